@@ -1,0 +1,283 @@
+"""Figures of the verification report: Bode overlays, Krylov mode importance, moment ratios, FRF error.
+
+Every ``*_figure`` function draws one matplotlib Figure from plain NumPy data and returns it; it does not
+touch the disk. ``save_figure`` writes a figure atomically (temporary name in the same folder, then
+os.replace); ``figure_png_bytes`` renders it in memory, for callers that stage several files together
+(see report.py).
+
+Figures are built on matplotlib's Agg canvas directly, never through pyplot, so this module neither needs
+a display nor changes the process-wide backend of a program that imports it.
+
+This module depends only on NumPy and matplotlib (no other kryflex module), so the report can be produced
+on a machine without the compiled extension.
+"""
+
+import io
+import os
+import tempfile
+
+import numpy as np
+from matplotlib import ticker
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+FULL_STYLE = {"color": "tab:blue", "linewidth": 1.6, "label": "full order"}
+REDUCED_STYLE = {"color": "tab:red", "linewidth": 1.2, "linestyle": "--", "label": "reduced (Krylov)"}
+DPI = 110
+
+# Values of |ratio - 1| below this are drawn on the floor of the log axis: a ratio that is exactly 1
+# (difference 0) cannot be shown on a log scale otherwise.
+RATIO_FLOOR = 1e-16
+
+
+# ----------------------------------------------------------------------------------------------- data helpers
+
+def frf_arrays(frf_entry):
+    """(freq_hz [nf], full [nf,t,a] complex, reduced [nf,t,a] complex) from one summary["frf"][label] block."""
+    freq = np.asarray(frf_entry["freq_hz"], dtype=float)
+    full = np.asarray(frf_entry["full_re"], dtype=float) + 1j * np.asarray(frf_entry["full_im"], dtype=float)
+    reduced = np.asarray(frf_entry["reduced_re"], dtype=float) + 1j * np.asarray(frf_entry["reduced_im"], dtype=float)
+    return freq, full, reduced
+
+
+def frf_relative_error(full, reduced):
+    """Pointwise relative FRF error ||H_full(f) - H_red(f)||_F / ||H_full(f)||_F over the I/O matrix.
+
+    full, reduced: arrays [nf, t, a] (or [nf]). A frequency where the full response is exactly zero gives inf
+    unless the reduced one is zero too (then 0), so the caller sees the problem rather than a silent 0.
+    """
+    full = np.asarray(full)
+    reduced = np.asarray(reduced)
+    axes = tuple(range(1, full.ndim))
+    diff = np.sqrt(np.sum(np.abs(full - reduced) ** 2, axis=axes)) if axes else np.abs(full - reduced)
+    ref = np.sqrt(np.sum(np.abs(full) ** 2, axis=axes)) if axes else np.abs(full)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        err = np.where(ref > 0, diff / np.where(ref > 0, ref, 1.0), np.where(diff > 0, np.inf, 0.0))
+    return err
+
+
+def magnitude_db(h):
+    """20 log10 |h|; NaN (a gap in the curve) where h is exactly zero, e.g. an output the input cannot reach."""
+    mag = np.abs(np.asarray(h))
+    with np.errstate(divide="ignore"):
+        return np.where(mag > 0, 20.0 * np.log10(np.where(mag > 0, mag, 1.0)), np.nan)
+
+
+def phase_deg(h, reference_deg=None):
+    """Unwrapped phase in degrees, shifted by a multiple of 360 so that its first point lies within 180 degrees
+    of reference_deg (default 0). Unwrapping avoids the vertical +-180 jumps of a wrapped phase, and the shared
+    reference keeps a full and a reduced curve on the same sheet."""
+    h = np.asarray(h)
+    ph = np.degrees(np.unwrap(np.angle(h)))
+    ref = 0.0 if reference_deg is None or not np.isfinite(reference_deg) else reference_deg
+    if ph.size:
+        ph = ph - 360.0 * np.round((ph[0] - ref) / 360.0)
+    return np.where(h != 0, ph, np.nan)
+
+
+def _frequency_axis(ax, freq, set_limits=True):
+    """Log frequency axis over the data; under about two decades, label 2x and 5x ticks too, in plain numbers,
+    so a narrow band is not left with a single '10^0' label."""
+    freq = np.asarray(freq, dtype=float)
+    if not freq.size:
+        return
+    low, high = float(freq.min()), float(freq.max())
+    if set_limits:
+        ax.set_xlim(low, high)
+    else:
+        low, high = ax.get_xlim()
+    plain = ticker.FuncFormatter(lambda x, _: f"{x:g}")
+    ax.xaxis.set_major_formatter(plain)
+    if high > 0 and low > 0 and np.log10(high / low) < 2.2:
+        ax.xaxis.set_minor_locator(ticker.LogLocator(base=10.0, subs=(2.0, 5.0)))
+        ax.xaxis.set_minor_formatter(plain)
+
+
+def _note_zero_response(ax, *curves):
+    """Say so on the axes when every curve is identically zero (nothing would be drawn on a dB scale)."""
+    if all(not np.any(np.asarray(c) != 0) for c in curves):
+        ax.text(0.5, 0.5, "response identically zero", transform=ax.transAxes, ha="center", va="center",
+                color="0.4")
+        ax.set_yticks([])
+
+
+# ----------------------------------------------------------------------------------------------- figures
+
+def bode_figure(freq_hz, full, reduced, title):
+    """Magnitude (dB) and phase (deg) against frequency (Hz, log axis), full and reduced overlaid.
+
+    full, reduced: complex arrays [nf] for one (output, input) pair.
+    """
+    freq = np.asarray(freq_hz, dtype=float)
+    fig = Figure(figsize=(7.0, 5.6))
+    FigureCanvasAgg(fig)
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+    ax_mag.semilogx(freq, magnitude_db(full), **FULL_STYLE)
+    ax_mag.semilogx(freq, magnitude_db(reduced), **REDUCED_STYLE)
+    ax_mag.set_ylabel("magnitude (dB)")
+    ax_mag.set_title(title)
+    ax_mag.legend(loc="best", fontsize="small")
+    _note_zero_response(ax_mag, full, reduced)
+    ph_full = phase_deg(full)
+    ph_red = phase_deg(reduced, ph_full[0] if ph_full.size else None)
+    ax_ph.semilogx(freq, ph_full, **FULL_STYLE)
+    ax_ph.semilogx(freq, ph_red, **REDUCED_STYLE)
+    ax_ph.set_ylabel("phase (deg)")
+    ax_ph.set_xlabel("frequency (Hz)")
+    for ax in (ax_mag, ax_ph):
+        ax.grid(True, which="both", alpha=0.3)
+    _frequency_axis(ax_ph, freq)
+    fig.tight_layout()
+    return fig
+
+
+def bode_overview_figure(panels, suptitle):
+    """Magnitudes only, one panel per configuration: panels = [(title, freq_hz, full [nf], reduced [nf]), ...]."""
+    n = max(len(panels), 1)
+    ncols = min(3, n)
+    nrows = (n + ncols - 1) // ncols
+    fig = Figure(figsize=(4.2 * ncols, 3.2 * nrows + 0.6))
+    FigureCanvasAgg(fig)
+    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
+    for ax, (title, freq, full, reduced) in zip(axes, panels):
+        ax.semilogx(freq, magnitude_db(full), **FULL_STYLE)
+        ax.semilogx(freq, magnitude_db(reduced), **REDUCED_STYLE)
+        ax.set_title(title, fontsize="medium")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.set_xlabel("frequency (Hz)", fontsize="small")
+        ax.set_ylabel("magnitude (dB)", fontsize="small")
+        _note_zero_response(ax, full, reduced)
+        _frequency_axis(ax, freq)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    if panels:
+        axes[0].legend(loc="best", fontsize="x-small")
+    fig.suptitle(suptitle)
+    fig.tight_layout()
+    return fig
+
+
+def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=None):
+    """Normalized importance of each Krylov mode at its frequency; kept modes in colour, the rest in grey.
+
+    Drawn as vertical bars on a log frequency axis (linear if a frequency is not positive), each labelled with
+    its 1-based mode number so the figure can be read beside the report's importance tables.
+    """
+    freq = np.asarray(freq_hz, dtype=float)
+    imp = np.asarray(importance, dtype=float)
+    kept = np.asarray(kept, dtype=bool)
+    fig = Figure(figsize=(7.0, 4.0))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    log_axis = freq.size > 0 and np.all(freq > 0)
+    if log_axis:
+        ax.set_xscale("log")
+    if band_hz is not None and len(band_hz) == 2:
+        ax.axvspan(band_hz[0], band_hz[1], color="0.92", zorder=0, label="band of interest")
+    for mask, colour, label in ((kept, "tab:green", "kept"), (~kept, "0.55", "discarded")):
+        if np.any(mask):
+            ax.vlines(freq[mask], 0.0, imp[mask], colors=colour, linewidth=4, label=label, zorder=2)
+            ax.plot(freq[mask], imp[mask], "o", color=colour, markersize=4, zorder=3)
+    for number, (f, v) in enumerate(zip(freq, imp), start=1):
+        ax.annotate(str(number), (f, v), textcoords="offset points", xytext=(0, 4), ha="center", fontsize=7)
+    if threshold is not None:
+        ax.axhline(threshold, color="tab:orange", linestyle=":", linewidth=1.2, label=f"keep threshold {threshold:g}")
+    ax.set_ylim(0.0, max(1.08, float(np.max(imp)) * 1.08 if imp.size else 1.08))
+    if log_axis:
+        _frequency_axis(ax, freq, set_limits=False)
+    ax.set_xlabel("Krylov mode frequency (Hz)")
+    ax.set_ylabel("normalized importance")
+    ax.set_title(title)
+    ax.grid(True, which="both", axis="x", alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def _worst_deviation_per_k(ratios):
+    """max over I/O entries of |ratio - 1| for each k; None where every entry is undefined."""
+    worst = []
+    for matrix in ratios:
+        values = [abs(r - 1.0) for row in matrix for r in row if r is not None]
+        worst.append(max(values) if values else None)
+    return worst
+
+
+def moment_ratio_figure(series, threshold, title="Moment ratios L_full / L_reduced"):
+    """|L_full^k / L_reduced^k - 1| (worst I/O entry) against k, one line per configuration and model.
+
+    series: [(legend label, ratios [k][t][a] with None where undefined, dashed: bool), ...].
+    A ratio of exactly 1 sits on the axis floor (RATIO_FLOOR); threshold is the exact-match tolerance line.
+    """
+    fig = Figure(figsize=(7.0, 4.4))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    markers = "osD^v<>ph*"
+    for index, (label, ratios, dashed) in enumerate(series):
+        worst = _worst_deviation_per_k(ratios)
+        ks = [k for k, w in enumerate(worst) if w is not None]
+        ys = [max(worst[k], RATIO_FLOOR) for k in ks]
+        if not ks:
+            continue
+        ax.semilogy(ks, ys, marker=markers[index % len(markers)], linestyle="--" if dashed else "-",
+                    linewidth=1.0, markersize=4, label=label)
+    ax.axhline(threshold, color="k", linestyle=":", linewidth=1.0, label=f"exact-match tolerance {threshold:g}")
+    ax.set_ylim(bottom=RATIO_FLOOR / 3)
+    ax.xaxis.set_major_locator(ticker.MaxNLocator(integer=True))
+    ax.set_xlabel("moment index k")
+    ax.set_ylabel("|L_full / L_reduced - 1|  (worst I/O entry)")
+    ax.set_title(title + f"  (floor {RATIO_FLOOR:g} = exact)", fontsize="medium")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize="x-small", ncol=2)
+    fig.tight_layout()
+    return fig
+
+
+def frf_error_figure(curves, accuracy, title="Relative frequency-response error"):
+    """Pointwise relative FRF error (see frf_relative_error) against frequency, one curve per configuration.
+
+    curves: [(legend label, freq_hz [nf], error [nf]), ...]; accuracy: target drawn as a horizontal line (or None).
+    """
+    fig = Figure(figsize=(7.0, 4.4))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    for label, freq, err in curves:
+        err = np.asarray(err, dtype=float)
+        ax.loglog(freq, np.maximum(err, RATIO_FLOOR), linewidth=1.1, label=label)
+    if accuracy is not None:
+        ax.axhline(accuracy, color="k", linestyle=":", linewidth=1.2, label=f"accuracy target {accuracy:g}")
+    if curves:
+        _frequency_axis(ax, np.concatenate([np.asarray(f, dtype=float) for _, f, _ in curves]))
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("||H_full - H_red||_F / ||H_full||_F")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize="x-small", ncol=2)
+    fig.tight_layout()
+    return fig
+
+
+# ----------------------------------------------------------------------------------------------- output
+
+def figure_png_bytes(fig, dpi=DPI):
+    """The figure rendered as PNG bytes (nothing written to disk)."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=dpi)
+    return buffer.getvalue()
+
+
+def save_figure(fig, path, dpi=DPI):
+    """Write the figure as PNG at path atomically: rendered in memory, written under a temporary name in the
+    same folder, then renamed, so a failure never leaves a truncated image at path."""
+    data = figure_png_bytes(fig, dpi)
+    directory = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path

@@ -1,0 +1,127 @@
+#include <kryflex_impl.h>
+
+PETSC_INTERN PetscErrorCode KFSystemBuildBodyMaps(KFSystem);
+PETSC_INTERN PetscErrorCode KFSystemBuildFrames(KFSystem);
+
+PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
+{
+  KFSystem y;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneSetUp(s));
+  PetscCall(PetscNew(&y));
+  y->scene = s;
+  PetscCall(PetscCalloc1(PetscMax(s->nrevolute, 1), &y->angles));
+  PetscCall(PetscCalloc5(s->nb, &y->Q, s->nb, &y->o, s->nb, &y->P, s->nb, &y->PtMP, s->nb, &y->PtKP));
+  *sys = y;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemDestroy(KFSystem *sys)
+{
+  KFSystem y = *sys;
+
+  PetscFunctionBegin;
+  if (!y) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < y->scene->nb; b++) {
+    PetscCall(MatDestroy(&y->P[b]));
+    PetscCall(MatDestroy(&y->PtMP[b]));
+    PetscCall(MatDestroy(&y->PtKP[b]));
+  }
+  PetscCall(PetscFree5(y->Q, y->o, y->P, y->PtMP, y->PtKP));
+  PetscCall(PetscFree(y->angles));
+  PetscCall(MatDestroy(&y->Ms));
+  PetscCall(MatDestroy(&y->Ks));
+  PetscCall(MatDestroy(&y->G));
+  PetscCall(MatDestroy(&y->Ht));
+  PetscCall(MatDestroy(&y->Phi));
+  PetscCall(PetscFree(y));
+  *sys = NULL;
+  PetscFunctionReturn(0);
+}
+
+/* sum_b P_b^T A_b P_b: the first angle computes the products and the union pattern, later angles reuse both */
+static PetscErrorCode KFSystemSumPtAP(KFSystem y, PetscBool mass, Mat *S)
+{
+  KFScene  s     = y->scene;
+  Mat     *parts = mass ? y->PtMP : y->PtKP;
+  PetscBool reuse = (PetscBool)(*S != NULL);
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nb; b++) {
+    Mat A = mass ? s->bodies[b].M : s->bodies[b].K;
+    PetscCall(MatPtAP(A, y->P[b], reuse ? MAT_REUSE_MATRIX : MAT_INITIAL_MATRIX, PETSC_DEFAULT, &parts[b]));
+  }
+  if (!reuse) {
+    PetscCall(MatDuplicate(parts[0], MAT_COPY_VALUES, S));
+    for (PetscInt b = 1; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], DIFFERENT_NONZERO_PATTERN));
+  } else {
+    PetscCall(MatZeroEntries(*S));
+    for (PetscInt b = 0; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], SUBSET_NONZERO_PATTERN));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* sum_b P_b^T X_b for the bodies' dense G_b or H_b^T */
+static PetscErrorCode KFSystemSumPtX(KFSystem y, PetscBool inputs, Mat *S)
+{
+  KFScene s = y->scene;
+
+  PetscFunctionBegin;
+  PetscCall(MatDestroy(S));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    Mat X = inputs ? s->bodies[b].G : s->bodies[b].Ht, T;
+    PetscCall(MatTransposeMatMult(y->P[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &T));
+    if (!*S) *S = T;
+    else {
+      PetscCall(MatAXPY(*S, 1.0, T, SAME_NONZERO_PATTERN));
+      PetscCall(MatDestroy(&T));
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
+{
+  KFScene s = y->scene;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));
+  for (PetscInt r = 0; r < s->nrevolute; r++) {
+    PetscCheck(PetscIsNormalReal(angles[r]) || angles[r] == 0, s->comm, PETSC_ERR_ARG_WRONG, "angle %" PetscInt_FMT " is not a finite number", r);
+    y->angles[r] = angles[r];
+  }
+  PetscCall(KFSystemBuildFrames(y));
+  PetscCall(KFSystemBuildBodyMaps(y));
+  PetscCall(KFSystemSumPtAP(y, PETSC_TRUE, &y->Ms));
+  PetscCall(KFSystemSumPtAP(y, PETSC_FALSE, &y->Ks));
+  PetscCall(KFSystemSumPtX(y, PETSC_TRUE, &y->G));
+  PetscCall(KFSystemSumPtX(y, PETSC_FALSE, &y->Ht));
+  PetscCall(MatSetOption(y->Ms, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatSetOption(y->Ks, MAT_SYMMETRIC, PETSC_TRUE));
+  y->assembled = PETSC_TRUE;
+  PetscCall(MatDestroy(&y->Phi)); /* rigid modes depend on the angles: set or compute them again */
+  y->user_rigid = PETSC_FALSE;
+  PetscCall(PetscLogEventEnd(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemGetMatrices(KFSystem y, Mat *Ms, Mat *Ks, Mat *G, Mat *Ht)
+{
+  PetscFunctionBegin;
+  PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() first");
+  if (Ms) *Ms = y->Ms;
+  if (Ks) *Ks = y->Ks;
+  if (G) *G = y->G;
+  if (Ht) *Ht = y->Ht;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemGetBodyMap(KFSystem y, PetscInt body, Mat *P)
+{
+  PetscFunctionBegin;
+  PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() first");
+  PetscCheck(body >= 0 && body < y->scene->nb, y->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
+  *P = y->P[body];
+  PetscFunctionReturn(0);
+}

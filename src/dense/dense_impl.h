@@ -1,0 +1,21 @@
+/* Private helpers of the small dense algebra stage (src/dense); not part of the public API. */
+#ifndef KRYFLEX_DENSE_IMPL_H
+#define KRYFLEX_DENSE_IMPL_H
+
+#include <kryflex.h>
+
+/* C = alpha op(A) op(B) + beta C with PetscInt sizes; quick return on empty C; tolerant of zero
+   leading dimensions (BLAS rejects ld < 1 even when the matrix is empty). */
+PETSC_INTERN PetscErrorCode KFDenseGemm_Private(char transa, char transb, PetscInt m, PetscInt n, PetscInt k, PetscReal alpha, const PetscReal A[], PetscInt lda, const PetscReal B[], PetscInt ldb, PetscReal beta, PetscReal C[], PetscInt ldc);
+/* A = (A + A^T) / 2 for an n x n array */
+PETSC_INTERN PetscErrorCode KFDenseSymmetrize_Private(PetscInt n, PetscReal A[]);
+/* Error unless max |A_ij - A_ji| <= rtol max |A_ij|: catches transposed or unrelated arrays, not rounding. */
+PETSC_INTERN PetscErrorCode KFDenseCheckSymmetric_Private(PetscInt n, const PetscReal A[], const char what[], const char caller[]);
+/* Largest eigenvalue, and whether mode i is flexible: lambda_i > rigid_tol * max(lambda) and lambda_i > 0 */
+PETSC_INTERN PetscReal KFDenseMaxReal_Private(PetscInt n, const PetscReal x[]);
+PETSC_INTERN PetscBool KFDenseIsFlexible_Private(PetscReal lambda, PetscReal lmax, PetscReal rigid_tol);
+
+/* Tolerance of KFDenseCheckSymmetric_Private for input pencils */
+#define KF_DENSE_SYMMETRY_RTOL 1e-6
+
+#endif

@@ -1,0 +1,197 @@
+/*
+  kryflex: Krylov reduction of articulated multi-flexible-body structures (A. Y. Lee, JPL).
+
+  Stages, one folder each under src/:
+    body/      load and check one body's M and K
+    scene/     bodies, joints, inputs, outputs: the tree and its dof maps
+    assemble/  P(alpha) by elimination and the full-order system (eq. 2-4)
+    rigid/     rigid-body and mechanism modes from geometry
+    solve/     the flexible solve operator K+ (one MUMPS factorization)
+    krylov/    deflated block Krylov basis in the M-inner product (eq. 8-9), raw recurrence
+    moments/   low-frequency moments L^k of the full-order system (eq. 5)
+    verify/    full-order eigensolve with SLEPc (verification only)
+    project/   reduced system (eq. 10-11) and reduced bodies (eq. 18-19)
+    dense/     small dense algebra: Krylov modes, importance, static correction,
+               reassembly at any angle (eq. 12-24), moments and frequency responses
+
+  Dense arrays in this API are column-major, replicated on every rank.
+*/
+#ifndef KRYFLEX_H
+#define KRYFLEX_H
+
+#include <petscmat.h>
+#include <slepcbv.h>
+
+#define KF_MAX_NAME 64
+
+/* ---------------------------------------------------------------- scene */
+
+typedef enum {
+  KF_JOINT_REVOLUTE = 0, /* ties 3 translations and the 2 rotations perpendicular to the axis */
+  KF_JOINT_FIXED    = 1  /* ties all 6 dofs */
+} KFJointType;
+
+/* Node dof components: 0..2 translations x,y,z; 3..5 rotations about x,y,z (body frame). */
+
+typedef struct _n_KFScene *KFScene;
+
+PETSC_EXTERN PetscErrorCode KFInitialize(void); /* registers log events; called by KFSceneCreate */
+PETSC_EXTERN PetscErrorCode KFSceneCreate(MPI_Comm, KFScene *);
+PETSC_EXTERN PetscErrorCode KFSceneDestroy(KFScene *);
+/* M and K are referenced (not copied); nodes: ids, coordinates (3 per node), dofs per node (3 or 6).
+   Dofs are ordered node by node in the given order, ux uy uz [rx ry rz]. */
+PETSC_EXTERN PetscErrorCode KFSceneAddBody(KFScene, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt ndof[], PetscInt *body);
+PETSC_EXTERN PetscErrorCode KFSceneAddInterface(KFScene, PetscInt body, const char name[], PetscInt node_id);
+/* axis: unit vector in the parent's frame (ignored for fixed joints);
+   R0: child frame orientation in the parent frame at angle 0 (column-major 3x3), NULL for identity.
+   The child's frame is R(alpha) = Rot(axis, alpha) R0: a child vector v_c reads R v_c in the parent frame.
+   Ties (parent node p, child node c): u_p = R u_c ; (theta_p - R theta_c) parallel to axis (revolute). */
+PETSC_EXTERN PetscErrorCode KFSceneAddJoint(KFScene, const char name[], KFJointType, PetscInt parent, const char parent_interface[], PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9]);
+PETSC_EXTERN PetscErrorCode KFSceneSetNumIO(KFScene, PetscInt ninputs, PetscInt noutputs);
+/* input column j gets weight at (body, node_id, component); several terms may share an input */
+PETSC_EXTERN PetscErrorCode KFSceneAddInputLoad(KFScene, PetscInt input, PetscInt body, PetscInt node_id, PetscInt component, PetscReal weight);
+PETSC_EXTERN PetscErrorCode KFSceneAddInputVector(KFScene, PetscInt input, PetscInt body, Vec g);
+PETSC_EXTERN PetscErrorCode KFSceneAddOutputReading(KFScene, PetscInt output, PetscInt body, PetscInt node_id, PetscInt component, PetscReal weight);
+PETSC_EXTERN PetscErrorCode KFSceneAddOutputVector(KFScene, PetscInt output, PetscInt body, Vec h);
+/* Checks everything (sizes, symmetry, nodes, joints reach every body, no cycles) and builds dof maps. */
+PETSC_EXTERN PetscErrorCode KFSceneSetUp(KFScene);
+PETSC_EXTERN PetscErrorCode KFSceneGetInfo(KFScene, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *nsystem, PetscInt *ninputs, PetscInt *noutputs);
+PETSC_EXTERN PetscErrorCode KFSceneGetBodyInfo(KFScene, PetscInt body, const char **name, PetscInt *ndofs, PetscInt *nnodes);
+PETSC_EXTERN PetscErrorCode KFSceneGetBodyMatrices(KFScene, PetscInt body, Mat *M, Mat *K, Mat *G, Mat *Ht);
+PETSC_EXTERN PetscErrorCode KFSceneView(KFScene, PetscViewer);
+
+/* Body matrices from files: PETSc binary (*.petsc, *.bin, *.dat) or Matrix Market (*.mtx), loaded in parallel. */
+PETSC_EXTERN PetscErrorCode KFMatLoadFile(MPI_Comm, const char path[], Mat *);
+/* Symmetry check: ||A - A^T||_F <= rtol ||A||_F */
+PETSC_EXTERN PetscErrorCode KFMatCheckSymmetric(Mat, const char what[], PetscReal rtol);
+
+/* ---------------------------------------------------------------- full-order system at alpha */
+
+typedef struct _n_KFSystem *KFSystem;
+
+/* A system at one configuration. KFSystemSetAngles (re)assembles, reusing the symbolic work. */
+PETSC_EXTERN PetscErrorCode KFSystemCreate(KFScene, KFSystem *);
+PETSC_EXTERN PetscErrorCode KFSystemDestroy(KFSystem *);
+/* angles: one per revolute joint, in the order the joints were added, radians */
+PETSC_EXTERN PetscErrorCode KFSystemSetAngles(KFSystem, const PetscReal angles[]);
+/* Ms, Ks: e x e MPIAIJ; G: e x a MPIDENSE; Ht: e x t MPIDENSE (H^T). Borrowed references. */
+PETSC_EXTERN PetscErrorCode KFSystemGetMatrices(KFSystem, Mat *Ms, Mat *Ks, Mat *G, Mat *Ht);
+/* P_b: n_b x e MPIAIJ, x_b = P_b x_e. Borrowed. */
+PETSC_EXTERN PetscErrorCode KFSystemGetBodyMap(KFSystem, PetscInt body, Mat *P);
+/* Rigid-body and mechanism modes (e x r, M-orthonormal). From geometry unless set by the user. */
+PETSC_EXTERN PetscErrorCode KFSystemComputeRigidModes(KFSystem);
+PETSC_EXTERN PetscErrorCode KFSystemSetRigidModes(KFSystem, Mat Phi);
+PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal *residual);
+
+/* ---------------------------------------------------------------- flexible solve operator K+ */
+
+typedef struct _n_KFFlexSolver *KFFlexSolver;
+
+/* One MUMPS factorization of K_S with a statically determinate set of dofs held (or of K_S + shift M_S).
+   Options (prefix -kryflex_): -kryflex_shift <sigma>, -kryflex_check_null_pivots */
+PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetUp(KFFlexSolver);
+/* X = K+ B for a block of right-hand sides (e x p dense) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverApply(KFFlexSolver, Mat B, Mat X);
+PETSC_EXTERN PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *);
+PETSC_EXTERN PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt *nheld, PetscInt *null_pivots, PetscInt *negative_pivots);
+
+/* ---------------------------------------------------------------- Krylov basis */
+
+/* Block Arnoldi in the M-inner product: input blocks K+G, (K+M)K+G, ... (nin blocks) and
+   output blocks K+H^T, ... (nout blocks); columns deflated below tol (relative). V is e x c, M-orthonormal.
+   Matches nin + nout moments. */
+PETSC_EXTERN PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, BV *V, PetscInt *ndeflated);
+/* The paper's raw recurrence (eq. 9), unorthogonalized, for diagnostics: returns the e x c matrix and the
+   condition number of its M-Gram matrix. */
+PETSC_EXTERN PetscErrorCode KFKrylovRawBasis(KFFlexSolver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond);
+
+/* ---------------------------------------------------------------- moments */
+
+/* L^k = H (K+ M)^k K+ G, k = 0..nmom-1, stored L[k*t*a + j*t + i] (t x a column-major per k) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverMoments(KFFlexSolver, PetscInt nmom, PetscReal L[]);
+
+/* ---------------------------------------------------------------- projection */
+
+/* Reduced system of eq. (10-11) on a basis V (e x c): Kr, Mr (c x c), Gr (c x a), Hr (t x c), replicated. */
+PETSC_EXTERN PetscErrorCode KFSystemProject(KFSystem, BV V, PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);
+/* Combines BV columns: X = V C (C: c x m column-major), returns a new e x m dense Mat. */
+PETSC_EXTERN PetscErrorCode KFBVCombine(BV V, PetscInt m, const PetscReal C[], Mat *X);
+
+/* Reduced bodies (eq. 18-19). A body basis collects system vectors from one or more configurations,
+   projected onto each body (Psi_b = P_b X), then M-orthonormalizes per body with rank deflation. */
+typedef struct _n_KFBodyBasis *KFBodyBasis;
+PETSC_EXTERN PetscErrorCode KFBodyBasisCreate(KFScene, KFBodyBasis *);
+PETSC_EXTERN PetscErrorCode KFBodyBasisAdd(KFBodyBasis, KFSystem, Mat X);
+PETSC_EXTERN PetscErrorCode KFBodyBasisFinish(KFBodyBasis, PetscReal tol);
+PETSC_EXTERN PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *);
+/* After Finish: reduced size v and dense data of body b. Arrays are owned by the basis.
+   M, K: v x v; G: v x a; H: t x v; iface: (6 * ninterfaces) x v, rows in interface order, components 0..5. */
+PETSC_EXTERN PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt body, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, PetscInt *ndeflated);
+/* The map back to full dofs: Psi_b (n_b x v dense). Borrowed. */
+PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *Psi);
+
+/* ---------------------------------------------------------------- verification eigensolve */
+
+/* Lowest nev flexible modes of (K_S, M_S) with SLEPc (GHEP, shift-and-invert with MUMPS, small negative target,
+   rigid modes as deflation space). omega2: eigenvalues; HPhi (t x nconv) and PhiG (nconv x a) column-major,
+   arrays sized for nev. Either array may be NULL. */
+/* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
+PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[]);
+PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);
+
+/* ---------------------------------------------------------------- small dense algebra (src/dense) */
+
+/* Generalized symmetric eigenproblem K phi = lambda M phi (M SPD), ascending; Phi M-orthonormal (n x n). */
+PETSC_EXTERN PetscErrorCode KFDenseEig(PetscInt n, const PetscReal K[], const PetscReal M[], PetscReal lambda[], PetscReal Phi[]);
+
+typedef enum {
+  KF_IMPORTANCE_H2     = 0, /* ||H phi|| ||phi^T G|| / (2 sqrt(zeta w^3)) */
+  KF_IMPORTANCE_HINF   = 1, /* ||H phi|| ||phi^T G|| / (2 zeta w^2) */
+  KF_IMPORTANCE_STATIC = 2  /* ||H phi phi^T G|| / w^2 */
+} KFImportance;
+/* Importance of each mode (n modes, Phi n x n M-orthonormal), normalized by the largest; rigid (lambda <= rigid_tol * max lambda) get 0. */
+PETSC_EXTERN PetscErrorCode KFDenseModeImportance(PetscInt n, const PetscReal lambda[], const PetscReal Phi[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscReal zeta, KFImportance, PetscReal rigid_tol, PetscReal importance[]);
+/* Static correction (eq. 17): given discarded modes Phid (n x d) with eigenvalues lambdad and G (n x a),
+   S = Phid Lambdad^-1 Phid^T G (n x a). */
+PETSC_EXTERN PetscErrorCode KFDenseStaticCorrection(PetscInt n, PetscInt d, const PetscReal Phid[], const PetscReal lambdad[], PetscInt a, const PetscReal G[], PetscReal S[]);
+/* Null space of D (m x n) by SVD: N (n x h) orthonormal, h = n - rank, rank = #{sigma > rtol sigma_max}.
+   N must hold n*n. smin_kept/smax: smallest singular value counted in the rank / largest (reported). */
+PETSC_EXTERN PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio);
+/* Moments of a small (possibly singular) system on its flexible subspace: L as in KFFlexSolverMoments. */
+PETSC_EXTERN PetscErrorCode KFDenseMoments(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscReal rigid_tol, PetscInt nmom, PetscReal L[]);
+/* Modal frequency response with uniform modal damping zeta (rigid modes undamped, 1/(-w^2)):
+   T(w) = sum_i H phi_i phi_i^T G / (lambda_i - w^2 + 2 i zeta sqrt(lambda_i) w), at nw frequencies w (rad/s).
+   Tre, Tim: nw blocks of t x a. */
+PETSC_EXTERN PetscErrorCode KFModalFRF(PetscInt nmodes, const PetscReal lambda[], PetscInt t, const PetscReal HPhi[], PetscInt a, const PetscReal PhiG[], PetscReal zeta, PetscReal rigid_tol, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+
+/* Reassembly of reduced bodies at any angle (eq. 20-24), without the full-order model. */
+typedef struct {
+  PetscInt         v;          /* reduced size */
+  const PetscReal *M, *K;      /* v x v */
+  const PetscReal *G;          /* v x a */
+  const PetscReal *H;          /* t x v */
+  PetscInt         ninterfaces;
+  const PetscReal *iface;      /* (6 ninterfaces) x v */
+} KFReducedBody;
+typedef struct {
+  KFJointType type;
+  PetscInt    parent, parent_interface, child, child_interface; /* body indices, interface indices within body */
+  PetscReal   axis[3], R0[9];
+} KFJointDef;
+/* Output: h x h Mh, Kh; h x a Gh; t x h Hh (arrays sized for n = sum v: n*n, n*a, t*n). */
+PETSC_EXTERN PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio);
+/* The joint rotation R(alpha) = Rot(axis, alpha) R0 (column-major 3x3). */
+PETSC_EXTERN PetscErrorCode KFJointRotation(const PetscReal axis[3], const PetscReal R0[9], PetscReal alpha, PetscReal R[9]);
+
+/* ---------------------------------------------------------------- progress */
+/* Progress lines with elapsed time on rank 0, unless -kryflex_quiet. */
+PETSC_EXTERN PetscErrorCode KFProgress(MPI_Comm, const char fmt[], ...);
+
+/* Error messages for bindings: after KFPushErrorRecorder(), KFLastError() holds the first message of a failed call. */
+PETSC_EXTERN PetscErrorCode KFPushErrorRecorder(void);
+PETSC_EXTERN const char    *KFLastError(void);
+PETSC_EXTERN void           KFClearError(void);
+
+#endif

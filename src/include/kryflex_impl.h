@@ -1,0 +1,101 @@
+/* Private data structures of kryflex: shared by the stages, not part of the public API. */
+#ifndef KRYFLEX_IMPL_H
+#define KRYFLEX_IMPL_H
+
+#include <kryflex.h>
+
+/* A linear combination of system dofs: how one interface dof of a body reads in system coordinates. */
+#define KF_MAX_TERMS 96
+typedef struct {
+  PetscInt  n;
+  PetscInt  idx[KF_MAX_TERMS];
+  PetscReal c[KF_MAX_TERMS];
+} KFExpr;
+
+typedef struct {
+  char     name[KF_MAX_NAME];
+  PetscInt node_id, node, dof0; /* node index in the body, first dof of that node */
+} KFInterface;
+
+typedef struct {
+  char         name[KF_MAX_NAME];
+  Mat          M, K;       /* referenced */
+  PetscInt     n;          /* dofs */
+  PetscInt     nnodes;
+  PetscInt    *ids, *ndof, *dof0;
+  PetscReal   *xyz;
+  PetscInt     ninterfaces;
+  KFInterface *iface;
+  Mat          G, Ht;      /* n x a, n x t (MPIDENSE), built at set-up */
+  PetscInt     parent_joint; /* joint in which this body is the child; -1 for the root */
+  PetscInt     child_iface;  /* its interface eliminated by that joint */
+  PetscInt     rstart, rend;
+  PetscInt    *sysidx;     /* local dofs -> system dof, -1 where eliminated */
+} KFBodyData;
+
+typedef struct {
+  char        name[KF_MAX_NAME];
+  KFJointType type;
+  PetscInt    parent, child, parent_iface, child_iface;
+  PetscReal   axis[3], R0[9];
+  PetscInt    revolute;  /* index among revolute joints, -1 if fixed */
+  PetscInt    beta;      /* system dof of the joint's free rotation, -1 if fixed */
+} KFJointData;
+
+typedef struct {
+  PetscInt  io, body, node_id, comp;
+  PetscReal w;
+  Vec       v; /* or a whole vector */
+} KFTerm;
+
+struct _n_KFScene {
+  MPI_Comm     comm;
+  PetscInt     nb, nj, nb_alloc, nj_alloc;
+  KFBodyData  *bodies;
+  KFJointData *joints;
+  PetscInt     ninputs, noutputs;
+  PetscInt     nin_terms, nout_terms, nin_alloc, nout_alloc;
+  KFTerm      *in_terms, *out_terms;
+  PetscBool    setup;
+  PetscInt    *order;      /* bodies, parents before children */
+  PetscInt     nrevolute;
+  PetscInt     nsys, nsys_local, sys_rstart;
+};
+
+struct _n_KFSystem {
+  KFScene   scene;
+  PetscBool assembled;
+  PetscReal *angles;
+  PetscReal (*Q)[9], (*o)[3]; /* body frame -> root frame: y = Q x + o */
+  Mat       *P;              /* per body, n_b x e */
+  Mat       *PtMP, *PtKP;    /* per body contributions, kept for reuse across angles */
+  Mat        Ms, Ks, G, Ht;
+  Mat        Phi;            /* rigid modes, e x r, M-orthonormal */
+  PetscInt   nrigid;
+  PetscReal  rigid_residual;
+  PetscBool  user_rigid;
+};
+
+struct _n_KFFlexSolver {
+  KFSystem  sys;
+  Mat       Kh, F;           /* held (or shifted) stiffness and its MUMPS factor */
+  PetscInt  nheld, *held;    /* held system dofs (global) */
+  PetscReal shift;
+  PetscInt  null_pivots, negative_pivots;
+  PetscBool setup;
+};
+
+/* utilities (src/util) */
+PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */
+PETSC_INTERN PetscErrorCode KFDenseCreate(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *);
+PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[]); /* A^T B replicated (A, B tall dense) */
+PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */
+PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
+PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); /* X <- (I - Phi Phi^T M) X, or (I - M Phi Phi^T) X if left */
+PETSC_INTERN PetscErrorCode KFBodyFindNode(KFBodyData *, PetscInt id, PetscInt *node);
+PETSC_INTERN PetscErrorCode KFExprAdd(KFExpr *, PetscInt idx, PetscReal c);
+PETSC_INTERN PetscErrorCode KFExprAXPY(KFExpr *, PetscReal a, const KFExpr *);
+
+PETSC_EXTERN PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
+
+#endif

@@ -1,0 +1,53 @@
+#include <kryflex_impl.h>
+
+/* The paper's recurrence (eq. 9) without orthogonalization: kept only to show how fast its vectors lose
+   independence (the condition number of their M-Gram matrix). */
+PetscErrorCode KFKrylovRawBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond)
+{
+  KFSystem   sys = solver->sys;
+  KFScene    s   = sys->scene;
+  PetscInt   a = s->ninputs, t = s->noutputs, c = a * nin + t * nout, col = 0, lda, ldw;
+  PetscReal *Gm, *ev, *vecs, *Id;
+  Mat        MP;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverSetUp(solver));
+  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, c, Praw));
+  for (int source = 0; source < 2; source++) {
+    Mat B = source ? sys->Ht : sys->G, W;
+    for (PetscInt blk = 0; blk < (source ? nout : nin); blk++) {
+      const PetscScalar *w;
+      PetscScalar       *p;
+      PetscInt           nl, q;
+      PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
+      PetscCall(KFFlexSolverApply(solver, B, W));
+      if (blk > 0) PetscCall(MatDestroy(&B));
+      PetscCall(MatGetLocalSize(W, &nl, NULL));
+      PetscCall(MatGetSize(W, NULL, &q));
+      PetscCall(MatDenseGetLDA(*Praw, &lda));
+      PetscCall(MatDenseGetLDA(W, &ldw));
+      PetscCall(MatDenseGetArrayRead(W, &w));
+      PetscCall(MatDenseGetArray(*Praw, &p));
+      for (PetscInt j = 0; j < q; j++)
+        for (PetscInt i = 0; i < nl; i++) p[i + (col + j) * lda] = w[i + j * ldw];
+      PetscCall(MatDenseRestoreArray(*Praw, &p));
+      PetscCall(MatDenseRestoreArrayRead(W, &w));
+      col += q;
+      PetscCall(MatMatMult(sys->Ms, W, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &B)); /* next: K+ M x_k */
+      PetscCall(MatDestroy(&W));
+    }
+    if ((source ? nout : nin) > 0) PetscCall(MatDestroy(&B));
+  }
+  PetscCall(MatAssemblyBegin(*Praw, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*Praw, MAT_FINAL_ASSEMBLY));
+  /* Gram matrix in the M-inner product and its eigenvalues */
+  PetscCall(PetscMalloc4(c * c, &Gm, c, &ev, c * c, &vecs, c * c, &Id));
+  PetscCall(MatMatMult(sys->Ms, *Praw, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MP));
+  PetscCall(KFMatTransposeMatMultGather(*Praw, MP, Gm));
+  PetscCall(MatDestroy(&MP));
+  for (PetscInt i = 0; i < c * c; i++) Id[i] = (i % (c + 1) == 0);
+  PetscCall(KFDenseEig(c, Gm, Id, ev, vecs));
+  *gram_cond = ev[0] > 0 ? ev[c - 1] / ev[0] : PETSC_INFINITY;
+  PetscCall(PetscFree4(Gm, ev, vecs, Id));
+  PetscFunctionReturn(0);
+}

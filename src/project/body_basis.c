@@ -1,0 +1,278 @@
+#include <kryflex_impl.h>
+
+/* Reduced bodies (eq. 18-19): system vectors (rigid, kept and static-correction modes, possibly from several
+   configurations) are mapped onto each body, Psi_b = P_b X, and compressed to an M_b-orthonormal basis by
+   Gram-Schmidt with column pivoting: the column with the largest remaining M_b-norm goes next, and the process
+   stops when every remaining column is below the tolerance (rank deflation). Columns of X are first scaled to
+   unit system M-norm, so a body's share of each column is at most 1 and the tolerance is absolute. */
+
+struct _n_KFBodyBasis {
+  KFScene     s;
+  PetscInt   *ncols;   /* per body: number of collected matrices */
+  Mat       **cols;    /* per body: collected n_b x m dense blocks */
+  PetscBool   finished;
+  Mat        *Psi;
+  PetscInt   *v, *ndefl;
+  PetscReal **M, **K, **G, **H, **iface;
+};
+
+PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
+{
+  KFBodyBasis b;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneSetUp(s));
+  PetscCall(PetscNew(&b));
+  b->s = s;
+  PetscCall(PetscCalloc3(s->nb, &b->ncols, s->nb, &b->cols, s->nb, &b->Psi));
+  PetscCall(PetscCalloc2(s->nb, &b->v, s->nb, &b->ndefl));
+  PetscCall(PetscCalloc5(s->nb, &b->M, s->nb, &b->K, s->nb, &b->G, s->nb, &b->H, s->nb, &b->iface));
+  *bb = b;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *bb)
+{
+  KFBodyBasis b = *bb;
+
+  PetscFunctionBegin;
+  if (!b) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < b->s->nb; i++) {
+    for (PetscInt k = 0; k < b->ncols[i]; k++) PetscCall(MatDestroy(&b->cols[i][k]));
+    PetscCall(PetscFree(b->cols[i]));
+    PetscCall(MatDestroy(&b->Psi[i]));
+    PetscCall(PetscFree5(b->M[i], b->K[i], b->G[i], b->H[i], b->iface[i]));
+  }
+  PetscCall(PetscFree3(b->ncols, b->cols, b->Psi));
+  PetscCall(PetscFree2(b->v, b->ndefl));
+  PetscCall(PetscFree5(b->M, b->K, b->G, b->H, b->iface));
+  PetscCall(PetscFree(b));
+  *bb = NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyBasisAdd(KFBodyBasis bb, KFSystem sys, Mat X)
+{
+  KFScene    s = bb->s;
+  Mat        Xn, MX;
+  PetscInt   m, N;
+  PetscReal *gram, *scale;
+
+  PetscFunctionBegin;
+  PetscCheck(!bb->finished, s->comm, PETSC_ERR_ORDER, "KFBodyBasisAdd() after KFBodyBasisFinish()");
+  PetscCheck(sys->scene == s, s->comm, PETSC_ERR_ARG_INCOMP, "the system belongs to another scene");
+  PetscCall(MatGetSize(X, &N, &m));
+  PetscCheck(N == s->nsys, s->comm, PETSC_ERR_ARG_SIZ, "vectors of %" PetscInt_FMT " rows for a %" PetscInt_FMT "-dof system", N, s->nsys);
+  PetscCall(PetscLogEventBegin(KF_EVENT_PROJECT, 0, 0, 0, 0));
+  /* unit system M-norm per column */
+  PetscCall(MatDuplicate(X, MAT_COPY_VALUES, &Xn));
+  PetscCall(MatMatMult(sys->Ms, Xn, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+  PetscCall(PetscMalloc2(m * m, &gram, m * m, &scale));
+  PetscCall(KFMatTransposeMatMultGather(Xn, MX, gram));
+  PetscCall(MatDestroy(&MX));
+  PetscCall(PetscArrayzero(scale, m * m));
+  for (PetscInt j = 0; j < m; j++) scale[j + j * m] = gram[j + j * m] > 0 ? 1.0 / PetscSqrtReal(gram[j + j * m]) : 0.0;
+  PetscCall(MatZeroEntries(Xn));
+  PetscCall(KFDenseMultSmall(X, m, m, scale, 1.0, Xn));
+  PetscCall(PetscFree2(gram, scale));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    Mat Y;
+    PetscCall(MatMatMult(sys->P[b], Xn, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+    PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
+    bb->cols[b][bb->ncols[b]++] = Y;
+  }
+  PetscCall(MatDestroy(&Xn));
+  PetscCall(PetscLogEventEnd(KF_EVENT_PROJECT, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* Pivoted Gram-Schmidt in the M-inner product on local arrays (W, MW: nl x m, column-major). Returns the chosen
+   columns' count and the orthonormal basis in Q (nl x v). */
+static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, PetscReal *W, PetscReal *MW, PetscReal tol, PetscInt *v, PetscReal *Q)
+{
+  PetscReal *res, *dots, *MQ;
+  PetscBool *used;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc4(m, &res, m, &dots, m, &used, nl * m + 1, &MQ));
+  for (PetscInt j = 0; j < m; j++) used[j] = PETSC_FALSE;
+  *v = 0;
+  for (;;) {
+    PetscInt  jmax = -1;
+    PetscReal rmax = 0, nrm;
+    for (PetscInt j = 0; j < m; j++) {
+      PetscReal d = 0;
+      for (PetscInt i = 0; i < nl; i++) d += W[i + j * nl] * MW[i + j * nl];
+      res[j] = d;
+    }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, res, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
+    for (PetscInt j = 0; j < m; j++)
+      if (!used[j] && res[j] > rmax) {
+        rmax = res[j];
+        jmax = j;
+      }
+    if (jmax < 0 || PetscSqrtReal(rmax) <= tol) break;
+    used[jmax] = PETSC_TRUE;
+    nrm        = PetscSqrtReal(rmax);
+    {
+      PetscReal *q = &Q[*v * nl], *mq = &MQ[*v * nl];
+      for (PetscInt i = 0; i < nl; i++) {
+        q[i]  = W[i + jmax * nl] / nrm;
+        mq[i] = MW[i + jmax * nl] / nrm;
+      }
+      /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement) */
+      for (int pass = 0; pass < 2; pass++) {
+        for (PetscInt j = 0; j < m; j++) {
+          PetscReal d = 0;
+          if (used[j]) {
+            dots[j] = 0;
+            continue;
+          }
+          for (PetscInt i = 0; i < nl; i++) d += mq[i] * W[i + j * nl];
+          dots[j] = d;
+        }
+        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
+        for (PetscInt j = 0; j < m; j++)
+          if (!used[j] && dots[j] != 0)
+            for (PetscInt i = 0; i < nl; i++) {
+              W[i + j * nl] -= dots[j] * q[i];
+              MW[i + j * nl] -= dots[j] * mq[i];
+            }
+      }
+    }
+    (*v)++;
+  }
+  PetscCall(PetscFree4(res, dots, used, MQ));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
+{
+  KFScene s = bb->s;
+
+  PetscFunctionBegin;
+  PetscCheck(!bb->finished, s->comm, PETSC_ERR_ORDER, "KFBodyBasisFinish() called twice");
+  PetscCheck(tol > 0 && tol < 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body deflation tolerance must lie in (0, 1); got %g", (double)tol);
+  PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B  = &s->bodies[b];
+    PetscInt    nl = B->rend - B->rstart, m = 0, v, a = s->ninputs, t = s->noutputs;
+    PetscReal  *W, *MW, *Q;
+    Mat         Wm, MWm, AQ;
+    PetscCheck(bb->ncols[b] > 0, s->comm, PETSC_ERR_ORDER, "no vectors were added to the body basis");
+    for (PetscInt k = 0; k < bb->ncols[b]; k++) {
+      PetscInt mk;
+      PetscCall(MatGetSize(bb->cols[b][k], NULL, &mk));
+      m += mk;
+    }
+    /* concatenate the collected blocks */
+    PetscCall(KFDenseCreate(s->comm, nl, B->n, m, &Wm));
+    {
+      PetscScalar *w;
+      PetscInt     off = 0, ldw;
+      PetscCall(MatDenseGetLDA(Wm, &ldw));
+      PetscCall(MatDenseGetArray(Wm, &w));
+      for (PetscInt k = 0; k < bb->ncols[b]; k++) {
+        const PetscScalar *y;
+        PetscInt           mk, ldy;
+        PetscCall(MatGetSize(bb->cols[b][k], NULL, &mk));
+        PetscCall(MatDenseGetLDA(bb->cols[b][k], &ldy));
+        PetscCall(MatDenseGetArrayRead(bb->cols[b][k], &y));
+        for (PetscInt j = 0; j < mk; j++)
+          for (PetscInt i = 0; i < nl; i++) w[i + (off + j) * ldw] = y[i + j * ldy];
+        PetscCall(MatDenseRestoreArrayRead(bb->cols[b][k], &y));
+        PetscCall(MatDestroy(&bb->cols[b][k]));
+        off += mk;
+      }
+      PetscCall(MatDenseRestoreArray(Wm, &w));
+    }
+    PetscCall(MatMatMult(B->M, Wm, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MWm));
+    PetscCall(PetscMalloc3(nl * m + 1, &W, nl * m + 1, &MW, nl * m + 1, &Q));
+    {
+      const PetscScalar *w, *mw;
+      PetscInt           ldw, ldmw;
+      PetscCall(MatDenseGetLDA(Wm, &ldw));
+      PetscCall(MatDenseGetLDA(MWm, &ldmw));
+      PetscCall(MatDenseGetArrayRead(Wm, &w));
+      PetscCall(MatDenseGetArrayRead(MWm, &mw));
+      for (PetscInt j = 0; j < m; j++)
+        for (PetscInt i = 0; i < nl; i++) {
+          W[i + j * nl]  = PetscRealPart(w[i + j * ldw]);
+          MW[i + j * nl] = PetscRealPart(mw[i + j * ldmw]);
+        }
+      PetscCall(MatDenseRestoreArrayRead(Wm, &w));
+      PetscCall(MatDenseRestoreArrayRead(MWm, &mw));
+    }
+    PetscCall(MatDestroy(&Wm));
+    PetscCall(MatDestroy(&MWm));
+    PetscCall(KFPivotedMGS(s->comm, nl, m, W, MW, tol, &v, Q));
+    PetscCheck(v > 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s' gets no basis vector: the modes do not move it", B->name);
+    bb->v[b]     = v;
+    bb->ndefl[b] = m - v;
+    PetscCall(KFDenseCreate(s->comm, nl, B->n, v, &bb->Psi[b]));
+    {
+      PetscScalar *p;
+      PetscInt     ldp;
+      PetscCall(MatDenseGetLDA(bb->Psi[b], &ldp));
+      PetscCall(MatDenseGetArray(bb->Psi[b], &p));
+      for (PetscInt j = 0; j < v; j++)
+        for (PetscInt i = 0; i < nl; i++) p[i + j * ldp] = Q[i + j * nl];
+      PetscCall(MatDenseRestoreArray(bb->Psi[b], &p));
+    }
+    PetscCall(PetscFree3(W, MW, Q));
+    /* one more M-orthonormalization of the chosen basis squeezes out the rounding of the updates */
+    PetscCall(KFMOrthonormalize(B->M, bb->Psi[b], "reduced body basis"));
+    /* reduced matrices (eq. 18-19) and interface rows */
+    PetscCall(PetscMalloc5(v * v, &bb->M[b], v * v, &bb->K[b], v * a, &bb->G[b], t * v, &bb->H[b], 6 * B->ninterfaces * v + 1, &bb->iface[b]));
+    PetscCall(MatMatMult(B->M, bb->Psi[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AQ));
+    PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], AQ, bb->M[b]));
+    PetscCall(MatDestroy(&AQ));
+    PetscCall(MatMatMult(B->K, bb->Psi[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AQ));
+    PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], AQ, bb->K[b]));
+    PetscCall(MatDestroy(&AQ));
+    PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], B->G, bb->G[b]));
+    PetscCall(KFMatTransposeMatMultGather(B->Ht, bb->Psi[b], bb->H[b]));
+    {
+      PetscInt           ni = 6 * B->ninterfaces, ldp;
+      const PetscScalar *p;
+      PetscCall(PetscArrayzero(bb->iface[b], ni * v));
+      PetscCall(MatDenseGetLDA(bb->Psi[b], &ldp));
+      PetscCall(MatDenseGetArrayRead(bb->Psi[b], &p));
+      for (PetscInt r = 0; r < ni; r++) {
+        PetscInt dof = B->iface[r / 6].dof0 + r % 6;
+        if (dof < B->rstart || dof >= B->rend) continue;
+        for (PetscInt j = 0; j < v; j++) bb->iface[b][r + j * ni] = PetscRealPart(p[(dof - B->rstart) + j * ldp]);
+      }
+      PetscCall(MatDenseRestoreArrayRead(bb->Psi[b], &p));
+      PetscCall(MPIU_Allreduce(MPI_IN_PLACE, bb->iface[b], (PetscMPIInt)(ni * v), MPIU_REAL, MPIU_SUM, s->comm));
+    }
+  }
+  bb->finished = PETSC_TRUE;
+  PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis bb, PetscInt b, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, PetscInt *ndeflated)
+{
+  PetscFunctionBegin;
+  PetscCheck(bb->finished, bb->s->comm, PETSC_ERR_ORDER, "call KFBodyBasisFinish() first");
+  PetscCheck(b >= 0 && b < bb->s->nb, bb->s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", b);
+  if (v) *v = bb->v[b];
+  if (M) *M = bb->M[b];
+  if (K) *K = bb->K[b];
+  if (G) *G = bb->G[b];
+  if (H) *H = bb->H[b];
+  if (ninterfaces) *ninterfaces = bb->s->bodies[b].ninterfaces;
+  if (iface) *iface = bb->iface[b];
+  if (ndeflated) *ndeflated = bb->ndefl[b];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyBasisGetMap(KFBodyBasis bb, PetscInt b, Mat *Psi)
+{
+  PetscFunctionBegin;
+  PetscCheck(bb->finished, bb->s->comm, PETSC_ERR_ORDER, "call KFBodyBasisFinish() first");
+  PetscCheck(b >= 0 && b < bb->s->nb, bb->s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", b);
+  *Psi = bb->Psi[b];
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,230 @@
+#include <kryflex_impl.h>
+
+/* Rigid-body and mechanism modes from node coordinates and joints: 6 rigid motions of the whole scene
+   (translations and rotations in the root frame) and, per revolute joint, the rotation of the child's subtree about
+   the joint axis. They are written in system dofs: kept body dofs take the body-frame motion, the joints' free
+   rotations (beta) are 1 for their own mechanism mode. */
+
+static void Cross(const PetscReal a[3], const PetscReal b[3], PetscReal c[3])
+{
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* is body b in the subtree hanging from joint j's child? */
+static PetscBool InSubtree(KFScene s, PetscInt b, PetscInt j)
+{
+  while (b >= 0) {
+    if (b == s->joints[j].child) return PETSC_TRUE;
+    b = s->bodies[b].parent_joint >= 0 ? s->joints[s->bodies[b].parent_joint].parent : -1;
+  }
+  return PETSC_FALSE;
+}
+
+static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
+{
+  KFScene      s = y->scene;
+  PetscInt     r = 6 + s->nrevolute, lda;
+  PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, Phi));
+  PetscCall(MatDenseGetLDA(*Phi, &lda));
+  PetscCall(MatDenseGetArrayWrite(*Phi, &a));
+  for (PetscInt m = 0; m < r; m++)
+    for (PetscInt i = 0; i < s->nsys_local; i++) a[i + m * lda] = 0;
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    PetscReal  *Q = y->Q[b], *o = y->o[b];
+    PetscInt    node = 0;
+    for (PetscInt i = B->rstart; i < B->rend; i++) {
+      PetscInt  sys = B->sysidx[i - B->rstart], comp;
+      PetscReal yv[3];
+      if (sys < 0) continue;
+      while (node + 1 < B->nnodes && B->dof0[node + 1] <= i) node++;
+      comp = i - B->dof0[node];
+      for (int c = 0; c < 3; c++) {
+        yv[c] = o[c];
+        for (int k = 0; k < 3; k++) yv[c] += Q[c + 3 * k] * B->xyz[3 * node + k];
+      }
+      for (PetscInt m = 0; m < r; m++) {
+        PetscReal t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, disp[3], rot[3], x[3] = {yv[0], yv[1], yv[2]};
+        if (m < 3) t[m] = 1;
+        else if (m < 6) w[m - 3] = 1;
+        else {
+          /* mechanism: the child subtree of revolute joint m-6 turns about the joint axis through the joint */
+          PetscInt j = 0;
+          for (j = 0; j < s->nj; j++)
+            if (s->joints[j].revolute == m - 6) break;
+          if (!InSubtree(s, b, j)) continue;
+          {
+            KFJointData *J  = &s->joints[j];
+            KFBodyData  *Pb = &s->bodies[J->parent];
+            PetscReal   *Qp = y->Q[J->parent], *op = y->o[J->parent], *xp = &Pb->xyz[3 * Pb->iface[J->parent_iface].node];
+            for (int c = 0; c < 3; c++) {
+              PetscReal yj = op[c];
+              w[c]         = 0;
+              for (int k = 0; k < 3; k++) {
+                w[c] += Qp[c + 3 * k] * J->axis[k];
+                yj += Qp[c + 3 * k] * xp[k];
+              }
+              x[c] -= yj;
+            }
+          }
+        }
+        Cross(w, x, disp);
+        for (int c = 0; c < 3; c++) disp[c] += t[c];
+        /* back to the body frame: Q^T */
+        for (int c = 0; c < 3; c++) {
+          rot[c] = 0;
+          for (int k = 0; k < 3; k++) rot[c] += Q[k + 3 * c] * (comp < 3 ? disp[k] : w[k]);
+        }
+        a[(sys - s->sys_rstart) + m * lda] = rot[comp % 3];
+      }
+    }
+  }
+  for (PetscInt j = 0; j < s->nj; j++) {
+    PetscInt beta = s->joints[j].beta;
+    if (beta >= s->sys_rstart && beta < s->sys_rstart + s->nsys_local) a[(beta - s->sys_rstart) + (6 + s->joints[j].revolute) * lda] = 1.0;
+  }
+  PetscCall(MatDenseRestoreArrayWrite(*Phi, &a));
+  PetscCall(MatAssemblyBegin(*Phi, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*Phi, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* M-orthonormalizes the columns (Cholesky of the small Gram matrix, twice for accuracy) */
+PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[])
+{
+  PetscInt     r, nl, lda;
+  PetscReal   *Gm;
+  PetscScalar *x;
+  Mat          MX;
+  MPI_Comm     comm;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)X, &comm));
+  PetscCall(MatGetSize(X, NULL, &r));
+  PetscCall(MatGetLocalSize(X, &nl, NULL));
+  PetscCall(PetscMalloc1(r * r, &Gm));
+  for (int pass = 0; pass < 2; pass++) {
+    PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+    PetscCall(KFMatTransposeMatMultGather(X, MX, Gm));
+    PetscCall(MatDestroy(&MX));
+    /* Cholesky Gm = L L^T, then X <- X L^-T */
+    for (PetscInt j = 0; j < r; j++) {
+      PetscReal d = Gm[j + j * r];
+      for (PetscInt k = 0; k < j; k++) d -= Gm[j + k * r] * Gm[j + k * r];
+      PetscCheck(d > 0, comm, PETSC_ERR_ARG_WRONG, "%s are linearly dependent in the M-inner product (column %" PetscInt_FMT "), or M is not positive definite; check node coordinates and the mass matrix", what, j);
+      Gm[j + j * r] = PetscSqrtReal(d);
+      for (PetscInt i = j + 1; i < r; i++) {
+        PetscReal v = Gm[i + j * r];
+        for (PetscInt k = 0; k < j; k++) v -= Gm[i + k * r] * Gm[j + k * r];
+        Gm[i + j * r] = v / Gm[j + j * r];
+      }
+    }
+    PetscCall(MatDenseGetLDA(X, &lda));
+    PetscCall(MatDenseGetArray(X, &x));
+    for (PetscInt i = 0; i < nl; i++)
+      for (PetscInt j = 0; j < r; j++) {
+        PetscReal v = PetscRealPart(x[i + j * lda]);
+        for (PetscInt k = 0; k < j; k++) v -= Gm[j + k * r] * PetscRealPart(x[i + k * lda]);
+        x[i + j * lda] = v / Gm[j + j * r];
+      }
+    PetscCall(MatDenseRestoreArray(X, &x));
+  }
+  PetscCall(PetscFree(Gm));
+  PetscFunctionReturn(0);
+}
+
+/* ||K Phi||_F / (||K||_F ||Phi||_F): rigid modes must carry no strain energy */
+static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
+{
+  Mat       KP;
+  PetscReal nKP, nK, nP;
+
+  PetscFunctionBegin;
+  PetscCall(MatMatMult(y->Ks, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KP));
+  PetscCall(MatNorm(KP, NORM_FROBENIUS, &nKP));
+  PetscCall(MatNorm(y->Ks, NORM_FROBENIUS, &nK));
+  PetscCall(MatNorm(y->Phi, NORM_FROBENIUS, &nP));
+  PetscCall(MatDestroy(&KP));
+  *res = nKP / (nK * nP);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemComputeRigidModes(KFSystem y)
+{
+  PetscReal tol = 1e-8;
+
+  PetscFunctionBegin;
+  PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() first");
+  if (y->Phi) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(KF_EVENT_RIGID, 0, 0, 0, 0));
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_rigid_tol", &tol, NULL));
+  PetscCall(KFSystemRigidFromGeometry(y, &y->Phi));
+  PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "rigid-body modes from node coordinates"));
+  y->nrigid = 6 + y->scene->nrevolute;
+  PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
+  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the rigid-body modes built from node coordinates strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or a body is not free-free; fix the nodes files or supply rigid modes (-kryflex_rigid_tol to loosen)", (double)y->rigid_residual, (double)tol);
+  PetscCall(PetscLogEventEnd(KF_EVENT_RIGID, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemSetRigidModes(KFSystem y, Mat Phi)
+{
+  PetscInt  m, r;
+  PetscReal tol = 1e-8;
+
+  PetscFunctionBegin;
+  PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFSystemSetRigidModes(): the modes belong to one configuration");
+  PetscCall(MatGetSize(Phi, &m, &r));
+  PetscCheck(m == y->scene->nsys, y->scene->comm, PETSC_ERR_ARG_SIZ, "supplied rigid modes have %" PetscInt_FMT " rows, the system has %" PetscInt_FMT " dofs", m, y->scene->nsys);
+  PetscCall(MatDestroy(&y->Phi));
+  PetscCall(MatConvert(Phi, MATDENSE, MAT_INITIAL_MATRIX, &y->Phi));
+  PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "supplied rigid-body modes"));
+  y->nrigid     = r;
+  y->user_rigid = PETSC_TRUE;
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_rigid_tol", &tol, NULL));
+  PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
+  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the supplied rigid-body modes strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g", (double)y->rigid_residual, (double)tol);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemGetRigidModes(KFSystem y, Mat *Phi, PetscReal *residual)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemComputeRigidModes(y));
+  if (Phi) *Phi = y->Phi;
+  if (residual) *residual = y->rigid_residual;
+  PetscFunctionReturn(0);
+}
+
+/* X <- (I - Phi Phi^T M) X  (onto the flexible subspace), or with left: X <- (I - M Phi Phi^T) X (self-equilibrated loads) */
+PetscErrorCode KFProjectFlexible(KFSystem y, Mat X, PetscBool left)
+{
+  Mat        MX = NULL;
+  PetscInt   r, p;
+  PetscReal *c;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemComputeRigidModes(y));
+  PetscCall(MatGetSize(y->Phi, NULL, &r));
+  PetscCall(MatGetSize(X, NULL, &p));
+  PetscCall(PetscMalloc1(r * p, &c));
+  if (!left) {
+    PetscCall(MatMatMult(y->Ms, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+    PetscCall(KFMatTransposeMatMultGather(y->Phi, MX, c)); /* Phi^T M X */
+    PetscCall(MatDestroy(&MX));
+    PetscCall(KFDenseMultSmall(y->Phi, r, p, c, -1.0, X)); /* X -= Phi c */
+  } else {
+    Mat MPhi;
+    PetscCall(KFMatTransposeMatMultGather(y->Phi, X, c)); /* Phi^T X */
+    PetscCall(MatMatMult(y->Ms, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+    PetscCall(KFDenseMultSmall(MPhi, r, p, c, -1.0, X)); /* X -= M Phi c */
+    PetscCall(MatDestroy(&MPhi));
+  }
+  PetscCall(PetscFree(c));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,307 @@
+#include <kryflex_impl.h>
+
+PetscErrorCode KFSceneCreate(MPI_Comm comm, KFScene *scene)
+{
+  PetscFunctionBegin;
+  PetscCall(KFInitialize());
+  PetscCall(PetscNew(scene));
+  (*scene)->comm = comm;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneDestroy(KFScene *scene)
+{
+  KFScene s = *scene;
+
+  PetscFunctionBegin;
+  if (!s) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    PetscCall(MatDestroy(&B->M));
+    PetscCall(MatDestroy(&B->K));
+    PetscCall(MatDestroy(&B->G));
+    PetscCall(MatDestroy(&B->Ht));
+    PetscCall(PetscFree4(B->ids, B->ndof, B->dof0, B->xyz));
+    PetscCall(PetscFree(B->iface));
+    PetscCall(PetscFree(B->sysidx));
+  }
+  for (PetscInt k = 0; k < s->nin_terms; k++) PetscCall(VecDestroy(&s->in_terms[k].v));
+  for (PetscInt k = 0; k < s->nout_terms; k++) PetscCall(VecDestroy(&s->out_terms[k].v));
+  PetscCall(PetscFree(s->bodies));
+  PetscCall(PetscFree(s->joints));
+  PetscCall(PetscFree(s->in_terms));
+  PetscCall(PetscFree(s->out_terms));
+  PetscCall(PetscFree(s->order));
+  PetscCall(PetscFree(s));
+  *scene = NULL;
+  PetscFunctionReturn(0);
+}
+
+#define KF_GROW(arr, n, alloc) \
+  do { \
+    if ((n) >= (alloc)) { \
+      PetscInt newalloc = (alloc) ? 2 * (alloc) : 4; \
+      PetscCall(PetscRealloc(sizeof(*(arr)) * newalloc, &(arr))); \
+      PetscCall(PetscMemzero((arr) + (alloc), sizeof(*(arr)) * (newalloc - (alloc)))); \
+      (alloc) = newalloc; \
+    } \
+  } while (0)
+
+PetscErrorCode KFSceneAddBody(KFScene s, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt ndof[], PetscInt *body)
+{
+  KFBodyData *B;
+  PetscInt    n = 0, mM, nM, mK, nK;
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add body %s after KFSceneSetUp()", name);
+  for (PetscInt b = 0; b < s->nb; b++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(s->bodies[b].name, name, &same));
+    PetscCheck(!same, s->comm, PETSC_ERR_ARG_WRONG, "body '%s' is defined twice: give each body a unique name", name);
+  }
+  PetscCheck(nnodes > 0, s->comm, PETSC_ERR_ARG_SIZ, "body '%s' has no nodes: its nodes file must list 'id x y z ndof' per node", name);
+  for (PetscInt i = 0; i < nnodes; i++) {
+    PetscCheck(ndof[i] == 3 || ndof[i] == 6, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": %" PetscInt_FMT " dofs per node; kryflex takes 6 (ux uy uz rx ry rz) or 3 (ux uy uz)", name, ids[i], ndof[i]);
+    n += ndof[i];
+  }
+  PetscCall(MatGetSize(M, &mM, &nM));
+  PetscCall(MatGetSize(K, &mK, &nK));
+  PetscCheck(mM == nM && mK == nK, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': M is %" PetscInt_FMT " x %" PetscInt_FMT " and K is %" PetscInt_FMT " x %" PetscInt_FMT "; both must be square", name, mM, nM, mK, nK);
+  PetscCheck(mM == mK, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': M is %" PetscInt_FMT " x %" PetscInt_FMT " but K is %" PetscInt_FMT " x %" PetscInt_FMT "; they must have the same size", name, mM, nM, mK, nK);
+  PetscCheck(mM == n, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': its nodes carry %" PetscInt_FMT " dofs but M and K are %" PetscInt_FMT " x %" PetscInt_FMT "; the nodes file must match the matrices (6 or 3 dofs per node, node by node)", name, n, mM, mM);
+  KF_GROW(s->bodies, s->nb, s->nb_alloc);
+  B = &s->bodies[s->nb];
+  PetscCall(PetscStrncpy(B->name, name, sizeof(B->name)));
+  PetscCall(PetscObjectReference((PetscObject)M));
+  PetscCall(PetscObjectReference((PetscObject)K));
+  B->M = M;
+  B->K = K;
+  B->n = n;
+  B->nnodes = nnodes;
+  PetscCall(PetscMalloc4(nnodes, &B->ids, nnodes, &B->ndof, nnodes, &B->dof0, 3 * nnodes, &B->xyz));
+  for (PetscInt i = 0, d = 0; i < nnodes; i++) {
+    B->ids[i]  = ids[i];
+    B->ndof[i] = ndof[i];
+    B->dof0[i] = d;
+    d += ndof[i];
+    for (int c = 0; c < 3; c++) B->xyz[3 * i + c] = xyz[3 * i + c];
+  }
+  {
+    /* duplicate ids would make node references ambiguous */
+    PetscInt *sorted;
+    PetscCall(PetscMalloc1(nnodes, &sorted));
+    PetscCall(PetscArraycpy(sorted, ids, nnodes));
+    PetscCall(PetscSortInt(nnodes, sorted));
+    for (PetscInt i = 1; i < nnodes; i++) PetscCheck(sorted[i] != sorted[i - 1], s->comm, PETSC_ERR_ARG_WRONG, "body '%s': node id %" PetscInt_FMT " appears twice in its nodes list", name, sorted[i]);
+    PetscCall(PetscFree(sorted));
+  }
+  B->parent_joint = -1;
+  B->child_iface  = -1;
+  if (body) *body = s->nb;
+  s->nb++;
+  PetscFunctionReturn(0);
+}
+
+/* index of a node id in a body, or -1 */
+PetscErrorCode KFBodyFindNode(KFBodyData *B, PetscInt id, PetscInt *node)
+{
+  PetscFunctionBegin;
+  *node = -1;
+  for (PetscInt i = 0; i < B->nnodes; i++)
+    if (B->ids[i] == id) {
+      *node = i;
+      break;
+    }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddInterface(KFScene s, PetscInt body, const char name[], PetscInt node_id)
+{
+  KFBodyData *B;
+  PetscInt    node, alloc;
+
+  PetscFunctionBegin;
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "interface '%s': body index %" PetscInt_FMT " does not exist", name, body);
+  B = &s->bodies[body];
+  PetscCall(KFBodyFindNode(B, node_id, &node));
+  PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': interface '%s' names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, name, node_id);
+  PetscCheck(B->ndof[node] == 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': interface '%s' (node %" PetscInt_FMT ") has %" PetscInt_FMT " dofs; interface nodes need 6 (translations and rotations)", B->name, name, node_id, B->ndof[node]);
+  alloc = B->ninterfaces;
+  PetscCall(PetscRealloc(sizeof(KFInterface) * (alloc + 1), &B->iface));
+  PetscCall(PetscStrncpy(B->iface[alloc].name, name, KF_MAX_NAME));
+  B->iface[alloc].node_id = node_id;
+  B->iface[alloc].node    = node;
+  B->iface[alloc].dof0    = B->dof0[node];
+  B->ninterfaces++;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFBodyFindInterface(KFScene s, PetscInt body, const char name[], const char role[], const char joint[], PetscInt *k)
+{
+  KFBodyData *B = &s->bodies[body];
+
+  PetscFunctionBegin;
+  *k = -1;
+  for (PetscInt i = 0; i < B->ninterfaces; i++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(B->iface[i].name, name, &same));
+    if (same) *k = i;
+  }
+  PetscCheck(*k >= 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': %s body '%s' has no interface named '%s'; declare it under the body's interfaces", joint, role, B->name, name);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddJoint(KFScene s, const char name[], KFJointType type, PetscInt parent, const char parent_interface[], PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9])
+{
+  KFJointData *J;
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add joint %s after KFSceneSetUp()", name);
+  PetscCheck(parent >= 0 && parent < s->nb && child >= 0 && child < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': parent or child body does not exist", name);
+  PetscCheck(parent != child, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s' ties body '%s' to itself; a joint connects two different bodies", name, s->bodies[parent].name);
+  PetscCheck(type == KF_JOINT_REVOLUTE || type == KF_JOINT_FIXED, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': unknown type", name);
+  KF_GROW(s->joints, s->nj, s->nj_alloc);
+  J = &s->joints[s->nj];
+  PetscCall(PetscStrncpy(J->name, name, sizeof(J->name)));
+  J->type   = type;
+  J->parent = parent;
+  J->child  = child;
+  PetscCall(KFBodyFindInterface(s, parent, parent_interface, "parent", name, &J->parent_iface));
+  PetscCall(KFBodyFindInterface(s, child, child_interface, "child", name, &J->child_iface));
+  if (type == KF_JOINT_REVOLUTE) {
+    PetscReal nrm = PetscSqrtReal(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    PetscCheck(nrm > 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': the rotation axis is zero; give a direction such as [0, 0, 1]", name);
+    for (int c = 0; c < 3; c++) J->axis[c] = axis[c] / nrm;
+  } else {
+    J->axis[0] = 0; J->axis[1] = 0; J->axis[2] = 1;
+  }
+  for (int c = 0; c < 9; c++) J->R0[c] = R0 ? R0[c] : (c % 4 == 0 ? 1.0 : 0.0);
+  {
+    /* R0 must be a rotation: R0^T R0 = I, det = +1 */
+    PetscReal err = 0, *R = J->R0, det;
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) {
+        PetscReal d = 0;
+        for (int k = 0; k < 3; k++) d += R[k + 3 * i] * R[k + 3 * j];
+        err = PetscMax(err, PetscAbsReal(d - (i == j)));
+      }
+    det = R[0] * (R[4] * R[8] - R[7] * R[5]) - R[3] * (R[1] * R[8] - R[7] * R[2]) + R[6] * (R[1] * R[5] - R[4] * R[2]);
+    PetscCheck(err < 1e-8 && det > 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': orientation is not a rotation matrix (orthonormality error %g, det %g)", name, (double)err, (double)det);
+  }
+  J->revolute = -1;
+  J->beta     = -1;
+  s->nj++;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneSetNumIO(KFScene s, PetscInt ninputs, PetscInt noutputs)
+{
+  PetscFunctionBegin;
+  PetscCheck(ninputs >= 1 && noutputs >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "a scene needs at least one input and one output (got %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs)", ninputs, noutputs);
+  s->ninputs  = ninputs;
+  s->noutputs = noutputs;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFSceneAddTerm(KFScene s, PetscBool input, PetscInt io, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal w, Vec v)
+{
+  KFTerm  *T;
+  PetscInt nio = input ? s->ninputs : s->noutputs;
+
+  PetscFunctionBegin;
+  PetscCheck(io >= 0 && io < nio, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT " does not exist (the scene has %" PetscInt_FMT "); call KFSceneSetNumIO first", input ? "input" : "output", io, nio);
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT ": body index %" PetscInt_FMT " does not exist", input ? "input" : "output", io, body);
+  if (!v) {
+    KFBodyData *B = &s->bodies[body];
+    PetscInt    node;
+    PetscCall(KFBodyFindNode(B, node_id, &node));
+    PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "%s %" PetscInt_FMT ": body '%s' has no node %" PetscInt_FMT, input ? "input" : "output", io, B->name, node_id);
+    PetscCheck(comp >= 0 && comp < B->ndof[node], s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT ": node %" PetscInt_FMT " of body '%s' has %" PetscInt_FMT " dofs, component %" PetscInt_FMT " does not exist (rotations rx ry rz need a 6-dof node)", input ? "input" : "output", io, node_id, B->name, B->ndof[node], comp);
+  } else {
+    PetscInt n;
+    PetscCall(VecGetSize(v, &n));
+    PetscCheck(n == s->bodies[body].n, s->comm, PETSC_ERR_ARG_SIZ, "%s %" PetscInt_FMT ": vector of size %" PetscInt_FMT " for body '%s' of %" PetscInt_FMT " dofs", input ? "input" : "output", io, n, s->bodies[body].name, s->bodies[body].n);
+    PetscCall(PetscObjectReference((PetscObject)v));
+  }
+  if (input) {
+    KF_GROW(s->in_terms, s->nin_terms, s->nin_alloc);
+    T = &s->in_terms[s->nin_terms++];
+  } else {
+    KF_GROW(s->out_terms, s->nout_terms, s->nout_alloc);
+    T = &s->out_terms[s->nout_terms++];
+  }
+  T->io = io; T->body = body; T->node_id = node_id; T->comp = comp; T->w = w; T->v = v;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddInputLoad(KFScene s, PetscInt input, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal w)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSceneAddTerm(s, PETSC_TRUE, input, body, node_id, comp, w, NULL));
+  PetscFunctionReturn(0);
+}
+PetscErrorCode KFSceneAddInputVector(KFScene s, PetscInt input, PetscInt body, Vec g)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSceneAddTerm(s, PETSC_TRUE, input, body, -1, -1, 1.0, g));
+  PetscFunctionReturn(0);
+}
+PetscErrorCode KFSceneAddOutputReading(KFScene s, PetscInt output, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal w)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSceneAddTerm(s, PETSC_FALSE, output, body, node_id, comp, w, NULL));
+  PetscFunctionReturn(0);
+}
+PetscErrorCode KFSceneAddOutputVector(KFScene s, PetscInt output, PetscInt body, Vec h)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSceneAddTerm(s, PETSC_FALSE, output, body, -1, -1, 1.0, h));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetInfo(KFScene s, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *nsystem, PetscInt *ninputs, PetscInt *noutputs)
+{
+  PetscFunctionBegin;
+  PetscCheck(s->setup, s->comm, PETSC_ERR_ORDER, "call KFSceneSetUp() first");
+  if (nbodies) *nbodies = s->nb;
+  if (njoints) *njoints = s->nj;
+  if (nrevolute) *nrevolute = s->nrevolute;
+  if (nsystem) *nsystem = s->nsys;
+  if (ninputs) *ninputs = s->ninputs;
+  if (noutputs) *noutputs = s->noutputs;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetBodyInfo(KFScene s, PetscInt body, const char **name, PetscInt *ndofs, PetscInt *nnodes)
+{
+  PetscFunctionBegin;
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
+  if (name) *name = s->bodies[body].name;
+  if (ndofs) *ndofs = s->bodies[body].n;
+  if (nnodes) *nnodes = s->bodies[body].nnodes;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetBodyMatrices(KFScene s, PetscInt body, Mat *M, Mat *K, Mat *G, Mat *Ht)
+{
+  PetscFunctionBegin;
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
+  if (M) *M = s->bodies[body].M;
+  if (K) *K = s->bodies[body].K;
+  if (G) *G = s->bodies[body].G;
+  if (Ht) *Ht = s->bodies[body].Ht;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneView(KFScene s, PetscViewer viewer)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "kryflex scene: %" PetscInt_FMT " bodies, %" PetscInt_FMT " joints (%" PetscInt_FMT " revolute), %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs\n", s->nb, s->nj, s->nrevolute, s->ninputs, s->noutputs));
+  for (PetscInt b = 0; b < s->nb; b++) PetscCall(PetscViewerASCIIPrintf(viewer, "  body %-16s %10" PetscInt_FMT " dofs %8" PetscInt_FMT " nodes %2" PetscInt_FMT " interfaces\n", s->bodies[b].name, s->bodies[b].n, s->bodies[b].nnodes, s->bodies[b].ninterfaces));
+  for (PetscInt j = 0; j < s->nj; j++) {
+    KFJointData *J = &s->joints[j];
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  joint %-15s %-8s %s.%s -> %s.%s axis (%g %g %g)\n", J->name, J->type == KF_JOINT_REVOLUTE ? "revolute" : "fixed", s->bodies[J->parent].name, s->bodies[J->parent].iface[J->parent_iface].name, s->bodies[J->child].name, s->bodies[J->child].iface[J->child_iface].name, (double)J->axis[0], (double)J->axis[1], (double)J->axis[2]));
+  }
+  if (s->setup) PetscCall(PetscViewerASCIIPrintf(viewer, "  system dofs: %" PetscInt_FMT "\n", s->nsys));
+  PetscFunctionReturn(0);
+}

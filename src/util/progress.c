@@ -1,0 +1,49 @@
+#include <kryflex_impl.h>
+#include <stdarg.h>
+
+PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
+static PetscBool     kf_initialized = PETSC_FALSE;
+static PetscLogDouble kf_t0;
+
+/* Registers one log event per stage so that -log_view shows where the time goes. */
+PetscErrorCode KFInitialize(void)
+{
+  PetscClassId classid;
+
+  PetscFunctionBegin;
+  if (kf_initialized) PetscFunctionReturn(0);
+  kf_initialized = PETSC_TRUE;
+  PetscCall(PetscTime(&kf_t0));
+  PetscCall(PetscClassIdRegister("kryflex", &classid));
+  PetscCall(PetscLogEventRegister("KFLoad", classid, &KF_EVENT_LOAD));
+  PetscCall(PetscLogEventRegister("KFAssemble", classid, &KF_EVENT_ASSEMBLE));
+  PetscCall(PetscLogEventRegister("KFRigidModes", classid, &KF_EVENT_RIGID));
+  PetscCall(PetscLogEventRegister("KFFactor", classid, &KF_EVENT_FACTOR));
+  PetscCall(PetscLogEventRegister("KFSolve", classid, &KF_EVENT_SOLVE));
+  PetscCall(PetscLogEventRegister("KFOrthogonalize", classid, &KF_EVENT_ORTHO));
+  PetscCall(PetscLogEventRegister("KFProject", classid, &KF_EVENT_PROJECT));
+  PetscCall(PetscLogEventRegister("KFMoments", classid, &KF_EVENT_MOMENTS));
+  PetscCall(PetscLogEventRegister("KFVerify", classid, &KF_EVENT_VERIFY));
+  PetscFunctionReturn(0);
+}
+
+/* Progress lines on rank 0 with the elapsed time since kryflex started; -kryflex_quiet silences them. */
+PetscErrorCode KFProgress(MPI_Comm comm, const char fmt[], ...)
+{
+  PetscBool      quiet = PETSC_FALSE;
+  PetscLogDouble now;
+  char           line[1024];
+  va_list        args;
+  size_t         len;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetBool(NULL, NULL, "-kryflex_quiet", &quiet, NULL));
+  if (quiet) PetscFunctionReturn(0);
+  if (!kf_initialized) PetscCall(KFInitialize());
+  PetscCall(PetscTime(&now));
+  va_start(args, fmt);
+  PetscCall(PetscVSNPrintf(line, sizeof(line), fmt, &len, args));
+  va_end(args);
+  PetscCall(PetscPrintf(comm, "[kryflex %8.2f s] %s\n", (double)(now - kf_t0), line));
+  PetscFunctionReturn(0);
+}

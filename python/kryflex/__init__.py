@@ -2,20 +2,18 @@
 
     import kryflex
     scene = kryflex.load_scene("meshes/galileo/galileo.yaml")
-    result = kryflex.reduce(scene)          # reduced bodies + verification summary
-    Mh, Kh, Gh, Hh = result.reduced.reassemble([60.0])[:4]
+    result = kryflex.reduce(scene)                  # reduced bodies + verification summary
+    Mh, Kh, Gh, Hh = result.model.reassemble([60.0])[:4]
+
+Runs under mpirun with mpi4py; PETSc options on the command line reach PETSc and SLEPc.
 """
 import sys as _sys
 
-# petsc4py must see the command line (PETSc options) before anything initializes PETSc.
-import petsc4py as _petsc4py
+# SLEPc (and with it PETSc) must see the command line before anything initializes them.
+import slepc4py as _slepc4py
 
-if not _petsc4py.PETSc_initialized if hasattr(_petsc4py, "PETSc_initialized") else True:
-    pass
-try:
-    _petsc4py.init(_sys.argv)
-except Exception:  # already initialized by the caller
-    pass
+_slepc4py.init(_sys.argv)
+from slepc4py import SLEPc as _SLEPc  # noqa: E402,F401  (initializes SLEPc)
 
 __version__ = "0.1.0"
 

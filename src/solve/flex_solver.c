@@ -1,6 +1,6 @@
 #include <kryflex_impl.h>
 
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(Mat Phi, PetscInt *nheld, PetscInt **held);
+PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
 
 PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
 {
@@ -33,7 +33,7 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
 }
 
 /* MUMPS LDL^T factorization with null-pivot detection; reports the inertia MUMPS sees. */
-static PetscErrorCode KFFactorMumps(Mat A, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
+static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
 {
   MatFactorInfo  info;
   MatFactorError err;
@@ -42,6 +42,7 @@ static PetscErrorCode KFFactorMumps(Mat A, Mat *F, PetscInt *null_pivots, PetscI
   PetscCall(MatFactorInfoInitialize(&info));
   PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F));
   PetscCall(MatMumpsSetIcntl(*F, 24, 1)); /* null-pivot detection */
+  if (null_threshold != 0) PetscCall(MatMumpsSetCntl(*F, 3, null_threshold));
   PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
@@ -69,7 +70,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     Vec       d;
     PetscReal dsum;
     PetscInt  rstart, rend, nloc = 0, *loc;
-    PetscCall(KFSelectHeldDofs(sys->Phi, &solver->nheld, &solver->held));
+    PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
     PetscCall(MatCreateVecs(solver->Kh, &d, NULL));
     PetscCall(MatGetDiagonal(solver->Kh, d));
     PetscCall(VecNorm(d, NORM_1, &dsum));
@@ -83,7 +84,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     PetscCall(PetscFree(loc));
   }
   PetscCall(KFProgress(s->comm, "factorization of the %" PetscInt_FMT "-dof system (MUMPS LDL^T, %" PetscInt_FMT " dofs held)", s->nsys, solver->nheld));
-  PetscCall(KFFactorMumps(solver->Kh, &solver->F, &solver->null_pivots, &solver->negative_pivots));
+  PetscCall(KFFactorMumps(solver->Kh, 0.0, &solver->F, &solver->null_pivots, &solver->negative_pivots));
   PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes the joints declare: a mechanism no joint declares (an unconnected dof, a missing tie, a body in pieces). Fix the model, or declare the joint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
@@ -94,7 +95,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   if (check) {
     Mat      F0;
     PetscInt nnull, nneg;
-    PetscCall(KFFactorMumps(sys->Ks, &F0, &nnull, &nneg));
+    PetscCall(KFFactorMumps(sys->Ks, -1e-10, &F0, &nnull, &nneg)); /* relative threshold: rigid pivots are rounding-sized */
     PetscCall(MatDestroy(&F0));
     if (nnull != sys->nrigid)
       PetscCall(PetscPrintf(s->comm, "kryflex: warning: MUMPS null-pivot detection finds %" PetscInt_FMT " zero-energy modes in K_S, geometry gives %" PetscInt_FMT " rigid-body and mechanism modes (MUMPS' threshold is approximate; -mat_mumps_cntl_3 sets it)\n", nnull, sys->nrigid));

@@ -1,10 +1,50 @@
 #include <kryflex_impl.h>
 
-/* A statically determinate set of held dofs: r dofs on which the rigid modes are independent, chosen by
+/* The natural clamp: the 6 dofs of one node of the root body (its first interface node, else its node nearest the
+   centroid) and each revolute joint's free rotation. Holding them leaves a cantilevered tree, which is as well
+   conditioned as the structure itself; holding far-away dofs (what a plain pivoted QR picks) hangs the structure
+   from its floppiest appendages and costs digits. Returns nheld = 0 when the scene has no 6-dof root node. */
+PETSC_INTERN PetscErrorCode KFSelectClampDofs(KFScene s, PetscInt *nheld, PetscInt **held)
+{
+  KFBodyData *R = &s->bodies[s->order[0]];
+  PetscInt    node = -1, loc[6], k = 0;
+
+  PetscFunctionBegin;
+  *nheld = 0;
+  if (R->ninterfaces > 0) node = R->iface[0].node;
+  else {
+    PetscReal c[3] = {0, 0, 0}, best = PETSC_MAX_REAL;
+    for (PetscInt i = 0; i < R->nnodes; i++)
+      for (int d = 0; d < 3; d++) c[d] += R->xyz[3 * i + d] / R->nnodes;
+    for (PetscInt i = 0; i < R->nnodes; i++) {
+      PetscReal d2 = 0;
+      if (R->ndof[i] != 6) continue;
+      for (int d = 0; d < 3; d++) d2 += PetscSqr(R->xyz[3 * i + d] - c[d]);
+      if (d2 < best) {
+        best = d2;
+        node = i;
+      }
+    }
+  }
+  if (node < 0) PetscFunctionReturn(0);
+  for (int d = 0; d < 6; d++) {
+    PetscInt dof = R->dof0[node] + d;
+    loc[d]       = (dof >= R->rstart && dof < R->rend) ? R->sysidx[dof - R->rstart] : -1;
+  }
+  PetscCall(PetscMalloc1(6 + s->nrevolute, held));
+  PetscCall(MPIU_Allreduce(loc, *held, 6, MPIU_INT, MPI_MAX, s->comm));
+  k = 6;
+  for (PetscInt j = 0; j < s->nj; j++)
+    if (s->joints[j].beta >= 0) (*held)[k++] = s->joints[j].beta;
+  *nheld = k;
+  PetscFunctionReturn(0);
+}
+
+/* Fallback: a statically determinate set of held dofs for any rigid modes: r dofs on which the rigid modes are independent, chosen by
    QR with column pivoting of Phi^T (each step takes the dof whose row of Phi has the largest part not yet
    spanned). Holding them removes every rigid and mechanism motion, so K with those rows and columns replaced by
    the identity is positive definite when the declared modes are all of K's null space. */
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(Mat Phi, PetscInt *nheld, PetscInt **held)
+PETSC_INTERN PetscErrorCode KFSelectPivotedDofs(Mat Phi, PetscInt *nheld, PetscInt **held)
 {
   PetscInt           nl, r, lda, rstart;
   const PetscScalar *a;
@@ -40,7 +80,10 @@ PETSC_INTERN PetscErrorCode KFSelectHeldDofs(Mat Phi, PetscInt *nheld, PetscInt 
         loc.i = rstart + i;
       }
     }
-    PetscCallMPI(MPI_Allreduce(&loc, &glob, 1, MPIU_REAL_INT, MPI_MAXLOC, comm));
+    /* the largest row, the lowest global index among equals: the same choice on every rank */
+    PetscCall(MPIU_Allreduce(&loc.v, &glob.v, 1, MPIU_REAL, MPIU_MAX, comm));
+    loc.i = (loc.v == glob.v) ? loc.i : PETSC_MAX_INT;
+    PetscCall(MPIU_Allreduce(&loc.i, &glob.i, 1, MPIU_INT, MPI_MIN, comm));
     PetscCheck(glob.v > 0, comm, PETSC_ERR_ARG_WRONG, "the rigid-body modes are linearly dependent: cannot find %" PetscInt_FMT " dofs to hold", r);
     owner_row = glob.i - rstart;
     for (PetscInt k = 0; k < r; k++) q[k] = (owner_row >= 0 && owner_row < nl) ? W[owner_row * r + k] : 0;
@@ -56,5 +99,52 @@ PETSC_INTERN PetscErrorCode KFSelectHeldDofs(Mat Phi, PetscInt *nheld, PetscInt 
   }
   *nheld = r;
   PetscCall(PetscFree2(W, q));
+  PetscFunctionReturn(0);
+}
+
+/* The held dofs must determine every rigid mode: Phi restricted to them is square and well conditioned. */
+static PetscErrorCode KFHeldConditioning(Mat Phi, PetscInt nheld, const PetscInt held[], PetscReal *cond)
+{
+  PetscInt           r, rstart, rend, lda;
+  const PetscScalar *a;
+  PetscReal         *A, *Id, *ev, *vecs, *AtA;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(Phi, NULL, &r));
+  *cond = PETSC_INFINITY;
+  if (nheld != r) PetscFunctionReturn(0);
+  PetscCall(MatGetOwnershipRange(Phi, &rstart, &rend));
+  PetscCall(MatDenseGetLDA(Phi, &lda));
+  PetscCall(PetscCalloc5(r * r, &A, r * r, &Id, r, &ev, r * r, &vecs, r * r, &AtA));
+  PetscCall(MatDenseGetArrayRead(Phi, &a));
+  for (PetscInt i = 0; i < r; i++)
+    if (held[i] >= rstart && held[i] < rend)
+      for (PetscInt j = 0; j < r; j++) A[i + j * r] = PetscRealPart(a[(held[i] - rstart) + j * lda]);
+  PetscCall(MatDenseRestoreArrayRead(Phi, &a));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, A, (PetscMPIInt)(r * r), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)Phi)));
+  for (PetscInt i = 0; i < r; i++)
+    for (PetscInt j = 0; j < r; j++) {
+      for (PetscInt k = 0; k < r; k++) AtA[i + j * r] += A[k + i * r] * A[k + j * r];
+      Id[i + j * r] = (i == j);
+    }
+  PetscCall(KFDenseEig(r, AtA, Id, ev, vecs));
+  if (ev[0] > 0) *cond = PetscSqrtReal(ev[r - 1] / ev[0]);
+  PetscCall(PetscFree5(A, Id, ev, vecs, AtA));
+  PetscFunctionReturn(0);
+}
+
+PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, PetscInt *nheld, PetscInt **held)
+{
+  PetscReal cond = PETSC_INFINITY;
+
+  PetscFunctionBegin;
+  if (!sys->user_rigid) {
+    PetscCall(KFSelectClampDofs(sys->scene, nheld, held));
+    if (*nheld) PetscCall(KFHeldConditioning(sys->Phi, *nheld, *held, &cond));
+  }
+  if (!(cond < 1e8)) {
+    if (*nheld) PetscCall(PetscFree(*held));
+    PetscCall(KFSelectPivotedDofs(sys->Phi, nheld, held));
+  }
   PetscFunctionReturn(0);
 }

@@ -1,0 +1,198 @@
+#!/usr/bin/python3
+"""Builds the 28-dof Galileo-like model of Lee's paper (Table 1, Fig. 2) and writes it next to this script.
+
+    /usr/bin/python3 meshes/galileo/generate.py [--out DIR]
+
+Stator (despun section, 12 dofs): two 6-dof nodes, the spin bearing (node 1) and point A (node 2), joined by
+one stubby beam.  Rotor (spun section, 21 dofs): a 6-dof hub on the bearing (node 101) and five 3-dof
+appendage tips on beams whose tip rotations are condensed out (pinned tips): magnetometer boom, two RTG
+booms, high-gain antenna, a stiff lower module.  Mass is lumped at the nodes (beams are massless, as in
+a stick model).  Section stiffnesses (and the inertias at point A) were tuned once so the free-free
+component frequencies resemble Table 1 (see README.md); the values are written out below.
+
+The script checks that each body is free-free (M positive definite, exactly 6 zero eigenvalues of K),
+prints component and system (alpha = 0) frequencies and writes:
+    stator_M.mtx stator_K.mtx rotor_M.mtx rotor_K.mtx stator_nodes.txt rotor_nodes.txt galileo.yaml
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+import scipy.linalg as sl
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+import frames  # noqa: E402  (meshes/frames.py: beam element and writers)
+
+# ------------------------------------------------------------------ design (SI units: kg, m, N)
+# Node inertia tensors are about the node, in the body frame.  The stator is a stub along -z whose lateral
+# inertia is lopsided (about x it is twice that about y: a platform reaching out along y), and the rotor's
+# booms stick out sideways and slightly up (products of inertia).  So turning the rotor changes both the
+# system frequencies and what the stator's point A feels: the input-to-output map depends on the clock angle.
+# Stiffnesses (and the inertias at point A) are the values of a one-off least-squares fit of the free-free
+# frequencies to Table 1 (README.md), rounded to 4 digits; nothing is fitted at run time.
+
+STATOR_NODES = [
+    # id, name, position, mass, inertia tensor
+    (1, "bearing", (0.0, 0.0, 0.0), 420.0, [[600.0, 0.0, 0.0], [0.0, 1500.0, 0.0], [0.0, 0.0, 260.0]]),
+    (2, "A", (0.0, 0.0, -1.7), 640.0, [[8126.0, 0.0, 0.0], [0.0, 1551.0, 0.0], [0.0, 0.0, 300.0]]),
+]
+# stator beam, bearing -> A (along -z); ref = global x, so local y = global y and local z = global x
+STATOR_BEAM = dict(EA=2.524e10, GJ=1.845e10, EIy=1.678e8, EIz=1.541e8, ref=(1.0, 0.0, 0.0))
+
+ROTOR_HUB = (101, "hub", (0.0, 0.0, 0.0), 900.0, [[760.0, 0.0, 0.0], [0.0, 760.0, 0.0], [0.0, 0.0, 1100.0]])
+ROTOR_APPENDAGES = [
+    # id, name, tip position, tip mass, EA, EIy (bending in the local x-z plane), EIz (local x-y plane).
+    # Local y is perpendicular to the beam and to global z (tangential for the radial booms; for the
+    # two beams along z it is perpendicular to global x).  Tips are 3-dof: tip rotations condensed out.
+    (102, "magnetometer_boom_tip", (-10.6, 1.2, 0.6), 16.0, 3.846e7, 1.467e5, 2324.0),
+    (103, "rtg1", (2.1, 3.6, 0.3), 60.0, 5.120e7, 7.935e5, 3.410e5),
+    (104, "rtg2", (2.3, -3.3, 0.35), 56.0, 5.004e7, 3.409e5, 6.040e5),
+    (105, "high_gain_antenna", (0.0, 0.0, 2.9), 52.0, 2.608e10, 1.437e8, 1.434e8),
+    (106, "lower_module", (0.0, 0.0, -1.1), 180.0, 3.729e10, 2.097e9, 2.097e9),
+]
+
+SCENE_ANGLES = [0, 15, 30, 45, 60, 72]
+
+
+# ------------------------------------------------------------------ model
+
+def node_mass(mass, inertia):
+    m = np.zeros((6, 6))
+    m[:3, :3] = mass * np.eye(3)
+    m[3:, 3:] = np.asarray(inertia, float)
+    return m
+
+
+def beam_stiffness(x1, x2, EA, EIy, EIz, GJ=None, ref=None, pinned_end=False):
+    """Global 12x12 beam stiffness; pinned_end condenses the end rotations out (9x9: hub 6 + tip 3)."""
+    R, L = frames.beam_frames(np.asarray(x1)[None], np.asarray(x2)[None], None if ref is None else np.asarray(ref)[None])
+    if GJ is None:
+        GJ = EIy   # irrelevant when the end is pinned: condensation removes torsion entirely
+    k = frames.to_global(frames.beam_local_stiffness(L, EA, GJ, EIy, EIz), R)
+    return (frames.condense(k, [9, 10, 11]) if pinned_end else k)[0]
+
+
+def build_stator(nodes=STATOR_NODES, beam=STATOR_BEAM):
+    (_, _, x1, m1, j1), (_, _, x2, m2, j2) = nodes
+    M = sl.block_diag(node_mass(m1, j1), node_mass(m2, j2))
+    K = beam_stiffness(x1, x2, beam["EA"], beam["EIy"], beam["EIz"], beam["GJ"], beam["ref"])
+    table = [(i, x, 6) for i, _, x, _, _ in nodes]
+    return M, 0.5 * (K + K.T), table
+
+
+def build_rotor(hub=ROTOR_HUB, appendages=ROTOR_APPENDAGES):
+    hid, _, xh, mh, jh = hub
+    n = 6 + 3 * len(appendages)
+    M = np.zeros((n, n))
+    K = np.zeros((n, n))
+    M[:6, :6] = node_mass(mh, jh)
+    table = [(hid, xh, 6)]
+    for a, (aid, _, xt, mt, EA, EIy, EIz) in enumerate(appendages):
+        tip = slice(6 + 3 * a, 9 + 3 * a)
+        M[tip, tip] = mt * np.eye(3)
+        k = beam_stiffness(xh, xt, EA, EIy, EIz, pinned_end=True)
+        dofs = np.r_[0:6, tip]
+        K[np.ix_(dofs, dofs)] += k
+        table.append((aid, xt, 3))
+    return M, 0.5 * (K + K.T), table
+
+
+def free_free_frequencies(name, M, K, nrigid=6, rtol=1e-9):
+    """Checks M > 0 and exactly nrigid zero eigenvalues of (K, M); returns all frequencies in Hz."""
+    if np.linalg.eigvalsh(M).min() <= 0:
+        raise SystemExit(f"{name}: mass matrix is not positive definite; give every dof a mass or inertia")
+    lam = sl.eigh(K, M, eigvals_only=True)
+    zero = np.abs(lam) <= rtol * lam.max()
+    if zero.sum() != nrigid or lam.min() < -rtol * lam.max():
+        raise SystemExit(f"{name}: expected exactly {nrigid} zero-frequency modes, found {zero.sum()} "
+                         f"(eigenvalues {lam[:nrigid + 2]}); check the beam connectivity")
+    lam[zero] = 0.0
+    return np.sqrt(lam) / (2 * np.pi)
+
+
+def system_frequencies_alpha0(Ms, Ks, Mr, Kr):
+    """System at alpha = 0: bearing nodes share ux uy uz rx ry (dofs 0..4 of each body); rz is free."""
+    ns = Ms.shape[0]
+    C = np.zeros((5, ns + Kr.shape[0]))
+    C[np.arange(5), np.arange(5)] = 1.0
+    C[np.arange(5), ns + np.arange(5)] = -1.0
+    P = sl.null_space(C)
+    M = P.T @ sl.block_diag(Ms, Mr) @ P
+    K = P.T @ sl.block_diag(Ks, Kr) @ P
+    return free_free_frequencies("system (alpha = 0)", M, K, nrigid=7)
+
+
+# ------------------------------------------------------------------ files
+
+def write_scene(out_dir):
+    scene = f"""\
+# Galileo-like 28-dof model (Lee, "A Krylov model reduction methodology for articulated,
+# multi-flexible body structures", Table 1, Fig. 2). Generated by meshes/galileo/generate.py.
+name: galileo
+bodies:
+  stator:
+    mass: stator_M.mtx
+    stiffness: stator_K.mtx
+    nodes: stator_nodes.txt
+    interfaces: {{bearing: 1}}
+  rotor:
+    mass: rotor_M.mtx
+    stiffness: rotor_K.mtx
+    nodes: rotor_nodes.txt
+    interfaces: {{bearing: 101}}
+joints:
+  spin_bearing: {{type: revolute, parent: stator, parent_interface: bearing, child: rotor, child_interface: bearing, axis: [0, 0, 1]}}
+inputs:
+  # spin bearing actuator: +torque about z on the stator, -torque on the rotor
+  bearing_torque:
+    - {{body: stator, node: 1, dof: rz, weight: 1.0}}
+    - {{body: rotor, node: 101, dof: rz, weight: -1.0}}
+outputs:
+  # rotation about Y at point A on the stator (not the bearing node)
+  pointA_ry: [{{body: stator, node: 2, dof: ry}}]
+angles: [{", ".join(str(a) for a in SCENE_ANGLES)}]
+band: [0.01, 10.0]
+damping: 0.0025
+accuracy: 0.05
+reduction: {{moments: 10, output_blocks: 1, importance: h2, keep_threshold: 0.05, reduction_angle: auto}}
+"""
+    with open(os.path.join(out_dir, "galileo.yaml"), "w") as f:
+        f.write(scene)
+
+
+def write_body(out_dir, name, M, K, table, names):
+    note = f"Galileo-like {name}, {M.shape[0]} dofs, SI units; generated by meshes/galileo/generate.py"
+    frames.write_mtx_symmetric(os.path.join(out_dir, f"{name}_M.mtx"), M, note)
+    frames.write_mtx_symmetric(os.path.join(out_dir, f"{name}_K.mtx"), K, note)
+    ids = [i for i, _, _ in table]
+    frames.write_nodes(os.path.join(out_dir, f"{name}_nodes.txt"), ids, [x for _, x, _ in table],
+                       [d for _, _, d in table], note + "\nnodes: " + ", ".join(f"{i} {n}" for i, n in zip(ids, names)))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=HERE, help="output directory (default: next to this script)")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+
+    Ms, Ks, stator_table = build_stator()
+    Mr, Kr, rotor_table = build_rotor()
+    fs = free_free_frequencies("stator", Ms, Ks)
+    fr = free_free_frequencies("rotor", Mr, Kr)
+    fsys = system_frequencies_alpha0(Ms, Ks, Mr, Kr)
+    print(f"dofs: stator {Ms.shape[0]}, rotor {Mr.shape[0]}, system {len(fsys)}")
+    print(f"{'mode':>4} {'rotor Hz':>10} {'stator Hz':>10} {'system Hz':>10}")
+    for i in range(len(fsys)):
+        cols = [f"{f[i]:10.4f}" if i < len(f) else " " * 10 for f in (fr, fs, fsys)]
+        print(f"{i + 1:4d} " + " ".join(cols))
+
+    write_body(args.out, "stator", Ms, Ks, stator_table, [n[1] for n in STATOR_NODES])
+    write_body(args.out, "rotor", Mr, Kr, rotor_table, [ROTOR_HUB[1]] + [a[1] for a in ROTOR_APPENDAGES])
+    write_scene(args.out)
+    print(f"wrote {args.out}/galileo.yaml and the stator/rotor matrices and node files")
+
+
+if __name__ == "__main__":
+    main()

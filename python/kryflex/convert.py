@@ -1,0 +1,397 @@
+"""`kryflex convert`: turn an exported FE model into a kryflex body (matrices, nodes, scene entry).
+
+Inputs:
+  a Nastran punch file (.pch, or any bulk-data file) with DMIG stiffness and mass matrices
+      (KAAX and MAAX by default) and optionally GRID cards (here or in --grids files);
+  a NumPy .npz holding M and K (dense arrays 'M', 'K', or sparse parts 'M_data', 'M_indices',
+      'M_indptr', 'M_shape' [, 'M_format' = csr|csc], or 'M_row', 'M_col', 'M_data', 'M_shape')
+      and optionally 'nodes' (n x 5: id x y z ndof);
+  Matrix Market (.mtx) or PETSc binary (.petsc) mass and stiffness files plus a nodes file.
+Output: see bodyfiles.write_body.
+"""
+
+import argparse
+import os
+import sys
+import warnings
+import zipfile
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.io
+import scipy.sparse as sp
+
+from .bodyfiles import ConversionError, ConversionWarning, FORMATS, read_nodes, write_body
+from .dmig import scan_bulk, build_matrices, grids_from_records, nodes_from_dofs
+
+__all__ = ["convert", "main", "ConversionError", "ConversionWarning", "ConvertedBody"]
+
+PETSC_MAT_CLASSID = 1211216
+EXIT_USAGE, EXIT_BAD_INPUT = 2, 3
+
+
+@dataclass
+class ConvertedBody:
+    files: dict            # 'mass', 'stiffness', 'nodes', 'snippet' -> written path
+    size: int              # number of dofs
+    node_count: int
+    interfaces: dict = field(default_factory=dict)
+
+
+def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
+            stiffness_name="KAAX", mass_name="MAAX", nodes=None):
+    """Convert one body and write it to out_dir; return a ConvertedBody.
+
+    inputs: path of a Nastran punch file or of a .npz, or a mapping
+            {'mass': file, 'stiffness': file, 'nodes': file} of Matrix Market / PETSc binary files.
+    interfaces: {interface name: node id}; grids: bulk-data file(s) with GRID cards (punch input);
+    nodes: a nodes file for a .npz that holds no 'nodes' array.
+    Raises ConversionError (message names the file and the fix); nothing is written then.
+    """
+    interfaces = dict(interfaces or {})
+    grids = [grids] if isinstance(grids, (str, os.PathLike)) else list(grids or [])
+    if isinstance(inputs, dict):
+        unknown = set(inputs) - {"mass", "stiffness", "nodes"}
+        if unknown or not {"mass", "stiffness", "nodes"} <= set(inputs):
+            raise ConversionError("matrix-file input needs exactly the keys 'mass', 'stiffness' and 'nodes'")
+        _no_grids(grids, "Matrix Market / PETSc inputs")
+        if nodes is not None:
+            raise ConversionError("give the nodes file once (inputs['nodes'])")
+        M, K, body_nodes, sources = load_matrix_files(inputs["mass"], inputs["stiffness"], inputs["nodes"])
+    else:
+        path = os.fspath(inputs)
+        _require_file(path, "input")
+        kind = os.path.splitext(path)[1].lower()
+        if kind == ".npz":
+            _no_grids(grids, "a .npz input (coordinates go in its 'nodes' array or a nodes file)")
+            M, K, body_nodes, sources = load_npz(path, nodes)
+        elif kind in (".mtx", ".petsc"):
+            raise ConversionError(
+                f"{path} is a single matrix; a body needs mass, stiffness and nodes: "
+                "use --mass M --stiffness K --nodes nodes.txt")
+        else:
+            if nodes is not None:
+                raise ConversionError(
+                    f"{path}: the nodes of a Nastran body come from its DMIG dofs; "
+                    "give coordinates as GRID cards (--grids bulk.bdf), not a nodes file")
+            M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name)
+    files = write_body(out_dir, name, M, K, body_nodes, interfaces, fmt=fmt, sources=sources)
+    return ConvertedBody(files=files, size=sum(n[4] for n in body_nodes),
+                         node_count=len(body_nodes), interfaces=interfaces)
+
+
+def _require_file(path, what):
+    if not os.path.isfile(path):
+        state = "is a folder" if os.path.isdir(path) else "does not exist"
+        raise ConversionError(f"{what} file {path} {state}")
+
+
+def _no_grids(grids, what):
+    if grids:
+        raise ConversionError(f"--grids applies to Nastran punch files only, not to {what}")
+
+
+# ---------------------------------------------------------------- Nastran punch
+
+def load_punch(path, grid_files, stiffness_name, mass_name):
+    names = (stiffness_name.upper(), mass_name.upper())
+    if names[0] == names[1]:
+        raise ConversionError(f"stiffness and mass matrix names are both {names[0]}; they must differ")
+    for grid_file in grid_files:
+        _require_file(grid_file, "GRID")
+    raw, other, records, grdset = scan_bulk(path, names)
+    matrices = build_matrices(path, names, raw, other)
+    K, dofs = matrices[names[0]]
+    M, _ = matrices[names[1]]
+    node_ndof = nodes_from_dofs(dofs)
+    ids = [g for g, _ in node_ndof]
+    coords = grids_from_records(path, records, grdset, ids)
+    origin = {gid: path for gid in coords}
+    for grid_file in grid_files:
+        _, _, more, more_set = scan_bulk(grid_file, ())
+        for gid, xyz in grids_from_records(grid_file, more, more_set, ids).items():
+            if gid in coords and coords[gid] != xyz:
+                raise ConversionError(
+                    f"GRID {gid} has coordinates {coords[gid]} in {origin[gid]} but {xyz} in {grid_file}; "
+                    "give each grid once")
+            coords[gid], origin[gid] = xyz, grid_file
+    if not coords:
+        warnings.warn(
+            f"{path}: no GRID cards for the {len(ids)} grids of the matrices (give them with --grids "
+            "bulk.bdf); node coordinates are set to 0, so rigid-body modes cannot be computed from "
+            "geometry and will then need to be supplied", ConversionWarning)
+    else:
+        missing = [g for g in ids if g not in coords]
+        if missing:
+            shown = ", ".join(str(g) for g in missing[:10])
+            raise ConversionError(
+                f"{len(missing)} grids of the DMIG matrices in {path} have no GRID card "
+                f"({shown}{', ...' if len(missing) > 10 else ''}); add the bulk-data file that defines "
+                "them with --grids")
+    nodes = [(g, *coords.get(g, (0.0, 0.0, 0.0)), n) for g, n in node_ndof]
+    sources = {"mass": f"DMIG {names[1]} of {path}", "stiffness": f"DMIG {names[0]} of {path}",
+               "nodes": f"grids of {path}"}
+    return M, K, nodes, sources
+
+
+# ---------------------------------------------------------------- NumPy archive
+
+def load_npz(path, nodes_file=None):
+    try:
+        archive = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+        raise ConversionError(f"{path} is not a readable NumPy .npz archive ({exc})") from None
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise ConversionError(f"{path} holds a single array; a body .npz holds M, K (and nodes): "
+                              "save it with numpy.savez(path, M=..., K=..., nodes=...)")
+    with archive:
+        M = _npz_matrix(archive, "M", path)
+        K = _npz_matrix(archive, "K", path)
+        has_nodes = "nodes" in archive.files
+        if has_nodes and nodes_file is not None:
+            raise ConversionError(f"{path} holds a 'nodes' array and a nodes file was given too; give one")
+        if has_nodes:
+            table = _npz_array(archive, "nodes", path)
+            if table.ndim != 2 or table.shape[1] != 5:
+                raise ConversionError(
+                    f"'nodes' array of {path} has shape {table.shape}; it must be n x 5 (id x y z ndof)")
+            nodes = [tuple(row) for row in table.tolist()]
+            nodes_source = f"'nodes' array of {path}"
+        elif nodes_file is not None:
+            _require_file(nodes_file, "nodes")
+            nodes, nodes_source = read_nodes(nodes_file), f"nodes file {nodes_file}"
+        else:
+            nodes, nodes_source = _default_nodes(path, M.shape[0]), f"default nodes for {path}"
+    sources = {"mass": f"'M' of {path}", "stiffness": f"'K' of {path}", "nodes": nodes_source}
+    return M, K, nodes, sources
+
+
+def _npz_array(archive, key, path):
+    try:
+        return archive[key]
+    except ValueError as exc:  # object arrays (e.g. a pickled scipy matrix) need pickle: refused
+        raise ConversionError(
+            f"'{key}' of {path} cannot be read without pickle ({exc}); store plain arrays: a dense "
+            f"'{key}' or sparse parts '{key}_data', '{key}_indices', '{key}_indptr', '{key}_shape'") from None
+
+
+def _npz_matrix(archive, key, path):
+    keys = set(archive.files)
+    where = f"{path}, matrix {key}"
+    try:
+        if key in keys:
+            dense = _npz_array(archive, key, path)
+            if dense.ndim != 2:
+                raise ConversionError(f"{where}: array '{key}' has {dense.ndim} dimensions; it must be 2-D")
+            return sp.csr_matrix(dense.astype(np.float64))
+        part = lambda suffix: _npz_array(archive, f"{key}_{suffix}", path)  # noqa: E731
+        if {f"{key}_{s}" for s in ("data", "indices", "indptr", "shape")} <= keys:
+            layout = "csr"
+            if f"{key}_format" in keys:
+                layout = part("format").item()
+                layout = layout.decode() if isinstance(layout, bytes) else str(layout)
+            if layout not in ("csr", "csc"):
+                raise ConversionError(f"{where}: '{key}_format' is {layout!r}; use 'csr' or 'csc'")
+            build = sp.csr_matrix if layout == "csr" else sp.csc_matrix
+            return build((part("data").astype(np.float64), part("indices"), part("indptr")),
+                         shape=tuple(int(n) for n in part("shape"))).tocsr()
+        if {f"{key}_{s}" for s in ("row", "col", "data", "shape")} <= keys:
+            return sp.csr_matrix((part("data").astype(np.float64), (part("row"), part("col"))),
+                                 shape=tuple(int(n) for n in part("shape")))
+    except (ValueError, TypeError, IndexError) as exc:
+        raise ConversionError(f"{where}: the stored arrays do not form a matrix ({exc})") from None
+    raise ConversionError(
+        f"{path} holds no matrix {key} (arrays: {', '.join(sorted(keys)) or 'none'}); store a dense "
+        f"'{key}', or sparse parts '{key}_data', '{key}_indices', '{key}_indptr', '{key}_shape' "
+        f"(CSR; '{key}_format'='csc' for CSC), or '{key}_row', '{key}_col', '{key}_data', '{key}_shape'")
+
+
+def _default_nodes(path, size):
+    if size % 6:
+        raise ConversionError(
+            f"{path} has no 'nodes' array and its {size} dofs are not a multiple of 6; "
+            "add 'nodes' (n x 5: id x y z ndof) or give a nodes file with --nodes")
+    warnings.warn(
+        f"{path} has no 'nodes' array: assuming {size // 6} nodes with 6 dofs, ids 1..{size // 6}, at "
+        "coordinates 0, so rigid-body modes will then need to be supplied (add 'nodes' to fix)",
+        ConversionWarning)
+    return [(i, 0.0, 0.0, 0.0, 6) for i in range(1, size // 6 + 1)]
+
+
+# ---------------------------------------------------------------- matrix files
+
+def load_matrix_files(mass, stiffness, nodes_file):
+    for path, what in ((mass, "mass"), (stiffness, "stiffness"), (nodes_file, "nodes")):
+        _require_file(path, what)
+    M, K = read_matrix_file(mass), read_matrix_file(stiffness)
+    sources = {"mass": os.fspath(mass), "stiffness": os.fspath(stiffness),
+               "nodes": f"nodes file {nodes_file}"}
+    return M, K, read_nodes(nodes_file), sources
+
+
+def read_matrix_file(path):
+    """A sparse matrix from a Matrix Market (.mtx) or PETSc binary (.petsc) file."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(4)
+    except OSError as exc:
+        raise ConversionError(f"cannot read matrix file {path}: {exc.strerror or exc}") from None
+    if len(head) == 4 and int.from_bytes(head, "big") == PETSC_MAT_CLASSID:
+        return _read_petsc(path)
+    if path.lower().endswith(".petsc"):
+        raise ConversionError(f"{path} is not a PETSc binary matrix (wrong header)")
+    try:
+        rows, cols, _, layout, value_field, _ = scipy.io.mminfo(path)
+        if value_field not in ("real", "integer"):
+            raise ConversionError(
+                f"{path} is a Matrix Market '{value_field}' matrix; mass and stiffness must be real")
+        A = scipy.io.mmread(path)
+    except ConversionError:
+        raise
+    except Exception as exc:  # scipy raises ValueError, IndexError, ... on malformed files
+        raise ConversionError(f"{path} is not a readable Matrix Market file ({exc})") from None
+    return sp.csr_matrix(A, dtype=np.float64)
+
+
+def _read_petsc(path):
+    from petsc4py import PETSc
+
+    viewer = PETSc.Viewer().createBinary(path, "r", comm=PETSc.COMM_SELF)
+    mat = PETSc.Mat().create(comm=PETSc.COMM_SELF)
+    try:
+        mat.setType(PETSc.Mat.Type.AIJ)
+        mat.load(viewer)
+        indptr, indices, data = mat.getValuesCSR()
+        return sp.csr_matrix((data.copy(), indices.copy(), indptr.copy()), shape=mat.getSize())
+    except PETSc.Error as exc:
+        raise ConversionError(f"{path}: PETSc cannot load this matrix ({exc})") from None
+    finally:
+        mat.destroy()
+        viewer.destroy()
+
+
+# ---------------------------------------------------------------- command line
+
+USAGE_EXAMPLES = """examples:
+  kryflex convert model.pch --name rotor --interface bearing=101 -o bodies
+  kryflex convert model.pch --grids model.bdf --name rotor --interface bearing=101 -o bodies
+  kryflex convert boom.npz --name boom --interface root=1 --format mtx -o bodies
+  kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
+
+Writes <name>_M.<fmt>, <name>_K.<fmt>, <name>_nodes.txt and <name>.body.yaml (the scene entry).
+Exit codes: 0 done, 2 command-line usage error, 3 bad input (nothing written)."""
+
+
+class _UsageError(Exception):
+    pass
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(
+        prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Convert an exported FE model (Nastran DMIG punch file, NumPy .npz, or Matrix "
+                    "Market / PETSc matrices + nodes file) into a kryflex body.",
+        epilog=USAGE_EXAMPLES)
+    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, or a .npz")
+    parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
+    parser.add_argument("--stiffness", metavar="FILE", help="stiffness matrix (.mtx or .petsc)")
+    parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z ndof per line)")
+    parser.add_argument("--name", required=True, help="body name (used in file names and the scene entry)")
+    parser.add_argument("-o", "--output-dir", default=".", metavar="DIR", help="output folder (default: .)")
+    parser.add_argument("--format", choices=FORMATS, default="petsc",
+                        help="matrix file format (default: petsc)")
+    parser.add_argument("--interface", action="append", default=[], metavar="NAME=NODE",
+                        help="interface name and its node id (6 dofs); repeat for several")
+    parser.add_argument("--grids", action="append", default=[], metavar="FILE",
+                        help="bulk-data file with GRID cards for a punch input; repeatable")
+    parser.add_argument("--stiffness-name", metavar="DMIG", help="DMIG stiffness name (default: KAAX)")
+    parser.add_argument("--mass-name", metavar="DMIG", help="DMIG mass name (default: MAAX)")
+    return parser
+
+
+def _parse_interfaces(items):
+    interfaces = {}
+    for item in items:
+        iname, sep, node = item.partition("=")
+        iname, node = iname.strip(), node.strip()
+        if not sep or not iname or not node:
+            raise _UsageError(f"--interface {item!r}: expected NAME=NODE, e.g. --interface bearing=101")
+        try:
+            node_id = int(node)
+        except ValueError:
+            raise _UsageError(f"--interface {item!r}: node {node!r} is not an integer node id") from None
+        if iname in interfaces:
+            raise _UsageError(f"--interface: interface '{iname}' given twice")
+        interfaces[iname] = node_id
+    return interfaces
+
+
+def _arguments_to_call(args):
+    """Check the combination of options; return the keyword arguments of convert()."""
+    interfaces = _parse_interfaces(args.interface)
+    files = (args.mass, args.stiffness)
+    if args.input and any(files):
+        raise _UsageError("give either an input file or --mass/--stiffness/--nodes, not both")
+    if not args.input and not any(files):
+        raise _UsageError("no input: give a punch file or .npz, or --mass M --stiffness K --nodes N")
+    call = dict(out_dir=args.output_dir, name=args.name, fmt=args.format, interfaces=interfaces)
+    if not args.input:
+        if not all(files) or not args.nodes:
+            raise _UsageError("matrix-file input needs all of --mass, --stiffness and --nodes")
+        if args.grids or args.stiffness_name or args.mass_name:
+            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        call["inputs"] = {"mass": args.mass, "stiffness": args.stiffness, "nodes": args.nodes}
+        return call
+    call["inputs"] = args.input
+    if args.input.lower().endswith(".npz"):
+        if args.grids or args.stiffness_name or args.mass_name:
+            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        call["nodes"] = args.nodes
+    else:
+        if args.nodes:
+            raise _UsageError("--nodes does not apply to a punch file: its nodes come from the DMIG dofs "
+                              "and GRID cards (use --grids for coordinates)")
+        call.update(grids=args.grids, stiffness_name=args.stiffness_name or "KAAX",
+                    mass_name=args.mass_name or "MAAX")
+    return call
+
+
+def main(argv=None):
+    """Run `kryflex convert` with argv (without the 'convert' word); return the exit code."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stop:  # argparse already printed usage and the error (code 2) or help (0)
+        return stop.code if isinstance(stop.code, int) else EXIT_USAGE
+    try:
+        call = _arguments_to_call(args)
+    except _UsageError as exc:
+        parser.print_usage(sys.stderr)
+        print(f"kryflex convert: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConversionWarning)
+        try:
+            body = convert(**call)
+        except ConversionError as exc:
+            _print_warnings(caught)
+            print(f"kryflex convert: error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    _print_warnings(caught)
+    interfaces = ", ".join(f"{k}={v}" for k, v in body.interfaces.items()) or "none"
+    print(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
+          f"interfaces {interfaces}")
+    for key in ("mass", "stiffness", "nodes", "snippet"):
+        print(f"  {key:9s} {body.files[key]}")
+    print(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
+    return 0
+
+
+def _print_warnings(caught):
+    for item in caught:
+        print(f"kryflex convert: warning: {item.message}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

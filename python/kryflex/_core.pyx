@@ -55,12 +55,14 @@ cdef extern from "kryflex.h":
         const PetscReal *H
         PetscInt ninterfaces
         const PetscReal *iface
+        const PetscReal *rigid
     ctypedef struct KFJointDef:
         KFJointType type
         PetscInt parent, parent_interface, child, child_interface
         PetscReal axis[3]
         PetscReal R0[9]
 
+    PetscErrorCode KFProgress(MPI_Comm, const char*, ...)
     PetscErrorCode KFPushErrorRecorder()
     const char *KFLastError()
     void KFClearError()
@@ -105,15 +107,16 @@ cdef extern from "kryflex.h":
     PetscErrorCode KFBodyBasisAdd(KFBodyBasis, KFSystem, PetscMat)
     PetscErrorCode KFBodyBasisFinish(KFBodyBasis, PetscReal)
     PetscErrorCode KFBodyBasisDestroy(KFBodyBasis*)
-    PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt, PetscInt*, const PetscReal**, const PetscReal**, const PetscReal**, const PetscReal**, PetscInt*, const PetscReal**, PetscInt*)
+    PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt, PetscInt*, const PetscReal**, const PetscReal**, const PetscReal**, const PetscReal**, PetscInt*, const PetscReal**, const PetscReal**, PetscInt*)
     PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt, PetscMat*)
     PetscErrorCode KFDenseEig(PetscInt, const PetscReal*, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFDenseModeImportance(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, KFImportance, PetscReal, PetscReal*)
     PetscErrorCode KFDenseStaticCorrection(PetscInt, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*)
     PetscErrorCode KFDenseNullSpace(PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
     PetscErrorCode KFDenseMoments(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscInt, PetscReal*)
+    PetscErrorCode KFDenseMomentsRigid(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, PetscReal*)
     PetscErrorCode KFModalFRF(PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
-    PetscErrorCode KFReassemble(PetscInt, const KFReducedBody*, PetscInt, const KFJointDef*, const PetscReal*, PetscInt, PetscInt, PetscReal, PetscInt*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscInt*, PetscReal*)
+    PetscErrorCode KFReassemble(PetscInt, const KFReducedBody*, PetscInt, const KFJointDef*, const PetscReal*, PetscInt, PetscInt, PetscReal, PetscInt*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
     PetscErrorCode KFJointRotation(const PetscReal*, const PetscReal*, PetscReal, PetscReal*)
 
 
@@ -158,6 +161,12 @@ cdef Comm as_comm(comm):
     if isinstance(comm, Comm):
         return comm
     return PETSc.Comm(comm)
+
+
+def progress(msg, comm=None):
+    """A progress line on rank 0 with the elapsed time, on the C library's clock (-kryflex_quiet silences it)."""
+    cdef Comm c = as_comm(comm)
+    check(KFProgress(c.comm, "%s", str(msg).encode()))
 
 
 def load_matrix(path, comm=None):
@@ -456,11 +465,12 @@ cdef class BodyBasis:
         cdef const PetscReal *G
         cdef const PetscReal *H
         cdef const PetscReal *I
+        cdef const PetscReal *R
         info = self.scene.info()
         t, a = info["outputs"], info["inputs"]
-        check(KFBodyBasisGetReduced(self.bb, b, &v, &M, &K, &G, &H, &nif, &I, &ndefl))
+        check(KFBodyBasisGetReduced(self.bb, b, &v, &M, &K, &G, &H, &nif, &I, &R, &ndefl))
         return dict(M=carray(M, v, v), K=carray(K, v, v), G=carray(G, v, a), H=carray(H, t, v),
-                    iface=carray(I, 6 * nif, v), deflated=ndefl)
+                    iface=carray(I, 6 * nif, v), rigid=carray(R, v, 6), deflated=ndefl)
 
     def map(self, int b):
         cdef PetscMat Psi
@@ -544,6 +554,23 @@ def dense_moments(K, M, G, H, int nmom, double rigid_tol=1e-8):
     return L.reshape(nmom, a, t).transpose(0, 2, 1).copy()
 
 
+def dense_moments_rigid(K, M, G, H, Phir, int nmom):
+    """Moments with known rigid modes (n x r), by solves: array (nmom, t, a)."""
+    cdef cnp.ndarray[double, ndim=2] cK = fortran(K, 2, "K")
+    cdef cnp.ndarray[double, ndim=2] cM = fortran(M, 2, "M")
+    cdef cnp.ndarray[double, ndim=2] cG = fortran(G, 2, "G")
+    cdef cnp.ndarray[double, ndim=2] cH = fortran(H, 2, "H")
+    cdef cnp.ndarray[double, ndim=2] cP = fortran(Phir, 2, "Phir")
+    n = cK.shape[0]
+    if cM.shape[0] != n or cG.shape[0] != n or cH.shape[1] != n or cP.shape[0] != n:
+        raise ValueError("inconsistent sizes for the moments")
+    t, a = cH.shape[0], cG.shape[1]
+    cdef cnp.ndarray[double, ndim=1] L = np.zeros(nmom * t * a)
+    check(KFDenseMomentsRigid(n, <PetscReal*>cK.data, <PetscReal*>cM.data, a, <PetscReal*>cG.data, t, <PetscReal*>cH.data,
+                              <PetscInt>cP.shape[1], <PetscReal*>cP.data, nmom, <PetscReal*>L.data))
+    return L.reshape(nmom, a, t).transpose(0, 2, 1).copy()
+
+
 def modal_frf(lam, HPhi, PhiG, double zeta, omegas, double rigid_tol=1e-8):
     """T(w) = sum_i H phi_i phi_i^T G / (lambda_i - w^2 + 2 i zeta sqrt(lambda_i) w): complex (nw, t, a)."""
     cdef cnp.ndarray[double, ndim=1] cl = fortran(lam, 1, "lambda")
@@ -593,6 +620,9 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
         n = 0
         for i, b in enumerate(bodies):
             arrays = [fortran(b[k], 2, "body %d %s" % (i, k)) for k in ("M", "K", "G", "H", "iface")]
+            has_rigid = b.get("rigid") is not None
+            if has_rigid:
+                arrays.append(fortran(b["rigid"], 2, "body %d rigid" % i))
             v = arrays[0].shape[0]
             shapes = [tuple(x.shape[:2]) for x in arrays]
             if shapes[0] != (v, v) or shapes[1] != (v, v) or shapes[2] != (v, ninputs) \
@@ -605,6 +635,11 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
             tmp = arrays[2]; cb[i].G = <PetscReal*>tmp.data
             tmp = arrays[3]; cb[i].H = <PetscReal*>tmp.data
             tmp = arrays[4]; cb[i].iface = <PetscReal*>tmp.data
+            cb[i].rigid = NULL
+            if has_rigid:
+                if tuple(arrays[5].shape[:2]) != (v, 6):
+                    raise ValueError("reduced body %d: rigid must be %d x 6" % (i, v))
+                tmp = arrays[5]; cb[i].rigid = <PetscReal*>tmp.data
             cb[i].ninterfaces = arrays[4].shape[0] // 6
             n += v
         nrev = 0
@@ -631,7 +666,8 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
         if len(np.atleast_1d(angles_rad)) != nrev:
             raise ValueError("%d revolute joint(s) need %d angle(s), got %d" % (nrev, nrev, len(np.atleast_1d(angles_rad))))
         Mh = np.zeros(n * n); Kh = np.zeros(n * n); Gh = np.zeros(n * ninputs); Hh = np.zeros(noutputs * n)
-        out = self_reassemble(nb, cb, nj, cj, ang, ninputs, noutputs, rtol, Mh, Kh, Gh, Hh)
+        Pr = np.zeros(n * n)
+        out = self_reassemble(nb, cb, nj, cj, ang, ninputs, noutputs, rtol, Mh, Kh, Gh, Hh, Pr)
     finally:
         PyMem_Free(cb)
         PyMem_Free(cj)
@@ -639,13 +675,14 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
 
 
 cdef object self_reassemble(int nb, KFReducedBody *cb, int nj, KFJointDef *cj, cnp.ndarray ang, int a, int t, double rtol,
-                            cnp.ndarray Mh, cnp.ndarray Kh, cnp.ndarray Gh, cnp.ndarray Hh):
-    cdef PetscInt h, rank
+                            cnp.ndarray Mh, cnp.ndarray Kh, cnp.ndarray Gh, cnp.ndarray Hh, cnp.ndarray Pr):
+    cdef PetscInt h, rank, nrigid
     cdef PetscReal ratio
     check(KFReassemble(nb, cb, nj, cj, <PetscReal*>ang.data, a, t, rtol, &h, <PetscReal*>Mh.data, <PetscReal*>Kh.data,
-                       <PetscReal*>Gh.data, <PetscReal*>Hh.data, &rank, &ratio))
+                       <PetscReal*>Gh.data, <PetscReal*>Hh.data, &rank, &ratio, &nrigid, <PetscReal*>Pr.data))
     M = Mh[:h * h].reshape(h, h, order="F").copy()
     K = Kh[:h * h].reshape(h, h, order="F").copy()
     G = Gh[:h * a].reshape(h, a, order="F").copy()
     H = Hh[:t * h].reshape(t, h, order="F").copy()
-    return M, K, G, H, rank, ratio
+    P = Pr[:h * nrigid].reshape(h, nrigid, order="F").copy() if nrigid >= 0 else None
+    return M, K, G, H, rank, ratio, P

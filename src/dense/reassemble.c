@@ -76,7 +76,32 @@ static PetscErrorCode CheckInputs(PetscInt nbodies, const KFReducedBody bodies[]
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio)
+/* The system's rigid and mechanism modes: combinations of the bodies' rigid motions R = blkdiag(R_b) that satisfy
+   the ties, Z = null(D R), in reassembled coordinates N^T R Z. They come from geometry, not from an eigensolve. */
+static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bodies[], const PetscInt off[], PetscInt m, PetscInt n, const PetscReal D[], const PetscReal N[], PetscInt hh, PetscReal rtol, PetscInt *nrigid, PetscReal Phir[])
+{
+  PetscInt   nr = 6 * nbodies, r, rk;
+  PetscReal *R, *E, *Z, *Y, ratio;
+
+  PetscFunctionBegin;
+  if (nrigid) *nrigid = -1;
+  if (!nrigid || !Phir) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < nbodies; b++)
+    if (!bodies[b].rigid) PetscFunctionReturn(0);
+  PetscCall(PetscCalloc4(n * nr, &R, PetscMax(m, 1) * nr, &E, nr * nr, &Z, n * nr, &Y));
+  for (PetscInt b = 0; b < nbodies; b++)
+    for (PetscInt k = 0; k < 6; k++)
+      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + (6 * b + k) * n] = bodies[b].rigid[i + k * bodies[b].v];
+  PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, R, n, 0.0, E, PetscMax(m, 1)));
+  PetscCall(KFDenseNullSpace(m, nr, E, rtol, &r, Z, &rk, &ratio));
+  PetscCall(KFDenseGemm_Private('N', 'N', n, r, nr, 1.0, R, n, Z, nr, 0.0, Y, n));
+  PetscCall(KFDenseGemm_Private('T', 'N', hh, r, n, 1.0, N, n, Y, n, 0.0, Phir, hh));
+  *nrigid = r;
+  PetscCall(PetscFree4(R, E, Z, Y));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
 {
   PetscInt  *off, n = 0, m = 0, row = 0, irev = 0, nrev = 0, hh, vmax = 0;
   PetscReal *D, *N, *W;
@@ -129,8 +154,9 @@ PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], Pets
   /* eq. (21-22): the reduced coordinates that satisfy the ties, phi = N phi_h */
   PetscCall(PetscMalloc1(n * n, &N));
   PetscCall(KFDenseNullSpace(m, n, D, rtol, &hh, N, rank, sratio));
-  PetscCall(PetscFree(D));
   *h = hh;
+  PetscCall(KFReassembleRigid(nbodies, bodies, off, m, n, D, N, hh, rtol, nrigid, Phir));
+  PetscCall(PetscFree(D));
 
   /* eq. (23-24), body by body: blkdiag(M_b) is never formed */
   PetscCall(PetscArrayzero(Mh, hh * hh));

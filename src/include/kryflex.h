@@ -127,8 +127,9 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisAdd(KFBodyBasis, KFSystem, Mat X);
 PETSC_EXTERN PetscErrorCode KFBodyBasisFinish(KFBodyBasis, PetscReal tol);
 PETSC_EXTERN PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *);
 /* After Finish: reduced size v and dense data of body b. Arrays are owned by the basis.
-   M, K: v x v; G: v x a; H: t x v; iface: (6 * ninterfaces) x v, rows in interface order, components 0..5. */
-PETSC_EXTERN PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt body, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, PetscInt *ndeflated);
+   M, K: v x v; G: v x a; H: t x v; iface: (6 * ninterfaces) x v, rows in interface order, components 0..5;
+   rigid: v x 6, the body's own rigid-body motions (from its node coordinates) in reduced coordinates. */
+PETSC_EXTERN PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt body, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, const PetscReal **rigid, PetscInt *ndeflated);
 /* The map back to full dofs: Psi_b (n_b x v dense). Borrowed. */
 PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *Psi);
 
@@ -159,8 +160,12 @@ PETSC_EXTERN PetscErrorCode KFDenseStaticCorrection(PetscInt n, PetscInt d, cons
 /* Null space of D (m x n) by SVD: N (n x h) orthonormal, h = n - rank, rank = #{sigma > rtol sigma_max}.
    N must hold n*n. smin_kept/smax: smallest singular value counted in the rank / largest (reported). */
 PETSC_EXTERN PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio);
-/* Moments of a small (possibly singular) system on its flexible subspace: L as in KFFlexSolverMoments. */
+/* Moments of a small (possibly singular) system on its flexible subspace: L as in KFFlexSolverMoments.
+   KFDenseMoments finds the rigid modes as eigenvalues below rigid_tol (relative); KFDenseMomentsRigid takes them
+   (Phir: n x r) and uses solves with K + sigma M Phir Phir^T M, which keeps the digits a stiff model loses in an
+   eigendecomposition (its rigid subspace is then only accurate to eps * lambda_max / lambda_1). */
 PETSC_EXTERN PetscErrorCode KFDenseMoments(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscReal rigid_tol, PetscInt nmom, PetscReal L[]);
+PETSC_EXTERN PetscErrorCode KFDenseMomentsRigid(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscInt r, const PetscReal Phir[], PetscInt nmom, PetscReal L[]);
 /* Modal frequency response with uniform modal damping zeta (rigid modes undamped, 1/(-w^2)):
    T(w) = sum_i H phi_i phi_i^T G / (lambda_i - w^2 + 2 i zeta sqrt(lambda_i) w), at nw frequencies w (rad/s).
    Tre, Tim: nw blocks of t x a. */
@@ -174,14 +179,17 @@ typedef struct {
   const PetscReal *H;          /* t x v */
   PetscInt         ninterfaces;
   const PetscReal *iface;      /* (6 ninterfaces) x v */
+  const PetscReal *rigid;      /* v x 6: the body's rigid-body motions, or NULL if unknown */
 } KFReducedBody;
 typedef struct {
   KFJointType type;
   PetscInt    parent, parent_interface, child, child_interface; /* body indices, interface indices within body */
   PetscReal   axis[3], R0[9];
 } KFJointDef;
-/* Output: h x h Mh, Kh; h x a Gh; t x h Hh (arrays sized for n = sum v: n*n, n*a, t*n). */
-PETSC_EXTERN PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio);
+/* Output: h x h Mh, Kh; h x a Gh; t x h Hh (arrays sized for n = sum v: n*n, n*a, t*n).
+   With every body's rigid motions given, also the system's rigid-body and mechanism modes Phir (h x nrigid, array
+   sized n*n): the compatible combinations of the bodies' rigid motions. Phir may be NULL; nrigid is -1 when unknown. */
+PETSC_EXTERN PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
 /* The joint rotation R(alpha) = Rot(axis, alpha) R0 (column-major 3x3). */
 PETSC_EXTERN PetscErrorCode KFJointRotation(const PetscReal axis[3], const PetscReal R0[9], PetscReal alpha, PetscReal R[9]);
 

@@ -82,7 +82,7 @@ PetscErrorCode KFKrylovBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, P
       PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
       PetscCall(MatDestroy(&W));
       PetscCall(MatGetSize(source ? sys->Ht : sys->G, NULL, &p));
-      PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", blk + 1, nblocks, k - k0, p, k));
+      if (s->nsys >= 50000) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", blk + 1, nblocks, k - k0, p, k));
       if (k == k0) break; /* the block deflated away: the Krylov space is exhausted */
       PetscCall(KFBVColumnsToMat(V, k0, k, &Prev));
     }

@@ -13,7 +13,7 @@ struct _n_KFBodyBasis {
   PetscBool   finished;
   Mat        *Psi;
   PetscInt   *v, *ndefl;
-  PetscReal **M, **K, **G, **H, **iface;
+  PetscReal **M, **K, **G, **H, **iface, **rigid;
 };
 
 PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
@@ -27,6 +27,7 @@ PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
   PetscCall(PetscCalloc3(s->nb, &b->ncols, s->nb, &b->cols, s->nb, &b->Psi));
   PetscCall(PetscCalloc2(s->nb, &b->v, s->nb, &b->ndefl));
   PetscCall(PetscCalloc5(s->nb, &b->M, s->nb, &b->K, s->nb, &b->G, s->nb, &b->H, s->nb, &b->iface));
+  PetscCall(PetscCalloc1(s->nb, &b->rigid));
   *bb = b;
   PetscFunctionReturn(0);
 }
@@ -42,7 +43,9 @@ PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *bb)
     PetscCall(PetscFree(b->cols[i]));
     PetscCall(MatDestroy(&b->Psi[i]));
     PetscCall(PetscFree5(b->M[i], b->K[i], b->G[i], b->H[i], b->iface[i]));
+    PetscCall(PetscFree(b->rigid[i]));
   }
+  PetscCall(PetscFree(b->rigid));
   PetscCall(PetscFree3(b->ncols, b->cols, b->Psi));
   PetscCall(PetscFree2(b->v, b->ndefl));
   PetscCall(PetscFree5(b->M, b->K, b->G, b->H, b->iface));
@@ -146,6 +149,48 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The body's 6 rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with
+   them reassembly finds the system's rigid and mechanism modes exactly, at any angle. */
+static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rigid)
+{
+  Mat          Phi, MPhi;
+  PetscScalar *p;
+  PetscInt     v, lda, node = 0;
+  MPI_Comm     comm = PetscObjectComm((PetscObject)Psi);
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(Psi, NULL, &v));
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, &Phi));
+  PetscCall(MatDenseGetLDA(Phi, &lda));
+  PetscCall(MatDenseGetArray(Phi, &p));
+  for (PetscInt i = B->rstart; i < B->rend; i++) {
+    PetscInt   comp;
+    PetscReal *x;
+    while (node + 1 < B->nnodes && B->dof0[node + 1] <= i) node++;
+    comp = i - B->dof0[node];
+    x    = &B->xyz[3 * node];
+    for (int m = 0; m < 6; m++) {
+      PetscReal w[3] = {0, 0, 0}, val;
+      if (m < 3) val = (comp == m) ? 1.0 : 0.0;
+      else {
+        w[m - 3] = 1;
+        if (comp < 3) { /* (w x x)_comp */
+          PetscReal c[3] = {w[1] * x[2] - w[2] * x[1], w[2] * x[0] - w[0] * x[2], w[0] * x[1] - w[1] * x[0]};
+          val = c[comp];
+        } else val = w[comp - 3];
+      }
+      p[(i - B->rstart) + m * lda] = val;
+    }
+  }
+  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+  PetscCall(PetscMalloc1(v * 6, rigid));
+  PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, *rigid));
+  PetscCall(MatDestroy(&MPhi));
+  PetscCall(MatDestroy(&Phi));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
 {
   KFScene s = bb->s;
@@ -246,13 +291,14 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
       PetscCall(MatDenseRestoreArrayRead(bb->Psi[b], &p));
       PetscCall(MPIU_Allreduce(MPI_IN_PLACE, bb->iface[b], (PetscMPIInt)(ni * v), MPIU_REAL, MPIU_SUM, s->comm));
     }
+    PetscCall(KFBodyRigidReduced(B, bb->Psi[b], &bb->rigid[b]));
   }
   bb->finished = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis bb, PetscInt b, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, PetscInt *ndeflated)
+PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis bb, PetscInt b, PetscInt *v, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H, PetscInt *ninterfaces, const PetscReal **iface, const PetscReal **rigid, PetscInt *ndeflated)
 {
   PetscFunctionBegin;
   PetscCheck(bb->finished, bb->s->comm, PETSC_ERR_ORDER, "call KFBodyBasisFinish() first");
@@ -264,6 +310,7 @@ PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis bb, PetscInt b, PetscInt *v, co
   if (H) *H = bb->H[b];
   if (ninterfaces) *ninterfaces = bb->s->bodies[b].ninterfaces;
   if (iface) *iface = bb->iface[b];
+  if (rigid) *rigid = bb->rigid[b];
   if (ndeflated) *ndeflated = bb->ndefl[b];
   PetscFunctionReturn(0);
 }

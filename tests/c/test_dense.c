@@ -706,6 +706,7 @@ static PetscErrorCode ReassemblyCase(PetscBool free_bodies)
     rb[b].H           = B[b].H;
     rb[b].ninterfaces = nif[b];
     rb[b].iface       = B[b].iface;
+    rb[b].rigid       = NULL;
   }
   /* joint 0: revolute 0 -> 1 about a skew axis with a nontrivial R0; joint 1: fixed 0 -> 2 turned about y;
      joint 2: revolute 1 -> 3 about x. The fixed joint in between checks which angle each revolute gets. */
@@ -717,7 +718,7 @@ static PetscErrorCode ReassemblyCase(PetscBool free_bodies)
   for (int i = 0; i < 9; i++) J[2].R0[i] = I3[i];
 
   PetscCall(PetscMalloc4(n * n, &Mh, n * n, &Kh, n * a, &Gh, t * n, &Hh));
-  PetscCall(KFReassemble(NB, rb, NJ, J, angles, a, t, 1e-10, &h, Mh, Kh, Gh, Hh, &rank, &sratio));
+  PetscCall(KFReassemble(NB, rb, NJ, J, angles, a, t, 1e-10, &h, Mh, Kh, Gh, Hh, &rank, &sratio, NULL, NULL));
   PetscCall(EliminatedSystem(B, J, angles, a, t, &e, &Ms, &Ks, &Gs, &Hs));
   PetscCall(PetscSNPrintf(what, sizeof(what), "h = %" PetscInt_FMT " (system dofs %" PetscInt_FMT "), rank %" PetscInt_FMT " (ties 16), sratio %.2e: |h - e| + |rank - 16|", h, e, rank, (double)sratio));
   PetscCall(Check(what, (PetscReal)(PetscAbsInt(h - e) + PetscAbsInt(rank - 16)), 0));
@@ -784,7 +785,7 @@ static PetscErrorCode TimeReassembly(void)
   PetscCall(PetscTime(&t0));
   for (PetscInt s = 0; s < reps; s++) {
     angle = 0.01 * s;
-    PetscCall(KFReassemble(2, rb, 1, &J, &angle, a, t, 1e-10, &h, Mh, Kh, Gh, Hh, &rank, &sratio));
+    PetscCall(KFReassemble(2, rb, 1, &J, &angle, a, t, 1e-10, &h, Mh, Kh, Gh, Hh, &rank, &sratio, NULL, NULL));
   }
   PetscCall(PetscTime(&t1));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "KFReassemble timing: 2 bodies of v = 60, 1 revolute joint: %.3f ms per call (h = %" PetscInt_FMT ")\n", 1e3 * (t1 - t0) / reps, h));

@@ -1,0 +1,353 @@
+"""The whole reduction of a scene and its verification (paper eq. 5-24), on the C library's stages.
+
+For every configuration of interest: assemble, factor once, build the deflated block Krylov basis, solve the small
+eigenproblem, rank the Krylov modes, compute the full-order moments and (for verification) the full-order modes.
+Then choose the reduction angle alpha_G, project rigid + kept + static-correction modes onto the bodies, and check
+the reassembled model against the full order at every configuration. With method multi-angle (or for comparison),
+the Krylov bases of several configurations are projected together so that every moment matches at each of them.
+"""
+import time
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import _core
+from .model import BODY_ARRAYS, ReducedModel, reduced_moments, rigid_tolerance, scene_fingerprint
+
+NEGLIGIBLE = 1e-8   # a moment entry below this fraction of its largest value over the angles counts as zero
+
+
+class Progress:
+    """Progress lines on rank 0, on the C library's clock; quiet=True (or -kryflex_quiet) silences them."""
+
+    def __init__(self, comm, quiet=None):
+        self.comm = comm
+        self.quiet = PETSc.Options().getBool("kryflex_quiet", False) if quiet is None else quiet
+
+    def __call__(self, msg):
+        if not self.quiet:
+            _core.progress(msg, self.comm)
+
+
+class Timer(dict):
+    def add(self, key, t0):
+        self[key] = self.get(key, 0.0) + time.perf_counter() - t0
+
+
+class Result:
+    """A reduction: the reduced model (method chosen in the scene), the alternative one, and the summary."""
+
+    def __init__(self, model, summary, multi_model=None):
+        self.model = model
+        self.summary = summary
+        self.multi_model = multi_model
+
+
+def frequency_grid(band, full_freqs, zeta, npoints):
+    """Log-spaced points over the band plus points around each resonance in it (peaks are 1/zeta sharp)."""
+    f = list(np.geomspace(band[0], band[1], npoints))
+    for fr in full_freqs:
+        if band[0] <= fr <= band[1]:
+            f.extend(fr * (1 + zeta * np.array([-2, -1, -0.5, 0, 0.5, 1, 2])))
+    f = np.unique(np.clip(f, band[0], band[1]))
+    return f
+
+
+def frf_error(Tf, Tr):
+    """max over frequency of ||T_full - T_red||_F / ||T_full||_F."""
+    num = np.linalg.norm((Tf - Tr).reshape(len(Tf), -1), axis=1)
+    den = np.linalg.norm(Tf.reshape(len(Tf), -1), axis=1)
+    return float(np.max(num / np.maximum(den, 1e-300)))
+
+
+def _jsonable(a):
+    return np.asarray(a, dtype=float).tolist()
+
+
+def _static_correction(Phi, lam, kept, Gr):
+    """Eq. (15-17): the static response of the discarded modes, one vector per input."""
+    if kept.all():
+        return np.zeros((Phi.shape[0], 0))
+    return _core.static_correction(Phi[:, ~kept], lam[~kept], Gr)
+
+
+def _full_frf(entry, freqs, zeta):
+    """Full-order response: rigid modes, computed flexible modes, and the static residual of the modes not computed."""
+    w = 2 * np.pi * freqs
+    lam = np.concatenate([np.zeros(entry["HPr"].shape[1]), entry["w2"]])
+    HPhi = np.hstack([entry["HPr"], entry["HPhi"]])
+    PhiG = np.vstack([entry["PrG"], entry["PhiG"]])
+    T = _core.modal_frf(lam, HPhi, PhiG, zeta, w, 1e-300)
+    resid = entry["L"][0] - np.einsum("ti,ia->ta", entry["HPhi"] / entry["w2"], entry["PhiG"])
+    return T + resid[None, :, :]
+
+
+def _dominant(entry, band, zeta, threshold):
+    """Full-order modes in the band whose peak contribution to the I/O map reaches threshold of the largest."""
+    w2 = entry["w2"]
+    f = np.sqrt(w2) / (2 * np.pi)
+    peak = np.array([np.linalg.norm(np.outer(entry["HPhi"][:, i], entry["PhiG"][i, :])) / (2 * zeta * w2[i])
+                     for i in range(len(w2))])
+    inband = (f >= band[0]) & (f <= band[1])
+    if not inband.any():
+        return []
+    top = peak[inband].max()
+    return [int(i) for i in np.nonzero(inband & (peak >= threshold * top))[0]]
+
+
+def _ratios(Lfull_all, Lred, label):
+    """L_full / L_red per entry; None where the full moment is negligible at this angle."""
+    Lf = Lfull_all[label]
+    scale = np.max(np.abs(np.stack(list(Lfull_all.values()))), axis=0)
+    out = []
+    for k in range(Lf.shape[0]):
+        rows = []
+        for i in range(Lf.shape[1]):
+            rows.append([None if abs(Lf[k, i, j]) <= NEGLIGIBLE * scale[k, i, j] or Lred[k, i, j] == 0
+                         else float(Lf[k, i, j] / Lred[k, i, j]) for j in range(Lf.shape[2])])
+        out.append(rows)
+    return out
+
+
+def _max_ratio_dev(ratios):
+    devs = [abs(x - 1) for k in ratios for row in k for x in row if x is not None]
+    return max(devs) if devs else 0.0
+
+
+def reduce(scene, quiet=None):
+    """Reduces a loaded Scene; returns a Result (model, summary)."""
+    red, ver = scene.reduction, scene.verify
+    progress = Progress(scene.comm, quiet)
+    timer = Timer()
+    nmom, nout = int(red["moments"]), int(red["output_blocks"])
+    nin = nmom - nout
+    zeta = scene.damping
+    nrigid = 6 + len(scene.revolute)
+    labels = [scene.label(c) for c in scene.configurations]
+    configs = dict(zip(labels, scene.configurations))
+    named_g = red["reduction_angle"] if red["reduction_angle"] != "auto" else None
+    label_g = scene.label(named_g) if named_g is not None else None
+    if label_g is not None and label_g not in configs:
+        configs[label_g] = named_g   # reduction angle outside the angles of interest: processed, not verified
+    multi_labels = [scene.label(c) for c in (red["reduction_angles"] or scene.configurations)]
+    for lab, c in zip(multi_labels, red["reduction_angles"] or scene.configurations):
+        configs.setdefault(lab, c)
+    # the named reduction angle last, so nothing has to be factored twice
+    order = [lab for lab in configs if lab != label_g] + ([label_g] if label_g else [])
+
+    system = _core.CSystem(scene.cscene)
+    nsys = scene.info["system_dofs"]
+    progress("scene '%s': %d bodies (%s dofs), %d system dofs, %d rigid-body and mechanism modes, %d inputs, %d outputs"
+             % (scene.name, len(scene.body_names), " + ".join(str(n) for n in scene.body_dofs), nsys, nrigid,
+                len(scene.input_names), len(scene.output_names)))
+    per, candidates = {}, {}
+    multi_basis = _core.BodyBasis(scene.cscene) if len(multi_labels) > 1 or red["method"] == "multi-angle" else None
+    for lab in order:
+        cfg = configs[lab]
+        progress("configuration %s deg" % lab)
+        t0 = time.perf_counter()
+        system.set_angles(scene.angles_rad(cfg))
+        Phir, rigid_res = system.rigid_modes()
+        timer.add("assembly", t0)
+        t0 = time.perf_counter()
+        solver = _core.FlexSolver(system, red["shift"] or None)
+        solver.setup()
+        timer.add("factorization", t0)
+        t0 = time.perf_counter()
+        kb, ndefl = solver.krylov_basis(nin, nout, float(red["deflation_tol"]))
+        timer.add("krylov", t0)
+        t0 = time.perf_counter()
+        Mr, Kr, Gr, Hr = kb.project()
+        lam, Phi = _core.dense_eig(Kr, Mr)
+        imp = _core.mode_importance(lam, Phi, Gr, Hr, zeta, red["importance"], 0.0)
+        kept = imp >= float(red["keep_threshold"])
+        timer.add("krylov modes", t0)
+        t0 = time.perf_counter()
+        L = solver.moments(nmom)
+        timer.add("moments", t0)
+        gram_cond = None
+        if nsys <= 20000:
+            gram_cond = float(min(solver.raw_basis(nin, nout)[1], 1e300))
+        entry = dict(L=L, lam=lam, imp=imp, kept=kept, ndefl=ndefl, c=kb.size, gram_cond=gram_cond,
+                     rigid_res=rigid_res, stats=solver.stats())
+        t0 = time.perf_counter()
+        if lab == label_g or label_g is None:
+            S = _static_correction(Phi, lam, kept, Gr) if red["static_correction"] else np.zeros((kb.size, 0))
+            entry["nstatic"] = S.shape[1]
+            entry["static_freq"] = []
+            bb = _core.BodyBasis(scene.cscene)
+            bb.add(system, Phir)
+            bb.add(system, kb.combine(np.hstack([Phi[:, kept], S])))
+            candidates[lab] = bb
+        if multi_basis is not None and lab in multi_labels:
+            multi_basis.add(system, Phir)
+            multi_basis.add(system, kb.combine(np.eye(kb.size)))
+        timer.add("projection", t0)
+        if ver["full_order"] and lab in labels:
+            t0 = time.perf_counter()
+            entry.update(_verify_full(system, scene, nsys - nrigid, progress))
+            timer.add("verification eigensolve", t0)
+        per[lab] = entry
+        del solver
+        progress("  %d Krylov vectors (%d deflated), %d of %d Krylov modes kept; held dofs %d"
+                 % (kb.size, ndefl, int(kept.sum()), kb.size, entry["stats"]["held"]))
+
+    # the reduction angle: named, or the configuration whose Krylov model needs the most modes
+    if label_g is None:
+        label_g = max(labels, key=lambda lab: (int(per[lab]["kept"].sum()), float(per[lab]["imp"][per[lab]["kept"]].sum())))
+        rule = ("alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the "
+                "importance threshold %g (%d), so its kept set covers the others' (the paper's rule)"
+                % (label_g, float(red["keep_threshold"]), int(per[label_g]["kept"].sum())))
+    else:
+        rule = "alpha_G = %s deg, named in the scene" % label_g
+    progress(rule)
+    t0 = time.perf_counter()
+    bb = candidates[label_g]
+    bb.finish(float(red["body_tol"]))
+    model = _make_model(scene, bb, red, [configs[label_g]], "single-angle")
+    multi_model = None
+    if multi_basis is not None:
+        multi_basis.finish(float(red["body_tol"]))
+        multi_model = _make_model(scene, multi_basis, red, [configs[lab] for lab in multi_labels], "multi-angle")
+    timer.add("projection", t0)
+    progress("reduced bodies: %s dofs (single-angle)%s" % (" + ".join(str(v) for v in model.sizes),
+             "; %s dofs (multi-angle)" % " + ".join(str(v) for v in multi_model.sizes) if multi_model else ""))
+
+    summary = _summary(scene, per, labels, label_g, rule, model, multi_model, timer, progress)
+    chosen = model if red["method"] == "single-angle" else multi_model
+    return Result(chosen, summary, multi_model=multi_model if chosen is model else model)
+
+
+def _verify_full(system, scene, nflex, progress):
+    """Full-order modes covering three times the band's top (SLEPc), with rigid-mode participation."""
+    want = ver_modes = scene.verify["modes"]
+    fmax = 3 * scene.band[1]
+    nev = min(nflex, int(want) if want != "auto" else 20)
+    while True:
+        w2, HPhi, PhiG = system.eigen(nev)
+        if ver_modes != "auto" or nev >= nflex or (len(w2) and np.sqrt(w2[-1]) / (2 * np.pi) >= fmax):
+            break
+        nev = min(nflex, 2 * nev)
+    HPr, PrG = system.rigid_io()
+    return dict(w2=w2, HPhi=HPhi, PhiG=PhiG, HPr=HPr, PrG=PrG)
+
+
+def _make_model(scene, bb, red, configs, method):
+    info = scene.info
+    bodies = [bb.reduced(b) for b in range(info["bodies"])]
+    save_maps = red["save_maps"]
+    maps = None
+    if save_maps is True or (save_maps == "auto" and max(scene.body_dofs) <= 200000):
+        maps = [_gather_dense(bb.map(b)) for b in range(info["bodies"])]
+    settings = {k: (v if not isinstance(v, np.ndarray) else v.tolist()) for k, v in red.items()}
+    settings.update(method=method, reduction_angles_deg=configs, damping=scene.damping, band_hz=scene.band)
+    return ReducedModel(scene.name, scene_fingerprint(scene), scene.body_names, scene.body_dofs, scene.interfaces,
+                        [{k: b[k] for k in BODY_ARRAYS} for b in bodies], scene.joints,
+                        scene.revolute, scene.input_names, scene.output_names, settings, maps)
+
+
+def _gather_dense(A):
+    """A distributed dense Mat as one NumPy array on every rank."""
+    local = A.getDenseArray().copy()
+    comm = A.getComm().tompi4py()
+    return np.vstack(comm.allgather(local))
+
+
+def _summary(scene, per, labels, label_g, rule, model, multi_model, timer, progress):
+    red = scene.reduction
+    zeta = scene.damping
+    nrigid = 6 + len(scene.revolute)
+    Lfull = {lab: per[lab]["L"] for lab in labels}
+    full_freqs, red_freqs, red_mom, ratios, frf, dom, dom_err = {}, {}, {}, {}, {}, {}, {}
+    sgain, rank, sratio, hsize = {}, {}, {}, {}
+    notes = []
+    t_reasm = []
+    for lab, cfg in zip(labels, scene.configurations):
+        e = per[lab]
+        t0 = time.perf_counter()
+        reassembled = model.reassemble(cfg)
+        t_reasm.append(time.perf_counter() - t0)
+        Mh, Kh, Gh, Hh, rk, sr, Phir = reassembled
+        if Phir is None or Phir.shape[1] != nrigid:
+            notes.append("reassembled model at %s deg: %s rigid-body and mechanism modes from the bodies' rigid motions, "
+                         "expected %d" % (lab, "no" if Phir is None else Phir.shape[1], nrigid))
+        lam, Phi = _core.dense_eig(Kh, Mh)
+        rt = rigid_tolerance(lam, nrigid)
+        fr = np.sqrt(np.maximum(lam[nrigid:], 0)) / (2 * np.pi)
+        Lr = reduced_moments(reassembled, Lfull[lab].shape[0], nrigid)
+        red_freqs[lab] = _jsonable(fr)
+        red_mom[lab] = _jsonable(Lr)
+        ratios[lab] = _ratios(Lfull, Lr, lab)
+        sgain[lab] = float(np.linalg.norm(Lfull[lab][0] - Lr[0]) / np.linalg.norm(Lfull[lab][0]))
+        rank[lab], sratio[lab], hsize[lab] = int(rk), float(sr), int(Kh.shape[0])
+        dev = _max_ratio_dev(ratios[lab])
+        if dev > 1e-8:
+            notes.append("single-angle model at %s deg: moments not matched exactly, max |L_full/L_red - 1| = %.3e%s"
+                         % (lab, dev, " (alpha_G)" if lab == label_g else ""))
+        if "w2" in e:
+            ff = np.sqrt(e["w2"]) / (2 * np.pi)
+            full_freqs[lab] = _jsonable(ff)
+            freqs = frequency_grid(scene.band, ff, zeta, int(scene.verify["frequency_points"]))
+            Tf = _full_frf(e, freqs, zeta)
+            Tr = _core.modal_frf(lam, Hh @ Phi, Phi.T @ Gh, zeta, 2 * np.pi * freqs, rt)
+            err = frf_error(Tf, Tr)
+            frf[lab] = dict(freq_hz=_jsonable(freqs), full_re=_jsonable(Tf.real), full_im=_jsonable(Tf.imag),
+                            reduced_re=_jsonable(Tr.real), reduced_im=_jsonable(Tr.imag), max_rel_error=err)
+            dom[lab] = _dominant(e, scene.band, zeta, float(red["keep_threshold"]))
+            dom_err[lab] = [float(np.min(np.abs(fr - ff[i])) / ff[i]) if fr.size else None for i in dom[lab]]
+        progress("  %s deg: reduced system %d dofs, moments max |ratio-1| %.2e, static gain error %.2e%s"
+                 % (lab, Kh.shape[0], dev, sgain[lab],
+                    ", FRF max rel. error %.3g" % frf[lab]["max_rel_error"] if lab in frf else ""))
+    summary = {
+        "kryflex_version": __import__("kryflex").__version__,
+        "scene": scene.name, "scene_file": scene.path,
+        "inputs": scene.input_names, "outputs": scene.output_names, "joints": scene.revolute,
+        "angles_deg": scene.configurations, "angle_labels": labels,
+        "band_hz": scene.band, "damping": zeta, "accuracy": scene.accuracy,
+        "settings": {"moments": int(red["moments"]), "output_blocks": int(red["output_blocks"]),
+                     "importance": red["importance"], "keep_threshold": float(red["keep_threshold"]),
+                     "deflation_tol": float(red["deflation_tol"]), "body_tol": float(red["body_tol"]),
+                     "reduction_angles_deg": model.settings["reduction_angles_deg"], "method": red["method"]},
+        "full": {"dofs_per_body": dict(zip(scene.body_names, scene.body_dofs)),
+                 "system_dofs": scene.info["system_dofs"], "rigid_modes": nrigid,
+                 "frequencies_hz": full_freqs,
+                 "moments": {lab: _jsonable(Lfull[lab]) for lab in labels}},
+        "krylov": {lab: {"frequency_hz": _jsonable(np.sqrt(np.maximum(per[lab]["lam"], 0)) / (2 * np.pi)),
+                         "importance": _jsonable(per[lab]["imp"]), "kept": [bool(x) for x in per[lab]["kept"]],
+                         "deflations": int(per[lab]["ndefl"]), "gram_condition_raw": per[lab]["gram_cond"]}
+                   for lab in labels},
+        "reduction_label": label_g, "reduction_rule": rule,
+        "kept_modes": [int(i) + 1 for i in np.nonzero(per[label_g]["kept"])[0]],
+        "static_correction_modes": int(per[label_g].get("nstatic", 0)),
+        "reduced": {"dofs_per_body": dict(zip(scene.body_names, model.sizes)),
+                    "system_dofs": hsize, "frequencies_hz": red_freqs, "moments": red_mom,
+                    "moment_ratios": ratios, "static_gain_error": sgain, "reassembly_rank": rank,
+                    "reassembly_sigma_ratio": sratio,
+                    "reassembly_seconds": float(np.median(t_reasm)) if t_reasm else None},
+        "frf": frf, "dominant_modes": dom, "dominant_freq_error": dom_err,
+        "timings_s": {k: float(v) for k, v in timer.items()},
+        "notes": notes,
+    }
+    if multi_model is not None:
+        m_ratios, m_err, m_size = {}, {}, {}
+        for lab, cfg in zip(labels, scene.configurations):
+            reassembled = multi_model.reassemble(cfg)
+            Mh, Kh, Gh, Hh = reassembled[:4]
+            lam, Phi = _core.dense_eig(Kh, Mh)
+            rt = rigid_tolerance(lam, nrigid)
+            Lr = reduced_moments(reassembled, Lfull[lab].shape[0], nrigid)
+            m_ratios[lab] = _ratios(Lfull, Lr, lab)
+            m_size[lab] = int(Kh.shape[0])
+            if lab in frf:
+                freqs = np.asarray(frf[lab]["freq_hz"])
+                Tf = np.asarray(frf[lab]["full_re"]) + 1j * np.asarray(frf[lab]["full_im"])
+                Tr = _core.modal_frf(lam, Hh @ Phi, Phi.T @ Gh, zeta, 2 * np.pi * freqs, rt)
+                m_err[lab] = frf_error(Tf, Tr)
+        summary["multi_angle"] = {"system_dofs": m_size, "dofs_per_body": dict(zip(scene.body_names, multi_model.sizes)),
+                                  "moment_ratios": m_ratios, "frf_max_rel_error": m_err,
+                                  "reduction_angles_deg": multi_model.settings["reduction_angles_deg"],
+                                  "max_moment_ratio_deviation": {lab: _max_ratio_dev(m_ratios[lab]) for lab in labels}}
+        progress("multi-angle model: %s dofs per body, reassembled %s dofs, max |L_full/L_red - 1| = %.2e"
+                 % (" + ".join(str(v) for v in multi_model.sizes), max(m_size.values()),
+                    max(summary["multi_angle"]["max_moment_ratio_deviation"].values())))
+    return summary

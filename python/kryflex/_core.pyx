@@ -166,7 +166,9 @@ cdef Comm as_comm(comm):
 def progress(msg, comm=None):
     """A progress line on rank 0 with the elapsed time, on the C library's clock (-kryflex_quiet silences it)."""
     cdef Comm c = as_comm(comm)
-    check(KFProgress(c.comm, "%s", str(msg).encode()))
+    cdef bytes text = str(msg).encode()
+    cdef const char *ctext = text
+    check(KFProgress(c.comm, "%s", ctext))
 
 
 def load_matrix(path, comm=None):

@@ -17,4 +17,7 @@ from slepc4py import SLEPc as _SLEPc  # noqa: E402,F401  (initializes SLEPc)
 
 __version__ = "0.1.0"
 
-from ._core import Error  # noqa: E402
+from ._core import Error  # noqa: E402,F401
+from .model import ModelFileError, ReducedModel  # noqa: E402,F401
+from .reduce import reduce  # noqa: E402,F401
+from .scene import Scene, SceneError, load_scene  # noqa: E402,F401

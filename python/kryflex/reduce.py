@@ -115,7 +115,19 @@ def _max_ratio_dev(ratios):
 
 
 def reduce(scene, quiet=None):
-    """Reduces a loaded Scene; returns a Result (model, summary)."""
+    """Reduces a loaded Scene; returns a Result (model, summary). quiet=True silences progress lines."""
+    opts = PETSc.Options()
+    was_quiet = opts.getBool("kryflex_quiet", False)
+    if quiet:
+        opts.setValue("kryflex_quiet", True)
+    try:
+        return _reduce(scene, quiet)
+    finally:
+        if quiet and not was_quiet:
+            opts.delValue("kryflex_quiet")
+
+
+def _reduce(scene, quiet):
     red, ver = scene.reduction, scene.verify
     progress = Progress(scene.comm, quiet)
     timer = Timer()

@@ -103,10 +103,10 @@ def _read_nodes(where, entry, base):
                     rows.append((int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), int(parts[4])))
                 except ValueError:
                     _fail(where, "%s line %d: not numbers: %r" % (entry, lineno, line))
-    elif isinstance(entry, list):
+    elif isinstance(entry, (list, np.ndarray)):
         rows = []
         for i, r in enumerate(entry):
-            if not isinstance(r, (list, tuple)) or len(r) != 5:
+            if not isinstance(r, (list, tuple, np.ndarray)) or len(r) != 5:
                 _fail(where, "inline node %d must be [id, x, y, z, ndof], got %r" % (i, r))
             rows.append((int(r[0]), float(r[1]), float(r[2]), float(r[3]), int(r[4])))
     else:
@@ -153,6 +153,29 @@ def _angles(where, raw, revolute):
     return configs
 
 
+def _as_petsc(where, A, comm):
+    """A body matrix given in memory: a petsc4py Mat as is, a SciPy sparse or NumPy array distributed as AIJ."""
+    if isinstance(A, PETSc.Mat):
+        return A
+    try:
+        import scipy.sparse as sp
+        A = sp.csr_matrix(A, dtype=np.float64)
+    except Exception as e:  # noqa: BLE001 - whatever it is, it is not a matrix
+        _fail(where, "expected a file name, a petsc4py Mat, a SciPy sparse matrix or a NumPy array (%s)" % e)
+    n, m = A.shape
+    if n != m:
+        _fail(where, "the matrix is %d x %d; body matrices are square" % (n, m))
+    if not np.all(np.isfinite(A.data)):
+        _fail(where, "the matrix holds non-finite values")
+    M = PETSc.Mat().createAIJ((n, n), comm=comm)
+    M.setPreallocationNNZ(0)
+    lo, hi = M.getOwnershipRange()
+    local = A[lo:hi]
+    M.setPreallocationCSR((local.indptr, local.indices, local.data))
+    M.assemble()
+    return M
+
+
 class Scene:
     """A loaded scene: the C scene plus the names and settings the reduction and the report need."""
 
@@ -185,6 +208,9 @@ class Scene:
                     _fail(bw, "'%s' is missing" % key)
             mats = []
             for key in ("mass", "stiffness"):
+                if not isinstance(b[key], str):
+                    mats.append(_as_petsc(bw + "." + key, b[key], self.comm))
+                    continue
                 fpath = os.path.join(base, str(b[key]))
                 if not os.path.isfile(fpath):
                     _fail(bw + "." + key, "file '%s' not found (looked for %s); fix the path (relative to the scene file)"
@@ -361,6 +387,13 @@ class Scene:
     @staticmethod
     def label(config):
         return "_".join("%g" % a for a in config) if config else "fixed"
+
+
+def scene_from_dict(spec, comm=None, base=None):
+    """A scene built in a script: the same keys as a scene file; body matrices may be petsc4py Mats, SciPy sparse
+    matrices or NumPy arrays, and nodes an array of rows (id, x, y, z, ndof). Relative file names are taken from
+    base (default: the working folder)."""
+    return Scene(spec, os.path.join(base, "scene.yaml") if base else None, comm)
 
 
 def load_scene(path, comm=None, overrides=True):

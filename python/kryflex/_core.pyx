@@ -92,8 +92,11 @@ cdef extern from "kryflex.h":
     PetscErrorCode KFSystemGetRigidModes(KFSystem, PetscMat*, PetscReal*)
     PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt*, PetscReal*, PetscReal*)
     PetscErrorCode KFSystemEigen(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscMat*)
     PetscErrorCode KFSystemProject(KFSystem, BV, PetscReal*, PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFBVCombine(BV, PetscInt, const PetscReal*, PetscMat*)
+    PetscErrorCode KFMatCombine(PetscMat, PetscInt, const PetscReal*, PetscMat*)
+    PetscErrorCode KFMatInner(PetscMat, PetscMat, PetscReal*)
     PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver*)
     PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal)
     PetscErrorCode KFFlexSolverSetUp(KFFlexSolver)
@@ -337,6 +340,20 @@ cdef class CSystem:
         return w2[:nconv].copy(), HPhi[:, :nconv].copy(), PhiG[:nconv, :].copy()
 
 
+    def eigen_modes(self, int nev):
+        """Lowest nev flexible modes: (omega^2, modes as a dense e x nconv petsc4py Mat)."""
+        cdef PetscInt nconv = 0
+        cdef PetscMat P
+        if nev < 1:
+            raise ValueError("nev must be >= 1")
+        cdef cnp.ndarray[double, ndim=1] w2 = np.zeros(nev)
+        check(KFSystemEigenModes(self.y, nev, &nconv, <PetscReal*>w2.data, &P))
+        modes = wrap_mat(P, False)
+        if nconv < nev:
+            modes = combine(modes, np.eye(nev)[:, :nconv])
+        return w2[:nconv].copy(), modes
+
+
 cdef class KrylovBasis:
     """An M-orthonormal Krylov basis (a SLEPc BV) of one system."""
     cdef BV V
@@ -478,6 +495,26 @@ cdef class BodyBasis:
         cdef PetscMat Psi
         check(KFBodyBasisGetMap(self.bb, b, &Psi))
         return wrap_mat(Psi, True)
+
+
+def combine(Mat X not None, C):
+    """X C for a tall dense Mat X (N x p) and a small replicated C (p x m): a new tall dense Mat."""
+    cdef cnp.ndarray[double, ndim=2] cC = fortran(C, 2, "C")
+    cdef PetscMat Y
+    if cC.shape[0] != X.getSize()[1]:
+        raise ValueError("C must have %d rows (the columns of X), got %d" % (X.getSize()[1], cC.shape[0]))
+    check(KFMatCombine(X.mat, <PetscInt>cC.shape[1], <PetscReal*>cC.data, &Y))
+    return wrap_mat(Y, False)
+
+
+def inner(Mat A not None, Mat B not None):
+    """A^T B for tall dense Mats with the same rows, replicated on every rank as a NumPy array."""
+    if A.getSize()[0] != B.getSize()[0] or A.getLocalSize()[0] != B.getLocalSize()[0]:
+        raise ValueError("A and B must have the same rows and row layout")
+    p, q = A.getSize()[1], B.getSize()[1]
+    cdef cnp.ndarray[double, ndim=2] out = np.zeros((p, q), order="F")
+    check(KFMatInner(A.mat, B.mat, <PetscReal*>out.data))
+    return out
 
 
 # ------------------------------------------------------------------ small dense algebra

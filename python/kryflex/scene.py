@@ -20,6 +20,8 @@ BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description"}
 JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
 TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
 REDUCTION_DEFAULTS = {
+    "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
+    "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
     "moments": 10,               # low-frequency moments matched exactly (c in the paper)
     "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
     "importance": "h2",          # h2 | hinf | static
@@ -38,6 +40,7 @@ VERIFY_DEFAULTS = {
     "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
     "frequency_points": 400,     # log-spaced frequency-response points over the band (+ points at resonances)
     "full_order": True,          # run the full-order verification at all
+    "frf_floor_db": -60.0,       # FRF error: notches deeper than this below the band's peak count against this level
 }
 
 
@@ -309,6 +312,8 @@ class Scene:
             _fail(where + ": reduction", "moments (%s) must exceed output_blocks (%s) >= 0" % (red["moments"], red["output_blocks"]))
         if red["importance"] not in _core.IMPORTANCE:
             _fail(where + ": reduction.importance", "'%s' is not one of %s" % (red["importance"], ", ".join(_core.IMPORTANCE)))
+        if red["basis"] not in ("krylov", "eigen"):
+            _fail(where + ": reduction.basis", "'%s' is not krylov or eigen" % red["basis"])
         if red["method"] not in ("single-angle", "multi-angle"):
             _fail(where + ": reduction.method", "'%s' is not single-angle or multi-angle" % red["method"])
         if red["reduction_angle"] != "auto":

@@ -104,7 +104,7 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt *nheld, 
    Matches nin + nout moments. */
 PETSC_EXTERN PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, BV *V, PetscInt *ndeflated);
 /* The paper's raw recurrence (eq. 9), unorthogonalized, for diagnostics: returns the e x c matrix and the
-   condition number of its M-Gram matrix. */
+   condition number of its M-Gram matrix after scaling the columns to unit norm (1/eps once the rank is lost). */
 PETSC_EXTERN PetscErrorCode KFKrylovRawBasis(KFFlexSolver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond);
 
 /* ---------------------------------------------------------------- moments */
@@ -118,6 +118,10 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverMoments(KFFlexSolver, PetscInt nmom, Pet
 PETSC_EXTERN PetscErrorCode KFSystemProject(KFSystem, BV V, PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);
 /* Combines BV columns: X = V C (C: c x m column-major), returns a new e x m dense Mat. */
 PETSC_EXTERN PetscErrorCode KFBVCombine(BV V, PetscInt m, const PetscReal C[], Mat *X);
+/* The same for a tall dense Mat: Y = X C (C: p x m replicated), and the small replicated product A^T B of two tall
+   dense Mats with the same row layout. */
+PETSC_EXTERN PetscErrorCode KFMatCombine(Mat X, PetscInt m, const PetscReal C[], Mat *Y);
+PETSC_EXTERN PetscErrorCode KFMatInner(Mat A, Mat B, PetscReal out[]);
 
 /* Reduced bodies (eq. 18-19). A body basis collects system vectors from one or more configurations,
    projected onto each body (Psi_b = P_b X), then M-orthonormalizes per body with rank deflation. */
@@ -138,6 +142,9 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *P
 /* Lowest nev flexible modes of (K_S, M_S) with SLEPc (GHEP, shift-and-invert with MUMPS, small negative target,
    rigid modes as deflation space). omega2: eigenvalues; HPhi (t x nconv) and PhiG (nconv x a) column-major,
    arrays sized for nev. Either array may be NULL. */
+/* The same eigensolve returning the M-normalized modes (e x nev dense, first nconv columns filled): the basis of the
+   eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
+PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes);
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
 PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[]);
 PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);

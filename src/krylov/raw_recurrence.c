@@ -45,9 +45,14 @@ PetscErrorCode KFKrylovRawBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout
   PetscCall(MatMatMult(sys->Ms, *Praw, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MP));
   PetscCall(KFMatTransposeMatMultGather(*Praw, MP, Gm));
   PetscCall(MatDestroy(&MP));
+  /* unit columns first: the raw vectors shrink like omega_1^(-2k), and that scaling alone says nothing about rank */
+  for (PetscInt j = 0; j < c; j++) ev[j] = 1.0 / PetscSqrtReal(Gm[j + j * c]);
+  for (PetscInt j = 0; j < c; j++)
+    for (PetscInt i = 0; i < c; i++) Gm[i + j * c] *= ev[i] * ev[j];
   for (PetscInt i = 0; i < c * c; i++) Id[i] = (i % (c + 1) == 0);
   PetscCall(KFDenseEig(c, Gm, Id, ev, vecs));
-  *gram_cond = ev[0] > 0 ? ev[c - 1] / ev[0] : PETSC_INFINITY;
+  /* once the smallest eigenvalue is lost in rounding the condition number is only known to exceed 1/eps */
+  *gram_cond = ev[0] > c * PETSC_MACHINE_EPSILON * ev[c - 1] ? ev[c - 1] / ev[0] : 1.0 / PETSC_MACHINE_EPSILON;
   PetscCall(PetscFree4(Gm, ev, vecs, Id));
   PetscFunctionReturn(0);
 }

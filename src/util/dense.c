@@ -87,3 +87,22 @@ PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c
   PetscCall(MatDenseRestoreArray(X, &x));
   PetscFunctionReturn(0);
 }
+
+PetscErrorCode KFMatCombine(Mat X, PetscInt m, const PetscReal C[], Mat *Y)
+{
+  PetscInt nl, N, p;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetLocalSize(X, &nl, NULL));
+  PetscCall(MatGetSize(X, &N, &p));
+  PetscCall(KFDenseCreate(PetscObjectComm((PetscObject)X), nl, N, m, Y));
+  PetscCall(KFDenseMultSmall(X, p, m, C, 1.0, *Y));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFMatInner(Mat A, Mat B, PetscReal out[])
+{
+  PetscFunctionBegin;
+  PetscCall(KFMatTransposeMatMultGather(A, B, out));
+  PetscFunctionReturn(0);
+}

@@ -4,7 +4,7 @@
 /* Full-order modes, for verification only: generalized Hermitian problem with the rigid modes as a deflation
    space. Small systems go to LAPACK through EPS; larger ones use Krylov-Schur with shift-and-invert (MUMPS) about a
    small negative target, so that K - target M is positive definite. */
-PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
+static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   EPS       eps;
@@ -65,12 +65,13 @@ PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscR
   PetscCall(EPSSolve(eps));
   PetscCall(EPSGetConverged(eps, &nc));
   PetscCall(MatCreateVecs(sys->Ks, &x, &y));
+  if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));
   /* the dense solver returns the rigid modes too: skip the r lowest */
   for (PetscInt i = dense ? r : 0; i < nc && got < nev; i++, got++) {
     PetscScalar kr;
     PetscCall(EPSGetEigenpair(eps, i, &kr, NULL, x, NULL));
     omega2[got] = PetscRealPart(kr);
-    if (HPhi || PhiG) {
+    if (HPhi || PhiG || modes) {
       PetscReal nrm2;
       PetscScalar dot;
       /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure) */
@@ -92,6 +93,12 @@ PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscR
         PetscCall(MatDenseRestoreColumnVecRead(sys->G, k, &g));
         PhiG[got + k * nev] = PetscRealPart(dot);
       }
+      if (modes) {
+        Vec col;
+        PetscCall(MatDenseGetColumnVecWrite(*modes, got, &col));
+        PetscCall(VecCopy(x, col));
+        PetscCall(MatDenseRestoreColumnVecWrite(*modes, got, &col));
+      }
     }
   }
   PetscCall(VecDestroy(&x));
@@ -99,6 +106,20 @@ PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscR
   PetscCall(EPSDestroy(&eps));
   *nconv = got;
   PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemEigenSolve(sys, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemEigenSolve(sys, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 

@@ -100,7 +100,7 @@ def _cmd_reduce(argv):
         _cleanup(out, created)
         _error("the model cannot be reduced: %s" % e)
         return EXIT_NUMERIC
-    written = []
+    written, problem = [], None
     try:
         if _rank() == 0:
             written.append(result.model.save(os.path.join(out, "reduced.h5")))
@@ -108,8 +108,11 @@ def _cmd_reduce(argv):
                 written.append(result.model.save(os.path.join(out, "reduced.npz")))
             written.extend(write_report(result.summary, out))
     except OSError as e:
+        problem = "cannot write the results to %s: %s" % (out, e)
+    problem = _from_rank0(problem)   # every rank exits with the same code
+    if problem is not None:
         _cleanup(out, created)
-        _error("cannot write the results to %s: %s" % (out, e))
+        _error(problem)
         return EXIT_OUTPUT
     s = result.summary
     _say("kryflex: reduced '%s': %s reduced dofs per body (%s), alpha_G = %s deg, kept Krylov modes %s"
@@ -123,23 +126,35 @@ def _cmd_reduce(argv):
 
 
 def _prepare_output(out):
-    """Creates the output folder if needed and checks it is writable before any long work; True if created here."""
-    created = False
+    """Creates the output folder if needed and checks it is writable before any long work; True if created here.
+    Rank 0 decides and every rank learns the outcome: a rank that went on alone would wait forever in the
+    reduction's collective calls."""
+    created, problem = False, None
     if _rank() == 0:
         if os.path.exists(out) and not os.path.isdir(out):
-            _error("output %s exists and is not a folder: choose another -o" % out)
-            raise SystemExit(EXIT_OUTPUT)
-        if not os.path.isdir(out):
+            problem = "output %s exists and is not a folder: choose another -o" % out
+        elif not os.path.isdir(out):
             try:
                 os.makedirs(out)
                 created = True
             except OSError as e:
-                _error("cannot create the output folder %s: %s" % (out, e))
-                raise SystemExit(EXIT_OUTPUT)
-        if not os.access(out, os.W_OK | os.X_OK):
-            _error("the output folder %s is not writable: choose another -o or fix its permissions" % out)
-            raise SystemExit(EXIT_OUTPUT)
+                problem = "cannot create the output folder %s: %s" % (out, e)
+        if problem is None and not os.access(out, os.W_OK | os.X_OK):
+            problem = "the output folder %s is not writable: choose another -o or fix its permissions" % out
+    created, problem = _from_rank0((created, problem))
+    if problem is not None:
+        _error(problem)
+        raise SystemExit(EXIT_OUTPUT)
     return created
+
+
+def _from_rank0(value):
+    """Rank 0's value on every rank (a no-op when run alone)."""
+    from petsc4py import PETSc
+    comm = PETSc.COMM_WORLD
+    if comm.getSize() == 1:
+        return value
+    return comm.tompi4py().bcast(value, root=0)
 
 
 def _cleanup(out, created):

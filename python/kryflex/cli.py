@@ -84,7 +84,7 @@ def _cmd_reduce(argv):
     from . import _core
     from .model import ModelFileError  # noqa: F401
     from .reduce import reduce as run_reduce
-    from .report import write_report
+    from .report import write_report, write_unverified
     from .scene import SceneError, load_scene
 
     out = os.path.abspath(args.output)
@@ -103,12 +103,17 @@ def _cmd_reduce(argv):
     written, problem = [], None
     try:
         if _rank() == 0:
+            # the report first (it leaves nothing behind if it fails), then the model files; a failure removes all
+            report = write_report if result.summary["frf"] else write_unverified
+            written.extend(report(result.summary, out))
             written.append(result.model.save(os.path.join(out, "reduced.h5")))
             if args.npz:
                 written.append(result.model.save(os.path.join(out, "reduced.npz")))
-            written.extend(write_report(result.summary, out))
     except OSError as e:
         problem = "cannot write the results to %s: %s" % (out, e)
+        for path in written:
+            if os.path.exists(path):
+                os.unlink(path)
     problem = _from_rank0(problem)   # every rank exits with the same code
     if problem is not None:
         _cleanup(out, created)
@@ -203,16 +208,11 @@ def _cmd_reassemble(argv):
                             frequencies_hz=[float(x) for x in f[:args.modes]]))
         key = "_".join("%g" % a for a in angles)
         arrays.update({"M_" + key: Mh, "K_" + key: Kh, "G_" + key: Gh, "H_" + key: Hh})
-    if args.output and _rank() == 0:
-        import tempfile
-        folder = os.path.dirname(os.path.abspath(args.output))
-        try:
-            fd, tmp = tempfile.mkstemp(prefix=".kryflex-", suffix=".npz", dir=folder)
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **arrays)
-            os.replace(tmp, args.output)
-        except OSError as e:
-            _error("cannot write %s: %s" % (args.output, e))
+    if args.output:
+        problem = _write_npz(args.output, arrays) if _rank() == 0 else None
+        problem = _from_rank0(problem)
+        if problem is not None:
+            _error(problem)
             return EXIT_OUTPUT
     if args.json:
         _say(json.dumps(results, indent=1))
@@ -222,6 +222,30 @@ def _cmd_reassemble(argv):
                  % (r["angles_deg"], r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
             _say("  flexible frequencies (Hz): " + " ".join("%.6g" % x for x in r["frequencies_hz"]))
     return EXIT_OK
+
+
+def _write_npz(path, arrays):
+    """Writes arrays to path (.npz) under a temporary name renamed into place; None, or what went wrong."""
+    import tempfile
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".kryflex-", suffix=".npz", dir=os.path.dirname(os.path.abspath(path)))
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.chmod(tmp, _file_mode())     # mkstemp makes 0600 files: give the usual umask permissions
+        os.replace(tmp, path)
+        return None
+    except OSError as e:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+        return "cannot write %s: %s" % (path, e)
+
+
+def _file_mode():
+    """Permissions of a new file under the current umask (os.umask can only be read by setting it)."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 def _cmd_info(argv):
@@ -295,4 +319,10 @@ def main(argv=None):
         return int(e.code or 0)
     except KeyboardInterrupt:
         _error("interrupted")
+        return EXIT_INTERNAL
+    except Exception as e:  # noqa: BLE001 - a bug: say so plainly, with the trace for the report
+        import traceback
+        if _rank() == 0:
+            traceback.print_exc()
+        _error("internal error (%s: %s): please report it with the command line" % (type(e).__name__, e))
         return EXIT_INTERNAL

@@ -831,3 +831,30 @@ def write_report(summary, out_dir):
     except BaseException:
         staging.abort()
         raise
+
+
+def write_unverified(summary, out_dir):
+    """When the full-order verification was skipped (verify.full_order: false): summary.json and a short report.md
+    with what is known without the full order (sizes, alpha_G, kept modes, full-order moments). Same guarantees as
+    write_report."""
+    _check_json_types(summary, ())
+    lines = [f"# kryflex reduction: {summary.get('scene', '?')}", "",
+             "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
+             "frequency comparison. Reduced body sizes: " + ", ".join(
+                 f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ".",
+             f"Reduction angle α_G: {summary.get('reduction_label')} deg; kept Krylov modes: {summary.get('kept_modes')}.", ""]
+    ratios = summary.get("reduced", {}).get("moment_ratios") or {}
+    if ratios:
+        lines += ["| angle (deg) | max abs(L_full/L_reduced - 1) |", "| :--- | ---: |"]
+        for label, r in ratios.items():
+            devs = [abs(x - 1) for k in r for row in k for x in row if x is not None]
+            lines.append(f"| {label} | {max(devs) if devs else 0:.3e} |")
+    os.makedirs(out_dir, exist_ok=True)
+    staging = _StagedFiles(out_dir)
+    try:
+        staging.add("summary.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8"))
+        staging.add("report.md", ("\n".join(lines) + "\n").encode("utf-8"))
+        return staging.commit()
+    except BaseException:
+        staging.abort()
+        raise

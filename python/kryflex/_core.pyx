@@ -682,6 +682,9 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
             cb[i].ninterfaces = arrays[4].shape[0] // 6
             n += v
         nrev = 0
+        children = set()
+        if nj != nb - 1:
+            raise ValueError("%d bodies need %d joints to form a tree, got %d" % (nb, nb - 1, nj))
         for j, J in enumerate(joints):
             kind = J["type"]
             if kind not in ("revolute", "fixed"):
@@ -697,11 +700,20 @@ def reassemble(bodies, joints, angles_rad, int ninputs, int noutputs, double rto
                 raise ValueError("joint %d: interface index out of range" % j)
             ax = np.asarray(J.get("axis", (0, 0, 1)), dtype=np.float64).ravel()
             R0 = np.eye(3) if J.get("R0") is None else np.asarray(J["R0"], dtype=np.float64)
+            if ax.shape != (3,) or not np.all(np.isfinite(ax)):
+                raise ValueError("joint %d: axis must be 3 finite numbers, got %r" % (j, J.get("axis")))
+            if R0.shape != (3, 3) or not np.all(np.isfinite(R0)):
+                raise ValueError("joint %d: R0 must be a finite 3x3 matrix" % j)
+            if J["child"] in children:
+                raise ValueError("joint %d: body %d is already the child of another joint: the joints must form a tree" % (j, J["child"]))
+            children.add(J["child"])
             for k in range(3):
                 cj[j].axis[k] = ax[k]
             for r in range(3):
                 for c in range(3):
                     cj[j].R0[r + 3 * c] = R0[r, c]
+        if not np.all(np.isfinite(np.atleast_1d(angles_rad))):
+            raise ValueError("angles must be finite numbers, got %r" % (angles_rad,))
         if len(np.atleast_1d(angles_rad)) != nrev:
             raise ValueError("%d revolute joint(s) need %d angle(s), got %d" % (nrev, nrev, len(np.atleast_1d(angles_rad))))
         Mh = np.zeros(n * n); Kh = np.zeros(n * n); Gh = np.zeros(n * ninputs); Hh = np.zeros(noutputs * n)

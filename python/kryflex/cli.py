@@ -45,6 +45,10 @@ def _split_petsc_options(argv, flags_with_value, flags):
     out, i = [], 0
     while i < len(argv):
         a = argv[i]
+        if a.split("=", 1)[0] in flags_with_value and "=" in a:
+            out.append(a)
+            i += 1
+            continue
         if a in flags_with_value:
             out.extend(argv[i:i + 2])
             i += 2
@@ -177,7 +181,11 @@ def _cmd_reassemble(argv):
     p.add_argument("-o", "--output", help="write the reassembled matrices (Mh, Kh, Gh, Hh per angle) to this .npz")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--modes", type=int, default=10, help="flexible frequencies to print (default 10)")
-    args = p.parse_args(_split_petsc_options(argv, {"--angle", "--scene", "-o", "--output", "--modes"}, {"--json", "-h", "--help"}))
+    kept = _split_petsc_options(argv, {"--angle", "--scene", "-o", "--output", "--modes"}, {"--json", "-h", "--help"})
+    # '--angle -30,95' would read as an option to argparse: glue the value on
+    kept = [a + "=" + kept[i + 1] if a == "--angle" and i + 1 < len(kept) else a for i, a in enumerate(kept)
+            if not (i > 0 and kept[i - 1] == "--angle")]
+    args = p.parse_args(kept)
     import time
 
     from .model import ModelFileError, ReducedModel

@@ -146,10 +146,11 @@ class ReducedModel:
                 g.attrs["index"] = i
                 g.attrs["full_dofs"] = self.body_dofs[i]
                 g.attrs["interfaces"] = json.dumps(self.interfaces[i])
+                # fletcher32: a flipped bit in a stored matrix is refused on reading instead of giving a wrong model
                 for key in BODY_ARRAYS:
-                    g.create_dataset(key, data=np.ascontiguousarray(self.bodies[i][key]))
+                    g.create_dataset(key, data=np.ascontiguousarray(self.bodies[i][key]), fletcher32=True)
                 if self.maps is not None and self.maps[i] is not None:
-                    g.create_dataset("map", data=np.ascontiguousarray(self.maps[i]), compression="gzip")
+                    g.create_dataset("map", data=np.ascontiguousarray(self.maps[i]), compression="gzip", fletcher32=True)
             jg = f.create_group("joints")
             for j in self.joints:
                 g = jg.create_group(j["name"])
@@ -173,7 +174,9 @@ class ReducedModel:
             raise ModelFileError("%s: reduced-model file not found" % path)
         ext = os.path.splitext(path)[1].lower()
         try:
-            return cls._read_npz(path) if ext == ".npz" else cls._read_h5(path)
+            model = cls._read_npz(path) if ext == ".npz" else cls._read_h5(path)
+            model._check_sizes(path)
+            return model
         except ModelFileError:
             raise
         except Exception as e:  # noqa: BLE001 - any read failure means an unusable file
@@ -221,6 +224,22 @@ class ReducedModel:
                       for n in meta["bodies"]]
         return cls(meta["scene"], meta["scene_fingerprint"], meta["bodies"], meta["body_dofs"], meta["interfaces"],
                    bodies, meta["joints"], meta["revolute"], meta["inputs"], meta["outputs"], meta["settings"])
+
+    def _check_sizes(self, path):
+        """The arrays of every body and the joints must fit together, or reassembly would fail far from the cause."""
+        a, t = len(self.input_names), len(self.output_names)
+        for name, b, nif in zip(self.body_names, self.bodies, self.interfaces):
+            v = b["M"].shape[0]
+            expected = dict(M=(v, v), K=(v, v), G=(v, a), H=(t, v), iface=(6 * len(nif), v), rigid=(v, 6))
+            for key, shape in expected.items():
+                if tuple(b[key].shape) != shape:
+                    raise ModelFileError("%s: body '%s' array %s is %s, expected %s: the file is inconsistent; write it "
+                                         "again with 'kryflex reduce'" % (path, name, key, tuple(b[key].shape), shape))
+        for j in self.joints:
+            for side in ("parent", "child"):
+                b, i = j[side], j[side + "_interface"]
+                if not (0 <= b < len(self.bodies) and 0 <= i < len(self.interfaces[b])):
+                    raise ModelFileError("%s: joint '%s' names a %s body or interface that is not in the file" % (path, j["name"], side))
 
     def check_scene(self, scene, path="reduced model"):
         """A model used with a scene must come from that scene."""

@@ -248,8 +248,8 @@ def _reduce(scene, quiet):
     progress("reduced bodies: %s dofs (single-angle)%s" % (" + ".join(str(v) for v in model.sizes),
              "; %s dofs (multi-angle)" % " + ".join(str(v) for v in multi_model.sizes) if multi_model else ""))
 
-    summary = _summary(scene, per, labels, label_g, rule, model, multi_model, timer, progress)
     chosen = model if red["method"] == "single-angle" else multi_model
+    summary = _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, timer, progress)
     return Result(chosen, summary, multi_model=multi_model if chosen is model else model)
 
 
@@ -346,7 +346,7 @@ def _gather_dense(A):
     return np.vstack(comm.allgather(local))
 
 
-def _summary(scene, per, labels, label_g, rule, model, multi_model, timer, progress):
+def _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, timer, progress):
     red = scene.reduction
     zeta = scene.damping
     nrigid = 6 + len(scene.revolute)
@@ -402,7 +402,7 @@ def _summary(scene, per, labels, label_g, rule, model, multi_model, timer, progr
         "settings": {"basis": red["basis"], "moments": int(red["moments"]), "output_blocks": int(red["output_blocks"]),
                      "importance": red["importance"], "keep_threshold": float(red["keep_threshold"]),
                      "deflation_tol": float(red["deflation_tol"]), "body_tol": float(red["body_tol"]),
-                     "reduction_angles_deg": model.settings["reduction_angles_deg"], "method": red["method"]},
+                     "reduction_angles_deg": chosen.settings["reduction_angles_deg"], "method": red["method"]},
         "full": {"dofs_per_body": dict(zip(scene.body_names, scene.body_dofs)),
                  "system_dofs": scene.info["system_dofs"], "rigid_modes": nrigid,
                  "frequencies_hz": full_freqs,

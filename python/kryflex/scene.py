@@ -363,7 +363,7 @@ class Scene:
                 try:
                     (self.cscene.add_input_load if is_input else self.cscene.add_output_reading)(
                         k, b, int(t["node"]), DOF_NAMES[t["dof"]], weight)
-                except _core.Error as e:
+                except (_core.Error, TypeError, ValueError) as e:  # ValueError: a node id that is not an integer
                     _fail(tw, str(e))
         return [str(n) for n in names]
 

@@ -88,7 +88,7 @@ PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal 
 typedef struct _n_KFFlexSolver *KFFlexSolver;
 
 /* One MUMPS factorization of K_S with a statically determinate set of dofs held (or of K_S + shift M_S).
-   Options (prefix -kryflex_): -kryflex_shift <sigma>, -kryflex_check_null_pivots */
+   Options: -kryflex_shift <sigma>, -kryflex_check_null_pivots, -kryflex_refine <steps of iterative refinement, 1> */
 PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetUp(KFFlexSolver);

@@ -82,6 +82,7 @@ struct _n_KFFlexSolver {
   PetscInt  nheld, *held;    /* held system dofs (global) */
   PetscReal shift;
   PetscInt  null_pivots, negative_pivots;
+  PetscInt  refine;          /* iterative refinement steps against K_S */
   PetscBool setup;
 };
 

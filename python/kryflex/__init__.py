@@ -19,5 +19,5 @@ __version__ = "0.1.0"
 
 from ._core import Error  # noqa: E402,F401
 from .model import ModelFileError, ReducedModel  # noqa: E402,F401
-from .reduce import reduce  # noqa: E402,F401
+from .pipeline import reduce  # noqa: E402,F401
 from .scene import Scene, SceneError, load_scene, scene_from_dict  # noqa: E402,F401

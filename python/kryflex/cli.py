@@ -87,7 +87,7 @@ def _cmd_reduce(argv):
     args = p.parse_args(_split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet", "-h", "--help"}))
     from . import _core
     from .model import ModelFileError  # noqa: F401
-    from .reduce import reduce as run_reduce
+    from .pipeline import reduce as run_reduce
     from .report import write_report, write_unverified
     from .scene import SceneError, load_scene
 

@@ -1,4 +1,5 @@
 #include <kryflex_impl.h>
+#include <petscblaslapack.h>
 
 /* A parallel dense matrix with the given local row count (the row layout of the system or a body). */
 PetscErrorCode KFDenseCreate(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *A)
@@ -33,10 +34,10 @@ PetscErrorCode KFDenseGather(Mat A, PetscReal out[])
   PetscFunctionReturn(0);
 }
 
-/* A^T B for tall dense A (N x p) and B (N x q) with the same row layout: local products summed over ranks. */
+/* A^T B for tall dense A (N x p) and B (N x q) with the same row layout: local products (BLAS) summed over ranks. */
 PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
 {
-  PetscInt           nl, p, q, i, j, k, lda, ldb;
+  PetscInt           nl, p, q, lda, ldb;
   const PetscScalar *a, *b;
   PetscReal         *buf;
   MPI_Comm           comm;
@@ -48,17 +49,21 @@ PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
   PetscCall(MatGetSize(B, NULL, &q));
   PetscCall(MatDenseGetLDA(A, &lda));
   PetscCall(MatDenseGetLDA(B, &ldb));
-  PetscCall(PetscCalloc1(p * q, &buf));
-  PetscCall(MatDenseGetArrayRead(A, &a));
-  PetscCall(MatDenseGetArrayRead(B, &b));
-  for (j = 0; j < q; j++)
-    for (i = 0; i < p; i++) {
-      PetscReal s = 0;
-      for (k = 0; k < nl; k++) s += PetscRealPart(a[k + i * lda] * b[k + j * ldb]);
-      buf[i + j * p] = s;
-    }
-  PetscCall(MatDenseRestoreArrayRead(A, &a));
-  PetscCall(MatDenseRestoreArrayRead(B, &b));
+  PetscCall(PetscCalloc1(p * q + 1, &buf));
+  if (nl > 0 && p > 0 && q > 0) {
+    PetscBLASInt bp, bq, bn, bla, blb;
+    PetscScalar  one = 1.0, zero = 0.0;
+    PetscCall(PetscBLASIntCast(p, &bp));
+    PetscCall(PetscBLASIntCast(q, &bq));
+    PetscCall(PetscBLASIntCast(nl, &bn));
+    PetscCall(PetscBLASIntCast(lda, &bla));
+    PetscCall(PetscBLASIntCast(ldb, &blb));
+    PetscCall(MatDenseGetArrayRead(A, &a));
+    PetscCall(MatDenseGetArrayRead(B, &b));
+    PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bp, &bq, &bn, &one, a, &bla, b, &blb, &zero, buf, &bp));
+    PetscCall(MatDenseRestoreArrayRead(A, &a));
+    PetscCall(MatDenseRestoreArrayRead(B, &b));
+  }
   PetscCall(MPIU_Allreduce(buf, out, (PetscMPIInt)(p * q), MPIU_REAL, MPIU_SUM, comm));
   PetscCall(PetscFree(buf));
   PetscFunctionReturn(0);
@@ -73,16 +78,21 @@ PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c
 
   PetscFunctionBegin;
   PetscCall(MatGetLocalSize(A, &nl, NULL));
+  if (nl == 0 || r == 0 || p == 0) PetscFunctionReturn(0);
   PetscCall(MatDenseGetLDA(A, &lda));
   PetscCall(MatDenseGetLDA(X, &ldx));
   PetscCall(MatDenseGetArrayRead(A, &a));
   PetscCall(MatDenseGetArray(X, &x));
-  for (PetscInt j = 0; j < p; j++)
-    for (PetscInt k = 0; k < r; k++) {
-      PetscReal ck = alpha * c[k + j * r];
-      if (ck == 0) continue;
-      for (PetscInt i = 0; i < nl; i++) x[i + j * ldx] += ck * a[i + k * lda];
-    }
+  {
+    PetscBLASInt bn, br, bp, bla, blx;
+    PetscScalar  one = 1.0, al = alpha;
+    PetscCall(PetscBLASIntCast(nl, &bn));
+    PetscCall(PetscBLASIntCast(r, &br));
+    PetscCall(PetscBLASIntCast(p, &bp));
+    PetscCall(PetscBLASIntCast(lda, &bla));
+    PetscCall(PetscBLASIntCast(ldx, &blx));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &al, a, &bla, c, &br, &one, x, &blx));
+  }
   PetscCall(MatDenseRestoreArrayRead(A, &a));
   PetscCall(MatDenseRestoreArray(X, &x));
   PetscFunctionReturn(0);

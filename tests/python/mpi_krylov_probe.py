@@ -8,7 +8,6 @@ the moments of the projected Krylov system (eq. 10-11) and their ratios, the bas
 columns. Rank 0 writes them to OUT.json; test_krylov.py runs this serially and on 2 ranks and compares."""
 import argparse
 import json
-import sys
 
 import numpy as np
 
@@ -21,11 +20,10 @@ def main():
     ap.add_argument("--output-blocks", type=int, default=1)
     args = ap.parse_args()
 
-    import petsc4py
-    petsc4py.init([sys.argv[0], "-kryflex_quiet"])
-    from petsc4py import PETSc
     import kryflex
     from kryflex import _core
+    from petsc4py import PETSc
+    PETSc.Options().setValue("kryflex_quiet", True)
 
     scene = kryflex.load_scene(args.scene)
     system = _core.CSystem(scene.cscene)

@@ -133,7 +133,9 @@ def importance_numpy(lam, Phi, G, H, zeta, measure):
     """kryflex.h's importance formulas, normalized by the largest."""
     w = np.sqrt(lam)
     size = np.linalg.norm(H @ Phi, axis=0) * np.linalg.norm(Phi.T @ G, axis=1)
-    value = {"h2": size / (2 * np.sqrt(zeta * w ** 3)), "hinf": size / (2 * zeta * w ** 2), "static": size / w ** 2}[measure]
+    value = {"h2": size / (2 * np.sqrt(zeta * w ** 3)),
+             "hinf": size / (2 * zeta * w ** 2),
+             "static": size / w ** 2}[measure]
     return value / value.max()
 
 
@@ -257,21 +259,36 @@ def test_multi_model_matches_moments_at_its_angles(case):
     assert_moments_match(case, multi, configs, "result.multi_model")
 
 
+def multi_angle_reduction(case):
+    """The scene reduced with reduction.method multi-angle at two angles, one of them not an angle of interest:
+    (reduction angles, Result)."""
+    if not hasattr(case, "_multi"):
+        with open(case.path) as f:
+            spec = yaml.safe_load(f)
+        confs = case.scene.configurations
+        extra = [a + 17.0 for a in confs[1]]
+        assert extra not in confs
+        spec["reduction"] = dict(spec.get("reduction") or {}, method="multi-angle", reduction_angles=[confs[0], extra])
+        scene = kryflex.scene_from_dict(spec, base=os.path.dirname(case.path))
+        case._multi = ([confs[0], extra], kryflex.reduce(scene, quiet=True))
+    return case._multi
+
+
 def test_multi_angle_method_with_its_own_angles(case):
-    """reduction.method multi-angle with reduction angles of which one is not an angle of interest."""
-    spec_path = case.path
-    with open(spec_path) as f:
-        spec = yaml.safe_load(f)
-    confs = case.scene.configurations
-    extra = [a + 17.0 for a in confs[1]]
-    assert extra not in confs
-    spec["reduction"] = dict(spec.get("reduction") or {}, method="multi-angle", reduction_angles=[confs[0], extra])
-    scene = kryflex.scene_from_dict(spec, base=os.path.dirname(spec_path))
-    result = kryflex.reduce(scene, quiet=True)
+    angles, result = multi_angle_reduction(case)
     model = result.model
     assert model.settings["method"] == "multi-angle"
-    assert [list(c) for c in model.settings["reduction_angles_deg"]] == [confs[0], extra]
-    assert_moments_match(case, model, [confs[0], extra], "method multi-angle")
+    assert [list(c) for c in model.settings["reduction_angles_deg"]] == angles
+    assert_moments_match(case, model, angles, "method multi-angle")
+
+
+@pytest.mark.xfail(strict=True, reason="bug: reduce.py _summary writes settings.reduction_angles_deg from the "
+                                       "single-angle model even when the method is multi-angle")
+def test_summary_settings_name_the_multi_angle_reduction_angles(galileo):
+    angles, result = multi_angle_reduction(galileo)
+    settings = result.summary["settings"]
+    assert settings["method"] == "multi-angle"
+    assert [list(c) for c in settings["reduction_angles_deg"]] == angles
 
 
 # ================================================================================================ Krylov modes
@@ -455,7 +472,7 @@ def test_report_flags_inexact_moments_with_the_ratio(galileo, galileo_report):
         if dev >= 2 * MOMENT_RTOL:
             flagged += 1
             assert len(mine) == 1, "no note for the inexact moments at %s deg (max |ratio - 1| %.2e)" % (label, dev)
-            stated = float(re.search(r"max \|L_full/L_red - 1\| = ([0-9.e+-]+)", mine[0]).group(1))
+            stated = float(re.search(r"\|L_full/L_red - 1\| = ([0-9.e+-]+)", mine[0]).group(1))
             assert stated == pytest.approx(dev, rel=0.05, abs=2e-9)
             assert mine[0] in report
             assert "α = %s°" % label in report[report.index("does NOT match"):]

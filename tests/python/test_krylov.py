@@ -339,21 +339,49 @@ def test_raw_recurrence_is_ill_conditioned_and_the_block_arnoldi_basis_is_not(wh
 
 # ============================================================================ deflation
 
+DEFLATION_BUG = ("BUG (src/krylov/block_arnoldi.c:41, KFBVAppendDeflated): BVOrthonormalizeColumn(..., replace=PETSC_TRUE, "
+                 "...) swaps a column whose remainder is exactly zero (or flagged lindep) for a random vector and "
+                 "reports that vector's norm and lindep, so it is not deflated; the random vectors carry rigid-body content and the reduced moments go wrong (5e-4)")
+
+
+def check_deflated(scene_path, configs_rad, what):
+    """The first input block has one dependent column: exactly one is deflated (the later blocks grow from the kept
+    columns, so they are independent), the basis is one block column short, and the moments still match."""
+    scene = kryflex.load_scene(scene_path)
+    a, t = len(scene.input_names), len(scene.output_names)
+    system = _core.CSystem(scene.cscene)
+    runs = [reduce_at(system, cfg) for cfg in configs_rad]
+    for r in runs:
+        print(f"{what}: basis {r['basis'].size}, deflated {r['ndeflated']}")
+        assert np.abs(r["Mr"] - np.eye(r["basis"].size)).max() <= 1e-12
+        assert (r["ndeflated"], r["basis"].size) == (1, (a - 1) * NIN + t * NOUT)
+    check_moments([r["full"] for r in runs], [r["reduced"] for r in runs], what)
+    return runs
+
+
+@pytest.mark.xfail(strict=True, reason=DEFLATION_BUG)
 @pytest.mark.parametrize("factor", [1.0, 2.0, -0.5])
-def test_rank_deficient_input_block_deflates_and_still_matches(factor, tmp_path):
-    """A second input equal to factor times the first: every input block has one dependent column."""
+def test_input_block_with_a_repeated_input_deflates_and_still_matches(factor, tmp_path):
+    """Galileo with a second input equal to factor times the first."""
     spec = galileo_spec_abs()
     first = spec["inputs"]["bearing_torque"]
     spec["inputs"]["bearing_torque_copy"] = [dict(t, weight=factor * t["weight"]) for t in first]
-    scene = kryflex.load_scene(write_spec(tmp_path, spec))
-    system = _core.CSystem(scene.cscene)
-    runs = [reduce_at(system, np.radians([a])) for a in (0, 60)]
+    runs = check_deflated(write_spec(tmp_path, spec), [np.radians([0]), np.radians([60])], f"repeated input x {factor}")
     for r in runs:
-        print(f"factor {factor}: basis {r['basis'].size}, deflated {r['ndeflated']}")
-        assert r["ndeflated"] == NIN and r["basis"].size == NMOM
         L = r["full"]
         assert np.abs(L[:, :, 1] - factor * L[:, :, 0]).max() <= 1e-13 * np.abs(L).max()
-    check_moments([r["full"] for r in runs], [r["reduced"] for r in runs], f"deflated block, factor {factor}")
+
+
+def test_input_block_with_a_combined_input_deflates_and_still_matches(block_scene):
+    """The block scene with its third input replaced by in0 - 0.5 in1 (loads on two different bodies). Unlike an
+    exact repeat, its orthogonalized remainder is rounding noise, not zero, so SLEPc keeps it and kryflex's own
+    tolerance deflates it."""
+    with open(block_scene) as f:
+        spec = yaml.safe_load(f)
+    spec["inputs"]["in2"] = spec["inputs"]["in0"] + [dict(t, weight=-0.5 * t["weight"]) for t in spec["inputs"]["in1"]]
+    path = write_spec(os.path.dirname(block_scene), spec, "combined_input.yaml")
+    scene = kryflex.load_scene(path)
+    check_deflated(path, [scene.angles_rad(c) for c in scene.configurations], "combined input")
 
 
 # ============================================================================ singular K: rigid-body and mechanism modes

@@ -157,13 +157,14 @@ def test_reassembly_from_file_equals_in_memory(case, ext, tmp_path):
         assert np.abs(lam_m - lam_d).max() <= SAME * lam_m.max()
         Lm, Ld = case.model.moments(angles, nmom), loaded.moments(angles, nmom)
         scale = np.abs(Lm).reshape(nmom, -1).max(axis=1)[:, None, None]
-        assert np.abs(Lm - Ld).max() <= SAME * 1.0 and np.all(np.abs(Lm - Ld) <= SAME * scale), angles
+        assert np.all(np.abs(Lm - Ld) <= SAME * scale), angles
 
 
 def test_command_reassembles_from_the_file_alone(case, tmp_path):
     """'kryflex reassemble' sees the reduced-model file and nothing else; its matrices equal the in-memory ones."""
     path = case.model.save(str(tmp_path / "reduced.h5"))
-    angles = case.angles[-2:]
+    angles = [a for a in case.angles if a[0] >= 0][-2:]     # negative first angles: see the xfail test below
+    assert any(a not in case.scene.configurations for a in angles)
     out = str(tmp_path / "reassembled.npz")
     cmd = [KRYFLEX_CMD, "reassemble", path, "-o", out, "--json", "-quiet"]
     for a in angles:
@@ -179,6 +180,19 @@ def test_command_reassembles_from_the_file_alone(case, tmp_path):
                 np.testing.assert_allclose(z["%s_%s" % (name, key)], x, rtol=0, atol=SAME * np.abs(x).max())
             assert r["dofs"] == mem[0].shape[0] and r["constraint_rank"] == mem[4]
             assert r["rigid_modes"] == case.nrigid
+
+
+@pytest.mark.parametrize("spelling", [
+    pytest.param(["--angle", "-30,95"], marks=pytest.mark.xfail(strict=True, reason=(
+        "bug: cli.py _cmd_reassemble: argparse takes '-30,95' for an option ('expected one argument')"))),
+    pytest.param(["--angle=-30,95"], marks=pytest.mark.xfail(strict=True, reason=(
+        "bug: cli.py _split_petsc_options drops '--angle=...' as a PETSc option ('required: --angle')")))])
+def test_command_takes_a_negative_first_angle(frames_rev, tmp_path, spelling):
+    path = frames_rev.model.save(str(tmp_path / "reduced.h5"))
+    proc = subprocess.run([KRYFLEX_CMD, "reassemble", path, "--json", "-quiet"] + spelling, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)[0]["angles_deg"] == [-30.0, 95.0]
 
 
 # ================================================================================================ rigid modes
@@ -219,9 +233,13 @@ def test_constraint_rank_and_numpy_reassembly(case):
         lam, lam_n = generalized_eigenvalues(Kh, Mh), generalized_eigenvalues(Kn, Mn)
         flex = slice(case.nrigid, None)
         np.testing.assert_allclose(lam[flex], lam_n[flex], rtol=1e-7)
-        w = 0.5 * np.sqrt(lam[case.nrigid])        # below the first flexible mode, away from resonances
+        # G and H: the transfer function below the first flexible mode, which does not depend on the basis of
+        # the null space. Solving with K - w^2 M loses cond(K - w^2 M) * eps (Galileo: 5e8 * 2e-16) in double,
+        # whichever the basis; a wrong input or output map would be off by O(1).
+        w = 0.5 * np.sqrt(lam[case.nrigid])
         T, Tn = transfer(Mh, Kh, Gh, Hh, w), transfer(Mn, Kn, Gn, Hn, w)
-        assert np.linalg.norm(T - Tn) <= 1e-8 * np.linalg.norm(Tn), a
+        cond = np.linalg.cond(Kn - w ** 2 * Mn)
+        assert np.linalg.norm(T - Tn) <= 1e3 * np.finfo(float).eps * cond * np.linalg.norm(Tn), a
     print("%s: constraint rank %d, sigma ratio %.3g" % (case.name, rank, ratio))
 
 
@@ -281,13 +299,16 @@ def bad_reassemble_calls(model):
         ("NaN angle", B, J, np.full(len(good), np.nan), a, t, 1e-9, ""),
         ("negative rank tolerance", B, J, good, a, t, -1.0, "tolerance"),
         ("no bodies", [], [], [], a, t, 1e-9, "no reduced bodies"),
+        # these raise, but not with a message that names the problem (IndexError from NumPy, LAPACK's SVD failure)
+        ("axis of 2 components", B, joint(0, axis=[0.0, 1.0]), good, a, t, 1e-9, ""),
+        ("R0 of 2 x 2", B, joint(0, R0=np.eye(2).tolist()), good, a, t, 1e-9, ""),
     ]
 
 
 def test_reassemble_rejects_bad_arguments(galileo, frames_fixed):
     for case in (galileo, frames_fixed):
         for what, bodies, joints, angles, a, t, rtol, message in bad_reassemble_calls(case.model):
-            with pytest.raises((ValueError, kryflex.Error), match=message) as info:
+            with pytest.raises((ValueError, IndexError, kryflex.Error), match=message) as info:
                 _core.reassemble(bodies, joints, angles, a, t, rtol)
             assert str(info.value), what
     # a ReducedModel names its joints when given the wrong number of angles
@@ -410,9 +431,12 @@ def test_corrupted_npz_data_is_refused(saved_galileo, tmp_path):
 def test_corrupted_h5_data_is_refused(saved_galileo, tmp_path):
     h5, _ = saved_galileo
     with h5py.File(h5, "r") as f:
-        offset = f["bodies/stator/K"].id.get_offset()
+        K = f["bodies/stator/K"]
+        # contiguous or in one chunk (small arrays), C order: entry i is 8 i bytes in
+        base = K.id.get_offset() if K.chunks is None else K.id.get_chunk_info(0).byte_offset
+        offset = base + 8 * int(np.argmax(np.abs(K[...])))
     data = bytearray(open(h5, "rb").read())
-    data[offset + 7] ^= 0x10          # the exponent byte of K[0, 0]
+    data[offset + 7] ^= 0x10          # the exponent byte of the stator's largest stiffness entry
     path = write_bytes(tmp_path / "flipped.h5", bytes(data))
     with pytest.raises(kryflex.ModelFileError):
         kryflex.ReducedModel.load(path)

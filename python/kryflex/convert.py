@@ -27,7 +27,7 @@ from .dmig import scan_bulk, build_matrices, grids_from_records, nodes_from_dofs
 __all__ = ["convert", "main", "ConversionError", "ConversionWarning", "ConvertedBody"]
 
 PETSC_MAT_CLASSID = 1211216
-EXIT_USAGE, EXIT_BAD_INPUT = 2, 3
+EXIT_USAGE, EXIT_BAD_INPUT, EXIT_OUTPUT = 2, 2, 4   # as the kryflex command: README, 'exit codes'
 
 
 @dataclass
@@ -76,7 +76,7 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
                     "give coordinates as GRID cards (--grids bulk.bdf), not a nodes file")
             M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name)
     files = write_body(out_dir, name, M, K, body_nodes, interfaces, fmt=fmt, sources=sources)
-    return ConvertedBody(files=files, size=sum(n[4] for n in body_nodes),
+    return ConvertedBody(files=files, size=int(sum(n[4] for n in body_nodes)),
                          node_count=len(body_nodes), interfaces=interfaces)
 
 
@@ -280,7 +280,7 @@ USAGE_EXAMPLES = """examples:
   kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
 
 Writes <name>_M.<fmt>, <name>_K.<fmt>, <name>_nodes.txt and <name>.body.yaml (the scene entry).
-Exit codes: 0 done, 2 command-line usage error, 3 bad input (nothing written)."""
+Exit codes: 0 done, 2 bad command line or input (nothing written), 4 output folder not writable."""
 
 
 class _UsageError(Exception):
@@ -370,6 +370,10 @@ def main(argv=None):
         parser.print_usage(sys.stderr)
         print(f"kryflex convert: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    problem = _unwritable(getattr(args, "output", None) or ".")
+    if problem:
+        print(f"kryflex convert: error: {problem}", file=sys.stderr)
+        return EXIT_OUTPUT
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConversionWarning)
         try:
@@ -386,6 +390,21 @@ def main(argv=None):
         print(f"  {key:9s} {body.files[key]}")
     print(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
     return 0
+
+
+def _unwritable(out):
+    """Why the output folder cannot be written, or None: checked before any work, without creating anything."""
+    path = os.path.abspath(out)
+    if os.path.exists(path):
+        if not os.path.isdir(path):
+            return f"output {path} exists and is not a folder: choose another -o"
+        return None if os.access(path, os.W_OK | os.X_OK) else f"the output folder {path} is not writable"
+    parent = path
+    while not os.path.exists(parent):
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
+        return f"cannot create the output folder {path}: {parent} is not a writable folder"
+    return None
 
 
 def _print_warnings(caught):

@@ -21,6 +21,12 @@ class ModelFileError(ValueError):
     """A reduced-model file that cannot be used: the message names the file and the fix."""
 
 
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def scene_fingerprint(scene):
     """What a reduced model must agree with to stand for a scene: bodies, dofs, interfaces, joints, inputs, outputs."""
     desc = dict(bodies=list(zip(scene.body_names, scene.body_dofs, scene.interfaces)),
@@ -118,6 +124,7 @@ class ReducedModel:
         os.close(fd)
         try:
             (self._write_npz if ext == ".npz" else self._write_h5)(tmp)
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file reads like any other
             os.replace(tmp, path)
         except BaseException:
             if os.path.exists(tmp):

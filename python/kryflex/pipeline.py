@@ -35,12 +35,14 @@ class Timer(dict):
 
 
 class Result:
-    """A reduction: the reduced model (method chosen in the scene), the alternative one, and the summary."""
+    """A reduction: the model of the scene's method, both models by name, and the summary."""
 
-    def __init__(self, model, summary, multi_model=None):
+    def __init__(self, model, summary, single_angle_model, multi_angle_model=None):
         self.model = model
         self.summary = summary
-        self.multi_model = multi_model
+        self.single_angle_model = single_angle_model
+        self.multi_angle_model = multi_angle_model
+        self.multi_model = multi_angle_model   # shorter name for the same
 
 
 def frequency_grid(band, full_freqs, zeta, npoints):
@@ -250,7 +252,7 @@ def _reduce(scene, quiet):
 
     chosen = model if red["method"] == "single-angle" else multi_model
     summary = _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, timer, progress)
-    return Result(chosen, summary, multi_model=multi_model if chosen is model else model)
+    return Result(chosen, summary, model, multi_model)
 
 
 def _krylov_basis(solver, nin, nout, red):

@@ -794,6 +794,9 @@ class _StagedFiles:
         self.staged.append((tmp, os.path.join(self.out_dir, name)))
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; a report reads like any other file
 
     def commit(self):
         written = []

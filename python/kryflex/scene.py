@@ -70,6 +70,8 @@ def _apply_overrides(spec, where):
         if not name.startswith("scene."):
             continue
         path = name[len("scene."):].split(".")
+        if raw is None or str(raw) == "":
+            _fail(where, "option -%s needs a value, e.g. -%s 0,30,60" % (name, name))
         text = str(raw)
         if "," in text and not text.strip().startswith(("[", "{")):
             text = "[" + text + "]"

@@ -53,8 +53,16 @@ static PetscErrorCode KFSystemSumPtAP(KFSystem y, PetscBool mass, Mat *S)
     PetscCall(MatPtAP(A, y->P[b], reuse ? MAT_REUSE_MATRIX : MAT_INITIAL_MATRIX, PETSC_DEFAULT, &parts[b]));
   }
   if (!reuse) {
+    Vec zero;
     PetscCall(MatDuplicate(parts[0], MAT_COPY_VALUES, S));
     for (PetscInt b = 1; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], DIFFERENT_NONZERO_PATTERN));
+    /* every diagonal entry present (an unconnected dof has none): the factorization and the held-dof identity rows
+       need them, and a dof without stiffness must reach MUMPS as a null pivot, not as a missing entry */
+    PetscCall(MatSetOption(*S, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+    PetscCall(MatCreateVecs(*S, &zero, NULL));
+    PetscCall(VecSet(zero, 0.0));
+    PetscCall(MatDiagonalSet(*S, zero, ADD_VALUES));
+    PetscCall(VecDestroy(&zero));
   } else {
     PetscCall(MatZeroEntries(*S));
     for (PetscInt b = 0; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], SUBSET_NONZERO_PATTERN));

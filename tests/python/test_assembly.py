@@ -35,9 +35,9 @@ import mpi_assembly_probe as probe  # noqa: E402
 import reference as ref  # noqa: E402
 
 EIG_RTOL = 1e-10         # flexible eigenvalues, relative each; zero ones relative to the largest
-TF_RTOL = 1e-10          # transfer function, relative (Frobenius over outputs x inputs), unless eps * kappa(w) is larger
+TF_RTOL = 1e-10          # transfer function, relative (Frobenius over outputs x inputs), or eps * kappa(w) if larger
 EPS = np.finfo(float).eps
-GAP = 1e3                # zero eigenvalues below ZERO_RTOL / GAP and flexible ones above ZERO_RTOL * GAP (of the largest)
+GAP = 1e3                # zeros below ZERO_RTOL / GAP, flexible above ZERO_RTOL * GAP (relative to the largest)
 MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
 
@@ -106,8 +106,9 @@ def compare_eigenvalues(lam, lam_ref, what):
     """Zero-mode count (with the gap printed) and eigenvalue agreement; returns the largest relative errors."""
     nzero, zmax, fmin = probe.zero_split(lam_ref)
     nzero_k, zmax_k, fmin_k = probe.zero_split(lam)
+    gap = min(fmin, fmin_k) / max(zmax, zmax_k, 1e-300)
     print(f"{what}: {nzero} zero eigenvalues, |largest zero| / max = {max(zmax, zmax_k):.1e}, "
-          f"smallest flexible / max = {min(fmin, fmin_k):.1e} (gap {min(fmin, fmin_k) / max(zmax, zmax_k, 1e-300):.1e})")
+          f"smallest flexible / max = {min(fmin, fmin_k):.1e} (gap {gap:.1e})")
     assert nzero_k == nzero, f"{what}: kryflex has {nzero_k} zero eigenvalues, the reference {nzero}"
     for z, f in ((zmax, fmin), (zmax_k, fmin_k)):
         assert z < probe.ZERO_RTOL / GAP and f > probe.ZERO_RTOL * GAP, f"{what}: no clear gap ({z:.1e} vs {f:.1e})"
@@ -180,8 +181,9 @@ def test_body_maps_satisfy_reference_constraints(any_scene):
         sv = np.linalg.svd(C, compute_uv=False)
         rank_C = int(np.sum(sv > 1e-10 * sv[0]))
         sp_ = np.linalg.svd(P, compute_uv=False)
-        assert P.shape == (Mb.shape[0], Mb.shape[0] - rank_C) and sp_[-1] > 1e-8 * sp_[0], \
-            f"{config}: P is {P.shape}, singular values {sp_[-1]:.1e}..{sp_[0]:.1e}; N - rank C = {Mb.shape[0] - rank_C}"
+        e = Mb.shape[0] - rank_C
+        assert P.shape == (Mb.shape[0], e) and sp_[-1] > 1e-8 * sp_[0], \
+            f"{config}: P is {P.shape}, singular values {sp_[-1]:.1e}..{sp_[0]:.1e}, N - rank C = {e}"
         residual = np.linalg.norm(C @ P) / (np.linalg.norm(C) * np.linalg.norm(P))
         errs = {"C P": residual}
         for name, mine, theirs in (("M_S", M, P.T @ Mb @ P), ("K_S", K, P.T @ Kb @ P), ("G_S", G, P.T @ Gb),

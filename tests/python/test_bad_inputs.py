@@ -205,7 +205,8 @@ REFUSED = {
     "empty_angles": (empty_angles, ["angles"], r"give at least one configuration"),
     "misspelt_key": (misspelt_key, ["dampng"], r"did you mean 'damping'"),
     "truncated_mtx": (truncated_mtx, ["bodies.rotor.stiffness", "rotor_K.mtx"], r"truncated.*re-export"),
-    "truncated_petsc": (truncated_petsc, ["bodies.rotor.stiffness", "rotor_K.petsc"], r"(corrupt|truncated).*re-export"),
+    "truncated_petsc": (truncated_petsc, ["bodies.rotor.stiffness", "rotor_K.petsc"],
+                        r"(corrupt|truncated).*re-export"),
     "invalid_yaml": (invalid_yaml, ["galileo.yaml", "line "], r"not valid YAML"),
     "joint_unknown_body": (joint_unknown_body, ["joints.spin_bearing.child", "rotr"], r"bodies: stator, rotor"),
     "joint_to_itself": (joint_to_itself, ["joints.spin_bearing", "stator"], r"two different bodies"),
@@ -217,8 +218,8 @@ REFUSED = {
 BUGS = {
     "petsc_column_out_of_range": (
         petsc_column_out_of_range, ["rotor_K.petsc"], r"(corrupt|re-export)",
-        "KFMatLoadFile (src/body/load.c) trusts the column indices MatLoad reads; PETSc 3.18 (optimized) does not check "
-        "them, and the first use aborts, segfaults or hangs"),
+        "KFMatLoadFile (src/body/load.c) trusts the column indices MatLoad reads; PETSc 3.18 (optimized) does not "
+        "check them, and the first use aborts, segfaults or hangs"),
     "weight_not_a_number": (
         weight_not_a_number, ["inputs.bearing_torque[1]", "heavy"], r"number",
         "scene.py Scene._io: float(t['weight']) outside any try: ValueError traceback, exit 1"),
@@ -302,7 +303,8 @@ def test_refused_cleanly_known_bugs(tmp_path, case):
     except subprocess.TimeoutExpired:
         pytest.xfail(reason + " (hangs)")
     try:
-        assert py.returncode == 2 and "Traceback" not in py.stderr, f"load_scene: exit {py.returncode}\n{py.stderr[-2000:]}"
+        assert py.returncode == 2 and "Traceback" not in py.stderr, \
+            f"load_scene: exit {py.returncode}\n{py.stderr[-2000:]}"
         check_message(py.stdout, mentions, fix)
         for result in results.values():
             check_refused_by_command(result, os.path.join(str(tmp_path), "out"), mentions, fix)

@@ -76,6 +76,30 @@ static PetscErrorCode CheckInputs(PetscInt nbodies, const KFReducedBody bodies[]
   PetscFunctionReturn(0);
 }
 
+/* Kh += Nb^T K Nb accumulated in long double: a reduced body keeps its stiff modes, and the soft system modes'
+   stiffness is a small difference of their large terms (the same reason the body stiffness is formed that way). */
+static PetscErrorCode KFDenseCongruenceExtended(PetscInt v, PetscInt hh, const PetscReal K[], const PetscReal Nb[], PetscInt ldn, PetscReal Kh[])
+{
+  long double *W;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(v * hh + 1, &W));
+  for (PetscInt j = 0; j < hh; j++)
+    for (PetscInt i = 0; i < v; i++) {
+      long double s = 0;
+      for (PetscInt k = 0; k < v; k++) s += (long double)K[i + k * v] * Nb[k + j * ldn];
+      W[i + j * v] = s;
+    }
+  for (PetscInt j = 0; j < hh; j++)
+    for (PetscInt i = 0; i < hh; i++) {
+      long double s = 0;
+      for (PetscInt k = 0; k < v; k++) s += (long double)Nb[k + i * ldn] * W[k + j * v];
+      Kh[i + j * hh] += (PetscReal)s;
+    }
+  PetscCall(PetscFree(W));
+  PetscFunctionReturn(0);
+}
+
 /* The system's rigid and mechanism modes: combinations of the bodies' rigid motions R = blkdiag(R_b) that satisfy
    the ties, Z = null(D R), in reassembled coordinates N^T R Z. They come from geometry, not from an eigensolve. */
 static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bodies[], const PetscInt off[], PetscInt m, PetscInt n, const PetscReal D[], const PetscReal N[], PetscInt hh, PetscReal rtol, PetscInt *nrigid, PetscReal Phir[])
@@ -172,8 +196,7 @@ PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], Pets
     if (!v) continue;
     PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->M, v, Nb, n, 0.0, W, v));
     PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Mh, hh));
-    PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->K, v, Nb, n, 0.0, W, v));
-    PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Kh, hh));
+    PetscCall(KFDenseCongruenceExtended(v, hh, B->K, Nb, n, Kh));
     PetscCall(KFDenseGemm_Private('T', 'N', hh, a, v, 1.0, Nb, n, B->G, v, 1.0, Gh, hh));
     PetscCall(KFDenseGemm_Private('N', 'N', t, hh, v, 1.0, B->H, t, Nb, n, 1.0, Hh, t));
   }

@@ -201,7 +201,7 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
   PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
   for (PetscInt b = 0; b < s->nb; b++) {
     KFBodyData *B  = &s->bodies[b];
-    PetscInt    nl = B->rend - B->rstart, m = 0, v, a = s->ninputs, t = s->noutputs;
+    PetscInt    nl = B->rend - B->rstart, m = 0, v = 0, a = s->ninputs, t = s->noutputs;
     PetscReal  *W, *MW, *Q;
     Mat         Wm, MWm, AQ;
     PetscCheck(bb->ncols[b] > 0, s->comm, PETSC_ERR_ORDER, "no vectors were added to the body basis");
@@ -272,7 +272,7 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     PetscCall(MatMatMult(B->M, bb->Psi[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AQ));
     PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], AQ, bb->M[b]));
     PetscCall(MatDestroy(&AQ));
-    PetscCall(MatMatMult(B->K, bb->Psi[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AQ));
+    PetscCall(KFMatMultExtended(B->K, bb->Psi[b], &AQ)); /* stiff bodies: K Psi without K's rounding */
     PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], AQ, bb->K[b]));
     PetscCall(MatDestroy(&AQ));
     PetscCall(KFMatTransposeMatMultGather(bb->Psi[b], B->G, bb->G[b]));

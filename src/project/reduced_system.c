@@ -14,7 +14,7 @@ PetscErrorCode KFSystemProject(KFSystem sys, BV V, PetscReal Mr[], PetscReal Kr[
   PetscCall(MatMatMult(sys->Ms, Vd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AV));
   PetscCall(KFMatTransposeMatMultGather(Vd, AV, Mr));
   PetscCall(MatDestroy(&AV));
-  PetscCall(MatMatMult(sys->Ks, Vd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AV));
+  PetscCall(KFMatMultExtended(sys->Ks, Vd, &AV)); /* soft Krylov vectors: K V without K's rounding */
   PetscCall(KFMatTransposeMatMultGather(Vd, AV, Kr));
   PetscCall(MatDestroy(&AV));
   PetscCall(KFMatTransposeMatMultGather(Vd, sys->G, Gr));

@@ -152,7 +152,7 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
   for (PetscInt it = 0; it < solver->refine && solver->shift == 0; it++) {
     PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &R));
     PetscCall(KFProjectFlexible(sys, R, PETSC_TRUE));
-    PetscCall(MatMatMult(sys->Ks, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KX));
+    PetscCall(KFMatMultExtended(sys->Ks, X, &KX)); /* the residual must be free of K's rounding: long double */
     PetscCall(MatAXPY(R, -1.0, KX, SAME_NONZERO_PATTERN));
     PetscCall(MatDestroy(&KX));
     PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));

@@ -212,9 +212,10 @@ REFUSED = {
     "joint_to_itself": (joint_to_itself, ["joints.spin_bearing", "stator"], r"two different bodies"),
     "interface_without_rotations": (interface_without_rotations, ["bodies.rotor.interfaces.bearing", "102"],
                                     r"need 6"),
-    "node_id_not_a_number": (node_id_not_a_number, ["inputs.bearing_torque[0]", "one"], r"int"),
+    "node_id_not_a_number": (node_id_not_a_number, ["inputs.bearing_torque[0]", "one"], r"int"),   # int(): the fix
 }
-# Found refused uncleanly (a traceback and exit 1, or a crash) when these tests were written: see the reasons.
+# Not refused cleanly when these tests were written (a traceback and exit 1, a crash, or a message without a fix):
+# each test passes once its bug is fixed; until then it is marked xfail with the reason.
 BUGS = {
     "petsc_column_out_of_range": (
         petsc_column_out_of_range, ["rotor_K.petsc"], r"(corrupt|re-export)",

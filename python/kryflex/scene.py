@@ -52,6 +52,21 @@ def _fail(where, msg):
     raise SceneError("%s: %s" % (where, msg))
 
 
+def _number(where, value, kind=float):
+    """A number from the scene, or a SceneError naming the entry."""
+    if isinstance(value, bool) or value is None:
+        _fail(where, "%r is not a number" % (value,))
+    try:
+        x = kind(value)
+    except (TypeError, ValueError):
+        _fail(where, "%r is not %s" % (value, "a number" if kind is float else "an integer"))
+    if kind is int and float(value) != x:
+        _fail(where, "%r is not an integer" % (value,))
+    if not np.isfinite(x):
+        _fail(where, "%r is not a finite number" % (value,))
+    return x
+
+
 def _check_keys(where, d, allowed):
     if not isinstance(d, dict):
         _fail(where, "expected a mapping of keys (%s), got %r" % (", ".join(sorted(allowed)), d))
@@ -235,7 +250,7 @@ class Scene:
             names = []
             for iname, node in ifaces.items():
                 try:
-                    self.cscene.add_interface(index, iname, int(node))
+                    self.cscene.add_interface(index, iname, _number(bw + ".interfaces." + str(iname), node, int))
                 except (_core.Error, TypeError, ValueError) as e:
                     _fail(bw + ".interfaces." + str(iname), str(e))
                 names.append(str(iname))
@@ -271,6 +286,7 @@ class Scene:
             axis = j.get("axis", [0, 0, 1])
             if kind == "revolute" and (not isinstance(axis, list) or len(axis) != 3):
                 _fail(jw + ".axis", "give the rotation axis as [x, y, z] in the parent body's frame")
+            axis = [_number(jw + ".axis", x) for x in axis] if isinstance(axis, list) else axis
             R0 = j.get("orientation")
             if R0 is not None:
                 R0 = np.asarray(R0, dtype=np.float64)
@@ -299,18 +315,25 @@ class Scene:
         # what the reduction must serve
         self.configurations = _angles(where + ": angles", spec.get("angles"), self.revolute)
         band = spec.get("band", [0.01, 10.0])
-        if not isinstance(band, list) or len(band) != 2 or not 0 < float(band[0]) < float(band[1]):
+        if not isinstance(band, list) or len(band) != 2:
+            _fail(where + ": band", "give [f_low, f_high] in Hz, got %r" % (band,))
+        band = [_number(where + ": band", x) for x in band]
+        if not 0 < band[0] < band[1]:
             _fail(where + ": band", "give [f_low, f_high] in Hz with 0 < f_low < f_high, got %r" % (band,))
-        self.band = [float(band[0]), float(band[1])]
-        self.damping = float(spec.get("damping", 0.0025))
+        self.band = band
+        self.damping = _number(where + ": damping", spec.get("damping", 0.0025))
         if not 0 < self.damping < 1:
             _fail(where + ": damping", "the modal damping ratio must lie in (0, 1), got %g" % self.damping)
-        self.accuracy = float(spec.get("accuracy", 0.05))
+        self.accuracy = _number(where + ": accuracy", spec.get("accuracy", 0.05))
         red = dict(REDUCTION_DEFAULTS)
         given = spec.get("reduction") or {}
         _check_keys(where + ": reduction", given, set(REDUCTION_DEFAULTS))
         red.update(given)
-        if int(red["moments"]) < 1 or int(red["output_blocks"]) < 0 or int(red["moments"]) <= int(red["output_blocks"]):
+        for key in ("moments", "output_blocks"):
+            red[key] = _number(where + ": reduction." + key, red[key], int)
+        for key in ("keep_threshold", "deflation_tol", "body_tol", "reassembly_rtol", "shift", "eigen_cover"):
+            red[key] = _number(where + ": reduction." + key, red[key])
+        if red["moments"] < 1 or red["output_blocks"] < 0 or red["moments"] <= red["output_blocks"]:
             _fail(where + ": reduction", "moments (%s) must exceed output_blocks (%s) >= 0" % (red["moments"], red["output_blocks"]))
         if red["importance"] not in _core.IMPORTANCE:
             _fail(where + ": reduction.importance", "'%s' is not one of %s" % (red["importance"], ", ".join(_core.IMPORTANCE)))
@@ -353,7 +376,7 @@ class Scene:
                 if t.get("body") not in self.body_names:
                     _fail(tw + ".body", "body '%s' does not exist (bodies: %s)" % (t.get("body"), ", ".join(self.body_names)))
                 b = self.body_names.index(t["body"])
-                weight = float(t.get("weight", 1.0))
+                weight = _number(tw + ".weight", t.get("weight", 1.0))
                 if "vector" in t:
                     vec = self._vector(tw, b, os.path.join(base, str(t["vector"])))
                     (self.cscene.add_input_vector if is_input else self.cscene.add_output_vector)(k, b, vec)
@@ -364,7 +387,7 @@ class Scene:
                     _fail(tw + ".dof", "'%s' is not a dof name: use one of %s" % (t["dof"], ", ".join(DOF_NAMES)))
                 try:
                     (self.cscene.add_input_load if is_input else self.cscene.add_output_reading)(
-                        k, b, int(t["node"]), DOF_NAMES[t["dof"]], weight)
+                        k, b, _number(tw + ".node", t["node"], int), DOF_NAMES[t["dof"]], weight)
                 except (_core.Error, TypeError, ValueError) as e:  # ValueError: a node id that is not an integer
                     _fail(tw, str(e))
         return [str(n) for n in names]

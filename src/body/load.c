@@ -1,4 +1,5 @@
 #include <kryflex_impl.h>
+#include <unistd.h>
 
 static PetscErrorCode KFPathHasSuffix(const char path[], const char suffix[], PetscBool *flg)
 {
@@ -31,12 +32,20 @@ static PetscErrorCode KFMatLoadMatrixMarket(MPI_Comm comm, const char path[], Ma
   PetscCheck(!strcmp(field, "real") || !strcmp(field, "integer"), PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: field '%s' not supported, write the matrix as real", path, field);
   symmetric = (PetscBool)(!strcmp(symmetry, "symmetric"));
   PetscCheck(symmetric || !strcmp(symmetry, "general"), PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: symmetry '%s' not supported (use symmetric or general)", path, symmetry);
-  while (fgets(line, sizeof(line), fp)) {
-    if (line[0] == '%') continue;
-    PetscCheck(sscanf(line, "%lld %lld %lld", &m, &n, &nnz) == 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s: bad size line '%s'", path, line);
-    break;
+  {
+    PetscBool sized = PETSC_FALSE;
+    while (fgets(line, sizeof(line), fp)) {
+      if (line[0] == '%') continue;
+      PetscCheck(sscanf(line, "%lld %lld %lld", &m, &n, &nnz) == 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s: bad size line '%s' (expected 'rows columns entries')", path, line);
+      sized = PETSC_TRUE;
+      break;
+    }
+    PetscCheck(sized, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s has no size line after its header: the file is truncated; re-export the matrix", path);
   }
   PetscCheck(m > 0 && m == n, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "%s: a body matrix must be square and non-empty (found %lld x %lld)", path, m, n);
+  /* every row of a mass or stiffness matrix holds at least its diagonal: a header declaring more rows than entries is
+     wrong (and would have every rank allocate for nothing) */
+  PetscCheck(nnz >= m, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s declares %lld rows but only %lld entries: a wrong or damaged header; re-export the matrix", path, m, nnz);
   PetscCall(PetscFClose(PETSC_COMM_SELF, fp));
 
   {
@@ -57,7 +66,7 @@ static PetscErrorCode KFMatLoadMatrixMarket(MPI_Comm comm, const char path[], Ma
     while (fgets(line, sizeof(line), fp) && line[0] == '%') { }
     for (k = 0; k < nnz; k++) {
       PetscCheck(fgets(line, sizeof(line), fp), PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated: %lld of %lld entries read; re-export the matrix", path, k, nnz);
-      PetscCheck(sscanf(line, "%lld %lld %lf", &i, &j, &v) == 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s: entry %lld is malformed: '%s'", path, k + 1, line);
+      PetscCheck(sscanf(line, "%lld %lld %lf", &i, &j, &v) == 3, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s: entry %lld is malformed: '%s' (expected 'row column value'; a cut line means a truncated file: re-export the matrix)", path, k + 1, line);
       PetscCheck(i >= 1 && i <= m && j >= 1 && j <= n, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s: entry %lld (%lld, %lld) is outside the %lld x %lld matrix", path, k + 1, i, j, m, n);
       PetscCheck(PetscIsNormalReal((PetscReal)v) || v == 0.0, PETSC_COMM_SELF, PETSC_ERR_FP, "%s: entry %lld (%lld, %lld) is not a finite number", path, k + 1, i, j);
       i--; j--;
@@ -86,6 +95,56 @@ static PetscErrorCode KFMatLoadMatrixMarket(MPI_Comm comm, const char path[], Ma
   PetscFunctionReturn(0);
 }
 
+/* A PETSc binary matrix file checked before MatLoad sees it: MatLoad trusts the column indices, and a damaged
+   file would crash the program or hang it. Rank 0 reads the header, row lengths and column indices in chunks. */
+static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
+{
+  PetscMPIInt rank;
+  char        msg[512] = "";
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (!rank) {
+    int         fd;
+    PetscInt    header[4], *buf = NULL;
+    PetscInt64  total = 0;
+    PetscCall(PetscBinaryOpen(path, FILE_MODE_READ, &fd));
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    if (PetscBinaryRead(fd, header, 4, NULL, PETSC_INT)) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s is too short for a PETSc binary matrix header", path));
+    else if (header[0] != MAT_FILE_CLASSID) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s is not a PETSc binary matrix (wrong class id %d)", path, (int)header[0]));
+    else if (header[1] <= 0 || header[1] != header[2] || header[3] < header[1]) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s: header says %d x %d with %d entries; a body matrix is square with at least its diagonal", path, (int)header[1], (int)header[2], (int)header[3]));
+    else {
+      const PetscInt chunk = 1 << 20, N = header[1];
+      PetscCall(PetscMalloc1(chunk, &buf));
+      for (PetscInt done = 0; done < N && !msg[0]; done += chunk) {
+        PetscInt cnt = PetscMin(chunk, N - done);
+        if (PetscBinaryRead(fd, buf, cnt, NULL, PETSC_INT)) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s is truncated in its row lengths", path));
+        for (PetscInt i = 0; i < cnt && !msg[0]; i++) {
+          if (buf[i] < 0 || buf[i] > N) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s: row %d has %d entries (of %d columns)", path, (int)(done + i), (int)buf[i], (int)N));
+          total += buf[i];
+        }
+      }
+      if (!msg[0] && total != header[3]) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s: its rows hold %lld entries, its header says %d", path, (long long)total, (int)header[3]));
+      for (PetscInt64 done = 0; done < total && !msg[0]; done += chunk) {
+        PetscInt cnt = (PetscInt)PetscMin((PetscInt64)chunk, total - done);
+        if (PetscBinaryRead(fd, buf, cnt, NULL, PETSC_INT)) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s is truncated in its column indices", path));
+        for (PetscInt i = 0; i < cnt && !msg[0]; i++)
+          if (buf[i] < 0 || buf[i] >= N) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s: column index %d is outside the %d columns", path, (int)buf[i], (int)N));
+      }
+      if (!msg[0]) {
+        off_t pos = lseek(fd, 0, SEEK_CUR), end = lseek(fd, 0, SEEK_END);
+        if (end - pos < (off_t)(total * (PetscInt64)sizeof(PetscScalar))) PetscCall(PetscSNPrintf(msg, sizeof(msg), "%s is truncated in its values", path));
+      }
+      PetscCall(PetscFree(buf));
+    }
+    PetscCall(PetscPopErrorHandler());
+    PetscCall(PetscBinaryClose(fd));
+  }
+  PetscCallMPI(MPI_Bcast(msg, sizeof(msg), MPI_CHAR, 0, comm));
+  PetscCheck(!msg[0], comm, PETSC_ERR_FILE_UNEXPECTED, "%s: re-export the matrix (or use Matrix Market, .mtx)", msg);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
 {
   PetscBool   exists, mtx;
@@ -100,6 +159,7 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
   if (mtx) PetscCall(KFMatLoadMatrixMarket(comm, path, A));
   else {
     PetscErrorCode ierr;
+    PetscCall(KFCheckPetscBinary(comm, path));
     PetscCall(PetscViewerBinaryOpen(comm, path, FILE_MODE_READ, &viewer));
     PetscCall(MatCreate(comm, A));
     PetscCall(MatSetType(*A, MATAIJ));
@@ -109,6 +169,11 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
     PetscCall(PetscPopErrorHandler());
     PetscCall(PetscViewerDestroy(&viewer));
     PetscCheck(!ierr, comm, PETSC_ERR_FILE_UNEXPECTED, "%s is not a readable PETSc binary matrix (corrupt or truncated?): re-export it, or use Matrix Market (.mtx)", path);
+  }
+  {
+    PetscReal nrm;
+    PetscCall(MatNorm(*A, NORM_FROBENIUS, &nrm));
+    PetscCheck(!PetscIsInfOrNanReal(nrm), comm, PETSC_ERR_FP, "%s holds values that are not finite (NaN or Inf): re-export the matrix", path);
   }
   PetscCall(PetscLogEventEnd(KF_EVENT_LOAD, 0, 0, 0, 0));
   PetscFunctionReturn(0);

@@ -170,6 +170,7 @@ PetscErrorCode KFSceneAddJoint(KFScene s, const char name[], KFJointType type, P
   PetscCall(KFBodyFindInterface(s, child, child_interface, "child", name, &J->child_iface));
   if (type == KF_JOINT_REVOLUTE) {
     PetscReal nrm = PetscSqrtReal(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    PetscCheck(!PetscIsInfOrNanReal(nrm), s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': the rotation axis is not a finite vector", name);
     PetscCheck(nrm > 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': the rotation axis is zero; give a direction such as [0, 0, 1]", name);
     for (int c = 0; c < 3; c++) J->axis[c] = axis[c] / nrm;
   } else {

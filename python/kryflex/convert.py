@@ -370,7 +370,7 @@ def main(argv=None):
         parser.print_usage(sys.stderr)
         print(f"kryflex convert: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    problem = _unwritable(getattr(args, "output", None) or ".")
+    problem = _unwritable(args.output_dir)
     if problem:
         print(f"kryflex convert: error: {problem}", file=sys.stderr)
         return EXIT_OUTPUT

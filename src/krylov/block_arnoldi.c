@@ -38,9 +38,13 @@ static PetscErrorCode KFBVAppendDeflated(BV V, Mat W, PetscReal tol, PetscInt *k
       continue;
     }
     PetscCall(BVSetActiveColumns(V, 0, *k + 1));
-    PetscCall(BVOrthonormalizeColumn(V, *k, PETSC_TRUE, &norm, &lindep));
+    /* orthogonalize only: BVOrthonormalizeColumn would swap a dependent column for a random vector */
+    PetscCall(BVOrthogonalizeColumn(V, *k, NULL, &norm, &lindep));
     if (lindep || norm <= tol * norm0) (*ndeflated)++;
-    else (*k)++;
+    else {
+      PetscCall(BVScaleColumn(V, *k, 1.0 / norm));
+      (*k)++;
+    }
   }
   PetscCall(BVSetActiveColumns(V, 0, *k));
   PetscFunctionReturn(0);

@@ -138,10 +138,9 @@ PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, PetscInt *nheld, Pets
   PetscReal cond = PETSC_INFINITY;
 
   PetscFunctionBegin;
-  if (!sys->user_rigid) {
-    PetscCall(KFSelectClampDofs(sys->scene, nheld, held));
-    if (*nheld) PetscCall(KFHeldConditioning(sys->Phi, *nheld, *held, &cond));
-  }
+  /* the clamp holds for supplied rigid modes too when they span the same motions: its conditioning tells */
+  PetscCall(KFSelectClampDofs(sys->scene, nheld, held));
+  if (*nheld) PetscCall(KFHeldConditioning(sys->Phi, *nheld, *held, &cond));
   if (!(cond < 1e8)) {
     if (*nheld) PetscCall(PetscFree(*held));
     PetscCall(KFSelectPivotedDofs(sys->Phi, nheld, held));

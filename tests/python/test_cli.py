@@ -357,8 +357,6 @@ def test_converted_bodies_reduce_like_the_originals(converted_galileo, serial, o
                                    ref_summary["reduced"]["frequencies_hz"][label], rtol=1e-8, err_msg=label)
 
 
-@pytest.mark.xfail(strict=True, reason="bug: convert.py ConvertedBody.size sums the nodes' ndof as given; a float "
-                                       "'nodes' array (np.loadtxt) prints '12.0 dofs'")
 def test_convert_reports_an_integer_dof_count(converted_galileo):
     _, _, npz, _ = converted_galileo
     assert "body 'stator': 12 dofs, 2 nodes" in npz.stdout
@@ -462,14 +460,10 @@ def test_convert_bad_input_names_it_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
-@pytest.mark.xfail(strict=True, reason="bug: convert.py EXIT_BAD_INPUT = 3, but README and cli.py document 2 for a "
-                                       "bad input file and 3 for a model that cannot be reduced")
 def test_convert_bad_input_file_exits_2(tmp_path):
     assert cli("convert", tmp_path / "nothere.npz", "--name", "x", "-o", tmp_path / "b").returncode == EXIT_INPUT
 
 
-@pytest.mark.xfail(strict=True, reason="bug: convert.py/bodyfiles.py report an unwritable output folder as a bad "
-                                       "input (exit 3); README documents 4")
 def test_convert_unwritable_output_exits_4(tmp_path):
     np.savez(tmp_path / "b.npz", M=np.eye(6), K=np.eye(6))
     assert cli("convert", tmp_path / "b.npz", "--name", "b", "-o", "/etc/passwd/x").returncode == EXIT_OUTPUT
@@ -550,9 +544,6 @@ def test_reduce_rejects_bad_input(bad, tmp_path, case):
     assert not out.exists(), "a failed run left its output folder"
 
 
-@pytest.mark.xfail(strict=True, reason="bug: a stiffness with no entries at all for an unconnected node fails with "
-                                       "PETSc's 'Matrix is missing diagonal entry in row 27' instead of the "
-                                       "undeclared-mechanism message (the assembled K_S needs its diagonal)")
 def test_unconnected_node_without_entries_is_named_a_mechanism(bad, tmp_path):
     p = cli("reduce", bad / "loose_nodiag.yaml", "-o", tmp_path / "out", "-quiet")
     assert p.returncode == EXIT_NUMERIC and "mechanism" in p.stderr, p.stderr
@@ -605,9 +596,6 @@ def test_reduce_write_failure_leaves_no_partial_results(tmp_path):
     assert sorted(os.listdir(out)) == ["reduced.h5"] and not os.listdir(out / "reduced.h5")
 
 
-@pytest.mark.xfail(strict=True, reason="bug: model.py ReducedModel.save and report.py write_report rename mkstemp "
-                                       "files into place, so reduced.h5, report.md, summary.json and the PNGs are 0600 "
-                                       "whatever the umask")
 def test_reduce_outputs_have_the_usual_permissions(serial):
     umask = os.umask(0o022)     # the fixture's run inherited this process's umask
     os.umask(umask)

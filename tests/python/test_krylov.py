@@ -359,7 +359,6 @@ def check_deflated(scene_path, configs_rad, what):
     return runs
 
 
-@pytest.mark.xfail(strict=True, reason=DEFLATION_BUG)
 @pytest.mark.parametrize("factor", [1.0, 2.0, -0.5])
 def test_input_block_with_a_repeated_input_deflates_and_still_matches(factor, tmp_path):
     """Galileo with a second input equal to factor times the first."""
@@ -429,8 +428,6 @@ def test_supplied_rigid_modes_give_the_same_moments(galileo, galileo_runs):
     check_moments(full, reduced, "supplied rigid modes: full vs reduced", tol=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG (src/solve/held_dofs.c, KFSelectHeldDofs): with supplied rigid modes "
-                   "the clamp is skipped and the pivoted-QR held dofs (far boom tips) cost ~2 digits: 4e-8 vs 1e-10")
 def test_supplied_rigid_modes_are_as_accurate_as_geometric_ones(galileo, galileo_runs):
     a = 45
     r = galileo_runs[a]
@@ -483,9 +480,6 @@ def test_undeclared_mechanism_is_a_clear_error(tmp_path):
     expect_undeclared_mechanism(detach_boom_tip(tmp_path, store_zeros=True))
 
 
-@pytest.mark.xfail(strict=True, reason="BUG (src/solve/flex_solver.c, KFFlexSolverSetUp/KFFactorMumps): a dof with "
-                   "no stored stiffness entry fails in PETSc's MUMPS interface with 'Matrix is missing diagonal entry "
-                   "in row 12 (27)', not the undeclared-mechanism message")
 def test_undeclared_mechanism_without_stored_diagonal_is_a_clear_error(tmp_path):
     expect_undeclared_mechanism(detach_boom_tip(tmp_path, store_zeros=False))
 

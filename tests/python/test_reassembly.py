@@ -163,7 +163,7 @@ def test_reassembly_from_file_equals_in_memory(case, ext, tmp_path):
 def test_command_reassembles_from_the_file_alone(case, tmp_path):
     """'kryflex reassemble' sees the reduced-model file and nothing else; its matrices equal the in-memory ones."""
     path = case.model.save(str(tmp_path / "reduced.h5"))
-    angles = [a for a in case.angles if a[0] >= 0][-2:]     # negative first angles: see the xfail test below
+    angles = [a for a in case.angles if a[0] >= 0][-2:]     # negative first angles: see test_command_takes_a_negative_first_angle
     assert any(a not in case.scene.configurations for a in angles)
     out = str(tmp_path / "reassembled.npz")
     cmd = [KRYFLEX_CMD, "reassemble", path, "-o", out, "--json", "-quiet"]
@@ -182,11 +182,7 @@ def test_command_reassembles_from_the_file_alone(case, tmp_path):
             assert r["rigid_modes"] == case.nrigid
 
 
-@pytest.mark.parametrize("spelling", [
-    pytest.param(["--angle", "-30,95"], marks=pytest.mark.xfail(strict=True, reason=(
-        "bug: cli.py _cmd_reassemble: argparse takes '-30,95' for an option ('expected one argument')"))),
-    pytest.param(["--angle=-30,95"], marks=pytest.mark.xfail(strict=True, reason=(
-        "bug: cli.py _split_petsc_options drops '--angle=...' as a PETSc option ('required: --angle')")))])
+@pytest.mark.parametrize("spelling", [["--angle", "-30,95"], ["--angle=-30,95"]])
 def test_command_takes_a_negative_first_angle(frames_rev, tmp_path, spelling):
     path = frames_rev.model.save(str(tmp_path / "reduced.h5"))
     proc = subprocess.run([KRYFLEX_CMD, "reassemble", path, "--json", "-quiet"] + spelling, capture_output=True,
@@ -426,8 +422,6 @@ def test_corrupted_npz_data_is_refused(saved_galileo, tmp_path):
         kryflex.ReducedModel.load(path)
 
 
-@pytest.mark.xfail(strict=True, reason="bug: model.py _write_h5 stores datasets without a checksum (fletcher32), "
-                                       "so corrupted array data in a .h5 file loads silently")
 def test_corrupted_h5_data_is_refused(saved_galileo, tmp_path):
     h5, _ = saved_galileo
     with h5py.File(h5, "r") as f:
@@ -442,8 +436,6 @@ def test_corrupted_h5_data_is_refused(saved_galileo, tmp_path):
         kryflex.ReducedModel.load(path)
 
 
-@pytest.mark.xfail(strict=True, reason="bug: ReducedModel.load does not check the arrays' sizes against each other; "
-                                       "an inconsistent file fails later, in reassemble, with a ValueError")
 def test_inconsistent_h5_is_refused(saved_galileo, tmp_path):
     h5, _ = saved_galileo
     path = shutil.copy(h5, tmp_path / "inconsistent.h5")

@@ -24,6 +24,8 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
+from .files import commit
+
 SYMMETRY_TOLERANCE = 1e-10  # relative to the largest entry: round-off of a symmetric export
 VALID_NDOF = (3, 6)
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
@@ -257,10 +259,8 @@ def _write_all_or_nothing(out_dir, jobs):
             os.close(handle)
             temporaries.append((temp_path, os.path.join(out_dir, file_name)))
             write(temp_path)
-        mode = _default_file_mode()  # mkstemp makes owner-only files; bodies are ordinary files
         for temp_path, final_path in temporaries:
-            os.chmod(temp_path, mode)
-            os.replace(temp_path, final_path)
+            commit(temp_path, final_path)
         created = False  # complete: keep the folder
     except OSError as exc:
         raise ConversionError(f"cannot write body files in {out_dir}: {exc}") from exc
@@ -271,12 +271,6 @@ def _write_all_or_nothing(out_dir, jobs):
                     os.remove(leftover)
         if created and os.path.isdir(out_dir) and not os.listdir(out_dir):
             os.rmdir(out_dir)
-
-
-def _default_file_mode():
-    umask = os.umask(0o022)
-    os.umask(umask)
-    return 0o666 & ~umask
 
 
 def _write_petsc(path, A):

@@ -234,26 +234,14 @@ def _cmd_reassemble(argv):
 
 def _write_npz(path, arrays):
     """Writes arrays to path (.npz) under a temporary name renamed into place; None, or what went wrong."""
-    import tempfile
-    tmp = None
+    from .files import atomic_path
     try:
-        fd, tmp = tempfile.mkstemp(prefix=".kryflex-", suffix=".npz", dir=os.path.dirname(os.path.abspath(path)))
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **arrays)
-        os.chmod(tmp, _file_mode())     # mkstemp makes 0600 files: give the usual umask permissions
-        os.replace(tmp, path)
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **arrays)
         return None
     except OSError as e:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
         return "cannot write %s: %s" % (path, e)
-
-
-def _file_mode():
-    """Permissions of a new file under the current umask (os.umask can only be read by setting it)."""
-    umask = os.umask(0o022)
-    os.umask(umask)
-    return 0o666 & ~umask
 
 
 def _cmd_info(argv):

@@ -6,11 +6,10 @@ alone (paper eq. 20-24, in C), and is stored as HDF5 (layout in README.md) or Nu
 import hashlib
 import json
 import os
-import tempfile
-
 import numpy as np
 
 from . import _core
+from .files import atomic_path
 
 FORMAT = "kryflex-reduced-model"
 BODY_ARRAYS = ("M", "K", "G", "H", "iface", "rigid")
@@ -19,12 +18,6 @@ VERSION = 1
 
 class ModelFileError(ValueError):
     """A reduced-model file that cannot be used: the message names the file and the fix."""
-
-
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def scene_fingerprint(scene):
@@ -119,17 +112,8 @@ class ReducedModel:
         ext = os.path.splitext(path)[1].lower()
         if ext not in (".h5", ".hdf5", ".npz"):
             raise ModelFileError("%s: reduced models are written as .h5 or .npz" % path)
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(prefix=".kryflex-", suffix=ext, dir=folder)
-        os.close(fd)
-        try:
+        with atomic_path(path) as tmp:
             (self._write_npz if ext == ".npz" else self._write_h5)(tmp)
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file reads like any other
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
         return path
 
     def _meta(self):

@@ -14,12 +14,13 @@ on a machine without the compiled extension.
 
 import io
 import os
-import tempfile
 
 import numpy as np
 from matplotlib import ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+
+from .files import atomic_path
 
 FULL_STYLE = {"color": "tab:blue", "linewidth": 1.6, "label": "full order"}
 REDUCED_STYLE = {"color": "tab:red", "linewidth": 1.2, "linestyle": "--", "label": "reduced (Krylov)"}
@@ -270,14 +271,7 @@ def save_figure(fig, path, dpi=DPI):
     """Write the figure as PNG at path atomically: rendered in memory, written under a temporary name in the
     same folder, then renamed, so a failure never leaves a truncated image at path."""
     data = figure_png_bytes(fig, dpi)
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "wb") as handle:
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as handle:
             handle.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

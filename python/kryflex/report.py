@@ -56,11 +56,11 @@ import json
 import math
 import os
 import re
-import tempfile
 
 import numpy as np
 
 from . import plots
+from .files import commit, temporary_beside
 
 # A moment ratio r with |r - 1| above this is reported as "not matched exactly".
 RATIO_EXACT_TOL = 1e-8
@@ -790,18 +790,16 @@ class _StagedFiles:
         self.staged = []
 
     def add(self, name, data):
-        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=self.out_dir)
-        self.staged.append((tmp, os.path.join(self.out_dir, name)))
-        with os.fdopen(fd, "wb") as handle:
+        final = os.path.join(self.out_dir, name)
+        tmp = temporary_beside(final)
+        self.staged.append((tmp, final))
+        with open(tmp, "wb") as handle:
             handle.write(data)
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; a report reads like any other file
 
     def commit(self):
         written = []
         for tmp, final in self.staged:
-            os.replace(tmp, final)
+            commit(tmp, final)
             written.append(final)
         self.staged = []
         return written

@@ -14,7 +14,7 @@ import sys as _sys
 # process into an exit with PETSc's signal error instead of a KeyboardInterrupt or nothing at all.
 import slepc4py as _slepc4py
 
-_slepc4py.init(_sys.argv[:1] + ["-no_signal_handler"] + _sys.argv[1:])
+_slepc4py.init(_sys.argv[:1] + ["-no_signal_handler", "true"] + _sys.argv[1:])   # a value: PETSc would read the next word
 from slepc4py import SLEPc as _SLEPc  # noqa: E402,F401  (initializes SLEPc)
 
 

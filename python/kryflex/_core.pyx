@@ -182,10 +182,6 @@ def load_matrix(path, comm=None):
     return wrap_mat(m, False)
 
 
-DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5,
-             "x": 0, "y": 1, "z": 2, "tx": 0, "ty": 1, "tz": 2}
-
-
 cdef class CScene:
     """Bodies, joints, inputs and outputs (the C KFScene)."""
     cdef KFScene s

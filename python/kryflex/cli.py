@@ -86,7 +86,6 @@ def _cmd_reduce(argv):
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
     args = p.parse_args(_split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet", "-h", "--help"}))
     from . import _core
-    from .model import ModelFileError  # noqa: F401
     from .pipeline import reduce as run_reduce
     from .report import write_report, write_unverified
     from .scene import SceneError, load_scene

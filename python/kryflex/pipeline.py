@@ -222,7 +222,7 @@ def _reduce(scene, quiet):
         timer.add("projection", t0)
         if ver["full_order"] and lab in labels:
             t0 = time.perf_counter()
-            entry.update(_verify_full(system, scene, nsys - nrigid, progress))
+            entry.update(_verify_full(system, scene, nsys - nrigid))
             timer.add("verification eigensolve", t0)
         per[lab] = entry
         del solver
@@ -313,14 +313,14 @@ def _hstack(A, B):
     return out
 
 
-def _verify_full(system, scene, nflex, progress):
+def _verify_full(system, scene, nflex):
     """Full-order modes covering three times the band's top (SLEPc), with rigid-mode participation."""
-    want = ver_modes = scene.verify["modes"]
+    want = scene.verify["modes"]
     fmax = 3 * scene.band[1]
     nev = min(nflex, int(want) if want != "auto" else 20)
     while True:
         w2, HPhi, PhiG = system.eigen(nev)
-        if ver_modes != "auto" or nev >= nflex or (len(w2) and np.sqrt(w2[-1]) / (2 * np.pi) >= fmax):
+        if want != "auto" or nev >= nflex or (len(w2) and np.sqrt(w2[-1]) / (2 * np.pi) >= fmax):
             break
         nev = min(nflex, 2 * nev)
     HPr, PrG = system.rigid_io()

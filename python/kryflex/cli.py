@@ -315,6 +315,10 @@ def main(argv=None):
     except KeyboardInterrupt:
         _error("interrupted")
         return EXIT_INTERNAL
+    except BrokenPipeError:
+        # the reader went away (kryflex info ... | head): stop quietly, as command-line tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except Exception as e:  # noqa: BLE001 - a bug: say so plainly, with the trace for the report
         import traceback
         if _rank() == 0:

@@ -4,6 +4,7 @@
 Every call checks its arguments before it reaches C, and a PETSc error becomes a
 kryflex Error carrying the message of the call that failed, never a crash."""
 
+cimport cython
 import numpy as np
 cimport numpy as cnp
 from cpython.mem cimport PyMem_Malloc, PyMem_Free
@@ -271,6 +272,8 @@ cdef class CScene:
         return wrap_mat(M, True), wrap_mat(K, True), wrap_mat(G, True), wrap_mat(Ht, True)
 
 
+# the owner (scene or system) must outlive this object's C data: never let the cyclic GC clear it first
+@cython.no_gc_clear
 cdef class CSystem:
     """The full-order system at one configuration (the C KFSystem)."""
     cdef KFSystem y
@@ -350,6 +353,8 @@ cdef class CSystem:
         return w2[:nconv].copy(), modes
 
 
+# the owner (scene or system) must outlive this object's C data: never let the cyclic GC clear it first
+@cython.no_gc_clear
 cdef class KrylovBasis:
     """An M-orthonormal Krylov basis (a SLEPc BV) of one system."""
     cdef BV V
@@ -387,6 +392,8 @@ cdef class KrylovBasis:
         return wrap_mat(X, False)
 
 
+# the owner (scene or system) must outlive this object's C data: never let the cyclic GC clear it first
+@cython.no_gc_clear
 cdef class FlexSolver:
     """The flexible solve operator K+ of one system: one MUMPS factorization."""
     cdef KFFlexSolver f
@@ -453,6 +460,8 @@ cdef object carray(const PetscReal *p, Py_ssize_t m, Py_ssize_t n):
     return out
 
 
+# the owner (scene or system) must outlive this object's C data: never let the cyclic GC clear it first
+@cython.no_gc_clear
 cdef class BodyBasis:
     """Reduced bodies from system vectors of one or more configurations (eq. 18-19)."""
     cdef KFBodyBasis bb

@@ -11,6 +11,7 @@ PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
   PetscCall(KFSceneSetUp(s));
   PetscCall(PetscNew(&y));
   y->scene = s;
+  y->nb    = s->nb;
   PetscCall(PetscCalloc1(PetscMax(s->nrevolute, 1), &y->angles));
   PetscCall(PetscCalloc5(s->nb, &y->Q, s->nb, &y->o, s->nb, &y->P, s->nb, &y->PtMP, s->nb, &y->PtKP));
   *sys = y;
@@ -23,7 +24,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
 
   PetscFunctionBegin;
   if (!y) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < y->scene->nb; b++) {
+  for (PetscInt b = 0; b < y->nb; b++) {
     PetscCall(MatDestroy(&y->P[b]));
     PetscCall(MatDestroy(&y->PtMP[b]));
     PetscCall(MatDestroy(&y->PtKP[b]));

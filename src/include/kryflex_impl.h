@@ -64,6 +64,7 @@ struct _n_KFScene {
 
 struct _n_KFSystem {
   KFScene   scene;
+  PetscInt  nb;              /* bodies: destroying needs no scene */
   PetscBool assembled;
   PetscReal *angles;
   PetscReal (*Q)[9], (*o)[3]; /* body frame -> root frame: y = Q x + o */

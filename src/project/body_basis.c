@@ -8,6 +8,7 @@
 
 struct _n_KFBodyBasis {
   KFScene     s;
+  PetscInt    nb;        /* bodies: destroying needs no scene */
   PetscInt   *ncols;   /* per body: number of collected matrices */
   Mat       **cols;    /* per body: collected n_b x m dense blocks */
   PetscBool   finished;
@@ -23,7 +24,8 @@ PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
   PetscFunctionBegin;
   PetscCall(KFSceneSetUp(s));
   PetscCall(PetscNew(&b));
-  b->s = s;
+  b->s  = s;
+  b->nb = s->nb;
   PetscCall(PetscCalloc3(s->nb, &b->ncols, s->nb, &b->cols, s->nb, &b->Psi));
   PetscCall(PetscCalloc2(s->nb, &b->v, s->nb, &b->ndefl));
   PetscCall(PetscCalloc5(s->nb, &b->M, s->nb, &b->K, s->nb, &b->G, s->nb, &b->H, s->nb, &b->iface));
@@ -38,7 +40,7 @@ PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *bb)
 
   PetscFunctionBegin;
   if (!b) PetscFunctionReturn(0);
-  for (PetscInt i = 0; i < b->s->nb; i++) {
+  for (PetscInt i = 0; i < b->nb; i++) {
     for (PetscInt k = 0; k < b->ncols[i]; k++) PetscCall(MatDestroy(&b->cols[i][k]));
     PetscCall(PetscFree(b->cols[i]));
     PetscCall(MatDestroy(&b->Psi[i]));

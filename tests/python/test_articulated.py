@@ -158,15 +158,7 @@ def reduce_galileo_variant(**reduction):
 
 # ================================================================================================ fixtures
 
-@pytest.fixture(scope="module", autouse=True)
-def quiet_library():
-    """The flexible solves made here print progress lines unless -kryflex_quiet."""
-    opts = PETSc.Options()
-    was = opts.hasName("kryflex_quiet")
-    opts.setValue("kryflex_quiet", True)
-    yield
-    if not was:
-        opts.delValue("kryflex_quiet")
+pytestmark = pytest.mark.usefixtures("quiet_library")   # tests/python/conftest.py
 
 
 @pytest.fixture(scope="module")

@@ -23,6 +23,9 @@ import scipy.sparse as sp
 
 import kryflex
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "meshes"))
+import frames  # noqa: E402  (the scene generators' PETSc binary writer)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
@@ -51,25 +54,10 @@ def write_mtx(folder, name, A, symmetry):
         scipy.io.mmwrite(f, sp.coo_matrix(A), symmetry=symmetry, precision=17)
 
 
-def write_petsc(path, A):
-    from petsc4py import PETSc
-    A = sp.csr_matrix(A)
-    A.sort_indices()
-    mat = PETSc.Mat().createAIJ(A.shape, csr=(A.indptr.astype(PETSc.IntType), A.indices.astype(PETSc.IntType), A.data),
-                                comm=PETSc.COMM_SELF)
-    mat.assemble()
-    viewer = PETSc.Viewer().createBinary(path, "w", comm=PETSc.COMM_SELF)
-    mat.view(viewer)
-    viewer.destroy()
-    mat.destroy()
-    if os.path.exists(path + ".info"):
-        os.remove(path + ".info")
-
-
 def rotor_K_as_petsc(folder):
     """The rotor's stiffness as PETSc binary (the scene points to it); returns the file's bytes."""
     path = os.path.join(folder, "rotor_K.petsc")
-    write_petsc(path, read_mtx(folder, "rotor_K.mtx"))
+    frames.write_petsc_binary(path, read_mtx(folder, "rotor_K.mtx"))
     replace_once(os.path.join(folder, "galileo.yaml"), "stiffness: rotor_K.mtx", "stiffness: rotor_K.petsc")
     with open(path, "rb") as f:
         return bytearray(f.read())

@@ -52,14 +52,7 @@ class Case:
         assert not any(a in self.scene.configurations for a in extra_angles)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def quiet_library():
-    opts = PETSc.Options()
-    was = opts.hasName("kryflex_quiet")
-    opts.setValue("kryflex_quiet", True)
-    yield
-    if not was:
-        opts.delValue("kryflex_quiet")
+pytestmark = pytest.mark.usefixtures("quiet_library")   # tests/python/conftest.py
 
 
 @pytest.fixture(scope="module")

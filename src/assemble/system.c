@@ -10,6 +10,7 @@ PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
   PetscFunctionBegin;
   PetscCall(KFSceneSetUp(s));
   PetscCall(PetscNew(&y));
+  PetscCall(PetscObjectReference((PetscObject)s)); /* the scene lives as long as the system */
   y->scene = s;
   y->nb    = s->nb;
   PetscCall(PetscCalloc1(PetscMax(s->nrevolute, 1), &y->angles));
@@ -36,6 +37,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(MatDestroy(&y->G));
   PetscCall(MatDestroy(&y->Ht));
   PetscCall(MatDestroy(&y->Phi));
+  PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
   *sys = NULL;
   PetscFunctionReturn(0);

@@ -3,6 +3,7 @@
 #define KRYFLEX_IMPL_H
 
 #include <kryflex.h>
+#include <petsc/private/petscimpl.h>
 
 /* A linear combination of system dofs: how one interface dof of a body reads in system coordinates. */
 #define KF_MAX_TERMS 96
@@ -48,8 +49,20 @@ typedef struct {
   Vec       v; /* or a whole vector */
 } KFTerm;
 
+/* The scene is a PETSc object: whatever holds it (a system, a body basis, a reducer) takes a reference with
+   PetscObjectReference, and KFSceneDestroy drops one, so a scene outlives everything built on it. */
+struct _KFSceneOps {
+  PetscErrorCode (*view)(KFScene, PetscViewer);
+};
+PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
+/* Registers KF_SCENE_CLASSID and KF_REDUCEDMODEL_CLASSID (src/model/package.c); called by KFInitialize. */
+PETSC_EXTERN PetscErrorCode KFModelInitializePackage(void);
+
 struct _n_KFScene {
-  MPI_Comm     comm;
+  PETSCHEADER(struct _KFSceneOps);
+  MPI_Comm     comm;       /* the header's communicator, kept here because every stage reads s->comm */
+  char         name[PETSC_MAX_PATH_LEN];
+  char       (*input_names)[KF_MAX_NAME], (*output_names)[KF_MAX_NAME]; /* "in0".., "out0".. unless named */
   PetscInt     nb, nj, nb_alloc, nj_alloc;
   KFBodyData  *bodies;
   KFJointData *joints;

@@ -24,6 +24,7 @@ PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
   PetscFunctionBegin;
   PetscCall(KFSceneSetUp(s));
   PetscCall(PetscNew(&b));
+  PetscCall(PetscObjectReference((PetscObject)s)); /* the scene lives as long as the basis */
   b->s  = s;
   b->nb = s->nb;
   PetscCall(PetscCalloc3(s->nb, &b->ncols, s->nb, &b->cols, s->nb, &b->Psi));
@@ -51,6 +52,7 @@ PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *bb)
   PetscCall(PetscFree3(b->ncols, b->cols, b->Psi));
   PetscCall(PetscFree2(b->v, b->ndefl));
   PetscCall(PetscFree5(b->M, b->K, b->G, b->H, b->iface));
+  PetscCall(KFSceneDestroy(&b->s)); /* drops the basis's reference */
   PetscCall(PetscFree(b));
   *bb = NULL;
   PetscFunctionReturn(0);

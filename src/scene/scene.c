@@ -2,19 +2,31 @@
 
 PetscErrorCode KFSceneCreate(MPI_Comm comm, KFScene *scene)
 {
+  KFScene s;
+
   PetscFunctionBegin;
+  PetscValidPointer(scene, 2);
   PetscCall(KFInitialize());
-  PetscCall(PetscNew(scene));
-  (*scene)->comm = comm;
+  PetscCall(KFModelInitializePackage());
+  PetscCall(PetscHeaderCreate(s, KF_SCENE_CLASSID, "KFScene", "Articulated multi-flexible-body scene", "KF", comm, KFSceneDestroy, KFSceneView));
+  s->comm = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
+  PetscCall(PetscStrncpy(s->name, "scene", sizeof(s->name)));
+  *scene = s;
   PetscFunctionReturn(0);
 }
 
+/* Drops one reference; the last one frees the scene (systems, body bases and reducers hold references). */
 PetscErrorCode KFSceneDestroy(KFScene *scene)
 {
   KFScene s = *scene;
 
   PetscFunctionBegin;
   if (!s) PetscFunctionReturn(0);
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  if (--((PetscObject)s)->refct > 0) {
+    *scene = NULL;
+    PetscFunctionReturn(0);
+  }
   for (PetscInt b = 0; b < s->nb; b++) {
     KFBodyData *B = &s->bodies[b];
     PetscCall(MatDestroy(&B->M));
@@ -32,8 +44,9 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
   PetscCall(PetscFree(s->in_terms));
   PetscCall(PetscFree(s->out_terms));
   PetscCall(PetscFree(s->order));
-  PetscCall(PetscFree(s));
-  *scene = NULL;
+  PetscCall(PetscFree(s->input_names));
+  PetscCall(PetscFree(s->output_names));
+  PetscCall(PetscHeaderDestroy(scene));
   PetscFunctionReturn(0);
 }
 
@@ -199,6 +212,14 @@ PetscErrorCode KFSceneSetNumIO(KFScene s, PetscInt ninputs, PetscInt noutputs)
 {
   PetscFunctionBegin;
   PetscCheck(ninputs >= 1 && noutputs >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "a scene needs at least one input and one output (got %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs)", ninputs, noutputs);
+  PetscCheck(!s->setup || (ninputs == s->ninputs && noutputs == s->noutputs), s->comm, PETSC_ERR_ORDER, "cannot change the number of inputs or outputs after KFSceneSetUp()");
+  /* names: "in0", "in1", ... and "out0", ... until KFSceneSetIOName names them; existing names are kept */
+  for (int pass = 0; pass < 2; pass++) {
+    char (**names)[KF_MAX_NAME] = pass ? &s->output_names : &s->input_names;
+    PetscInt old = pass ? s->noutputs : s->ninputs, n = pass ? noutputs : ninputs;
+    PetscCall(PetscRealloc(sizeof(**names) * n, names));
+    for (PetscInt i = old; i < n; i++) PetscCall(PetscSNPrintf((*names)[i], KF_MAX_NAME, "%s%" PetscInt_FMT, pass ? "out" : "in", i));
+  }
   s->ninputs  = ninputs;
   s->noutputs = noutputs;
   PetscFunctionReturn(0);
@@ -304,5 +325,88 @@ PetscErrorCode KFSceneView(KFScene s, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "  joint %-15s %-8s %s.%s -> %s.%s axis (%g %g %g)\n", J->name, J->type == KF_JOINT_REVOLUTE ? "revolute" : "fixed", s->bodies[J->parent].name, s->bodies[J->parent].iface[J->parent_iface].name, s->bodies[J->child].name, s->bodies[J->child].iface[J->child_iface].name, (double)J->axis[0], (double)J->axis[1], (double)J->axis[2]));
   }
   if (s->setup) PetscCall(PetscViewerASCIIPrintf(viewer, "  system dofs: %" PetscInt_FMT "\n", s->nsys));
+  PetscFunctionReturn(0);
+}
+
+/* ---------------------------------------------------------------- names recorded in reduced models */
+
+PetscErrorCode KFSceneSetName(KFScene s, const char name[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  PetscCheck(name && name[0], s->comm, PETSC_ERR_ARG_WRONG, "a scene name must not be empty");
+  PetscCheck(strlen(name) < sizeof(s->name), s->comm, PETSC_ERR_ARG_SIZ, "scene name '%.40s...' is longer than %d characters; give a shorter name", name, (int)sizeof(s->name) - 1);
+  PetscCall(PetscStrncpy(s->name, name, sizeof(s->name)));
+  PetscCall(PetscObjectSetName((PetscObject)s, name));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetName(KFScene s, const char **name)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  *name = s->name;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneSetIOName(KFScene s, PetscBool input, PetscInt i, const char name[])
+{
+  PetscInt n = input ? s->ninputs : s->noutputs;
+  char (*names)[KF_MAX_NAME] = input ? s->input_names : s->output_names;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  PetscCheck(i >= 0 && i < n, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT " does not exist (the scene has %" PetscInt_FMT "); call KFSceneSetNumIO first", input ? "input" : "output", i, n);
+  PetscCheck(name && name[0], s->comm, PETSC_ERR_ARG_WRONG, "%s %" PetscInt_FMT ": a name must not be empty", input ? "input" : "output", i);
+  PetscCheck(strlen(name) < KF_MAX_NAME, s->comm, PETSC_ERR_ARG_SIZ, "%s name '%.40s...' is longer than %d characters; give a shorter name", input ? "input" : "output", name, KF_MAX_NAME - 1);
+  for (PetscInt k = 0; k < n; k++) {
+    PetscBool same;
+    if (k == i) continue;
+    PetscCall(PetscStrcmp(names[k], name, &same));
+    PetscCheck(!same, s->comm, PETSC_ERR_ARG_WRONG, "%s name '%s' is used twice (%s %" PetscInt_FMT " and %" PetscInt_FMT "): give each a unique name", input ? "input" : "output", name, input ? "inputs" : "outputs", k, i);
+  }
+  PetscCall(PetscStrncpy(names[i], name, KF_MAX_NAME));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetIOName(KFScene s, PetscBool input, PetscInt i, const char **name)
+{
+  PetscInt n = input ? s->ninputs : s->noutputs;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  PetscCheck(i >= 0 && i < n, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT " does not exist (the scene has %" PetscInt_FMT ")", input ? "input" : "output", i, n);
+  *name = input ? s->input_names[i] : s->output_names[i];
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetJointInfo(KFScene s, PetscInt j, const char **name, KFJointDef *joint)
+{
+  KFJointData *J;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  PetscCheck(j >= 0 && j < s->nj, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint index %" PetscInt_FMT " does not exist (the scene has %" PetscInt_FMT " joints)", j, s->nj);
+  J = &s->joints[j];
+  if (name) *name = J->name;
+  if (joint) {
+    joint->type             = J->type;
+    joint->parent           = J->parent;
+    joint->parent_interface = J->parent_iface;
+    joint->child            = J->child;
+    joint->child_interface  = J->child_iface;
+    for (int c = 0; c < 3; c++) joint->axis[c] = J->axis[c];
+    for (int c = 0; c < 9; c++) joint->R0[c] = J->R0[c];
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetInterfaceName(KFScene s, PetscInt body, PetscInt i, const char **name)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
+  PetscCheck(i >= 0 && i < s->bodies[body].ninterfaces, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s' has no interface %" PetscInt_FMT " (it has %" PetscInt_FMT ")", s->bodies[body].name, i, s->bodies[body].ninterfaces);
+  *name = s->bodies[body].iface[i].name;
   PetscFunctionReturn(0);
 }

@@ -1,0 +1,61 @@
+/* Private data of the reduced model (src/model, src/io): not part of the public API. */
+#ifndef KRYFLEX_MODELIMPL_H
+#define KRYFLEX_MODELIMPL_H
+
+#include <kryflex_impl.h>
+
+/* HDF5 file format written by KFReducedModelSave and accepted by KFReducedModelLoad */
+#define KF_MODEL_FORMAT  "kryflex-reduced-model"
+#define KF_MODEL_VERSION 2
+
+/* One reduced body; arrays column-major, replicated, owned by the model. */
+typedef struct {
+  char       name[KF_MAX_NAME];
+  PetscInt   full_dofs;
+  PetscInt   v, ninterfaces;
+  char     (*iface_names)[KF_MAX_NAME];
+  PetscReal *M, *K, *G, *H; /* v x v, v x v, v x a, t x v */
+  PetscReal *iface;         /* (6 ninterfaces) x v */
+  PetscReal *rigid;         /* v x 6 */
+  PetscReal *map;           /* full_dofs x v, or NULL when not kept */
+} KFModelBody;
+
+struct _KFReducedModelOps {
+  PetscErrorCode (*view)(KFReducedModel, PetscViewer);
+};
+
+struct _p_KFReducedModel {
+  PETSCHEADER(struct _KFReducedModelOps);
+  char          scene_name[PETSC_MAX_PATH_LEN];
+  char          fingerprint[17];
+  PetscInt      nb, nj, nrevolute, ninputs, noutputs;
+  KFModelBody  *bodies;
+  char        (*joint_names)[KF_MAX_NAME];
+  KFJointDef   *joints;      /* revolute joints in revolute order, as KFReassemble consumes the angles */
+  char        (*input_names)[KF_MAX_NAME], (*output_names)[KF_MAX_NAME];
+  PetscInt      nangles;     /* reduction configurations */
+  PetscReal    *angles;      /* nangles x nrevolute, row by row, radians */
+  PetscInt      nsettings, nsettings_alloc;
+  char        **keys, **values;
+};
+
+/* A reassembled model at one configuration (plain data). */
+struct _n_KFReducedSystem {
+  PetscInt   n, a, t;
+  PetscInt   nrigid;         /* from Phir, or 6 + revolute joints when the bodies' rigid motions are unknown */
+  PetscInt   nrigid_expected; /* 6 + revolute joints */
+  PetscBool  phir_known;
+  PetscInt   rank;
+  PetscReal  sratio;
+  PetscReal *M, *K, *G, *H;  /* n x n, n x n, n x a, t x n */
+  PetscReal *lambda, *Phi;   /* n, n x n */
+  PetscReal *Phir;           /* n x nrigid, or NULL */
+  PetscInt   nf;
+  PetscReal *freq;           /* nf flexible frequencies, Hz */
+  PetscReal *HPhi, *PhiG;    /* t x n, n x a: made by the first frequency response */
+};
+
+/* an empty model on comm, with counts set and arrays allocated for nb bodies, nj joints, a inputs, t outputs */
+PETSC_INTERN PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm, PetscInt nb, PetscInt nj, PetscInt a, PetscInt t, KFReducedModel *);
+
+#endif

@@ -1,0 +1,72 @@
+/* A reduced model reassembled at one configuration (eq. 20-24), with its modes: a KFReducedSystem. */
+#include <kryflex/modelimpl.h>
+
+/* reassembly_rtol from the settings (the reducer records the tolerance it used), 1e-9 otherwise */
+static PetscErrorCode KFReducedModelGetReassemblyRtol(KFReducedModel m, PetscReal *rtol)
+{
+  PetscFunctionBegin;
+  *rtol = 1e-9;
+  for (PetscInt k = 0; k < m->nsettings; k++) {
+    PetscBool same;
+    char     *end;
+    double    x;
+
+    PetscCall(PetscStrcmp(m->keys[k], "reassembly_rtol", &same));
+    if (!same) continue;
+    x = strtod(m->values[k], &end);
+    PetscCheck(end != m->values[k] && *end == 0 && x > 0 && x < 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "the model's setting reassembly_rtol = '%s' is not a number in (0, 1): set it again (KFReducedModelSetSetting) or reduce again", m->values[k]);
+    *rtol = (PetscReal)x;
+  }
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedModelReassemble - the reduced system at one configuration (angles: one per revolute joint, radians):
+  KFReassemble of the model's bodies and joints with the model's reassembly_rtol, then the eigenpairs of the
+  reassembled pencil. The rigid-body and mechanism modes come from the bodies' stored rigid motions (Phir); only a
+  model without them falls back to 6 + revolute joints.
+*/
+PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles[], KFReducedSystem *system)
+{
+  MPI_Comm        comm = PetscObjectComm((PetscObject)m);
+  KFReducedSystem y;
+  KFReducedBody  *bodies;
+  PetscInt        n = 0, h, nrigid, a = m->ninputs, t = m->noutputs;
+  PetscReal       rtol;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  PetscValidPointer(system, 3);
+  PetscCheck(angles || !m->nrevolute, comm, PETSC_ERR_ARG_NULL, "the model has %" PetscInt_FMT " revolute joint(s): give one angle (radians) per revolute joint", m->nrevolute);
+  for (PetscInt r = 0; r < m->nrevolute; r++) PetscCheck(!PetscIsInfOrNanReal(angles[r]), comm, PETSC_ERR_ARG_WRONG, "angle %" PetscInt_FMT " is not a finite number", r);
+  PetscCall(KFReducedModelGetReassemblyRtol(m, &rtol));
+  PetscCall(PetscMalloc1(m->nb, &bodies));
+  for (PetscInt b = 0; b < m->nb; b++) {
+    PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
+    n += bodies[b].v;
+  }
+  PetscCall(PetscNew(&y));
+  y->a               = a;
+  y->t               = t;
+  y->nrigid_expected = 6 + m->nrevolute;
+  PetscCall(PetscMalloc4(n * n, &y->M, n * n, &y->K, n * a, &y->G, t * n, &y->H));
+  PetscCall(PetscMalloc1(n * n, &y->Phir));
+  PetscCall(KFReassemble(m->nb, bodies, m->nj, m->joints, angles, a, t, rtol, &h, y->M, y->K, y->G, y->H, &y->rank, &y->sratio, &nrigid, y->Phir));
+  PetscCall(PetscFree(bodies));
+  y->n = h;
+  PetscCheck(h > 0, comm, PETSC_ERR_ARG_WRONG, "the joints' interface ties leave no free coordinate in the reduced model: reduce again with a larger body basis");
+  if (nrigid >= 0) {
+    y->nrigid     = nrigid;
+    y->phir_known = PETSC_TRUE;
+  } else {
+    y->nrigid = y->nrigid_expected;
+    PetscCall(PetscFree(y->Phir));
+  }
+  PetscCall(PetscMalloc2(h, &y->lambda, h * h, &y->Phi));
+  PetscCall(KFDenseEig(h, y->K, y->M, y->lambda, y->Phi));
+  y->nf = PetscMax(h - y->nrigid, 0);
+  PetscCall(PetscMalloc1(y->nf, &y->freq));
+  for (PetscInt i = 0; i < y->nf; i++) y->freq[i] = PetscSqrtReal(PetscMax(y->lambda[y->nrigid + i], 0.0)) / (2 * PETSC_PI);
+  *system = y;
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,123 @@
+/* The reduced system at one configuration: getters, moments, frequency response, view. */
+#include <kryflex/modelimpl.h>
+#include "../dense/dense_impl.h"
+
+PetscErrorCode KFReducedSystemDestroy(KFReducedSystem *system)
+{
+  KFReducedSystem y = *system;
+
+  PetscFunctionBegin;
+  if (!y) PetscFunctionReturn(0);
+  PetscCall(PetscFree4(y->M, y->K, y->G, y->H));
+  PetscCall(PetscFree(y->Phir));
+  PetscCall(PetscFree2(y->lambda, y->Phi));
+  PetscCall(PetscFree(y->freq));
+  PetscCall(PetscFree2(y->HPhi, y->PhiG));
+  PetscCall(PetscFree(y));
+  *system = NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemGetMatrices(KFReducedSystem y, PetscInt *n, PetscInt *a, PetscInt *t, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (n) *n = y->n;
+  if (a) *a = y->a;
+  if (t) *t = y->t;
+  if (M) *M = y->M;
+  if (K) *K = y->K;
+  if (G) *G = y->G;
+  if (H) *H = y->H;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemGetModes(KFReducedSystem y, const PetscReal **lambda, const PetscReal **Phi, PetscInt *nrigid, const PetscReal **Phir)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (lambda) *lambda = y->lambda;
+  if (Phi) *Phi = y->Phi;
+  if (nrigid) *nrigid = y->nrigid;
+  if (Phir) *Phir = y->Phir;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemGetReassemblyInfo(KFReducedSystem y, PetscInt *rank, PetscReal *sratio)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (rank) *rank = y->rank;
+  if (sratio) *sratio = y->sratio;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemGetFrequencies(KFReducedSystem y, PetscInt *nf, const PetscReal **freq_hz)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (nf) *nf = y->nf;
+  if (freq_hz) *freq_hz = y->freq;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedSystemMoments - L^k = H (K+ M)^k K+ G on the flexible subspace, k = 0..nmom-1. With the geometric rigid
+  modes (Phir) of the expected count, by solves with them (KFDenseMomentsRigid: keeps the digits a stiff model
+  loses in an eigendecomposition); otherwise from the eigenpairs with the rigid tolerance of KFRigidTolerance.
+*/
+PetscErrorCode KFReducedSystemMoments(KFReducedSystem y, PetscInt nmom, PetscReal L[])
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  PetscCheck(nmom >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReducedSystemMoments: negative number of moments %" PetscInt_FMT, nmom);
+  if (y->phir_known && y->nrigid == y->nrigid_expected) {
+    PetscCall(KFDenseMomentsRigid(y->n, y->K, y->M, y->a, y->G, y->t, y->H, y->nrigid, y->Phir, nmom, L));
+  } else {
+    PetscReal rtol;
+    PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
+    PetscCall(KFDenseMoments(y->n, y->K, y->M, y->a, y->G, y->t, y->H, rtol, nmom, L));
+  }
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedSystemFRF - modal frequency response with uniform modal damping zeta at nw frequencies w (rad/s),
+  Tre/Tim: nw blocks of t x a; the nrigid lowest modes are undamped rigid modes (KFRigidTolerance).
+*/
+PetscErrorCode KFReducedSystemFRF(KFReducedSystem y, PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  PetscReal rtol;
+
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (!y->HPhi) {
+    PetscCall(PetscMalloc2(y->t * y->n, &y->HPhi, y->n * y->a, &y->PhiG));
+    PetscCall(KFDenseGemm_Private('N', 'N', y->t, y->n, y->n, 1.0, y->H, y->t, y->Phi, y->n, 0.0, y->HPhi, y->t));
+    PetscCall(KFDenseGemm_Private('T', 'N', y->n, y->a, y->n, 1.0, y->Phi, y->n, y->G, y->n, 0.0, y->PhiG, y->n));
+  }
+  PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
+  PetscCall(KFModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, zeta, rtol, nw, w, Tre, Tim));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemView(KFReducedSystem y, PetscViewer viewer)
+{
+  PetscBool iascii;
+
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PETSC_COMM_SELF, &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &iascii));
+  if (!iascii) PetscFunctionReturn(0);
+  PetscCall(PetscViewerASCIIPrintf(viewer, "KFReducedSystem: %" PetscInt_FMT " dofs (%" PetscInt_FMT " rigid-body and mechanism modes%s), %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs\n", y->n, y->nrigid, y->phir_known ? "" : ", assumed: the bodies' rigid motions are unknown", y->a, y->t));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "interface constraints: rank %" PetscInt_FMT ", sigma_min(kept)/sigma_max %.3e\n", y->rank, (double)y->sratio));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "flexible frequencies (Hz):"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  for (PetscInt i = 0; i < y->nf; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "%s %.6g", (i && i % 8 == 0) ? "\n   " : "", (double)y->freq[i]));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}

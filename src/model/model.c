@@ -10,13 +10,16 @@ PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm comm, PetscInt nb, Pet
   PetscFunctionBegin;
   PetscCall(KFModelInitializePackage());
   PetscCall(PetscHeaderCreate(m, KF_REDUCEDMODEL_CLASSID, "KFReducedModel", "Reduced model of an articulated structure", "KF", comm, KFReducedModelDestroy, KFReducedModelView));
+  /* one kind so far: reduced bodies reassembled at any angle (the view would otherwise say "type not yet set") */
+  PetscCall(PetscObjectChangeTypeName((PetscObject)m, "reduced-bodies"));
   m->nb       = nb;
   m->nj       = nj;
   m->ninputs  = a;
   m->noutputs = t;
   PetscCall(PetscCalloc1(nb, &m->bodies));
   PetscCall(PetscCalloc2(nj, &m->joint_names, nj, &m->joints));
-  PetscCall(PetscCalloc2(a, &m->input_names, t, &m->output_names));
+  PetscCall(PetscCalloc1(a, &m->input_names));
+  PetscCall(PetscCalloc1(t, &m->output_names));
   *model = m;
   PetscFunctionReturn(0);
 }
@@ -53,6 +56,7 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
   t = s->noutputs;
   PetscCall(KFReducedModelCreateEmpty_Private(s->comm, s->nb, s->nj, a, t, &m));
   PetscCall(PetscStrncpy(m->scene_name, s->name, sizeof(m->scene_name)));
+  PetscCall(PetscObjectSetName((PetscObject)m, s->name));
   PetscCall(KFSceneGetFingerprint(s, m->fingerprint));
   m->nrevolute = s->nrevolute;
   for (PetscInt b = 0; b < s->nb; b++) {
@@ -123,7 +127,8 @@ PetscErrorCode KFReducedModelDestroy(KFReducedModel *model)
   }
   PetscCall(PetscFree(m->bodies));
   PetscCall(PetscFree2(m->joint_names, m->joints));
-  PetscCall(PetscFree2(m->input_names, m->output_names));
+  PetscCall(PetscFree(m->input_names));
+  PetscCall(PetscFree(m->output_names));
   PetscCall(PetscFree(m->angles));
   for (PetscInt k = 0; k < m->nsettings; k++) {
     PetscCall(PetscFree(m->keys[k]));

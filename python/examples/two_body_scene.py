@@ -27,8 +27,10 @@ import sys
 import numpy as np
 import scipy.sparse as sp
 
-import kryflex                       # first: it hands the command line to PETSc/SLEPc (e.g. -log_view)
-from petsc4py import PETSc
+import kryflex
+
+kryflex.init(sys.argv)               # first: hand the command line to PETSc/SLEPc (e.g. -log_view)
+from petsc4py import PETSc  # noqa: E402
 
 COMM = PETSc.COMM_WORLD
 

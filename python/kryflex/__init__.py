@@ -2,38 +2,47 @@
 
     import kryflex
     scene = kryflex.load_scene("meshes/galileo/galileo.yaml")
-    result = kryflex.reduce(scene)                  # reduced bodies + verification summary
-    Mh, Kh, Gh, Hh = result.model.reassemble([60.0])[:4]
+    model = kryflex.Reducer(scene, moments=10).reduce()     # reduced bodies (a ReducedModel)
+    system = model.at([60.0])                               # the reduced system at 60 deg (a ReducedSystem)
 
-Runs under mpirun with mpi4py; PETSc options on the command line reach PETSc and SLEPc.
+Importing kryflex has no side effects: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a
+command line's PETSc options (the kryflex command does that). Runs under mpirun with mpi4py.
+
+The package, in the order data flows through it:
+    io/        scenes (YAML, in-memory matrices), body files, Nastran DMIG, Matrix Market, converters
+    _core      the binding of the C library (src/include/kryflex.h) on petsc4py and slepc4py
+    api        Reducer, ReducedModel, ReducedSystem: the reduction and its results, computed in C
+    report/    the summary dict of a reduction, report.md, summary.json and plots
+    cli/       the kryflex command: reduce, reassemble, info, convert
 """
-import sys as _sys
+import importlib
 
-# SLEPc (and with it PETSc) must see the command line before anything initializes them. Signals stay Python's:
-# PETSc's handler would replace Python's dispositions (SIGPIPE, SIGINT...) and turn a stray signal from a child
-# process into an exit with PETSc's signal error instead of a KeyboardInterrupt or nothing at all.
-import slepc4py as _slepc4py
-
-_slepc4py.init(_sys.argv[:1] + ["-no_signal_handler", "true"] + _sys.argv[1:])   # a value: PETSc would read the next word
-from slepc4py import SLEPc as _SLEPc  # noqa: E402,F401  (initializes SLEPc)
-
-
-def _keep_python_signals():
-    """When PETSc was initialized before kryflex (without -no_signal_handler), take its handler back off."""
-    import signal
-    from petsc4py import PETSc
-    if PETSc.Options().getBool("no_signal_handler", False) or not hasattr(PETSc.Sys, "popSignalHandler"):
-        return
-    PETSc.Sys.popSignalHandler()
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
-
-
-_keep_python_signals()
+from ._runtime import init
 
 __version__ = "0.1.0"
 
-from ._core import Error  # noqa: E402,F401
-from .model import ModelFileError, ReducedModel  # noqa: E402,F401
-from .pipeline import reduce  # noqa: E402,F401
-from .scene import Scene, SceneError, load_scene, scene_from_dict  # noqa: E402,F401
+# public name -> the module that defines it; imported on first access
+_PUBLIC = {
+    "Error": "._core",
+    "ModelFileError": ".model",
+    "ReducedModel": ".model",
+    "reduce": ".pipeline",
+    "Scene": ".io.scene",
+    "SceneError": ".io.scene",
+    "load_scene": ".io.scene",
+    "scene_from_dict": ".io.scene",
+}
+__all__ = ["init", "__version__"] + list(_PUBLIC)
+
+
+def __getattr__(name):
+    if name not in _PUBLIC:
+        raise AttributeError("module 'kryflex' has no attribute %r" % name)
+    init()
+    value = getattr(importlib.import_module(_PUBLIC[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_PUBLIC))

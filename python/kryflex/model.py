@@ -9,7 +9,7 @@ import os
 import numpy as np
 
 from . import _core
-from .files import atomic_path
+from .io.files import atomic_path
 
 FORMAT = "kryflex-reduced-model"
 BODY_ARRAYS = ("M", "K", "G", "H", "iface", "rigid")

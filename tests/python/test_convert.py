@@ -14,9 +14,9 @@ import pytest
 import scipy.io
 import scipy.sparse as sp
 
-from kryflex import bodyfiles, dmig
-from kryflex.bodyfiles import ConversionError, ConversionWarning, read_nodes, write_body
-from kryflex.convert import convert, main
+from kryflex.io import bodyfiles, dmig
+from kryflex.io.bodyfiles import ConversionError, ConversionWarning, read_nodes, write_body
+from kryflex.io.convert import convert, main
 
 # Grid ids are not contiguous; grid 13 has translations only (a 3-dof node).
 GRIDS = {7: 6, 12: 6, 13: 3, 40: 6, 41: 6, 105: 6, 2000: 6}

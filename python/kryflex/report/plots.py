@@ -13,14 +13,13 @@ on a machine without the compiled extension.
 """
 
 import io
-import os
 
 import numpy as np
 from matplotlib import ticker
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .files import atomic_path
+from ..io.files import atomic_path
 
 FULL_STYLE = {"color": "tab:blue", "linewidth": 1.6, "label": "full order"}
 REDUCED_STYLE = {"color": "tab:red", "linewidth": 1.2, "linestyle": "--", "label": "reduced (Krylov)"}

@@ -10,7 +10,7 @@ import numpy as np
 import yaml
 from petsc4py import PETSc
 
-from . import _core
+from .. import _core
 
 DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
 

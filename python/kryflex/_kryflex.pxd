@@ -1,0 +1,154 @@
+# The C API of src/include/kryflex.h, for the binding (_core.pyx). PETSc's handle types come from petsc4py and
+# SLEPc's from slepc4py; the scalar typedefs are extern, as petsc4py declares them, so that the C compiler uses
+# the sizes PETSc was built with (64-bit PetscInt included): Cython never assumes them.
+
+from petsc4py.PETSc cimport MPI_Comm, PetscMat, PetscObject, PetscVec, PetscViewer
+from slepc4py.SLEPc cimport SlepcBV
+
+cdef extern from "petscsys.h" nogil:
+    ctypedef long PetscInt
+    ctypedef double PetscReal
+    ctypedef int PetscErrorCode
+    ctypedef enum PetscBool:
+        PETSC_FALSE
+        PETSC_TRUE
+    PetscErrorCode PetscObjectReference(PetscObject)
+    PetscErrorCode PetscObjectDereference(PetscObject)
+
+cdef extern from "slepcbv.h" nogil:
+    PetscErrorCode BVGetActiveColumns(SlepcBV, PetscInt*, PetscInt*)
+
+cdef extern from "kryflex.h" nogil:
+    # ------------------------------------------------------------ scene
+    ctypedef struct _n_KFScene
+    ctypedef _n_KFScene* KFScene
+    ctypedef enum KFJointType:
+        KF_JOINT_REVOLUTE
+        KF_JOINT_FIXED
+
+    PetscErrorCode KFInitialize()
+    PetscErrorCode KFSceneCreate(MPI_Comm, KFScene*)
+    PetscErrorCode KFSceneDestroy(KFScene*)
+    PetscErrorCode KFSceneAddBody(KFScene, const char*, PetscMat, PetscMat, PetscInt, const PetscInt*, const PetscReal*, const PetscInt*, PetscInt*)
+    PetscErrorCode KFSceneAddInterface(KFScene, PetscInt, const char*, PetscInt)
+    PetscErrorCode KFSceneAddJoint(KFScene, const char*, KFJointType, PetscInt, const char*, PetscInt, const char*, const PetscReal*, const PetscReal*)
+    PetscErrorCode KFSceneSetNumIO(KFScene, PetscInt, PetscInt)
+    PetscErrorCode KFSceneAddInputLoad(KFScene, PetscInt, PetscInt, PetscInt, PetscInt, PetscReal)
+    PetscErrorCode KFSceneAddInputVector(KFScene, PetscInt, PetscInt, PetscVec)
+    PetscErrorCode KFSceneAddOutputReading(KFScene, PetscInt, PetscInt, PetscInt, PetscInt, PetscReal)
+    PetscErrorCode KFSceneAddOutputVector(KFScene, PetscInt, PetscInt, PetscVec)
+    PetscErrorCode KFSceneSetUp(KFScene)
+    PetscErrorCode KFSceneGetInfo(KFScene, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*)
+    PetscErrorCode KFSceneGetBodyInfo(KFScene, PetscInt, const char**, PetscInt*, PetscInt*)
+    PetscErrorCode KFSceneGetBodyMatrices(KFScene, PetscInt, PetscMat*, PetscMat*, PetscMat*, PetscMat*)
+    PetscErrorCode KFSceneView(KFScene, PetscViewer)
+    PetscErrorCode KFMatLoadFile(MPI_Comm, const char*, PetscMat*)
+
+    # ------------------------------------------------------------ full-order system, K+, Krylov basis, projection
+    ctypedef struct _n_KFSystem
+    ctypedef _n_KFSystem* KFSystem
+    ctypedef struct _n_KFFlexSolver
+    ctypedef _n_KFFlexSolver* KFFlexSolver
+    ctypedef struct _n_KFBodyBasis
+    ctypedef _n_KFBodyBasis* KFBodyBasis
+
+    PetscErrorCode KFSystemCreate(KFScene, KFSystem*)
+    PetscErrorCode KFSystemDestroy(KFSystem*)
+    PetscErrorCode KFSystemSetAngles(KFSystem, const PetscReal*)
+    PetscErrorCode KFSystemGetMatrices(KFSystem, PetscMat*, PetscMat*, PetscMat*, PetscMat*)
+    PetscErrorCode KFSystemGetBodyMap(KFSystem, PetscInt, PetscMat*)
+    PetscErrorCode KFSystemComputeRigidModes(KFSystem)
+    PetscErrorCode KFSystemSetRigidModes(KFSystem, PetscMat)
+    PetscErrorCode KFSystemGetRigidModes(KFSystem, PetscMat*, PetscReal*)
+    PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt*, PetscReal*, PetscReal*)
+    PetscErrorCode KFSystemEigen(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscMat*)
+    PetscErrorCode KFSystemProject(KFSystem, SlepcBV, PetscReal*, PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFBVCombine(SlepcBV, PetscInt, const PetscReal*, PetscMat*)
+    PetscErrorCode KFMatCombine(PetscMat, PetscInt, const PetscReal*, PetscMat*)
+    PetscErrorCode KFMatInner(PetscMat, PetscMat, PetscReal*)
+    PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver*)
+    PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal)
+    PetscErrorCode KFFlexSolverSetUp(KFFlexSolver)
+    PetscErrorCode KFFlexSolverApply(KFFlexSolver, PetscMat, PetscMat)
+    PetscErrorCode KFFlexSolverDestroy(KFFlexSolver*)
+    PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt*, PetscInt*, PetscInt*)
+    PetscErrorCode KFFlexSolverMoments(KFFlexSolver, PetscInt, PetscReal*)
+    PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt, PetscInt, PetscReal, SlepcBV*, PetscInt*)
+    PetscErrorCode KFKrylovRawBasis(KFFlexSolver, PetscInt, PetscInt, PetscMat*, PetscReal*)
+    PetscErrorCode KFBodyBasisCreate(KFScene, KFBodyBasis*)
+    PetscErrorCode KFBodyBasisAdd(KFBodyBasis, KFSystem, PetscMat)
+    PetscErrorCode KFBodyBasisFinish(KFBodyBasis, PetscReal)
+    PetscErrorCode KFBodyBasisDestroy(KFBodyBasis*)
+    PetscErrorCode KFBodyBasisGetReduced(KFBodyBasis, PetscInt, PetscInt*, const PetscReal**, const PetscReal**, const PetscReal**, const PetscReal**, PetscInt*, const PetscReal**, const PetscReal**, PetscInt*)
+    PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt, PetscMat*)
+
+    # ------------------------------------------------------------ small dense algebra
+    ctypedef enum KFImportance:
+        KF_IMPORTANCE_H2
+        KF_IMPORTANCE_HINF
+        KF_IMPORTANCE_STATIC
+    ctypedef struct KFReducedBody:
+        PetscInt v
+        const PetscReal *M
+        const PetscReal *K
+        const PetscReal *G
+        const PetscReal *H
+        PetscInt ninterfaces
+        const PetscReal *iface
+        const PetscReal *rigid
+    ctypedef struct KFJointDef:
+        KFJointType type
+        PetscInt parent, parent_interface, child, child_interface
+        PetscReal axis[3]
+        PetscReal R0[9]
+
+    PetscErrorCode KFDenseEig(PetscInt, const PetscReal*, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFDenseModeImportance(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, KFImportance, PetscReal, PetscReal*)
+    PetscErrorCode KFDenseStaticCorrection(PetscInt, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*)
+    PetscErrorCode KFDenseNullSpace(PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
+    PetscErrorCode KFDenseMoments(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscInt, PetscReal*)
+    PetscErrorCode KFDenseMomentsRigid(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, PetscReal*)
+    PetscErrorCode KFModalFRF(PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFReassemble(PetscInt, const KFReducedBody*, PetscInt, const KFJointDef*, const PetscReal*, PetscInt, PetscInt, PetscReal, PetscInt*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
+    PetscErrorCode KFJointRotation(const PetscReal*, const PetscReal*, PetscReal, PetscReal*)
+
+    # ------------------------------------------------------------ progress and errors
+    PetscErrorCode KFProgress(MPI_Comm, const char*, ...)
+    PetscErrorCode KFPushErrorRecorder()
+    const char *KFLastError()
+    void KFClearError()
+
+    # ------------------------------------------------------------ reduced model and reduced system
+    ctypedef struct _n_KFReducedSystem
+    ctypedef _n_KFReducedSystem* KFReducedSystem
+    ctypedef struct _p_KFReducedModel
+    ctypedef _p_KFReducedModel* KFReducedModel
+
+    PetscErrorCode KFReducedSystemGetMatrices(KFReducedSystem, PetscInt*, PetscInt*, PetscInt*, const PetscReal**, const PetscReal**, const PetscReal**, const PetscReal**)
+    PetscErrorCode KFReducedSystemGetModes(KFReducedSystem, const PetscReal**, const PetscReal**, PetscInt*, const PetscReal**)
+    PetscErrorCode KFReducedSystemGetReassemblyInfo(KFReducedSystem, PetscInt*, PetscReal*)
+    PetscErrorCode KFReducedSystemGetFrequencies(KFReducedSystem, PetscInt*, const PetscReal**)
+    PetscErrorCode KFReducedSystemMoments(KFReducedSystem, PetscInt, PetscReal*)
+    PetscErrorCode KFReducedSystemFRF(KFReducedSystem, PetscReal, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFReducedSystemView(KFReducedSystem, PetscViewer)
+    PetscErrorCode KFReducedSystemDestroy(KFReducedSystem*)
+
+    PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene, KFBodyBasis, PetscInt, const PetscReal*, PetscBool, KFReducedModel*)
+    PetscErrorCode KFReducedModelDestroy(KFReducedModel*)
+    PetscErrorCode KFReducedModelView(KFReducedModel, PetscViewer)
+    PetscErrorCode KFReducedModelGetInfo(KFReducedModel, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*)
+    PetscErrorCode KFReducedModelGetSceneName(KFReducedModel, const char**, const char**)
+    PetscErrorCode KFReducedModelGetReductionAngles(KFReducedModel, PetscInt*, const PetscReal**)
+    PetscErrorCode KFReducedModelGetBody(KFReducedModel, PetscInt, const char**, PetscInt*, KFReducedBody*, const PetscReal**)
+    PetscErrorCode KFReducedModelGetInterfaceName(KFReducedModel, PetscInt, PetscInt, const char**)
+    PetscErrorCode KFReducedModelGetJoint(KFReducedModel, PetscInt, const char**, KFJointDef*)
+    PetscErrorCode KFReducedModelGetIOName(KFReducedModel, PetscBool, PetscInt, const char**)
+    PetscErrorCode KFReducedModelSetSetting(KFReducedModel, const char*, const char*)
+    PetscErrorCode KFReducedModelGetSettings(KFReducedModel, PetscInt*, const char * const **, const char * const **)
+    PetscErrorCode KFReducedModelReassemble(KFReducedModel, const PetscReal*, KFReducedSystem*)
+    PetscErrorCode KFSceneGetFingerprint(KFScene, char*)
+    PetscErrorCode KFSceneSetName(KFScene, const char*)
+    PetscErrorCode KFSceneGetName(KFScene, const char**)
+    PetscErrorCode KFSceneSetIOName(KFScene, PetscBool, PetscInt, const char*)
+    PetscErrorCode KFSceneGetIOName(KFScene, PetscBool, PetscInt, const char**)

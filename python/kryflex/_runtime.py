@@ -1,0 +1,45 @@
+"""PETSc and SLEPc start-up: on first use, or from kryflex.init(argv) with a command line's options.
+
+Importing kryflex starts nothing; the binding calls init() when it is first imported. Signals stay Python's:
+PETSc's handler would replace Python's dispositions (SIGPIPE, SIGINT...) and turn a stray signal from a child process
+into an exit with PETSc's signal error instead of a KeyboardInterrupt or nothing at all.
+"""
+import sys
+
+_started = False
+
+
+def init(argv=None):
+    """Initializes PETSc and SLEPc. argv: a command line (program name, then options such as -kf_moments 12 or
+    -log_view); None: no options. Only the first call starts PETSc; when PETSc is already running (started by
+    petsc4py or an earlier call), argv's options are added to its options database instead."""
+    global _started
+    options = [str(a) for a in (argv or [])[1:]]
+    if _started or "petsc4py.PETSc" in sys.modules:
+        _started = True
+        _keep_python_signals()
+        if options:
+            from petsc4py import PETSc
+            PETSc.Options().insertString(" ".join(_quoted(a) for a in options))
+        return
+    import slepc4py
+    program = str(argv[0]) if argv else "kryflex"
+    slepc4py.init([program, "-no_signal_handler", "true"] + options)   # a value: PETSc would read the next word
+    from slepc4py import SLEPc  # noqa: F401  (starts SLEPc, and PETSc with it)
+    _started = True
+
+
+def _quoted(word):
+    return '"%s"' % word if any(c.isspace() for c in word) else word
+
+
+def _keep_python_signals():
+    """When PETSc was started before kryflex (without -no_signal_handler), take its handler back off."""
+    import signal
+    from petsc4py import PETSc
+    if PETSc.Options().getBool("no_signal_handler", False) or not hasattr(PETSc.Sys, "popSignalHandler"):
+        return
+    PETSc.Sys.popSignalHandler()
+    PETSc.Options().setValue("no_signal_handler", True)   # popped once: a second init must not pop another
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGPIPE, signal.SIG_IGN)

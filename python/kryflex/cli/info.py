@@ -1,0 +1,51 @@
+"""kryflex info SCENE: what a scene holds and what reducing it will take."""
+from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, Parser, error, say, split_petsc_options
+
+
+def run(argv):
+    p = Parser(prog="kryflex info", description="What a scene holds and what reducing it will take.")
+    p.add_argument("scene")
+    args = p.parse_args(split_petsc_options(argv, set(), {"-h", "--help"}))
+    from .. import _core
+    from ..io.scene import SceneError, load_scene
+    try:
+        scene = load_scene(args.scene)
+        system = _core.CSystem(scene.cscene)
+        system.set_angles(scene.angles_rad(scene.configurations[0]))
+        _, residual = system.rigid_modes()
+    except SceneError as e:
+        error(str(e))
+        return EXIT_INPUT
+    except _core.Error as e:
+        error(str(e))
+        return EXIT_NUMERIC
+    info = scene.info
+    nnz = 0
+    say("scene '%s' (%s)" % (scene.name, scene.path))
+    for b, name in enumerate(scene.body_names):
+        M, K = scene.cscene.body_matrices(b)[:2]
+        nz = int(K.getInfo(K.InfoType.GLOBAL_SUM)["nz_used"] + M.getInfo(M.InfoType.GLOBAL_SUM)["nz_used"])
+        nnz += nz
+        say("  body %-16s %10d dofs %8d nodes  interfaces: %s" % (name, scene.body_dofs[b], len(scene.body_nodes[b][0]),
+                                                                 ", ".join(scene.interfaces[b]) or "none"))
+    for j in scene.joints:
+        say("  joint %-15s %-8s %s.%s -> %s.%s%s" % (j["name"], j["type"], scene.body_names[j["parent"]],
+                                                   scene.interfaces[j["parent"]][j["parent_interface"]],
+                                                   scene.body_names[j["child"]],
+                                                   scene.interfaces[j["child"]][j["child_interface"]],
+                                                   "  axis %s" % j["axis"] if j["type"] == "revolute" else ""))
+    nr = 6 + len(scene.revolute)
+    say("  system: %d dofs; %d rigid-body and mechanism modes (6 + %d revolute); rigid-mode residual %.1e at %s deg"
+         % (info["system_dofs"], nr, len(scene.revolute), residual, scene.label(scene.configurations[0])))
+    say("  inputs: %s" % ", ".join(scene.input_names))
+    say("  outputs: %s" % ", ".join(scene.output_names))
+    say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
+    say("  band %g-%g Hz, damping %g, accuracy target %g, %d moments"
+         % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, int(scene.reduction["moments"])))
+    c = len(scene.input_names) * (int(scene.reduction["moments"]) - int(scene.reduction["output_blocks"])) + \
+        len(scene.output_names) * int(scene.reduction["output_blocks"])
+    e = info["system_dofs"]
+    base = 12 * 2 * nnz + 8 * e * (c + nr) * 3
+    say("  memory estimate: %.2g GiB for matrices and Krylov vectors, plus the MUMPS factor (typically 10-50 x the "
+         "stiffness nonzeros for 3-D solids: %.2g-%.2g GiB)" % (base / 2**30, 10 * 12 * nnz / 2 / 2**30, 50 * 12 * nnz / 2 / 2**30))
+    return EXIT_OK

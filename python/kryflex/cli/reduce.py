@@ -1,0 +1,89 @@
+"""kryflex reduce SCENE -o OUTDIR: reduce a scene, verify it, write the reduced model and the report."""
+import os
+import shutil
+
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Parser, error, from_rank0, rank, say,
+                     split_petsc_options)
+
+
+def run(argv):
+    p = Parser(prog="kryflex reduce", description="Reduce a scene and verify the reduced model against the full order.")
+    p.add_argument("scene", help="scene file (YAML)")
+    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("--npz", action="store_true", help="also write the reduced bodies as NumPy .npz")
+    p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
+    args = p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet", "-h", "--help"}))
+    from .. import _core
+    from ..pipeline import reduce as run_reduce
+    from ..report import write_report, write_unverified
+    from ..io.scene import SceneError, load_scene
+
+    out = os.path.abspath(args.output)
+    created = _prepare_output(out)
+    try:
+        scene = load_scene(args.scene)
+        result = run_reduce(scene, quiet=True if args.quiet else None)
+    except SceneError as e:
+        _cleanup(out, created)
+        error(str(e))
+        return EXIT_INPUT
+    except _core.Error as e:
+        _cleanup(out, created)
+        error("the model cannot be reduced: %s" % e)
+        return EXIT_NUMERIC
+    written, problem = [], None
+    try:
+        if rank() == 0:
+            # the report first (it leaves nothing behind if it fails), then the model files; a failure removes all
+            report = write_report if result.summary["frf"] else write_unverified
+            written.extend(report(result.summary, out))
+            written.append(result.model.save(os.path.join(out, "reduced.h5")))
+            if args.npz:
+                written.append(result.model.save(os.path.join(out, "reduced.npz")))
+    except OSError as e:
+        problem = "cannot write the results to %s: %s" % (out, e)
+        for path in written:
+            if os.path.exists(path):
+                os.unlink(path)
+    problem = from_rank0(problem)   # every rank exits with the same code
+    if problem is not None:
+        _cleanup(out, created)
+        error(problem)
+        return EXIT_OUTPUT
+    s = result.summary
+    say("kryflex: reduced '%s': %s reduced dofs per body (%s), alpha_G = %s deg, kept Krylov modes %s"
+         % (s["scene"], " + ".join(str(v) for v in result.model.sizes), result.model.settings["method"],
+            s["reduction_label"], s["kept_modes"]))
+    errs = [v["max_rel_error"] for v in s["frf"].values()]
+    if errs:
+        say("kryflex: max relative frequency-response error over the band: %.3g (target %.3g)" % (max(errs), s["accuracy"]))
+    say("kryflex: results in %s (reduced.h5, report.md, summary.json, plots)" % out)
+    return EXIT_OK
+
+
+def _prepare_output(out):
+    """Creates the output folder if needed and checks it is writable before any long work; True if created here.
+    Rank 0 decides and every rank learns the outcome: a rank that went on alone would wait forever in the
+    reduction's collective calls."""
+    created, problem = False, None
+    if rank() == 0:
+        if os.path.exists(out) and not os.path.isdir(out):
+            problem = "output %s exists and is not a folder: choose another -o" % out
+        elif not os.path.isdir(out):
+            try:
+                os.makedirs(out)
+                created = True
+            except OSError as e:
+                problem = "cannot create the output folder %s: %s" % (out, e)
+        if problem is None and not os.access(out, os.W_OK | os.X_OK):
+            problem = "the output folder %s is not writable: choose another -o or fix its permissions" % out
+    created, problem = from_rank0((created, problem))
+    if problem is not None:
+        error(problem)
+        raise SystemExit(EXIT_OUTPUT)
+    return created
+
+
+def _cleanup(out, created):
+    if created and rank() == 0 and os.path.isdir(out) and not os.listdir(out):
+        shutil.rmtree(out, ignore_errors=True)

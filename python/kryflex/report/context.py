@@ -1,0 +1,51 @@
+"""Facts derived from a summary that several report sections and figures share."""
+from .formatting import MAX_MOMENT_ENTRIES_SHOWN
+from .schema import _get
+
+
+class _Context:
+    """Derived facts used by several sections (labels, headers, displayed I/O entries)."""
+
+    def __init__(self, summary):
+        self.s = summary
+        self.labels = list(summary["angle_labels"])
+        self.label_g = summary["reduction_label"]
+        self.outputs = list(summary["outputs"])
+        self.inputs = list(summary["inputs"])
+        self.rigid = _get(summary, ("full", "rigid_modes"))
+        self.entries = [(o, i) for o in range(len(self.outputs)) for i in range(len(self.inputs))]
+        self.dominant_entry = self._dominant_entry()
+        self.shown_entries = self.entries if len(self.entries) <= MAX_MOMENT_ENTRIES_SHOWN else [self.dominant_entry]
+
+    def _dominant_entry(self):
+        """The (output, input) entry with the largest static gain |L^0| summed over configurations."""
+        weight = {e: 0.0 for e in self.entries}
+        for label in self.labels:
+            moments = self.s["full"]["moments"][label]
+            if moments:
+                for (o, i) in self.entries:
+                    weight[(o, i)] += abs(moments[0][o][i])
+        return max(self.entries, key=lambda e: weight[e])
+
+    def angle(self, label):
+        """'α = 15°' from angles_deg when available (several joints: 'α = (0°, 30°)'), else from the label."""
+        angles = self.s.get("angles_deg")
+        if angles is not None:
+            values = angles[self.labels.index(label)]
+            values = values if isinstance(values, (list, tuple)) else [values]
+            if len(values) == 1:
+                return f"α = {values[0]:g}°"
+            return "α = (" + ", ".join(f"{v:g}°" for v in values) + ")"
+        return f"α = {label}°"
+
+    def short_angle(self, label):
+        text = self.angle(label)[4:]
+        return text + " (α_G)" if label == self.label_g else text
+
+    def entry_name(self, entry):
+        o, i = entry
+        return f"{self.outputs[o]} ← {self.inputs[i]}"
+
+    def mode_number(self, flex_index):
+        """Paper-style mode number of the flex_index-th (0-based) flexible mode: rigid modes come first."""
+        return flex_index + 1 + (self.rigid or 0)

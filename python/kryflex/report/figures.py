@@ -1,0 +1,54 @@
+"""The report's figures: their file names and their PNG bytes."""
+from . import plots
+from .context import _Context
+from .formatting import RATIO_EXACT_TOL, safe_name
+
+
+def plot_file_names(summary):
+    """{"bode": {(label, (o, i)): file}, "importance": {label: file}} with file-name-safe, distinct names."""
+    c = _Context(summary)
+    used = set()
+
+    def unique(name):
+        stem, candidate, n = name[:-4], name, 2
+        while candidate in used:
+            candidate, n = f"{stem}_{n}.png", n + 1
+        used.add(candidate)
+        return candidate
+
+    names = {"bode": {}, "importance": {}}
+    for label in c.labels:
+        for (o, i) in c.entries:
+            names["bode"][(label, (o, i))] = unique(
+                f"bode_{safe_name(label)}deg_{safe_name(c.outputs[o])}_{safe_name(c.inputs[i])}.png")
+        names["importance"][label] = unique(f"importance_{safe_name(label)}deg.png")
+    return names
+
+
+def _render_plots(summary, plot_names):
+    """Yield (file name, PNG bytes) for every figure of the report."""
+    c = _Context(summary)
+    settings = summary.get("settings") or {}
+    arrays = {label: plots.frf_arrays(summary["frf"][label]) for label in c.labels}
+    for label in c.labels:
+        freq, full, red = arrays[label]
+        for (o, i) in c.entries:
+            title = f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}"
+            yield plot_names["bode"][(label, (o, i))], plots.figure_png_bytes(
+                plots.bode_figure(freq, full[:, o, i], red[:, o, i], title))
+    o, i = c.dominant_entry
+    panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
+    yield "bode_overview.png", plots.figure_png_bytes(
+        plots.bode_overview_figure(panels, f"{summary['scene']}: full vs reduced, {c.entry_name((o, i))}"))
+    for label in c.labels:
+        kr = summary["krylov"][label]
+        title = f"Krylov mode importance, {c.angle(label)}{' (α_G)' if label == c.label_g else ''}"
+        yield plot_names["importance"][label], plots.figure_png_bytes(plots.importance_figure(
+            kr["frequency_hz"], kr["importance"], kr["kept"], title,
+            threshold=settings.get("keep_threshold"), band_hz=summary.get("band_hz")))
+    series = [(f"single, {c.short_angle(l)}", summary["reduced"]["moment_ratios"][l], False) for l in c.labels]
+    multi = (summary.get("multi_angle") or {}).get("moment_ratios") or {}
+    series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
+    yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
+    curves = [(c.short_angle(l), arrays[l][0], plots.frf_relative_error(arrays[l][1], arrays[l][2])) for l in c.labels]
+    yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(curves, summary.get("accuracy")))

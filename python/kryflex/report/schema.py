@@ -1,0 +1,157 @@
+"""The summary a report is made from: its schema, and the checks that it can be reported.
+
+Summary schema (JSON types only: dict with str keys, list, int, float (finite), str, bool, None; undefined
+numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may be missing.
+
+{
+ "kryflex_version": str (opt), "scene": str, "scene_file": str (opt),
+ "inputs": [names], "outputs": [names], "joints": [revolute joint names] (opt),
+ "angles_deg": [[a1, a2, ..] per configuration, one entry per revolute joint] (opt),
+ "angle_labels": ["0", "15", ...]  (file names and table headers; e.g. "0_30" for several joints),
+ "band_hz": [f0, f1] (opt), "damping": z (opt), "accuracy": target (opt),
+ "settings": {"moments": c, "output_blocks", "importance", "keep_threshold", "deflation_tol",
+              "reduction_angles_deg": [[..]], "method": "single-angle" | "multi-angle"} (opt, any keys shown),
+ "full": {"dofs_per_body": {body: n} (opt), "system_dofs": e (opt), "rigid_modes": r (opt),
+          "body_frequencies_hz": {body: [..]} (opt; free-free component frequencies, lowest few),
+          "frequencies_hz": {<label>: [lowest flexible system frequencies]},
+          "moments": {<label>: [t x a nested list, per k = 0..c-1]}},
+ "krylov": {<label>: {"frequency_hz": [c], "importance": [c] (normalized), "kept": [c bools],
+                      "deflations": int (opt), "gram_condition_raw": float|None (opt)}},
+ "reduction_label": <label> of alpha_G, "reduction_rule": str (opt; why this alpha_G),
+ "kept_modes": [1-based Krylov mode numbers at alpha_G], "static_correction_modes": int (opt),
+ "static_correction_frequency_hz": [..] (opt),
+ "reduced": {"dofs_per_body": {body: v} (opt), "body_frequencies_hz": {body: [..]} (opt),
+             "system_dofs": {<label>: h} (opt), "frequencies_hz": {<label>: [..]},
+             "moments": {<label>: [same layout as full]} (opt),
+             "moment_ratios": {<label>: [t x a per k]}  (full/reduced; None where the full moment is negligible),
+             "static_gain_error": {<label>: float} (opt), "reassembly_rank": {<label>: int} (opt),
+             "reassembly_sigma_ratio": {<label>: float} (opt), "reassembly_seconds": float (opt)},
+ "frf": {<label>: {"freq_hz": [nf], "full_re": [nf][t][a], "full_im", "reduced_re", "reduced_im",
+                   "max_rel_error": float}},
+ "dominant_modes": {<label>: [0-based indices into full["frequencies_hz"][<label>]]} (opt),
+ "dominant_freq_error": {<label>: [relative error of the matched reduced frequency, same order]} (opt),
+ "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},
+                 "frf_max_rel_error": {<label>: float}} (opt, every part optional),
+ "timings_s": {stage: seconds} (opt), "notes": [str] (opt)
+}
+
+This module depends only on the standard library, NumPy and plots.py (no compiled kryflex code).
+"""
+import math
+
+import numpy as np
+
+
+class ReportError(ValueError):
+    """The summary cannot be turned into a report; the message names the offending key and the fix."""
+
+
+# =============================================================================================== validation
+
+REQUIRED_KEYS = [
+    ("scene",), ("inputs",), ("outputs",), ("angle_labels",),
+    ("full", "frequencies_hz"), ("full", "moments"),
+    ("krylov",), ("reduction_label",), ("kept_modes",),
+    ("reduced", "frequencies_hz"), ("reduced", "moment_ratios"),
+    ("frf",),
+]
+# Keys that must hold one entry per configuration label.
+PER_LABEL_KEYS = [("full", "frequencies_hz"), ("full", "moments"), ("krylov",), ("reduced", "moment_ratios"), ("frf",)]
+
+
+def _key_text(path):
+    return "summary" + "".join(f"[{p!r}]" for p in path)
+
+
+def _get(summary, path, default=None):
+    node = summary
+    for part in path:
+        if not isinstance(node, dict) or part not in node:
+            return default
+        node = node[part]
+    return node
+
+
+def _check_json_types(node, path):
+    """Reject anything json would refuse or change: numpy objects, NaN/inf, non-str keys."""
+    if node is None or isinstance(node, (str, bool, int)):  # numpy integers are not int: rejected below
+        return
+    if isinstance(node, float):
+        if not math.isfinite(node):
+            raise ReportError(f"{_key_text(path)} is {node}: JSON has no NaN/inf; use None for an undefined number")
+        return
+    if isinstance(node, (list, tuple)):
+        for index, item in enumerate(node):
+            _check_json_types(item, path + (index,))
+        return
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if not isinstance(key, str):
+                raise ReportError(f"{_key_text(path)} has key {key!r} of type {type(key).__name__}: use str keys")
+            _check_json_types(value, path + (key,))
+        return
+    raise ReportError(f"{_key_text(path)} is a {type(node).__module__}.{type(node).__name__}, not a JSON type: "
+                      "convert with float()/int()/.tolist() before calling write_report")
+
+
+def _check_matrix(value, rows, cols, path, allow_none=False):
+    if not isinstance(value, (list, tuple)) or len(value) != rows or any(
+            not isinstance(row, (list, tuple)) or len(row) != cols for row in value):
+        raise ReportError(f"{_key_text(path)} must be a {rows} x {cols} nested list (outputs x inputs)")
+    if not allow_none and any(v is None for row in value for v in row):
+        raise ReportError(f"{_key_text(path)} contains None; only moment ratios may be undefined")
+
+
+def validate_summary(summary):
+    """Raise ReportError naming the first problem; return nothing if the summary can be reported."""
+    if not isinstance(summary, dict):
+        raise ReportError(f"summary must be a dict, got {type(summary).__name__}")
+    for path in REQUIRED_KEYS:
+        if _get(summary, path) is None:
+            raise ReportError(f"{_key_text(path)} is missing: the report needs it "
+                              "(see the schema in kryflex/report.py)")
+    _check_json_types(summary, ())
+    labels = summary["angle_labels"]
+    if not labels or len(set(labels)) != len(labels) or not all(isinstance(a, str) for a in labels):
+        raise ReportError("summary['angle_labels'] must be a non-empty list of distinct strings")
+    angles = summary.get("angles_deg")
+    if angles is not None and len(angles) != len(labels):
+        raise ReportError(f"summary['angles_deg'] has {len(angles)} configurations but angle_labels has {len(labels)}")
+    if summary["reduction_label"] not in labels:
+        raise ReportError(f"summary['reduction_label'] = {summary['reduction_label']!r} "
+                          f"is not one of angle_labels {labels}")
+    for path in PER_LABEL_KEYS:
+        block = _get(summary, path)
+        for label in labels:
+            if label not in block:
+                raise ReportError(f"{_key_text(path + (label,))} is missing: every angle label needs an entry")
+    t, a = len(summary["outputs"]), len(summary["inputs"])
+    if t == 0 or a == 0:
+        raise ReportError("summary['inputs'] and summary['outputs'] must name at least one input and one output")
+    for label in labels:
+        krylov = summary["krylov"][label]
+        sizes = {name: len(krylov.get(name) or []) for name in ("frequency_hz", "importance", "kept")}
+        if len(set(sizes.values())) != 1:
+            raise ReportError(f"summary['krylov'][{label!r}] lists of different lengths {sizes}: "
+                              "one entry per Krylov mode")
+        for kind in ("moments",):
+            for k, matrix in enumerate(summary["full"][kind][label]):
+                _check_matrix(matrix, t, a, ("full", kind, label, k))
+        for k, matrix in enumerate(summary["reduced"]["moment_ratios"][label]):
+            _check_matrix(matrix, t, a, ("reduced", "moment_ratios", label, k), allow_none=True)
+        frf = summary["frf"][label]
+        for name in ("freq_hz", "full_re", "full_im", "reduced_re", "reduced_im"):
+            if name not in frf:
+                raise ReportError(f"{_key_text(('frf', label, name))} is missing")
+        nf = len(frf["freq_hz"])
+        for name in ("full_re", "full_im", "reduced_re", "reduced_im"):
+            shape = np.shape(np.asarray(frf[name], dtype=float))
+            if shape != (nf, t, a):
+                raise ReportError(f"{_key_text(('frf', label, name))} has shape {shape}, expected "
+                                  f"(len(freq_hz), outputs, inputs) = {(nf, t, a)}")
+    for label, indices in (summary.get("dominant_modes") or {}).items():
+        n_full = len(_get(summary, ("full", "frequencies_hz", label)) or [])
+        bad = [i for i in indices if not isinstance(i, int) or not 0 <= i < n_full]
+        if bad:
+            raise ReportError(f"summary['dominant_modes'][{label!r}] has indices {bad} outside the "
+                              f"{n_full} listed full-order frequencies (0-based indices expected)")

@@ -1,0 +1,430 @@
+"""report.md: one function per section, in the order of the paper's study (Tables 1-6, Fig. 3)."""
+import numpy as np
+
+from . import plots
+from .context import _Context
+from .formatting import (DASH, MAX_MISMATCHES_LISTED, RATIO_EXACT_TOL, decade_scale, fmt_freq, fmt_general,
+                         fmt_percent, fmt_ratio, mode_ranges, table)
+from .schema import _get
+
+
+def _section_scene(c):
+    s = c.s
+    lines = [f"# kryflex verification report: {s['scene']}", ""]
+    origin = []
+    if s.get("kryflex_version"):
+        origin.append(f"kryflex {s['kryflex_version']}")
+    if s.get("scene_file"):
+        origin.append(f"scene file `{s['scene_file']}`")
+    if origin:
+        lines += ["; ".join(origin) + ".", ""]
+    lines += ["## 1. Scene and settings", ""]
+    dofs = _get(s, ("full", "dofs_per_body")) or {}
+    body_text = ", ".join(f"{b} ({n} dofs)" for b, n in dofs.items())
+    text = []
+    if body_text:
+        text.append(f"The scene has {len(dofs)} bodies: {body_text}.")
+    joints = s.get("joints")
+    if joints:
+        text.append(f"Revolute joints: {', '.join(joints)}.")
+    e = _get(s, ("full", "system_dofs"))
+    if e is not None:
+        rigid = ""
+        if c.rigid is not None:
+            rigid = f", of which {c.rigid} are rigid-body/mechanism modes" if c.rigid else ", with no rigid-body modes"
+        text.append(f"The assembled full-order system has {e} degrees of freedom{rigid}.")
+    text.append(f"Inputs: {', '.join(c.inputs)}. Outputs: {', '.join(c.outputs)}.")
+    text.append("Configurations: " + ", ".join(c.angle(l) for l in c.labels) + ".")
+    if s.get("band_hz"):
+        text.append(f"Frequency band of interest: {s['band_hz'][0]:g} to {s['band_hz'][1]:g} Hz.")
+    if s.get("damping") is not None:
+        text.append(f"Uniform modal damping: {100 * s['damping']:g} % on both the full and reduced models.")
+    if s.get("accuracy") is not None:
+        text.append(f"Accuracy target: maximum relative frequency-response error {fmt_percent(s['accuracy'], 3)}.")
+    lines += [" ".join(text), ""]
+    settings = s.get("settings") or {}
+    if settings:
+        lines += [table(["setting", "value"], [(k, fmt_general(v)) for k, v in settings.items()], "ll"), ""]
+    return lines
+
+
+def _section_full_frequencies(c):
+    s = c.s
+    lines = ["## 2. Full-order natural frequencies (cf. Table 1)", ""]
+    bodies = _get(s, ("full", "body_frequencies_hz")) or {}
+    if bodies:
+        dofs = _get(s, ("full", "dofs_per_body")) or {}
+        n = max(len(v) for v in bodies.values())
+        header = ["Mode"] + [f"Ω_{b} (Hz)" + (f", {dofs[b]} dofs" if b in dofs else "") for b in bodies]
+        rows = [[str(m + 1)] + [fmt_freq(v[m]) if m < len(v) else "" for v in bodies.values()] for m in range(n)]
+        lines += ["Table 1a. Free-free component frequencies (lowest listed by the pipeline).", "",
+                  table(header, rows), ""]
+    freqs = s["full"]["frequencies_hz"]
+    n = max(len(freqs[l]) for l in c.labels)
+    header = ["Mode"] + [f"Ω_system (Hz), {c.short_angle(l)}" for l in c.labels]
+    rows = []
+    if c.rigid:
+        rows.append([f"1–{c.rigid}" if c.rigid > 1 else "1"] + ["0"] * len(c.labels))
+    for m in range(n):
+        rows.append([str(c.mode_number(m))] + [fmt_freq(freqs[l][m]) if m < len(freqs[l]) else "" for l in c.labels])
+    rigid_note = (f" Modes 1–{c.rigid} are the rigid-body and mechanism modes (0 Hz);"
+                  " flexible modes follow." if c.rigid else "")
+    lines += ["Table 1b. System natural frequencies at each configuration (lowest flexible modes)." + rigid_note, "",
+              table(header, rows), ""]
+    lines += [_frequency_variation_sentence(c, freqs), ""]
+    return lines
+
+
+def _frequency_variation_sentence(c, freqs):
+    """How the system frequencies move with the angle (the paper: some rise, some fall, a few stay)."""
+    if len(c.labels) < 2:
+        return "Only one configuration was analysed."
+    n = min(len(freqs[l]) for l in c.labels)
+    if n == 0:
+        return ""
+    table_ = np.array([[freqs[l][m] for l in c.labels] for m in range(n)], dtype=float)
+    low, high = table_.min(axis=1), table_.max(axis=1)
+    spread = np.where(low > 0, (high - low) / np.where(low > 0, low, 1.0), 0.0)
+    moving = int(np.sum(spread > 1e-3))
+    worst = int(np.argmax(spread))
+    return (f"Across the {len(c.labels)} configurations, {moving} of the {n} listed flexible modes change by more "
+            f"than 0.1 %; the largest change is mode {c.mode_number(worst)} "
+            f"({fmt_freq(low[worst])} to {fmt_freq(high[worst])} Hz, {fmt_percent(spread[worst], 3)}).")
+
+
+def _kept_numbers(krylov):
+    return [m + 1 for m, k in enumerate(krylov["kept"]) if k]
+
+
+def _section_krylov(c):
+    s = c.s
+    settings = s.get("settings") or {}
+    threshold = settings.get("keep_threshold")
+    lines = ["## 3. Importance of the Krylov modes (cf. Tables 2 and 3)", ""]
+    lines += ["At each configuration the Krylov basis is built, the small reduced eigenproblem solved, and each "
+              "Krylov mode ranked by its normalized contribution to the input-to-output map "
+              f"(measure: {settings.get('importance', 'see settings')}). Modes marked * reach the keep threshold"
+              + (f" {threshold:g}" if threshold is not None else "") + ".", ""]
+    for number, label in enumerate(c.labels, start=1):
+        kr = s["krylov"][label]
+        count = len(kr["frequency_hz"])
+        extra = []
+        if kr.get("deflations") is not None:
+            extra.append(f"{kr['deflations']} deflation(s)")
+        if kr.get("gram_condition_raw") is not None:
+            extra.append(f"condition of the raw-recurrence Gram matrix {kr['gram_condition_raw']:.3g}")
+        caption = f"Table 3.{number}. Normalized importance of the Krylov modes ({c.angle(label)}, c = {count})"
+        if label == c.label_g:
+            caption += ", the reduction configuration α_G"
+        lines += [caption + "." + (" " + "; ".join(extra) + "." if extra else ""), ""]
+        rows = [[f"{m + 1}*" if kept else str(m + 1), fmt_freq(f), f"{imp:.4f}"]
+                for m, (f, imp, kept) in enumerate(zip(kr["frequency_hz"], kr["importance"], kr["kept"]))]
+        lines += [table(["Mode", "Ω_Krylov (Hz)", "importance"], rows), "", "\\* kept Krylov modes", ""]
+    return lines
+
+
+def _section_alpha_g(c):
+    s = c.s
+    lines = ["## 4. Choice of the reduction configuration α_G", ""]
+    rows = []
+    for label in c.labels:
+        kept = _kept_numbers(s["krylov"][label])
+        rows.append([c.short_angle(label), str(len(kept)), mode_ranges(kept)])
+    lines += [table(["configuration", "important modes", "mode numbers"], rows, "lrl"), ""]
+    text = f"The reduction basis is built at α_G: {c.angle(c.label_g)}."
+    if s.get("reduction_rule"):
+        text += f" Reason: {s['reduction_rule']}"
+        text += "" if text.endswith(".") else "."
+    settings = s.get("settings") or {}
+    if settings.get("method"):
+        text += f" Method: {settings['method']}."
+    if settings.get("reduction_angles_deg"):
+        text += f" Reduction angles: {fmt_general(settings['reduction_angles_deg'])} deg."
+    lines += [text, ""]
+    return lines
+
+
+def _section_kept(c):
+    s = c.s
+    kr = s["krylov"][c.label_g]
+    count = len(kr["frequency_hz"])
+    kept = sorted(s["kept_modes"])
+    discarded = [m for m in range(1, count + 1) if m not in kept]
+    lines = ["## 5. Kept Krylov modes and static correction", ""]
+    text = (f"At α_G ({c.angle(c.label_g)}) the projection mode set keeps {len(kept)} of the {count} Krylov modes: "
+            f"modes {mode_ranges(kept)} (numbers of Table 3.{c.labels.index(c.label_g) + 1}).")
+    if discarded:
+        best = max(discarded, key=lambda m: kr["importance"][m - 1])
+        n_static = s.get("static_correction_modes")
+        text += (f" The discarded modes {mode_ranges(discarded)} are replaced by "
+                 + (f"{n_static} " if n_static is not None else "")
+                 + "static correction mode(s)")
+        sc = s.get("static_correction_frequency_hz")
+        if sc:
+            text += " at " + ", ".join(fmt_freq(f) for f in sc) + " Hz"
+        text += (f". The discarded mode of highest importance is mode {best} "
+                 f"({fmt_freq(kr['frequency_hz'][best - 1])} Hz, importance {kr['importance'][best - 1]:.4f}).")
+    elif s.get("static_correction_modes"):
+        text += f" {s['static_correction_modes']} static correction mode(s) are added."
+    lines += [text, ""]
+    return lines
+
+
+def _nearest(values, target):
+    if not values:
+        return None
+    return int(np.argmin([abs(v - target) for v in values]))
+
+
+def _section_reduced(c):
+    s = c.s
+    red = s["reduced"]
+    lines = ["## 6. Reduced-order component and system models (cf. Table 4)", ""]
+    full_dofs = _get(s, ("full", "dofs_per_body")) or {}
+    red_dofs = red.get("dofs_per_body") or {}
+    if red_dofs:
+        parts = [f"{b}: {v}" + (f" (full {full_dofs[b]})" if b in full_dofs else "") for b, v in red_dofs.items()]
+        sys_dofs = (red.get("system_dofs") or {}).get(c.label_g)
+        full_sys = _get(s, ("full", "system_dofs"))
+        sentence = "Projected body models, degrees of freedom: " + "; ".join(parts) + "."
+        if sys_dofs is not None:
+            sentence += f" Reduced system at α_G: {sys_dofs} dofs" + (f" (full {full_sys})." if full_sys else ".")
+        lines += [sentence, ""]
+    bodies = red.get("body_frequencies_hz") or {}
+    if bodies:
+        n = max(len(v) for v in bodies.values())
+        rows = [[str(m + 1)] + [fmt_freq(v[m]) if m < len(v) else "" for v in bodies.values()] for m in range(n)]
+        lines += ["Table 4a. Natural frequencies of the projected (reduced) component models.", "",
+                  table(["Mode"] + [f"ω_{b} (Hz)" for b in bodies], rows), ""]
+    lines += _table_reduced_system(c)
+    lines += _table_dominant_errors(c)
+    lines += _table_reassembly(c)
+    return lines
+
+
+def _table_reduced_system(c):
+    s = c.s
+    full = s["full"]["frequencies_hz"][c.label_g]
+    reduced = s["reduced"]["frequencies_hz"].get(c.label_g) or []
+    dominant = set((s.get("dominant_modes") or {}).get(c.label_g) or [])
+    captured = {_nearest(reduced, full[i]) for i in dominant} - {None}
+    n = max(len(full), len(reduced))
+    rows = []
+    if c.rigid:
+        rows.append([f"1–{c.rigid}" if c.rigid > 1 else "1", "0", "0"])
+    for m in range(n):
+        f_full = fmt_freq(full[m]) + (" †" if m in dominant else "") if m < len(full) else ""
+        f_red = fmt_freq(reduced[m]) + (" ‡" if m in captured else "") if m < len(reduced) else ""
+        rows.append([str(c.mode_number(m)), f_full, f_red])
+    return [f"Table 4b. System natural frequencies at α_G ({c.angle(c.label_g)}): full order Ω and reduced ω.", "",
+            table(["Mode", "Ω_system full (Hz)", "ω_system reduced (Hz)"], rows), "",
+            "† dominant full-order system modes; ‡ the reduced mode nearest to each of them.", ""]
+
+
+def _table_dominant_errors(c):
+    s = c.s
+    dominant = s.get("dominant_modes") or {}
+    errors = s.get("dominant_freq_error") or {}
+    if not dominant:
+        return []
+    rows, worst = [], {}
+    for label in c.labels:
+        indices = dominant.get(label) or []
+        errs = errors.get(label) or []
+        for j, index in enumerate(indices):
+            err = errs[j] if j < len(errs) else None
+            rows.append([c.short_angle(label), str(c.mode_number(index)),
+                         fmt_freq(s["full"]["frequencies_hz"][label][index]), fmt_percent(err, 3)])
+            if err is not None:
+                worst[label] = max(worst.get(label, 0.0), abs(err))
+    lines = ["Table 4c. Relative frequency error of the reduced model on each dominant full-order mode.", "",
+             table(["configuration", "Mode", "Ω full (Hz)", "relative error"], rows), ""]
+    if worst:
+        at_g = worst.get(c.label_g)
+        overall = max(worst.values())
+        text = ""
+        if at_g is not None:
+            text = (f"At α_G the {len(dominant.get(c.label_g) or [])} dominant full-order modes are captured to "
+                    f"within {fmt_percent(at_g, 3)}; ")
+        text += f"over all configurations the worst dominant-mode frequency error is {fmt_percent(overall, 3)}."
+        lines += [text, ""]
+    return lines
+
+
+def _table_reassembly(c):
+    red = c.s["reduced"]
+    columns = [("system_dofs", "reduced system dofs", str), ("reassembly_rank", "reassembly rank", str),
+               ("reassembly_sigma_ratio", "σ ratio at the rank cut", lambda v: f"{v:.3g}"),
+               ("static_gain_error", "static gain error", lambda v: f"{v:.3g}")]
+    present = [(key, name, f) for key, name, f in columns if red.get(key)]
+    if not present:
+        return []
+    rows = [[c.short_angle(l)] + [f(red[key][l]) if red[key].get(l) is not None else DASH for key, _, f in present]
+            for l in c.labels]
+    lines = ["Reassembly of the reduced bodies at each configuration (null space of the interface constraints by SVD).",
+             "", table(["configuration"] + [name for _, name, _ in present], rows), ""]
+    if red.get("reassembly_seconds") is not None:
+        lines += [f"Total reassembly time: {red['reassembly_seconds']:.3g} s.", ""]
+    return lines
+
+
+def _section_moments(c):
+    s = c.s
+    lines = ["## 7. Low-frequency moments of the full-order models (cf. Table 5)", ""]
+    lines += ["L^k = H (K⁺M)^k K⁺ G on the flexible subspace. Each row shows mantissas: the entry times the row's "
+              "scale is L^k (e.g. −1.8910 with scale 1e-07 means −1.8910 × 10⁻⁷).", ""]
+    if len(c.shown_entries) < len(c.entries):
+        lines += [f"With {len(c.entries)} (output, input) entries, only the dominant one (largest static gain), "
+                  f"{c.entry_name(c.dominant_entry)}, is tabulated; every entry is in summary.json.", ""]
+    moments = s["full"]["moments"]
+    count = max(len(moments[l]) for l in c.labels)
+    for entry in c.shown_entries:
+        o, i = entry
+        rows = []
+        for k in range(count):
+            values = [moments[l][k][o][i] if k < len(moments[l]) else None for l in c.labels]
+            p = decade_scale(values)
+            rows.append([f"L^{k}", f"1e{p:+03d}"] + [DASH if v is None else f"{v / 10.0 ** p:.4f}" for v in values])
+        lines += [f"Table 5 ({c.entry_name(entry)}). Full-order moments L^k.", "",
+                  table(["L^k", "scale"] + [c.short_angle(l) for l in c.labels], rows), ""]
+    return lines
+
+
+def _mismatches(ratios_by_label, c):
+    """[(label, k, entry, ratio)] for every defined ratio with |ratio - 1| > RATIO_EXACT_TOL."""
+    found = []
+    for label in c.labels:
+        for (o, i) in c.entries:
+            for k, matrix in enumerate(ratios_by_label.get(label) or []):
+                r = matrix[o][i]
+                if r is not None and abs(r - 1.0) > RATIO_EXACT_TOL:
+                    found.append((label, k, (o, i), r))
+    return found
+
+
+def _mismatch_sentence(c, found, model):
+    if not found:
+        return (f"All defined ratios of the {model} equal 1 to within {RATIO_EXACT_TOL:g} at every configuration: "
+                f"its moments match the full-order ones exactly.")
+    several = len(c.entries) > 1
+    groups = {}          # one group per configuration and I/O entry: "α = 0°, out ← in: k = 0 ratio .., k = 1 .."
+    for label, k, entry, r in found[:MAX_MISMATCHES_LISTED]:
+        where = f"α = {c.short_angle(label)}" + (f", {c.entry_name(entry)}" if several else "")
+        groups.setdefault(where, []).append(f"k = {k} ratio {fmt_ratio(r)}")
+    text = (f"**The {model} does NOT match the full-order moments exactly** (|ratio − 1| > {RATIO_EXACT_TOL:g}) "
+            f"in {len(found)} place(s): "
+            + "; ".join(f"{where}: {', '.join(items)}" for where, items in groups.items()))
+    if len(found) > MAX_MISMATCHES_LISTED:
+        text += f"; and {len(found) - MAX_MISMATCHES_LISTED} more (see summary.json)"
+    text += "."
+    if any(label == c.label_g for label, _, _, _ in found) and model.startswith("single"):
+        text += (" This includes α_G itself, where the match is exact by construction: "
+                 "treat it as a defect of the reduction, not an approximation.")
+    return text
+
+
+def _section_ratios(c):
+    s = c.s
+    ratios = s["reduced"]["moment_ratios"]
+    lines = ["## 8. Ratios of full to reduced moments, L_full^k / L_reduced^k (cf. Table 6)", ""]
+    count = max(len(ratios[l]) for l in c.labels)
+    for entry in c.shown_entries:
+        o, i = entry
+        rows = [[str(k)] + [fmt_ratio(ratios[l][k][o][i]) if k < len(ratios[l]) else DASH for l in c.labels]
+                for k in range(count)]
+        lines += [f"Table 6 ({c.entry_name(entry)}). L_full^k / L_reduced^k, single-angle model built at α_G.", "",
+                  table(["k"] + [c.short_angle(l) for l in c.labels], rows), ""]
+    lines += [f"{DASH} : the full-order moment is negligible, so the ratio is undefined.", ""]
+    lines += [_mismatch_sentence(c, _mismatches(ratios, c), "single-angle model"), ""]
+    return lines
+
+
+def _section_multi(c):
+    s = c.s
+    multi = s.get("multi_angle")
+    if not multi:
+        return []
+    red = s["reduced"]
+    lines = ["## 9. Multi-angle model beside the single-angle model", ""]
+    single_body = red.get("dofs_per_body") or {}
+    multi_body = multi.get("dofs_per_body") or {}
+    bodies = list(dict.fromkeys(list(single_body) + list(multi_body)))
+    if bodies:
+        rows = [["single-angle (α_G)"] + [str(single_body.get(b, DASH)) for b in bodies],
+                ["multi-angle"] + [str(multi_body.get(b, DASH)) for b in bodies]]
+        lines += [table(["model"] + [f"{b} dofs" for b in bodies], rows), ""]
+    single_sys = red.get("system_dofs") or {}
+    multi_sys = multi.get("system_dofs") or {}
+    multi_err = multi.get("frf_max_rel_error") or {}
+    rows = []
+    for label in c.labels:
+        rows.append([c.short_angle(label), str(single_sys.get(label, DASH)), str(multi_sys.get(label, DASH)),
+                     fmt_percent(s["frf"][label].get("max_rel_error")), fmt_percent(multi_err.get(label))])
+    lines += [table(["configuration", "single: system dofs", "multi: system dofs", "single: max FRF error",
+                     "multi: max FRF error"], rows), ""]
+    if multi.get("moment_ratios"):
+        lines += [_mismatch_sentence(c, _mismatches(multi["moment_ratios"], c), "multi-angle model"), ""]
+    return lines
+
+
+def _section_frf(c, plot_names):
+    s = c.s
+    accuracy = s.get("accuracy")
+    lines = ["## 10. Frequency responses (cf. Fig. 3)", ""]
+    lines += ["Relative FRF error: the pipeline's maximum over the band, and, as a cross-check, the maximum of the "
+              "pointwise error ||H_full − H_red||_F / ||H_full||_F of the plotted responses.", ""]
+    rows, passed, judged = [], 0, 0
+    for label in c.labels:
+        frf = s["frf"][label]
+        err = frf.get("max_rel_error")
+        freq, full, red = plots.frf_arrays(frf)
+        plotted = float(np.max(plots.frf_relative_error(full, red))) if freq.size else None
+        verdict = DASH
+        if err is not None and accuracy is not None:
+            judged += 1
+            ok = err <= accuracy
+            passed += ok
+            verdict = "PASS" if ok else "MISS"
+        rows.append([c.short_angle(label), fmt_percent(err), fmt_percent(plotted),
+                     fmt_percent(accuracy, 3) if accuracy is not None else DASH, verdict])
+    lines += ["Table 7. Maximum relative frequency-response error over the band against the accuracy target.", "",
+              table(["configuration", "max relative error", "max pointwise (plotted)", "target", "result"], rows), ""]
+    if judged:
+        lines += [f"{passed} of {judged} configurations meet the accuracy target.", ""]
+    lines += ["![Bode overview](bode_overview.png)", "", "Bode plots, full vs reduced:", ""]
+    for label in c.labels:
+        links = [f"[{c.entry_name(e)}]({plot_names['bode'][(label, e)]})" for e in c.entries]
+        lines.append(f"- {c.short_angle(label)}: " + ", ".join(links))
+    lines += ["", "![Relative FRF error](frf_error.png)", "", "![Moment ratios](moment_ratios.png)", "",
+              "Importance of the Krylov modes: " + ", ".join(
+                  f"[{c.short_angle(l)}]({plot_names['importance'][l]})" for l in c.labels), "",
+              f"![Importance at α_G]({plot_names['importance'][c.label_g]})", ""]
+    return lines
+
+
+def _section_timings(c):
+    timings = c.s.get("timings_s") or {}
+    if not timings:
+        return []
+    rows = [[stage, f"{seconds:.3g}"] for stage, seconds in timings.items()]
+    rows.append(["**total**", f"{sum(timings.values()):.3g}"])
+    return ["## 11. Timings", "", table(["stage", "seconds"], rows), ""]
+
+
+def _section_notes(c):
+    notes = c.s.get("notes") or []
+    if not notes:
+        return []
+    return ["## 12. Notes", ""] + [f"- {n}" for n in notes] + [""]
+
+
+def render_markdown(summary, plot_names):
+    """report.md text; plot_names as returned by plot_file_names."""
+    c = _Context(summary)
+    lines = []
+    for section in (_section_scene, _section_full_frequencies, _section_krylov, _section_alpha_g, _section_kept,
+                    _section_reduced, _section_moments, _section_ratios, _section_multi):
+        lines += section(c)
+    lines += _section_frf(c, plot_names)
+    lines += _section_timings(c) + _section_notes(c)
+    return "\n".join(lines).rstrip() + "\n"

@@ -200,8 +200,153 @@ PETSC_EXTERN PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody b
 /* The joint rotation R(alpha) = Rot(axis, alpha) R0 (column-major 3x3). */
 PETSC_EXTERN PetscErrorCode KFJointRotation(const PetscReal axis[3], const PetscReal R0[9], PetscReal alpha, PetscReal R[9]);
 
+/* ---------------------------------------------------------------- reduced system at one configuration */
+
+/* A reassembled reduced model at one configuration: small, dense, replicated on every rank (not a PETSc object:
+   plain data with its own Destroy). Arrays are column-major and owned by the system. */
+typedef struct _n_KFReducedSystem *KFReducedSystem;
+/* n: reduced system dofs; a, t: inputs, outputs; M, K: n x n; G: n x a; H: t x n */
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetMatrices(KFReducedSystem, PetscInt *n, PetscInt *a, PetscInt *t, const PetscReal **M, const PetscReal **K, const PetscReal **G, const PetscReal **H);
+/* eigenvalues (ascending, n) and M-orthonormal modes (n x n); nrigid: rigid-body and mechanism modes, which come
+   from the bodies' stored rigid motions (Phir, n x nrigid), never from the lowest eigenvalues; Phir NULL if unknown */
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetModes(KFReducedSystem, const PetscReal **lambda, const PetscReal **Phi, PetscInt *nrigid, const PetscReal **Phir);
+/* interface-constraint rank and sigma_min(kept)/sigma_max of the reassembly's SVD */
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetReassemblyInfo(KFReducedSystem, PetscInt *rank, PetscReal *sratio);
+/* flexible frequencies in Hz (n - nrigid of them, ascending) */
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetFrequencies(KFReducedSystem, PetscInt *nf, const PetscReal **freq_hz);
+/* moments L^k, k = 0..nmom-1, layout as KFFlexSolverMoments (t x a per k), on the flexible subspace */
+PETSC_EXTERN PetscErrorCode KFReducedSystemMoments(KFReducedSystem, PetscInt nmom, PetscReal L[]);
+/* modal frequency response with uniform modal damping zeta at nw frequencies w (rad/s): nw blocks of t x a */
+PETSC_EXTERN PetscErrorCode KFReducedSystemFRF(KFReducedSystem, PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+PETSC_EXTERN PetscErrorCode KFReducedSystemView(KFReducedSystem, PetscViewer);
+PETSC_EXTERN PetscErrorCode KFReducedSystemDestroy(KFReducedSystem *);
+
+/* ---------------------------------------------------------------- reduced model (KFReducedModel) */
+
+/* The reduced bodies, how they are jointed, their inputs and outputs, and the settings that made them: everything
+   reassembly needs and nothing of the full-order model. A PETSc object (reference counted), the same on every rank.
+   Stored as HDF5 (layout in README.md) by one writer, KFReducedModelSave, and read by KFReducedModelLoad. */
+typedef struct _p_KFReducedModel *KFReducedModel;
+PETSC_EXTERN PetscClassId KF_REDUCEDMODEL_CLASSID;
+
+/* From a finished body basis of a scene; angles: the nangles reduction configurations (nangles x nrevolute,
+   radians) the basis was built at. */
+PETSC_EXTERN PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene, KFBodyBasis, PetscInt nangles, const PetscReal angles[], PetscBool keep_maps, KFReducedModel *);
+PETSC_EXTERN PetscErrorCode KFReducedModelDestroy(KFReducedModel *);
+PETSC_EXTERN PetscErrorCode KFReducedModelView(KFReducedModel, PetscViewer);
+PETSC_EXTERN PetscErrorCode KFReducedModelViewFromOptions(KFReducedModel, PetscObject, const char[]);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetInfo(KFReducedModel, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *ninputs, PetscInt *noutputs, PetscInt *nrigid);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetSceneName(KFReducedModel, const char **name, const char **fingerprint);
+/* the reduction configurations the model was built at: nangles x nrevolute, row by row, radians (owned by the model) */
+PETSC_EXTERN PetscErrorCode KFReducedModelGetReductionAngles(KFReducedModel, PetscInt *nangles, const PetscReal **angles);
+/* body b: name, full-order dofs, reduced data (arrays owned by the model), map back to full dofs (n_b x v, the
+   replicated column-major array, NULL when not kept) */
+PETSC_EXTERN PetscErrorCode KFReducedModelGetBody(KFReducedModel, PetscInt b, const char **name, PetscInt *full_dofs, KFReducedBody *body, const PetscReal **map);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetInterfaceName(KFReducedModel, PetscInt b, PetscInt i, const char **name);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetJoint(KFReducedModel, PetscInt j, const char **name, KFJointDef *joint);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetIOName(KFReducedModel, PetscBool input, PetscInt i, const char **name);
+/* settings: string key/value pairs recorded by the reducer (method, angles, damping, band, tolerances ...) */
+PETSC_EXTERN PetscErrorCode KFReducedModelSetSetting(KFReducedModel, const char key[], const char value[]);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetSettings(KFReducedModel, PetscInt *n, const char *const **keys, const char *const **values);
+/* reassembly at one configuration (angles: one per revolute joint, radians), eq. 20-24 */
+PETSC_EXTERN PetscErrorCode KFReducedModelReassemble(KFReducedModel, const PetscReal angles[], KFReducedSystem *);
+/* HDF5, written under a temporary name in the same folder and renamed into place (earlier file left intact on
+   failure); read with checks of format, version and internal consistency (shapes, names, counts). */
+PETSC_EXTERN PetscErrorCode KFReducedModelSave(KFReducedModel, const char path[]);
+PETSC_EXTERN PetscErrorCode KFReducedModelLoad(MPI_Comm, const char path[], KFReducedModel *);
+/* fingerprint of a scene (bodies, dofs, interfaces, joints, inputs, outputs): 16 hex digits + NUL; a model used
+   with a scene must carry the scene's fingerprint */
+PETSC_EXTERN PetscErrorCode KFSceneGetFingerprint(KFScene, char fp[17]);
+/* name of the scene, recorded in models */
+PETSC_EXTERN PetscErrorCode KFSceneSetName(KFScene, const char name[]);
+PETSC_EXTERN PetscErrorCode KFSceneGetName(KFScene, const char **name);
+PETSC_EXTERN PetscErrorCode KFSceneGetJointInfo(KFScene, PetscInt j, const char **name, KFJointDef *joint);
+PETSC_EXTERN PetscErrorCode KFSceneGetInterfaceName(KFScene, PetscInt body, PetscInt i, const char **name);
+PETSC_EXTERN PetscErrorCode KFSceneSetIOName(KFScene, PetscBool input, PetscInt i, const char name[]);
+PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt i, const char **name);
+
+/* ---------------------------------------------------------------- error measures (one definition everywhere) */
+
+/* Relative frequency-response error: max over frequency of ||T_full - T_red||_F / max(||T_full||_F, floor) with
+   floor = 10^(floor_db/20) max_w ||T_full||_F, so that antiresonance notches deeper than floor_db below the band's
+   peak are measured against that floor. T*: nw blocks of t x a, real and imaginary parts. */
+PETSC_EXTERN PetscErrorCode KFFRFError(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *err);
+/* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
+   below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales
+   taken over nconfig configurations (Lall: nconfig blocks of nmom x t x a) so a moment that vanishes at one angle
+   by symmetry is not compared by its rounding. */
+PETSC_EXTERN PetscErrorCode KFMomentErrors(PetscInt nmom, PetscInt t, PetscInt a, PetscInt nconfig, const PetscReal Lall[], PetscInt config, const PetscReal Lred[], PetscReal negligible, PetscReal errors[], PetscReal ratios[]);
+/* A relative tolerance separating the nrigid lowest eigenvalues from the rest (the geometric mean of the last rigid
+   and the first flexible eigenvalue, relative to the largest): lambda sorted ascending, n values. */
+PETSC_EXTERN PetscErrorCode KFRigidTolerance(PetscInt n, const PetscReal lambda[], PetscInt nrigid, PetscReal *rtol);
+/* Log-spaced points over [fmin, fmax] plus 7 points around each resonance in the band (peaks are 1/zeta sharp),
+   sorted, unique; f must hold npoints + 7 nres values. */
+PETSC_EXTERN PetscErrorCode KFFrequencyGrid(PetscReal fmin, PetscReal fmax, PetscInt npoints, PetscInt nres, const PetscReal fres[], PetscReal zeta, PetscInt *nf, PetscReal f[]);
+
+/* ---------------------------------------------------------------- the reducer (KFReducer) */
+
+/* The whole reduction of a scene as one object, in the manner of KSP: create, set the scene and what the
+   reduction must serve, KFReducerSetFromOptions (every option under -kf_, listed by -help), KFReducerSetUp,
+   KFReducerSolve, then take the reduced model and the verification results. Implementations (-kf_reducer_type):
+   krylov (A. Y. Lee's methodology) and eigen (the eigenvector baseline it replaces, EP&A / COMPARE style). */
+typedef struct _p_KFReducer *KFReducer;
+typedef const char          *KFReducerType;
+#define KFREDUCERKRYLOV "krylov"
+#define KFREDUCEREIGEN  "eigen"
+PETSC_EXTERN PetscClassId      KF_REDUCER_CLASSID;
+PETSC_EXTERN PetscFunctionList KFReducerList;
+
+typedef enum {
+  KF_METHOD_SINGLE_ANGLE = 0, /* the paper: one basis at alpha_G, moments exact there */
+  KF_METHOD_MULTI_ANGLE  = 1  /* bases at several angles projected together: moments exact at each */
+} KFReducerMethod;
+PETSC_EXTERN const char *const KFReducerMethods[];
+PETSC_EXTERN const char *const KFImportances[];
+
+PETSC_EXTERN PetscErrorCode KFReducerCreate(MPI_Comm, KFReducer *);
+PETSC_EXTERN PetscErrorCode KFReducerRegister(const char[], PetscErrorCode (*)(KFReducer));
+PETSC_EXTERN PetscErrorCode KFReducerSetType(KFReducer, KFReducerType);
+PETSC_EXTERN PetscErrorCode KFReducerGetType(KFReducer, KFReducerType *);
+PETSC_EXTERN PetscErrorCode KFReducerSetOptionsPrefix(KFReducer, const char[]);
+/* the scene is referenced; it is set up if it is not yet */
+PETSC_EXTERN PetscErrorCode KFReducerSetScene(KFReducer, KFScene);
+PETSC_EXTERN PetscErrorCode KFReducerGetScene(KFReducer, KFScene *);
+/* angles of interest: nconfig configurations of nrevolute angles each (radians), row by row */
+PETSC_EXTERN PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt nconfig, const PetscReal angles[]);
+/* alpha_G: one configuration (single-angle) or several (multi-angle); n = 0 chooses automatically */
+PETSC_EXTERN PetscErrorCode KFReducerSetReductionAngles(KFReducer, PetscInt n, const PetscReal angles[]);
+PETSC_EXTERN PetscErrorCode KFReducerSetMethod(KFReducer, KFReducerMethod);
+PETSC_EXTERN PetscErrorCode KFReducerSetBand(KFReducer, PetscReal fmin_hz, PetscReal fmax_hz);
+PETSC_EXTERN PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal zeta);
+PETSC_EXTERN PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal target);
+/* moments matched (c in the paper), of which nout are blocks started from K+ H^T */
+PETSC_EXTERN PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt moments, PetscInt output_blocks);
+PETSC_EXTERN PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal keep_threshold);
+PETSC_EXTERN PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool);
+PETSC_EXTERN PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal deflation_tol, PetscReal body_tol, PetscReal reassembly_rtol);
+PETSC_EXTERN PetscErrorCode KFReducerSetShift(KFReducer, PetscReal shift);
+/* full-order verification: on/off, modes (PETSC_DECIDE: cover 3 x the band's top), frequency points, FRF floor (dB) */
+PETSC_EXTERN PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool full_order, PetscInt modes, PetscInt frequency_points, PetscReal frf_floor_db);
+PETSC_EXTERN PetscErrorCode KFReducerSetFromOptions(KFReducer);
+PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
+PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);
+PETSC_EXTERN PetscErrorCode KFReducerView(KFReducer, PetscViewer);
+PETSC_EXTERN PetscErrorCode KFReducerViewFromOptions(KFReducer, PetscObject, const char[]);
+PETSC_EXTERN PetscErrorCode KFReducerDestroy(KFReducer *);
+/* after Solve: the model of the chosen method (borrowed); both models (multi NULL when not built) */
+PETSC_EXTERN PetscErrorCode KFReducerGetReducedModel(KFReducer, KFReducedModel *);
+PETSC_EXTERN PetscErrorCode KFReducerGetReducedModels(KFReducer, KFReducedModel *single_angle, KFReducedModel *multi_angle);
+/* Results of the solve as named arrays, replicated, column-major over shape (ndim <= 3). config: index into the
+   angles of interest, or -1 for the results of the whole solve. Names and meanings are listed in README.md
+   ("Results of a reduction"); KFReducerGetResultNames enumerates what a solve recorded. */
+PETSC_EXTERN PetscErrorCode KFReducerGetResultNames(KFReducer, PetscInt config, PetscInt *n, const char *const **names);
+PETSC_EXTERN PetscErrorCode KFReducerGetResult(KFReducer, PetscInt config, const char name[], PetscInt *ndim, const PetscInt **shape, const PetscReal **data);
+/* notes a user should read (moments not matched, rigid-mode counts ...) and the rule that chose alpha_G */
+PETSC_EXTERN PetscErrorCode KFReducerGetNotes(KFReducer, PetscInt *n, const char *const **notes);
+PETSC_EXTERN PetscErrorCode KFReducerGetReductionRule(KFReducer, const char **rule);
+
 /* ---------------------------------------------------------------- progress */
-/* Progress lines with elapsed time on rank 0, unless -kryflex_quiet. */
+/* Progress lines with elapsed time on rank 0, unless -kf_quiet. */
 PETSC_EXTERN PetscErrorCode KFProgress(MPI_Comm, const char fmt[], ...);
 
 /* Error messages for bindings: after KFPushErrorRecorder(), KFLastError() holds the first message of a failed call. */

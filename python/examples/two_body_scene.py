@@ -18,8 +18,8 @@ Run (the output folder is created; default ./two_body_out):
     PYTHONPATH=python /usr/bin/python3 python/examples/two_body_scene.py [OUTDIR] [-quiet] [PETSc options]
     mpiexec -n 2 /usr/bin/python3 python/examples/two_body_scene.py OUTDIR
 
-It writes OUTDIR/two_body.h5 and OUTDIR/two_body.npz (the reduced model; reload with
-kryflex.ReducedModel.load) and OUTDIR/bode.png, and prints a summary.
+It writes OUTDIR/two_body.h5 (the reduced model; reload with kryflex.ReducedModel.load), OUTDIR/two_body.npz
+(its arrays exported for NumPy) and OUTDIR/bode.png, and prints a summary.
 """
 import os
 import sys
@@ -211,7 +211,7 @@ def bode_plot(model, angles, path):
     nout = len(model.output_names)
     fig, axes = plt.subplots(2, nout, figsize=(6 * nout, 7), sharex=True, squeeze=False)
     for a in angles:
-        T = model.frf([a], freqs, DAMPING)[:, :, 0]          # (frequencies, outputs) for the one input
+        T = model.at([a]).frf(freqs, DAMPING)[:, :, 0]          # (frequencies, outputs) for the one input
         for o in range(nout):
             axes[0, o].loglog(freqs, np.abs(T[:, o]), label="%g deg" % a)
             axes[1, o].semilogx(freqs, np.degrees(np.unwrap(np.angle(T[:, o]))))
@@ -246,7 +246,7 @@ def main(argv):
     say("reduced bodies: %s dofs (%s model, Krylov vectors of %s deg)"
         % (" + ".join(map(str, model.sizes)), model.settings["method"],
            ", ".join(kryflex.Scene.label(c) for c in model.settings["reduction_angles_deg"])))
-    other = result.multi_model          # the model of the other method (here the paper's single-angle one)
+    other = result.multi_angle_model          # the model of the other method (here the paper's single-angle one)
     say("  (the paper's single-angle model, at alpha_G = %s deg with Krylov modes %s kept: %s dofs)"
         % (summary["reduction_label"], summary["kept_modes"], " + ".join(map(str, other.sizes))))
 
@@ -259,7 +259,7 @@ def main(argv):
     # 4. reassembly at any angle needs only the reduced bodies
     for a in ANGLES_OF_INTEREST + OTHER_ANGLES:
         Mh, Kh, Gh, Hh, rank, sigma_ratio, Phir = model.reassemble([a])
-        freqs = model.frequencies_hz([a])
+        freqs = model.at([a]).frequencies_hz
         say("reduced frequencies at %g deg (Hz): %s" % (a, fmt(freqs[:6])))
     say("  (reassembled system: %d dofs, %d rigid-body + mechanism modes)" % (Kh.shape[0], Phir.shape[1]))
 
@@ -267,27 +267,29 @@ def main(argv):
     #    verification (summary) holds the full-order frequencies, dominant modes and moments at each of them
     for label, config in zip(summary["angle_labels"], summary["angles_deg"]):
         full = np.array(summary["full"]["frequencies_hz"][label])
-        reduced = model.frequencies_hz(config)
+        reduced = model.at(config).frequencies_hz
         freq_errors = [np.min(np.abs(reduced - full[i])) / full[i] for i in summary["dominant_modes"][label]]
         L_full = np.array(summary["full"]["moments"][label])          # (moments, outputs, inputs)
-        L_red = model.moments(config, L_full.shape[0])
+        L_red = model.at(config).moments(L_full.shape[0])
         moment_error = max(np.linalg.norm(L_full[k] - L_red[k]) / np.linalg.norm(L_full[k]) for k in range(len(L_full)))
         say("at %s deg: dominant modes %s Hz reproduced to %s; %d moments to %.1e"
             % (label, fmt(full[summary["dominant_modes"][label]]), " ".join("%.1e" % e for e in freq_errors),
                len(L_full), moment_error))
 
     # 6. low-frequency moments L^k = H (K+ M)^k K+ G of the reduced model, e.g. at an angle it was not built at
-    L = model.moments([45.0], 4)
+    L = model.at([45.0]).moments(4)
     pairs = ", ".join("%s/%s" % (o, model.input_names[0]) for o in model.output_names)
     say("moments at 45 deg (k = 0..3, %s):" % pairs)
     for k in range(L.shape[0]):
         say("  L^%d = %s" % (k, fmt(L[k, :, 0])))
 
-    # 7. files: the reduced model (HDF5 and NumPy) and a Bode plot; written once, by rank 0
+    # 7. files: the reduced model (HDF5, written by every rank together; a NumPy export) and a Bode plot
     if COMM.getRank() == 0:
         os.makedirs(outdir, exist_ok=True)
-        model.save(os.path.join(outdir, "two_body.h5"))
-        model.save(os.path.join(outdir, "two_body.npz"))
+    COMM.barrier()
+    model.save(os.path.join(outdir, "two_body.h5"))
+    if COMM.getRank() == 0:
+        model.export_npz(os.path.join(outdir, "two_body.npz"))
         bode_plot(model, sorted(ANGLES_OF_INTEREST + OTHER_ANGLES), os.path.join(outdir, "bode.png"))
     COMM.barrier()
     say("wrote %s (two_body.h5, two_body.npz, bode.png)" % outdir)

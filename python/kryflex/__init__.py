@@ -24,8 +24,9 @@ __version__ = "0.1.0"
 # public name -> the module that defines it; imported on first access
 _PUBLIC = {
     "Error": "._core",
-    "ModelFileError": ".model",
-    "ReducedModel": ".model",
+    "ModelFileError": ".api",
+    "ReducedModel": ".api",
+    "ReducedSystem": ".api",
     "reduce": ".pipeline",
     "Scene": ".io.scene",
     "SceneError": ".io.scene",

@@ -152,3 +152,5 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSceneGetName(KFScene, const char**)
     PetscErrorCode KFSceneSetIOName(KFScene, PetscBool, PetscInt, const char*)
     PetscErrorCode KFSceneGetIOName(KFScene, PetscBool, PetscInt, const char**)
+    PetscErrorCode KFReducedModelSave(KFReducedModel, const char*)
+    PetscErrorCode KFReducedModelLoad(MPI_Comm, const char*, KFReducedModel*)

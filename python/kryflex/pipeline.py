@@ -6,13 +6,14 @@ Then choose the reduction angle alpha_G, project rigid + kept + static-correctio
 the reassembled model against the full order at every configuration. With method multi-angle (or for comparison),
 the Krylov bases of several configurations are projected together so that every moment matches at each of them.
 """
+import json
 import time
 
 import numpy as np
 from petsc4py import PETSc
 
 from . import _core
-from .model import BODY_ARRAYS, ReducedModel, reduced_moments, rigid_tolerance, scene_fingerprint
+from .api import ReducedModel
 
 NEGLIGIBLE = 1e-8   # a moment entry below this fraction of its largest value over the angles counts as zero
 
@@ -42,7 +43,6 @@ class Result:
         self.summary = summary
         self.single_angle_model = single_angle_model
         self.multi_angle_model = multi_angle_model
-        self.multi_model = multi_angle_model   # shorter name for the same
 
 
 def frequency_grid(band, full_freqs, zeta, npoints):
@@ -328,24 +328,15 @@ def _verify_full(system, scene, nflex):
 
 
 def _make_model(scene, bb, red, configs, method):
-    info = scene.info
-    bodies = [bb.reduced(b) for b in range(info["bodies"])]
+    """The C reduced model of a finished body basis, with the settings that made it (JSON values)."""
     save_maps = red["save_maps"]
-    maps = None
-    if save_maps is True or (save_maps == "auto" and max(scene.body_dofs) <= 200000):
-        maps = [_gather_dense(bb.map(b)) for b in range(info["bodies"])]
+    keep_maps = save_maps is True or (save_maps == "auto" and max(scene.body_dofs) <= 200000)
+    model = ReducedModel.from_body_basis(scene.cscene, bb, [scene.angles_rad(c) for c in configs], keep_maps)
     settings = {k: (v if not isinstance(v, np.ndarray) else v.tolist()) for k, v in red.items()}
     settings.update(method=method, reduction_angles_deg=configs, damping=scene.damping, band_hz=scene.band)
-    return ReducedModel(scene.name, scene_fingerprint(scene), scene.body_names, scene.body_dofs, scene.interfaces,
-                        [{k: b[k] for k in BODY_ARRAYS} for b in bodies], scene.joints,
-                        scene.revolute, scene.input_names, scene.output_names, settings, maps)
-
-
-def _gather_dense(A):
-    """A distributed dense Mat as one NumPy array on every rank."""
-    local = A.getDenseArray().copy()
-    comm = A.getComm().tompi4py()
-    return np.vstack(comm.allgather(local))
+    for key, value in settings.items():
+        model.set_setting(key, json.dumps(value))
+    return model
 
 
 def _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, timer, progress):
@@ -360,16 +351,14 @@ def _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, time
     for lab, cfg in zip(labels, scene.configurations):
         e = per[lab]
         t0 = time.perf_counter()
-        reassembled = model.reassemble(cfg)
+        system = model.at(cfg)
         t_reasm.append(time.perf_counter() - t0)
-        Mh, Kh, Gh, Hh, rk, sr, Phir = reassembled
+        Kh, rk, sr, Phir = system.K, system.constraint_rank, system.sigma_ratio, system.rigid_modes
         if Phir is None or Phir.shape[1] != nrigid:
             notes.append("reassembled model at %s deg: %s rigid-body and mechanism modes from the bodies' rigid motions, "
                          "expected %d" % (lab, "no" if Phir is None else Phir.shape[1], nrigid))
-        lam, Phi = _core.dense_eig(Kh, Mh)
-        rt = rigid_tolerance(lam, nrigid)
-        fr = np.sqrt(np.maximum(lam[nrigid:], 0)) / (2 * np.pi)
-        Lr = reduced_moments(reassembled, Lfull[lab].shape[0], nrigid)
+        fr = system.frequencies_hz
+        Lr = system.moments(Lfull[lab].shape[0])
         red_freqs[lab] = _jsonable(fr)
         red_mom[lab] = _jsonable(Lr)
         ratios[lab] = _ratios(Lfull, Lr, lab)
@@ -386,7 +375,7 @@ def _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, time
             full_freqs[lab] = _jsonable(ff)
             freqs = frequency_grid(scene.band, ff, zeta, int(scene.verify["frequency_points"]))
             Tf = _full_frf(e, freqs, zeta)
-            Tr = _core.modal_frf(lam, Hh @ Phi, Phi.T @ Gh, zeta, 2 * np.pi * freqs, rt)
+            Tr = system.frf(freqs, zeta)
             err = frf_error(Tf, Tr, float(scene.verify["frf_floor_db"]))
             frf[lab] = dict(freq_hz=_jsonable(freqs), full_re=_jsonable(Tf.real), full_im=_jsonable(Tf.imag),
                             reduced_re=_jsonable(Tr.real), reduced_im=_jsonable(Tr.imag), max_rel_error=err)
@@ -428,18 +417,15 @@ def _summary(scene, per, labels, label_g, rule, model, multi_model, chosen, time
     if multi_model is not None:
         m_ratios, m_err, m_size, m_merr = {}, {}, {}, {}
         for lab, cfg in zip(labels, scene.configurations):
-            reassembled = multi_model.reassemble(cfg)
-            Mh, Kh, Gh, Hh = reassembled[:4]
-            lam, Phi = _core.dense_eig(Kh, Mh)
-            rt = rigid_tolerance(lam, nrigid)
-            Lr = reduced_moments(reassembled, Lfull[lab].shape[0], nrigid)
+            system = multi_model.at(cfg)
+            Lr = system.moments(Lfull[lab].shape[0])
             m_ratios[lab] = _ratios(Lfull, Lr, lab)
             m_merr[lab] = moment_errors(Lfull, Lr, lab)
-            m_size[lab] = int(Kh.shape[0])
+            m_size[lab] = int(system.dofs)
             if lab in frf:
                 freqs = np.asarray(frf[lab]["freq_hz"])
                 Tf = np.asarray(frf[lab]["full_re"]) + 1j * np.asarray(frf[lab]["full_im"])
-                Tr = _core.modal_frf(lam, Hh @ Phi, Phi.T @ Gh, zeta, 2 * np.pi * freqs, rt)
+                Tr = system.frf(freqs, zeta)
                 m_err[lab] = frf_error(Tf, Tr, float(scene.verify["frf_floor_db"]))
         summary["multi_angle"] = {"system_dofs": m_size, "dofs_per_body": dict(zip(scene.body_names, multi_model.sizes)),
                                   "moment_ratios": m_ratios, "frf_max_rel_error": m_err,

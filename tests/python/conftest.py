@@ -12,3 +12,9 @@ def quiet_library():
     yield
     if not was:
         opts.delValue("kryflex_quiet")
+
+
+def reassembled(model, angles_deg):
+    """model.at(angles_deg) as the tuple the tests compare: (M, K, B, C, constraint rank, sigma ratio, rigid modes)."""
+    s = model.at(angles_deg)
+    return s.M, s.K, s.B, s.C, s.constraint_rank, s.sigma_ratio, s.rigid_modes

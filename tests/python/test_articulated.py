@@ -35,6 +35,7 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 import reference as ref  # noqa: E402
+from conftest import reassembled  # noqa: E402
 
 STATIC_GAIN_RTOL = 1e-10     # the static gain at alpha_G is exact (static correction, eq. 15-17)
 # The Galileo-like model's eigenvalues span 1e8 (0.12 Hz to 2.4 kHz): its static gain is defined only to about 1e-10 in
@@ -205,7 +206,7 @@ def test_static_gain_exact_at_alpha_g(case):
     rtol = STATIC_GAIN_RTOL_GALILEO if case.name == "galileo" else STATIC_GAIN_RTOL
     assert s["reduced"]["static_gain_error"][label_g] <= rtol
     L0_full = case.full_moments(cfg_g)[0]
-    L0_red = case.model.moments(cfg_g, 1)[0]
+    L0_red = case.model.at(cfg_g).moments(1)[0]
     err = np.linalg.norm(L0_full - L0_red) / np.linalg.norm(L0_full)
     print("%s: static gain at alpha_G = %s deg: relative error %.2e (summary %.2e)"
           % (case.name, label_g, err, s["reduced"]["static_gain_error"][label_g]))
@@ -230,7 +231,7 @@ def test_dominant_modes_captured_at_every_angle(case):
         assert len(f_dom) == len(reported), (label, f_dom, reported)
         np.testing.assert_allclose(np.sort(reported), np.sort(f_dom), rtol=1e-6)
         # ... and the reassembled reduced model's frequencies, nearest to each
-        f_red = case.model.frequencies_hz(cfg)
+        f_red = case.model.at(cfg).frequencies_hz
         for f in f_dom:
             e = np.min(np.abs(f_red - f)) / f
             worst = max(worst, e)
@@ -243,18 +244,18 @@ def test_dominant_modes_captured_at_every_angle(case):
 def assert_moments_match(case, model, configs, what):
     for cfg in configs:
         Lf = case.full_moments(cfg)
-        Lr = model.moments(cfg, Lf.shape[0])
+        Lr = model.at(cfg).moments(Lf.shape[0])
         normwise, entrywise = moment_errors(Lf, Lr)
         print("%s %s at %s deg: moments normwise %.2e, entrywise %.2e" % (case.name, what, cfg, normwise, entrywise))
         assert normwise <= MOMENT_RTOL and entrywise <= MOMENT_RTOL, (what, cfg, normwise, entrywise)
 
 
 def test_multi_model_matches_moments_at_its_angles(case):
-    multi = case.result.multi_model
+    multi = case.result.multi_angle_model
     assert multi is not None and multi.settings["method"] == "multi-angle"
     configs = multi.settings["reduction_angles_deg"]
     assert [list(c) for c in configs] == case.scene.configurations
-    assert_moments_match(case, multi, configs, "result.multi_model")
+    assert_moments_match(case, multi, configs, "result.multi_angle_model")
 
 
 def multi_angle_reduction(case):
@@ -366,7 +367,7 @@ def test_static_correction_keeps_the_static_gain(static_correction):
     solver = _core.FlexSolver(system)
     solver.setup()
     L0_full = solver.moments(1)[0]
-    L0_red = result.model.moments([60.0], 1)[0]
+    L0_red = result.model.at([60.0]).moments(1)[0]
     err = np.linalg.norm(L0_full - L0_red) / np.linalg.norm(L0_full)
     print("static correction %s: static gain error at alpha_G %.2e (summary %.2e)"
           % (static_correction, err, s["reduced"]["static_gain_error"]["60"]))
@@ -437,7 +438,7 @@ def test_report_names_kept_modes_alpha_g_and_sizes(galileo, galileo_report):
         assert body.name == name
         assert "%s: %d (full %d)" % (name, v, body.n) in report, name
     # the reduced system size at alpha_G, from reassembling the written model; full size from the reference
-    h = model.reassemble([float(label_g)])[0].shape[0]
+    h = reassembled(model, [float(label_g)])[0].shape[0]
     full = ref.assemble(galileo.ref, [float(label_g)])[0].shape[0]
     assert "Reduced system at α_G: %d dofs (full %d)" % (h, full) in report
     assert summary["reduced"]["system_dofs"][label_g] == h
@@ -456,7 +457,7 @@ def test_report_flags_inexact_moments_with_the_ratio(galileo, galileo_report):
     flagged = 0
     for col, (cfg, label) in enumerate(zip(galileo.scene.configurations, summary["angle_labels"])):
         Lf = galileo.full_moments(cfg)
-        Lr = model.moments(cfg, Lf.shape[0])
+        Lr = model.at(cfg).moments(Lf.shape[0])
         dev = float(np.abs(Lf / Lr - 1).max())      # one input, one output: every entry is its moment's largest
         mine = [n for n in notes if n.startswith("single-angle model at %s deg:" % label)]
         # the printed ratios are these

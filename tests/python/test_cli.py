@@ -28,6 +28,7 @@ GALILEO_DIR = os.path.dirname(GALILEO)
 sys.path.insert(0, HERE)
 import reference as ref  # noqa: E402
 from test_example import rigid_mode_moments, normwise_errors  # noqa: E402  (the exact-rigid-mode reference)
+from conftest import reassembled  # noqa: E402
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL = 0, 2, 3, 4, 5
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
@@ -61,7 +62,7 @@ def moment_errors(summary, label):
 
 def spread(model, angles):
     """lambda_max / lambda_1 (lowest flexible) of the reassembled model: the factor rounding is amplified by."""
-    Mh, Kh = model.reassemble(angles)[:2]
+    Mh, Kh = reassembled(model, angles)[:2]
     lam = sl.eigh(Kh, Mh, eigvals_only=True)
     return lam[-1] / lam[model.nrigid]
 
@@ -147,7 +148,7 @@ def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
         assert nrigid == 7
         assert normwise_errors(L_ref, np.array(s["full"]["moments"][label])).max() < 1e-8, label
         if label == g:
-            assert normwise_errors(L_ref, model.moments(config, nmom)).max() < 1e-8
+            assert normwise_errors(L_ref, model.at(config).moments(nmom)).max() < 1e-8
 
 
 def test_reduced_frequencies_are_close_to_full_order(serial, galileo_ref):
@@ -179,7 +180,7 @@ def test_two_ranks_give_the_serial_reduction(serial, two_ranks):
         assert normwise_errors(L1, L2).max() < 1e-8, label
     m1 = kryflex.ReducedModel.load(os.path.join(serial.out, "reduced.h5"))
     m2 = kryflex.ReducedModel.load(os.path.join(two_ranks.out, "reduced.h5"))
-    np.testing.assert_allclose(m2.frequencies_hz([37.5]), m1.frequencies_hz([37.5]), rtol=1e-8)
+    np.testing.assert_allclose(m2.at([37.5]).frequencies_hz, m1.at([37.5]).frequencies_hz, rtol=1e-8)
 
 
 def test_progress_lines_once_per_run(serial, two_ranks):
@@ -221,9 +222,9 @@ def test_reassemble_json_equals_the_api(serial):
     assert [r["angles_deg"] for r in res] == [[30.0], [45.0]]
     for r in res:
         a = r["angles_deg"]
-        Kh = model.reassemble(a)[1]
+        Kh = reassembled(model, a)[1]
         assert r["dofs"] == Kh.shape[0] and r["rigid_modes"] == 7
-        f = model.frequencies_hz(a)[:len(r["frequencies_hz"])]
+        f = model.at(a).frequencies_hz[:len(r["frequencies_hz"])]
         # another process: the same computation, up to the rounding a dense eigensolve amplifies (eps kappa)
         np.testing.assert_allclose(r["frequencies_hz"], f, rtol=10 * EPS * spread(model, a))
     # and the reduce run's own verification at 30 deg
@@ -253,7 +254,7 @@ def test_reassemble_writes_matrices(serial, tmp_path):
     with np.load(target) as z:
         assert set(z.files) == {"%s_%s" % (m, a) for m in "MKGH" for a in ("30", "45")}
         for a in (30.0, 45.0):
-            Mh, Kh, Gh, Hh = model.reassemble([a])[:4]
+            Mh, Kh, Gh, Hh = reassembled(model, [a])[:4]
             for name, A in zip("MKGH", (Mh, Kh, Gh, Hh)):
                 np.testing.assert_allclose(z["%s_%g" % (name, a)], A, rtol=0, atol=1e-12 * np.abs(A).max())
             np.testing.assert_allclose(z["K_%g" % a], z["K_%g" % a].T, atol=1e-12 * np.abs(Kh).max())

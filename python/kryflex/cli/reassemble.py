@@ -10,7 +10,7 @@ from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_OK, EXIT_OUTPUT, Parser, error
 def run(argv):
     p = Parser(prog="kryflex reassemble",
                 description="The reduced system at any angles from a reduced-model file alone (paper eq. 20-24).")
-    p.add_argument("reduced", help="reduced-model file (.h5 or .npz) written by 'kryflex reduce'")
+    p.add_argument("reduced", help="reduced-model file (.h5) written by 'kryflex reduce'")
     p.add_argument("--angle", action="append", required=True,
                    help="angle(s) in degrees, comma-separated for several revolute joints; repeat for more configurations")
     p.add_argument("--scene", help="check that the reduced model comes from this scene")
@@ -24,7 +24,7 @@ def run(argv):
     args = p.parse_args(kept)
     import time
 
-    from ..model import ModelFileError, ReducedModel
+    from ..api import ModelFileError, ReducedModel
     from ..io.scene import SceneError, load_scene
     try:
         model = ReducedModel.load(args.reduced)
@@ -41,17 +41,17 @@ def run(argv):
         try:
             angles = [float(x) for x in text.split(",")]
             t0 = time.perf_counter()
-            Mh, Kh, Gh, Hh, constraint_rank, ratio, Phir = model.reassemble(angles)
+            system = model.at(angles)
             dt = time.perf_counter() - t0
         except ValueError as e:
             error("--angle %s: %s" % (text, e))
             return EXIT_INPUT
-        f = model.frequencies_hz(angles)
-        results.append(dict(angles_deg=angles, dofs=int(Kh.shape[0]), constraint_rank=int(constraint_rank), sigma_ratio=float(ratio),
-                            rigid_modes=None if Phir is None else int(Phir.shape[1]), seconds=dt,
-                            frequencies_hz=[float(x) for x in f[:args.modes]]))
+        results.append(dict(angles_deg=angles, dofs=system.dofs, constraint_rank=system.constraint_rank,
+                            sigma_ratio=system.sigma_ratio, seconds=dt,
+                            rigid_modes=None if system.rigid_modes is None else int(system.rigid_modes.shape[1]),
+                            frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]]))
         key = "_".join("%g" % a for a in angles)
-        arrays.update({"M_" + key: Mh, "K_" + key: Kh, "G_" + key: Gh, "H_" + key: Hh})
+        arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
     if args.output:
         problem = _write_npz(args.output, arrays) if rank() == 0 else None
         problem = from_rank0(problem)

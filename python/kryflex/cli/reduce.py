@@ -10,7 +10,7 @@ def run(argv):
     p = Parser(prog="kryflex reduce", description="Reduce a scene and verify the reduced model against the full order.")
     p.add_argument("scene", help="scene file (YAML)")
     p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
-    p.add_argument("--npz", action="store_true", help="also write the reduced bodies as NumPy .npz")
+    p.add_argument("--npz", action="store_true", help="also export the reduced bodies' arrays as NumPy .npz (kryflex reads only reduced.h5)")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
     args = p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet", "-h", "--help"}))
     from .. import _core
@@ -31,22 +31,29 @@ def run(argv):
         _cleanup(out, created)
         error("the model cannot be reduced: %s" % e)
         return EXIT_NUMERIC
+    # the report first, on rank 0 (it leaves nothing behind if it fails); then the model file, written by every rank
+    # together (the C writer is collective and fails on every rank alike); a failure removes all
     written, problem = [], None
     try:
         if rank() == 0:
-            # the report first (it leaves nothing behind if it fails), then the model files; a failure removes all
             report = write_report if result.summary["frf"] else write_unverified
             written.extend(report(result.summary, out))
-            written.append(result.model.save(os.path.join(out, "reduced.h5")))
-            if args.npz:
-                written.append(result.model.save(os.path.join(out, "reduced.npz")))
     except OSError as e:
         problem = "cannot write the results to %s: %s" % (out, e)
-        for path in written:
-            if os.path.exists(path):
-                os.unlink(path)
     problem = from_rank0(problem)   # every rank exits with the same code
+    if problem is None:
+        try:
+            written.append(result.model.save(os.path.join(out, "reduced.h5")))
+            if args.npz and rank() == 0:
+                written.append(result.model.export_npz(os.path.join(out, "reduced.npz")))
+        except (OSError, _core.Error) as e:
+            problem = "cannot write the results to %s: %s" % (out, e)
+        problem = from_rank0(problem)
     if problem is not None:
+        if rank() == 0:
+            for path in written:
+                if os.path.exists(path):
+                    os.unlink(path)
         _cleanup(out, created)
         error(problem)
         return EXIT_OUTPUT

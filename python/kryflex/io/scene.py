@@ -213,6 +213,7 @@ class Scene:
         self.spec = spec
         self.name = str(spec.get("name", os.path.splitext(os.path.basename(path))[0] if path else "scene"))
         self.cscene = _core.CScene(self.comm)
+        self.cscene.set_name(self.name)   # recorded in reduced models, with the input and output names
 
         # bodies
         bodies = spec["bodies"]
@@ -314,6 +315,12 @@ class Scene:
         self.cscene.set_num_io(len(spec["inputs"]), len(spec["outputs"]))
         self.input_names = self._io(where, "inputs", spec["inputs"], base, True)
         self.output_names = self._io(where, "outputs", spec["outputs"], base, False)
+        for is_input, names in ((True, self.input_names), (False, self.output_names)):
+            for i, name in enumerate(names):
+                try:
+                    self.cscene.set_io_name(is_input, i, name)
+                except _core.Error as e:
+                    _fail(where + (": inputs." if is_input else ": outputs.") + name, str(e))
 
         # what the reduction must serve
         self.configurations = _angles(where + ": angles", spec.get("angles"), self.revolute)

@@ -1,0 +1,211 @@
+# CReducedModel (the C KFReducedModel, a reference-counted PETSc object) and CReducedSystem (a KFReducedSystem: the
+# model reassembled at one configuration, plain data with its modes). NumPy arrays returned here are copies.
+
+cdef class CReducedSystem:
+    """The reduced system at one configuration: matrices, modes, frequencies, moments and frequency responses."""
+    cdef KFReducedSystem y
+
+    def __dealloc__(self):
+        if self.y != NULL:
+            KFReducedSystemDestroy(&self.y)
+
+    cdef KFReducedSystem handle(self) except NULL:
+        if self.y == NULL:
+            raise ValueError("an empty CReducedSystem: get one from CReducedModel.reassemble")
+        return self.y
+
+    def matrices(self):
+        """(M, K, G, H): n x n, n x n, n x a, t x n."""
+        cdef PetscInt n, a, t
+        cdef const PetscReal *M
+        cdef const PetscReal *K
+        cdef const PetscReal *G
+        cdef const PetscReal *H
+        check(KFReducedSystemGetMatrices(self.handle(), &n, &a, &t, &M, &K, &G, &H))
+        return carray(M, n, n), carray(K, n, n), carray(G, n, a), carray(H, t, n)
+
+    def modes(self):
+        """(eigenvalues ascending, M-orthonormal modes n x n, rigid count, rigid modes n x r from the bodies' rigid
+        motions or None)."""
+        cdef PetscInt n, r
+        cdef const PetscReal *lam
+        cdef const PetscReal *Phi
+        cdef const PetscReal *Phir
+        check(KFReducedSystemGetMatrices(self.handle(), &n, NULL, NULL, NULL, NULL, NULL, NULL))
+        check(KFReducedSystemGetModes(self.y, &lam, &Phi, &r, &Phir))
+        return carray(lam, n, 1)[:, 0].copy(), carray(Phi, n, n), r, carray(Phir, n, r)
+
+    def reassembly_info(self):
+        """(rank of the interface constraints, sigma_min(kept) / sigma_max of their SVD)."""
+        cdef PetscInt rank
+        cdef PetscReal ratio
+        check(KFReducedSystemGetReassemblyInfo(self.handle(), &rank, &ratio))
+        return rank, ratio
+
+    def frequencies_hz(self):
+        cdef PetscInt nf
+        cdef const PetscReal *f
+        check(KFReducedSystemGetFrequencies(self.handle(), &nf, &f))
+        return carray(f, nf, 1)[:, 0].copy()
+
+    def moments(self, PetscInt nmom):
+        """L^k, k < nmom, on the flexible subspace: (nmom, t, a)."""
+        cdef PetscInt a, t
+        if nmom < 1:
+            raise ValueError("the number of moments must be >= 1, got %d" % nmom)
+        check(KFReducedSystemGetMatrices(self.handle(), NULL, &a, &t, NULL, NULL, NULL, NULL))
+        cdef cnp.ndarray L = np.zeros(nmom * t * a)
+        check(KFReducedSystemMoments(self.y, nmom, real_ptr(L)))
+        return L.reshape(nmom, a, t).transpose(0, 2, 1).copy()
+
+    def frf(self, PetscReal zeta, omegas):
+        """Frequency response with uniform modal damping zeta at omegas (rad/s): complex (nw, t, a)."""
+        cdef PetscInt a, t
+        cdef cnp.ndarray w = fortran(omegas, 1, "frequencies")
+        if not 0 <= zeta < 1:
+            raise ValueError("the modal damping ratio must lie in [0, 1), got %g" % zeta)
+        check(KFReducedSystemGetMatrices(self.handle(), NULL, &a, &t, NULL, NULL, NULL, NULL))
+        nw = w.shape[0]
+        cdef cnp.ndarray re = np.zeros(nw * t * a)
+        cdef cnp.ndarray im = np.zeros(nw * t * a)
+        check(KFReducedSystemFRF(self.y, zeta, nw, real_ptr(w), real_ptr(re), real_ptr(im)))
+        return (re + 1j * im).reshape(nw, a, t).transpose(0, 2, 1).copy()
+
+    def view(self, Viewer viewer=None):
+        check(KFReducedSystemView(self.handle(), NULL if viewer is None else viewer.vwr))
+
+
+cdef class CReducedModel:
+    """Reduced bodies, joints, input and output names and settings (the C KFReducedModel)."""
+    cdef KFReducedModel m
+
+    def __dealloc__(self):
+        if self.m != NULL:
+            KFReducedModelDestroy(&self.m)
+
+    cdef int adopt(self, KFReducedModel m, bint borrowed) except -1:
+        """Holds m; a borrowed model gets its own reference."""
+        if borrowed:
+            check(PetscObjectReference(<PetscObject>m))
+        self.m = m
+        return 0
+
+    @classmethod
+    def from_body_basis(cls, CScene scene not None, BodyBasis basis not None, angles_rad, bint keep_maps):
+        """From a finished body basis; angles_rad: the reduction configurations (one row of revolute angles each)."""
+        nr = scene.info()["revolute"]
+        cdef cnp.ndarray ang = np.ascontiguousarray(np.asarray(angles_rad, dtype=np.float64))
+        cdef CReducedModel out = cls.__new__(cls)
+        cdef KFReducedModel m = NULL
+        if ang.size != len(angles_rad) * nr or not np.all(np.isfinite(ang)):
+            raise ValueError("give one row of %d finite angles per reduction configuration" % nr)
+        check(KFReducedModelCreateFromBodyBasis(scene.s, basis.bb, <PetscInt>ang.shape[0],
+                                                real_ptr(ang) if ang.size else NULL,
+                                                PETSC_TRUE if keep_maps else PETSC_FALSE, &m))
+        out.adopt(m, False)
+        return out
+
+    def info(self):
+        cdef PetscInt nb, nj, nr, a, t, r
+        check(KFReducedModelGetInfo(self.m, &nb, &nj, &nr, &a, &t, &r))
+        return dict(bodies=nb, joints=nj, revolute=nr, inputs=a, outputs=t, rigid=r)
+
+    @property
+    def scene_name(self):
+        cdef const char *name
+        cdef const char *fp
+        check(KFReducedModelGetSceneName(self.m, &name, &fp))
+        return name.decode()
+
+    @property
+    def fingerprint(self):
+        cdef const char *name
+        cdef const char *fp
+        check(KFReducedModelGetSceneName(self.m, &name, &fp))
+        return fp.decode()
+
+    def body(self, PetscInt b):
+        """Reduced body b: dict with name, full_dofs, interfaces (names), M, K, G, H, iface, rigid, map (or None)."""
+        cdef const char *name
+        cdef const char *iname
+        cdef PetscInt n
+        cdef KFReducedBody B
+        cdef const PetscReal *Psi
+        info = self.info()
+        a, t = info["inputs"], info["outputs"]
+        check(KFReducedModelGetBody(self.m, b, &name, &n, &B, &Psi))
+        interfaces = []
+        for i in range(B.ninterfaces):
+            check(KFReducedModelGetInterfaceName(self.m, b, i, &iname))
+            interfaces.append(iname.decode())
+        return dict(name=name.decode(), full_dofs=n, interfaces=interfaces, M=carray(B.M, B.v, B.v),
+                    K=carray(B.K, B.v, B.v), G=carray(B.G, B.v, a), H=carray(B.H, t, B.v),
+                    iface=carray(B.iface, 6 * B.ninterfaces, B.v), rigid=carray(B.rigid, B.v, 6),
+                    map=carray(Psi, n, B.v))
+
+    def joint(self, PetscInt j):
+        """Joint j (revolute joints first, in the order of the angles): dict with name, type, parent, child (body
+        indices), parent_interface, child_interface (interface indices), axis, R0 (3x3, rows)."""
+        cdef const char *name
+        cdef KFJointDef J
+        check(KFReducedModelGetJoint(self.m, j, &name, &J))
+        return dict(name=name.decode(), type="revolute" if J.type == KF_JOINT_REVOLUTE else "fixed",
+                    parent=J.parent, child=J.child, parent_interface=J.parent_interface,
+                    child_interface=J.child_interface, axis=[J.axis[k] for k in range(3)],
+                    R0=carray(J.R0, 3, 3).tolist())
+
+    def io_names(self, bint inputs):
+        cdef const char *name
+        info = self.info()
+        names = []
+        for i in range(info["inputs"] if inputs else info["outputs"]):
+            check(KFReducedModelGetIOName(self.m, PETSC_TRUE if inputs else PETSC_FALSE, i, &name))
+            names.append(name.decode())
+        return names
+
+    def reduction_angles(self):
+        """The reduction configurations, (nangles, revolute joints), radians."""
+        cdef PetscInt n
+        cdef const PetscReal *ang
+        nr = self.info()["revolute"]
+        check(KFReducedModelGetReductionAngles(self.m, &n, &ang))
+        return carray(ang, nr, n).T.copy() if nr else np.zeros((n, 0))
+
+    def set_setting(self, key, value):
+        check(KFReducedModelSetSetting(self.m, cstr(key, "setting key"), cstr(value, "setting value")))
+
+    def setting_strings(self):
+        """The recorded settings, in order: {key: value string}."""
+        cdef PetscInt n
+        cdef const char * const *keys
+        cdef const char * const *values
+        check(KFReducedModelGetSettings(self.m, &n, &keys, &values))
+        return {keys[k].decode(): values[k].decode() for k in range(n)}
+
+    def reassemble(self, angles_rad):
+        """The reduced system at one configuration (one angle per revolute joint, radians): a CReducedSystem."""
+        cdef cnp.ndarray ang = np.ascontiguousarray(np.atleast_1d(np.asarray(angles_rad, dtype=np.float64)))
+        cdef CReducedSystem out = CReducedSystem()
+        nr = self.info()["revolute"]
+        if ang.ndim != 1 or ang.shape[0] != nr:
+            raise ValueError("the model has %d revolute joint(s): give %d angle(s), got %d" % (nr, nr, ang.size))
+        check(KFReducedModelReassemble(self.m, real_ptr(ang) if nr else NULL, &out.y))
+        return out
+
+    def view(self, Viewer viewer=None):
+        check(KFReducedModelView(self.m, NULL if viewer is None else viewer.vwr))
+
+    def save(self, path):
+        """HDF5, written under a temporary name and renamed into place (README.md: reduced.h5 layout)."""
+        check(KFReducedModelSave(self.m, cstr(path, "file name")))
+        return path
+
+    @classmethod
+    def load(cls, path, comm=None):
+        """A model read from an HDF5 file written by save, with checks of format, version and consistency."""
+        cdef Comm c = as_comm(comm)
+        cdef CReducedModel out = cls.__new__(cls)
+        cdef KFReducedModel m = NULL
+        check(KFReducedModelLoad(c.comm, cstr(path, "file name"), &m))
+        out.adopt(m, False)
+        return out

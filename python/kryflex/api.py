@@ -1,0 +1,187 @@
+"""The reduction and its results, in pyMOR's shape, on the C library's objects:
+
+    model = Reducer(scene, moments=12, method="multi-angle").reduce()    # a ReducedModel (KFReducer, KFReducedModel)
+    system = model.at([37.5])                                             # a ReducedSystem (KFReducedSystem)
+    T = system.frf(np.geomspace(0.01, 10, 500)); L = system.moments(10)
+
+Every number comes from C (src/reducer, src/model, src/measure); this module only names and shapes them.
+"""
+import dataclasses
+import functools
+import json
+import os
+
+import numpy as np
+
+from . import _core
+
+
+class ModelFileError(ValueError):
+    """A reduced-model file that cannot be used: the message names the file and the fix."""
+
+
+@dataclasses.dataclass(eq=False)
+class ReducedSystem:
+    """A reduced model reassembled at one configuration (paper eq. 20-24): small, dense, the same on every rank.
+
+    M, K (n x n), B = G (n x inputs), C = H (outputs x n); damping: the uniform modal damping ratio the reduction
+    served; eigenvalues (ascending) and M-orthonormal modes of (K, M); rigid_modes: the rigid-body and mechanism
+    modes from the bodies' rigid motions (n x r, or None when the model lacks them); frequencies_hz: the flexible
+    ones; constraint_rank, sigma_ratio: the reassembly's SVD of the interface constraints."""
+    angles_deg: tuple
+    M: np.ndarray
+    K: np.ndarray
+    damping: float
+    B: np.ndarray
+    C: np.ndarray
+    frequencies_hz: np.ndarray
+    modes: np.ndarray
+    eigenvalues: np.ndarray
+    rigid_modes: object
+    constraint_rank: int
+    sigma_ratio: float
+    handle: _core.CReducedSystem = dataclasses.field(repr=False)
+
+    @classmethod
+    def from_handle(cls, handle, angles_deg, damping):
+        M, K, G, H = handle.matrices()
+        lam, Phi, _, Phir = handle.modes()
+        rank, ratio = handle.reassembly_info()
+        return cls(tuple(angles_deg), M, K, damping, G, H, handle.frequencies_hz(), Phi, lam, Phir, int(rank),
+                   float(ratio), handle)
+
+    @property
+    def dofs(self):
+        return self.M.shape[0]
+
+    def frf(self, freqs_hz, damping=None):
+        """Frequency response (frequencies, outputs, inputs), complex, with uniform modal damping (default: the
+        model's), rigid-body and mechanism modes undamped."""
+        w = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
+        return self.handle.frf(self.damping if damping is None else float(damping), w)
+
+    def moments(self, k):
+        """The low-frequency moments L^0 .. L^(k-1) on the flexible subspace: (k, outputs, inputs)."""
+        return self.handle.moments(int(k))
+
+    def view(self):
+        self.handle.view()
+
+
+def _setting_value(text):
+    """Settings are strings in C; numbers, lists and booleans are stored as JSON (-kf_ option values as text)."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+class ReducedModel(_core.CReducedModel):
+    """Reduced bodies + joints + names + settings (KFReducedModel): everything reassembly needs, nothing of the
+    full-order model. The same on every rank."""
+
+    def at(self, angles_deg):
+        """The reduced system at one configuration (degrees, one angle per revolute joint)."""
+        angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
+        if angles.ndim != 1 or angles.size != len(self.revolute):
+            raise ValueError("the model has %d revolute joint(s) (%s): give %d angle(s), got %d"
+                             % (len(self.revolute), ", ".join(self.revolute), len(self.revolute), angles.size))
+        return ReducedSystem.from_handle(self.reassemble(np.radians(angles)), [float(a) for a in angles],
+                                         float(self.settings.get("damping", 0.0)))
+
+    # ------------------------------------------------------------------ what the model holds (copies, cached)
+
+    @functools.cached_property
+    def _bodies(self):
+        return [self.body(b) for b in range(self.info()["bodies"])]
+
+    @property
+    def bodies(self):
+        """Per body a dict of NumPy arrays: M, K (v x v), G (v x a), H (t x v), iface (6 n_if x v), rigid (v x 6)."""
+        return [{k: b[k] for k in ("M", "K", "G", "H", "iface", "rigid")} for b in self._bodies]
+
+    @property
+    def maps(self):
+        """Per body its map back to the full dofs (n_b x v), or None when the model does not keep maps."""
+        maps = [b["map"] for b in self._bodies]
+        return maps if any(m is not None for m in maps) else None
+
+    @property
+    def body_names(self):
+        return [b["name"] for b in self._bodies]
+
+    @property
+    def body_dofs(self):
+        return [b["full_dofs"] for b in self._bodies]
+
+    @property
+    def sizes(self):
+        return [b["M"].shape[0] for b in self._bodies]
+
+    @property
+    def interfaces(self):
+        return [b["interfaces"] for b in self._bodies]
+
+    @functools.cached_property
+    def joints(self):
+        return [self.joint(j) for j in range(self.info()["joints"])]
+
+    @property
+    def revolute(self):
+        return [j["name"] for j in self.joints if j["type"] == "revolute"]
+
+    @functools.cached_property
+    def input_names(self):
+        return self.io_names(True)
+
+    @functools.cached_property
+    def output_names(self):
+        return self.io_names(False)
+
+    @property
+    def nrigid(self):
+        return self.info()["rigid"]
+
+    @property
+    def settings(self):
+        return {k: _setting_value(v) for k, v in self.setting_strings().items()}
+
+    # ------------------------------------------------------------------ files and scenes
+
+    def save(self, path):
+        """Writes the model as HDF5 (README.md: reduced.h5 layout) through the C writer, atomically."""
+        if os.path.splitext(str(path))[1].lower() not in (".h5", ".hdf5"):
+            raise ModelFileError("%s: reduced models are written as .h5 (HDF5); export_npz writes the arrays for NumPy"
+                                 % path)
+        return super().save(str(path))
+
+    @classmethod
+    def load(cls, path, comm=None):
+        """Reads a model written by save (checked: format, version, shapes, names, checksums)."""
+        if not os.path.isfile(path):
+            raise ModelFileError("%s: reduced-model file not found" % path)
+        try:
+            return super().load(str(path), comm)
+        except _core.Error as e:
+            raise ModelFileError("%s: not a usable kryflex reduced model (%s); write it again with 'kryflex reduce'"
+                                 % (path, e)) from None
+
+    def export_npz(self, path):
+        """A plain NumPy export of the reduced bodies (<body>__M, __K, __G, __H, __iface, __rigid) and the names, for
+        tools without HDF5; kryflex itself reads only the HDF5 file."""
+        from .io.files import atomic_path
+        arrays = {"%s__%s" % (name, key): body[key] for name, body in zip(self.body_names, self.bodies) for key in body}
+        arrays.update(inputs=np.array(self.input_names), outputs=np.array(self.output_names),
+                      revolute_joints=np.array(self.revolute))
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                np.savez(f, **arrays)
+        return path
+
+    def check_scene(self, scene, path="reduced model"):
+        """A model used with a scene must come from that scene (the C fingerprint of bodies, joints, inputs, outputs)."""
+        if scene.cscene.fingerprint() != self.fingerprint:
+            raise ModelFileError("%s was reduced from scene '%s', not from this scene '%s' (its bodies, joints, inputs or "
+                                 "outputs differ): reduce this scene again with 'kryflex reduce'"
+                                 % (path, self.scene_name, scene.name))
+

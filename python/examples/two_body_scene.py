@@ -258,10 +258,9 @@ def main(argv):
 
     # 4. reassembly at any angle needs only the reduced bodies
     for a in ANGLES_OF_INTEREST + OTHER_ANGLES:
-        Mh, Kh, Gh, Hh, rank, sigma_ratio, Phir = model.reassemble([a])
-        freqs = model.at([a]).frequencies_hz
-        say("reduced frequencies at %g deg (Hz): %s" % (a, fmt(freqs[:6])))
-    say("  (reassembled system: %d dofs, %d rigid-body + mechanism modes)" % (Kh.shape[0], Phir.shape[1]))
+        system = model.at([a])
+        say("reduced frequencies at %g deg (Hz): %s" % (a, fmt(system.frequencies_hz[:6])))
+    say("  (reassembled system: %d dofs, %d rigid-body + mechanism modes)" % (system.dofs, system.rigid_modes.shape[1]))
 
     # 5. how close the reduced model is to the full order at the angles of interest: the reduction's
     #    verification (summary) holds the full-order frequencies, dominant modes and moments at each of them

@@ -163,7 +163,7 @@ class ReducedModel(_core.CReducedModel):
         try:
             return super().load(str(path), comm)
         except _core.Error as e:
-            raise ModelFileError("%s: not a usable kryflex reduced model (%s); write it again with 'kryflex reduce'"
+            raise ModelFileError("%s: not a readable kryflex reduced model (%s); write it again with 'kryflex reduce'"
                                  % (path, e)) from None
 
     def export_npz(self, path):

@@ -2,7 +2,7 @@
 
     import kryflex
     scene = kryflex.load_scene("meshes/galileo/galileo.yaml")
-    model = kryflex.Reducer(scene, moments=10).reduce()     # reduced bodies (a ReducedModel)
+    model = kryflex.reduce(scene).model                      # reduced bodies (a ReducedModel)
     system = model.at([60.0])                               # the reduced system at 60 deg (a ReducedSystem)
 
 Importing kryflex has no side effects: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a
@@ -11,7 +11,7 @@ command line's PETSc options (the kryflex command does that). Runs under mpirun 
 The package, in the order data flows through it:
     io/        scenes (YAML, in-memory matrices), body files, Nastran DMIG, Matrix Market, converters
     _core      the binding of the C library (src/include/kryflex.h) on petsc4py and slepc4py
-    api        Reducer, ReducedModel, ReducedSystem: the reduction and its results, computed in C
+    api        ReducedModel, ReducedSystem: the results of a reduction, computed in C
     report/    the summary dict of a reduction, report.md, summary.json and plots
     cli/       the kryflex command: reduce, reassemble, info, convert
 """

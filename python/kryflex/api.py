@@ -1,10 +1,11 @@
-"""The reduction and its results, in pyMOR's shape, on the C library's objects:
+"""The results of a reduction, in pyMOR's shape, on the C library's objects:
 
-    model = Reducer(scene, moments=12, method="multi-angle").reduce()    # a ReducedModel (KFReducer, KFReducedModel)
-    system = model.at([37.5])                                             # a ReducedSystem (KFReducedSystem)
+    model = kryflex.reduce(scene).model                   # a ReducedModel (KFReducedModel)
+    system = model.at([37.5])                             # a ReducedSystem (KFReducedSystem)
     T = system.frf(np.geomspace(0.01, 10, 500)); L = system.moments(10)
 
-Every number comes from C (src/reducer, src/model, src/measure); this module only names and shapes them.
+Every number comes from C (src/model, src/measure); this module only names and shapes them. The Reducer (on
+KFReducer) joins it when src/reducer lands.
 """
 import dataclasses
 import functools

@@ -88,7 +88,8 @@ PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal 
 typedef struct _n_KFFlexSolver *KFFlexSolver;
 
 /* One MUMPS factorization of K_S with a statically determinate set of dofs held (or of K_S + shift M_S).
-   Options: -kryflex_shift <sigma>, -kryflex_check_null_pivots, -kryflex_refine <steps of iterative refinement, 1> */
+   Options: -kf_shift <sigma>, -kf_refine <steps of iterative refinement, 1>, -kf_check_null_pivots,
+   -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
 PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetUp(KFFlexSolver);

@@ -54,12 +54,15 @@ PetscErrorCode KFKrylovBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, P
 {
   KFSystem sys = solver->sys;
   KFScene  s   = sys->scene;
-  PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0;
+  PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min = 50000;
   BV       V;
 
   PetscFunctionBegin;
   PetscCheck(nin >= 1 && nout >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the Krylov basis needs at least one input block (got %" PetscInt_FMT " input and %" PetscInt_FMT " output blocks)", nin, nout);
   PetscCheck(tol > 0 && tol < 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "deflation tolerance must lie in (0, 1); got %g", (double)tol);
+  PetscOptionsBegin(s->comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
+  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", progress_min, &progress_min, NULL));
+  PetscOptionsEnd();
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(BVCreate(s->comm, &V));
   PetscCall(BVSetSizes(V, s->nsys_local, s->nsys, maxcols));
@@ -87,7 +90,7 @@ PetscErrorCode KFKrylovBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, P
       PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
       PetscCall(MatDestroy(&W));
       PetscCall(MatGetSize(source ? sys->Ht : sys->G, NULL, &p));
-      if (s->nsys >= 50000) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", blk + 1, nblocks, k - k0, p, k));
+      if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", blk + 1, nblocks, k - k0, p, k));
       if (k == k0) break; /* the block deflated away: the Krylov space is exhausted */
       PetscCall(KFBVColumnsToMat(V, k0, k, &Prev));
     }

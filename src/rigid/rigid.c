@@ -154,20 +154,31 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscFunctionReturn(0);
 }
 
+/* -kf_rigid_tol: how much strain the rigid-body modes may show, ||K Phi|| / (||K|| ||Phi||) */
+static PetscErrorCode KFRigidTolFromOptions(MPI_Comm comm, PetscReal *tol)
+{
+  PetscFunctionBegin;
+  *tol = 1e-8;
+  PetscOptionsBegin(comm, NULL, "kryflex rigid-body and mechanism modes", "KFSystemComputeRigidModes");
+  PetscCall(PetscOptionsReal("-kf_rigid_tol", "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", "KFSystemComputeRigidModes", *tol, tol, NULL));
+  PetscOptionsEnd();
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSystemComputeRigidModes(KFSystem y)
 {
-  PetscReal tol = 1e-8;
+  PetscReal tol;
 
   PetscFunctionBegin;
   PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() first");
   if (y->Phi) PetscFunctionReturn(0);
   PetscCall(PetscLogEventBegin(KF_EVENT_RIGID, 0, 0, 0, 0));
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_rigid_tol", &tol, NULL));
+  PetscCall(KFRigidTolFromOptions(y->scene->comm, &tol));
   PetscCall(KFSystemRigidFromGeometry(y, &y->Phi));
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "rigid-body modes from node coordinates"));
   y->nrigid = 6 + y->scene->nrevolute;
   PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
-  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the rigid-body modes built from node coordinates strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or a body is not free-free; fix the nodes files or supply rigid modes (-kryflex_rigid_tol to loosen)", (double)y->rigid_residual, (double)tol);
+  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the rigid-body modes built from node coordinates strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or a body is not free-free; fix the nodes files or supply rigid modes (-kf_rigid_tol to loosen)", (double)y->rigid_residual, (double)tol);
   PetscCall(PetscLogEventEnd(KF_EVENT_RIGID, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -175,7 +186,7 @@ PetscErrorCode KFSystemComputeRigidModes(KFSystem y)
 PetscErrorCode KFSystemSetRigidModes(KFSystem y, Mat Phi)
 {
   PetscInt  m, r;
-  PetscReal tol = 1e-8;
+  PetscReal tol;
 
   PetscFunctionBegin;
   PetscCheck(y->assembled, y->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFSystemSetRigidModes(): the modes belong to one configuration");
@@ -186,7 +197,7 @@ PetscErrorCode KFSystemSetRigidModes(KFSystem y, Mat Phi)
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "supplied rigid-body modes"));
   y->nrigid     = r;
   y->user_rigid = PETSC_TRUE;
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_rigid_tol", &tol, NULL));
+  PetscCall(KFRigidTolFromOptions(y->scene->comm, &tol));
   PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
   PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the supplied rigid-body modes strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g", (double)y->rigid_residual, (double)tol);
   PetscFunctionReturn(0);

@@ -7,10 +7,12 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscFunctionBegin;
   PetscCheck(sys->assembled, sys->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFFlexSolverCreate()");
   PetscCall(PetscNew(solver));
-  (*solver)->sys = sys;
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_shift", &(*solver)->shift, NULL));
+  (*solver)->sys    = sys;
   (*solver)->refine = 1;
-  PetscCall(PetscOptionsGetInt(NULL, NULL, "-kryflex_refine", &(*solver)->refine, NULL));
+  PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
+  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
+  PetscCall(PetscOptionsInt("-kf_refine", "Steps of iterative refinement of each solve (default 1)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
+  PetscOptionsEnd();
   PetscFunctionReturn(0);
 }
 
@@ -61,9 +63,11 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   KFSystem  sys = solver->sys;
   KFScene   s   = sys->scene;
   PetscBool check;
+  PetscInt  check_max = 20000;
 
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
+  PetscCheck(solver->shift >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)solver->shift);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
   PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
@@ -92,8 +96,11 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
 
   /* cross-check (small models by default): MUMPS' null pivots of K_S itself should number the rigid modes */
-  check = (PetscBool)(s->nsys <= 20000 && solver->shift == 0);
-  PetscCall(PetscOptionsGetBool(NULL, NULL, "-kryflex_check_null_pivots", &check, NULL));
+  PetscOptionsBegin(s->comm, NULL, "kryflex null-pivot cross-check", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsInt("-kf_null_pivot_check_max_dofs", "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", "KFFlexSolverSetUp", check_max, &check_max, NULL));
+  check = (PetscBool)(s->nsys <= check_max && solver->shift == 0);
+  PetscCall(PetscOptionsBool("-kf_check_null_pivots", "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", "KFFlexSolverSetUp", check, &check, NULL));
+  PetscOptionsEnd();
   if (check) {
     Mat      F0;
     PetscInt nnull, nneg;

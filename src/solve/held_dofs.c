@@ -135,13 +135,16 @@ static PetscErrorCode KFHeldConditioning(Mat Phi, PetscInt nheld, const PetscInt
 
 PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, PetscInt *nheld, PetscInt **held)
 {
-  PetscReal cond = PETSC_INFINITY;
+  PetscReal cond = PETSC_INFINITY, cond_max = 1e8;
 
   PetscFunctionBegin;
+  PetscOptionsBegin(sys->scene->comm, NULL, "kryflex held dofs of the flexible solve", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsReal("-kf_held_cond_max", "Largest condition number of the rigid modes on the clamp's held dofs before falling back to pivoted QR (default 1e8)", "KFFlexSolverSetUp", cond_max, &cond_max, NULL));
+  PetscOptionsEnd();
   /* the clamp holds for supplied rigid modes too when they span the same motions: its conditioning tells */
   PetscCall(KFSelectClampDofs(sys->scene, nheld, held));
   if (*nheld) PetscCall(KFHeldConditioning(sys->Phi, *nheld, *held, &cond));
-  if (!(cond < 1e8)) {
+  if (!(cond < cond_max)) {
     if (*nheld) PetscCall(PetscFree(*held));
     PetscCall(KFSelectPivotedDofs(sys->Phi, nheld, held));
   }

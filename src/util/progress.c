@@ -5,15 +5,27 @@ PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR,
 static PetscBool     kf_initialized = PETSC_FALSE;
 static PetscLogDouble kf_t0;
 
-/* Registers one log event per stage so that -log_view shows where the time goes. */
+static PetscErrorCode KFFinalize(void)
+{
+  PetscFunctionBegin;
+  /* PetscFinalize forgets the log events: a later PetscInitialize (the Python face may run several) registers anew */
+  kf_initialized = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/* Registers one log event per stage so that -log_view shows where the time goes, the class ids of the scene and the
+   reduced model, and the help of -kf_quiet (read by KFProgress, which is called too often for an options block). */
 PetscErrorCode KFInitialize(void)
 {
   PetscClassId classid;
+  PetscBool    quiet = PETSC_FALSE;
 
   PetscFunctionBegin;
   if (kf_initialized) PetscFunctionReturn(0);
   kf_initialized = PETSC_TRUE;
   PetscCall(PetscTime(&kf_t0));
+  PetscCall(PetscRegisterFinalize(KFFinalize));
+  PetscCall(KFModelInitializePackage());
   PetscCall(PetscClassIdRegister("kryflex", &classid));
   PetscCall(PetscLogEventRegister("KFLoad", classid, &KF_EVENT_LOAD));
   PetscCall(PetscLogEventRegister("KFAssemble", classid, &KF_EVENT_ASSEMBLE));
@@ -24,10 +36,13 @@ PetscErrorCode KFInitialize(void)
   PetscCall(PetscLogEventRegister("KFProject", classid, &KF_EVENT_PROJECT));
   PetscCall(PetscLogEventRegister("KFMoments", classid, &KF_EVENT_MOMENTS));
   PetscCall(PetscLogEventRegister("KFVerify", classid, &KF_EVENT_VERIFY));
+  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "kryflex progress lines", "KFProgress");
+  PetscCall(PetscOptionsBool("-kf_quiet", "Silence the progress lines with elapsed time on rank 0 (default false)", "KFProgress", quiet, &quiet, NULL));
+  PetscOptionsEnd();
   PetscFunctionReturn(0);
 }
 
-/* Progress lines on rank 0 with the elapsed time since kryflex started; -kryflex_quiet silences them. */
+/* Progress lines on rank 0 with the elapsed time since kryflex started; -kf_quiet silences them. */
 PetscErrorCode KFProgress(MPI_Comm comm, const char fmt[], ...)
 {
   PetscBool      quiet = PETSC_FALSE;
@@ -37,7 +52,7 @@ PetscErrorCode KFProgress(MPI_Comm comm, const char fmt[], ...)
   size_t         len;
 
   PetscFunctionBegin;
-  PetscCall(PetscOptionsGetBool(NULL, NULL, "-kryflex_quiet", &quiet, NULL));
+  PetscCall(PetscOptionsGetBool(NULL, NULL, "-kf_quiet", &quiet, NULL));
   if (quiet) PetscFunctionReturn(0);
   if (!kf_initialized) PetscCall(KFInitialize());
   PetscCall(PetscTime(&now));

@@ -14,6 +14,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
   Vec      *defl, x, y;
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
   PetscReal target = 0;
+  PetscInt  dense_max = 600;
   PetscBool dense, has_target;
 
   PetscFunctionBegin;
@@ -23,8 +24,11 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
   nflex = s->nsys - r;
   PetscCheck(nev >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "ask for at least one mode");
   nev   = PetscMin(nev, nflex);
-  dense = (PetscBool)(s->nsys <= 600);
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kryflex_verify_target", &target, &has_target));
+  PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
+  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", dense_max, &dense_max, NULL));
+  PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", target, &target, &has_target));
+  PetscOptionsEnd();
+  dense = (PetscBool)(s->nsys <= dense_max);
   PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : "Krylov-Schur, shift-and-invert with MUMPS"));
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));
@@ -60,7 +64,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
   }
-  PetscCall(EPSSetOptionsPrefix(eps, "kryflex_verify_"));
+  PetscCall(EPSSetOptionsPrefix(eps, "kf_verify_"));
   PetscCall(EPSSetFromOptions(eps));
   PetscCall(EPSSolve(eps));
   PetscCall(EPSGetConverged(eps, &nc));

@@ -149,7 +149,7 @@ int main(int argc, char **argv)
 
   PetscCall(SlepcInitialize(&argc, &argv, NULL, "Krylov reduction of the Galileo-like model through the C API"));
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
-  PetscCall(PetscOptionsSetValue(NULL, "-kryflex_quiet", NULL));
+  PetscCall(PetscOptionsSetValue(NULL, "-kf_quiet", NULL));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "test_krylov on %d rank(s)\n", size));
   PetscCall(GalileoScene(&scene));
   PetscCall(KFSystemCreate(scene, &sys));

@@ -23,7 +23,7 @@ def main():
     import kryflex
     from kryflex import _core
     from petsc4py import PETSc
-    PETSc.Options().setValue("kryflex_quiet", True)
+    PETSc.Options().setValue("kf_quiet", True)
 
     scene = kryflex.load_scene(args.scene)
     system = _core.CSystem(scene.cscene)

@@ -755,7 +755,6 @@ int main(int argc, char **argv)
   PetscCall(SlepcInitialize(&argc, &argv, NULL, "Reduced model: life cycle, reassembly, files, error measures"));
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   PetscCall(PetscOptionsSetValue(NULL, "-kf_quiet", NULL));
-  PetscCall(PetscOptionsSetValue(NULL, "-kf_quiet", NULL));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "test_model on %d rank(s)\n", size));
   PetscCall(TestMeasures());
   PetscCall(GalileoScene("rotor", &scene));

@@ -314,8 +314,12 @@ PETSC_EXTERN PetscErrorCode KFReducerSetScene(KFReducer, KFScene);
 PETSC_EXTERN PetscErrorCode KFReducerGetScene(KFReducer, KFScene *);
 /* angles of interest: nconfig configurations of nrevolute angles each (radians), row by row */
 PETSC_EXTERN PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt nconfig, const PetscReal angles[]);
-/* alpha_G: one configuration (single-angle) or several (multi-angle); n = 0 chooses automatically */
-PETSC_EXTERN PetscErrorCode KFReducerSetReductionAngles(KFReducer, PetscInt n, const PetscReal angles[]);
+/* alpha_G of the single-angle model (nrevolute angles, radians); NULL: the paper's rule chooses it among the angles
+   of interest (-kf_reduction_angle, degrees, or auto) */
+PETSC_EXTERN PetscErrorCode KFReducerSetReductionAngle(KFReducer, const PetscReal angles[]);
+/* the configurations whose Krylov bases make the multi-angle model (n x nrevolute, radians); n = 0: the angles of
+   interest (-kf_multi_angles, degrees, flattened) */
+PETSC_EXTERN PetscErrorCode KFReducerSetMultiAngles(KFReducer, PetscInt n, const PetscReal angles[]);
 PETSC_EXTERN PetscErrorCode KFReducerSetMethod(KFReducer, KFReducerMethod);
 PETSC_EXTERN PetscErrorCode KFReducerSetBand(KFReducer, PetscReal fmin_hz, PetscReal fmax_hz);
 PETSC_EXTERN PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal zeta);
@@ -326,6 +330,11 @@ PETSC_EXTERN PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, Pets
 PETSC_EXTERN PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool);
 PETSC_EXTERN PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal deflation_tol, PetscReal body_tol, PetscReal reassembly_rtol);
 PETSC_EXTERN PetscErrorCode KFReducerSetShift(KFReducer, PetscReal shift);
+/* keep each reduced body's map back to its full dofs in the model: PETSC_TRUE, PETSC_FALSE, or PETSC_DECIDE (keep it
+   while no body has more than -kf_save_maps_max_dofs dofs, 200000) */
+PETSC_EXTERN PetscErrorCode KFReducerSetSaveMaps(KFReducer, PetscInt);
+/* eigen type: full-order modes up to cover x the band's top frequency (-kf_eigen_cover, 1) */
+PETSC_EXTERN PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal cover);
 /* full-order verification: on/off, modes (PETSC_DECIDE: cover 3 x the band's top), frequency points, FRF floor (dB) */
 PETSC_EXTERN PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool full_order, PetscInt modes, PetscInt frequency_points, PetscReal frf_floor_db);
 PETSC_EXTERN PetscErrorCode KFReducerSetFromOptions(KFReducer);

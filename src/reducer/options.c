@@ -1,0 +1,206 @@
+/* KFReducerSetFromOptions: every setting under -kf_ (listed with its default by -help), and the reducer's view. */
+#include <kryflex/reducerimpl.h>
+
+static const char *const KFSaveMaps[] = {"false", "true", "auto", "KFSaveMaps", "", NULL};
+
+/* angles given in degrees on the command line, n configurations of nrev angles, into radians */
+static PetscErrorCode KFReducerDegreesOption_Private(KFReducer r, const char what[], PetscInt n, PetscReal deg[], PetscInt *nconfig)
+{
+  PetscInt nrev;
+
+  PetscFunctionBegin;
+  PetscCheck(r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "%s: set the scene (KFReducerSetScene) before KFReducerSetFromOptions", what);
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+  nrev = PetscMax(nrev, 1);
+  PetscCheck(n % nrev == 0 && n > 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "%s: the scene has %" PetscInt_FMT " revolute joint(s), so give a multiple of %" PetscInt_FMT " angles in degrees, comma-separated; got %" PetscInt_FMT, what, nrev, nrev, n);
+  for (PetscInt i = 0; i < n; i++) deg[i] *= PETSC_PI / 180.0;
+  *nconfig = n / nrev;
+  PetscFunctionReturn(0);
+}
+
+#define KF_MAX_OPTION_ANGLES 4096
+
+PetscErrorCode KFReducerSetFromOptions(KFReducer r)
+{
+  char           type[256] = KFREDUCERKRYLOV, alpha[PETSC_MAX_PATH_LEN] = "auto";
+  PetscReal      band[2], deg[KF_MAX_OPTION_ANGLES];
+  PetscInt       n, nconfig, save, method, importance, moments, oblocks, vmodes, npoints;
+  PetscReal      zeta, accuracy, keep, dtol, btol, rtol, shift, floor_db;
+  PetscBool      flg, sc, verify;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  if (((PetscObject)r)->type_name) PetscCall(PetscStrncpy(type, ((PetscObject)r)->type_name, sizeof(type)));
+  PetscObjectOptionsBegin((PetscObject)r);
+  PetscCall(PetscOptionsFList("-kf_reducer_type", "Basis: krylov (Lee's Krylov methodology) or eigen (the eigenvector baseline)", "KFReducerSetType", KFReducerList, type, type, sizeof(type), &flg));
+  if (flg || !((PetscObject)r)->type_name) PetscCall(KFReducerSetType(r, type));
+
+  n = KF_MAX_OPTION_ANGLES;
+  PetscCall(PetscOptionsRealArray("-kf_angles", "Angles of interest in degrees, one per revolute joint per configuration, comma-separated", "KFReducerSetAngles", deg, &n, &flg));
+  if (flg) {
+    PetscCall(KFReducerDegreesOption_Private(r, "-kf_angles", n, deg, &nconfig));
+    PetscCall(KFReducerSetAngles(r, nconfig, deg));
+  }
+  PetscCall(PetscOptionsString("-kf_reduction_angle", "alpha_G of the single-angle model in degrees (one per revolute joint), or auto: the paper's rule", "KFReducerSetReductionAngle", alpha, alpha, sizeof(alpha), &flg));
+  if (flg) {
+    PetscBool isauto;
+
+    PetscCall(PetscStrcasecmp(alpha, "auto", &isauto));
+    if (isauto) PetscCall(KFReducerSetReductionAngle(r, NULL));
+    else {
+      n = KF_MAX_OPTION_ANGLES;
+      PetscCall(PetscOptionsGetRealArray(((PetscObject)r)->options, ((PetscObject)r)->prefix, "-kf_reduction_angle", deg, &n, NULL));
+      PetscCall(KFReducerDegreesOption_Private(r, "-kf_reduction_angle", n, deg, &nconfig));
+      PetscCheck(nconfig == 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_reduction_angle: give one configuration (one angle per revolute joint) or auto, got %" PetscInt_FMT, nconfig);
+      PetscCall(KFReducerSetReductionAngle(r, deg));
+    }
+  }
+  n = KF_MAX_OPTION_ANGLES;
+  PetscCall(PetscOptionsRealArray("-kf_multi_angles", "Configurations of the multi-angle basis in degrees (default: the angles of interest)", "KFReducerSetMultiAngles", deg, &n, &flg));
+  if (flg) {
+    PetscCall(KFReducerDegreesOption_Private(r, "-kf_multi_angles", n, deg, &nconfig));
+    PetscCall(KFReducerSetMultiAngles(r, nconfig, deg));
+  }
+  method = (PetscInt)r->method;
+  PetscCall(PetscOptionsEList("-kf_method", "single-angle (the paper: one basis at alpha_G) or multi-angle (bases at several angles)", "KFReducerSetMethod", KFReducerMethods, 2, KFReducerMethods[r->method], &method, &flg));
+  if (flg) PetscCall(KFReducerSetMethod(r, (KFReducerMethod)method));
+
+  band[0] = r->band[0];
+  band[1] = r->band[1];
+  n       = 2;
+  PetscCall(PetscOptionsRealArray("-kf_band", "Frequency band of interest in Hz: low,high (default 0.01,10)", "KFReducerSetBand", band, &n, &flg));
+  if (flg) {
+    PetscCheck(n == 2, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_band: give two frequencies in Hz, low,high; got %" PetscInt_FMT, n);
+    PetscCall(KFReducerSetBand(r, band[0], band[1]));
+  }
+  zeta = r->zeta;
+  PetscCall(PetscOptionsReal("-kf_damping", "Uniform modal damping ratio", "KFReducerSetDamping", zeta, &zeta, &flg));
+  if (flg) PetscCall(KFReducerSetDamping(r, zeta));
+  accuracy = r->accuracy;
+  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative frequency-response error over the band", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
+  if (flg) PetscCall(KFReducerSetAccuracy(r, accuracy));
+
+  moments = r->moments;
+  oblocks = r->output_blocks;
+  PetscCall(PetscOptionsInt("-kf_moments", "Low-frequency moments matched exactly (c in the paper)", "KFReducerSetMoments", moments, &moments, NULL));
+  PetscCall(PetscOptionsInt("-kf_output_blocks", "Krylov blocks started from K+ H^T (of the moments)", "KFReducerSetMoments", oblocks, &oblocks, NULL));
+  PetscCall(KFReducerSetMoments(r, moments, oblocks));
+  importance = (PetscInt)r->importance;
+  keep       = r->keep_threshold;
+  PetscCall(PetscOptionsEList("-kf_importance", "Mode importance: h2, hinf or static", "KFReducerSetImportance", KFImportances, 3, KFImportances[r->importance], &importance, NULL));
+  PetscCall(PetscOptionsReal("-kf_keep_threshold", "Keep modes whose importance (normalized to the largest) reaches this", "KFReducerSetImportance", keep, &keep, NULL));
+  PetscCall(KFReducerSetImportance(r, (KFImportance)importance, keep));
+  sc = r->static_correction;
+  PetscCall(PetscOptionsBool("-kf_static_correction", "Add the static correction of the discarded modes (eq. 15-17)", "KFReducerSetStaticCorrection", sc, &sc, NULL));
+  PetscCall(KFReducerSetStaticCorrection(r, sc));
+  dtol = r->deflation_tol;
+  btol = r->body_tol;
+  rtol = r->reassembly_rtol;
+  PetscCall(PetscOptionsReal("-kf_deflation_tol", "Krylov block deflation tolerance (relative)", "KFReducerSetTolerances", dtol, &dtol, NULL));
+  PetscCall(PetscOptionsReal("-kf_body_tol", "Per-body rank deflation of the projected vectors (relative)", "KFReducerSetTolerances", btol, &btol, NULL));
+  PetscCall(PetscOptionsReal("-kf_reassembly_rtol", "SVD rank tolerance of the reduced interface constraints", "KFReducerSetTolerances", rtol, &rtol, NULL));
+  PetscCall(KFReducerSetTolerances(r, dtol, btol, rtol));
+  shift = r->shift;
+  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of holding dofs (moments then expand about -shift)", "KFReducerSetShift", shift, &shift, &flg));
+  if (flg) PetscCall(KFReducerSetShift(r, shift));
+  save = r->save_maps == PETSC_DECIDE ? 2 : r->save_maps;
+  PetscCall(PetscOptionsEList("-kf_save_maps", "Store each reduced body's map back to its full dofs: true, false or auto", "KFReducerSetSaveMaps", KFSaveMaps, 3, KFSaveMaps[save], &save, &flg));
+  if (flg) PetscCall(KFReducerSetSaveMaps(r, save == 2 ? PETSC_DECIDE : save));
+  PetscCall(PetscOptionsInt("-kf_save_maps_max_dofs", "With -kf_save_maps auto: store the maps while no body has more dofs", "KFReducerSetSaveMaps", r->save_maps_max_dofs, &r->save_maps_max_dofs, NULL));
+  PetscCall(PetscOptionsInt("-kf_gram_condition_max_dofs", "Report the raw recurrence's Gram condition (diagnostic) up to this many system dofs", "KFReducerSolve", r->gram_condition_max_dofs, &r->gram_condition_max_dofs, NULL));
+  PetscCall(PetscOptionsReal("-kf_negligible_moment", "A moment below this fraction of its largest value over the angles counts as zero", "KFMomentErrors", r->negligible, &r->negligible, NULL));
+
+  verify   = r->verify;
+  vmodes   = r->verify_modes;
+  npoints  = r->frequency_points;
+  floor_db = r->frf_floor_db;
+  PetscCall(PetscOptionsBool("-kf_verify", "Verify the reduced model against the full order (SLEPc eigensolve) at every angle of interest", "KFReducerSetVerification", verify, &verify, NULL));
+  PetscCall(PetscOptionsInt("-kf_verify_modes", "Full-order modes for verification (-1: cover -kf_verify_cover x the band's top)", "KFReducerSetVerification", vmodes, &vmodes, NULL));
+  PetscCall(PetscOptionsReal("-kf_verify_cover", "Automatic verification modes cover this multiple of the band's top frequency", "KFReducerSetVerification", r->verify_cover, &r->verify_cover, NULL));
+  PetscCall(PetscOptionsInt("-kf_frequency_points", "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "KFReducerSetVerification", npoints, &npoints, NULL));
+  PetscCall(PetscOptionsReal("-kf_frf_floor_db", "FRF error: notches deeper than this below the band's peak count against this level", "KFFRFError", floor_db, &floor_db, NULL));
+  PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
+  if (r->ops->setfromoptions) PetscCall((*r->ops->setfromoptions)(r, PetscOptionsObject));
+  PetscCall(PetscObjectProcessOptionsHandlers((PetscObject)r, PetscOptionsObject));
+  PetscOptionsEnd();
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFReducerViewAngles_Private(PetscViewer v, const char what[], PetscInt n, PetscInt nrev, const PetscReal a[])
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(v, "%s (deg):", what));
+  PetscCall(PetscViewerASCIIUseTabs(v, PETSC_FALSE));
+  for (PetscInt c = 0; c < n; c++) {
+    PetscCall(PetscViewerASCIIPrintf(v, c ? ", " : " "));
+    for (PetscInt j = 0; j < nrev; j++) PetscCall(PetscViewerASCIIPrintf(v, "%s%g", j ? "/" : "", (double)(a[c * nrev + j] * 180.0 / PETSC_PI)));
+  }
+  PetscCall(PetscViewerASCIIPrintf(v, "\n"));
+  PetscCall(PetscViewerASCIIUseTabs(v, PETSC_TRUE));
+  PetscFunctionReturn(0);
+}
+
+/* the configuration, and after a solve what it did: alpha_G and why, model sizes, errors per angle, notes */
+PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
+{
+  PetscBool iascii;
+  PetscInt  nrev = 0;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PetscObjectComm((PetscObject)r), &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &iascii));
+  if (!iascii) PetscFunctionReturn(0);
+  PetscCall(PetscObjectPrintClassNamePrefixType((PetscObject)r, viewer));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  if (r->scene) {
+    const char *name;
+    PetscInt    nb, nsys, a, t;
+
+    PetscCall(KFSceneGetName(r->scene, &name));
+    PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "scene '%s': %" PetscInt_FMT " bodies, %" PetscInt_FMT " system dofs, %" PetscInt_FMT " revolute joints, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs\n", name, nb, nsys, nrev, a, t));
+  } else PetscCall(PetscViewerASCIIPrintf(viewer, "no scene set\n"));
+  if (r->nconfig) PetscCall(KFReducerViewAngles_Private(viewer, "angles of interest", r->nconfig, PetscMax(nrev, 1), r->angles));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "method %s; band %g-%g Hz; damping %g; accuracy %g\n", KFReducerMethods[r->method], (double)r->band[0], (double)r->band[1], (double)r->zeta, (double)r->accuracy));
+  if (r->auto_alpha) PetscCall(PetscViewerASCIIPrintf(viewer, "alpha_G: auto (the paper's rule)\n"));
+  else PetscCall(KFReducerViewAngles_Private(viewer, "alpha_G", 1, PetscMax(nrev, 1), r->alpha_g));
+  if (r->nmulti) PetscCall(KFReducerViewAngles_Private(viewer, "multi-angle configurations", r->nmulti, PetscMax(nrev, 1), r->multi));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "moments %" PetscInt_FMT " (%" PetscInt_FMT " output blocks); importance %s, keep threshold %g; static correction %s\n", r->moments, r->output_blocks, KFImportances[r->importance], (double)r->keep_threshold, r->static_correction ? "yes" : "no"));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "tolerances: deflation %g, body %g, reassembly %g; shift %g\n", (double)r->deflation_tol, (double)r->body_tol, (double)r->reassembly_rtol, (double)r->shift));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "verification: %s, %" PetscInt_FMT " frequency points, FRF floor %g dB\n", r->verify ? "full order" : "off", r->frequency_points, (double)r->frf_floor_db));
+  if (r->ops->view) PetscCall((*r->ops->view)(r, viewer));
+  if (r->solved) {
+    PetscInt nb;
+
+    PetscCall(PetscViewerASCIIPrintf(viewer, "%s\n", r->rule));
+    PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+    for (PetscInt c = 0; c < r->nconfig; c++) {
+      const PetscReal *dofs, *err = NULL;
+      PetscInt         nd;
+      const char *const *names;
+      PetscBool        has = PETSC_FALSE;
+
+      PetscCall(KFReducerGetResult(r, c, "reduced_dofs", NULL, NULL, &dofs));
+      PetscCall(KFReducerGetResultNames(r, c, &nd, &names));
+      for (PetscInt i = 0; i < nd; i++) has = has || !strcmp(names[i], "frf_error");
+      if (has) PetscCall(KFReducerGetResult(r, c, "frf_error", NULL, NULL, &err));
+      PetscCall(KFReducerViewAngles_Private(viewer, "configuration", 1, PetscMax(nrev, 1), &r->angles[c * PetscMax(nrev, 1)]));
+      PetscCall(PetscViewerASCIIPushTab(viewer));
+      if (err) PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, FRF max relative error %.3g (target %g)\n", (int)dofs[0], (double)err[0], (double)r->accuracy));
+      else PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, not verified\n", (int)dofs[0]));
+      PetscCall(PetscViewerASCIIPopTab(viewer));
+    }
+    for (PetscInt i = 0; i < r->nnotes; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "note: %s\n", r->notes[i]));
+  }
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerViewFromOptions(KFReducer r, PetscObject obj, const char name[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(PetscObjectViewFromOptions((PetscObject)r, obj, name));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,409 @@
+/*
+  KFReducerSetUp and KFReducerSolve: the whole reduction of a scene (paper eq. 5-24).
+
+  For every configuration: assemble, factor once, build the implementation's basis, solve its small eigenproblem,
+  rank the modes, compute the full-order moments and (for verification) the full-order modes. Then choose alpha_G,
+  project rigid + kept + static-correction vectors onto the bodies, and compare the reassembled model with the full
+  order at every angle of interest. The multi-angle model projects the whole bases of several configurations
+  together, so that every moment matches at each of them.
+*/
+#include <kryflex/reducerimpl.h>
+
+/* one configuration the solve visits */
+typedef struct {
+  const PetscReal *angles;   /* nrev (points into the reducer's arrays) */
+  PetscInt         interest; /* index among the angles of interest, -1 if not one */
+  PetscBool        is_g;     /* the named alpha_G */
+  PetscBool        in_multi; /* one of the multi-angle configurations */
+} KFConfig;
+
+static PetscBool KFSameAngles(PetscInt nrev, const PetscReal a[], const PetscReal b[])
+{
+  for (PetscInt j = 0; j < nrev; j++)
+    if (a[j] != b[j]) return PETSC_FALSE;
+  return PETSC_TRUE;
+}
+
+/* Checks what the solve needs before any heavy work; the same on every rank (every value is replicated). */
+PetscErrorCode KFReducerSetUp(KFReducer r)
+{
+  MPI_Comm comm;
+  PetscInt nrev, nsys;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  if (r->setupcalled) PetscFunctionReturn(0);
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCheck(r->scene, comm, PETSC_ERR_ORDER, "no scene: call KFReducerSetScene() before KFReducerSetUp()");
+  if (!((PetscObject)r)->type_name) PetscCall(KFReducerSetType(r, KFREDUCERKRYLOV));
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SETUP, r, 0, 0, 0));
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, &nsys, NULL, NULL));
+  nrev = PetscMax(nrev, 1);
+  if (!r->nconfig) { /* no angles given: the scene at angle 0 */
+    PetscCall(PetscCalloc1(nrev, &r->angles));
+    r->nconfig = 1;
+  }
+  for (PetscInt c = 0; c < r->nconfig; c++)
+    for (PetscInt d = 0; d < c; d++) PetscCheck(!KFSameAngles(nrev, &r->angles[c * nrev], &r->angles[d * nrev]), comm, PETSC_ERR_ARG_WRONG, "angles of interest: configuration %" PetscInt_FMT " repeats configuration %" PetscInt_FMT " (%g deg): give each configuration once", c + 1, d + 1, (double)(r->angles[c * nrev] * 180.0 / PETSC_PI));
+  for (PetscInt c = 0; c < r->nmulti; c++)
+    for (PetscInt d = 0; d < c; d++) PetscCheck(!KFSameAngles(nrev, &r->multi[c * nrev], &r->multi[d * nrev]), comm, PETSC_ERR_ARG_WRONG, "multi-angle configurations: configuration %" PetscInt_FMT " repeats configuration %" PetscInt_FMT ": give each configuration once", c + 1, d + 1);
+  PetscCheck(r->moments > r->output_blocks, comm, PETSC_ERR_ARG_OUTOFRANGE, "moments (%" PetscInt_FMT ") must exceed output_blocks (%" PetscInt_FMT ")", r->moments, r->output_blocks);
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_SETUP, r, 0, 0, 0));
+  r->setupcalled = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
+/* configurations to visit: the angles of interest, then a named alpha_G and the multi-angle configurations that are
+   not among them; the named alpha_G is visited last so that nothing has to be factored twice */
+static PetscErrorCode KFReducerConfigurations_Private(KFReducer r, PetscInt nrev, PetscInt *nc, KFConfig **configs)
+{
+  const PetscInt nmulti = r->nmulti ? r->nmulti : r->nconfig;
+  const PetscReal *multi = r->nmulti ? r->multi : r->angles;
+  KFConfig      *list, tmp;
+  PetscInt       n = 0, g = -1;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(r->nconfig + nmulti + 1, &list));
+  for (PetscInt c = 0; c < r->nconfig; c++) {
+    list[n].angles   = &r->angles[c * nrev];
+    list[n].interest = c;
+    n++;
+  }
+  for (PetscInt m = -1; m < nmulti; m++) {
+    const PetscReal *a = m < 0 ? (r->auto_alpha ? NULL : r->alpha_g) : &multi[m * nrev];
+    PetscInt         i;
+
+    if (!a) continue;
+    for (i = 0; i < n; i++)
+      if (KFSameAngles(nrev, list[i].angles, a)) break;
+    if (i == n) {
+      list[n].angles   = a;
+      list[n].interest = -1;
+      n++;
+    }
+    if (m < 0) list[i].is_g = PETSC_TRUE;
+    else list[i].in_multi = PETSC_TRUE;
+  }
+  for (PetscInt i = 0; i < n; i++)
+    if (list[i].is_g) g = i;
+  if (g >= 0) { /* alpha_G last */
+    tmp = list[g];
+    for (PetscInt i = g; i < n - 1; i++) list[i] = list[i + 1];
+    list[n - 1] = tmp;
+  }
+  *nc      = n;
+  *configs = list;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFReducerBasisDestroy_Private(KFReducer r, KFReducerBasis *basis)
+{
+  PetscFunctionBegin;
+  if (r->ops->destroybasis) PetscCall((*r->ops->destroybasis)(r, basis));
+  PetscCall(PetscFree4(basis->lambda, basis->Phi, basis->Gr, basis->Hr));
+  PetscCall(PetscMemzero(basis, sizeof(*basis)));
+  PetscFunctionReturn(0);
+}
+
+/* a reduced model from a finished body basis, with the settings that made it */
+static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KFReducerMethod method, PetscInt n, const PetscReal angles[], KFReducedModel *model)
+{
+  PetscInt  nb, maxdofs = 0;
+  PetscBool keep;
+
+  PetscFunctionBegin;
+  PetscCall(KFBodyBasisFinish(bb, r->body_tol));
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt nd;
+
+    PetscCall(KFSceneGetBodyInfo(r->scene, b, NULL, &nd, NULL));
+    maxdofs = PetscMax(maxdofs, nd);
+  }
+  keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
+  PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, n, angles, keep, model));
+  PetscCall(KFReducerRecordSettings_Private(r, *model, method, n, angles));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFSizesString(KFReducedModel m, char buf[], size_t len)
+{
+  PetscInt nb;
+  size_t   used = 0;
+
+  PetscFunctionBegin;
+  buf[0] = 0;
+  PetscCall(KFReducedModelGetInfo(m, &nb, NULL, NULL, NULL, NULL, NULL));
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &body, NULL));
+    PetscCall(PetscSNPrintf(buf + used, len - used, "%s%" PetscInt_FMT, b ? " + " : "", body.v));
+    PetscCall(PetscStrlen(buf, &used));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSolve(KFReducer r)
+{
+  MPI_Comm         comm;
+  KFSystem         sys = NULL;
+  KFConfig        *configs = NULL;
+  KFBodyBasis     *candidates, multi_bb = NULL;
+  KFFullReference *ref;
+  PetscInt         nc = 0, nrev, nrev1, nb, nsys, a, t, nrigid, nmom, g = -1, multi_n = 0;
+  PetscReal       *Lfull, *Lg = NULL, *multi_angles = NULL, *kept_g = NULL;
+  PetscReal        times[7] = {0}, best_imp = -1;
+  PetscInt         best_kept = -1, nkept_g = 0, nstatic_g = 0;
+  PetscLogDouble   t0, t1;
+  const char      *name, *type;
+  char             sizes[256], sizes_multi[256];
+  static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(KFReducerSetUp(r));
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
+  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
+  PetscCall(KFReducerGetType(r, &type));
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
+  PetscCall(KFSceneGetName(r->scene, &name));
+  nrev1  = PetscMax(nrev, 1);
+  nrigid = 6 + nrev;
+  nmom   = r->moments;
+  PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
+  {
+    char dofs[256];
+    size_t used = 0;
+
+    dofs[0] = 0;
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscInt nd;
+
+      PetscCall(KFSceneGetBodyInfo(r->scene, b, NULL, &nd, NULL));
+      PetscCall(PetscSNPrintf(dofs + used, sizeof(dofs) - used, "%s%" PetscInt_FMT, b ? " + " : "", nd));
+      PetscCall(PetscStrlen(dofs, &used));
+    }
+    PetscCall(KFProgress(comm, "scene '%s': %" PetscInt_FMT " bodies (%s dofs), %" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs", name, nb, dofs, nsys, nrigid, a, t));
+  }
+  PetscCall(PetscCalloc3(nc, &candidates, r->nconfig, &ref, r->nconfig * nmom * t * a, &Lfull));
+  PetscCall(PetscMalloc1(nmom * t * a, &Lg));
+  if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &multi_bb));
+  PetscCall(PetscMalloc1(nc * nrev1, &multi_angles));
+  PetscCall(KFSystemCreate(r->scene, &sys));
+
+  for (PetscInt i = 0; i < nc; i++) {
+    KFConfig       *cfg = &configs[i];
+    KFFlexSolver    solver = NULL;
+    KFReducerBasis  basis;
+    Mat             Phir, X;
+    PetscReal       rigid_res, *imp, *freq, *keptf;
+    PetscBool      *kept;
+    PetscInt        nkept = 0, nheld, c;
+    char            label[128];
+    size_t          used = 0;
+
+    label[0] = 0;
+    for (PetscInt j = 0; j < nrev1; j++) {
+      PetscCall(PetscSNPrintf(label + used, sizeof(label) - used, "%s%g", j ? "_" : "", (double)(nrev ? cfg->angles[j] * 180.0 / PETSC_PI : 0)));
+      PetscCall(PetscStrlen(label, &used));
+    }
+    PetscCall(KFProgress(comm, "configuration %s deg", nrev ? label : "fixed"));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFSystemSetAngles(sys, cfg->angles));
+    PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
+    PetscCall(PetscTime(&t1));
+    times[0] += t1 - t0;
+
+    t0 = t1;
+    PetscCall(KFFlexSolverCreate(sys, &solver));
+    if (r->shift > 0) PetscCall(KFFlexSolverSetShift(solver, r->shift));
+    PetscCall(KFFlexSolverSetUp(solver));
+    PetscCall(PetscTime(&t1));
+    times[1] += t1 - t0;
+
+    t0 = t1;
+    PetscCall(PetscMemzero(&basis, sizeof(basis)));
+    basis.gram_condition = (PetscReal)NAN;
+    PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+    PetscCall((*r->ops->buildbasis)(r, sys, solver, &basis));
+    PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+    PetscCall(PetscTime(&t1));
+    times[2] += t1 - t0;
+
+    t0 = t1;
+    c = basis.size;
+    PetscCall(PetscMalloc4(c, &imp, c, &kept, c, &freq, c, &keptf));
+    PetscCall(KFDenseModeImportance(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->importance, 0.0, imp));
+    for (PetscInt k = 0; k < c; k++) {
+      kept[k]  = (PetscBool)(imp[k] >= r->keep_threshold);
+      keptf[k] = kept[k] ? 1.0 : 0.0;
+      freq[k]  = PetscSqrtReal(PetscMax(basis.lambda[k], 0)) / (2 * PETSC_PI);
+      nkept += kept[k];
+    }
+    PetscCall(PetscTime(&t1));
+    times[3] += t1 - t0;
+
+    t0 = t1;
+    PetscCall(KFFlexSolverMoments(solver, nmom, cfg->interest >= 0 ? &Lfull[cfg->interest * nmom * t * a] : Lg));
+    PetscCall(PetscTime(&t1));
+    times[4] += t1 - t0;
+    PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
+
+    t0 = t1;
+    if (cfg->is_g || (r->auto_alpha && cfg->interest >= 0)) {
+      PetscReal sum = 0;
+      PetscInt  ncols;
+
+      for (PetscInt k = 0; k < c; k++)
+        if (kept[k]) sum += imp[k];
+      /* the paper's rule: alpha_G is the angle of interest whose model needs the most modes (ties: the larger kept
+         importance, then the first); only the best candidate's body basis is kept */
+      if (cfg->is_g || nkept > best_kept || (nkept == best_kept && sum > best_imp)) {
+        PetscCall((*r->ops->vectors)(r, sys, solver, &basis, kept, r->static_correction, &X));
+        PetscCall(MatGetSize(X, NULL, &ncols));
+        if (g >= 0) PetscCall(KFBodyBasisDestroy(&candidates[g]));
+        g         = i;
+        best_kept = nkept;
+        best_imp  = sum;
+        nkept_g   = nkept;
+        nstatic_g = ncols - nkept;
+        PetscCall(PetscFree(kept_g));
+        PetscCall(PetscMalloc1(PetscMax(nkept, 1), &kept_g));
+        for (PetscInt k = 0, m = 0; k < c; k++)
+          if (kept[k]) kept_g[m++] = k + 1;
+        PetscCall(KFBodyBasisCreate(r->scene, &candidates[i]));
+        PetscCall(KFBodyBasisAdd(candidates[i], sys, Phir));
+        PetscCall(KFBodyBasisAdd(candidates[i], sys, X));
+        PetscCall(MatDestroy(&X));
+      }
+    }
+    if (multi_bb && cfg->in_multi) {
+      PetscCall(KFBodyBasisAdd(multi_bb, sys, Phir));
+      PetscCall((*r->ops->vectors)(r, sys, solver, &basis, NULL, PETSC_FALSE, &X));
+      PetscCall(KFBodyBasisAdd(multi_bb, sys, X));
+      PetscCall(MatDestroy(&X));
+      PetscCall(PetscArraycpy(&multi_angles[multi_n * nrev1], cfg->angles, nrev1));
+      multi_n++;
+    }
+    PetscCall(PetscTime(&t1));
+    times[5] += t1 - t0;
+
+    if (cfg->interest >= 0) {
+      const PetscInt ci = cfg->interest, shape[3] = {t, a, nmom};
+
+      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nmom * t * a]));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &c, freq));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &c, imp));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &c, keptf));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)basis.ndeflated));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", basis.gram_condition));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
+      if (r->verify) {
+        PetscCall(PetscTime(&t0));
+        PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+        PetscCall(KFReducerFullReference_Private(r, sys, &ref[ci]));
+        PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+        PetscCall(PetscTime(&t1));
+        times[6] += t1 - t0;
+      }
+    }
+    PetscCall(KFFlexSolverDestroy(&solver));
+    PetscCall(KFProgress(comm, "  %" PetscInt_FMT " %s vectors (%" PetscInt_FMT " deflated), %" PetscInt_FMT " of %" PetscInt_FMT " modes kept; held dofs %" PetscInt_FMT, c, type, basis.ndeflated, nkept, c, nheld));
+    PetscCall(PetscFree4(imp, kept, freq, keptf));
+    PetscCall(KFReducerBasisDestroy_Private(r, &basis));
+  }
+  PetscCall(KFSystemDestroy(&sys));
+
+  /* alpha_G and its model; the other candidates are not needed */
+  {
+    const PetscInt gi = configs[g].interest;
+    char           label[128];
+    size_t         used = 0;
+
+    label[0] = 0;
+    for (PetscInt j = 0; j < nrev1; j++) {
+      PetscCall(PetscSNPrintf(label + used, sizeof(label) - used, "%s%g", j ? "_" : "", (double)(nrev ? configs[g].angles[j] * 180.0 / PETSC_PI : 0)));
+      PetscCall(PetscStrlen(label, &used));
+    }
+    if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, nkept_g));
+    else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg, named in the scene", label));
+    PetscCall(KFProgress(comm, "%s", r->rule));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFReducerMakeModel_Private(r, candidates[g], KF_METHOD_SINGLE_ANGLE, 1, configs[g].angles, &r->single));
+    if (multi_bb) PetscCall(KFReducerMakeModel_Private(r, multi_bb, KF_METHOD_MULTI_ANGLE, multi_n, multi_angles, &r->multi_model));
+    PetscCall(PetscTime(&t1));
+    times[5] += t1 - t0;
+    {
+      const PetscInt shape[2] = {nrev1, 1};
+      PetscReal      one;
+
+      PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, configs[g].angles));
+      PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)gi));
+      PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept_g, kept_g));
+      PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic_g));
+      PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
+      one = (PetscReal)nrigid;
+      PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", one));
+    }
+  }
+  {
+    PetscReal *dofs;
+
+    PetscCall(PetscMalloc1(nb, &dofs));
+    for (PetscInt b = 0; b < nb; b++) {
+      KFReducedBody body;
+
+      PetscCall(KFReducedModelGetBody(r->single, b, NULL, NULL, &body, NULL));
+      dofs[b] = (PetscReal)body.v;
+    }
+    PetscCall(KFReducerResultSet_Private(r, -1, "reduced_dofs_per_body", 1, &nb, dofs));
+    if (r->multi_model) {
+      const PetscInt shape[2] = {nrev1, multi_n};
+
+      for (PetscInt b = 0; b < nb; b++) {
+        KFReducedBody body;
+
+        PetscCall(KFReducedModelGetBody(r->multi_model, b, NULL, NULL, &body, NULL));
+        dofs[b] = (PetscReal)body.v;
+      }
+      PetscCall(KFReducerResultSet_Private(r, -1, "multi_dofs_per_body", 1, &nb, dofs));
+      PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, shape, multi_angles));
+    }
+    PetscCall(PetscFree(dofs));
+  }
+  PetscCall(KFSizesString(r->single, sizes, sizeof(sizes)));
+  if (r->multi_model) {
+    char tmp[256];
+
+    PetscCall(KFSizesString(r->multi_model, tmp, sizeof(tmp)));
+    PetscCall(PetscSNPrintf(sizes_multi, sizeof(sizes_multi), "; %s dofs (multi-angle)", tmp));
+  } else sizes_multi[0] = 0;
+  PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
+
+  PetscCall(KFReducerCompare_Private(r, Lfull, ref));
+  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
+
+  for (PetscInt i = 0; i < nc; i++) PetscCall(KFBodyBasisDestroy(&candidates[i]));
+  for (PetscInt c = 0; c < r->nconfig; c++) PetscCall(KFFullReferenceDestroy_Private(&ref[c]));
+  PetscCall(KFBodyBasisDestroy(&multi_bb));
+  PetscCall(PetscFree3(candidates, ref, Lfull));
+  PetscCall(PetscFree(Lg));
+  PetscCall(PetscFree(kept_g));
+  PetscCall(PetscFree(multi_angles));
+  PetscCall(PetscFree(configs));
+  r->solved = PETSC_TRUE;
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
+  PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view"));
+  {
+    KFReducedModel model;
+
+    PetscCall(KFReducerGetReducedModel(r, &model));
+    PetscCall(KFReducedModelViewFromOptions(model, (PetscObject)r, "-kf_model_view"));
+  }
+  PetscFunctionReturn(0);
+}

@@ -133,13 +133,8 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, const PetscReal Lfull[], KF
     PetscReal        sratio, dev = 0, sgain, num = 0, den = 0, dofs;
     PetscLogDouble   t0, t1;
     char             label[128], frfpart[96] = "";
-    size_t           used = 0;
 
-    label[0] = 0;
-    for (PetscInt j = 0; j < nrev1; j++) {
-      PetscCall(PetscSNPrintf(label + used, sizeof(label) - used, "%s%g", j ? "_" : "", (double)(nrev ? angles[j] * 180.0 / PETSC_PI : 0)));
-      PetscCall(PetscStrlen(label, &used));
-    }
+    PetscCall(KFReducerConfigLabel_Private(nrev, angles, label, sizeof(label)));
     PetscCall(PetscTime(&t0));
     PetscCall(KFReducedModelReassemble(r->single, angles, &rs));
     PetscCall(PetscTime(&t1));

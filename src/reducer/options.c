@@ -35,6 +35,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsFList("-kf_reducer_type", "Basis: krylov (Lee's Krylov methodology) or eigen (the eigenvector baseline)", "KFReducerSetType", KFReducerList, type, type, sizeof(type), &flg));
   if (flg || !((PetscObject)r)->type_name) PetscCall(KFReducerSetType(r, type));
 
+  PetscCall(PetscArrayzero(deg, KF_MAX_OPTION_ANGLES)); /* -help prints the array's first entry as the default */
   n = KF_MAX_OPTION_ANGLES;
   PetscCall(PetscOptionsRealArray("-kf_angles", "Angles of interest in degrees, one per revolute joint per configuration, comma-separated", "KFReducerSetAngles", deg, &n, &flg));
   if (flg) {
@@ -55,6 +56,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
       PetscCall(KFReducerSetReductionAngle(r, deg));
     }
   }
+  PetscCall(PetscArrayzero(deg, KF_MAX_OPTION_ANGLES));
   n = KF_MAX_OPTION_ANGLES;
   PetscCall(PetscOptionsRealArray("-kf_multi_angles", "Configurations of the multi-angle basis in degrees (default: the angles of interest)", "KFReducerSetMultiAngles", deg, &n, &flg));
   if (flg) {
@@ -128,12 +130,14 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
 
 static PetscErrorCode KFReducerViewAngles_Private(PetscViewer v, const char what[], PetscInt n, PetscInt nrev, const PetscReal a[])
 {
+  char label[128];
+
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(v, "%s (deg):", what));
   PetscCall(PetscViewerASCIIUseTabs(v, PETSC_FALSE));
   for (PetscInt c = 0; c < n; c++) {
-    PetscCall(PetscViewerASCIIPrintf(v, c ? ", " : " "));
-    for (PetscInt j = 0; j < nrev; j++) PetscCall(PetscViewerASCIIPrintf(v, "%s%g", j ? "/" : "", (double)(a[c * nrev + j] * 180.0 / PETSC_PI)));
+    PetscCall(KFReducerConfigLabel_Private(nrev, &a[c * PetscMax(nrev, 1)], label, sizeof(label)));
+    PetscCall(PetscViewerASCIIPrintf(v, "%s%s", c ? ", " : " ", label));
   }
   PetscCall(PetscViewerASCIIPrintf(v, "\n"));
   PetscCall(PetscViewerASCIIUseTabs(v, PETSC_TRUE));
@@ -161,11 +165,11 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
     PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
     PetscCall(PetscViewerASCIIPrintf(viewer, "scene '%s': %" PetscInt_FMT " bodies, %" PetscInt_FMT " system dofs, %" PetscInt_FMT " revolute joints, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs\n", name, nb, nsys, nrev, a, t));
   } else PetscCall(PetscViewerASCIIPrintf(viewer, "no scene set\n"));
-  if (r->nconfig) PetscCall(KFReducerViewAngles_Private(viewer, "angles of interest", r->nconfig, PetscMax(nrev, 1), r->angles));
+  if (r->nconfig) PetscCall(KFReducerViewAngles_Private(viewer, "angles of interest", r->nconfig, nrev, r->angles));
   PetscCall(PetscViewerASCIIPrintf(viewer, "method %s; band %g-%g Hz; damping %g; accuracy %g\n", KFReducerMethods[r->method], (double)r->band[0], (double)r->band[1], (double)r->zeta, (double)r->accuracy));
   if (r->auto_alpha) PetscCall(PetscViewerASCIIPrintf(viewer, "alpha_G: auto (the paper's rule)\n"));
-  else PetscCall(KFReducerViewAngles_Private(viewer, "alpha_G", 1, PetscMax(nrev, 1), r->alpha_g));
-  if (r->nmulti) PetscCall(KFReducerViewAngles_Private(viewer, "multi-angle configurations", r->nmulti, PetscMax(nrev, 1), r->multi));
+  else PetscCall(KFReducerViewAngles_Private(viewer, "alpha_G", 1, nrev, r->alpha_g));
+  if (r->nmulti) PetscCall(KFReducerViewAngles_Private(viewer, "multi-angle configurations", r->nmulti, nrev, r->multi));
   PetscCall(PetscViewerASCIIPrintf(viewer, "moments %" PetscInt_FMT " (%" PetscInt_FMT " output blocks); importance %s, keep threshold %g; static correction %s\n", r->moments, r->output_blocks, KFImportances[r->importance], (double)r->keep_threshold, r->static_correction ? "yes" : "no"));
   PetscCall(PetscViewerASCIIPrintf(viewer, "tolerances: deflation %g, body %g, reassembly %g; shift %g\n", (double)r->deflation_tol, (double)r->body_tol, (double)r->reassembly_rtol, (double)r->shift));
   PetscCall(PetscViewerASCIIPrintf(viewer, "verification: %s, %" PetscInt_FMT " frequency points, FRF floor %g dB\n", r->verify ? "full order" : "off", r->frequency_points, (double)r->frf_floor_db));
@@ -185,7 +189,7 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
       PetscCall(KFReducerGetResultNames(r, c, &nd, &names));
       for (PetscInt i = 0; i < nd; i++) has = has || !strcmp(names[i], "frf_error");
       if (has) PetscCall(KFReducerGetResult(r, c, "frf_error", NULL, NULL, &err));
-      PetscCall(KFReducerViewAngles_Private(viewer, "configuration", 1, PetscMax(nrev, 1), &r->angles[c * PetscMax(nrev, 1)]));
+      PetscCall(KFReducerViewAngles_Private(viewer, "configuration", 1, nrev, &r->angles[c * PetscMax(nrev, 1)]));
       PetscCall(PetscViewerASCIIPushTab(viewer));
       if (err) PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, FRF max relative error %.3g (target %g)\n", (int)dofs[0], (double)err[0], (double)r->accuracy));
       else PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, not verified\n", (int)dofs[0]));

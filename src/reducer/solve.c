@@ -204,14 +204,9 @@ PetscErrorCode KFReducerSolve(KFReducer r)
     PetscBool      *kept;
     PetscInt        nkept = 0, nheld, c;
     char            label[128];
-    size_t          used = 0;
 
-    label[0] = 0;
-    for (PetscInt j = 0; j < nrev1; j++) {
-      PetscCall(PetscSNPrintf(label + used, sizeof(label) - used, "%s%g", j ? "_" : "", (double)(nrev ? cfg->angles[j] * 180.0 / PETSC_PI : 0)));
-      PetscCall(PetscStrlen(label, &used));
-    }
-    PetscCall(KFProgress(comm, "configuration %s deg", nrev ? label : "fixed"));
+    PetscCall(KFReducerConfigLabel_Private(nrev, cfg->angles, label, sizeof(label)));
+    PetscCall(KFProgress(comm, "configuration %s deg", label));
     PetscCall(PetscTime(&t0));
     PetscCall(KFSystemSetAngles(sys, cfg->angles));
     PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
@@ -220,7 +215,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
 
     t0 = t1;
     PetscCall(KFFlexSolverCreate(sys, &solver));
-    if (r->shift > 0) PetscCall(KFFlexSolverSetShift(solver, r->shift));
+    PetscCall(KFFlexSolverSetShift(solver, r->shift)); /* the reducer's value, whatever the global options say */
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));
     times[1] += t1 - t0;
@@ -323,13 +318,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   {
     const PetscInt gi = configs[g].interest;
     char           label[128];
-    size_t         used = 0;
 
-    label[0] = 0;
-    for (PetscInt j = 0; j < nrev1; j++) {
-      PetscCall(PetscSNPrintf(label + used, sizeof(label) - used, "%s%g", j ? "_" : "", (double)(nrev ? configs[g].angles[j] * 180.0 / PETSC_PI : 0)));
-      PetscCall(PetscStrlen(label, &used));
-    }
+    PetscCall(KFReducerConfigLabel_Private(nrev, configs[g].angles, label, sizeof(label)));
     if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, nkept_g));
     else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg, named in the scene", label));
     PetscCall(KFProgress(comm, "%s", r->rule));

@@ -314,6 +314,8 @@ PETSC_EXTERN PetscErrorCode KFReducerSetScene(KFReducer, KFScene);
 PETSC_EXTERN PetscErrorCode KFReducerGetScene(KFReducer, KFScene *);
 /* angles of interest: nconfig configurations of nrevolute angles each (radians), row by row */
 PETSC_EXTERN PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt nconfig, const PetscReal angles[]);
+/* the angles of interest as the reducer has them (after KFReducerSetFromOptions: -kf_angles); owned by the reducer */
+PETSC_EXTERN PetscErrorCode KFReducerGetAngles(KFReducer, PetscInt *nconfig, const PetscReal **angles);
 /* alpha_G of the single-angle model (nrevolute angles, radians); NULL: the paper's rule chooses it among the angles
    of interest (-kf_reduction_angle, degrees, or auto) */
 PETSC_EXTERN PetscErrorCode KFReducerSetReductionAngle(KFReducer, const PetscReal angles[]);

@@ -183,6 +183,15 @@ PetscErrorCode KFReducerSetAngles(KFReducer r, PetscInt nconfig, const PetscReal
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KFReducerGetAngles(KFReducer r, PetscInt *nconfig, const PetscReal **angles)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  if (nconfig) *nconfig = r->nconfig;
+  if (angles) *angles = r->angles;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSetReductionAngle(KFReducer r, const PetscReal angles[])
 {
   PetscFunctionBegin;

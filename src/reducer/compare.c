@@ -251,19 +251,9 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, const PetscReal Lfull[], KF
     }
   }
   if (r->multi_model) {
-    char     sizes[256];
-    size_t   used = 0;
-    PetscInt nb;
+    char sizes[256];
 
-    sizes[0] = 0;
-    PetscCall(KFReducedModelGetInfo(r->multi_model, &nb, NULL, NULL, NULL, NULL, NULL));
-    for (PetscInt b = 0; b < nb; b++) {
-      KFReducedBody body;
-
-      PetscCall(KFReducedModelGetBody(r->multi_model, b, NULL, NULL, &body, NULL));
-      PetscCall(PetscSNPrintf(sizes + used, sizeof(sizes) - used, "%s%" PetscInt_FMT, b ? " + " : "", body.v));
-      PetscCall(PetscStrlen(sizes, &used));
-    }
+    PetscCall(KFReducerModelSizes_Private(r->multi_model, sizes, sizeof(sizes)));
     PetscCall(KFProgress(comm, "multi-angle model: %s dofs per body, reassembled %" PetscInt_FMT " dofs, max moment error %.2e", sizes, max_multi_dofs, (double)max_multi_err));
   }
   PetscCall(PetscFree3(Lr, errors, ratios));

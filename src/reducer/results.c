@@ -146,3 +146,22 @@ PetscErrorCode KFReducerConfigLabel_Private(PetscInt nrev, const PetscReal angle
   for (PetscInt j = 0; j < nrev && used < len; j++) used += (size_t)snprintf(buf + used, len - used, "%s%g", j ? "_" : "", (double)(angles[j] * 180.0 / PETSC_PI));
   PetscFunctionReturn(0);
 }
+
+/* "12 + 19": reduced dofs per body, for progress lines */
+PetscErrorCode KFReducerModelSizes_Private(KFReducedModel m, char buf[], size_t len)
+{
+  PetscInt nb;
+  size_t   used = 0;
+
+  PetscFunctionBegin;
+  buf[0] = 0;
+  PetscCall(KFReducedModelGetInfo(m, &nb, NULL, NULL, NULL, NULL, NULL));
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &body, NULL));
+    PetscCall(PetscSNPrintf(buf + used, len - used, "%s%" PetscInt_FMT, b ? " + " : "", body.v));
+    PetscCall(PetscStrlen(buf, &used));
+  }
+  PetscFunctionReturn(0);
+}

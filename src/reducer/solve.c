@@ -126,24 +126,6 @@ static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KF
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFSizesString(KFReducedModel m, char buf[], size_t len)
-{
-  PetscInt nb;
-  size_t   used = 0;
-
-  PetscFunctionBegin;
-  buf[0] = 0;
-  PetscCall(KFReducedModelGetInfo(m, &nb, NULL, NULL, NULL, NULL, NULL));
-  for (PetscInt b = 0; b < nb; b++) {
-    KFReducedBody body;
-
-    PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &body, NULL));
-    PetscCall(PetscSNPrintf(buf + used, len - used, "%s%" PetscInt_FMT, b ? " + " : "", body.v));
-    PetscCall(PetscStrlen(buf, &used));
-  }
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KFReducerSolve(KFReducer r)
 {
   MPI_Comm         comm;
@@ -366,11 +348,11 @@ PetscErrorCode KFReducerSolve(KFReducer r)
     }
     PetscCall(PetscFree(dofs));
   }
-  PetscCall(KFSizesString(r->single, sizes, sizeof(sizes)));
+  PetscCall(KFReducerModelSizes_Private(r->single, sizes, sizeof(sizes)));
   if (r->multi_model) {
     char tmp[256];
 
-    PetscCall(KFSizesString(r->multi_model, tmp, sizeof(tmp)));
+    PetscCall(KFReducerModelSizes_Private(r->multi_model, tmp, sizeof(tmp)));
     PetscCall(PetscSNPrintf(sizes_multi, sizeof(sizes_multi), "; %s dofs (multi-angle)", tmp));
   } else sizes_multi[0] = 0;
   PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));

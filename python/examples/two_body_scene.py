@@ -240,13 +240,13 @@ def main(argv):
         % (scene.name, ", ".join(scene.body_names), " + ".join(map(str, scene.body_dofs)),
            scene.info["system_dofs"], ", ".join("%g" % a for a in ANGLES_OF_INTEREST)))
 
-    # 2. the reduction (collective: every rank calls it and gets the same small dense model back)
-    result = kryflex.reduce(scene, quiet=quiet)
+    # 2. the reduction by the C reducer (collective: every rank calls it and gets the same small dense model back)
+    result = kryflex.Reducer(scene, quiet=quiet).reduce()
     model, summary = result.model, result.summary
     say("reduced bodies: %s dofs (%s model, Krylov vectors of %s deg)"
         % (" + ".join(map(str, model.sizes)), model.settings["method"],
            ", ".join(kryflex.Scene.label(c) for c in model.settings["reduction_angles_deg"])))
-    other = result.multi_angle_model          # the model of the other method (here the paper's single-angle one)
+    other = result.single_angle_model         # the model of the other method: the paper's single-angle one
     say("  (the paper's single-angle model, at alpha_G = %s deg with Krylov modes %s kept: %s dofs)"
         % (summary["reduction_label"], summary["kept_modes"], " + ".join(map(str, other.sizes))))
 

@@ -2,8 +2,10 @@
 
     import kryflex
     scene = kryflex.load_scene("meshes/galileo/galileo.yaml")
-    model = kryflex.reduce(scene).model                      # reduced bodies (a ReducedModel)
+    model = kryflex.Reducer(scene).reduce().model            # reduced bodies (a ReducedModel)
     system = model.at([60.0])                               # the reduced system at 60 deg (a ReducedSystem)
+
+kryflex.reduce(scene) does the same in one call and returns the same Reduction (model, summary, both models).
 
 Importing kryflex has no side effects: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a
 command line's PETSc options (the kryflex command does that). Runs under mpirun with mpi4py.
@@ -11,6 +13,7 @@ command line's PETSc options (the kryflex command does that). Runs under mpirun 
 The package, in the order data flows through it:
     io/        scenes (YAML, in-memory matrices), body files, Nastran DMIG, Matrix Market, converters
     _core      the binding of the C library (src/include/kryflex.h) on petsc4py and slepc4py
+    reducer    Reducer (the C KFReducer: the whole reduction policy and its verification), Reduction, reduce
     api        ReducedModel, ReducedSystem: the results of a reduction, computed in C
     report/    the summary dict of a reduction, report.md, summary.json and plots
     cli/       the kryflex command: reduce, reassemble, info, convert
@@ -27,7 +30,9 @@ _PUBLIC = {
     "ModelFileError": ".api",
     "ReducedModel": ".api",
     "ReducedSystem": ".api",
-    "reduce": ".pipeline",
+    "Reducer": ".reducer",
+    "Reduction": ".reducer",
+    "reduce": ".reducer",
     "Scene": ".io.scene",
     "SceneError": ".io.scene",
     "load_scene": ".io.scene",

@@ -14,6 +14,17 @@ cdef extern from "petscsys.h" nogil:
         PETSC_TRUE
     PetscErrorCode PetscObjectReference(PetscObject)
     PetscErrorCode PetscObjectDereference(PetscObject)
+    PetscErrorCode PetscObjectDestroy(PetscObject*)
+    PetscErrorCode PetscObjectGetComm(PetscObject, MPI_Comm*)
+    PetscBool PetscInitializeCalled
+    PetscBool PetscFinalizeCalled
+
+cdef extern from "mpi.h" nogil:
+    int MPI_Comm_size(MPI_Comm, int*)
+
+cdef extern from "petsc/private/garbagecollector.h" nogil:
+    # what petsc4py's objects are released through: destroyed later, together, by PetscGarbageCleanup
+    PetscErrorCode PetscObjectDelayedDestroy(PetscObject*)
 
 cdef extern from "slepcbv.h" nogil:
     PetscErrorCode BVGetActiveColumns(SlepcBV, PetscInt*, PetscInt*)
@@ -154,3 +165,51 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSceneGetIOName(KFScene, PetscBool, PetscInt, const char**)
     PetscErrorCode KFReducedModelSave(KFReducedModel, const char*)
     PetscErrorCode KFReducedModelLoad(MPI_Comm, const char*, KFReducedModel*)
+
+    # ------------------------------------------------------------ error measures (src/measure)
+    PetscErrorCode KFFRFError(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*)
+    PetscErrorCode KFMomentErrors(PetscInt, PetscInt, PetscInt, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
+    PetscErrorCode KFRigidTolerance(PetscInt, const PetscReal*, PetscInt, PetscReal*)
+    PetscErrorCode KFFrequencyGrid(PetscReal, PetscReal, PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*)
+
+    # ------------------------------------------------------------ the reducer (KFReducer)
+    ctypedef struct _p_KFReducer
+    ctypedef _p_KFReducer* KFReducer
+    ctypedef const char* KFReducerType
+    ctypedef enum KFReducerMethod:
+        KF_METHOD_SINGLE_ANGLE
+        KF_METHOD_MULTI_ANGLE
+
+    PetscErrorCode KFReducerCreate(MPI_Comm, KFReducer*)
+    PetscErrorCode KFReducerDestroy(KFReducer*)
+    PetscErrorCode KFReducerSetType(KFReducer, KFReducerType)
+    PetscErrorCode KFReducerGetType(KFReducer, KFReducerType*)
+    PetscErrorCode KFReducerSetOptionsPrefix(KFReducer, const char*)
+    PetscErrorCode KFReducerSetScene(KFReducer, KFScene)
+    PetscErrorCode KFReducerGetScene(KFReducer, KFScene*)
+    PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt, const PetscReal*)
+    PetscErrorCode KFReducerGetAngles(KFReducer, PetscInt*, const PetscReal**)
+    PetscErrorCode KFReducerSetReductionAngle(KFReducer, const PetscReal*)
+    PetscErrorCode KFReducerSetMultiAngles(KFReducer, PetscInt, const PetscReal*)
+    PetscErrorCode KFReducerSetMethod(KFReducer, KFReducerMethod)
+    PetscErrorCode KFReducerSetBand(KFReducer, PetscReal, PetscReal)
+    PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal)
+    PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal)
+    PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt, PetscInt)
+    PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal)
+    PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool)
+    PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal, PetscReal, PetscReal)
+    PetscErrorCode KFReducerSetShift(KFReducer, PetscReal)
+    PetscErrorCode KFReducerSetSaveMaps(KFReducer, PetscInt)
+    PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal)
+    PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool, PetscInt, PetscInt, PetscReal)
+    PetscErrorCode KFReducerSetFromOptions(KFReducer)
+    PetscErrorCode KFReducerSetUp(KFReducer)
+    PetscErrorCode KFReducerSolve(KFReducer)
+    PetscErrorCode KFReducerView(KFReducer, PetscViewer)
+    PetscErrorCode KFReducerGetReducedModel(KFReducer, KFReducedModel*)
+    PetscErrorCode KFReducerGetReducedModels(KFReducer, KFReducedModel*, KFReducedModel*)
+    PetscErrorCode KFReducerGetResultNames(KFReducer, PetscInt, PetscInt*, const char * const **)
+    PetscErrorCode KFReducerGetResult(KFReducer, PetscInt, const char*, PetscInt*, const PetscInt**, const PetscReal**)
+    PetscErrorCode KFReducerGetNotes(KFReducer, PetscInt*, const char * const **)
+    PetscErrorCode KFReducerGetReductionRule(KFReducer, const char**)

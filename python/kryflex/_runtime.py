@@ -3,10 +3,17 @@
 Importing kryflex starts nothing; the binding calls init() when it is first imported. Signals stay Python's:
 PETSc's handler would replace Python's dispositions (SIGPIPE, SIGINT...) and turn a stray signal from a child process
 into an exit with PETSc's signal error instead of a KeyboardInterrupt or nothing at all.
+
+At exit, Python's cyclic garbage is collected before petsc4py cleans up and finalizes PETSc: a kryflex object kept
+alive by a reference cycle on one rank only (a frame held by a plotting library, say) would otherwise still live on
+that rank when PETSc's collective clean-up runs on the others, and the ranks would wait for each other forever.
 """
+import atexit
+import gc
 import sys
 
 _started = False
+_collect_registered = False
 
 
 def init(argv=None):
@@ -18,6 +25,7 @@ def init(argv=None):
     if _started or "petsc4py.PETSc" in sys.modules:
         _started = True
         _keep_python_signals()
+        _collect_at_exit()
         if options:
             from petsc4py import PETSc
             PETSc.Options().insertString(" ".join(_quoted(a) for a in options))
@@ -27,6 +35,16 @@ def init(argv=None):
     slepc4py.init([program, "-no_signal_handler", "true"] + options)   # a value: PETSc would read the next word
     from slepc4py import SLEPc  # noqa: F401  (starts SLEPc, and PETSc with it)
     _started = True
+    _collect_at_exit()
+
+
+def _collect_at_exit():
+    """Registers the exit-time collection once, after petsc4py registered its own exit handler (atexit runs the last
+    registered first): the collection then runs before petsc4py's clean-up."""
+    global _collect_registered
+    if not _collect_registered:
+        atexit.register(gc.collect)
+        _collect_registered = True
 
 
 def _quoted(word):

@@ -1,11 +1,11 @@
 """The results of a reduction, in pyMOR's shape, on the C library's objects:
 
-    model = kryflex.reduce(scene).model                   # a ReducedModel (KFReducedModel)
+    model = kryflex.Reducer(scene).reduce().model        # a ReducedModel (KFReducedModel)
     system = model.at([37.5])                             # a ReducedSystem (KFReducedSystem)
     T = system.frf(np.geomspace(0.01, 10, 500)); L = system.moments(10)
 
-Every number comes from C (src/model, src/measure); this module only names and shapes them. The Reducer (on
-KFReducer) joins it when src/reducer lands.
+Every number comes from C (src/model, src/measure); this module only names and shapes them. The Reducer that makes
+the models (on KFReducer) is in reducer.py.
 """
 import dataclasses
 import functools

@@ -27,6 +27,28 @@ if INT_DTYPE.itemsize != sizeof(PetscInt) or np.dtype(PETSc.RealType) != np.dtyp
                                                                     INT_DTYPE, np.dtype(PETSc.RealType)))
 
 
+cdef void release(PetscObject *obj) nogil:
+    """Releases the binding's reference to a kryflex PETSc object (KFScene, KFReducer, KFReducedModel) from a
+    __dealloc__, as petsc4py releases its own objects: nothing after PetscFinalize; on one rank, destroyed now; on
+    several, through PETSc's garbage (PetscObjectDelayedDestroy). Python's garbage collector frees an object at
+    different times on different ranks (a frame kept in a reference cycle on one rank only, say), and an object that
+    lives on one rank and not on another leaves its communicator alive on one rank only: the next collective
+    communicator duplication (petsc4py's PetscGarbageCleanup at exit, a new object) then waits forever.
+    PetscGarbageCleanup (at exit, or PETSc.garbage_cleanup()) destroys what every rank has released."""
+    cdef MPI_Comm comm
+    cdef int size = 1
+    cdef PetscObject o = obj[0]
+    obj[0] = NULL
+    if o == NULL or not <int>PetscInitializeCalled or <int>PetscFinalizeCalled:
+        return
+    if PetscObjectGetComm(o, &comm) == 0:
+        MPI_Comm_size(comm, &size)
+    if size > 1:
+        PetscObjectDelayedDestroy(&o)
+    else:
+        PetscObjectDestroy(&o)
+
+
 cdef inline PetscReal *real_ptr(cnp.ndarray a):
     return <PetscReal*>cnp.PyArray_DATA(a)
 

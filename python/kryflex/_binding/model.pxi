@@ -80,8 +80,7 @@ cdef class CReducedModel:
     cdef KFReducedModel m
 
     def __dealloc__(self):
-        if self.m != NULL:
-            KFReducedModelDestroy(&self.m)
+        release(<PetscObject*>&self.m)
 
     cdef int adopt(self, KFReducedModel m, bint borrowed) except -1:
         """Holds m; a borrowed model gets its own reference."""

@@ -31,8 +31,7 @@ cdef class CScene:
         check(KFSceneCreate(c.comm, &self.s))
 
     def __dealloc__(self):
-        if self.s != NULL:
-            KFSceneDestroy(&self.s)
+        release(<PetscObject*>&self.s)
 
     def add_body(self, name, Mat M not None, Mat K not None, ids, xyz, ndof):
         cdef cnp.ndarray cids = index_array(ids, "body %r node ids" % name)

@@ -19,17 +19,20 @@ USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structur
   kryflex info SCENE                    bodies, dofs, joints, rigid and mechanism modes, inputs, outputs, memory
   kryflex convert INPUT --name NAME     import Matrix Market, NumPy .npz or Nastran DMIG (.pch) body matrices
 
-PETSc options may follow (e.g. -log_view, -scene.damping 0.005, -scene.reduction.moments 12); -quiet silences
-progress. Run under MPI as: mpirun -n 2 kryflex reduce SCENE -o OUTDIR. 'kryflex COMMAND -h' for details.
+PETSc options may follow (e.g. -log_view, -kf_moments 12, -kf_damping 0.005, -scene.reduction.moments 12); -quiet
+silences progress. Run under MPI as: mpirun -n 2 kryflex reduce SCENE -o OUTDIR. 'kryflex COMMAND -h' for details;
+'kryflex reduce -help' lists the reducer's -kf_ options with their defaults.
 """
 
 
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
-    # PETSc reads the command line's options (-log_view, -kf_*, -scene.*) when it starts: before anything else
+    # PETSc reads the command line's options (-log_view, -kf_*, -scene.*) when it starts: before anything else. The
+    # help flags are the commands' own (kryflex reduce -help lists the reducer's options itself): PETSc's general
+    # help is left out.
     from .. import init
-    init([sys.argv[0] if sys.argv else "kryflex"] + argv)
-    if not argv or argv[0] in ("-h", "--help", "help"):
+    init([sys.argv[0] if sys.argv else "kryflex"] + [a for a in argv if a not in ("-h", "-help", "--help")])
+    if not argv or argv[0] in ("-h", "-help", "--help", "help"):
         say(USAGE)
         return EXIT_OK if argv else EXIT_INPUT
     cmd, rest = argv[0], argv[1:]
@@ -42,7 +45,7 @@ def main(argv=None):
         return EXIT_INPUT
     if "-quiet" in rest or "--quiet" in rest:
         from petsc4py import PETSc
-        PETSc.Options().setValue("kryflex_quiet", True)
+        PETSc.Options().setValue("kf_quiet", True)
     try:
         return commands[cmd](rest)
     except SystemExit as e:

@@ -1,4 +1,5 @@
-"""kryflex reduce SCENE -o OUTDIR: reduce a scene, verify it, write the reduced model and the report."""
+"""kryflex reduce SCENE -o OUTDIR: reduce a scene, verify it, write the reduced model and the report (on the C reducer,
+KFReducer: every -kf_ option applies; kryflex reduce -help lists them)."""
 import os
 import shutil
 
@@ -6,15 +7,45 @@ from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Parser, err
                      split_petsc_options)
 
 
-def run(argv):
-    p = Parser(prog="kryflex reduce", description="Reduce a scene and verify the reduced model against the full order.")
+HELP_FLAGS = ("-h", "-help", "--help")
+
+
+def parser():
+    p = Parser(prog="kryflex reduce", description="Reduce a scene and verify the reduced model against the full order.",
+               epilog="Every scene value can be overridden with -scene.<path> <value> (e.g. -scene.reduction.moments 12); "
+                      "the reducer's own options (-kf_*, listed below with their defaults) override the scene.")
     p.add_argument("scene", help="scene file (YAML)")
     p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
     p.add_argument("--npz", action="store_true", help="also export the reduced bodies' arrays as NumPy .npz (kryflex reads only reduced.h5)")
-    p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
-    args = p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet", "-h", "--help"}))
+    p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines (-kf_quiet)")
+    return p
+
+
+def print_help(p):
+    """The command's usage, then the reducer's PETSc options with their defaults (KFReducerSetFromOptions under
+    -help, on a reducer without a scene)."""
+    say(p.format_help())
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    added = not opts.hasName("help")
+    if added:
+        opts.setValue("help", True)      # before the binding starts: KFInitialize lists -kf_quiet then
+    try:
+        from ..reducer import print_options_help
+        print_options_help()
+    finally:
+        if added:
+            opts.delValue("help")
+    return EXIT_OK
+
+
+def run(argv):
+    p = parser()
+    if any(a in HELP_FLAGS for a in argv):
+        return print_help(p)
+    args = p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet"}))
     from .. import _core
-    from ..pipeline import reduce as run_reduce
+    from ..reducer import Reducer
     from ..report import write_report, write_unverified
     from ..io.scene import SceneError, load_scene
 
@@ -22,11 +53,17 @@ def run(argv):
     created = _prepare_output(out)
     try:
         scene = load_scene(args.scene)
-        result = run_reduce(scene, quiet=True if args.quiet else None)
+        reducer = Reducer(scene, quiet=True if args.quiet else None)   # the scene's settings, then the -kf_ options
     except SceneError as e:
         _cleanup(out, created)
         error(str(e))
         return EXIT_INPUT
+    except _core.Error as e:     # a setting the reducer refuses (a scene value or a -kf_ option)
+        _cleanup(out, created)
+        error("%s: %s" % (args.scene, e))
+        return EXIT_INPUT
+    try:
+        result = reducer.reduce()
     except _core.Error as e:
         _cleanup(out, created)
         error("the model cannot be reduced: %s" % e)

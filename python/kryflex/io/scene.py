@@ -240,7 +240,7 @@ class Scene:
                     mats.append(_core.load_matrix(fpath, self.comm))
                 except _core.Error as e:
                     _fail(bw + "." + key, str(e))
-                if not PETSc.Options().getBool("kryflex_quiet", False):
+                if not PETSc.Options().getBool("kf_quiet", False):
                     _core.progress("loaded %s of body '%s': %s (%d dofs)" % (key, bname, b[key], mats[-1].getSize()[0]),
                                    self.comm)
             ids, xyz, ndof = _read_nodes(bw + ".nodes", b["nodes"], base)

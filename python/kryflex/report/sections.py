@@ -57,7 +57,7 @@ def _section_full_frequencies(c):
         n = max(len(v) for v in bodies.values())
         header = ["Mode"] + [f"Ω_{b} (Hz)" + (f", {dofs[b]} dofs" if b in dofs else "") for b in bodies]
         rows = [[str(m + 1)] + [fmt_freq(v[m]) if m < len(v) else "" for v in bodies.values()] for m in range(n)]
-        lines += ["Table 1a. Free-free component frequencies (lowest listed by the pipeline).", "",
+        lines += ["Table 1a. Free-free component frequencies (lowest listed by the reducer).", "",
                   table(header, rows), ""]
     freqs = s["full"]["frequencies_hz"]
     n = max(len(freqs[l]) for l in c.labels)
@@ -371,7 +371,7 @@ def _section_frf(c, plot_names):
     s = c.s
     accuracy = s.get("accuracy")
     lines = ["## 10. Frequency responses (cf. Fig. 3)", ""]
-    lines += ["Relative FRF error: the pipeline's maximum over the band, and, as a cross-check, the maximum of the "
+    lines += ["Relative FRF error: the reducer's maximum over the band, and, as a cross-check, the maximum of the "
               "pointwise error ||H_full − H_red||_F / ||H_full||_F of the plotted responses.", ""]
     rows, passed, judged = [], 0, 0
     for label in c.labels:

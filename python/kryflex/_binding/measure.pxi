@@ -1,0 +1,71 @@
+# The error measures of src/measure (one definition everywhere: the reducer, the verification, scripts and tests),
+# on NumPy arrays in the Python layouts: responses (frequencies, outputs, inputs), moments (k, outputs, inputs).
+# Undefined values are NaN, as in C.
+
+cdef cnp.ndarray blocks_ta(X, name):
+    """(n, t, a) -> the C layout: n blocks of t x a column-major, as one contiguous float64 array."""
+    arr = np.asarray(X, dtype=np.float64)
+    if arr.ndim != 3:
+        raise ValueError("%s must have 3 dimensions (count, outputs, inputs), got shape %s" % (name, arr.shape))
+    return np.ascontiguousarray(arr.transpose(0, 2, 1))
+
+
+def frf_error(Tf, Tr, PetscReal floor_db=-60.0):
+    """max over frequency of ||T_full - T_red||_F / max(||T_full||_F, floor), floor = 10^(floor_db/20) times the
+    band's largest ||T_full||_F (KFFRFError). Tf, Tr: complex (frequencies, outputs, inputs)."""
+    full = np.asarray(Tf)
+    red = np.asarray(Tr)
+    if full.shape != red.shape or full.ndim != 3:
+        raise ValueError("the full and reduced responses must have the same shape (frequencies, outputs, inputs), "
+                         "got %s and %s" % (full.shape, red.shape))
+    cdef cnp.ndarray fre = blocks_ta(full.real, "the full response")
+    cdef cnp.ndarray fim = blocks_ta(np.imag(full), "the full response")
+    cdef cnp.ndarray rre = blocks_ta(red.real, "the reduced response")
+    cdef cnp.ndarray rim = blocks_ta(np.imag(red), "the reduced response")
+    cdef PetscReal err = 0
+    check(KFFRFError(<PetscInt>full.shape[0], <PetscInt>full.shape[1], <PetscInt>full.shape[2], real_ptr(fre),
+                     real_ptr(fim), real_ptr(rre), real_ptr(rim), floor_db, &err))
+    return float(err)
+
+
+def moment_errors(Lall, PetscInt config, Lred, PetscReal negligible=1e-8):
+    """(errors (k), ratios (k, outputs, inputs)) of the reduced moments Lred against the full ones of configuration
+    config among Lall (configurations, k, outputs, inputs) (KFMomentErrors): normwise relative errors and entrywise
+    ratios L_full / L_red, NaN where the full moment is negligible over the configurations."""
+    full = np.asarray(Lall, dtype=np.float64)
+    if full.ndim != 4:
+        raise ValueError("Lall must have 4 dimensions (configurations, k, outputs, inputs), got shape %s" % (full.shape,))
+    nconfig, nmom, t, a = full.shape
+    if np.shape(Lred) != (nmom, t, a):
+        raise ValueError("Lred must have shape %s, got %s" % ((nmom, t, a), np.shape(Lred)))
+    if not 0 <= config < nconfig:
+        raise ValueError("configuration %d is not among the %d given" % (config, nconfig))
+    cdef cnp.ndarray cL = np.ascontiguousarray(full.transpose(0, 1, 3, 2))
+    cdef cnp.ndarray cR = blocks_ta(Lred, "Lred")
+    cdef cnp.ndarray errors = np.zeros(nmom)
+    cdef cnp.ndarray ratios = np.zeros(nmom * t * a)
+    check(KFMomentErrors(nmom, t, a, nconfig, real_ptr(cL), config, real_ptr(cR), negligible, real_ptr(errors),
+                         real_ptr(ratios)))
+    return errors, ratios.reshape(nmom, a, t).transpose(0, 2, 1).copy()
+
+
+def rigid_tolerance(lam, PetscInt nrigid):
+    """A relative tolerance separating the nrigid lowest eigenvalues from the rest (KFRigidTolerance)."""
+    cdef cnp.ndarray cl = fortran(lam, 1, "eigenvalues")
+    cdef PetscReal rtol = 0
+    check(KFRigidTolerance(<PetscInt>cl.shape[0], real_ptr(cl) if cl.shape[0] else NULL, nrigid, &rtol))
+    return float(rtol)
+
+
+def frequency_grid(band, resonances_hz, PetscReal zeta, PetscInt npoints):
+    """Log-spaced points over the band (Hz) plus 7 points around each resonance in it, sorted, unique
+    (KFFrequencyGrid)."""
+    lo, hi = [float(x) for x in band]
+    cdef cnp.ndarray fres = fortran(np.atleast_1d(np.asarray(resonances_hz, dtype=np.float64)), 1, "resonances")
+    if npoints < 0:
+        raise ValueError("the number of points must be >= 0, got %d" % npoints)
+    nres = fres.shape[0]
+    cdef cnp.ndarray f = np.zeros(max(npoints + 7 * nres, 1))
+    cdef PetscInt nf = 0
+    check(KFFrequencyGrid(lo, hi, npoints, nres, real_ptr(fres) if nres else NULL, zeta, &nf, real_ptr(f)))
+    return f[:nf].copy()

@@ -1,0 +1,181 @@
+"""The reduction of a scene, in pyMOR's shape, on the C reducer (KFReducer, src/reducer):
+
+    reducer = kryflex.Reducer(scene)                 # every scene key set on the C reducer, then its -kf_ options
+    reduction = reducer.reduce()                     # a Reduction: model, summary, both models
+    system = reduction.model.at([37.5])              # the reduced system at any angle (a ReducedSystem)
+    reducer.result(0, "frf_error")                   # the C reducer's named results, per angle of interest
+
+The policy (bases, importance, alpha_G, static correction, projection, verification) and every number are C's;
+this module maps the scene onto the reducer's setters, hands out the models and builds the report's summary from the
+reducer's results (report/summary.py).
+"""
+import contextlib
+
+import numpy as np
+
+from . import _core
+from .api import ReducedModel
+
+
+class Reduction:
+    """What a reduction made: the model of the scene's method (model), both models by name (multi_angle_model is
+    None when no multi-angle model was built) and the summary dict the report is written from."""
+
+    def __init__(self, model, summary, single_angle_model, multi_angle_model=None):
+        self.model = model
+        self.summary = summary
+        self.single_angle_model = single_angle_model
+        self.multi_angle_model = multi_angle_model
+
+    def __repr__(self):
+        return "Reduction(model=%s dofs per body (%s), multi_angle_model=%s)" % (
+            self.model.sizes, self.model.settings.get("method"),
+            None if self.multi_angle_model is None else self.multi_angle_model.sizes)
+
+
+@contextlib.contextmanager
+def quiet_progress(quiet):
+    """-kf_quiet set for the duration of the block when quiet is true (the C progress lines read it at each line)."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    added = bool(quiet) and not opts.getBool("kf_quiet", False)
+    if added:
+        opts.setValue("kf_quiet", True)
+    try:
+        yield
+    finally:
+        if added:
+            opts.delValue("kf_quiet")
+
+
+def _save_maps(value):
+    return "auto" if value in (None, "auto") else bool(value)
+
+
+class Reducer:
+    """The reduction of a loaded Scene (io/scene.py) by the C reducer.
+
+    Every scene key (reduction.*, verify.*, band, damping, accuracy, angles) is set on the reducer, then the -kf_
+    PETSc options are applied (KFReducerSetFromOptions): command-line options override the scene. quiet=True
+    silences the progress lines while this object works (-kf_quiet for the call); None leaves -kf_quiet as it is."""
+
+    def __init__(self, scene, quiet=None):
+        self.scene = scene
+        self.quiet = quiet
+        red, ver = scene.reduction, scene.verify
+        r = _core.CReducer(scene.comm)
+        r.set_type(red["basis"])
+        r.set_scene(scene.cscene)
+        r.set_angles([scene.angles_rad(c) for c in scene.configurations])
+        named = red["reduction_angle"]
+        r.set_reduction_angle(None if named == "auto" else scene.angles_rad(named))
+        multi = red["reduction_angles"]
+        r.set_multi_angles([scene.angles_rad(c) for c in multi] if multi else None)
+        r.set_method(red["method"])
+        r.set_band(*scene.band)
+        r.set_damping(scene.damping)
+        r.set_accuracy(scene.accuracy)
+        r.set_moments(int(red["moments"]), int(red["output_blocks"]))
+        r.set_importance(red["importance"], float(red["keep_threshold"]))
+        r.set_static_correction(bool(red["static_correction"]))
+        r.set_tolerances(float(red["deflation_tol"]), float(red["body_tol"]), float(red["reassembly_rtol"]))
+        r.set_shift(float(red["shift"]))
+        r.set_save_maps(_save_maps(red["save_maps"]))
+        r.eigen_set_cover(float(red["eigen_cover"]))
+        r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
+                           float(ver["frf_floor_db"]))
+        with quiet_progress(quiet):
+            r.set_from_options()
+        self.handle = r
+        self.configurations = self._angles_of_interest()
+        self._reduction = None
+
+    def _angles_of_interest(self):
+        """The configurations of interest in degrees, as the reducer has them: the scene's, or those of -kf_angles
+        (given in degrees, written back with the 12 digits a user gives)."""
+        angles = self.handle.get_angles()
+        scene = [list(c) for c in self.scene.configurations]
+        if len(angles) == len(scene) and all(np.array_equal(a, self.scene.angles_rad(c)) for a, c in zip(angles, scene)):
+            return scene
+        return [[float("%.12g" % d) for d in np.degrees(a)] for a in angles]
+
+    # ------------------------------------------------------------------ the reduction
+
+    def reduce(self):
+        """Sets up and solves (collective: every rank calls it and gets the same small dense models back); returns a
+        Reduction. A second call returns the same Reduction."""
+        if self._reduction is None:
+            # objects every rank has released since (earlier models and reducers under MPI wait in PETSc's garbage,
+            # see _binding/common.pxi): destroyed here, a collective point, before the new ones are made
+            from petsc4py import PETSc
+            PETSc.garbage_cleanup(self.scene.comm)
+            with quiet_progress(self.quiet):
+                self.handle.setup()
+                self.handle.solve()
+            chosen, single, multi = self.handle.models(ReducedModel)
+            from .report.summary import build_summary
+            self._reduction = Reduction(chosen, build_summary(self, single, multi, chosen), single, multi)
+        return self._reduction
+
+    # ------------------------------------------------------------------ what the solve recorded
+
+    @property
+    def nconfig(self):
+        return len(self.configurations)
+
+    def result_names(self, config=-1):
+        """Names of the results of configuration config (an index into the scene's angles of interest), or of the
+        whole solve (-1)."""
+        return self.handle.result_names(int(config))
+
+    def result(self, config, name):
+        """A named result as C recorded it: a NumPy array of C's shape (column-major), NaN where not available."""
+        return self.handle.result(int(config), name)
+
+    def moments(self, config, name):
+        """A moment result (full_moments, reduced_moments, moment_ratios, multi_moment_ratios) as (k, outputs, inputs)."""
+        return self.result(config, name).transpose(2, 0, 1)
+
+    def frf(self, config, which):
+        """The full ("full") or reduced ("reduced") frequency response of the verification at configuration config:
+        complex (frequencies, outputs, inputs), at the frequencies of result frf_frequencies_hz."""
+        re = self.result(config, "frf_%s_re" % which)
+        im = self.result(config, "frf_%s_im" % which)
+        return (re + 1j * im).transpose(2, 0, 1)
+
+    @property
+    def notes(self):
+        return self.handle.notes()
+
+    @property
+    def rule(self):
+        return self.handle.rule()
+
+    def view(self, viewer=None):
+        self.handle.view(viewer)
+
+    @property
+    def type(self):
+        return self.handle.get_type()
+
+
+def reduce(scene, quiet=None):
+    """Reduces a loaded Scene (Reducer(scene, quiet).reduce()): a Reduction (model, summary, single_angle_model,
+    multi_angle_model). quiet=True silences the progress lines for the call."""
+    return Reducer(scene, quiet).reduce()
+
+
+def print_options_help(comm=None):
+    """Prints the reducer's options (-kf_*, with their defaults) as PETSc's -help does: a reducer without a scene
+    reads its options with -help in the options database."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    added = not opts.hasName("help")
+    if added:
+        opts.setValue("help", True)
+    try:
+        _core.CReducer(comm).set_from_options()
+    finally:
+        if added:
+            opts.delValue("help")
+

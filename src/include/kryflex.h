@@ -335,7 +335,7 @@ PETSC_EXTERN PetscErrorCode KFReducerSetShift(KFReducer, PetscReal shift);
 /* keep each reduced body's map back to its full dofs in the model: PETSC_TRUE, PETSC_FALSE, or PETSC_DECIDE (keep it
    while no body has more than -kf_save_maps_max_dofs dofs, 200000) */
 PETSC_EXTERN PetscErrorCode KFReducerSetSaveMaps(KFReducer, PetscInt);
-/* eigen type: full-order modes up to cover x the band's top frequency (-kf_eigen_cover, 1) */
+/* eigen type: full-order modes up to cover x the band's top frequency (-kf_eigen_cover, 1); kept whatever the type */
 PETSC_EXTERN PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal cover);
 /* full-order verification: on/off, modes (PETSC_DECIDE: cover 3 x the band's top), frequency points, FRF floor (dB) */
 PETSC_EXTERN PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool full_order, PetscInt modes, PetscInt frequency_points, PetscReal frf_floor_db);

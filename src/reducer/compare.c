@@ -141,7 +141,8 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, const PetscReal Lfull[], KF
     PetscCall(KFReducerResultScalar_Private(r, c, "reassembly_seconds", t1 - t0));
     PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
     PetscCall(KFReducedSystemGetModes(rs, &lambda, &Phi, &nrigid, &Phir));
-    if (!Phir || nrigid != expected) PetscCall(KFReducerNote_Private(r, "reassembled model at %s deg: %s rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, !Phir ? "no" : "", expected));
+    if (!Phir) PetscCall(KFReducerNote_Private(r, "reassembled model at %s deg: no rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, expected));
+    else if (nrigid != expected) PetscCall(KFReducerNote_Private(r, "reassembled model at %s deg: %" PetscInt_FMT " rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, nrigid, expected));
     PetscCall(KFReducedSystemGetFrequencies(rs, &nf, &freq));
     PetscCall(KFReducedSystemMoments(rs, nmom, Lr));
     PetscCall(KFMomentErrors(nmom, t, a, r->nconfig, Lfull, c, Lr, r->negligible, errors, ratios));

@@ -64,6 +64,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->body_tol                = 1e-10;
   r->reassembly_rtol         = 1e-9;
   r->shift                   = 0.0;
+  r->eigen_cover             = 1.0;
   r->save_maps               = PETSC_DECIDE;
   r->save_maps_max_dofs      = 200000;
   r->gram_condition_max_dofs = 20000;
@@ -165,7 +166,7 @@ static PetscErrorCode KFReducerCopyAngles_Private(KFReducer r, const char what[]
   PetscFunctionBegin;
   PetscCall(KFReducerRevolute_Private(r, &nrev));
   PetscCheck(n >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "%s: the number of configurations must be >= 0, got %" PetscInt_FMT, what, n);
-  for (i = 0; i < n * nrev; i++) PetscCheck(PetscIsNormalReal(in[i]) || in[i] == 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "%s: angles must be finite numbers, entry %" PetscInt_FMT " is %g", what, i, (double)in[i]);
+  for (i = 0; i < n * nrev; i++) PetscCheck(!PetscIsInfOrNanReal(in[i]), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "%s: angles must be finite numbers, entry %" PetscInt_FMT " is %g", what, i, (double)in[i]);
   PetscCall(PetscFree(*out));
   PetscCall(PetscCalloc1(PetscMax(n * nrev, 1), out));
   if (n > 0 && nrev > 0) PetscCall(PetscArraycpy(*out, in, n * nrev));

@@ -45,16 +45,14 @@ static PetscErrorCode KFSetString(KFReducedModel m, const char key[], const char
 PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KFReducerMethod method, PetscInt n, const PetscReal angles[])
 {
   PetscInt    nrev;
-  PetscReal   cover = 1.0;
   KFReducerType type;
   char        buf[16384], num[64];
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
   PetscCall(KFReducerGetType(r, &type));
-  PetscTryMethod(r, "KFReducerEigenGetCover_C", (KFReducer, PetscReal *), (r, &cover));
   PetscCall(KFSetString(m, "basis", type));
-  PetscCall(KFSetReal(m, "eigen_cover", cover));
+  PetscCall(KFSetReal(m, "eigen_cover", r->eigen_cover));
   PetscCall(PetscSNPrintf(num, sizeof(num), "%" PetscInt_FMT, r->moments));
   PetscCall(KFReducedModelSetSetting(m, "moments", num));
   PetscCall(PetscSNPrintf(num, sizeof(num), "%" PetscInt_FMT, r->output_blocks));

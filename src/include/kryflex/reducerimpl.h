@@ -64,6 +64,7 @@ struct _p_KFReducer {
   PetscReal       keep_threshold;
   PetscBool       static_correction;
   PetscReal       deflation_tol, body_tol, reassembly_rtol, shift;
+  PetscReal       eigen_cover;    /* eigen type's cover, kept here so that it survives a change of type */
   PetscInt        save_maps;      /* PETSC_TRUE, PETSC_FALSE or PETSC_DECIDE */
   PetscInt        save_maps_max_dofs, gram_condition_max_dofs;
   PetscReal       negligible;     /* a moment below this fraction of its largest value over the angles is zero */

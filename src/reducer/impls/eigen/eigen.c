@@ -3,15 +3,10 @@
    (one solve with K+). */
 #include <kryflex/reducerimpl.h>
 
-typedef struct {
-  PetscReal cover;
-} KFReducer_Eigen;
-
 static PetscErrorCode KFReducerBuildBasis_Eigen(KFReducer r, KFSystem sys, KFFlexSolver solver, KFReducerBasis *basis)
 {
-  KFReducer_Eigen *eig = (KFReducer_Eigen *)r->data;
   PetscInt         nrev, nsys, a, t, nflex, nev, nconv = 0, m = 0;
-  PetscReal       *w2 = NULL, *C, *HrT, fmax = eig->cover * r->band[1];
+  PetscReal       *w2 = NULL, *C, *HrT, fmax = r->eigen_cover * r->band[1];
   Mat              modes = NULL, Mm, Ms, Ks, G, Ht;
 
   PetscFunctionBegin;
@@ -124,73 +119,41 @@ static PetscErrorCode KFReducerDestroyBasis_Eigen(KFReducer r, KFReducerBasis *b
 
 static PetscErrorCode KFReducerSetFromOptions_Eigen(KFReducer r, PetscOptionItems *PetscOptionsObject)
 {
-  KFReducer_Eigen *eig = (KFReducer_Eigen *)r->data;
+  PetscReal cover = r->eigen_cover;
+  PetscBool flg;
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "Eigenvector baseline (-kf_reducer_type eigen)");
-  PetscCall(PetscOptionsReal("-kf_eigen_cover", "Full-order modes up to this multiple of the band's top frequency", "KFReducerEigenSetCover", eig->cover, &eig->cover, NULL));
+  PetscCall(PetscOptionsReal("-kf_eigen_cover", "Full-order modes up to this multiple of the band's top frequency", "KFReducerEigenSetCover", cover, &cover, &flg));
   PetscOptionsHeadEnd();
-  PetscCheck(eig->cover > 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_eigen_cover: give a positive multiple of the band's top frequency, got %g", (double)eig->cover);
+  if (flg) PetscCall(KFReducerEigenSetCover(r, cover));
   PetscFunctionReturn(0);
 }
 
 static PetscErrorCode KFReducerView_Eigen(KFReducer r, PetscViewer viewer)
 {
-  KFReducer_Eigen *eig = (KFReducer_Eigen *)r->data;
-
   PetscFunctionBegin;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "eigenvector basis: full-order modes up to %g x the band's top frequency\n", (double)eig->cover));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "eigenvector basis: full-order modes up to %g x the band's top frequency\n", (double)r->eigen_cover));
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFReducerEigenSetCover_Eigen(KFReducer r, PetscReal cover)
-{
-  PetscFunctionBegin;
-  PetscCheck(cover > 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "eigen cover: give a positive multiple of the band's top frequency, got %g", (double)cover);
-  ((KFReducer_Eigen *)r->data)->cover = cover;
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode KFReducerEigenGetCover_Eigen(KFReducer r, PetscReal *cover)
-{
-  PetscFunctionBegin;
-  *cover = ((KFReducer_Eigen *)r->data)->cover;
-  PetscFunctionReturn(0);
-}
-
-/* ignored by other types, like KSP's type-specific setters */
+/* kept by the reducer whatever its type, so that a later -kf_reducer_type eigen finds it */
 PetscErrorCode KFReducerEigenSetCover(KFReducer r, PetscReal cover)
 {
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
-  PetscTryMethod(r, "KFReducerEigenSetCover_C", (KFReducer, PetscReal), (r, cover));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode KFReducerDestroy_Eigen(KFReducer r)
-{
-  PetscFunctionBegin;
-  PetscCall(PetscObjectComposeFunction((PetscObject)r, "KFReducerEigenSetCover_C", NULL));
-  PetscCall(PetscObjectComposeFunction((PetscObject)r, "KFReducerEigenGetCover_C", NULL));
-  PetscCall(PetscFree(r->data));
+  PetscCheck(cover > 0 && !PetscIsInfOrNanReal(cover), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "eigen cover: give a positive multiple of the band's top frequency, got %g (-kf_eigen_cover)", (double)cover);
+  r->eigen_cover = cover;
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFReducerCreate_Eigen(KFReducer r)
 {
-  KFReducer_Eigen *eig;
-
   PetscFunctionBegin;
-  PetscCall(PetscNew(&eig));
-  eig->cover               = 1.0;
-  r->data                  = eig;
-  r->ops->buildbasis       = KFReducerBuildBasis_Eigen;
-  r->ops->vectors          = KFReducerVectors_Eigen;
-  r->ops->destroybasis     = KFReducerDestroyBasis_Eigen;
-  r->ops->setfromoptions   = KFReducerSetFromOptions_Eigen;
-  r->ops->view             = KFReducerView_Eigen;
-  r->ops->destroy          = KFReducerDestroy_Eigen;
-  PetscCall(PetscObjectComposeFunction((PetscObject)r, "KFReducerEigenSetCover_C", KFReducerEigenSetCover_Eigen));
-  PetscCall(PetscObjectComposeFunction((PetscObject)r, "KFReducerEigenGetCover_C", KFReducerEigenGetCover_Eigen));
+  r->ops->buildbasis     = KFReducerBuildBasis_Eigen;
+  r->ops->vectors        = KFReducerVectors_Eigen;
+  r->ops->destroybasis   = KFReducerDestroyBasis_Eigen;
+  r->ops->setfromoptions = KFReducerSetFromOptions_Eigen;
+  r->ops->view           = KFReducerView_Eigen;
   PetscFunctionReturn(0);
 }

@@ -34,6 +34,33 @@ class Reduction:
 
 
 @contextlib.contextmanager
+def kf_options(options):
+    """The given -kf_ options (names without the -kf_, e.g. moments=12, reducer_type="eigen", band=(0.01, 5)) set
+    in PETSc's options database for the duration of the block, and what was there before put back."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    before = {}
+    for key, value in options.items():
+        name = "kf_" + key
+        before[name] = opts.getString(name) if opts.hasName(name) else None
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif isinstance(value, (list, tuple)) or hasattr(value, "tolist"):
+            text = ",".join("%.17g" % float(x) for x in (value.tolist() if hasattr(value, "tolist") else value))
+        else:
+            text = str(value)
+        opts.setValue(name, text)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                opts.delValue(name)
+            else:
+                opts.setValue(name, value)
+
+
+@contextlib.contextmanager
 def quiet_progress(quiet):
     """-kf_quiet set for the duration of the block when quiet is true (the C progress lines read it at each line)."""
     from petsc4py import PETSc
@@ -57,9 +84,11 @@ class Reducer:
 
     Every scene key (reduction.*, verify.*, band, damping, accuracy, angles) is set on the reducer, then the -kf_
     PETSc options are applied (KFReducerSetFromOptions): command-line options override the scene. quiet=True
-    silences the progress lines while this object works (-kf_quiet for the call); None leaves -kf_quiet as it is."""
+    silences the progress lines while this object works (-kf_quiet for the call); None leaves -kf_quiet as it is.
+    Keyword options are -kf_ options by their names without -kf_ (moments=12, reducer_type="eigen",
+    band=(0.01, 5), static_correction=False); they override the scene and the command line for this reducer only."""
 
-    def __init__(self, scene, quiet=None):
+    def __init__(self, scene, quiet=None, **options):
         self.scene = scene
         self.quiet = quiet
         red, ver = scene.reduction, scene.verify
@@ -84,7 +113,7 @@ class Reducer:
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]))
-        with quiet_progress(quiet):
+        with quiet_progress(quiet), kf_options(options):
             r.set_from_options()
         self.handle = r
         self.configurations = self._angles_of_interest()
@@ -159,10 +188,10 @@ class Reducer:
         return self.handle.get_type()
 
 
-def reduce(scene, quiet=None):
-    """Reduces a loaded Scene (Reducer(scene, quiet).reduce()): a Reduction (model, summary, single_angle_model,
-    multi_angle_model). quiet=True silences the progress lines for the call."""
-    return Reducer(scene, quiet).reduce()
+def reduce(scene, quiet=None, **options):
+    """Reduces a loaded Scene (Reducer(scene, quiet, **options).reduce()): a Reduction (model, summary,
+    single_angle_model, multi_angle_model). quiet=True silences the progress lines for the call."""
+    return Reducer(scene, quiet, **options).reduce()
 
 
 def print_options_help(comm=None):

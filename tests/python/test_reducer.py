@@ -332,6 +332,20 @@ def test_kf_options_override_the_scene(scenes):
         reducer.result(2, "reduced_dofs")      # two angles of interest, not the scene's three
 
 
+def test_keyword_options_set_this_reducer_only(scenes):
+    """Reducer(scene, **options) takes -kf_ options by name (moments=6, method="multi-angle", verify=False,
+    damping=0.01): they reach the C reducer and are gone from PETSc's options afterwards."""
+    from petsc4py import PETSc
+    scene = kryflex.load_scene(scenes["frames"])
+    reducer = kryflex.Reducer(scene, quiet=True, moments=6, method="multi-angle", verify=False, damping=0.01)
+    opts = PETSc.Options()
+    assert not any(opts.hasName(n) for n in ("kf_moments", "kf_method", "kf_verify", "kf_damping"))
+    reduction = reducer.reduce()
+    assert reduction.model.settings["moments"] == 6 and reduction.model.settings["method"] == "multi-angle"
+    assert reduction.model.settings["damping"] == 0.01
+    assert "frf_error" not in reducer.result_names(0)
+
+
 def test_quiet_silences_the_progress_lines_for_the_call_only(scenes, capfd):
     from petsc4py import PETSc
     opts = PETSc.Options()

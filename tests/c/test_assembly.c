@@ -11,27 +11,7 @@
    and that bad scenes (an interface on a missing node, a joint from a body to itself, a body no joint reaches)
    return an error code instead of aborting.
    Run from the source folder (CTest does), serial or under mpiexec; rank 0 prints; non-zero exit on failure. */
-#include <kryflex.h>
-
-static int nfail = 0;
-
-static PetscErrorCode Check(const char what[], PetscReal err, PetscReal tol)
-{
-  PetscBool ok = (err <= tol && !PetscIsInfOrNanReal(err)) ? PETSC_TRUE : PETSC_FALSE;
-
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-70s %9.2e  (tol %7.1e)  %s\n", what, (double)err, (double)tol, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
-
-static PetscErrorCode CheckTrue(const char what[], PetscBool ok)
-{
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-90s %s\n", what, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
+#include "kftest.h"
 
 /* ------------------------------------------------------------------ a body from meshes/galileo */
 
@@ -42,33 +22,25 @@ typedef struct {
   PetscReal  xyz[3 * 64];
 } Body;
 
-/* Nodes file: 'id x y z ndof' per line, '#' comments. Every rank reads it. */
-static PetscErrorCode ReadNodes(const char path[], Body *b)
+/* the nodes file (kftest.h's reader) into the fixed arrays of a Body, with each node's first dof */
+static PetscErrorCode ReadBodyNodes(const char path[], Body *b)
 {
-  FILE *fp;
-  char  line[512];
+  PetscInt  *ids, *ndof, n = 0;
+  PetscReal *xyz;
 
   PetscFunctionBegin;
-  fp = fopen(path, "r");
-  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "cannot open %s (run from the source folder)", path);
-  b->nnodes = b->n = 0;
-  while (fgets(line, sizeof(line), fp)) {
-    long long id, nd;
-    double    x, y, z;
-    char     *hash = strchr(line, '#');
-    if (hash) *hash = 0;
-    if (sscanf(line, "%lld %lf %lf %lf %lld", &id, &x, &y, &z, &nd) != 5) continue;
-    PetscCheck(b->nnodes < 64, PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: too many nodes for this test", path);
-    b->ids[b->nnodes]             = (PetscInt)id;
-    b->ndof[b->nnodes]            = (PetscInt)nd;
-    b->first[b->nnodes]           = b->n;
-    b->xyz[3 * b->nnodes + 0]     = x;
-    b->xyz[3 * b->nnodes + 1]     = y;
-    b->xyz[3 * b->nnodes + 2]     = z;
-    b->n                         += (PetscInt)nd;
-    b->nnodes++;
+  PetscCall(ReadNodes(path, &n, &ids, &xyz, &ndof));
+  PetscCheck(n <= 64, PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: too many nodes for this test", path);
+  b->nnodes = n;
+  b->n      = 0;
+  for (PetscInt k = 0; k < n; k++) {
+    b->ids[k]   = ids[k];
+    b->ndof[k]  = ndof[k];
+    b->first[k] = b->n;
+    for (PetscInt j = 0; j < 3; j++) b->xyz[3 * k + j] = xyz[3 * k + j];
+    b->n += ndof[k];
   }
-  fclose(fp);
+  PetscCall(PetscFree3(ids, xyz, ndof));
   PetscFunctionReturn(0);
 }
 
@@ -78,7 +50,7 @@ static PetscErrorCode LoadBody(const char stem[], Body *b)
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_nodes.txt", stem));
-  PetscCall(ReadNodes(path, b));
+  PetscCall(ReadBodyNodes(path, b));
   PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_M.mtx", stem));
   PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &b->M));
   PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_K.mtx", stem));

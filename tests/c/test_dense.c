@@ -2,19 +2,7 @@
    with plain loops and Gaussian elimination: eigenpairs, null spaces, moments, frequency responses,
    static correction, mode importance, joint rotations and reassembly at any angle.
    Every rank runs every check on the same data; rank 0 prints; the exit code is non-zero on failure. */
-#include <kryflex.h>
-
-static int nfail = 0;
-
-static PetscErrorCode Check(const char what[], PetscReal err, PetscReal tol)
-{
-  PetscBool ok = (err <= tol && !PetscIsInfOrNanReal(err)) ? PETSC_TRUE : PETSC_FALSE;
-
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-66s %9.2e  (tol %7.1e)  %s\n", what, (double)err, (double)tol, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
+#include "kftest.h"
 
 /* ------------------------------------------------------------------ plain dense helpers (column-major) */
 

@@ -4,54 +4,12 @@
    (KFDenseMoments of KFSystemProject) compared with the full-order ones (KFFlexSolverMoments) at two clock angles.
    Runs from the source root (CMake sets the working folder), serial and on 2 ranks; rank 0 prints; the exit code
    is non-zero on failure. */
-#include <kryflex.h>
+#include "kftest.h"
 #include <slepcsys.h>
 
 #define GALILEO "meshes/galileo/"
 #define NMOM    10
 #define MATCH   1e-8 /* the paper's Table 6: L_full^k / L_reduced^k = 1 to 8 digits */
-
-static int nfail = 0;
-
-static PetscErrorCode Check(const char what[], PetscReal err, PetscReal tol)
-{
-  PetscBool ok = (err <= tol && !PetscIsInfOrNanReal(err)) ? PETSC_TRUE : PETSC_FALSE;
-
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-62s %9.2e  (tol %7.1e)  %s\n", what, (double)err, (double)tol, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
-
-/* A nodes file: "id x y z ndof" per line, '#' comments. Every rank reads it (it is small). */
-static PetscErrorCode ReadNodes(const char path[], PetscInt *nnodes, PetscInt **ids, PetscReal **xyz, PetscInt **ndof)
-{
-  FILE    *fp;
-  char     line[512];
-  PetscInt n = 0, cap = 16;
-
-  PetscFunctionBegin;
-  PetscCall(PetscFOpen(PETSC_COMM_SELF, path, "r", &fp));
-  PetscCall(PetscMalloc3(cap, ids, 3 * cap, xyz, cap, ndof));
-  while (fgets(line, sizeof(line), fp)) {
-    long long id, d;
-    double    x, y, z;
-    char     *hash = strchr(line, '#');
-    if (hash) *hash = 0;
-    if (sscanf(line, "%lld %lf %lf %lf %lld", &id, &x, &y, &z, &d) != 5) continue;
-    PetscCheck(n < cap, PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: more than %" PetscInt_FMT " nodes; this test reads small files only", path, cap);
-    (*ids)[n]         = (PetscInt)id;
-    (*ndof)[n]        = (PetscInt)d;
-    (*xyz)[3 * n + 0] = x;
-    (*xyz)[3 * n + 1] = y;
-    (*xyz)[3 * n + 2] = z;
-    n++;
-  }
-  PetscCall(PetscFClose(PETSC_COMM_SELF, fp));
-  PetscCheck(n > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s holds no nodes", path);
-  *nnodes = n;
-  PetscFunctionReturn(0);
-}
 
 static PetscErrorCode AddBody(KFScene scene, const char name[], PetscInt *body)
 {

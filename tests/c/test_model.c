@@ -12,37 +12,13 @@
      (checksum) file, and saves into a missing folder or with a body name HDF5 cannot take, fail with the right
      error code and message on every rank, leaving an earlier file byte-identical and no temporary behind.
    Run from the source folder (CTest does), serial or under mpiexec; rank 0 prints; non-zero exit on failure. */
-#include <kryflex.h>
+#include "kftest.h"
 #include <hdf5.h>
 #include <petscblaslapack.h>
 #include <unistd.h>
 #include <sys/stat.h>
 
 #define GALILEO "meshes/galileo/"
-
-static int nfail = 0;
-
-static PetscErrorCode Check(const char what[], PetscReal err, PetscReal tol)
-{
-  PetscBool ok = (err <= tol && !PetscIsInfOrNanReal(err)) ? PETSC_TRUE : PETSC_FALSE;
-
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-76s %9.2e  (tol %7.1e)  %s\n", what, (double)err, (double)tol, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
-
-/* a condition that must hold on every rank */
-static PetscErrorCode CheckTrue(const char what[], PetscBool ok)
-{
-  PetscBool all;
-
-  PetscFunctionBegin;
-  PetscCall(MPIU_Allreduce(&ok, &all, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
-  if (!all) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-96s %s\n", what, all ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
 
 static PetscBool Same(PetscInt n, const PetscReal a[], const PetscReal b[])
 {
@@ -57,34 +33,6 @@ static PetscReal RelDiff(PetscReal x, PetscReal y)
 }
 
 /* ------------------------------------------------------------------ the Galileo-like scene */
-
-static PetscErrorCode ReadNodes(const char path[], PetscInt *nnodes, PetscInt **ids, PetscReal **xyz, PetscInt **ndof)
-{
-  FILE    *fp;
-  char     line[512];
-  PetscInt n = 0, cap = 64;
-
-  PetscFunctionBegin;
-  PetscCall(PetscFOpen(PETSC_COMM_SELF, path, "r", &fp));
-  PetscCall(PetscMalloc3(cap, ids, 3 * cap, xyz, cap, ndof));
-  while (fgets(line, sizeof(line), fp)) {
-    long long id, d;
-    double    x, y, z;
-    char     *hash = strchr(line, '#');
-    if (hash) *hash = 0;
-    if (sscanf(line, "%lld %lf %lf %lf %lld", &id, &x, &y, &z, &d) != 5) continue;
-    PetscCheck(n < cap, PETSC_COMM_SELF, PETSC_ERR_SUP, "%s: too many nodes for this test", path);
-    (*ids)[n]         = (PetscInt)id;
-    (*ndof)[n]        = (PetscInt)d;
-    (*xyz)[3 * n + 0] = x;
-    (*xyz)[3 * n + 1] = y;
-    (*xyz)[3 * n + 2] = z;
-    n++;
-  }
-  PetscCall(PetscFClose(PETSC_COMM_SELF, fp));
-  *nnodes = n;
-  PetscFunctionReturn(0);
-}
 
 static PetscErrorCode AddBody(KFScene scene, const char stem[], const char name[], PetscInt *body)
 {

@@ -12,32 +12,8 @@
      saved and loaded back reassembles to the same K, bit for bit, at an angle that is not an angle of interest;
    - a solve of the eigen type (the eigenvector baseline) on the same scene gives a model.
    Run from the source folder (CTest does), serial or under mpiexec; rank 0 prints; non-zero exit on failure. */
-#include <kryflex.h>
+#include "kftest.h"
 #include <unistd.h>
-
-static int nfail = 0;
-
-static PetscErrorCode Check(const char what[], PetscReal err, PetscReal tol)
-{
-  PetscBool ok = (err <= tol && !PetscIsInfOrNanReal(err)) ? PETSC_TRUE : PETSC_FALSE;
-
-  PetscFunctionBegin;
-  if (!ok) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-76s %9.2e  (tol %7.1e)  %s\n", what, (double)err, (double)tol, ok ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
-
-/* a condition that must hold on every rank */
-static PetscErrorCode CheckTrue(const char what[], PetscBool ok)
-{
-  PetscBool all;
-
-  PetscFunctionBegin;
-  PetscCall(MPIU_Allreduce(&ok, &all, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
-  if (!all) nfail++;
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %-96s %s\n", what, all ? "ok" : "FAIL"));
-  PetscFunctionReturn(0);
-}
 
 /* a call that must fail (ierr set by the caller under KFPushErrorRecorder), with the same code on every rank */
 static PetscErrorCode ExpectFailure(const char what[], PetscErrorCode ierr)

@@ -459,21 +459,38 @@ done:
   PetscFunctionReturn(0);
 }
 
+/* opens dataset name of loc, or records why not ('what' names it for messages); dset < 0 then */
+static PetscErrorCode OpenDataset(KFReader *r, hid_t loc, const char where[], const char name[], char what[], size_t len, hid_t *dset)
+{
+  PetscFunctionBegin;
+  *dset = -1;
+  PetscCall(PetscSNPrintf(what, len, "%sdataset '%s'", where, name));
+  if (r->st->code) PetscFunctionReturn(0);
+  if (!Exists(loc, name)) PetscCall(Inconsistent(r, "%s is missing", what));
+  else if ((*dset = H5Dopen2(loc, name, H5P_DEFAULT)) < 0) PetscCall(ReadFail(r, what));
+  PetscFunctionReturn(0);
+}
+
+/* opens attribute name of loc, or records why not; attr < 0 then */
+static PetscErrorCode OpenAttribute(KFReader *r, hid_t loc, const char where[], const char name[], char what[], size_t len, hid_t *attr)
+{
+  PetscFunctionBegin;
+  *attr = -1;
+  PetscCall(PetscSNPrintf(what, len, "%sattribute '%s'", where, name));
+  if (r->st->code) PetscFunctionReturn(0);
+  if (H5Aexists(loc, name) <= 0) PetscCall(Inconsistent(r, "%s is missing", what));
+  else if ((*attr = H5Aopen(loc, name, H5P_DEFAULT)) < 0) PetscCall(ReadFail(r, what));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadStringAttr(KFReader *r, hid_t loc, const char where[], const char name[], size_t len, char value[])
 {
   hid_t attr;
   char  what[3 * KF_MAX_NAME];
 
   PetscFunctionBegin;
-  if (r->st->code) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(what, sizeof(what), "%sattribute '%s'", where, name));
-  if (H5Aexists(loc, name) <= 0) {
-    PetscCall(Inconsistent(r, "%s is missing", what));
-    PetscFunctionReturn(0);
-  }
-  attr = H5Aopen(loc, name, H5P_DEFAULT);
-  if (attr < 0) PetscCall(ReadFail(r, what));
-  else {
+  PetscCall(OpenAttribute(r, loc, where, name, what, sizeof(what), &attr));
+  if (attr >= 0) {
     hid_t    space = H5Aget_space(attr);
     hssize_t np    = space >= 0 ? H5Sget_simple_extent_npoints(space) : -1;
     if (space >= 0) H5Sclose(space);
@@ -491,15 +508,8 @@ static PetscErrorCode ReadNumberAttr(KFReader *r, hid_t loc, const char where[],
   char  what[3 * KF_MAX_NAME];
 
   PetscFunctionBegin;
-  if (r->st->code) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(what, sizeof(what), "%sattribute '%s'", where, name));
-  if (H5Aexists(loc, name) <= 0) {
-    PetscCall(Inconsistent(r, "%s is missing", what));
-    PetscFunctionReturn(0);
-  }
-  attr = H5Aopen(loc, name, H5P_DEFAULT);
-  if (attr < 0) PetscCall(ReadFail(r, what));
-  else {
+  PetscCall(OpenAttribute(r, loc, where, name, what, sizeof(what), &attr));
+  if (attr >= 0) {
     hid_t       space = H5Aget_space(attr), type = H5Aget_type(attr);
     hssize_t    np    = space >= 0 ? H5Sget_simple_extent_npoints(space) : -1;
     H5T_class_t cls   = type >= 0 ? H5Tget_class(type) : H5T_NO_CLASS;
@@ -533,17 +543,8 @@ static PetscErrorCode ReadStrings(KFReader *r, hid_t loc, const char where[], co
   PetscFunctionBegin;
   *n     = 0;
   *names = NULL;
-  if (r->st->code) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(what, sizeof(what), "%sdataset '%s'", where, name));
-  if (!Exists(loc, name)) {
-    PetscCall(Inconsistent(r, "%s is missing", what));
-    PetscFunctionReturn(0);
-  }
-  dset = H5Dopen2(loc, name, H5P_DEFAULT);
-  if (dset < 0) {
-    PetscCall(ReadFail(r, what));
-    PetscFunctionReturn(0);
-  }
+  PetscCall(OpenDataset(r, loc, where, name, what, sizeof(what), &dset));
+  if (dset < 0) PetscFunctionReturn(0);
   space = H5Dget_space(dset);
   ndims = space >= 0 ? H5Sget_simple_extent_ndims(space) : -1;
   if (ndims == 1) H5Sget_simple_extent_dims(space, dims, NULL);
@@ -569,17 +570,8 @@ static PetscErrorCode ReadMatrix(KFReader *r, hid_t loc, const char where[], con
 
   PetscFunctionBegin;
   *a = NULL;
-  if (r->st->code) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(what, sizeof(what), "%sdataset '%s'", where, name));
-  if (!Exists(loc, name)) {
-    PetscCall(Inconsistent(r, "%s is missing", what));
-    PetscFunctionReturn(0);
-  }
-  dset = H5Dopen2(loc, name, H5P_DEFAULT);
-  if (dset < 0) {
-    PetscCall(ReadFail(r, what));
-    PetscFunctionReturn(0);
-  }
+  PetscCall(OpenDataset(r, loc, where, name, what, sizeof(what), &dset));
+  if (dset < 0) PetscFunctionReturn(0);
   space = H5Dget_space(dset);
   type  = H5Dget_type(dset);
   ndims = space >= 0 ? H5Sget_simple_extent_ndims(space) : -1;

@@ -159,13 +159,19 @@ class ReducedModel(_core.CReducedModel):
     @classmethod
     def load(cls, path, comm=None):
         """Reads a model written by save (checked: format, version, shapes, names, checksums)."""
+        if os.path.isdir(path):
+            raise ModelFileError("%s: a folder, not a reduced-model file: give the .h5 file 'kryflex reduce' wrote "
+                                 "(OUT/reduced.h5)" % path)
         if not os.path.isfile(path):
             raise ModelFileError("%s: reduced-model file not found" % path)
         try:
             return super().load(str(path), comm)
         except _core.Error as e:
-            raise ModelFileError("%s: not a readable kryflex reduced model (%s); write it again with 'kryflex reduce'"
-                                 % (path, e)) from None
+            # the C reader's message names the file, the dataset, the fault and the fix: said once, not wrapped
+            detail = str(e)
+            if detail.startswith("%s: " % path):
+                detail = detail[len(str(path)) + 2:]
+            raise ModelFileError("%s: not a readable kryflex reduced model: %s" % (path, detail)) from None
 
     def export_npz(self, path):
         """A plain NumPy export of the reduced bodies (<body>__M, __K, __G, __H, __iface, __rigid) and the names, for

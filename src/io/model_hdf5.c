@@ -15,6 +15,7 @@
    names the file, the fault and the fix; every rank then raises the same error together. */
 #include <kryflex/modelimpl.h>
 #include <hdf5.h>
+#include <petscblaslapack.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdarg.h>
@@ -559,8 +560,10 @@ static PetscErrorCode ReadStrings(KFReader *r, hid_t loc, const char where[], co
   PetscFunctionReturn(0);
 }
 
-/* a real (rows, cols) dataset of the expected shape into a new column-major array (row-major if rowmajor) */
-static PetscErrorCode ReadMatrix(KFReader *r, hid_t loc, const char where[], const char name[], PetscInt rows, PetscInt cols, PetscBool rowmajor, PetscReal **a)
+/* a real (rows, cols) dataset of the expected shape (why: what fixes it, for messages) into a new column-major
+   array (row-major if rowmajor); every value finite: NaN or Inf in a model is an edit or a damage the checksums
+   did not see, and would surface later as a failed eigensolve or SVD */
+static PetscErrorCode ReadMatrix(KFReader *r, hid_t loc, const char where[], const char name[], PetscInt rows, PetscInt cols, const char why[], PetscBool rowmajor, PetscReal **a)
 {
   hid_t      dset, space, type;
   int        ndims;
@@ -578,13 +581,25 @@ static PetscErrorCode ReadMatrix(KFReader *r, hid_t loc, const char where[], con
   if (ndims == 2) H5Sget_simple_extent_dims(space, dims, NULL);
   if (ndims != 2 || type < 0 || H5Tget_class(type) != H5T_FLOAT) PetscCall(Inconsistent(r, "%s is not a matrix of real numbers", what));
   else if (dims[0] != (hsize_t)rows || dims[1] != (hsize_t)cols)
-    PetscCall(Inconsistent(r, "%s is %llu x %llu, expected %" PetscInt_FMT " x %" PetscInt_FMT, what, (unsigned long long)dims[0], (unsigned long long)dims[1], rows, cols));
+    PetscCall(Inconsistent(r, "%s is %llu x %llu, expected %" PetscInt_FMT " x %" PetscInt_FMT " (%s)", what, (unsigned long long)dims[0], (unsigned long long)dims[1], rows, cols, why));
   else {
+    PetscBool ok  = PETSC_TRUE;
+    PetscInt  bad = -1;
     PetscCall(PetscMalloc1(rows * cols + 1, &buf));
     if (rows * cols > 0 && H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
       PetscCall(ReadFail(r, what));
-      PetscCall(PetscFree(buf));
-    } else if (rowmajor) *a = buf;
+      ok = PETSC_FALSE;
+    }
+    for (PetscInt k = 0; ok && k < rows * cols && bad < 0; k++)
+      if (PetscIsInfOrNanReal(buf[k])) bad = k;
+    if (bad >= 0) {
+      char value[32];
+      (void)snprintf(value, sizeof(value), "%g", (double)buf[bad]); /* PETSc's printf writes "nan." */
+      PetscCall(Inconsistent(r, "%s holds %s at [%" PetscInt_FMT ", %" PetscInt_FMT "] (NumPy indexing), not a finite number", what, value, bad / cols, bad % cols));
+      ok = PETSC_FALSE;
+    }
+    if (!ok) PetscCall(PetscFree(buf));
+    else if (rowmajor) *a = buf;
     else {
       PetscCall(PetscMalloc1(rows * cols, a));
       for (PetscInt i = 0; i < rows; i++)
@@ -730,6 +745,79 @@ static PetscErrorCode ReadSettings(KFReader *r, hid_t f, KFReducedModel m)
   PetscFunctionReturn(0);
 }
 
+/* the names of a string dataset are keys (inputs, outputs, interfaces): none twice */
+static PetscErrorCode CheckNames(KFReader *r, const char where[], const char name[], PetscInt n, char (*names)[KF_MAX_NAME])
+{
+  PetscFunctionBegin;
+  if (r->st->code) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < n; i++)
+    for (PetscInt k = 0; k < i; k++)
+      if (!strcmp(names[i], names[k])) {
+        PetscCall(Inconsistent(r, "%sdataset '%s' names '%s' twice (entries %" PetscInt_FMT " and %" PetscInt_FMT ")", where, name, names[i], k, i));
+        PetscFunctionReturn(0);
+      }
+  PetscFunctionReturn(0);
+}
+
+/* The reduced mass is symmetric positive definite and the reduced stiffness symmetric positive semi-definite
+   (projections of the full ones): an edit that breaks this would make reassembly fail or give a wrong model. The
+   tolerances are far above the rounding of the projection (about 1e-16 for symmetry and 1e-12 for the smallest
+   eigenvalue of K relative to its largest on the Galileo model). */
+static PetscErrorCode CheckBodyMatrices(KFReader *r, const char where[], KFModelBody *R)
+{
+  const PetscInt v = R->v;
+  PetscBLASInt   bn, info, lwork;
+  PetscReal     *A, *w, *work, wq, amax, asym;
+
+  PetscFunctionBegin;
+  if (r->st->code || v < 1) PetscFunctionReturn(0);
+  for (int k = 0; k < 2 && !r->st->code; k++) {
+    const PetscReal *X = k ? R->K : R->M;
+    amax = asym = 0;
+    for (PetscInt i = 0; i < v; i++)
+      for (PetscInt j = 0; j < v; j++) {
+        amax = PetscMax(amax, PetscAbsReal(X[i + j * v]));
+        asym = PetscMax(asym, PetscAbsReal(X[i + j * v] - X[j + i * v]));
+      }
+    if (asym > 1e-8 * amax) PetscCall(Inconsistent(r, "%sdataset '%s' is not symmetric (largest |%s - %s^T| is %g of its largest entry)", where, k ? "K" : "M", k ? "K" : "M", k ? "K" : "M", (double)(asym / amax)));
+  }
+  if (r->st->code) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(v, &bn));
+  PetscCall(PetscMalloc2(v * v, &A, v, &w));
+  PetscCall(PetscArraycpy(A, R->M, v * v));
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, A, &bn, &info));
+  if (info) PetscCall(Inconsistent(r, "%sdataset 'M' is not positive definite (its leading minor of order %d is not); a reduced mass matrix always is", where, (int)info));
+  else {
+    PetscCall(PetscArraycpy(A, R->K, v * v));
+    lwork = -1;
+    PetscCallBLAS("LAPACKsyev", LAPACKsyev_("N", "L", &bn, A, &bn, w, &wq, &lwork, &info));
+    PetscCall(PetscBLASIntCast((PetscInt)wq, &lwork));
+    PetscCall(PetscMalloc1(lwork, &work));
+    PetscCallBLAS("LAPACKsyev", LAPACKsyev_("N", "L", &bn, A, &bn, w, work, &lwork, &info));
+    PetscCall(PetscFree(work));
+    amax = PetscMax(PetscAbsReal(w[0]), PetscAbsReal(w[v - 1]));
+    if (info) PetscCall(Inconsistent(r, "%sdataset 'K': its eigenvalues cannot be computed (LAPACK syev info %d)", where, (int)info));
+    else if (w[0] < -1e-8 * amax) PetscCall(Inconsistent(r, "%sdataset 'K' has the negative eigenvalue %g (largest %g): a reduced stiffness matrix is positive semi-definite", where, (double)w[0], (double)w[v - 1]));
+  }
+  PetscCall(PetscFree2(A, w));
+  PetscFunctionReturn(0);
+}
+
+/* the settings reassembly uses: damping, the uniform modal damping ratio of the model's frequency responses */
+static PetscErrorCode CheckSettings(KFReader *r, KFReducedModel m)
+{
+  PetscFunctionBegin;
+  if (r->st->code) PetscFunctionReturn(0);
+  for (PetscInt k = 0; k < m->nsettings; k++)
+    if (!strcmp(m->keys[k], "damping")) {
+      char  *end;
+      double d = strtod(m->values[k], &end);
+      while (*end == ' ') end++;
+      if (end == m->values[k] || *end || !(d >= 0 && d < 1)) PetscCall(Inconsistent(r, "setting 'damping' is '%s', not a damping ratio in [0, 1)", m->values[k]));
+    }
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode ReadBodies(KFReader *r, hid_t f, KFReducedModel m)
 {
   hid_t    bg;
@@ -784,13 +872,17 @@ static PetscErrorCode ReadBodies(KFReader *r, hid_t f, KFReducedModel m)
     R->ninterfaces = ni;
     /* the reduced size is M's; every other array must agree with it */
     v = DatasetRows(g, "M");
-    if (!r->st->code && v < 0) PetscCall(ReadMatrix(r, g, where, "M", 0, 0, PETSC_FALSE, &R->M)); /* reports what is wrong with M */
+    if (!r->st->code && v < 0) PetscCall(ReadMatrix(r, g, where, "M", 0, 0, "a square matrix", PETSC_FALSE, &R->M)); /* reports what is wrong with M */
     R->v = v;
     if (!r->st->code) {
       PetscReal    **arrays[6] = {&R->M, &R->K, &R->G, &R->H, &R->iface, &R->rigid};
       const PetscInt rows[6]   = {v, v, v, t, 6 * ni, v}, cols[6] = {v, v, a, v, v, 6};
-      for (int k = 0; k < 6; k++) PetscCall(ReadMatrix(r, g, where, BodyArrays[k], rows[k], cols[k], PETSC_FALSE, arrays[k]));
-      if (Exists(g, "map")) PetscCall(ReadMatrix(r, g, where, "map", R->full_dofs, v, PETSC_FALSE, &R->map));
+      const char    *why[6]    = {"square", "the size of M", "the rows of M x the names in dataset 'inputs'", "the names in dataset 'outputs' x the rows of M", "6 per name in dataset 'interfaces' x the rows of M", "the rows of M x 6"};
+      for (int k = 0; k < 6; k++) PetscCall(ReadMatrix(r, g, where, BodyArrays[k], rows[k], cols[k], why[k], PETSC_FALSE, arrays[k]));
+      if (Exists(g, "map")) PetscCall(ReadMatrix(r, g, where, "map", R->full_dofs, v, "attribute 'full_dofs' x the rows of M", PETSC_FALSE, &R->map));
+      if (!r->st->code && v > R->full_dofs) PetscCall(Inconsistent(r, "%shas %" PetscInt_FMT " reduced dofs (the rows of M) but attribute 'full_dofs' is %" PetscInt_FMT ": a reduced body is never larger than the full one", where, v, R->full_dofs));
+      PetscCall(CheckNames(r, where, "interfaces", ni, R->iface_names));
+      PetscCall(CheckBodyMatrices(r, where, R));
     }
     H5Gclose(g);
   }
@@ -949,6 +1041,43 @@ static PetscErrorCode ReadJoints(KFReader *r, hid_t f, KFReducedModel m)
   PetscFunctionReturn(0);
 }
 
+/* the joints make a tree of the bodies, as the scene did: one root, every other body the child of one joint, all
+   reached (a body no joint reaches would add its own rigid-body modes to the reassembled model) */
+static PetscErrorCode CheckTree(KFReader *r, KFReducedModel m)
+{
+  PetscInt *parent, *queue, head = 0, tail = 0, root = -1;
+
+  PetscFunctionBegin;
+  if (r->st->code) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc2(m->nb, &parent, m->nb, &queue));
+  for (PetscInt b = 0; b < m->nb; b++) parent[b] = -1;
+  for (PetscInt j = 0; j < m->nj && !r->st->code; j++) {
+    PetscInt c = m->joints[j].child;
+    if (parent[c] >= 0) PetscCall(Inconsistent(r, "body '%s' is the child of joints '%s' and '%s'; the joints of a model form a tree", m->bodies[c].name, m->joint_names[parent[c]], m->joint_names[j]));
+    parent[c] = j;
+  }
+  for (PetscInt b = 0; b < m->nb && root < 0; b++)
+    if (parent[b] < 0) root = b;
+  if (!r->st->code && root < 0) PetscCall(Inconsistent(r, "the joints form a loop (every body is some joint's child); the joints of a model form a tree"));
+  if (!r->st->code) {
+    for (PetscInt b = 0; b < m->nb; b++) parent[b] = -2; /* now: not reached */
+    queue[tail++] = root;
+    parent[root]  = -1;
+    while (head < tail) {
+      PetscInt b = queue[head++];
+      for (PetscInt j = 0; j < m->nj; j++)
+        if (m->joints[j].parent == b && parent[m->joints[j].child] == -2) {
+          parent[m->joints[j].child] = j;
+          queue[tail++]              = m->joints[j].child;
+        }
+    }
+    for (PetscInt b = 0; b < m->nb && !r->st->code; b++)
+      if (parent[b] == -2) PetscCall(Inconsistent(r, "body '%s' is tied to the root body '%s' by no chain of joints (%" PetscInt_FMT " bodies, %" PetscInt_FMT " joints): a body or joint was added or removed", m->bodies[b].name, m->bodies[root].name, m->nb, m->nj));
+  }
+  PetscCall(PetscFree2(parent, queue));
+  PetscFunctionReturn(0);
+}
+
 /* one rank's reading of the whole file into m (created empty); file faults go to st */
 static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedModel m, KFIOStatus *st)
 {
@@ -985,7 +1114,8 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   PetscCall(ReadStringAttr(&r, f, "", "format", sizeof(format), format));
   if (!st->code && strcmp(format, KF_MODEL_FORMAT)) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: not a kryflex reduced model (format attribute '%s', expected '%s'): give the model file written by 'kryflex reduce'", path, format, KF_MODEL_FORMAT));
   PetscCall(ReadIntAttr(&r, f, "", "version", &version));
-  if (!st->code && version != KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written by another kryflex version (model format version %" PetscInt_FMT ", this kryflex reads version %d): reduce again with 'kryflex reduce'", path, version, KF_MODEL_VERSION));
+  if (!st->code && version > KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format %" PetscInt_FMT "; this kryflex reads format %d: use a newer kryflex or re-run kryflex reduce", path, version, KF_MODEL_VERSION));
+  if (!st->code && version < KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format %" PetscInt_FMT " (an older kryflex); this kryflex reads format %d: re-run kryflex reduce", path, version, KF_MODEL_VERSION));
   PetscCall(ReadStringAttr(&r, f, "", "scene", sizeof(m->scene_name), m->scene_name));
   PetscCall(ReadStringAttr(&r, f, "", "scene_fingerprint", sizeof(m->fingerprint), m->fingerprint));
   if (!st->code && strlen(m->fingerprint) != 16) PetscCall(Inconsistent(&r, "the scene fingerprint '%s' is not 16 hex digits", m->fingerprint));
@@ -994,13 +1124,17 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   PetscCall(ReadStrings(&r, f, "", "inputs", &m->ninputs, &m->input_names));
   PetscCall(ReadStrings(&r, f, "", "outputs", &m->noutputs, &m->output_names));
   if (!st->code && (m->ninputs < 1 || m->noutputs < 1)) PetscCall(Inconsistent(&r, "the model has %" PetscInt_FMT " inputs and %" PetscInt_FMT " outputs; it needs at least one of each", m->ninputs, m->noutputs));
+  PetscCall(CheckNames(&r, "", "inputs", m->ninputs, m->input_names));
+  PetscCall(CheckNames(&r, "", "outputs", m->noutputs, m->output_names));
   PetscCall(ReadSettings(&r, f, m));
+  PetscCall(CheckSettings(&r, m));
   PetscCall(ReadBodies(&r, f, m));
   PetscCall(ReadJoints(&r, f, m));
+  PetscCall(CheckTree(&r, m));
   n = Exists(f, "reduction_angles") ? DatasetRows(f, "reduction_angles") : 0;
   if (!st->code && n > 0) {
     m->nangles = n;
-    PetscCall(ReadMatrix(&r, f, "", "reduction_angles", n, m->nrevolute, PETSC_TRUE, &m->angles));
+    PetscCall(ReadMatrix(&r, f, "", "reduction_angles", n, m->nrevolute, "one column per revolute joint", PETSC_TRUE, &m->angles));
   }
   H5Fclose(f);
   PetscFunctionReturn(0);

@@ -507,8 +507,6 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
         const PetscInt chunk = 1 << 20, N = header[1];
         PetscInt64     need;
         PetscCall(PetscMalloc1(chunk, &buf));
-        need = (4 + (PetscInt64)N + header[3]) * (PetscInt64)sizeof(PetscInt) + (PetscInt64)header[3] * (PetscInt64)sizeof(PetscScalar);
-        if ((PetscInt64)size < need) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated (%lld bytes; its header announces a %d x %d matrix with %d entries, %lld bytes): re-export the matrix", path, (long long)size, (int)N, (int)N, (int)header[3], (long long)need));
         for (PetscInt done = 0; done < N && !st.code; done += chunk) {
           PetscInt cnt = PetscMin(chunk, N - done);
           PetscCall(PetscBinaryRead(fd, buf, cnt, &got, PETSC_INT));
@@ -519,6 +517,9 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
           }
         }
         if (!st.code && total != header[3]) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: its rows hold %lld entries, its header says %d: the file is corrupt; re-export the matrix", path, (long long)total, (int)header[3]));
+        /* the row lengths agree with the header: a file shorter than they announce is cut */
+        need = (4 + (PetscInt64)N + header[3]) * (PetscInt64)sizeof(PetscInt) + (PetscInt64)header[3] * (PetscInt64)sizeof(PetscScalar);
+        if (!st.code && (PetscInt64)size < need) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated (%lld bytes; its header announces a %d x %d matrix with %d entries, %lld bytes): re-export the matrix", path, (long long)size, (int)N, (int)N, (int)header[3], (long long)need));
         /* the column indices, row by row: the row lengths again (a second descriptor), then each row's indices must
            lie in [0, N) and increase, as MatLoad assumes */
         if (!st.code) {

@@ -102,7 +102,7 @@ def with_entry(A, value):
 
 
 def bad_pattern(A):
-    return mtx_text(A, field="pattern").replace("\n", "\n", 1), ["field 'pattern'"], r"export it with field 'real'"
+    return mtx_text(A, field="pattern"), ["field 'pattern'"], r"export it with field 'real'"
 
 
 def bad_complex(A):
@@ -321,28 +321,15 @@ def good_no_final_newline():
 
 def good_general_duplicates_summed():
     A = spd()
-    return mtx_text(A, symmetry="general", extra=["1 1 1.5", "2 3 -0.25"], nnz=None).replace(
-        "\n%d %d " % (7, 7), "\n%d %d " % (7, 7), 1)
+    return mtx_text(A, symmetry="general", extra=["1 1 1.5", "2 3 -0.25"], nnz=np.count_nonzero(A) + 2)
 
 
 GOOD_MTX = {name[5:]: f for name, f in dict(globals()).items() if name.startswith("good_")}
 
 
-def _fix_count(text):
-    """good_general_duplicates_summed adds entries after the size line: count them in."""
-    lines = text.splitlines()
-    size = next(i for i, l in enumerate(lines) if l.strip() and not l.lstrip().startswith("%"))
-    m, n, _ = lines[size].split()
-    nnz = sum(1 for l in lines[size + 1:] if l.strip() and not l.lstrip().startswith("%"))
-    lines[size] = "%s %s %d" % (m, n, nnz)
-    return "\n".join(lines) + "\n"
-
-
 @pytest.mark.parametrize("case", sorted(GOOD_MTX))
 def test_good_matrix_market_equals_scipy(tmp_path, case):
     text = GOOD_MTX[case]()
-    if case == "general_duplicates_summed":
-        text = _fix_count(text)
     path = os.path.join(str(tmp_path), "A.mtx")
     write(path, text)
     # scipy reads the banner word '%%MatrixMarket' case-sensitively (the specification does not): its copy has it so

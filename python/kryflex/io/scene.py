@@ -125,7 +125,7 @@ def _read_nodes(where, key, name, base):
         except ValueError:
             _fail("%s: %s" % (where, key), "%s line %d: %r is not numbers; give 'id x y z ndof' (integer id and "
                   "ndof)" % (name, lineno, line[:80]))
-        labels.append("(%s line %d)" % (name, lineno))
+        labels.append("%s line %d" % (name, lineno))
     if not rows:
         _fail("%s: %s" % (where, key), "%s lists no nodes; give 'id x y z ndof' per line" % name)
     return schema.node_table(where, key, rows, labels)

@@ -124,7 +124,9 @@ def real(where, path, value, interval, fix=None):
     if not _is_number(value):
         fail(where, path, "%s is not a number; %s" % (_short(value), fix or "give a number in %s" % iv.text))
     x = float(value)
-    if not math.isfinite(x) or x not in iv:
+    if not math.isfinite(x):
+        fail(where, path, "%s is not a finite number; %s" % (_short(value), fix or "give a value in %s" % iv.text))
+    if x not in iv:
         fail(where, path, "%s is outside %s; %s" % (_short(value), iv.text, fix or "give a value in %s" % iv.text))
     return x
 
@@ -292,7 +294,7 @@ def node_table(where, path, rows, labels=None):
     """Node rows (id, x, y, z, ndof) as (ids int32, xyz float64, ndof int32); labels[i] says where row i was written
     (e.g. 'line 12'), default '[i]'."""
     def at(i):
-        return "%s %s" % (path, labels[i]) if labels is not None else "%s[%d]" % (path, i)
+        return "%s (%s)" % (path, labels[i]) if labels is not None else "%s[%d]" % (path, i)
 
     if isinstance(rows, np.ndarray):
         rows = rows.tolist()

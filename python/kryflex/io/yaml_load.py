@@ -37,14 +37,16 @@ class _StrictLoader(_Base):
                 if key_node.tag == _MERGE:     # '<<: *base' merges: explicit keys override merged ones (YAML rule)
                     continue
                 key = self.construct_object(key_node, deep=True)
-                line = key_node.start_mark.line + 1
+                mark = key_node.start_mark
                 try:
                     first = seen.get(key)
                 except TypeError:              # an unhashable key: yaml's own message says so
                     continue
                 if first is not None:
-                    raise YAMLInputError("key %s appears twice (lines %d and %d): keep one" % (_short(key), first, line))
-                seen[key] = line
+                    at = ("lines %d and %d" % (first.line + 1, mark.line + 1) if first.line != mark.line else
+                          "line %d, columns %d and %d" % (mark.line + 1, first.column + 1, mark.column + 1))
+                    raise YAMLInputError("key %s appears twice (%s): keep one" % (_short(key), at))
+                seen[key] = mark
         return super().construct_mapping(node, deep=deep)
 
 

@@ -27,7 +27,7 @@ def _override_path(where, option, path, spec):
     """Checks a -scene.<path> option's path against the scene's keys (did-you-mean on a typo)."""
     w = "option -" + option
     if path[0] not in TOP_KEYS:
-        schema.fail(where, w, schema.unknown_key(path[0], TOP_KEYS))
+        schema.fail(where, w, schema.unknown_key(path[0], TOP_KEYS).replace("unknown key", "the scene has no entry", 1))
     section = path[0]
     if section in ("reduction", "verify"):
         if len(path) != 2:

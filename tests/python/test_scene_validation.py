@@ -507,6 +507,13 @@ def test_node_id_limit():
     assert ids.dtype == np.int32 and ids.tolist() == [2 ** 31 - 1, 0]
 
 
+def test_scene_path_not_a_file(tmp_path):
+    with pytest.raises(kryflex.SceneError, match=r"is not a regular file .*name the scene's \.yaml file"):
+        kryflex.load_scene(str(tmp_path))
+    with pytest.raises(kryflex.SceneError, match=r"nothere\.yaml: scene file not found .*fix the path"):
+        kryflex.load_scene(str(tmp_path / "nothere.yaml"))
+
+
 def test_scene_from_dict_same_rules():
     spec = copy.deepcopy(GALILEO)
     spec["angles"] = [30, 30]

@@ -170,7 +170,7 @@ def _as_petsc(where, A, comm):
     if n != m:
         _fail(where, "the matrix is %d x %d; body matrices are square" % (n, m))
     if not np.all(np.isfinite(A.data)):
-        _fail(where, "the matrix holds non-finite values")
+        _fail(where, "the matrix holds non-finite values (NaN or Inf); give finite entries")
     M = PETSc.Mat().createAIJ((n, n), comm=comm)
     M.setPreallocationNNZ(0)
     lo, hi = M.getOwnershipRange()
@@ -312,8 +312,8 @@ def load_scene(path, comm=None, overrides=True):
     """Reads a scene file (YAML) and its body files; -scene.<path> PETSc options override its values."""
     where = os.path.basename(str(path))
     if not os.path.isfile(path):
-        if os.path.isdir(path):
-            raise SceneError("%s: is a folder, not a scene file (%s); name the scene's .yaml file"
+        if os.path.exists(path):
+            raise SceneError("%s: is not a regular file (%s); name the scene's .yaml file"
                              % (where, os.path.abspath(path)))
         raise SceneError("%s: scene file not found (looked for %s); fix the path" % (where, os.path.abspath(path)))
     try:

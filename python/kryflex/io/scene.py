@@ -2,84 +2,54 @@
 
 A scene is one YAML file (see README.md, "Scene file reference"). Every value can be overridden from the command
 line with a PETSc option named after its path: ``-scene.damping 0.005``, ``-scene.reduction.moments 12``,
-``-scene.angles 0,30,60``. Errors name the offending entry and the fix.
+``-scene.angles 0,30,60``. Loading goes from cheap to expensive, so that a mistake anywhere is found before any
+heavy work: the YAML (io/yaml_load.py: size, nesting, aliases, duplicate keys), every key and value
+(io/scene_schema.py), the files the scene names (present, readable; nodes and vectors read and checked), and only
+then the body matrices. Errors are SceneError, naming the entry, the value and the fix.
 """
 import os
 
 import numpy as np
-import yaml
 from petsc4py import PETSc
 
 from .. import _core
-
-DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
-
-TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
-            "accuracy", "reduction", "verify"}
-BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description"}
-JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
-TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
-REDUCTION_DEFAULTS = {
-    "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
-    "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
-    "moments": 10,               # low-frequency moments matched exactly (c in the paper)
-    "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
-    "importance": "h2",          # h2 | hinf | static
-    "keep_threshold": 0.05,      # keep Krylov modes whose normalized importance reaches this
-    "reduction_angle": "auto",   # alpha_G: auto, or an angle (list for several joints)
-    "method": "single-angle",    # single-angle (the paper) | multi-angle (exact moments at several angles)
-    "reduction_angles": None,    # multi-angle: configurations to build Krylov vectors at (default: all angles)
-    "deflation_tol": 1e-10,      # Krylov block deflation (relative)
-    "body_tol": 1e-10,           # per-body rank deflation of the projected modes
-    "reassembly_rtol": 1e-9,     # SVD rank tolerance of the reduced interface constraints
-    "static_correction": True,   # eq. 15-17
-    "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
-    "save_maps": "auto",         # store each reduced body's map back to its full dofs
-}
-VERIFY_DEFAULTS = {
-    "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
-    "frequency_points": 400,     # log-spaced frequency-response points over the band (+ points at resonances)
-    "full_order": True,          # run the full-order verification at all
-    "frf_floor_db": -60.0,       # FRF error: notches deeper than this below the band's peak count against this level
-}
-
-
-class SceneError(ValueError):
-    """A bad scene: the message names the entry and the fix."""
+from . import scene_schema as schema
+from . import yaml_load
+from .scene_schema import (DOF_NAMES, TOP_KEYS, BODY_KEYS, JOINT_KEYS, TERM_KEYS,  # noqa: F401 - the scene's keys
+                           REDUCTION_DEFAULTS, VERIFY_DEFAULTS, SceneError)
 
 
 def _fail(where, msg):
     raise SceneError("%s: %s" % (where, msg))
 
 
-def _number(where, value, kind=float):
-    """A number from the scene, or a SceneError naming the entry."""
-    if isinstance(value, bool) or value is None:
-        _fail(where, "%r is not a number" % (value,))
-    try:
-        x = kind(value)
-    except (TypeError, ValueError):
-        _fail(where, "%r is not %s" % (value, "a number" if kind is float else "an integer"))
-    if kind is int and float(value) != x:
-        _fail(where, "%r is not an integer" % (value,))
-    if not np.isfinite(x):
-        _fail(where, "%r is not a finite number" % (value,))
-    return x
-
-
-def _check_keys(where, d, allowed):
-    if not isinstance(d, dict):
-        _fail(where, "expected a mapping of keys (%s), got %r" % (", ".join(sorted(allowed)), d))
-    for k in d:
-        if k not in allowed:
-            import difflib
-            close = difflib.get_close_matches(str(k), sorted(allowed), n=1)
-            hint = " (did you mean '%s'?)" % close[0] if close else ""
-            _fail(where, "unknown key '%s'%s; allowed keys: %s" % (k, hint, ", ".join(sorted(allowed))))
+def _override_path(where, option, path, spec):
+    """Checks a -scene.<path> option's path against the scene's keys (did-you-mean on a typo)."""
+    w = "option -" + option
+    if path[0] not in TOP_KEYS:
+        schema.fail(where, w, schema.unknown_key(path[0], TOP_KEYS).replace("unknown key", "the scene has no entry", 1))
+    section = path[0]
+    if section in ("reduction", "verify"):
+        if len(path) != 2:
+            schema.fail(where, w, "give one %s key, e.g. -scene.%s.%s" % (section, section,
+                                                                        sorted(schema.SECTION_KEYS[section])[0]))
+        if path[1] not in schema.SECTION_KEYS[section]:
+            schema.fail(where, w, schema.unknown_key(path[1], schema.SECTION_KEYS[section]))
+    elif section in ("bodies", "joints", "inputs", "outputs") and len(path) > 1:
+        names = spec.get(section) if isinstance(spec.get(section), dict) else {}
+        if path[1] not in names:
+            close = schema.unknown_key(path[1], set(map(str, names))).split(";")[0].replace("unknown key", "no entry")
+            schema.fail(where, w, "the scene's %s have %s; name one of: %s" % (section, close,
+                                                                             ", ".join(map(str, names)) or "none"))
+        if section in schema.SECTION_KEYS and len(path) > 2 and path[2] not in schema.SECTION_KEYS[section]:
+            schema.fail(where, w, schema.unknown_key(path[2], schema.SECTION_KEYS[section]))
+    elif len(path) > 1:
+        schema.fail(where, w, "'%s' has no keys below it; give -scene.%s VALUE" % (section, section))
 
 
 def _apply_overrides(spec, where):
-    """-scene.<path> <value> PETSc options replace scene values; unknown paths are errors."""
+    """-scene.<path> <value> PETSc options replace scene values; the paths are checked here, the values with the
+    rest of the scene."""
     opts = PETSc.Options().getAll()
     for name, raw in sorted(opts.items()):
         if not name.startswith("scene."):
@@ -87,10 +57,14 @@ def _apply_overrides(spec, where):
         path = name[len("scene."):].split(".")
         if raw is None or str(raw) == "":
             _fail(where, "option -%s needs a value, e.g. -%s 0,30,60" % (name, name))
+        _override_path(where, name, path, spec)
         text = str(raw)
         if "," in text and not text.strip().startswith(("[", "{")):
             text = "[" + text + "]"
-        value = yaml.safe_load(text) if text != "" else True
+        try:
+            value = yaml_load.load_text(text)
+        except yaml_load.YAMLInputError as e:
+            _fail(where, "option -%s: %s" % (name, e))
         node = spec
         for i, key in enumerate(path[:-1]):
             if not isinstance(node, dict) or key not in node:
@@ -104,73 +78,83 @@ def _apply_overrides(spec, where):
         node[path[-1]] = value
 
 
-def _read_nodes(where, entry, base):
-    """Nodes inline ([[id, x, y, z, ndof], ...]) or from a file ('id x y z ndof' per line)."""
-    if isinstance(entry, str):
-        path = os.path.join(base, entry)
-        if not os.path.isfile(path):
-            _fail(where, "nodes file '%s' not found (looked for %s)" % (entry, os.path.abspath(path)))
-        rows = []
-        with open(path) as f:
-            for lineno, line in enumerate(f, 1):
-                line = line.split("#", 1)[0].strip()
-                if not line:
-                    continue
-                parts = line.split()
-                if len(parts) != 5:
-                    _fail(where, "%s line %d: expected 'id x y z ndof', got %r" % (entry, lineno, line))
-                try:
-                    rows.append((int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), int(parts[4])))
-                except ValueError:
-                    _fail(where, "%s line %d: not numbers: %r" % (entry, lineno, line))
-    elif isinstance(entry, (list, np.ndarray)):
-        rows = []
-        for i, r in enumerate(entry):
-            if not isinstance(r, (list, tuple, np.ndarray)) or len(r) != 5:
-                _fail(where, "inline node %d must be [id, x, y, z, ndof], got %r" % (i, r))
-            rows.append((int(r[0]), float(r[1]), float(r[2]), float(r[3]), int(r[4])))
-    else:
-        _fail(where, "give a nodes file name or an inline list of [id, x, y, z, ndof]")
-    if not rows:
-        _fail(where, "no nodes")
-    ids = np.array([r[0] for r in rows], dtype=np.intc)
-    xyz = np.array([r[1:4] for r in rows], dtype=np.float64)
-    ndof = np.array([r[4] for r in rows], dtype=np.intc)
-    return ids, xyz, ndof
+# ------------------------------------------------------------------ the files a scene names
+
+def _file(where, key, name, base, what="file"):
+    """The path of a file the scene names, checked to be a readable regular file."""
+    path = os.path.join(base, name)
+    if not os.path.exists(path):
+        _fail("%s: %s" % (where, key), "%s '%s' not found (looked for %s); fix the path (relative to the scene file)"
+              % (what, name, os.path.abspath(path)))
+    if not os.path.isfile(path):
+        _fail("%s: %s" % (where, key), "'%s' is not a regular file (%s); name the %s itself"
+              % (name, os.path.abspath(path), what))
+    if not os.access(path, os.R_OK):
+        _fail("%s: %s" % (where, key), "%s '%s' is not readable; give read permission (chmod +r %s)"
+              % (what, name, os.path.abspath(path)))
+    return path
 
 
-def _angles(where, raw, revolute):
-    """Configurations as a list of lists of degrees, one entry per revolute joint in scene order."""
-    nr = len(revolute)
-    if raw is None:
-        if nr:
-            _fail(where, "'angles' is missing: list the articulation angles of interest in degrees, e.g. angles: [0, 30, 60]")
-        return [[]]
-    if not isinstance(raw, list):
-        raw = [raw]
-    if not raw:
-        _fail(where, "'angles' is an empty list: give at least one configuration, e.g. angles: [0, 30, 60]")
-    configs = []
-    for i, c in enumerate(raw):
-        if isinstance(c, dict):
-            missing = [j for j in revolute if j not in c]
-            extra = [j for j in c if j not in revolute]
-            if missing or extra:
-                _fail(where, "angles[%d]: give one angle per revolute joint (%s); missing %s, unknown %s"
-                      % (i, ", ".join(revolute), missing or "none", extra or "none"))
-            c = [c[j] for j in revolute]
-        elif not isinstance(c, list):
-            c = [c]
-        if len(c) != nr:
-            _fail(where, "angles[%d] = %r: the scene has %d revolute joint(s) (%s); give %d angle(s) per configuration"
-                  % (i, c, nr, ", ".join(revolute) or "none", nr))
+def _text_lines(where, key, path, name):
+    """(line number, text) of the non-empty lines of a small text file, '#' (and '%') comments removed."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        _fail("%s: %s" % (where, key), "%s is not UTF-8 text at byte %d; save it as plain text" % (name, e.start))
+    except OSError as e:
+        _fail("%s: %s" % (where, key), "cannot read %s (%s); check the file" % (name, e.strerror))
+    for lineno, line in enumerate(text.splitlines(), 1):
+        line = line.split("#", 1)[0].split("%", 1)[0].strip()
+        if line:
+            yield lineno, line
+
+
+def _read_nodes(where, key, name, base):
+    """A nodes file: 'id x y z ndof' per line, '#' comments; checked by the same rules as inline nodes."""
+    path = _file(where, key, name, base, "nodes file")
+    rows, labels = [], []
+    for lineno, line in _text_lines(where, key, path, name):
+        parts = line.split()
+        if len(parts) != 5:
+            _fail("%s: %s" % (where, key), "%s line %d: %r is not 'id x y z ndof'; give five numbers per line"
+                  % (name, lineno, line[:80]))
         try:
-            configs.append([float(x) for x in c])
-        except (TypeError, ValueError):
-            _fail(where, "angles[%d] = %r: angles are numbers in degrees" % (i, c))
-        if not all(np.isfinite(configs[-1])):
-            _fail(where, "angles[%d]: not finite" % i)
-    return configs
+            rows.append([int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), int(parts[4])])
+        except ValueError:
+            _fail("%s: %s" % (where, key), "%s line %d: %r is not numbers; give 'id x y z ndof' (integer id and "
+                  "ndof)" % (name, lineno, line[:80]))
+        labels.append("%s line %d" % (name, lineno))
+    if not rows:
+        _fail("%s: %s" % (where, key), "%s lists no nodes; give 'id x y z ndof' per line" % name)
+    return schema.node_table(where, key, rows, labels)
+
+
+def _read_vector(where, key, name, base):
+    """A load or reading vector file: numbers (text, any layout) or Matrix Market (.mtx)."""
+    path = _file(where, key, name, base, "vector file")
+    if path.endswith(".mtx"):
+        try:
+            import scipy.io
+            m = scipy.io.mmread(path)
+            return np.asarray(m.todense() if hasattr(m, "todense") else m, dtype=np.float64).ravel()
+        except Exception as e:  # noqa: BLE001 - any parse failure is a bad file
+            _fail("%s: %s" % (where, key), "cannot read %s as Matrix Market (%s); re-export it"
+                  % (name, " ".join(str(e).split())[:120]))
+    data = []
+    for lineno, line in _text_lines(where, key, path, name):
+        for word in line.replace(",", " ").split():
+            try:
+                x = float(word)
+            except ValueError:
+                _fail("%s: %s" % (where, key), "%s line %d: %r is not a number; give one number per dof"
+                      % (name, lineno, word[:40]))
+            if not np.isfinite(x):
+                _fail("%s: %s" % (where, key), "%s line %d: %r is not finite; give finite numbers"
+                      % (name, lineno, word[:40]))
+            data.append(x)
+    return np.array(data, dtype=np.float64)
 
 
 def _as_petsc(where, A, comm):
@@ -186,7 +170,7 @@ def _as_petsc(where, A, comm):
     if n != m:
         _fail(where, "the matrix is %d x %d; body matrices are square" % (n, m))
     if not np.all(np.isfinite(A.data)):
-        _fail(where, "the matrix holds non-finite values")
+        _fail(where, "the matrix holds non-finite values (NaN or Inf); give finite entries")
     M = PETSc.Mat().createAIJ((n, n), comm=comm)
     M.setPreallocationNNZ(0)
     lo, hi = M.getOwnershipRange()
@@ -204,219 +188,107 @@ class Scene:
         where = os.path.basename(path) if path else "scene"
         base = os.path.dirname(self.path) if path else os.getcwd()
         self.comm = comm or PETSc.COMM_WORLD
-        if not isinstance(spec, dict):
-            _fail(where, "a scene is a YAML mapping with bodies, joints, inputs, outputs, angles")
-        _check_keys(where, spec, TOP_KEYS)
-        for key in ("bodies", "inputs", "outputs"):
-            if not spec.get(key):
-                _fail(where, "'%s' is missing or empty" % key)
+        valid = schema.validate(spec, where, os.path.splitext(os.path.basename(path))[0] if path else "scene")
         self.spec = spec
-        self.name = str(spec.get("name", os.path.splitext(os.path.basename(path))[0] if path else "scene"))
+        self.name = valid["name"]
+        bodies = valid["bodies"]
+
+        # the files the scene names, before any matrix is loaded: the matrix files present and readable, the
+        # (small) nodes and vector files read and checked against each other
+        mats = {}
+        for body in bodies:
+            for key in ("mass", "stiffness"):
+                if isinstance(body[key], str):
+                    mats[body["name"], key] = _file(where, "bodies.%s.%s" % (body["name"], key), body[key], base)
+        nodes = [body["nodes"] if not isinstance(body["nodes"], str) else
+                 _read_nodes(where, "bodies.%s.nodes" % body["name"], body["nodes"], base) for body in bodies]
+        schema.check_node_references(where, valid, nodes)
+        dofs = [int(nd.sum()) for _, _, nd in nodes]
+        vectors = {}
+        for key in ("inputs", "outputs"):
+            for ioname, terms in valid[key]:
+                for i, t in enumerate(terms):
+                    if "vector" in t:
+                        tpath = "%s.%s[%d].vector" % (key, ioname, i)
+                        data = _read_vector(where, tpath, t["vector"], base)
+                        vectors[key, ioname, i] = t["weight"] * schema.check_vector(
+                            where, tpath, data, bodies[t["body"]]["name"], dofs[t["body"]])
+
+        # the C scene
         self.cscene = _core.CScene(self.comm)
         self.cscene.set_name(self.name)   # recorded in reduced models, with the input and output names
-
-        # bodies
-        bodies = spec["bodies"]
-        if not isinstance(bodies, dict):
-            _fail(where, "'bodies' must map body names to {mass, stiffness, nodes, interfaces}")
-        self.body_names, self.body_dofs, self.interfaces = [], [], []
-        self.body_nodes = []
-        for bname, b in bodies.items():
-            bw = "%s: bodies.%s" % (where, bname)
-            _check_keys(bw, b, BODY_KEYS)
-            for key in ("mass", "stiffness", "nodes"):
-                if key not in b:
-                    _fail(bw, "'%s' is missing" % key)
-            mats = []
-            for key in ("mass", "stiffness"):
-                if not isinstance(b[key], str):
-                    mats.append(_as_petsc(bw + "." + key, b[key], self.comm))
-                    continue
-                fpath = os.path.join(base, str(b[key]))
-                if not os.path.isfile(fpath):
-                    _fail(bw + "." + key, "file '%s' not found (looked for %s); fix the path (relative to the scene file)"
-                          % (b[key], os.path.abspath(fpath)))
-                try:
-                    mats.append(_core.load_matrix(fpath, self.comm))
-                except _core.Error as e:
-                    _fail(bw + "." + key, str(e))
-                if not PETSc.Options().getBool("kf_quiet", False):
-                    _core.progress("loaded %s of body '%s': %s (%d dofs)" % (key, bname, b[key], mats[-1].getSize()[0]),
-                                   self.comm)
-            ids, xyz, ndof = _read_nodes(bw + ".nodes", b["nodes"], base)
+        self.body_names = [body["name"] for body in bodies]
+        self.body_dofs = dofs
+        self.body_nodes = nodes
+        self.interfaces = [[iname for iname, _ in body["interfaces"]] for body in bodies]
+        for body, (ids, xyz, ndof) in zip(bodies, nodes):
+            bw = "%s: bodies.%s" % (where, body["name"])
+            M, K = (self._matrix(bw + "." + key, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
             try:
-                index = self.cscene.add_body(bname, mats[0], mats[1], ids, xyz, ndof)
+                index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
+                for iname, nid in body["interfaces"]:
+                    self.cscene.add_interface(index, iname, nid)
             except _core.Error as e:
                 _fail(bw, str(e))
-            ifaces = b.get("interfaces") or {}
-            if not isinstance(ifaces, dict):
-                _fail(bw + ".interfaces", "map interface names to node ids, e.g. {bearing: 101}")
-            names = []
-            for iname, node in ifaces.items():
-                try:
-                    self.cscene.add_interface(index, iname, _number(bw + ".interfaces." + str(iname), node, int))
-                except (_core.Error, TypeError, ValueError) as e:
-                    _fail(bw + ".interfaces." + str(iname), str(e))
-                names.append(str(iname))
-            self.body_names.append(str(bname))
-            self.body_dofs.append(int(ndof.sum()))
-            self.interfaces.append(names)
-            self.body_nodes.append((ids, xyz, ndof))
 
-        # joints
-        joints = spec.get("joints") or {}
-        if not isinstance(joints, dict):
-            _fail(where, "'joints' must map joint names to {type, parent, parent_interface, child, child_interface, axis}")
-        if len(self.body_names) > 1 and not joints:
-            _fail(where, "%d bodies but no joints: every body but one must be attached by a joint" % len(self.body_names))
-        self.joints, self.revolute = [], []
-        for jname, j in joints.items():
-            jw = "%s: joints.%s" % (where, jname)
-            _check_keys(jw, j, JOINT_KEYS)
-            kind = j.get("type", "revolute")
-            if kind not in ("revolute", "fixed"):
-                _fail(jw + ".type", "'%s' is not a joint type: use revolute or fixed" % kind)
-            for key in ("parent", "child", "parent_interface", "child_interface"):
-                if key not in j:
-                    _fail(jw, "'%s' is missing" % key)
-            for key in ("parent", "child"):
-                if j[key] not in self.body_names:
-                    _fail(jw + "." + key, "body '%s' does not exist (bodies: %s)" % (j[key], ", ".join(self.body_names)))
-            p, c = self.body_names.index(j["parent"]), self.body_names.index(j["child"])
-            for key, b in (("parent_interface", p), ("child_interface", c)):
-                if str(j[key]) not in self.interfaces[b]:
-                    _fail(jw + "." + key, "body '%s' has no interface '%s' (it has: %s); declare it under bodies.%s.interfaces"
-                          % (self.body_names[b], j[key], ", ".join(self.interfaces[b]) or "none", self.body_names[b]))
-            axis = j.get("axis", [0, 0, 1])
-            if kind == "revolute" and (not isinstance(axis, list) or len(axis) != 3):
-                _fail(jw + ".axis", "give the rotation axis as [x, y, z] in the parent body's frame")
-            axis = [_number(jw + ".axis", x) for x in axis] if isinstance(axis, list) else axis
-            R0 = j.get("orientation")
-            if R0 is not None:
-                R0 = np.asarray(R0, dtype=np.float64)
-                if R0.shape != (3, 3):
-                    _fail(jw + ".orientation", "give a 3x3 rotation matrix (rows)")
+        self.joints, self.revolute = [], list(valid["revolute"])
+        for j in valid["joints"]:
+            p, c = j["parent"], j["child"]
             try:
-                self.cscene.add_joint(jname, kind, p, str(j["parent_interface"]), c, str(j["child_interface"]), axis, R0)
+                self.cscene.add_joint(j["name"], j["type"], p, j["parent_interface"], c, j["child_interface"],
+                                      j["axis"], None if j["R0"] is None else np.array(j["R0"]))
             except _core.Error as e:
-                _fail(jw, str(e))
-            self.joints.append(dict(name=str(jname), type=kind, parent=p, child=c,
-                                    parent_interface=self.interfaces[p].index(str(j["parent_interface"])),
-                                    child_interface=self.interfaces[c].index(str(j["child_interface"])),
-                                    axis=[float(x) for x in axis] if kind == "revolute" else [0.0, 0.0, 1.0],
-                                    R0=None if R0 is None else R0.tolist()))
-            if kind == "revolute":
-                self.revolute.append(str(jname))
+                _fail("%s: joints.%s" % (where, j["name"]), str(e))
+            self.joints.append(dict(name=j["name"], type=j["type"], parent=p, child=c,
+                                    parent_interface=self.interfaces[p].index(j["parent_interface"]),
+                                    child_interface=self.interfaces[c].index(j["child_interface"]),
+                                    axis=j["axis"], R0=j["R0"]))
 
-        # inputs and outputs
-        for key in ("inputs", "outputs"):
-            if not isinstance(spec[key], dict):
-                _fail(where + ": " + key, "map %s names to lists of {body, node, dof, weight} terms" % key)
-        self.cscene.set_num_io(len(spec["inputs"]), len(spec["outputs"]))
-        self.input_names = self._io(where, "inputs", spec["inputs"], base, True)
-        self.output_names = self._io(where, "outputs", spec["outputs"], base, False)
-        for is_input, names in ((True, self.input_names), (False, self.output_names)):
-            for i, name in enumerate(names):
+        self.cscene.set_num_io(len(valid["inputs"]), len(valid["outputs"]))
+        self.input_names = [n for n, _ in valid["inputs"]]
+        self.output_names = [n for n, _ in valid["outputs"]]
+        for key, is_input in (("inputs", True), ("outputs", False)):
+            for k, (ioname, terms) in enumerate(valid[key]):
                 try:
-                    self.cscene.set_io_name(is_input, i, name)
+                    self.cscene.set_io_name(is_input, k, ioname)
+                    for i, t in enumerate(terms):
+                        if "vector" in t:
+                            vec = self._vec(vectors[key, ioname, i])
+                            (self.cscene.add_input_vector if is_input else self.cscene.add_output_vector)(k, t["body"], vec)
+                        else:
+                            (self.cscene.add_input_load if is_input else self.cscene.add_output_reading)(
+                                k, t["body"], t["node"], t["dof"], t["weight"])
                 except _core.Error as e:
-                    _fail(where + (": inputs." if is_input else ": outputs.") + name, str(e))
+                    _fail("%s: %s.%s" % (where, key, ioname), str(e))
 
         # what the reduction must serve
-        self.configurations = _angles(where + ": angles", spec.get("angles"), self.revolute)
-        band = spec.get("band", [0.01, 10.0])
-        if not isinstance(band, list) or len(band) != 2:
-            _fail(where + ": band", "give [f_low, f_high] in Hz, got %r" % (band,))
-        band = [_number(where + ": band", x) for x in band]
-        if not 0 < band[0] < band[1]:
-            _fail(where + ": band", "give [f_low, f_high] in Hz with 0 < f_low < f_high, got %r" % (band,))
-        self.band = band
-        self.damping = _number(where + ": damping", spec.get("damping", 0.0025))
-        if not 0 < self.damping < 1:
-            _fail(where + ": damping", "the modal damping ratio must lie in (0, 1), got %g" % self.damping)
-        self.accuracy = _number(where + ": accuracy", spec.get("accuracy", 0.05))
-        red = dict(REDUCTION_DEFAULTS)
-        given = spec.get("reduction") or {}
-        _check_keys(where + ": reduction", given, set(REDUCTION_DEFAULTS))
-        red.update(given)
-        for key in ("moments", "output_blocks"):
-            red[key] = _number(where + ": reduction." + key, red[key], int)
-        for key in ("keep_threshold", "deflation_tol", "body_tol", "reassembly_rtol", "shift", "eigen_cover"):
-            red[key] = _number(where + ": reduction." + key, red[key])
-        if red["moments"] < 1 or red["output_blocks"] < 0 or red["moments"] <= red["output_blocks"]:
-            _fail(where + ": reduction", "moments (%s) must exceed output_blocks (%s) >= 0" % (red["moments"], red["output_blocks"]))
-        if red["importance"] not in _core.IMPORTANCE:
-            _fail(where + ": reduction.importance", "'%s' is not one of %s" % (red["importance"], ", ".join(_core.IMPORTANCE)))
-        if red["basis"] not in ("krylov", "eigen"):
-            _fail(where + ": reduction.basis", "'%s' is not krylov or eigen" % red["basis"])
-        if red["method"] not in ("single-angle", "multi-angle"):
-            _fail(where + ": reduction.method", "'%s' is not single-angle or multi-angle" % red["method"])
-        if red["reduction_angle"] != "auto":
-            red["reduction_angle"] = _angles(where + ": reduction.reduction_angle", [red["reduction_angle"]]
-                                             if not isinstance(red["reduction_angle"], list) or len(self.revolute) > 1
-                                             and not isinstance(red["reduction_angle"][0], list) else red["reduction_angle"],
-                                             self.revolute)[0]
-        if red["reduction_angles"] is not None:
-            red["reduction_angles"] = _angles(where + ": reduction.reduction_angles", red["reduction_angles"], self.revolute)
-        self.reduction = red
-        ver = dict(VERIFY_DEFAULTS)
-        given = spec.get("verify") or {}
-        _check_keys(where + ": verify", given, set(VERIFY_DEFAULTS))
-        ver.update(given)
-        self.verify = ver
+        self.configurations = valid["configurations"]
+        self.band = valid["band"]
+        self.damping = valid["damping"]
+        self.accuracy = valid["accuracy"]
+        self.reduction = valid["reduction"]
+        self.verify = valid["verify"]
         try:
             self.cscene.setup()
         except _core.Error as e:
             _fail(where, str(e))
         self.info = self.cscene.info()
 
-    def _io(self, where, key, entries, base, is_input):
-        if not isinstance(entries, dict):
-            _fail(where + ": " + key, "map %s names to lists of {body, node, dof, weight} terms" % key)
-        names = list(entries)
-        for k, (name, terms) in enumerate(entries.items()):
-            w = "%s: %s.%s" % (where, key, name)
-            if isinstance(terms, dict):
-                terms = [terms]
-            if not isinstance(terms, list) or not terms:
-                _fail(w, "give a list of {body, node, dof, weight} terms")
-            for i, t in enumerate(terms):
-                tw = "%s[%d]" % (w, i)
-                _check_keys(tw, t, TERM_KEYS)
-                if t.get("body") not in self.body_names:
-                    _fail(tw + ".body", "body '%s' does not exist (bodies: %s)" % (t.get("body"), ", ".join(self.body_names)))
-                b = self.body_names.index(t["body"])
-                weight = _number(tw + ".weight", t.get("weight", 1.0))
-                if "vector" in t:
-                    vec = self._vector(tw, b, os.path.join(base, str(t["vector"])))
-                    (self.cscene.add_input_vector if is_input else self.cscene.add_output_vector)(k, b, vec)
-                    continue
-                if "node" not in t or "dof" not in t:
-                    _fail(tw, "give node and dof (%s), or a vector file" % ", ".join(DOF_NAMES))
-                if t["dof"] not in DOF_NAMES:
-                    _fail(tw + ".dof", "'%s' is not a dof name: use one of %s" % (t["dof"], ", ".join(DOF_NAMES)))
-                try:
-                    (self.cscene.add_input_load if is_input else self.cscene.add_output_reading)(
-                        k, b, _number(tw + ".node", t["node"], int), DOF_NAMES[t["dof"]], weight)
-                except (_core.Error, TypeError, ValueError) as e:  # ValueError: a node id that is not an integer
-                    _fail(tw, str(e))
-        return [str(n) for n in names]
-
-    def _vector(self, where, b, path):
-        if not os.path.isfile(path):
-            _fail(where + ".vector", "file %s not found" % path)
+    def _matrix(self, where, body, key, path):
+        """A body matrix: loaded from its (checked) file, or given in memory."""
+        if path is None:
+            return _as_petsc(where, body[key], self.comm)
         try:
-            if path.endswith(".mtx"):
-                import scipy.io
-                m = scipy.io.mmread(path)
-                data = np.asarray(m.todense() if hasattr(m, "todense") else m).ravel()
-            else:
-                data = np.loadtxt(path, comments=("#", "%")).ravel()
-        except Exception as e:  # noqa: BLE001 - any parse failure is a bad file
-            _fail(where + ".vector", "cannot read %s: %s" % (path, e))
-        if data.size != self.body_dofs[b]:
-            _fail(where + ".vector", "%s has %d entries, body '%s' has %d dofs" % (path, data.size, self.body_names[b], self.body_dofs[b]))
-        vec = PETSc.Vec().createMPI(self.body_dofs[b], comm=self.comm)
+            A = _core.load_matrix(path, self.comm)
+        except _core.Error as e:
+            _fail(where, str(e))
+        if not PETSc.Options().getBool("kf_quiet", False):
+            _core.progress("loaded %s of body '%s': %s (%d dofs)" % (key, body["name"], body[key], A.getSize()[0]),
+                           self.comm)
+        return A
+
+    def _vec(self, data):
+        vec = PETSc.Vec().createMPI(data.size, comm=self.comm)
         lo, hi = vec.getOwnershipRange()
         vec.setArray(data[lo:hi])
         return vec
@@ -440,12 +312,16 @@ def load_scene(path, comm=None, overrides=True):
     """Reads a scene file (YAML) and its body files; -scene.<path> PETSc options override its values."""
     where = os.path.basename(str(path))
     if not os.path.isfile(path):
-        raise SceneError("%s: scene file not found (looked for %s)" % (where, os.path.abspath(path)))
+        if os.path.exists(path):
+            raise SceneError("%s: is not a regular file (%s); name the scene's .yaml file"
+                             % (where, os.path.abspath(path)))
+        raise SceneError("%s: scene file not found (looked for %s); fix the path" % (where, os.path.abspath(path)))
     try:
-        with open(path) as f:
-            spec = yaml.safe_load(f)
-    except yaml.YAMLError as e:
-        raise SceneError("%s: not valid YAML: %s" % (where, e)) from None
-    if overrides:
-        _apply_overrides(spec if isinstance(spec, dict) else {}, where)
+        spec = yaml_load.load_file(path)
+    except yaml_load.YAMLInputError as e:
+        raise SceneError("%s: %s" % (where, e)) from None
+    except OSError as e:
+        raise SceneError("%s: cannot read the scene file (%s); check its permissions" % (where, e.strerror)) from None
+    if overrides and isinstance(spec, dict):
+        _apply_overrides(spec, where)
     return Scene(spec, path, comm)

@@ -1,0 +1,632 @@
+"""The rules of a scene, checked on the parsed spec before any file is touched.
+
+validate(spec, where) checks every key (types, ranges, names, references between bodies, interfaces and joints,
+the joint tree, angles) and returns the scene in a normalized form that io/scene.py builds from without checking
+again. node_table, check_node_references and check_vector are the rules on node lists and load vectors, which
+scene.py applies once it has read those (small) files, still before any matrix is loaded. Nothing here reads
+files or loads matrices, so a bad value anywhere is reported in milliseconds.
+
+Every message reads "<scene file>: <key path>: <what is wrong, with the value>; <the fix>". The ranges refuse at
+least everything the C setters (src/reducer/interface.c, src/scene/scene.c) refuse, so that no scene value first
+fails inside the reducer.
+"""
+import difflib
+import math
+import re
+
+import numpy as np
+
+DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
+NODE_DOFS = (3, 6)                    # src/scene/scene.c KFSceneAddBody: ux uy uz (+ rx ry rz)
+MAX_NODE_ID = 2 ** 31 - 1             # PetscInt is 32-bit in this build
+MAX_NAME = 63                         # KF_MAX_NAME (64) holds the terminating NUL
+MAX_SCENE_NAME = 255
+MAX_ANGLE = 360.0                     # degrees
+MAX_MOMENTS = 200
+MAX_FREQUENCY_POINTS = 100000
+ORIENTATION_TOL = 1e-6                # orthonormality of a joint orientation as written (7 digits are enough)
+IMPORTANCES = ("h2", "hinf", "static")
+BASES = ("krylov", "eigen")
+METHODS = ("single-angle", "multi-angle")
+JOINT_TYPES = ("revolute", "fixed")
+
+TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
+            "accuracy", "reduction", "verify"}
+BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description"}
+JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
+TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
+REDUCTION_DEFAULTS = {
+    "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
+    "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
+    "moments": 10,               # low-frequency moments matched exactly (c in the paper)
+    "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
+    "importance": "h2",          # h2 | hinf | static
+    "keep_threshold": 0.05,      # keep Krylov modes whose normalized importance reaches this
+    "reduction_angle": "auto",   # alpha_G: auto, or an angle (list for several joints)
+    "method": "single-angle",    # single-angle (the paper) | multi-angle (exact moments at several angles)
+    "reduction_angles": None,    # multi-angle: configurations to build Krylov vectors at (default: all angles)
+    "deflation_tol": 1e-10,      # Krylov block deflation (relative)
+    "body_tol": 1e-10,           # per-body rank deflation of the projected modes
+    "reassembly_rtol": 1e-9,     # SVD rank tolerance of the reduced interface constraints
+    "static_correction": True,   # eq. 15-17
+    "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
+    "save_maps": "auto",         # store each reduced body's map back to its full dofs
+}
+VERIFY_DEFAULTS = {
+    "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
+    "frequency_points": 400,     # log-spaced frequency-response points over the band (+ points at resonances)
+    "full_order": True,          # run the full-order verification at all
+    "frf_floor_db": -60.0,       # FRF error: notches deeper than this below the band's peak count against this level
+}
+DEFAULTS = {"band": [0.01, 10.0], "damping": 0.0025, "accuracy": 0.05}
+# the keys under each section, for -scene.<path> options and did-you-mean hints
+SECTION_KEYS = {"reduction": set(REDUCTION_DEFAULTS), "verify": set(VERIFY_DEFAULTS), "bodies": BODY_KEYS,
+                "joints": JOINT_KEYS}
+
+NAME_RULE = ("use 1 to %d ASCII letters, digits, '_', '-', '.' or '+', not starting with '.' (names become file "
+             "and HDF5 group names)" % MAX_NAME)
+_NAME = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*\Z")
+
+
+class SceneError(ValueError):
+    """A bad scene: the message names the entry, the value and the fix."""
+
+
+def fail(where, path, msg):
+    raise SceneError("%s: %s: %s" % (where, path, msg) if path else "%s: %s" % (where, msg))
+
+
+def _short(value, limit=80):
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def unknown_key(key, allowed):
+    """'unknown key ... (did you mean ...?); allowed keys: ...'"""
+    close = difflib.get_close_matches(str(key), sorted(allowed), n=1)
+    hint = " (did you mean '%s'?)" % close[0] if close else ""
+    return "unknown key %s%s; allowed keys: %s" % (_short(key), hint, ", ".join(sorted(allowed)))
+
+
+def mapping(where, path, value, allowed=None, what=None):
+    """A mapping whose keys are among allowed (None: any)."""
+    if not isinstance(value, dict):
+        fail(where, path, "expected a mapping of %s, got %s" % (what or ", ".join(sorted(allowed)), _short(value)))
+    if allowed is not None:
+        for k in value:
+            if k not in allowed:
+                fail(where, path, unknown_key(k, allowed))
+    return value
+
+
+# ------------------------------------------------------------------ values
+
+def _is_number(value):
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+class Interval:
+    """An interval written as in the messages: '(0, 1]', '[2, 100000]', '[0, inf)'."""
+
+    def __init__(self, text):
+        self.text = text
+        self.lo_open, self.hi_open = text[0] == "(", text[-1] == ")"
+        lo, hi = text[1:-1].split(",")
+        self.lo, self.hi = float(lo), float(hi)
+
+    def __contains__(self, x):
+        return ((x > self.lo if self.lo_open else x >= self.lo) and (x < self.hi if self.hi_open else x <= self.hi))
+
+
+def real(where, path, value, interval, fix=None):
+    """A finite number in interval (an Interval or its text)."""
+    iv = Interval(interval) if isinstance(interval, str) else interval
+    if not _is_number(value):
+        fail(where, path, "%s is not a number; %s" % (_short(value), fix or "give a number in %s" % iv.text))
+    x = float(value)
+    if not math.isfinite(x):
+        fail(where, path, "%s is not a finite number; %s" % (_short(value), fix or "give a value in %s" % iv.text))
+    if x not in iv:
+        fail(where, path, "%s is outside %s; %s" % (_short(value), iv.text, fix or "give a value in %s" % iv.text))
+    return x
+
+
+def integer(where, path, value, interval, fix=None):
+    """An integer (10 or 10.0) in interval."""
+    iv = Interval(interval) if isinstance(interval, str) else interval
+    fix = fix or "give an integer in %s" % iv.text
+    if not _is_number(value) or not math.isfinite(float(value)) or float(value) != math.floor(float(value)):
+        fail(where, path, "%s is not an integer; %s" % (_short(value), fix))
+    x = int(value)
+    if x not in iv:
+        fail(where, path, "%s is outside %s; %s" % (_short(value), iv.text, fix))
+    return x
+
+
+def boolean(where, path, value):
+    if not isinstance(value, (bool, np.bool_)):
+        fail(where, path, "%s is not a boolean; give true or false" % _short(value))
+    return bool(value)
+
+
+def choice(where, path, value, choices):
+    if not isinstance(value, str) or value not in choices:
+        fail(where, path, "%s is not one of %s; use one of them" % (_short(value), ", ".join(choices)))
+    return value
+
+
+def text(where, path, value, fix="give it as text"):
+    if not isinstance(value, str):
+        fail(where, path, "%s is not text; %s" % (_short(value), fix))
+    return value
+
+
+def name(where, path, value, kind):
+    """A body, joint, interface, input or output name (integers are taken as their digits)."""
+    if _is_number(value) and isinstance(value, (int, np.integer)):
+        value = str(value)
+    if not isinstance(value, str):
+        fail(where, path, "%s name %s is not text; %s" % (kind, _short(value), NAME_RULE))
+    if not 1 <= len(value) <= MAX_NAME or not _NAME.match(value):
+        fail(where, path, "%s name %s is not allowed; %s" % (kind, _short(value), NAME_RULE))
+    return value
+
+
+def node_id(where, path, value):
+    if _is_number(value) and float(value) == math.floor(float(value)) and int(value) > MAX_NODE_ID:
+        fail(where, path, "node id %d exceeds %d, the largest this build (32-bit PetscInt) holds; renumber the nodes"
+             % (int(value), MAX_NODE_ID))
+    return integer(where, path, value, "[0, %d]" % MAX_NODE_ID, "node ids are integers in [0, %d]" % MAX_NODE_ID)
+
+
+def _ref(value):
+    """A reference to a name: integers are taken as their digits, as in name()."""
+    return str(value) if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) else value
+
+
+def file_name(where, path, value):
+    if not isinstance(value, str) or not value or "\0" in value:
+        fail(where, path, "%s is not a file name; give the file's path relative to the scene file" % _short(value))
+    return value
+
+
+def vector3(where, path, value, what):
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        fail(where, path, "%s is not a 3-vector; give %s as [x, y, z]" % (_short(value), what))
+    return [real(where, path, x, "(-inf, inf)", "give %s as [x, y, z] of finite numbers" % what) for x in value]
+
+
+def rotation(where, path, value):
+    """A 3x3 rotation matrix (rows), orthonormal to ORIENTATION_TOL with det +1. Returned exactly orthonormal (the
+    nearest rotation) when it is not already to 1e-9, so that a matrix written with 7 digits passes the C check."""
+    fix = "give a 3x3 rotation matrix as rows, e.g. [[1, 0, 0], [0, 1, 0], [0, 0, 1]]"
+    rows = value.tolist() if isinstance(value, np.ndarray) else value
+    if not isinstance(rows, (list, tuple)) or len(rows) != 3 or \
+            not all(isinstance(r, (list, tuple)) and len(r) == 3 for r in rows):
+        fail(where, path, "%s is not a 3x3 matrix; %s" % (_short(value), fix))
+    R = np.array([[real(where, path, x, "(-inf, inf)", fix) for x in r] for r in rows])
+    err = np.abs(R.T @ R - np.eye(3)).max()
+    det = np.linalg.det(R)
+    if err > ORIENTATION_TOL or det <= 0:
+        fail(where, path, "%s is not a rotation (orthonormality error %.2g, det %.3g); %s, orthonormal to %g with "
+             "det +1" % (_short(value), err, det, fix, ORIENTATION_TOL))
+    if err > 1e-9:
+        U, _, Vt = np.linalg.svd(R)
+        R = U @ Vt
+    return R.tolist()
+
+
+# ------------------------------------------------------------------ angles
+
+def _angle(where, path, value):
+    return real(where, path, value, "[-%g, %g]" % (MAX_ANGLE, MAX_ANGLE), "give angles in degrees in [-360, 360]")
+
+
+def configuration(where, path, c, revolute):
+    """One configuration: a number (one revolute joint), [a1, a2, ...] or {joint: angle}, in degrees."""
+    nr = len(revolute)
+    if isinstance(c, dict):
+        missing = [j for j in revolute if j not in c]
+        extra = [j for j in c if j not in revolute]
+        if missing or extra:
+            fail(where, path, "%s: give one angle per revolute joint (%s); missing %s, unknown %s"
+                 % (_short(c), ", ".join(revolute) or "none", ", ".join(missing) or "none",
+                    ", ".join(map(str, extra)) or "none"))
+        c = [c[j] for j in revolute]
+    elif isinstance(c, np.ndarray):
+        c = c.tolist()
+    elif not isinstance(c, (list, tuple)):
+        c = [c]
+    if len(c) != nr:
+        fail(where, path, "%s: the scene has %d revolute joint(s) (%s); give %d angle(s) per configuration"
+             % (_short(c), nr, ", ".join(revolute) or "none", nr))
+    return [_angle(where, path, x) for x in c]
+
+
+def configurations(where, path, raw, revolute):
+    """A list of distinct configurations (a lone number is one configuration)."""
+    if isinstance(raw, np.ndarray):
+        raw = raw.tolist()
+    if not isinstance(raw, (list, tuple)):
+        raw = [raw]
+    if not raw:
+        fail(where, path, "an empty list; give at least one configuration, e.g. %s: [0, 30, 60]" % path)
+    configs = []
+    for i, c in enumerate(raw):
+        configs.append(configuration(where, "%s[%d]" % (path, i), c, revolute))
+        for k, d in enumerate(configs[:-1]):
+            if d == configs[-1]:
+                fail(where, path, "configuration %s appears twice (entries %d and %d); give each configuration once"
+                     % (_short(c), k, i))
+    return configs
+
+
+def _angles_of_interest(where, spec, revolute):
+    raw = spec.get("angles")
+    if raw is None:
+        if revolute:
+            fail(where, "angles", "missing; list the articulation angles of interest in degrees, e.g. "
+                 "angles: [0, 30, 60]")
+        return [[]]
+    if not revolute:
+        fail(where, "angles", "%s, but the scene has no revolute joint; remove 'angles'" % _short(raw))
+    return configurations(where, "angles", raw, revolute)
+
+
+def _reduction_angle(where, value, revolute):
+    path = "reduction.reduction_angle"
+    if value == "auto":
+        return value
+    if not revolute:
+        fail(where, path, "%s, but the scene has no revolute joint; use auto" % _short(value))
+    if isinstance(value, str):
+        fail(where, path, "%s is neither auto nor an angle; give auto or an angle in degrees" % _short(value))
+    if isinstance(value, (list, tuple)) and len(value) == 1 and isinstance(value[0], (list, tuple, dict)):
+        value = value[0]        # [[a1, a2]]: one configuration written as a list of one
+    return configuration(where, path, value, revolute)
+
+
+# ------------------------------------------------------------------ nodes
+
+def node_table(where, path, rows, labels=None):
+    """Node rows (id, x, y, z, ndof) as (ids int32, xyz float64, ndof int32); labels[i] says where row i was written
+    (e.g. 'line 12'), default '[i]'."""
+    def at(i):
+        return "%s (%s)" % (path, labels[i]) if labels is not None else "%s[%d]" % (path, i)
+
+    if isinstance(rows, np.ndarray):
+        rows = rows.tolist()
+    if not isinstance(rows, (list, tuple)):
+        fail(where, path, "%s is neither a nodes file name nor a list; give a file or [[id, x, y, z, ndof], ...]"
+             % _short(rows))
+    if not rows:
+        fail(where, path, "no nodes; list 'id x y z ndof' per node")
+    table = _node_array(rows)
+    if table is not None:
+        return table
+    # row by row: the first bad row, and what is wrong with it
+    n = len(rows)
+    ids = np.empty(n, dtype=np.int32)
+    xyz = np.empty((n, 3))
+    ndof = np.empty(n, dtype=np.int32)
+    first = {}
+    for i, r in enumerate(rows):
+        if isinstance(r, np.ndarray):
+            r = r.tolist()
+        if not isinstance(r, (list, tuple)) or len(r) != 5:
+            fail(where, at(i), "%s is not [id, x, y, z, ndof]; give five numbers per node" % _short(r))
+        ids[i] = node_id(where, at(i), r[0])
+        for c in range(3):
+            xyz[i, c] = real(where, at(i), r[1 + c], "(-inf, inf)", "node coordinates are finite numbers")
+        if not _is_number(r[4]) or float(r[4]) not in NODE_DOFS:
+            fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz)" % (ids[i], _short(r[4])))
+        ndof[i] = int(r[4])
+        k = first.setdefault(int(ids[i]), i)
+        if k != i:
+            fail(where, at(i), "node id %d appears twice (%s and %s); give each node once"
+                 % (ids[i], labels[k] if labels is not None else "[%d]" % k,
+                    labels[i] if labels is not None else "[%d]" % i))
+    return ids, xyz, ndof
+
+
+def _node_array(rows):
+    """All rows at once when every rule holds (a large body's nodes in milliseconds), else None."""
+    try:
+        if not all(isinstance(r, (list, tuple)) and len(r) == 5 and all(map(_is_number, r)) for r in rows):
+            return None
+        A = np.array(rows, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    ids, xyz, ndof = A[:, 0], A[:, 1:4], A[:, 4]
+    if not ((ids == np.floor(ids)) & (ids >= 0) & (ids <= MAX_NODE_ID) & np.isfinite(xyz).all(axis=1)
+            & np.isin(ndof, NODE_DOFS)).all():
+        return None
+    ids = ids.astype(np.int32)
+    if np.unique(ids).size != ids.size:
+        return None
+    return ids, np.ascontiguousarray(xyz), ndof.astype(np.int32)
+
+
+def check_node_references(where, valid, nodes):
+    """Interfaces on existing 6-dof nodes, input/output terms on existing nodes and dofs. nodes[b] = (ids, xyz, ndof)."""
+    index = [dict(zip(ids.tolist(), nd.tolist())) for ids, _, nd in nodes]
+    for b, body in enumerate(valid["bodies"]):
+        for iname, nid in body["interfaces"]:
+            path = "bodies.%s.interfaces.%s" % (body["name"], iname)
+            if nid not in index[b]:
+                fail(where, path, "node %d is not in the body's nodes list; use one of its node ids" % nid)
+            if index[b][nid] != 6:
+                fail(where, path, "node %d has %d dofs; interface nodes need 6 (translations and rotations)"
+                     % (nid, index[b][nid]))
+    for key in ("inputs", "outputs"):
+        for ioname, terms in valid[key]:
+            for i, t in enumerate(terms):
+                if "node" not in t:
+                    continue
+                path = "%s.%s[%d]" % (key, ioname, i)
+                body = valid["bodies"][t["body"]]["name"]
+                nd = index[t["body"]].get(t["node"])
+                if nd is None:
+                    fail(where, path + ".node", "body '%s' has no node %d; use one of its node ids" % (body, t["node"]))
+                if t["dof"] >= nd:
+                    fail(where, path + ".dof", "node %d of body '%s' has %d dofs, so no %s; rotations rx ry rz need "
+                         "a 6-dof node" % (t["node"], body, nd, _short(t["dof_name"])))
+
+
+def check_vector(where, path, data, body, ndofs):
+    """A load or reading vector over a whole body: ndofs finite entries."""
+    data = np.asarray(data, dtype=np.float64).ravel()
+    if data.size != ndofs:
+        fail(where, path, "%d entries, but body '%s' has %d dofs; give one entry per dof" % (data.size, body, ndofs))
+    bad = np.flatnonzero(~np.isfinite(data))
+    if bad.size:
+        fail(where, path, "entry %d is %r; give finite numbers" % (bad[0], data[bad[0]]))
+    return data
+
+
+# ------------------------------------------------------------------ the scene
+
+def _bodies(where, spec):
+    raw = mapping(where, "bodies", spec["bodies"], what="body names to {mass, stiffness, nodes, interfaces}")
+    bodies = []
+    for bname, b in raw.items():
+        bname = name(where, "bodies", bname, "body")
+        path = "bodies." + bname
+        mapping(where, path, b, BODY_KEYS)
+        for key in ("mass", "stiffness", "nodes"):
+            if key not in b:
+                fail(where, path, "'%s' is missing; give it (see the scene reference)" % key)
+        body = {"name": bname, "interfaces": []}
+        for key in ("mass", "stiffness"):
+            v = b[key]
+            if isinstance(v, str) or v is None or _is_number(v) or isinstance(v, (bool, dict)):
+                file_name(where, path + "." + key, v)
+            body[key] = v             # a file name, or a matrix given in memory (checked when it is converted)
+        if isinstance(b["nodes"], str):
+            body["nodes"] = file_name(where, path + ".nodes", b["nodes"])
+        else:
+            body["nodes"] = node_table(where, path + ".nodes", b["nodes"])
+        if "description" in b:
+            text(where, path + ".description", b["description"])
+        ifaces = b.get("interfaces")
+        if ifaces is not None:
+            mapping(where, path + ".interfaces", ifaces, what="interface names to node ids, e.g. {bearing: 101}")
+            for iname, nid in ifaces.items():
+                iname = name(where, path + ".interfaces", iname, "interface")
+                body["interfaces"].append((iname, node_id(where, "%s.interfaces.%s" % (path, iname), nid)))
+        if any(n == body["name"] for n in (x["name"] for x in bodies)):
+            fail(where, path, "body '%s' is defined twice; give each body a unique name" % bname)
+        bodies.append(body)
+    return bodies
+
+
+def _joints(where, spec, bodies):
+    raw = spec.get("joints")
+    if raw is None:
+        raw = {}
+    mapping(where, "joints", raw, what="joint names to {type, parent, parent_interface, child, child_interface, axis}")
+    names = [b["name"] for b in bodies]
+    joints, seen = [], set()
+    for jname, j in raw.items():
+        jname = name(where, "joints", jname, "joint")
+        path = "joints." + jname
+        if jname in seen:
+            fail(where, path, "joint '%s' is defined twice; give each joint a unique name" % jname)
+        seen.add(jname)
+        mapping(where, path, j, JOINT_KEYS)
+        kind = choice(where, path + ".type", j.get("type", "revolute"), JOINT_TYPES)
+        for key in ("parent", "child", "parent_interface", "child_interface"):
+            if key not in j:
+                fail(where, path, "'%s' is missing; give it" % key)
+        ends = {}
+        for key in ("parent", "child"):
+            if _ref(j[key]) not in names:
+                fail(where, path + "." + key, "body %s does not exist (bodies: %s); name one of them"
+                     % (_short(j[key]), ", ".join(names)))
+            ends[key] = names.index(_ref(j[key]))
+        if ends["parent"] == ends["child"]:
+            fail(where, path, "ties body '%s' to itself; a joint connects two different bodies" % names[ends["parent"]])
+        for key, b in (("parent_interface", ends["parent"]), ("child_interface", ends["child"])):
+            have = [i for i, _ in bodies[b]["interfaces"]]
+            if _ref(j[key]) not in have:
+                fail(where, path + "." + key, "body '%s' has no interface %s (it has: %s); declare it under bodies.%s."
+                     "interfaces" % (names[b], _short(j[key]), ", ".join(have) or "none", names[b]))
+        axis = vector3(where, path + ".axis", j.get("axis", [0, 0, 1]), "the rotation axis")
+        if not any(axis):
+            fail(where, path + ".axis", "%s is zero; give a direction such as [0, 0, 1]" % _short(j.get("axis")))
+        R0 = j.get("orientation")
+        joints.append({"name": jname, "type": kind, "parent": ends["parent"], "child": ends["child"],
+                       "parent_interface": _ref(j["parent_interface"]), "child_interface": _ref(j["child_interface"]),
+                       "axis": axis if kind == "revolute" else [0.0, 0.0, 1.0],
+                       "R0": None if R0 is None else rotation(where, path + ".orientation", R0)})
+    _tree(where, names, joints)
+    return joints
+
+
+def _tree(where, names, joints):
+    """Joints join the bodies into one tree (the C scene's setup checks the same on its own input)."""
+    if len(names) > 1 and not joints:
+        fail(where, "joints", "%d bodies but no joints; attach every body but one by a joint" % len(names))
+    parent = {}
+    for j in joints:
+        c = j["child"]
+        if c in parent:
+            fail(where, "joints." + j["name"], "body '%s' is the child of two joints ('%s' and '%s'); a scene is a tree: "
+                 "make one of them its parent instead" % (names[c], parent[c]["name"], j["name"]))
+        parent[c] = j
+    roots = [b for b in range(len(names)) if b not in parent]
+    if not roots:
+        fail(where, "joints", "the joints form a loop: every body is some joint's child; kryflex needs a tree (one "
+             "root body that is no joint's child)")
+    seen, todo = {roots[0]}, [roots[0]]
+    while todo:
+        b = todo.pop()
+        for j in joints:
+            if j["parent"] == b and j["child"] not in seen:
+                seen.add(j["child"])
+                todo.append(j["child"])
+    for b in range(len(names)):
+        if b not in seen:
+            fail(where, "bodies." + names[b], "body '%s' is not attached to the root body '%s': no chain of joints "
+                 "reaches it; add a joint that connects it (or remove the body)" % (names[b], names[roots[0]]))
+
+
+def _io(where, key, spec, bodies):
+    raw = mapping(where, key, spec[key], what="%s names to lists of {body, node, dof, weight} terms" % key)
+    names = [b["name"] for b in bodies]
+    result = []
+    for ioname, terms in raw.items():
+        ioname = name(where, key, ioname, key[:-1])
+        path = "%s.%s" % (key, ioname)
+        if any(n == ioname for n, _ in result):
+            fail(where, path, "%s name '%s' is used twice; give each a unique name" % (key[:-1], ioname))
+        if isinstance(terms, dict):
+            terms = [terms]
+        if not isinstance(terms, list) or not terms:
+            fail(where, path, "%s is not a list of terms; give a list of {body, node, dof, weight} terms"
+                 % _short(terms))
+        checked = []
+        for i, t in enumerate(terms):
+            tpath = "%s[%d]" % (path, i)
+            mapping(where, tpath, t, TERM_KEYS)
+            if _ref(t.get("body")) not in names:
+                fail(where, tpath + ".body", "body %s does not exist (bodies: %s); name one of them"
+                     % (_short(t.get("body")), ", ".join(names)))
+            term = {"body": names.index(_ref(t["body"])),
+                    "weight": real(where, tpath + ".weight", t.get("weight", 1.0), "(-inf, inf)",
+                                   "give the weight as a finite number")}
+            if "vector" in t:
+                if "node" in t or "dof" in t:
+                    fail(where, tpath, "both a vector and node/dof; give node and dof, or a vector file, not both")
+                term["vector"] = file_name(where, tpath + ".vector", t["vector"])
+            else:
+                if "node" not in t or "dof" not in t:
+                    fail(where, tpath, "node or dof is missing; give node and dof (%s), or a vector file"
+                         % ", ".join(DOF_NAMES))
+                term["node"] = node_id(where, tpath + ".node", t["node"])
+                term["dof_name"] = choice(where, tpath + ".dof", t["dof"], tuple(DOF_NAMES))
+                term["dof"] = DOF_NAMES[t["dof"]]
+            checked.append(term)
+        result.append((ioname, checked))
+    return result
+
+
+def _reduction(where, given, revolute):
+    red = dict(REDUCTION_DEFAULTS)
+    red.update(mapping(where, "reduction", given if given is not None else {}, set(REDUCTION_DEFAULTS)))
+    p = "reduction."
+    red["basis"] = choice(where, p + "basis", red["basis"], BASES)
+    red["method"] = choice(where, p + "method", red["method"], METHODS)
+    red["importance"] = choice(where, p + "importance", red["importance"], IMPORTANCES)
+    red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)
+    red["output_blocks"] = integer(where, p + "output_blocks", red["output_blocks"], "[0, inf)",
+                                   "give an integer >= 0 and below moments")
+    if red["output_blocks"] >= red["moments"]:
+        fail(where, p + "output_blocks", "%d is not below moments (%d); give fewer output blocks than moments"
+             % (red["output_blocks"], red["moments"]))
+    red["keep_threshold"] = real(where, p + "keep_threshold", red["keep_threshold"], "(0, 1]",
+                                 "importances are normalized to 1: give a value in (0, 1]")
+    for key in ("deflation_tol", "body_tol", "reassembly_rtol"):
+        red[key] = real(where, p + key, red[key], "(0, 1)", "tolerances are relative: give a value in (0, 1)")
+    red["shift"] = real(where, p + "shift", red["shift"], "[0, inf)", "give a shift >= 0 (0: hold dofs instead)")
+    red["eigen_cover"] = real(where, p + "eigen_cover", red["eigen_cover"], "[1, inf)",
+                              "give a multiple >= 1 of the band's top frequency")
+    red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
+    if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
+        fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % _short(red["save_maps"]))
+    red["save_maps"] = red["save_maps"] if red["save_maps"] == "auto" else bool(red["save_maps"])
+    red["reduction_angle"] = _reduction_angle(where, red["reduction_angle"], revolute)
+    if red["reduction_angles"] is not None:
+        if not revolute:
+            fail(where, p + "reduction_angles", "%s, but the scene has no revolute joint; remove it"
+                 % _short(red["reduction_angles"]))
+        red["reduction_angles"] = configurations(where, p + "reduction_angles", red["reduction_angles"], revolute)
+    return red
+
+
+def _verify(where, given):
+    ver = dict(VERIFY_DEFAULTS)
+    ver.update(mapping(where, "verify", given if given is not None else {}, set(VERIFY_DEFAULTS)))
+    p = "verify."
+    if ver["modes"] != "auto":
+        ver["modes"] = integer(where, p + "modes", ver["modes"], "[1, inf)", "give auto or a positive integer")
+    ver["frequency_points"] = integer(where, p + "frequency_points", ver["frequency_points"],
+                                      "[2, %d]" % MAX_FREQUENCY_POINTS)
+    ver["full_order"] = boolean(where, p + "full_order", ver["full_order"])
+    ver["frf_floor_db"] = real(where, p + "frf_floor_db", ver["frf_floor_db"], "(-inf, 0)",
+                               "give a level below the peak in dB (negative), e.g. -60")
+    return ver
+
+
+def validate(spec, where, default_name="scene"):
+    """The scene's spec (a parsed scene file, or scene_from_dict's dict) checked and normalized; SceneError at the
+    first bad entry."""
+    if not isinstance(spec, dict):
+        fail(where, None, "%s is not a scene; a scene is a YAML mapping with bodies, joints, inputs, outputs, angles"
+             % ("an empty file" if spec is None else _short(spec, 40)))
+    for k in spec:
+        if k not in TOP_KEYS:
+            fail(where, None, unknown_key(k, TOP_KEYS))
+    for key in ("bodies", "inputs", "outputs"):
+        if not spec.get(key):
+            fail(where, key, "missing or empty; give at least one (see the scene reference)")
+    scene_name = spec.get("name", default_name)
+    if isinstance(scene_name, (int, np.integer)) and not isinstance(scene_name, bool):
+        scene_name = str(scene_name)
+    text(where, "name", scene_name)
+    if not 1 <= len(scene_name) <= MAX_SCENE_NAME or not scene_name.isprintable():
+        fail(where, "name", "%s is not a usable scene name; give 1 to %d printable characters"
+             % (_short(scene_name), MAX_SCENE_NAME))
+    for key in ("description", "units"):
+        if key in spec:
+            text(where, key, spec[key])
+    bodies = _bodies(where, spec)
+    joints = _joints(where, spec, bodies)
+    revolute = [j["name"] for j in joints if j["type"] == "revolute"]
+    band = spec.get("band", DEFAULTS["band"])
+    if isinstance(band, (tuple, np.ndarray)):
+        band = list(band)
+    if not isinstance(band, list) or len(band) != 2:
+        fail(where, "band", "%s is not [f_low, f_high]; give [f_low, f_high] in Hz with 0 < f_low < f_high"
+             % _short(band))
+    band = [real(where, "band", x, "(0, inf)", "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
+    if not band[0] < band[1]:
+        fail(where, "band", "%s: f_low is not below f_high; give [f_low, f_high] in Hz with 0 < f_low < f_high" % band)
+    return {
+        "name": scene_name,
+        "bodies": bodies,
+        "joints": joints,
+        "revolute": revolute,
+        "inputs": _io(where, "inputs", spec, bodies),
+        "outputs": _io(where, "outputs", spec, bodies),
+        "configurations": _angles_of_interest(where, spec, revolute),
+        "band": band,
+        "damping": real(where, "damping", spec.get("damping", DEFAULTS["damping"]), "(0, 1)",
+                        "the modal damping ratio lies in (0, 1), e.g. 0.0025"),
+        "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
+                         "give the target relative error in (0, 1), e.g. 0.05"),
+        "reduction": _reduction(where, spec.get("reduction"), revolute),
+        "verify": _verify(where, spec.get("verify")),
+    }

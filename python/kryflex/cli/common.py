@@ -19,7 +19,7 @@ EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL = 0, 1
 EXIT_TARGET, EXIT_SIGINT, EXIT_SIGTERM = 6, 130, 143
 
 # signal number -> (exit code, name)
-SIGNALS = {2: (EXIT_SIGINT, "SIGINT"), 15: (EXIT_SIGTERM, "SIGTERM")}
+SIGNALS = {2: (EXIT_SIGINT, "interrupted (SIGINT)"), 15: (EXIT_SIGTERM, "terminated (SIGTERM)")}
 # which code the run ends with when ranks fail differently: a stop the user asked for first, then bugs, then the
 # failures of the model, the files and the input
 SEVERITY = (EXIT_OK, EXIT_TARGET, EXIT_INPUT, EXIT_OUTPUT, EXIT_MODEL, EXIT_NUMERIC, EXIT_INTERNAL, EXIT_SIGINT,
@@ -82,8 +82,8 @@ class Failure(Exception):
 
 
 def interrupted(signum):
-    code, name = SIGNALS.get(signum, (EXIT_SIGINT, "signal %d" % signum))
-    return Failure(code, "interrupted", text="kryflex: interrupted (%s)%s" % (name, interrupt_note))
+    code, what = SIGNALS.get(signum, (EXIT_SIGINT, "interrupted (signal %d)" % signum))
+    return Failure(code, what, text="kryflex: %s%s" % (what, interrupt_note))
 
 
 def pending_interrupt():
@@ -91,6 +91,13 @@ def pending_interrupt():
     from .. import _core
     sig = _core.interrupt_signal()
     return interrupted(sig) if sig else None
+
+
+def raise_if_interrupted():
+    """Stops a long Python step of one rank (the plots) when a signal was noted; its phase's agreement tells the others."""
+    failure = pending_interrupt()
+    if failure is not None:
+        raise failure
 
 
 def internal(exc):
@@ -256,24 +263,18 @@ def nonnegative_int(text):
     return value
 
 
-def check_kf_options():
-    """Refuses a -kf_ option that nothing reads (a misspelt name would otherwise be ignored without a word), naming
-    the closest known one. Called once the reducer has read its options: options of later stages (LATER_OPTIONS,
-    LATER_PREFIXES) are not read yet and are accepted."""
+def given_kf_options():
+    """The -kf_ options given (command line, PETSC_OPTIONS, options files) that the reducer itself may read: the
+    candidates of check_kf_options."""
     from .. import _core
-    unknown = [name for name, _ in _core.unused_options()
-               if name.startswith("kf_") and name not in LATER_OPTIONS and not name.startswith(LATER_PREFIXES)]
-    if not unknown:
-        return
-    name = sorted(unknown)[0]
-    close = difflib.get_close_matches(name, sorted(set(_reducer_option_names()) | set(LATER_OPTIONS)), n=1)
-    hint = " (did you mean -%s?)" % close[0] if close else ": 'kryflex reduce -help' lists the -kf_ options"
-    raise Failure(EXIT_INPUT, "unknown option -%s%s" % (name, hint))
+    return [name for name, _ in _core.unused_options()
+            if name.startswith("kf_") and name not in LATER_OPTIONS and not name.startswith(LATER_PREFIXES)]
 
 
-def _reducer_option_names():
+def reducer_option_names():
     """The reducer's option names, from its -help listing (KFReducerSetFromOptions prints them on a reducer of this
-    rank alone), captured from the C standard output."""
+    rank alone), captured from the C standard output. Before the first reducer reads its options: PETSc prints an
+    options block's help once per process."""
     import tempfile
     from petsc4py import PETSc
     from ..reducer import print_options_help
@@ -287,7 +288,20 @@ def _reducer_option_names():
             os.dup2(saved, 1)
             os.close(saved)
         f.seek(0)
-        return re.findall(r"-(kf_[a-z0-9_]+)", f.read().decode(errors="replace"))
+        return sorted(set(re.findall(r"-(kf_[a-z0-9_]+)", f.read().decode(errors="replace"))))
+
+
+def check_kf_options(known):
+    """Refuses a -kf_ option that nothing read (a misspelt name would otherwise be ignored without a word), naming the
+    closest of known (reducer_option_names()). Called once the reducer has read its options: options of later stages
+    (LATER_OPTIONS, LATER_PREFIXES) are not read yet and are accepted."""
+    unknown = given_kf_options()
+    if not unknown:
+        return
+    name = sorted(unknown)[0]
+    close = difflib.get_close_matches(name, sorted(set(known) | set(LATER_OPTIONS)), n=1)
+    hint = " (did you mean -%s?)" % close[0] if close else ": 'kryflex reduce -help' lists the -kf_ options"
+    raise Failure(EXIT_INPUT, "unknown option -%s%s" % (name, hint))
 
 
 def from_rank0(value):

@@ -84,9 +84,10 @@ def run(argv):
 
         def set_up():
             # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank
+            known = common.reducer_option_names() if common.given_kf_options() else ()
             reducer = Reducer(scene, quiet=True if args.quiet else None)
             reducer.setup()
-            common.check_kf_options()
+            common.check_kf_options(known)
             return reducer
         reducer = collective(set_up, (SceneError, EXIT_INPUT, str),
                              (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
@@ -103,7 +104,10 @@ def run(argv):
             # rank 0 alone: the report and the NumPy export (the model file below is written by every rank together)
             if rank() == 0:
                 from ..report import write_report, write_unverified
-                (write_report if s["frf"] else write_unverified)(s, staging.path)
+                if s["frf"]:
+                    write_report(s, staging.path, between=common.raise_if_interrupted)
+                else:
+                    write_unverified(s, staging.path)
                 if args.npz:
                     result.model.export_npz(staging.file("reduced.npz"))
         collective(write_report_files, cannot)

@@ -1,6 +1,8 @@
 """Writing result files so that a failure never leaves a half-written one: a temporary name in the same folder,
-renamed into place when complete, with the permissions the umask gives any new file."""
+renamed into place when complete, with the permissions the umask gives any new file; and, for a command's whole set
+of results, a staging folder inside the output folder (Staging), moved into place only when everything is written."""
 import contextlib
+import errno
 import os
 import tempfile
 
@@ -101,6 +103,11 @@ class Staging:
         """Moves every staged file into the folder; returns their final paths. On failure the folder's earlier files
         are restored and the error raised."""
         names = sorted(n for n in os.listdir(self.path) if not n.startswith("."))
+        for name in names:      # never move a user's folder (or anything but a file) aside
+            final = os.path.join(self.folder, name)
+            if os.path.lexists(final) and (os.path.isdir(final) or not os.path.isfile(final)):
+                raise IsADirectoryError(errno.EISDIR, "%s is in the way of the new %s" % (
+                    "a folder" if os.path.isdir(final) else "something other than a file", name), final)
         aside = os.path.join(self.path, ".previous")
         os.mkdir(aside)
         moved, kept = [], []

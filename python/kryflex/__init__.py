@@ -27,6 +27,7 @@ __version__ = "0.1.0"
 # public name -> the module that defines it; imported on first access
 _PUBLIC = {
     "Error": "._core",
+    "Interrupted": "._core",
     "ModelFileError": ".api",
     "ReducedModel": ".api",
     "ReducedSystem": ".api",

@@ -16,6 +16,8 @@ cdef extern from "petscsys.h" nogil:
     PetscErrorCode PetscObjectDereference(PetscObject)
     PetscErrorCode PetscObjectDestroy(PetscObject*)
     PetscErrorCode PetscObjectGetComm(PetscObject, MPI_Comm*)
+    PetscErrorCode PetscOptionsLeftGet(void*, PetscInt*, char***, char***)
+    PetscErrorCode PetscOptionsLeftRestore(void*, PetscInt*, char***, char***)
     PetscBool PetscInitializeCalled
     PetscBool PetscFinalizeCalled
 
@@ -129,6 +131,10 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFPushErrorRecorder()
     const char *KFLastError()
     void KFClearError()
+    enum: KF_ERR_INTERRUPTED
+    PetscErrorCode KFInterruptCatch()
+    PetscErrorCode KFInterruptCheck(MPI_Comm)
+    int KFInterruptSignal()
 
     # ------------------------------------------------------------ reduced model and reduced system
     ctypedef struct _n_KFReducedSystem

@@ -130,6 +130,11 @@ class Reducer:
 
     # ------------------------------------------------------------------ the reduction
 
+    def setup(self):
+        """Checks the settings against the scene before any heavy work (KFReducerSetUp; reduce() calls it too):
+        collective, and cheap."""
+        self.handle.setup()
+
     def reduce(self):
         """Sets up and solves (collective: every rank calls it and gets the same small dense models back); returns a
         Reduction. A second call returns the same Reduction."""

@@ -366,4 +366,15 @@ PETSC_EXTERN PetscErrorCode KFPushErrorRecorder(void);
 PETSC_EXTERN const char    *KFLastError(void);
 PETSC_EXTERN void           KFClearError(void);
 
+/* Interrupts (SIGINT, SIGTERM) for a command that wants long work to stop cleanly: KFInterruptCatch() installs
+   handlers that only note the signal (a second identical signal ends the process at once, as without them);
+   KFInterruptCheck(comm), called at stage boundaries of the reducer (per configuration, per Krylov block), is
+   collective: every rank stops at the same point with the error KF_ERR_INTERRUPTED ("interrupted by SIGINT").
+   Library users who do not call KFInterruptCatch keep their own signal handling; the checks then cost one
+   allreduce of an int. KFInterruptSignal() is the signal noted (0: none). */
+#define KF_ERR_INTERRUPTED 190 /* outside PETSc's error codes */
+PETSC_EXTERN PetscErrorCode KFInterruptCatch(void);
+PETSC_EXTERN PetscErrorCode KFInterruptCheck(MPI_Comm);
+PETSC_EXTERN int            KFInterruptSignal(void);
+
 #endif

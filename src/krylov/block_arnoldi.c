@@ -92,6 +92,7 @@ PetscErrorCode KFKrylovBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, P
       PetscCall(MatGetSize(source ? sys->Ht : sys->G, NULL, &p));
       if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", blk + 1, nblocks, k - k0, p, k));
       if (k == k0) break; /* the block deflated away: the Krylov space is exhausted */
+      PetscCall(KFInterruptCheck(s->comm)); /* a command's SIGINT/SIGTERM: every rank stops after the same block */
       PetscCall(KFBVColumnsToMat(V, k0, k, &Prev));
     }
     PetscCall(MatDestroy(&Prev));

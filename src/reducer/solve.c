@@ -186,6 +186,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
     PetscInt        nkept = 0, nheld, c;
     char            label[128];
 
+    /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
+    PetscCall(KFInterruptCheck(comm));
     PetscCall(KFReducerConfigLabel_Private(nrev, cfg->angles, label, sizeof(label)));
     PetscCall(KFProgress(comm, "configuration %s deg", label));
     PetscCall(PetscTime(&t0));
@@ -200,6 +202,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));
     times[1] += t1 - t0;
+    PetscCall(KFInterruptCheck(comm));
 
     t0 = t1;
     PetscCall(PetscMemzero(&basis, sizeof(basis)));
@@ -282,6 +285,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
       PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
       if (r->verify) {
+        PetscCall(KFInterruptCheck(comm));
         PetscCall(PetscTime(&t0));
         PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
         PetscCall(KFReducerFullReference_Private(r, sys, &ref[ci]));
@@ -296,6 +300,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
     PetscCall(KFReducerBasisDestroy_Private(r, &basis));
   }
   PetscCall(KFSystemDestroy(&sys));
+  PetscCall(KFInterruptCheck(comm));
 
   /* alpha_G and its model; the other candidates are not needed */
   {
@@ -358,6 +363,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   } else sizes_multi[0] = 0;
   PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
 
+  PetscCall(KFInterruptCheck(comm));
   PetscCall(KFReducerCompare_Private(r, Lfull, ref));
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
 

@@ -4,13 +4,57 @@ class Error(RuntimeError):
     """A kryflex or PETSc error, with the message of the call that failed."""
 
 
+class Interrupted(Error):
+    """Long C work stopped by SIGINT or SIGTERM (after interrupt_catch()): signal is the signal's number, the same on
+    every rank (the C check is collective)."""
+
+    def __init__(self, msg, signal):
+        super().__init__(msg)
+        self.signal = signal
+
+
 cdef int check(PetscErrorCode ierr) except -1:
-    """Turns a failed C call into an Error carrying the recorder's message."""
+    """Turns a failed C call into an Error carrying the recorder's message (Interrupted for KFInterruptCheck's)."""
     if ierr != 0:
         msg = KFLastError().decode(errors="replace") or "PETSc error %d" % ierr
         KFClearError()
+        if ierr == KF_ERR_INTERRUPTED:
+            raise Interrupted(msg, KFInterruptSignal())
         raise Error(msg)
     return 0
+
+
+def interrupt_catch():
+    """Installs the C library's SIGINT/SIGTERM handlers (KFInterruptCatch): a signal is noted, and the reducer stops at
+    its next stage boundary with Interrupted. For a command; Python's KeyboardInterrupt no longer fires after it."""
+    check(KFInterruptCatch())
+
+
+def interrupt_signal():
+    """The signal noted by the handlers of interrupt_catch() on this rank (0: none)."""
+    return KFInterruptSignal()
+
+
+def interrupt_check(comm=None):
+    """Collective: raises Interrupted on every rank if any rank noted a signal (KFInterruptCheck)."""
+    cdef Comm c = as_comm(comm)
+    check(KFInterruptCheck(c.comm))
+
+
+def unused_options():
+    """The options in PETSc's database that nothing has read yet, as (name without the dash, value or None)."""
+    cdef PetscInt n = 0
+    cdef char **names = NULL
+    cdef char **values = NULL
+    check(PetscOptionsLeftGet(NULL, &n, &names, &values))
+    out = []
+    try:
+        for i in range(n):
+            out.append((names[i].decode(errors="replace"),
+                        values[i].decode(errors="replace") if values[i] != NULL else None))
+    finally:
+        check(PetscOptionsLeftRestore(NULL, &n, &names, &values))
+    return out
 
 
 # The recorder keeps the first message of a failed call instead of PETSc's traceback on stderr. It is pushed when the

@@ -1,24 +1,27 @@
 """kryflex info SCENE: what a scene holds and what reducing it will take."""
-from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, Parser, error, say, split_petsc_options
+from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, Parser, collective, say, split_petsc_options
 
 
 def run(argv):
     p = Parser(prog="kryflex info", description="What a scene holds and what reducing it will take.")
     p.add_argument("scene")
-    args = p.parse_args(split_petsc_options(argv, set(), {"-h", "--help"}))
+    args = collective(lambda: p.parse_args(split_petsc_options(argv, set(), {"-h", "--help"})))
     from .. import _core
     from ..io.scene import SceneError, load_scene
-    try:
-        scene = load_scene(args.scene)
+    scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
+                       (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+
+    def rigid_modes():
         system = _core.CSystem(scene.cscene)
         system.set_angles(scene.angles_rad(scene.configurations[0]))
-        _, residual = system.rigid_modes()
-    except SceneError as e:
-        error(str(e))
-        return EXIT_INPUT
-    except _core.Error as e:
-        error(str(e))
-        return EXIT_NUMERIC
+        return system.rigid_modes()[1]
+    residual = collective(rigid_modes, (_core.Error, EXIT_NUMERIC, str))
+    collective(lambda: describe(scene, residual))
+    return EXIT_OK
+
+
+def describe(scene, residual):
+    """The description, on rank 0 (the matrices' nonzero counts are summed over the ranks)."""
     info = scene.info
     nnz = 0
     say("scene '%s' (%s)" % (scene.name, scene.path))
@@ -48,4 +51,3 @@ def run(argv):
     base = 12 * 2 * nnz + 8 * e * (c + nr) * 3
     say("  memory estimate: %.2g GiB for matrices and Krylov vectors, plus the MUMPS factor (typically 10-50 x the "
          "stiffness nonzeros for 3-D solids: %.2g-%.2g GiB)" % (base / 2**30, 10 * 12 * nnz / 2 / 2**30, 50 * 12 * nnz / 2 / 2**30))
-    return EXIT_OK

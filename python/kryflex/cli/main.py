@@ -1,13 +1,20 @@
 """The kryflex command: reduce, reassemble, info, convert. Runs alone or under mpirun.
 
-Exit codes: 0 done; 2 bad command line, scene or input file; 3 the model cannot be reduced (numerical failure,
-e.g. an undeclared mechanism or an indefinite stiffness); 4 the output cannot be written; 5 a reduced-model file
-that cannot be used (unreadable, or from another scene); 1 an internal error (a bug: please report it).
+Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
+  0    done (verification passed, or verification was off and the run says so)
+  1    internal error (a bug: please report it)
+  2    bad command line, scene, option value or input file
+  3    numerical failure: the model cannot be reduced (indefinite K, undeclared mechanism, MUMPS failure)
+  4    the output cannot be written (not a folder, read-only, disk full); earlier results left intact
+  5    a reduced-model file that cannot be used (unreadable, truncated, inconsistent, other version, other scene)
+  6    accuracy target missed: the results are written, summary.json says "target_met": false
+  130  interrupted by SIGINT; 143 terminated by SIGTERM (earlier results intact, no stray files)
+Under mpirun a rank that fails alone while the others wait in a collective call ends the run with MPI_Abort(code)
+after -kf_error_agreement_timeout seconds (cli/common.py).
 """
-import os
 import sys
 
-from .common import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, error, rank, say
+from .common import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_SIGINT, Failure, agree, error, internal, say, start_agreement
 from .info import run as info
 from .reassemble import run as reassemble
 from .reduce import run as reduce
@@ -47,19 +54,23 @@ def main(argv=None):
         from petsc4py import PETSc
         PETSc.Options().setValue("kf_quiet", True)
     try:
+        # SIGINT and SIGTERM are noted by the C library's handlers from here on, and the work stops at its next
+        # stage or phase boundary, on every rank together (before: Python's KeyboardInterrupt, or the default)
+        from .. import _core
+        _core.interrupt_catch()
+        try:
+            start_agreement()
+        except Failure as f:
+            agree(f)
         return commands[cmd](rest)
     except SystemExit as e:
         return int(e.code or 0)
     except KeyboardInterrupt:
-        error("interrupted")
-        return EXIT_INTERNAL
-    except BrokenPipeError:
-        # the reader went away (kryflex info ... | head): stop quietly, as command-line tools do
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return EXIT_OK
-    except Exception as e:  # noqa: BLE001 - a bug: say so plainly, with the trace for the report
-        import traceback
-        if rank() == 0:
-            traceback.print_exc()
-        error("internal error (%s: %s): please report it with the command line" % (type(e).__name__, e))
+        print("kryflex: interrupted (SIGINT)", file=sys.stderr, flush=True)
+        return EXIT_SIGINT
+    except Exception as e:  # noqa: BLE001 - a bug outside the phases: say so plainly, with the trace for the report
+        try:
+            agree(internal(e))
+        except SystemExit as stop:
+            return int(stop.code or 0)
         return EXIT_INTERNAL

@@ -1,10 +1,12 @@
 """kryflex reassemble REDUCED --angle A: the reduced system at any angles from a reduced-model file alone."""
 import json
+import os
 
 import numpy as np
 
-from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_OK, EXIT_OUTPUT, Parser, error, from_rank0, rank, say,
-                     split_petsc_options)
+from . import common
+from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective,
+                     nonnegative_int, rank, say, split_petsc_options)
 
 
 def run(argv):
@@ -16,65 +18,86 @@ def run(argv):
     p.add_argument("--scene", help="check that the reduced model comes from this scene")
     p.add_argument("-o", "--output", help="write the reassembled matrices (Mh, Kh, Gh, Hh per angle) to this .npz")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
-    p.add_argument("--modes", type=int, default=10, help="flexible frequencies to print (default 10)")
-    kept = split_petsc_options(argv, {"--angle", "--scene", "-o", "--output", "--modes"}, {"--json", "-h", "--help"})
-    # '--angle -30,95' would read as an option to argparse: glue the value on
-    kept = [a + "=" + kept[i + 1] if a == "--angle" and i + 1 < len(kept) else a for i, a in enumerate(kept)
-            if not (i > 0 and kept[i - 1] == "--angle")]
-    args = p.parse_args(kept)
+    p.add_argument("--modes", type=nonnegative_int, default=10, help="flexible frequencies to print (default 10)")
+
+    def parse():
+        kept = split_petsc_options(argv, {"--angle", "--scene", "-o", "--output", "--modes"}, {"--json", "-h", "--help"})
+        # '--angle -30,95' would read as an option to argparse: glue the value on
+        kept = [a + "=" + kept[i + 1] if a == "--angle" and i + 1 < len(kept) else a for i, a in enumerate(kept)
+                if not (i > 0 and kept[i - 1] == "--angle")]
+        args = p.parse_args(kept)
+        args.angles = [_angles(text) for text in args.angle]
+        return args
+    args = collective(parse)
     import time
 
+    from .. import _core
     from ..api import ModelFileError, ReducedModel
     from ..io.scene import SceneError, load_scene
-    try:
+
+    def load():
         model = ReducedModel.load(args.reduced)
         if args.scene:
             model.check_scene(load_scene(args.scene), args.reduced)
-    except ModelFileError as e:
-        error(str(e))
-        return EXIT_MODEL
-    except SceneError as e:
-        error(str(e))
-        return EXIT_INPUT
-    results, arrays = [], {}
-    for text in args.angle:
-        try:
-            angles = [float(x) for x in text.split(",")]
+        return model
+    model = collective(load, (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
+                       (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+
+    def reassemble():
+        results, arrays = [], {}
+        for text, angles in zip(args.angle, args.angles):
             t0 = time.perf_counter()
-            system = model.at(angles)
+            try:
+                system = model.at(angles)
+            except ValueError as e:
+                raise Failure(EXIT_INPUT, "--angle %s: %s" % (text, e)) from None
             dt = time.perf_counter() - t0
-        except ValueError as e:
-            error("--angle %s: %s" % (text, e))
-            return EXIT_INPUT
-        results.append(dict(angles_deg=angles, dofs=system.dofs, constraint_rank=system.constraint_rank,
-                            sigma_ratio=system.sigma_ratio, seconds=dt,
-                            rigid_modes=None if system.rigid_modes is None else int(system.rigid_modes.shape[1]),
-                            frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]]))
-        key = "_".join("%g" % a for a in angles)
-        arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
+            results.append(dict(angles_deg=angles, dofs=system.dofs, constraint_rank=system.constraint_rank,
+                                sigma_ratio=system.sigma_ratio, seconds=dt,
+                                rigid_modes=None if system.rigid_modes is None else int(system.rigid_modes.shape[1]),
+                                frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]]))
+            key = "_".join("%g" % a for a in angles)
+            arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
+        return results, arrays
+    results, arrays = collective(reassemble, (_core.Error, EXIT_NUMERIC, str))
     if args.output:
-        problem = _write_npz(args.output, arrays) if rank() == 0 else None
-        problem = from_rank0(problem)
-        if problem is not None:
-            error(problem)
-            return EXIT_OUTPUT
+        path = os.path.abspath(args.output)
+        common.interrupt_note = ": %s left as it was" % path
+        collective(lambda: _write_npz(path, arrays) if rank() == 0 else None,
+                   (OSError, EXIT_OUTPUT, lambda e: "cannot write %s: %s" % (path, e)))
     if args.json:
         say(json.dumps(results, indent=1))
     else:
         for r in results:
             say("angles %s deg: %d dofs (constraint rank %d, %s rigid/mechanism modes), reassembled in %.2f ms"
-                 % (r["angles_deg"], r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
+                % (r["angles_deg"], r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
             say("  flexible frequencies (Hz): " + " ".join("%.6g" % x for x in r["frequencies_hz"]))
     return EXIT_OK
 
 
-def _write_npz(path, arrays):
-    """Writes arrays to path (.npz) under a temporary name renamed into place; None, or what went wrong."""
-    from ..io.files import atomic_path
+def _angles(text):
     try:
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, **arrays)
-        return None
-    except OSError as e:
-        return "cannot write %s: %s" % (path, e)
+        return [float(x) for x in text.split(",")]
+    except ValueError as e:
+        raise Failure(EXIT_INPUT, "--angle %s: %s: give angles in degrees, comma-separated for several revolute "
+                      "joints" % (text, e)) from None
+
+
+def _write_npz(path, arrays):
+    """Writes arrays to path (.npz) through a staging folder beside it (io/files.py Staging): path is replaced only
+    by a complete file, and a failure leaves nothing behind."""
+    from ..io.files import Staging, remove_stale_staging
+    folder, name = os.path.split(path)
+    if os.path.isdir(path):
+        raise Failure(EXIT_OUTPUT, "-o %s is a folder: give a file name (.npz)" % path)
+    if not os.path.isdir(folder):
+        raise Failure(EXIT_OUTPUT, "cannot write %s: %s is not an existing folder" % (path, folder))
+    remove_stale_staging(folder)
+    staging = Staging(folder)
+    staging.create()
+    try:
+        with open(staging.file(name), "wb") as fh:
+            np.savez(fh, **arrays)
+        staging.commit()
+    finally:
+        staging.discard()

@@ -2,9 +2,11 @@
 KFReducer: every -kf_ option applies; kryflex reduce -help lists them)."""
 import os
 import shutil
+import sys
 
-from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Parser, error, from_rank0, rank, say,
-                     split_petsc_options)
+from . import common
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, EXIT_TARGET, Failure, Parser, collective,
+                     from_rank0, rank, say, split_petsc_options)
 
 
 HELP_FLAGS = ("-h", "-help", "--help")
@@ -43,91 +45,138 @@ def run(argv):
     p = parser()
     if any(a in HELP_FLAGS for a in argv):
         return print_help(p)
-    args = p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet"}))
+    args = collective(lambda: p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet"})))
     from .. import _core
-    from ..reducer import Reducer
-    from ..report import write_report, write_unverified
+    from ..io.files import Staging
     from ..io.scene import SceneError, load_scene
+    from ..reducer import Reducer
 
     out = os.path.abspath(args.output)
-    created = _prepare_output(out)
-    try:
-        scene = load_scene(args.scene)
-        reducer = Reducer(scene, quiet=True if args.quiet else None)   # the scene's settings, then the -kf_ options
-    except SceneError as e:
-        _cleanup(out, created)
-        error(str(e))
-        return EXIT_INPUT
-    except _core.Error as e:     # a setting the reducer refuses (a scene value or a -kf_ option)
-        _cleanup(out, created)
-        error("%s: %s" % (args.scene, e))
-        return EXIT_INPUT
-    try:
-        result = reducer.reduce()
-    except _core.Error as e:
-        _cleanup(out, created)
-        error("the model cannot be reduced: %s" % e)
-        return EXIT_NUMERIC
-    # the report first, on rank 0 (it leaves nothing behind if it fails); then the model file, written by every rank
-    # together (the C writer is collective and fails on every rank alike); a failure removes all
-    written, problem = [], None
-    try:
+    common.interrupt_note = ": results in %s left as they were" % out
+    # the staging folder first: an output that cannot be written is refused before any long work; every rank knows
+    # its name (the model file is written by every rank together)
+    prepared = {}
+
+    def prepare():
         if rank() == 0:
-            report = write_report if result.summary["frf"] else write_unverified
-            written.extend(report(result.summary, out))
-    except OSError as e:
-        problem = "cannot write the results to %s: %s" % (out, e)
-    problem = from_rank0(problem)   # every rank exits with the same code
-    if problem is None:
-        try:
-            written.append(result.model.save(os.path.join(out, "reduced.h5")))
-            if args.npz and rank() == 0:
-                written.append(result.model.export_npz(os.path.join(out, "reduced.npz")))
-        except (OSError, _core.Error) as e:
-            problem = "cannot write the results to %s: %s" % (out, e)
-        problem = from_rank0(problem)
-    if problem is not None:
-        if rank() == 0:
-            for path in written:
-                if os.path.exists(path):
-                    os.unlink(path)
-        _cleanup(out, created)
-        error(problem)
-        return EXIT_OUTPUT
-    s = result.summary
+            prepared["created"], prepared["path"] = _prepare_output(out)
+    try:
+        collective(prepare)
+    except SystemExit:
+        if prepared:
+            Staging(out, prepared["path"]).discard()
+            if prepared["created"]:
+                _remove_if_empty(out)
+        raise
+    created, path = from_rank0((prepared.get("created"), prepared.get("path")))
+    staging = Staging(out, path)
+
+    def clean_up():
+        staging.discard()
+        if created:
+            _remove_if_empty(out)
+    # a rank that ends the run alone (MPI_Abort) removes what this run made first
+    common.before_abort.append(clean_up)
+    committed = False
+    try:
+        scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
+                           (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+
+        def set_up():
+            # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank
+            known = common.reducer_option_names() if common.given_kf_options() else ()
+            reducer = Reducer(scene, quiet=True if args.quiet else None)
+            reducer.setup()
+            common.check_kf_options(known)
+            return reducer
+        reducer = collective(set_up, (SceneError, EXIT_INPUT, str),
+                             (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+        result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
+
+        s = result.summary
+        met, worst, where = target(result)
+        s["target_met"] = met
+        _core.progress("writing the results to %s" % out)
+        cannot = (OSError, EXIT_OUTPUT, lambda e: "cannot write the results to %s: %s" % (out, e))
+        cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: "cannot write the results to %s: %s" % (out, e))
+
+        def write_report_files():
+            # rank 0 alone: the report and the NumPy export (the model file below is written by every rank together)
+            if rank() == 0:
+                from ..report import write_report, write_unverified
+                if s["frf"]:
+                    write_report(s, staging.path, between=common.raise_if_interrupted)
+                else:
+                    write_unverified(s, staging.path)
+                if args.npz:
+                    result.model.export_npz(staging.file("reduced.npz"))
+        collective(write_report_files, cannot)
+        collective(lambda: result.model.save(staging.file("reduced.h5")), cannot, cannot_c)
+        # the results are complete: a signal from here on no longer undoes them
+        collective(lambda: staging.commit() if rank() == 0 else None, cannot, interruptible=False)
+        committed = True
+    finally:
+        if not committed and rank() == 0:
+            clean_up()
     say("kryflex: reduced '%s': %s reduced dofs per body (%s), alpha_G = %s deg, kept Krylov modes %s"
-         % (s["scene"], " + ".join(str(v) for v in result.model.sizes), result.model.settings["method"],
-            s["reduction_label"], s["kept_modes"]))
-    errs = [v["max_rel_error"] for v in s["frf"].values()]
-    if errs:
-        say("kryflex: max relative frequency-response error over the band: %.3g (target %.3g)" % (max(errs), s["accuracy"]))
+        % (s["scene"], " + ".join(str(v) for v in result.model.sizes), result.model.settings["method"],
+           s["reduction_label"], s["kept_modes"]))
     say("kryflex: results in %s (reduced.h5, report.md, summary.json, plots)" % out)
+    if met is None:
+        say("kryflex: the full-order verification was off (verify.full_order: false): the accuracy target %g was not "
+            "checked" % s["accuracy"])
+        return EXIT_OK
+    say("kryflex: max relative frequency-response error over the band (%s model): %.3g at %s deg (target %.3g)"
+        % (result.model.settings["method"], worst, where, s["accuracy"]))
+    if not met:
+        say("kryflex: target missed: max relative FRF error %.3g at %s deg > accuracy %.3g"
+            % (worst, where, s["accuracy"]), sys.stderr)
+        return EXIT_TARGET
     return EXIT_OK
 
 
+def target(result):
+    """(met, worst error, its angle label) of the model written against the scene's accuracy at the angles of
+    interest: the multi-angle model's errors for method multi-angle, the single-angle model's otherwise; met is None
+    when the verification was off."""
+    s = result.summary
+    if not s["frf"]:
+        return None, None, None
+    if result.model.settings["method"] == "multi-angle":
+        errors = (s.get("multi_angle") or {}).get("frf_max_rel_error") or {}
+    else:
+        errors = {label: v["max_rel_error"] for label, v in s["frf"].items()}
+    errors = {label: e for label, e in errors.items() if e is not None}
+    if not errors:
+        return None, None, None
+    where = max(errors, key=errors.get)
+    return bool(errors[where] <= s["accuracy"]), errors[where], where
+
+
 def _prepare_output(out):
-    """Creates the output folder if needed and checks it is writable before any long work; True if created here.
-    Rank 0 decides and every rank learns the outcome: a rank that went on alone would wait forever in the
-    reduction's collective calls."""
-    created, problem = False, None
-    if rank() == 0:
-        if os.path.exists(out) and not os.path.isdir(out):
-            problem = "output %s exists and is not a folder: choose another -o" % out
-        elif not os.path.isdir(out):
-            try:
-                os.makedirs(out)
-                created = True
-            except OSError as e:
-                problem = "cannot create the output folder %s: %s" % (out, e)
-        if problem is None and not os.access(out, os.W_OK | os.X_OK):
-            problem = "the output folder %s is not writable: choose another -o or fix its permissions" % out
-    created, problem = from_rank0((created, problem))
-    if problem is not None:
-        error(problem)
-        raise SystemExit(EXIT_OUTPUT)
-    return created
+    """Rank 0: the output folder (created if needed: True if created here) and a new staging folder inside it, after
+    removing stale ones; a Failure (EXIT_OUTPUT) when the folder cannot be written."""
+    from ..io.files import Staging, remove_stale_staging
+    created = False
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise Failure(EXIT_OUTPUT, "output %s exists and is not a folder: choose another -o" % out)
+    if not os.path.isdir(out):
+        try:
+            os.makedirs(out)
+            created = True
+        except OSError as e:
+            raise Failure(EXIT_OUTPUT, "cannot create the output folder %s: %s" % (out, e.strerror or e)) from None
+    remove_stale_staging(out)
+    try:
+        path = Staging(out).create()
+    except OSError as e:
+        if created:
+            _remove_if_empty(out)
+        raise Failure(EXIT_OUTPUT, "the output folder %s is not writable (%s): choose another -o or fix its "
+                      "permissions" % (out, e.strerror or e)) from None
+    return created, path
 
 
-def _cleanup(out, created):
-    if created and rank() == 0 and os.path.isdir(out) and not os.listdir(out):
+def _remove_if_empty(out):
+    if os.path.isdir(out) and not os.listdir(out):
         shutil.rmtree(out, ignore_errors=True)

@@ -58,11 +58,12 @@ class _StagedFiles:
         self.staged = []
 
 
-def write_report(summary, out_dir):
+def write_report(summary, out_dir, between=None):
     """Write summary.json, report.md and the PNG plots into out_dir; return the written paths.
 
     Raises ReportError (a ValueError) naming the offending key when the summary is incomplete or not plain JSON;
-    on any failure no file of this report is left in out_dir (earlier files there are untouched).
+    on any failure no file of this report is left in out_dir (earlier files there are untouched). between: called
+    after each plot (the command stops there when it was interrupted: rendering the plots is the long part).
     """
     validate_summary(summary)
     text_json = json.dumps(summary, indent=1, allow_nan=False) + "\n"
@@ -73,6 +74,8 @@ def write_report(summary, out_dir):
     try:
         for name, data in _render_plots(summary, plot_names):
             staging.add(name, data)
+            if between is not None:
+                between()
         staging.add("summary.json", text_json.encode("utf-8"))
         staging.add("report.md", markdown.encode("utf-8"))
         return staging.commit()

@@ -4,7 +4,7 @@ Every case is refused with exit 2 by `kryflex info` (fast: it fails before any r
 folder matters, by `kryflex reduce`; kryflex.load_scene raises kryflex.SceneError with the same content. The message
 names the scene file and the entry path, the offending value, and the fix.
 """
-from .edits import (all_of, alias_bomb, deep_nesting, del_key, huge_scene, make_folder, non_utf8_scene, rename_body,
+from .edits import (alias_bomb, deep_nesting, huge_scene, make_folder, non_utf8_scene, rename_body,
                     rename_interface, rename_io, rename_joint, set_key, spec_edit, text, write)
 from .harness import DID_YOU_MEAN, EXIT_INPUT, FIX, Case
 

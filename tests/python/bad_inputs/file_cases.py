@@ -9,7 +9,7 @@ from . import edits as e
 from .harness import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, FIX, Case
 
 REDUCE = ("reduce", "{scene}", "-o", "{out}", "-quiet")
-REEXPORT = r"re-?export|write it again|export it again|fix|give|use|check"
+REEXPORT = FIX           # any imperative: re-export the matrix, write it as real, fix the path, ...
 
 
 def F(name, prepare, mentions, fix=REEXPORT, argv=("info", "{scene}"), **kw):

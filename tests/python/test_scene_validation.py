@@ -125,13 +125,13 @@ CASES = {
                                   ["'moments' appears twice (line 29, columns"], r"keep one"),
     "yaml_alias_bomb": (raw(BOMB), ["aliases", "expand to more than 100000"], r"write the entries out"),
     "yaml_alias_loop": (raw("bodies: &b [1, *b]\n"), ["*b", "loop"], r"write the entry out"),
-    "yaml_too_deep": (raw("angles: " + "[" * 40 + "]" * 40 + "\n"), ["line 1", "deeper than 32"], r"flatten"),
+    "yaml_too_deep": (raw("angles: " + "[" * 40 + "]" * 40 + "\n"), ["line 1", "deeper than 32"], r"remove the extra nesting"),
     "yaml_not_utf8": (raw(b"name: gal\xe9leo\n"), ["not UTF-8 text at byte 9"], r"save the scene as UTF-8"),
     "yaml_syntax": (text("angles: [0, 15, 30, 45, 60, 72]", "angles: [0, 15, 30\n  oops: : ]"),
                     ["not valid YAML at line 26, column"], r"fix the syntax"),
     "yaml_too_large": (raw("# padding\n" * 110000), ["1100000 bytes", "1048576"], r"their own files"),
-    "yaml_empty": (raw(""), ["an empty file"], r"a YAML mapping with bodies"),
-    "yaml_list": (raw("- 1\n- 2\n"), ["[1, 2]"], r"a YAML mapping with bodies"),
+    "yaml_empty": (raw(""), ["an empty file"], r"write the scene as a YAML mapping with bodies"),
+    "yaml_list": (raw("- 1\n- 2\n"), ["[1, 2]"], r"write the scene as a YAML mapping with bodies"),
     # ---- top level
     "top_unknown_key": (text("damping: 0.0025", "dampng: 0.0025"), ["'dampng'"], r"did you mean 'damping'"),
     "top_bodies_missing": (at("bodies", None), ["bodies", "missing"], r"give at least one"),
@@ -140,10 +140,10 @@ CASES = {
     "top_name_newline": (at("name", "gal\nileo"), ["name", "'gal\\nileo'"], r"printable characters"),
     "top_description": (at("description", 3), ["description", "3"], r"as text"),
     # ---- band, damping, accuracy
-    "damping_high": (at("damping", 1.5), ["damping", "1.5", "outside (0, 1)"], r"lies in \(0, 1\)"),
-    "damping_zero": (at("damping", 0), ["damping", "0 is outside"], r"lies in \(0, 1\)"),
-    "damping_text": (at("damping", "low"), ["damping", "'low'", "not a number"], r"lies in \(0, 1\)"),
-    "damping_nan": (text("damping: 0.0025", "damping: .nan"), ["damping", "nan"], r"lies in \(0, 1\)"),
+    "damping_high": (at("damping", 1.5), ["damping", "1.5", "outside (0, 1)"], r"give the modal damping ratio in \(0, 1\)"),
+    "damping_zero": (at("damping", 0), ["damping", "0 is outside"], r"give the modal damping ratio in \(0, 1\)"),
+    "damping_text": (at("damping", "low"), ["damping", "'low'", "not a number"], r"give the modal damping ratio in \(0, 1\)"),
+    "damping_nan": (text("damping: 0.0025", "damping: .nan"), ["damping", "nan"], r"give the modal damping ratio in \(0, 1\)"),
     "damping_bool": (at("damping", True), ["damping", "True", "not a number"], r"\(0, 1\)"),
     "accuracy_one": (at("accuracy", 1.0), ["accuracy", "1.0", "(0, 1)"], r"target relative error"),
     "accuracy_negative": (at("accuracy", -0.1), ["accuracy", "-0.1"], r"give the target"),
@@ -194,7 +194,7 @@ CASES = {
     "static_correction_int": (at("reduction.static_correction", 1), ["reduction.static_correction", "1"],
                               r"true or false"),
     "reduction_unknown_key": (at("reduction.moment", 3), ["reduction", "'moment'"], r"did you mean 'moments'"),
-    "reduction_not_mapping": (at("reduction", 5), ["reduction", "5"], r"expected a mapping"),
+    "reduction_not_mapping": (at("reduction", 5), ["reduction", "5"], r"is not a mapping; give a mapping of"),
     # ---- verify
     "verify_modes_zero": (at("verify.modes", 0), ["verify.modes", "0"], r"auto or a positive integer"),
     "verify_modes_text": (at("verify.modes", "many"), ["verify.modes", "'many'"], r"auto or a positive integer"),
@@ -237,11 +237,11 @@ CASES = {
                                ["bodies.rotor.interfaces.bearing", "3000000000", "exceeds 2147483647"],
                                r"renumber the nodes"),
     "node_id_negative_term": (lambda s, d: s["inputs"]["bearing_torque"][0].update(node=-1),
-                              ["inputs.bearing_torque[0].node", "-1"], r"integers in \[0, 2147483647\]"),
+                              ["inputs.bearing_torque[0].node", "-1"], r"give the node id as an integer in \[0, 2147483647\]"),
     "node_id_text": (lambda s, d: s["inputs"]["bearing_torque"][0].update(node="one"),
-                     ["inputs.bearing_torque[0].node", "'one'", "not an integer"], r"node ids are integers"),
+                     ["inputs.bearing_torque[0].node", "'one'", "not an integer"], r"give the node id as an integer"),
     "node_id_fraction": (lambda s, d: s["outputs"]["pointA_ry"][0].update(node=1.5),
-                         ["outputs.pointA_ry[0].node", "1.5"], r"node ids are integers"),
+                         ["outputs.pointA_ry[0].node", "1.5"], r"give the node id as an integer"),
     "inline_nodes_duplicate": (at("bodies.stator.nodes", [[1, 0, 0, 0, 6], [1, 0, 0, -1.7, 6]]),
                                ["bodies.stator.nodes[1]", "node id 1 appears twice"], r"give each node once"),
     "inline_nodes_ndof": (at("bodies.stator.nodes", [[1, 0, 0, 0, 6], [2, 0, 0, -1.7, 4]]),
@@ -332,8 +332,8 @@ CASES = {
     # ---- files
     "mass_missing_last_body": (at("bodies.rotor.mass", "gone_M.mtx"), ["bodies.rotor.mass", "'gone_M.mtx'",
                                                                        "not found"], r"fix the path"),
-    "stiffness_is_folder": (at("bodies.rotor.stiffness", "."), ["bodies.rotor.stiffness", "not a regular file"],
-                            r"name the file itself"),
+    "stiffness_is_folder": (at("bodies.rotor.stiffness", "."), ["bodies.rotor.stiffness", "a folder, not a file"],
+                            r"give the path of the matrix file itself"),
     "mass_not_text": (at("bodies.rotor.mass", 5), ["bodies.rotor.mass", "5"], r"relative to the scene file"),
     "vector_missing": (lambda s, d: s["outputs"].update(pointA_ry=[{"body": "stator", "vector": "none.txt"}]),
                        ["outputs.pointA_ry[0].vector", "'none.txt'", "not found"], r"fix the path"),
@@ -350,7 +350,7 @@ OVERRIDES = {
     "override_unknown_reduction_key": ({"scene.reduction.momnets": "12"},
                                        ["option -scene.reduction.momnets", "'momnets'"], r"did you mean 'moments'"),
     "override_unknown_top_key": ({"scene.dampng": "0.1"}, ["option -scene.dampng"], r"did you mean 'damping'"),
-    "override_bad_value": ({"scene.damping": "2"}, ["damping", "2 is outside (0, 1)"], r"lies in \(0, 1\)"),
+    "override_bad_value": ({"scene.damping": "2"}, ["damping", "2 is outside (0, 1)"], r"give the modal damping ratio in \(0, 1\)"),
     "override_repeated_angles": ({"scene.angles": "30,30"}, ["angles", "30", "appears twice"],
                                  r"each configuration once"),
     "override_unknown_body": ({"scene.bodies.rotr.mass": "x.mtx"}, ["option -scene.bodies.rotr.mass", "'rotr'"],
@@ -508,7 +508,7 @@ def test_node_id_limit():
 
 
 def test_scene_path_not_a_file(tmp_path):
-    with pytest.raises(kryflex.SceneError, match=r"is not a regular file .*name the scene's \.yaml file"):
+    with pytest.raises(kryflex.SceneError, match=r"is a folder, not a file .*give the path of the scene's \.yaml file"):
         kryflex.load_scene(str(tmp_path))
     with pytest.raises(kryflex.SceneError, match=r"nothere\.yaml: scene file not found .*fix the path"):
         kryflex.load_scene(str(tmp_path / "nothere.yaml"))

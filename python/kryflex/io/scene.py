@@ -39,7 +39,7 @@ def _override_path(where, option, path, spec):
         names = spec.get(section) if isinstance(spec.get(section), dict) else {}
         if path[1] not in names:
             close = schema.unknown_key(path[1], set(map(str, names))).split(";")[0].replace("unknown key", "no entry")
-            schema.fail(where, w, "the scene's %s have %s; name one of: %s" % (section, close,
+            schema.fail(where, w, "the scene's %s have %s; use one of: %s" % (section, close,
                                                                              ", ".join(map(str, names)) or "none"))
         if section in schema.SECTION_KEYS and len(path) > 2 and path[2] not in schema.SECTION_KEYS[section]:
             schema.fail(where, w, schema.unknown_key(path[2], schema.SECTION_KEYS[section]))
@@ -56,7 +56,8 @@ def _apply_overrides(spec, where):
             continue
         path = name[len("scene."):].split(".")
         if raw is None or str(raw) == "":
-            _fail(where, "option -%s needs a value, e.g. -%s 0,30,60" % (name, name))
+            _fail(where, "option -%s: no value; give one after the option, e.g. -%s %s"
+                  % (name, name, "0,30,60" if path[-1] in ("angles", "reduction_angles", "band") else "VALUE"))
         _override_path(where, name, path, spec)
         text = str(raw)
         if "," in text and not text.strip().startswith(("[", "{")):
@@ -87,12 +88,17 @@ def _file(where, key, name, base, what="file"):
         _fail("%s: %s" % (where, key), "%s '%s' not found (looked for %s); fix the path (relative to the scene file)"
               % (what, name, os.path.abspath(path)))
     if not os.path.isfile(path):
-        _fail("%s: %s" % (where, key), "'%s' is not a regular file (%s); name the %s itself"
-              % (name, os.path.abspath(path), what))
+        _fail("%s: %s" % (where, key), "'%s' is %s (%s); give the path of the %s itself"
+              % (name, _not_a_file(path), os.path.abspath(path), what))
     if not os.access(path, os.R_OK):
         _fail("%s: %s" % (where, key), "%s '%s' is not readable; give read permission (chmod +r %s)"
               % (what, name, os.path.abspath(path)))
     return path
+
+
+def _not_a_file(path):
+    """What a path that exists but is no regular file is, for the messages."""
+    return "a folder, not a file" if os.path.isdir(path) else "not a regular file"
 
 
 def _text_lines(where, key, path, name):
@@ -148,8 +154,8 @@ def _read_vector(where, key, name, base):
             try:
                 x = float(word)
             except ValueError:
-                _fail("%s: %s" % (where, key), "%s line %d: %r is not a number; give one number per dof"
-                      % (name, lineno, word[:40]))
+                _fail("%s: %s" % (where, key), "%s line %d (%r): %r is not a number; give one number per dof"
+                      % (name, lineno, line[:80], word[:40]))
             if not np.isfinite(x):
                 _fail("%s: %s" % (where, key), "%s line %d: %r is not finite; give finite numbers"
                       % (name, lineno, word[:40]))
@@ -199,7 +205,8 @@ class Scene:
         for body in bodies:
             for key in ("mass", "stiffness"):
                 if isinstance(body[key], str):
-                    mats[body["name"], key] = _file(where, "bodies.%s.%s" % (body["name"], key), body[key], base)
+                    mats[body["name"], key] = _file(where, "bodies.%s.%s" % (body["name"], key), body[key], base,
+                                                    "matrix file")
         nodes = [body["nodes"] if not isinstance(body["nodes"], str) else
                  _read_nodes(where, "bodies.%s.nodes" % body["name"], body["nodes"], base) for body in bodies]
         schema.check_node_references(where, valid, nodes)
@@ -212,7 +219,7 @@ class Scene:
                         tpath = "%s.%s[%d].vector" % (key, ioname, i)
                         data = _read_vector(where, tpath, t["vector"], base)
                         vectors[key, ioname, i] = t["weight"] * schema.check_vector(
-                            where, tpath, data, bodies[t["body"]]["name"], dofs[t["body"]])
+                            where, "%s (%s)" % (tpath, t["vector"]), data, bodies[t["body"]]["name"], dofs[t["body"]])
 
         # the C scene
         self.cscene = _core.CScene(self.comm)
@@ -313,8 +320,8 @@ def load_scene(path, comm=None, overrides=True):
     where = os.path.basename(str(path))
     if not os.path.isfile(path):
         if os.path.exists(path):
-            raise SceneError("%s: is not a regular file (%s); name the scene's .yaml file"
-                             % (where, os.path.abspath(path)))
+            raise SceneError("%s: is %s (%s); give the path of the scene's .yaml file"
+                             % (where, _not_a_file(path), os.path.abspath(path)))
         raise SceneError("%s: scene file not found (looked for %s); fix the path" % (where, os.path.abspath(path)))
     try:
         spec = yaml_load.load_file(path)

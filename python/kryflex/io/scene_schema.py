@@ -88,10 +88,18 @@ def unknown_key(key, allowed):
     return "unknown key %s%s; allowed keys: %s" % (_short(key), hint, ", ".join(sorted(allowed)))
 
 
+def unknown_body(value, names):
+    """'body ... does not exist (bodies: ...); use one of them (did you mean ...?)'"""
+    close = difflib.get_close_matches(str(value), names, n=1)
+    hint = " (did you mean '%s'?)" % close[0] if close else ""
+    return "body %s does not exist (bodies: %s); use one of them%s" % (_short(value), ", ".join(names), hint)
+
+
 def mapping(where, path, value, allowed=None, what=None):
     """A mapping whose keys are among allowed (None: any)."""
     if not isinstance(value, dict):
-        fail(where, path, "expected a mapping of %s, got %s" % (what or ", ".join(sorted(allowed)), _short(value)))
+        fail(where, path, "%s is not a mapping; give a mapping of %s" % (_short(value),
+                                                                          what or ", ".join(sorted(allowed))))
     if allowed is not None:
         for k in value:
             if k not in allowed:
@@ -176,7 +184,8 @@ def node_id(where, path, value):
     if _is_number(value) and float(value) == math.floor(float(value)) and int(value) > MAX_NODE_ID:
         fail(where, path, "node id %d exceeds %d, the largest this build (32-bit PetscInt) holds; renumber the nodes"
              % (int(value), MAX_NODE_ID))
-    return integer(where, path, value, "[0, %d]" % MAX_NODE_ID, "node ids are integers in [0, %d]" % MAX_NODE_ID)
+    return integer(where, path, value, "[0, %d]" % MAX_NODE_ID, "give the node id as an integer in [0, %d]"
+                   % MAX_NODE_ID)
 
 
 def _ref(value):
@@ -319,7 +328,7 @@ def node_table(where, path, rows, labels=None):
             fail(where, at(i), "%s is not [id, x, y, z, ndof]; give five numbers per node" % _short(r))
         ids[i] = node_id(where, at(i), r[0])
         for c in range(3):
-            xyz[i, c] = real(where, at(i), r[1 + c], "(-inf, inf)", "node coordinates are finite numbers")
+            xyz[i, c] = real(where, at(i), r[1 + c], "(-inf, inf)", "give the coordinates as finite numbers")
         if not _is_number(r[4]) or float(r[4]) not in NODE_DOFS:
             fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz)" % (ids[i], _short(r[4])))
         ndof[i] = int(r[4])
@@ -443,8 +452,7 @@ def _joints(where, spec, bodies):
         ends = {}
         for key in ("parent", "child"):
             if _ref(j[key]) not in names:
-                fail(where, path + "." + key, "body %s does not exist (bodies: %s); name one of them"
-                     % (_short(j[key]), ", ".join(names)))
+                fail(where, path + "." + key, unknown_body(j[key], names))
             ends[key] = names.index(_ref(j[key]))
         if ends["parent"] == ends["child"]:
             fail(where, path, "ties body '%s' to itself; a joint connects two different bodies" % names[ends["parent"]])
@@ -512,8 +520,7 @@ def _io(where, key, spec, bodies):
             tpath = "%s[%d]" % (path, i)
             mapping(where, tpath, t, TERM_KEYS)
             if _ref(t.get("body")) not in names:
-                fail(where, tpath + ".body", "body %s does not exist (bodies: %s); name one of them"
-                     % (_short(t.get("body")), ", ".join(names)))
+                fail(where, tpath + ".body", unknown_body(t.get("body"), names))
             term = {"body": names.index(_ref(t["body"])),
                     "weight": real(where, tpath + ".weight", t.get("weight", 1.0), "(-inf, inf)",
                                    "give the weight as a finite number")}
@@ -584,8 +591,8 @@ def validate(spec, where, default_name="scene"):
     """The scene's spec (a parsed scene file, or scene_from_dict's dict) checked and normalized; SceneError at the
     first bad entry."""
     if not isinstance(spec, dict):
-        fail(where, None, "%s is not a scene; a scene is a YAML mapping with bodies, joints, inputs, outputs, angles"
-             % ("an empty file" if spec is None else _short(spec, 40)))
+        fail(where, None, "%s is not a scene; write the scene as a YAML mapping with bodies, joints, inputs, "
+             "outputs, angles" % ("an empty file" if spec is None else _short(spec, 40)))
     for k in spec:
         if k not in TOP_KEYS:
             fail(where, None, unknown_key(k, TOP_KEYS))
@@ -624,7 +631,7 @@ def validate(spec, where, default_name="scene"):
         "configurations": _angles_of_interest(where, spec, revolute),
         "band": band,
         "damping": real(where, "damping", spec.get("damping", DEFAULTS["damping"]), "(0, 1)",
-                        "the modal damping ratio lies in (0, 1), e.g. 0.0025"),
+                        "give the modal damping ratio in (0, 1), e.g. 0.0025"),
         "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
                          "give the target relative error in (0, 1), e.g. 0.05"),
         "reduction": _reduction(where, spec.get("reduction"), revolute),

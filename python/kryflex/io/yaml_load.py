@@ -5,7 +5,8 @@ attack, and is refused in milliseconds with a one-line message instead of a Memo
 message as long as the file. yaml's own SafeLoader (libyaml's when present) does the parsing; this module adds:
 - a first pass over the event stream (no recursion, nothing built) that bounds the nesting depth and counts the
   nodes aliases would create (a "billion laughs" bomb is a few hundred bytes that expand to 10^9 nodes);
-- duplicate keys at any level refused with both line numbers (yaml keeps the last one silently);
+- duplicate keys at any level refused with their entry path and both line numbers (yaml keeps the last
+  one silently);
 - non-UTF-8 bytes refused with their byte offset;
 - syntax errors reduced to their line, column and problem.
 Errors are YAMLInputError (a ValueError) without the file name: the caller prefixes it.
@@ -27,27 +28,43 @@ class YAMLInputError(ValueError):
     """Bad YAML input; the message says where (line, column or byte) and what to do."""
 
 
-class _StrictLoader(_Base):
-    """SafeLoader that refuses duplicate keys instead of keeping the last one."""
+def _key_path(path, key):
+    """The entry path of a mapping value as the messages write it: bodies.rotor.interfaces, inputs.x[1].node."""
+    return "%s.%s" % (path, key) if path else str(key)
 
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            seen = {}
-            for key_node, _ in node.value:
+
+def _check_duplicate_keys(loader, root):
+    """Refuses a key given twice in one mapping, at any level, naming the entry path and both lines (yaml keeps
+    the last one silently). Walks the composed node tree once (a node reached again through an alias is not walked
+    again), before anything is constructed."""
+    seen_nodes = set()
+    todo = [(root, "")]
+    while todo:
+        node, path = todo.pop()
+        if id(node) in seen_nodes:
+            continue
+        seen_nodes.add(id(node))
+        if isinstance(node, yaml.SequenceNode):
+            todo.extend((item, "%s[%d]" % (path, i)) for i, item in enumerate(node.value))
+        elif isinstance(node, yaml.MappingNode):
+            first = {}
+            for key_node, value_node in node.value:
                 if key_node.tag == _MERGE:     # '<<: *base' merges: explicit keys override merged ones (YAML rule)
+                    todo.append((value_node, path))
                     continue
-                key = self.construct_object(key_node, deep=True)
+                key = loader.construct_object(key_node, deep=True)
                 mark = key_node.start_mark
                 try:
-                    first = seen.get(key)
+                    earlier = first.get(key)
                 except TypeError:              # an unhashable key: yaml's own message says so
                     continue
-                if first is not None:
-                    at = ("lines %d and %d" % (first.line + 1, mark.line + 1) if first.line != mark.line else
-                          "line %d, columns %d and %d" % (mark.line + 1, first.column + 1, mark.column + 1))
-                    raise YAMLInputError("key %s appears twice (%s): keep one" % (_short(key), at))
-                seen[key] = mark
-        return super().construct_mapping(node, deep=deep)
+                if earlier is not None:
+                    at = ("lines %d and %d" % (earlier.line + 1, mark.line + 1) if earlier.line != mark.line else
+                          "line %d, columns %d and %d" % (mark.line + 1, earlier.column + 1, mark.column + 1))
+                    raise YAMLInputError("%s: key %s appears twice (%s); keep one"
+                                         % (_key_path(path, key), _short(key), at))
+                first[key] = mark
+                todo.append((value_node, _key_path(path, key)))
 
 
 def _short(value):
@@ -69,8 +86,8 @@ def _check_events(text, max_depth, max_alias_nodes):
         if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
             stack.append([event.anchor, 1])
             if len(stack) > max_depth:
-                raise YAMLInputError("%s: entries nested deeper than %d levels; a scene needs far fewer: flatten it"
-                                     % (_where(event.start_mark), max_depth))
+                raise YAMLInputError("%s: entries nested deeper than %d levels; remove the extra nesting (a scene "
+                                     "needs 5 levels)" % (_where(event.start_mark), max_depth))
             continue
         if isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
             anchor, n = stack.pop()
@@ -109,9 +126,13 @@ def load_text(text, max_depth=MAX_DEPTH, max_alias_nodes=MAX_ALIAS_NODES):
         text = _decode(text)
     try:
         _check_events(text, max_depth, max_alias_nodes)
-        loader = _StrictLoader(text)
+        loader = _Base(text)
         try:
-            return loader.get_single_data()
+            root = loader.get_single_node()
+            if root is None:
+                return None
+            _check_duplicate_keys(loader, root)
+            return loader.construct_document(root)
         finally:
             loader.dispose()
     except yaml.MarkedYAMLError as e:

@@ -29,6 +29,8 @@ def override(name, options, mentions, fix=FIX, out="absent", command="reduce"):
 
 
 RANGE = r"(\(|\[)\s*0|between|range|positive|greater|at least|> ?0|must|give|use"
+# a bad name: the fix is to rename it, or the rule a name must follow ("use 1 to 63 ASCII letters, ...")
+NAME_FIX = r"rename|\buse 1 to \d+ ASCII"
 IN_0_1 = r"\(0, 1\]|\(0,1\]|between 0 and 1|in \(0|0 < |give a value"
 
 CASES = [
@@ -103,13 +105,13 @@ CASES = [
     S("duplicate_interface_name", text("interfaces: {bearing: 101}", "interfaces: {bearing: 101, bearing: 102}"),
       ["bodies.rotor.interfaces", "bearing", "re:duplicate|twice"]),
     # ------------------------------------------------------------------ names: '/', spaces, non-ASCII
-    R("body_name_slash", rename_body("rotor", "rot/or"), ["rot/or"], fix=r"rename"),
-    S("body_name_space", rename_body("rotor", "my rotor"), ["my rotor"], fix=r"rename"),
-    S("body_name_non_ascii", rename_body("rotor", "rötor"), ["rötor"], fix=r"rename"),
-    S("joint_name_slash", rename_joint("spin_bearing", "spin/bearing"), ["spin/bearing"], fix=r"rename"),
-    S("input_name_space", rename_io("inputs", "bearing_torque", "bearing torque"), ["bearing torque"], fix=r"rename"),
-    S("output_name_non_ascii", rename_io("outputs", "pointA_ry", "pointÅ_ry"), ["pointÅ_ry"], fix=r"rename"),
-    S("interface_name_slash", rename_interface("rotor", "bearing", "bear/ing"), ["bear/ing"], fix=r"rename"),
+    R("body_name_slash", rename_body("rotor", "rot/or"), ["rot/or"], fix=NAME_FIX),
+    S("body_name_space", rename_body("rotor", "my rotor"), ["my rotor"], fix=NAME_FIX),
+    S("body_name_non_ascii", rename_body("rotor", "rötor"), ["rötor"], fix=NAME_FIX),
+    S("joint_name_slash", rename_joint("spin_bearing", "spin/bearing"), ["spin/bearing"], fix=NAME_FIX),
+    S("input_name_space", rename_io("inputs", "bearing_torque", "bearing torque"), ["bearing torque"], fix=NAME_FIX),
+    S("output_name_non_ascii", rename_io("outputs", "pointA_ry", "pointÅ_ry"), ["pointÅ_ry"], fix=NAME_FIX),
+    S("interface_name_slash", rename_interface("rotor", "bearing", "bear/ing"), ["bear/ing"], fix=NAME_FIX),
     # ------------------------------------------------------------------ angles
     S("empty_angles", text("angles: [0, 15, 30, 45, 60, 72]", "angles: []"), ["angles"],
       fix=r"give at least one configuration"),                                                       # existing

@@ -249,7 +249,7 @@ static PetscErrorCode MMReadHeader(MMFile *f, MMHeader *h, LoadStatus *st)
     else if (!a || !b || !c || *p) PetscCall(LoadFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: bad size line (line %lld: '%s'): expected three integers 'rows columns entries'; re-export the matrix", path, f->lineno, MMQuote(s, q)));
   }
   if (st->code) PetscFunctionReturn(0);
-  if (m <= 0 || m != n) PetscCall(LoadFail(st, PETSC_ERR_ARG_SIZ, "%s: a body matrix must be square and non-empty (the size line, line %lld, says %lld x %lld)", path, f->lineno, m, n));
+  if (m <= 0 || m != n) PetscCall(LoadFail(st, PETSC_ERR_ARG_SIZ, "%s: a body matrix must be square and non-empty (the size line, line %lld, says %lld x %lld): re-export the matrix as n x n, n the body's dofs", path, f->lineno, m, n));
   else if (m > PETSC_MAX_INT) PetscCall(LoadFail(st, PETSC_ERR_ARG_SIZ, "%s: %lld rows is more than this PETSc build can index (%lld: PetscInt has %d bits): use a PETSc configured with --with-64-bit-indices", path, m, (long long)PETSC_MAX_INT, (int)(8 * sizeof(PetscInt))));
   else if (nnz < 0 || nnz > (h->symmetric ? m + (m * (m - 1)) / 2 : m * m)) /* m <= 2^31 here: no overflow */
     PetscCall(LoadFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: the size line (line %lld) declares %lld entries, but a %s %lld x %lld matrix has %lld places: a wrong or damaged header; re-export the matrix", path, f->lineno, nnz, h->symmetric ? "symmetric (one triangle)" : "general", m, m, h->symmetric ? m + (m * (m - 1)) / 2 : m * m));

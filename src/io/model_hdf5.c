@@ -759,8 +759,8 @@ static PetscErrorCode CheckNames(KFReader *r, const char where[], const char nam
   PetscFunctionReturn(0);
 }
 
-/* The reduced mass is symmetric positive definite and the reduced stiffness symmetric positive semi-definite
-   (projections of the full ones): an edit that breaks this would make reassembly fail or give a wrong model. The
+/* The reduced mass is the identity and the reduced stiffness symmetric positive semi-definite
+   (projections of the full ones on a mass-orthonormal basis): an edit that breaks this would make reassembly fail or give a wrong model. The
    tolerances are far above the rounding of the projection (about 1e-16 for symmetry and 1e-12 for the smallest
    eigenvalue of K relative to its largest on the Galileo model). */
 static PetscErrorCode CheckBodyMatrices(KFReader *r, const char where[], KFModelBody *R)
@@ -798,6 +798,14 @@ static PetscErrorCode CheckBodyMatrices(KFReader *r, const char where[], KFModel
     amax = PetscMax(PetscAbsReal(w[0]), PetscAbsReal(w[v - 1]));
     if (info) PetscCall(Inconsistent(r, "%sdataset 'K': its eigenvalues cannot be computed (LAPACK syev info %d)", where, (int)info));
     else if (w[0] < -1e-8 * amax) PetscCall(Inconsistent(r, "%sdataset 'K' has the negative eigenvalue %g (largest %g): a reduced stiffness matrix is positive semi-definite", where, (double)w[0], (double)w[v - 1]));
+  }
+  /* the body basis is M-orthonormal (KFMOrthonormalize before the projection), so the reduced mass is the identity
+     to rounding; reassembly and the rigid modes take it as it is, so an edited M would give another model silently */
+  if (!r->st->code) {
+    PetscReal dev = 0;
+    for (PetscInt i = 0; i < v; i++)
+      for (PetscInt j = 0; j < v; j++) dev = PetscMax(dev, PetscAbsReal(R->M[i + j * v] - (i == j ? 1.0 : 0.0)));
+    if (dev > 1e-6) PetscCall(Inconsistent(r, "%sdataset 'M' is not the identity (largest |M - I| is %g): a reduced mass is the identity by construction (its basis is mass-orthonormal), so M was edited", where, (double)dev));
   }
   PetscCall(PetscFree2(A, w));
   PetscFunctionReturn(0);
@@ -1103,13 +1111,15 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   fapl = H5Pcreate(H5P_FILE_ACCESS);
   if (fapl >= 0) (void)H5Pset_file_locking(fapl, 0, 1);
   f = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
-  if (fapl >= 0) H5Pclose(fapl);
   if (f < 0) {
     H5Diagnosis d;
+    /* before any other HDF5 call: each one clears the error stack, and with it HDF5's reason (a truncated file) */
     H5Diagnose(&d);
-    PetscCall(IOFail(st, PETSC_ERR_FILE_OPEN, "%s: cannot open the model file (%s): write it again with 'kryflex reduce'", path, d.detail[0] ? d.detail : "HDF5 error"));
+    if (fapl >= 0) H5Pclose(fapl);
+    PetscCall(IOFail(st, PETSC_ERR_FILE_OPEN, "%s: cannot open the model file, it is damaged or incomplete (%s): write it again with 'kryflex reduce'", path, d.detail[0] ? d.detail : "HDF5 error"));
     PetscFunctionReturn(0);
   }
+  if (fapl >= 0) H5Pclose(fapl);
   if (H5Aexists(f, "format") <= 0) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: not a kryflex reduced model (no format attribute): give the model file written by 'kryflex reduce'", path));
   PetscCall(ReadStringAttr(&r, f, "", "format", sizeof(format), format));
   if (!st->code && strcmp(format, KF_MODEL_FORMAT)) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: not a kryflex reduced model (format attribute '%s', expected '%s'): give the model file written by 'kryflex reduce'", path, format, KF_MODEL_FORMAT));

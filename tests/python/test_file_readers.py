@@ -615,6 +615,9 @@ H5_EDITS = {
     "K_asymmetric": (edit_array("bodies/rotor/K", make_asymmetric), ["body 'rotor' dataset 'K' is not symmetric"]),
     "M_not_definite": (edit_array("bodies/rotor/M", lambda a: -a), ["body 'rotor' dataset 'M' is not positive definite"]),
     "K_indefinite": (edit_array("bodies/rotor/K", lambda a: -a), ["body 'rotor' dataset 'K' has the negative eigenvalue"]),
+    # symmetric positive definite, but not the identity a mass-orthonormal basis gives: edited
+    "M_scaled": (edit_array("bodies/stator/M", lambda a: 2 * a), ["body 'stator' dataset 'M' is not the identity",
+                                                                  "largest |M - I| is 1"]),
     "M_integer": (lambda f: (lambda a: (f.__delitem__("bodies/rotor/M"),
                                         f.create_dataset("bodies/rotor/M", data=a.astype(np.int32))))(f["bodies/rotor/M"][()]),
                   ["body 'rotor' dataset 'M' is not a matrix of real numbers"]),
@@ -667,6 +670,16 @@ def test_unedited_copy_loads(model_file, tmp_path):
             rewrite(f, name, f[name][()])
     a, b = kryflex.ReducedModel.load(model_file), kryflex.ReducedModel.load(path)
     np.testing.assert_array_equal(a.at([30]).K, b.at([30]).K)
+
+
+def test_truncated_model_says_so(model_file, tmp_path):
+    """A file cut short cannot even be opened: the message gives HDF5's reason (truncated), not a bare 'HDF5 error'."""
+    data = open(model_file, "rb").read()
+    path = str(tmp_path / "cut.h5")
+    with open(path, "wb") as f:
+        f.write(data[:len(data) // 2])
+    with pytest.raises(kryflex.ModelFileError, match=r"cut\.h5: .*damaged or incomplete \(truncated file"):
+        kryflex.ReducedModel.load(path)
 
 
 def test_flipped_bit_fails_its_checksum(model_file, tmp_path):

@@ -8,7 +8,7 @@ through HDF5 (h5py) recomputes it - such an edit is caught only by the reader's 
 import numpy as np
 
 from . import edits as e
-from .harness import EXIT_INPUT, EXIT_MODEL, FIX, Case
+from .harness import EXIT_INPUT, EXIT_MODEL, EXIT_OK, FIX, Case
 
 AGAIN = r"reduce|write it again|re-?run|give"
 
@@ -78,7 +78,10 @@ CASES = [
     M("format_version_newer", _set_attr("/", "version", 3), ["re:version", "3"], fix=r"reduce|upgrade|use|install"),
     M("format_name_other", _set_attr("/", "format", "someone-elses-model"), ["someone-elses-model"]),
     M("edited_K_asymmetric", _asymmetric("bodies/rotor/K"), ["re:bodies/rotor/K|rotor", "re:symmetric|edited|inconsistent"]),
-    M("edited_K_scaled", _scale("bodies/rotor/K", 1.01), ["re:edited|inconsistent|checksum|digest"]),
+    # K scaled by a negative factor: no longer positive semi-definite (a scaling by 1.01 is a consistent, stiffer
+    # rotor that no check can tell from a reduction's: edited_K_scaled_consistent, accepted)
+    M("edited_K_scaled", _scale("bodies/rotor/K", -1.01), ["re:bodies/rotor/K|rotor", "re:negative|definite|edited"]),
+    # the reduced mass is the identity by construction (a mass-orthonormal basis): any other M was edited
     M("edited_M_not_identity", _scale("bodies/stator/M", 2.0), ["re:bodies/stator/M|stator",
                                                                 "re:identity|edited|inconsistent"]),
     M("edited_nan", _nan("bodies/rotor/G"), ["re:bodies/rotor/G|rotor", "re:nan|finite"]),
@@ -91,6 +94,10 @@ CASES = [
       argv=("reassemble", "{model}", "--angle", "30", "--scene", "{dir}/other.yaml", "-o", "{out}")),
     M("earlier_output_kept", e.bytes_edit(lambda d: d[: len(d) // 2]), ["re:truncated|incomplete|damaged"],
       out="earlier"),
+    # a stiffer rotor (K x 1.01: symmetric, semi-definite, its rigid motions still unstrained) is a valid model, as a
+    # what-if edit may make on purpose: reassembled, not refused (the file holds no second copy of K to compare with)
+    Case("model", "edited_K_scaled_consistent", _scale("bodies/rotor/K", 1.01),
+         argv=("reassemble", "{model}", "--angle", "30", "-o", "{out}"), code=EXIT_OK, kind="accept", out_name="matrices.npz"),
     # --scene pointing at a bad scene: a bad input (2), not a bad model file
     Case("model", "scene_check_bad_scene", e.text("damping: 0.0025", "damping: low"),
          argv=("reassemble", "{model}", "--angle", "30", "--scene", "{scene}", "-o", "{out}"), code=EXIT_INPUT,

@@ -434,6 +434,13 @@ def test_override_applied(folder, options):
     assert scene.reduction["static_correction"] is False
 
 
+def test_override_exponent_without_dot(folder, options):
+    path = write_case(folder, "override_exponent", lambda s, d: None)
+    options({"scene.accuracy": "1e-12", "scene.reduction.deflation_tol": "1E-9"})
+    scene = kryflex.load_scene(path)
+    assert scene.accuracy == 1e-12 and scene.reduction["deflation_tol"] == 1e-9
+
+
 # ------------------------------------------------------------------ what valid scenes write still loads
 
 def test_galileo_unchanged(loads):
@@ -478,6 +485,8 @@ GOOD = {
     "vector_term_weighted": (vector_term("0 0 0 0 0 0\n0 0 0 0 1 0\n", "v_ok.txt", weight=2.0),
                              lambda s: s.output_names == ["pointA_ry"]),
     "fixed_joint": (at("joints.spin_bearing.type", "fixed"), None),
+    # YAML 1.1 reads 1e-12 (no dot) as text: the scene loader reads it as the number everybody means
+    "exponent_without_dot": (text("accuracy: 0.05", "accuracy: 1e-12"), lambda s: s.accuracy == 1e-12),
 }
 
 

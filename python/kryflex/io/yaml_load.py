@@ -12,6 +12,7 @@ message as long as the file. yaml's own SafeLoader (libyaml's when present) does
 Errors are YAMLInputError (a ValueError) without the file name: the caller prefixes it.
 """
 import os
+import re
 
 import yaml
 
@@ -20,8 +21,16 @@ MAX_DEPTH = 32               # nested sequences and mappings (a scene needs 5)
 MAX_ALIAS_NODES = 100000     # nodes created through aliases, counting nested ones expanded
 MAX_MESSAGE = 200            # characters of a parser's problem text kept in a message
 
-_Base = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _MERGE = "tag:yaml.org,2002:merge"
+
+
+class _Base(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """yaml's safe loader, reading 1e-12 as the number it is (YAML 1.1 wants a dot, 1.0e-12, and would make it
+    the text '1e-12': a scene's `accuracy: 1e-12` or `-scene.accuracy 1e-12` refused as 'not a number')."""
+
+
+_Base.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+$"),
+                            list("-+0123456789"))
 
 
 class YAMLInputError(ValueError):

@@ -148,7 +148,7 @@ def test_target_unchecked_without_verification(tmp_path):
 
 BAD_COMMAND_LINES = [
     # (id, arguments, words of the message)
-    ("double-dash typo", ["reduce", GALILEO, "-o", "{out}", "--npzz"], ["unrecognized arguments: --npzz"]),
+    ("double-dash typo", ["reduce", GALILEO, "-o", "{out}", "--npzz"], ["unknown option --npzz (did you mean --npz?)"]),
     ("misspelt -kf_ option", ["reduce", GALILEO, "-o", "{out}", "-kf_momnets", "12"],
      ["unknown option -kf_momnets (did you mean -kf_moments?)"]),
     ("bad option value", ["reduce", GALILEO, "-o", "{out}", "-kf_moments", "0"], ["moments (0) must exceed"]),

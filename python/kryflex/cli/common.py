@@ -246,7 +246,27 @@ class Parser(argparse.ArgumentParser):
     and help goes out on rank 0 only."""
 
     def error(self, message):
-        raise Failure(EXIT_INPUT, message, usage=self.format_usage().rstrip())
+        raise Failure(EXIT_INPUT, self.explain(message), usage=self.format_usage().rstrip())
+
+    def explain(self, message):
+        """argparse's message with what to do: the missing arguments to give, the closest of the command's options
+        for an unknown one (--npzz: did you mean --npz?), and where the usage is."""
+        where = "run '%s -h' for the usage" % self.prog
+        missing = re.fullmatch(r"the following arguments are required: (.*)", message)
+        if missing:
+            return "missing %s: give %s (%s)" % (missing.group(1), "it" if "," not in missing.group(1) else "them",
+                                                 where)
+        unknown = re.fullmatch(r"unrecognized arguments: (.*)", message)
+        if unknown:
+            words = unknown.group(1).split()
+            options = sorted(o for a in self._actions for o in a.option_strings if o.startswith("--"))
+            close = [difflib.get_close_matches(w.split("=", 1)[0], options, n=1) for w in words if w.startswith("--")]
+            close = [c[0] for c in close if c]
+            if close:
+                return "unknown option %s (did you mean %s?)" % (" ".join(words), " or ".join(close))
+            return "unexpected argument%s %s: remove %s (%s)" % ("s" if len(words) > 1 else "", " ".join(words),
+                                                                 "them" if len(words) > 1 else "it", where)
+        return "%s: %s" % (message, where)
 
     def _print_message(self, message, file=None):
         if message and rank() == 0:
@@ -302,6 +322,32 @@ def check_kf_options(known):
     close = difflib.get_close_matches(name, sorted(set(known) | set(LATER_OPTIONS)), n=1)
     hint = " (did you mean -%s?)" % close[0] if close else ": 'kryflex reduce -help' lists the -kf_ options"
     raise Failure(EXIT_INPUT, "unknown option -%s%s" % (name, hint))
+
+
+def option_error(exc, scene_path):
+    """The message of a C error raised while the reducer read its settings (the scene's, then the -kf_ options). An
+    error about a -kf_ option that was given names that option and its value, not the scene, and says what to do;
+    PETSc's own refusals of a value (not a number, not one of the choices) are said the same way. Any other error
+    is the scene's."""
+    from petsc4py import PETSc
+    msg = str(exc).strip()
+    given = {k: v for k, v in PETSc.Options().getAll().items() if k.startswith("kf_")}
+    listing = "'kryflex reduce -help' lists the -kf_ options with their defaults"
+    bad_number = re.search(r"Input string (.*?) has no numeric value", msg)
+    if bad_number:
+        value = bad_number.group(1)
+        names = ["-%s %s: " % (k, v) for k, v in sorted(given.items()) if v is not None and value in v.split(",")]
+        return "%s%r is not a number: give a number (%s)" % ((names or [""])[0], value, listing)
+    bad_choice = re.search(r"Unknown option (\S+) for -(\w+)\. Available options: (.*)", msg)
+    if bad_choice:
+        value, name, choices = bad_choice.group(1), bad_choice.group(2), bad_choice.group(3).split()
+        close = difflib.get_close_matches(value, choices, n=1, cutoff=0.3)
+        return "-%s %s: not one of %s: use one of them%s" % (name, value, ", ".join(choices),
+                                                             " (did you mean %s?)" % close[0] if close else "")
+    names = [k for k in sorted(given) if re.search(r"-%s\b" % re.escape(k), msg)]
+    if names:
+        return "-%s %s: %s; give -%s a valid value (%s)" % (names[0], given[names[0]], msg, names[0], listing)
+    return "%s: %s" % (scene_path, msg)
 
 
 def from_rank0(value):

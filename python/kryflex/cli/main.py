@@ -39,9 +39,14 @@ def main(argv=None):
     # help is left out.
     from .. import init
     init([sys.argv[0] if sys.argv else "kryflex"] + [a for a in argv if a not in ("-h", "-help", "--help")])
-    if not argv or argv[0] in ("-h", "-help", "--help", "help"):
+    if argv and argv[0] in ("-h", "-help", "--help", "help"):
         say(USAGE)
-        return EXIT_OK if argv else EXIT_INPUT
+        return EXIT_OK
+    if not argv:
+        # the usage, and the one error line every refusal has (on stderr: standard output stays empty)
+        say(USAGE.rstrip(), sys.stderr)
+        error("no command given: use reduce, reassemble, info or convert (kryflex -h)")
+        return EXIT_INPUT
     cmd, rest = argv[0], argv[1:]
     if cmd == "convert":
         from ..io.convert import main as convert_main

@@ -1,4 +1,5 @@
 """kryflex reassemble REDUCED --angle A: the reduced system at any angles from a reduced-model file alone."""
+import io
 import json
 import os
 
@@ -64,7 +65,8 @@ def run(argv):
         path = os.path.abspath(args.output)
         common.interrupt_note = ": %s left as it was" % path
         collective(lambda: _write_npz(path, arrays) if rank() == 0 else None,
-                   (OSError, EXIT_OUTPUT, lambda e: "cannot write %s: %s" % (path, e)))
+                   (OSError, EXIT_OUTPUT, lambda e: "cannot write %s (%s): choose another -o, or free space on its "
+                    "disk" % (path, e.strerror or e)))
     if args.json:
         say(json.dumps(results, indent=1))
     else:
@@ -76,11 +78,14 @@ def run(argv):
 
 
 def _angles(text):
+    fix = "give finite angles in degrees, comma-separated for several revolute joints"
     try:
-        return [float(x) for x in text.split(",")]
+        angles = [float(x) for x in text.split(",")]
     except ValueError as e:
-        raise Failure(EXIT_INPUT, "--angle %s: %s: give angles in degrees, comma-separated for several revolute "
-                      "joints" % (text, e)) from None
+        raise Failure(EXIT_INPUT, "--angle %s: %s: %s" % (text, e, fix)) from None
+    if not np.all(np.isfinite(angles)):
+        raise Failure(EXIT_INPUT, "--angle %s: not a finite number: %s" % (text, fix))
+    return angles
 
 
 def _write_npz(path, arrays):
@@ -91,13 +96,17 @@ def _write_npz(path, arrays):
     if os.path.isdir(path):
         raise Failure(EXIT_OUTPUT, "-o %s is a folder: give a file name (.npz)" % path)
     if not os.path.isdir(folder):
-        raise Failure(EXIT_OUTPUT, "cannot write %s: %s is not an existing folder" % (path, folder))
+        raise Failure(EXIT_OUTPUT, "cannot write %s: %s is not an existing folder: choose another -o" % (path, folder))
     remove_stale_staging(folder)
     staging = Staging(folder)
     staging.create()
     try:
+        # built in memory, then written: a failed write (disk full) leaves no half-closed zip archive behind to
+        # complain when it is collected
+        archive = io.BytesIO()
+        np.savez(archive, **arrays)
         with open(staging.file(name), "wb") as fh:
-            np.savez(fh, **arrays)
+            fh.write(archive.getbuffer())
         staging.commit()
     finally:
         staging.discard()

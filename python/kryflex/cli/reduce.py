@@ -90,15 +90,15 @@ def run(argv):
             common.check_kf_options(known)
             return reducer
         reducer = collective(set_up, (SceneError, EXIT_INPUT, str),
-                             (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+                             (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
 
         s = result.summary
         met, worst, where = target(result)
         s["target_met"] = met
         _core.progress("writing the results to %s" % out)
-        cannot = (OSError, EXIT_OUTPUT, lambda e: "cannot write the results to %s: %s" % (out, e))
-        cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: "cannot write the results to %s: %s" % (out, e))
+        cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
+        cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: cannot_write(out, e, created))
 
         def write_report_files():
             # rank 0 alone: the report and the NumPy export (the model file below is written by every rank together)
@@ -165,7 +165,8 @@ def _prepare_output(out):
             os.makedirs(out)
             created = True
         except OSError as e:
-            raise Failure(EXIT_OUTPUT, "cannot create the output folder %s: %s" % (out, e.strerror or e)) from None
+            raise Failure(EXIT_OUTPUT, "cannot create the output folder %s: %s: choose another -o"
+                          % (out, e.strerror or e)) from None
     remove_stale_staging(out)
     try:
         path = Staging(out).create()
@@ -175,6 +176,12 @@ def _prepare_output(out):
         raise Failure(EXIT_OUTPUT, "the output folder %s is not writable (%s): choose another -o or fix its "
                       "permissions" % (out, e.strerror or e)) from None
     return created, path
+
+
+def cannot_write(out, why, created):
+    """The message of a failed write of the results: nothing of this run is left, earlier results are as they were."""
+    return "cannot write the results to %s: %s: free space on its disk or choose another -o (%s)" % (
+        out, why, "nothing was left there" if created else "its earlier contents are left as they were")
 
 
 def _remove_if_empty(out):

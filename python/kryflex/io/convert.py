@@ -83,7 +83,7 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
 def _require_file(path, what):
     if not os.path.isfile(path):
         state = "is a folder" if os.path.isdir(path) else "does not exist"
-        raise ConversionError(f"{what} file {path} {state}")
+        raise ConversionError(f"{what} file {path} {state}: give the path of an existing file")
 
 
 def _no_grids(grids, what):
@@ -288,7 +288,8 @@ class _UsageError(Exception):
 
 
 def build_parser():
-    parser = argparse.ArgumentParser(
+    from ..cli.common import Parser    # the kryflex conventions: one 'kryflex: error:' line, on rank 0, with the fix
+    parser = Parser(
         prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Convert an exported FE model (Nastran DMIG punch file, NumPy .npz, or Matrix "
                     "Market / PETSc matrices + nodes file) into a kryflex body.",
@@ -359,20 +360,24 @@ def _arguments_to_call(args):
 
 def main(argv=None):
     """Run `kryflex convert` with argv (without the 'convert' word); return the exit code."""
+    from ..cli.common import Failure, error, say
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-    except SystemExit as stop:  # argparse already printed usage and the error (code 2) or help (0)
+    except Failure as bad:      # the usage and the error line (code 2)
+        say(bad.text, sys.stderr)
+        return bad.code
+    except SystemExit as stop:  # -h: argparse printed the help
         return stop.code if isinstance(stop.code, int) else EXIT_USAGE
     try:
         call = _arguments_to_call(args)
     except _UsageError as exc:
-        parser.print_usage(sys.stderr)
-        print(f"kryflex convert: error: {exc}", file=sys.stderr)
+        say(parser.format_usage().rstrip(), sys.stderr)
+        error(str(exc))
         return EXIT_USAGE
     problem = _unwritable(args.output_dir)
     if problem:
-        print(f"kryflex convert: error: {problem}", file=sys.stderr)
+        error(problem)
         return EXIT_OUTPUT
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConversionWarning)
@@ -380,7 +385,7 @@ def main(argv=None):
             body = convert(**call)
         except ConversionError as exc:
             _print_warnings(caught)
-            print(f"kryflex convert: error: {exc}", file=sys.stderr)
+            error(str(exc))
             return EXIT_BAD_INPUT
     _print_warnings(caught)
     interfaces = ", ".join(f"{k}={v}" for k, v in body.interfaces.items()) or "none"
@@ -398,12 +403,14 @@ def _unwritable(out):
     if os.path.exists(path):
         if not os.path.isdir(path):
             return f"output {path} exists and is not a folder: choose another -o"
-        return None if os.access(path, os.W_OK | os.X_OK) else f"the output folder {path} is not writable"
+        if os.access(path, os.W_OK | os.X_OK):
+            return None
+        return f"the output folder {path} is not writable: choose another -o"
     parent = path
     while not os.path.exists(parent):
         parent = os.path.dirname(parent)
     if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
-        return f"cannot create the output folder {path}: {parent} is not a writable folder"
+        return f"cannot create the output folder {path}: {parent} is not a writable folder: choose another -o"
     return None
 
 

@@ -22,8 +22,9 @@ LOUD_REDUCE = ("reduce", "{scene}", "-o", "{out}")          # progress lines tel
 # the report (summary.json: ~700 kB) cannot be written under 200 kB per file; the model file (~75 kB) and each plot can
 DISK = 200 << 10
 FULL = ["re:space|full|too large|EFBIG|file size|limit"]
-# MPI's own shared memory (PMIx's dstore segments, the vader BTL's backing files) is sized with ftruncate and would
-# hit the limit before kryflex does: keep MPI off files for these runs
+# the limit is set in each kryflex process once MPI has started (harness.disk_full_site); MPI's own shared memory
+# (PMIx's dstore segments, the vader BTL's backing files) is kept off files too, so that only kryflex's writes meet
+# the full disk
 NO_MPI_FILES = (("PMIX_MCA_gds", "hash"), ("OMPI_MCA_btl", "self,tcp"))
 
 

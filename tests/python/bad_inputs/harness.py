@@ -13,7 +13,6 @@ import dataclasses
 import hashlib
 import os
 import re
-import resource
 import shutil
 import signal
 import subprocess
@@ -68,7 +67,8 @@ class Case:
     kind        'refuse' (the default), 'accept' (exit 0, no error line), 'target' (exit 6: written, marked missed),
                 'signal' (a signal while reducing), 'accept_clean' (exit 0 and no stale staging folder left)
     signal      the signal of a 'signal' case
-    fsize       RLIMIT_FSIZE in bytes (set in the child by preexec_fn; Python ignores SIGXFSZ: writes get EFBIG)
+    fsize       RLIMIT_FSIZE in bytes, set in every kryflex process once MPI has started (see disk_full_site;
+                Python ignores SIGXFSZ: writes get EFBIG)
     timeout     seconds before the case counts as a hang
     out_name    OUT's name in the case folder ('out' for reduce; a .npz file for reassemble -o)
     gone        paths outside the case folder that must not exist after the run (-o /proc/...)
@@ -198,10 +198,20 @@ def command_line(case, ctx, ranks):
     return argv
 
 
-def _limit_file_size(nbytes):
-    def preexec():
-        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
-    return preexec
+def disk_full_site(folder, nbytes):
+    """A sitecustomize (in folder: for PYTHONPATH) that limits the files a kryflex process writes to nbytes
+    (RLIMIT_FSIZE) right after kryflex.init: the disk is full for kryflex, not for MPI's start-up (PMIx and the
+    shared-memory transport size their files with ftruncate, and a limit set before MPI_Init, e.g. by preexec_fn,
+    makes MPI_Init fail or mpiexec's helpers die of SIGXFSZ). As tests/python/test_collective_errors.py does."""
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "sitecustomize.py"), "w") as f:
+        f.write("import resource, kryflex, kryflex._runtime as rt\n"
+                "start = rt.init\n"
+                "def init(argv=None):\n"
+                "    start(argv)\n"
+                "    resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
+                "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
+    return folder
 
 
 def _kill_group(proc):
@@ -218,12 +228,14 @@ def _kill_group(proc):
 SIGNAL_AFTER = re.compile(r"multi-angle model|reduced bodies|alpha_G")
 
 
-def execute(case, ctx, ranks):
+def execute(case, ctx, ranks, site=None):
+    """Runs the case's command; site: a folder put first on PYTHONPATH (a sitecustomize: disk_full_site)."""
     argv = command_line(case, ctx, ranks)
-    kwargs = dict(env=dict(ENV, **dict(case.env)), cwd=ctx.dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    env = dict(ENV, **dict(case.env))
+    if site:
+        env["PYTHONPATH"] = site + ":" + env["PYTHONPATH"]
+    kwargs = dict(env=env, cwd=ctx.dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                   errors="replace", start_new_session=True)
-    if case.fsize:
-        kwargs["preexec_fn"] = _limit_file_size(case.fsize)
     t0 = time.monotonic()
     proc = subprocess.Popen(argv, **kwargs)
     note = ""
@@ -336,9 +348,11 @@ def run_case(case, ranks, base, cache):
             shutil.copytree(cache, ctx.out)
     if case.prepare is not None:
         case.prepare(ctx)
+    # outside the case folder: nothing new may appear beside the inputs
+    site = disk_full_site(folder + ".site", case.fsize) if case.fsize else None
     before = snapshot(ctx.out)
     around = snapshot(folder, skip=ctx.out)
-    outcome = execute(case, ctx, ranks)
+    outcome = execute(case, ctx, ranks, site)
     outcome.before, outcome.after = before, snapshot(ctx.out)
     after_around = snapshot(folder, skip=ctx.out)
     outcome.stray = sorted(set(after_around) - set(around))

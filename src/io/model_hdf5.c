@@ -980,7 +980,7 @@ static PetscErrorCode ReadJoints(KFReader *r, hid_t f, KFReducedModel m)
     for (int c = 0; c < 3; c++)
       for (int q = 0; q < 3; q++) J->R0[c + 3 * q] = R0[3 * c + q];
     if (J->parent < 0 || J->parent >= m->nb || J->child < 0 || J->child >= m->nb || J->parent == J->child) {
-      PetscCall(Inconsistent(r, "%sties bodies %" PetscInt_FMT " and %" PetscInt_FMT ", but the file has bodies 0..%" PetscInt_FMT, where, J->parent, J->child, m->nb - 1));
+      PetscCall(Inconsistent(r, "%sties bodies %" PetscInt_FMT " (attribute parent) and %" PetscInt_FMT " (attribute child), but the file has bodies 0..%" PetscInt_FMT, where, J->parent, J->child, m->nb - 1));
       break;
     }
     if (J->parent_interface < 0 || J->parent_interface >= m->bodies[J->parent].ninterfaces || J->child_interface < 0 || J->child_interface >= m->bodies[J->child].ninterfaces) {
@@ -1124,8 +1124,8 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   PetscCall(ReadStringAttr(&r, f, "", "format", sizeof(format), format));
   if (!st->code && strcmp(format, KF_MODEL_FORMAT)) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: not a kryflex reduced model (format attribute '%s', expected '%s'): give the model file written by 'kryflex reduce'", path, format, KF_MODEL_FORMAT));
   PetscCall(ReadIntAttr(&r, f, "", "version", &version));
-  if (!st->code && version > KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format %" PetscInt_FMT "; this kryflex reads format %d: use a newer kryflex or re-run kryflex reduce", path, version, KF_MODEL_VERSION));
-  if (!st->code && version < KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format %" PetscInt_FMT " (an older kryflex); this kryflex reads format %d: re-run kryflex reduce", path, version, KF_MODEL_VERSION));
+  if (!st->code && version > KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format version %" PetscInt_FMT "; this kryflex reads format version %d: use a newer kryflex or re-run kryflex reduce", path, version, KF_MODEL_VERSION));
+  if (!st->code && version < KF_MODEL_VERSION) PetscCall(IOFail(st, PETSC_ERR_FILE_UNEXPECTED, "%s: written in format version %" PetscInt_FMT " (an older kryflex); this kryflex reads format version %d: re-run kryflex reduce", path, version, KF_MODEL_VERSION));
   PetscCall(ReadStringAttr(&r, f, "", "scene", sizeof(m->scene_name), m->scene_name));
   PetscCall(ReadStringAttr(&r, f, "", "scene_fingerprint", sizeof(m->fingerprint), m->fingerprint));
   if (!st->code && strlen(m->fingerprint) != 16) PetscCall(Inconsistent(&r, "the scene fingerprint '%s' is not 16 hex digits", m->fingerprint));

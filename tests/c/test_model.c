@@ -645,7 +645,7 @@ static PetscErrorCode TestFiles(KFReducedModel model)
   PetscCall(ExpectFailure("load an HDF5 file without the format attribute", ierr, PETSC_ERR_FILE_UNEXPECTED, "not a kryflex reduced model"));
   PetscCall(Damage_(good, bad, DAMAGE_VERSION));
   ierr = KFReducedModelLoad(PETSC_COMM_WORLD, bad, &loaded);
-  PetscCall(ExpectFailure("load a version 1 file", ierr, PETSC_ERR_FILE_UNEXPECTED, "written in format 1"));
+  PetscCall(ExpectFailure("load a version 1 file", ierr, PETSC_ERR_FILE_UNEXPECTED, "written in format version 1"));
   PetscCall(Damage_(good, bad, DAMAGE_SHAPE));
   ierr = KFReducedModelLoad(PETSC_COMM_WORLD, bad, &loaded);
   PetscCall(ExpectFailure("load a file whose rotor K is 3 x 4", ierr, PETSC_ERR_FILE_UNEXPECTED, "'K' is 3 x 4"));

@@ -578,8 +578,8 @@ def make_asymmetric(a):
 # name -> (edit, what the message must say)
 H5_EDITS = {
     "newer_format": (set_attr("/", "version", 3),
-                     ["written in format 3; this kryflex reads format 2", "use a newer kryflex or re-run kryflex reduce"]),
-    "older_format": (set_attr("/", "version", 1), ["written in format 1", "re-run kryflex reduce"]),
+                     ["written in format version 3; this kryflex reads format version 2", "use a newer kryflex or re-run kryflex reduce"]),
+    "older_format": (set_attr("/", "version", 1), ["written in format version 1", "re-run kryflex reduce"]),
     "K_shape": (edit_array("bodies/stator/K", lambda a: a[:-1, :-1]),
                 ["body 'stator' dataset 'K' is 11 x 11, expected 12 x 12"]),
     "G_columns": (edit_array("bodies/rotor/G", lambda a: np.hstack([a, a])),
@@ -591,7 +591,7 @@ H5_EDITS = {
                                     [rewrite(f, "bodies/%s/H" % b, np.vstack([f["bodies/%s/H" % b][()]] * 2))
                                      for b in ("stator", "rotor")]),
                          ["dataset 'outputs' names 'a' twice"]),
-    "missing_body": (remove_body, ["joint 'spin_bearing' ties bodies 0 and 1", "bodies 0..0"]),
+    "missing_body": (remove_body, ["joint 'spin_bearing' ties bodies 0 (attribute parent) and 1 (attribute child)", "bodies 0..0"]),
     "extra_body": (add_extra_body, ["body 'spare' is tied to the root body 'stator' by no chain of joints"]),
     "repeated_body_index": (set_attr("bodies/rotor", "index", 0), ["index attributes of the bodies"]),
     "negative_full_dofs": (set_attr("bodies/rotor", "full_dofs", -3), ["body 'rotor' attribute 'full_dofs' is -3"]),
@@ -625,7 +625,7 @@ H5_EDITS = {
                    ["body 'rotor' dataset 'iface' is 12 x 12, expected 6 x 12", "dataset 'interfaces'"]),
     "interfaces_count": (set_strings("bodies/rotor/interfaces", ["bearing", "other"]),
                          ["body 'rotor' dataset 'iface' is 6 x 12, expected 12 x 12"]),
-    "joint_parent": (set_attr("joints/spin_bearing", "parent", 5), ["joint 'spin_bearing' ties bodies 5 and 1"]),
+    "joint_parent": (set_attr("joints/spin_bearing", "parent", 5), ["joint 'spin_bearing' ties bodies 5 (attribute parent) and 1"]),
     "joint_interface": (set_attr("joints/spin_bearing", "child_interface", 3),
                         ["joint 'spin_bearing' names an interface"]),
     "joint_axis": (set_attr("joints/spin_bearing", "axis", np.zeros(3)), ["joint 'spin_bearing' has the axis"]),

@@ -29,11 +29,11 @@ def solid(tmp_path_factory):
     return os.path.join(out, "spacecraft.yaml")
 
 
-def reduce(scene, out, nranks, *options):
+def reduce(scene, out, nranks, *options, code=0):
     cmd = (["mpiexec", "-n", str(nranks)] if nranks > 1 else []) + [KRYFLEX, "reduce", scene, "-o", str(out), "-quiet",
                                                                     *options]
     r = run(cmd)
-    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.returncode == code, r.stdout + r.stderr
     return json.load(open(os.path.join(out, "summary.json")))
 
 
@@ -69,7 +69,10 @@ def test_two_ranks_equal_serial(solid, krylov_serial, tmp_path):
 
 
 def test_eigenvector_baseline_runs_through_the_same_pipeline(solid, krylov_serial, tmp_path):
-    se = reduce(solid, tmp_path, 1, "-scene.reduction.basis", "eigen", "-scene.reduction.eigen_cover", "2")
+    # the baseline misses the scene's 0.05 target (about 0.43 at 0 deg): the command says so with exit 6, the results
+    # written and marked
+    se = reduce(solid, tmp_path, 1, "-scene.reduction.basis", "eigen", "-scene.reduction.eigen_cover", "2", code=6)
+    assert se["target_met"] is False
     assert se["settings"]["basis"] == "eigen"
     # the baseline's modes are exact full-order modes: its kept modes reproduce the full frequencies
     lab = se["reduction_label"]

@@ -59,6 +59,10 @@ def main(argv=None):
         from petsc4py import PETSc
         PETSc.Options().setValue("kf_quiet", True)
     try:
+        if any(a in ("-h", "-help", "--help") for a in rest):
+            # help only prints, on rank 0; and the binding must not start before 'kryflex reduce -help' sets PETSc's
+            # help option (KFInitialize lists -kf_quiet then)
+            return commands[cmd](rest)
         # SIGINT and SIGTERM are noted by the C library's handlers from here on, and the work stops at its next
         # stage or phase boundary, on every rank together (before: Python's KeyboardInterrupt, or the default)
         from .. import _core

@@ -10,9 +10,9 @@ writes into out_dir (created if needed):
   importance_<angle>deg.png                      normalized importance of the Krylov modes, kept ones marked
   moment_ratios.png                              |L_full/L_reduced - 1| against k
   frf_error.png                                  pointwise relative FRF error against frequency
-and returns the written paths. Everything is validated and rendered first, into temporary files; only when
-all succeeded are they renamed into place (os.replace). A failure raises ReportError (or the plotting error),
-removes the temporary files and leaves any earlier report in out_dir untouched.
+and returns the written paths. Everything is validated first, then rendered into a hidden staging folder inside
+out_dir; only when all succeeded are the files moved into place together (io.files.Staging). A failure raises
+ReportError (or the plotting error), removes the staging folder and leaves any earlier report in out_dir untouched.
 
 The summary schema is in schema.py. This package depends only on the standard library, NumPy and matplotlib
 (no compiled kryflex code).
@@ -20,42 +20,26 @@ The summary schema is in schema.py. This package depends only on the standard li
 import json
 import os
 
-from ..io.files import commit, temporary_beside
+from ..io.files import Staging
 from .figures import _render_plots, plot_file_names
 from .schema import _check_json_types, validate_summary
 from .sections import render_markdown
 
 
-class _StagedFiles:
-    """Files written under temporary names in out_dir and renamed into place together by commit().
-
-    Until commit() nothing visible changes in out_dir; abort() removes the temporary files, so a failure
-    never leaves a partial or mixed old/new report behind."""
-
-    def __init__(self, out_dir):
-        self.out_dir = out_dir
-        self.staged = []
-
-    def add(self, name, data):
-        final = os.path.join(self.out_dir, name)
-        tmp = temporary_beside(final)
-        self.staged.append((tmp, final))
-        with open(tmp, "wb") as handle:
-            handle.write(data)
-
-    def commit(self):
-        written = []
-        for tmp, final in self.staged:
-            commit(tmp, final)
-            written.append(final)
-        self.staged = []
-        return written
-
-    def abort(self):
-        for tmp, _ in self.staged:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-        self.staged = []
+def _write_together(out_dir, files):
+    """Writes (name, bytes) pairs into a staging folder of out_dir (io.files.Staging) and moves them into place
+    together; returns their paths. On any failure, or an exception raised between files, nothing of them is left
+    and out_dir's earlier files are as they were."""
+    os.makedirs(out_dir, exist_ok=True)
+    staging = Staging(out_dir)
+    staging.create()
+    try:
+        for name, data in files:
+            with open(staging.file(name), "wb") as handle:
+                handle.write(data)
+        return staging.commit()
+    finally:
+        staging.discard()
 
 
 def write_report(summary, out_dir, between=None):
@@ -69,19 +53,16 @@ def write_report(summary, out_dir, between=None):
     text_json = json.dumps(summary, indent=1, allow_nan=False) + "\n"
     plot_names = plot_file_names(summary)
     markdown = render_markdown(summary, plot_names)
-    os.makedirs(out_dir, exist_ok=True)
-    staging = _StagedFiles(out_dir)
-    try:
+
+    def files():
         for name, data in _render_plots(summary, plot_names):
-            staging.add(name, data)
+            yield name, data
             if between is not None:
                 between()
-        staging.add("summary.json", text_json.encode("utf-8"))
-        staging.add("report.md", markdown.encode("utf-8"))
-        return staging.commit()
-    except BaseException:
-        staging.abort()
-        raise
+        yield "summary.json", text_json.encode("utf-8")
+        yield "report.md", markdown.encode("utf-8")
+
+    return _write_together(out_dir, files())
 
 
 def write_unverified(summary, out_dir):
@@ -100,12 +81,6 @@ def write_unverified(summary, out_dir):
         for label, r in ratios.items():
             devs = [abs(x - 1) for k in r for row in k for x in row if x is not None]
             lines.append(f"| {label} | {max(devs) if devs else 0:.3e} |")
-    os.makedirs(out_dir, exist_ok=True)
-    staging = _StagedFiles(out_dir)
-    try:
-        staging.add("summary.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8"))
-        staging.add("report.md", ("\n".join(lines) + "\n").encode("utf-8"))
-        return staging.commit()
-    except BaseException:
-        staging.abort()
-        raise
+    return _write_together(out_dir, [
+        ("summary.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8")),
+        ("report.md", ("\n".join(lines) + "\n").encode("utf-8"))])

@@ -16,6 +16,8 @@ import re
 
 import numpy as np
 
+from .yaml_load import short_repr
+
 DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
 NODE_DOFS = (3, 6)                    # src/scene/scene.c KFSceneAddBody: ux uy uz (+ rx ry rz)
 MAX_NODE_ID = 2 ** 31 - 1             # PetscInt is 32-bit in this build
@@ -76,29 +78,24 @@ def fail(where, path, msg):
     raise SceneError("%s: %s: %s" % (where, path, msg) if path else "%s: %s" % (where, msg))
 
 
-def _short(value, limit=80):
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
 def unknown_key(key, allowed):
     """'unknown key ... (did you mean ...?); allowed keys: ...'"""
     close = difflib.get_close_matches(str(key), sorted(allowed), n=1)
     hint = " (did you mean '%s'?)" % close[0] if close else ""
-    return "unknown key %s%s; allowed keys: %s" % (_short(key), hint, ", ".join(sorted(allowed)))
+    return "unknown key %s%s; allowed keys: %s" % (short_repr(key), hint, ", ".join(sorted(allowed)))
 
 
 def unknown_body(value, names):
     """'body ... does not exist (bodies: ...); use one of them (did you mean ...?)'"""
     close = difflib.get_close_matches(str(value), names, n=1)
     hint = " (did you mean '%s'?)" % close[0] if close else ""
-    return "body %s does not exist (bodies: %s); use one of them%s" % (_short(value), ", ".join(names), hint)
+    return "body %s does not exist (bodies: %s); use one of them%s" % (short_repr(value), ", ".join(names), hint)
 
 
 def mapping(where, path, value, allowed=None, what=None):
     """A mapping whose keys are among allowed (None: any)."""
     if not isinstance(value, dict):
-        fail(where, path, "%s is not a mapping; give a mapping of %s" % (_short(value),
+        fail(where, path, "%s is not a mapping; give a mapping of %s" % (short_repr(value),
                                                                           what or ", ".join(sorted(allowed))))
     if allowed is not None:
         for k in value:
@@ -130,12 +127,12 @@ def real(where, path, value, interval, fix=None):
     """A finite number in interval (an Interval or its text)."""
     iv = Interval(interval) if isinstance(interval, str) else interval
     if not _is_number(value):
-        fail(where, path, "%s is not a number; %s" % (_short(value), fix or "give a number in %s" % iv.text))
+        fail(where, path, "%s is not a number; %s" % (short_repr(value), fix or "give a number in %s" % iv.text))
     x = float(value)
     if not math.isfinite(x):
-        fail(where, path, "%s is not a finite number; %s" % (_short(value), fix or "give a value in %s" % iv.text))
+        fail(where, path, "%s is not a finite number; %s" % (short_repr(value), fix or "give a value in %s" % iv.text))
     if x not in iv:
-        fail(where, path, "%s is outside %s; %s" % (_short(value), iv.text, fix or "give a value in %s" % iv.text))
+        fail(where, path, "%s is outside %s; %s" % (short_repr(value), iv.text, fix or "give a value in %s" % iv.text))
     return x
 
 
@@ -144,28 +141,28 @@ def integer(where, path, value, interval, fix=None):
     iv = Interval(interval) if isinstance(interval, str) else interval
     fix = fix or "give an integer in %s" % iv.text
     if not _is_number(value) or not math.isfinite(float(value)) or float(value) != math.floor(float(value)):
-        fail(where, path, "%s is not an integer; %s" % (_short(value), fix))
+        fail(where, path, "%s is not an integer; %s" % (short_repr(value), fix))
     x = int(value)
     if x not in iv:
-        fail(where, path, "%s is outside %s; %s" % (_short(value), iv.text, fix))
+        fail(where, path, "%s is outside %s; %s" % (short_repr(value), iv.text, fix))
     return x
 
 
 def boolean(where, path, value):
     if not isinstance(value, (bool, np.bool_)):
-        fail(where, path, "%s is not a boolean; give true or false" % _short(value))
+        fail(where, path, "%s is not a boolean; give true or false" % short_repr(value))
     return bool(value)
 
 
 def choice(where, path, value, choices):
     if not isinstance(value, str) or value not in choices:
-        fail(where, path, "%s is not one of %s; use one of them" % (_short(value), ", ".join(choices)))
+        fail(where, path, "%s is not one of %s; use one of them" % (short_repr(value), ", ".join(choices)))
     return value
 
 
 def text(where, path, value, fix="give it as text"):
     if not isinstance(value, str):
-        fail(where, path, "%s is not text; %s" % (_short(value), fix))
+        fail(where, path, "%s is not text; %s" % (short_repr(value), fix))
     return value
 
 
@@ -174,9 +171,9 @@ def name(where, path, value, kind):
     if _is_number(value) and isinstance(value, (int, np.integer)):
         value = str(value)
     if not isinstance(value, str):
-        fail(where, path, "%s name %s is not text; %s" % (kind, _short(value), NAME_RULE))
+        fail(where, path, "%s name %s is not text; %s" % (kind, short_repr(value), NAME_RULE))
     if not 1 <= len(value) <= MAX_NAME or not _NAME.match(value):
-        fail(where, path, "%s name %s is not allowed; %s" % (kind, _short(value), NAME_RULE))
+        fail(where, path, "%s name %s is not allowed; %s" % (kind, short_repr(value), NAME_RULE))
     return value
 
 
@@ -195,7 +192,7 @@ def _ref(value):
 
 def file_name(where, path, value):
     if not isinstance(value, str) or not value or "\0" in value:
-        fail(where, path, "%s is not a file name; give the file's path relative to the scene file" % _short(value))
+        fail(where, path, "%s is not a file name; give the file's path relative to the scene file" % short_repr(value))
     return value
 
 
@@ -203,7 +200,7 @@ def vector3(where, path, value, what):
     if isinstance(value, np.ndarray):
         value = value.tolist()
     if not isinstance(value, (list, tuple)) or len(value) != 3:
-        fail(where, path, "%s is not a 3-vector; give %s as [x, y, z]" % (_short(value), what))
+        fail(where, path, "%s is not a 3-vector; give %s as [x, y, z]" % (short_repr(value), what))
     return [real(where, path, x, "(-inf, inf)", "give %s as [x, y, z] of finite numbers" % what) for x in value]
 
 
@@ -214,13 +211,13 @@ def rotation(where, path, value):
     rows = value.tolist() if isinstance(value, np.ndarray) else value
     if not isinstance(rows, (list, tuple)) or len(rows) != 3 or \
             not all(isinstance(r, (list, tuple)) and len(r) == 3 for r in rows):
-        fail(where, path, "%s is not a 3x3 matrix; %s" % (_short(value), fix))
+        fail(where, path, "%s is not a 3x3 matrix; %s" % (short_repr(value), fix))
     R = np.array([[real(where, path, x, "(-inf, inf)", fix) for x in r] for r in rows])
     err = np.abs(R.T @ R - np.eye(3)).max()
     det = np.linalg.det(R)
     if err > ORIENTATION_TOL or det <= 0:
         fail(where, path, "%s is not a rotation (orthonormality error %.2g, det %.3g); %s, orthonormal to %g with "
-             "det +1" % (_short(value), err, det, fix, ORIENTATION_TOL))
+             "det +1" % (short_repr(value), err, det, fix, ORIENTATION_TOL))
     if err > 1e-9:
         U, _, Vt = np.linalg.svd(R)
         R = U @ Vt
@@ -241,7 +238,7 @@ def configuration(where, path, c, revolute):
         extra = [j for j in c if j not in revolute]
         if missing or extra:
             fail(where, path, "%s: give one angle per revolute joint (%s); missing %s, unknown %s"
-                 % (_short(c), ", ".join(revolute) or "none", ", ".join(missing) or "none",
+                 % (short_repr(c), ", ".join(revolute) or "none", ", ".join(missing) or "none",
                     ", ".join(map(str, extra)) or "none"))
         c = [c[j] for j in revolute]
     elif isinstance(c, np.ndarray):
@@ -250,7 +247,7 @@ def configuration(where, path, c, revolute):
         c = [c]
     if len(c) != nr:
         fail(where, path, "%s: the scene has %d revolute joint(s) (%s); give %d angle(s) per configuration"
-             % (_short(c), nr, ", ".join(revolute) or "none", nr))
+             % (short_repr(c), nr, ", ".join(revolute) or "none", nr))
     return [_angle(where, path, x) for x in c]
 
 
@@ -268,7 +265,7 @@ def configurations(where, path, raw, revolute):
         for k, d in enumerate(configs[:-1]):
             if d == configs[-1]:
                 fail(where, path, "configuration %s appears twice (entries %d and %d); give each configuration once"
-                     % (_short(c), k, i))
+                     % (short_repr(c), k, i))
     return configs
 
 
@@ -280,7 +277,7 @@ def _angles_of_interest(where, spec, revolute):
                  "angles: [0, 30, 60]")
         return [[]]
     if not revolute:
-        fail(where, "angles", "%s, but the scene has no revolute joint; remove 'angles'" % _short(raw))
+        fail(where, "angles", "%s, but the scene has no revolute joint; remove 'angles'" % short_repr(raw))
     return configurations(where, "angles", raw, revolute)
 
 
@@ -289,9 +286,9 @@ def _reduction_angle(where, value, revolute):
     if value == "auto":
         return value
     if not revolute:
-        fail(where, path, "%s, but the scene has no revolute joint; use auto" % _short(value))
+        fail(where, path, "%s, but the scene has no revolute joint; use auto" % short_repr(value))
     if isinstance(value, str):
-        fail(where, path, "%s is neither auto nor an angle; give auto or an angle in degrees" % _short(value))
+        fail(where, path, "%s is neither auto nor an angle; give auto or an angle in degrees" % short_repr(value))
     if isinstance(value, (list, tuple)) and len(value) == 1 and isinstance(value[0], (list, tuple, dict)):
         value = value[0]        # [[a1, a2]]: one configuration written as a list of one
     return configuration(where, path, value, revolute)
@@ -309,7 +306,7 @@ def node_table(where, path, rows, labels=None):
         rows = rows.tolist()
     if not isinstance(rows, (list, tuple)):
         fail(where, path, "%s is neither a nodes file name nor a list; give a file or [[id, x, y, z, ndof], ...]"
-             % _short(rows))
+             % short_repr(rows))
     if not rows:
         fail(where, path, "no nodes; list 'id x y z ndof' per node")
     table = _node_array(rows)
@@ -325,12 +322,12 @@ def node_table(where, path, rows, labels=None):
         if isinstance(r, np.ndarray):
             r = r.tolist()
         if not isinstance(r, (list, tuple)) or len(r) != 5:
-            fail(where, at(i), "%s is not [id, x, y, z, ndof]; give five numbers per node" % _short(r))
+            fail(where, at(i), "%s is not [id, x, y, z, ndof]; give five numbers per node" % short_repr(r))
         ids[i] = node_id(where, at(i), r[0])
         for c in range(3):
             xyz[i, c] = real(where, at(i), r[1 + c], "(-inf, inf)", "give the coordinates as finite numbers")
         if not _is_number(r[4]) or float(r[4]) not in NODE_DOFS:
-            fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz)" % (ids[i], _short(r[4])))
+            fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz)" % (ids[i], short_repr(r[4])))
         ndof[i] = int(r[4])
         k = first.setdefault(int(ids[i]), i)
         if k != i:
@@ -381,7 +378,7 @@ def check_node_references(where, valid, nodes):
                     fail(where, path + ".node", "body '%s' has no node %d; use one of its node ids" % (body, t["node"]))
                 if t["dof"] >= nd:
                     fail(where, path + ".dof", "node %d of body '%s' has %d dofs, so no %s; rotations rx ry rz need "
-                         "a 6-dof node" % (t["node"], body, nd, _short(t["dof_name"])))
+                         "a 6-dof node" % (t["node"], body, nd, short_repr(t["dof_name"])))
 
 
 def check_vector(where, path, data, body, ndofs):
@@ -460,10 +457,10 @@ def _joints(where, spec, bodies):
             have = [i for i, _ in bodies[b]["interfaces"]]
             if _ref(j[key]) not in have:
                 fail(where, path + "." + key, "body '%s' has no interface %s (it has: %s); declare it under bodies.%s."
-                     "interfaces" % (names[b], _short(j[key]), ", ".join(have) or "none", names[b]))
+                     "interfaces" % (names[b], short_repr(j[key]), ", ".join(have) or "none", names[b]))
         axis = vector3(where, path + ".axis", j.get("axis", [0, 0, 1]), "the rotation axis")
         if not any(axis):
-            fail(where, path + ".axis", "%s is zero; give a direction such as [0, 0, 1]" % _short(j.get("axis")))
+            fail(where, path + ".axis", "%s is zero; give a direction such as [0, 0, 1]" % short_repr(j.get("axis")))
         R0 = j.get("orientation")
         joints.append({"name": jname, "type": kind, "parent": ends["parent"], "child": ends["child"],
                        "parent_interface": _ref(j["parent_interface"]), "child_interface": _ref(j["child_interface"]),
@@ -514,7 +511,7 @@ def _io(where, key, spec, bodies):
             terms = [terms]
         if not isinstance(terms, list) or not terms:
             fail(where, path, "%s is not a list of terms; give a list of {body, node, dof, weight} terms"
-                 % _short(terms))
+                 % short_repr(terms))
         checked = []
         for i, t in enumerate(terms):
             tpath = "%s[%d]" % (path, i)
@@ -562,13 +559,13 @@ def _reduction(where, given, revolute):
                               "give a multiple >= 1 of the band's top frequency")
     red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
     if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
-        fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % _short(red["save_maps"]))
+        fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % short_repr(red["save_maps"]))
     red["save_maps"] = red["save_maps"] if red["save_maps"] == "auto" else bool(red["save_maps"])
     red["reduction_angle"] = _reduction_angle(where, red["reduction_angle"], revolute)
     if red["reduction_angles"] is not None:
         if not revolute:
             fail(where, p + "reduction_angles", "%s, but the scene has no revolute joint; remove it"
-                 % _short(red["reduction_angles"]))
+                 % short_repr(red["reduction_angles"]))
         red["reduction_angles"] = configurations(where, p + "reduction_angles", red["reduction_angles"], revolute)
     return red
 
@@ -592,7 +589,7 @@ def validate(spec, where, default_name="scene"):
     first bad entry."""
     if not isinstance(spec, dict):
         fail(where, None, "%s is not a scene; write the scene as a YAML mapping with bodies, joints, inputs, "
-             "outputs, angles" % ("an empty file" if spec is None else _short(spec, 40)))
+             "outputs, angles" % ("an empty file" if spec is None else short_repr(spec, 40)))
     for k in spec:
         if k not in TOP_KEYS:
             fail(where, None, unknown_key(k, TOP_KEYS))
@@ -605,7 +602,7 @@ def validate(spec, where, default_name="scene"):
     text(where, "name", scene_name)
     if not 1 <= len(scene_name) <= MAX_SCENE_NAME or not scene_name.isprintable():
         fail(where, "name", "%s is not a usable scene name; give 1 to %d printable characters"
-             % (_short(scene_name), MAX_SCENE_NAME))
+             % (short_repr(scene_name), MAX_SCENE_NAME))
     for key in ("description", "units"):
         if key in spec:
             text(where, key, spec[key])
@@ -617,7 +614,7 @@ def validate(spec, where, default_name="scene"):
         band = list(band)
     if not isinstance(band, list) or len(band) != 2:
         fail(where, "band", "%s is not [f_low, f_high]; give [f_low, f_high] in Hz with 0 < f_low < f_high"
-             % _short(band))
+             % short_repr(band))
     band = [real(where, "band", x, "(0, inf)", "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
     if not band[0] < band[1]:
         fail(where, "band", "%s: f_low is not below f_high; give [f_low, f_high] in Hz with 0 < f_low < f_high" % band)

@@ -71,14 +71,15 @@ def _check_duplicate_keys(loader, root):
                     at = ("lines %d and %d" % (earlier.line + 1, mark.line + 1) if earlier.line != mark.line else
                           "line %d, columns %d and %d" % (mark.line + 1, earlier.column + 1, mark.column + 1))
                     raise YAMLInputError("%s: key %s appears twice (%s); keep one"
-                                         % (_key_path(path, key), _short(key), at))
+                                         % (_key_path(path, key), short_repr(key, 60), at))
                 first[key] = mark
                 todo.append((value_node, _key_path(path, key)))
 
 
-def _short(value):
+def short_repr(value, limit=80):
+    """repr(value), cut to limit characters: a message quotes a value, never a whole mapping or an alias bomb."""
     text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _where(mark):

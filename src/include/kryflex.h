@@ -158,10 +158,21 @@ PETSC_EXTERN PetscErrorCode KFDenseEig(PetscInt n, const PetscReal K[], const Pe
 typedef enum {
   KF_IMPORTANCE_H2     = 0, /* ||H phi|| ||phi^T G|| / (2 sqrt(zeta w^3)) */
   KF_IMPORTANCE_HINF   = 1, /* ||H phi|| ||phi^T G|| / (2 zeta w^2) */
-  KF_IMPORTANCE_STATIC = 2  /* ||H phi phi^T G|| / w^2 */
+  KF_IMPORTANCE_STATIC = 2, /* ||H phi phi^T G|| / w^2 */
+  KF_IMPORTANCE_BAND   = 3  /* band-aware and cluster-invariant: KFDenseModeImportanceBand */
 } KFImportance;
 /* Importance of each mode (n modes, Phi n x n M-orthonormal), normalized by the largest; rigid (lambda <= rigid_tol * max lambda) get 0. */
 PETSC_EXTERN PetscErrorCode KFDenseModeImportance(PetscInt n, const PetscReal lambda[], const PetscReal Phi[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscReal zeta, KFImportance, PetscReal rigid_tol, PetscReal importance[]);
+/* Band-aware, cluster-invariant importance: modes whose frequencies lie within cluster_rtol (relative) of each other
+   form a cluster; the cluster's residue R = H Phi_C Phi_C^T G (invariant to the basis chosen inside it) gives
+   importance = ||R||_2 max_{w in band} 1/|lambda_C - w^2 + 2 i zeta sqrt(lambda_C) w|, normalized by the largest. Every
+   mode of a cluster gets its cluster's importance and id (0, 1, ... in ascending frequency); rigid modes
+   (lambda <= rigid_tol * max lambda) get importance 0 and cluster -1. band_hz: [fmin, fmax]. */
+PETSC_EXTERN PetscErrorCode KFDenseModeImportanceBand(PetscInt n, const PetscReal lambda[], const PetscReal Phi[], PetscInt a, const PetscReal G[], PetscInt t, const PetscReal H[], PetscReal zeta, const PetscReal band_hz[2], PetscReal cluster_rtol, PetscReal rigid_tol, PetscReal importance[], PetscInt cluster[]);
+/* Hankel singular values of the damped modal system: n flexible modes (w2 > 0), outputs HPhi (t x n), inputs PhiG
+   (n x a), uniform damping zeta, states (q, qdot) per mode; descending, 2n values. No model of first-order order r has
+   an H-infinity error below hsv[r]. */
+PETSC_EXTERN PetscErrorCode KFModalHankelSingularValues(PetscInt n, const PetscReal w2[], PetscInt t, const PetscReal HPhi[], PetscInt a, const PetscReal PhiG[], PetscReal zeta, PetscReal hsv[]);
 /* Static correction (eq. 17): given discarded modes Phid (n x d) with eigenvalues lambdad and G (n x a),
    S = Phid Lambdad^-1 Phid^T G (n x a). */
 PETSC_EXTERN PetscErrorCode KFDenseStaticCorrection(PetscInt n, PetscInt d, const PetscReal Phid[], const PetscReal lambdad[], PetscInt a, const PetscReal G[], PetscReal S[]);

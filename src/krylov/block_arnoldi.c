@@ -135,7 +135,8 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
   PetscInt made[2] = {0, 0}, want[2] = {nin, nout}, nblocks = nin + nout;
   PetscBool done[2] = {PETSC_FALSE, PETSC_FALSE};
   Mat      Prev[2] = {NULL, NULL};
-  BV       V;
+  BV       V, chain[2] = {NULL, NULL};
+  PetscInt kc[2] = {0, 0};
 
   PetscFunctionBegin;
   PetscCheck(nin >= 1 && nout >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the Krylov basis needs at least one input block (got %" PetscInt_FMT " input and %" PetscInt_FMT " output blocks)", nin, nout);
@@ -152,6 +153,10 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
   /* classical Gram-Schmidt, refined when the norm drops (DGKS): as safe as always refining, half the work */
   PetscCall(BVSetOrthogonalization(V, BV_ORTHOG_CGS, BV_ORTHOG_REFINE_IFNEEDED, PETSC_DEFAULT, BV_ORTHOG_BLOCK_GS));
   PetscCall(BVSetFromOptions(V));
+  for (int c = 0; c < 2; c++) {
+    PetscCall(BVDuplicateResize(V, PetscMax(c ? t * nout : a * nin, 1), &chain[c]));
+    PetscCall(BVSetActiveColumns(chain[c], 0, 0));
+  }
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
     int      source = (blk % 2 == 1 && made[1] < want[1]) || made[0] >= want[0] ? 1 : 0;
@@ -169,13 +174,23 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
       PetscCall(KFFlexSolverApply(solver, B, W));
       if (made[source] > 1) PetscCall(MatDestroy(&B));
       PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
-      PetscCall(KFBVAppendDeflated(sys, V, W, tol, &k, &ndefl));
+      /* each chain is an Arnoldi process of its own (its next block starts from its own orthonormalized block, not
+         from one the other chain has been taken out of, which would leave its Krylov space); the basis collects both */
+      {
+        PetscInt kc0 = kc[source], dummy = 0;
+
+        PetscCall(KFBVAppendDeflated(sys, chain[source], W, tol, &kc[source], &dummy));
+        if (kc[source] > kc0) {
+          PetscCall(KFBVColumnsToMat(chain[source], kc0, kc[source], &Prev[source]));
+          PetscCall(KFBVAppendDeflated(sys, V, Prev[source], tol, &k, &ndefl));
+        }
+        ndefl += dummy;
+        if (kc[source] == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
+      }
       PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
       PetscCall(MatDestroy(&W));
       PetscCall(MatGetSize(source ? sys->Ht : sys->G, NULL, &p));
       if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", made[source], want[source], k - k0, p, k));
-      if (k == k0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's Krylov space is exhausted */
-      else PetscCall(KFBVColumnsToMat(V, k0, k, &Prev[source]));
       PetscCall(KFInterruptCheck(s->comm)); /* a command's SIGINT/SIGTERM: every rank stops after the same block */
     }
     info->block_end[blk] = k;
@@ -188,6 +203,8 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
   }
   PetscCall(MatDestroy(&Prev[0]));
   PetscCall(MatDestroy(&Prev[1]));
+  PetscCall(BVDestroy(&chain[0]));
+  PetscCall(BVDestroy(&chain[1]));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality));
   PetscCall(BVSetActiveColumns(V, 0, k));

@@ -197,7 +197,13 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     t0 = t1;
     c = basis.size;
     PetscCall(PetscMalloc4(c, &imp, c, &kept, c, &freq, c, &keptf));
-    PetscCall(KFDenseModeImportance(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->importance, 0.0, imp));
+    if (r->importance == KF_IMPORTANCE_BAND) {
+      PetscInt *clu;
+
+      PetscCall(PetscMalloc1(c, &clu));
+      PetscCall(KFDenseModeImportanceBand(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->band, r->cluster_rtol, 0.0, imp, clu));
+      PetscCall(PetscFree(clu));
+    } else PetscCall(KFDenseModeImportance(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->importance, 0.0, imp));
     for (PetscInt k = 0; k < c; k++) {
       kept[k]  = (PetscBool)(imp[k] >= r->keep_threshold);
       keptf[k] = kept[k] ? 1.0 : 0.0;

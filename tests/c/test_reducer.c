@@ -377,6 +377,7 @@ static PetscErrorCode TestSolve(KFScene scene)
   PetscCall(KFReducerSetDamping(r, 0.01));
   PetscCall(KFReducerSetMoments(r, 6, 1));
   PetscCall(KFReducerSetImportance(r, KF_IMPORTANCE_H2, 0.0)); /* keep every Krylov mode: moments exact */
+  PetscCall(KFReducerSetSearch(r, PETSC_FALSE, 24)); /* the paper's fixed recipe: every mode of the 6 moments kept */
   PetscCall(KFReducerSetVerification(r, PETSC_TRUE, PETSC_DECIDE, 60, -60));
   PetscCall(KFReducerSetFromOptions(r));
   PetscCall(KFReducerSetUp(r));

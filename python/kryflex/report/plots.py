@@ -65,14 +65,30 @@ def magnitude_db(h):
 
 def phase_deg(h, reference_deg=None):
     """Unwrapped phase in degrees, shifted by a multiple of 360 so that its first point lies within 180 degrees
-    of reference_deg (default 0). Unwrapping avoids the vertical +-180 jumps of a wrapped phase, and the shared
-    reference keeps a full and a reduced curve on the same sheet."""
+    of reference_deg (default 0). Unwrapping avoids the vertical +-180 jumps of a wrapped phase."""
     h = np.asarray(h)
     ph = np.degrees(np.unwrap(np.angle(h)))
     ref = 0.0 if reference_deg is None or not np.isfinite(reference_deg) else reference_deg
     if ph.size:
         ph = ph - 360.0 * np.round((ph[0] - ref) / 360.0)
     return np.where(h != 0, ph, np.nan)
+
+
+def phase_pair_deg(full, reduced):
+    """(full, reduced) phases in degrees, drawn consistently: both unwrapped (numpy.unwrap), the full curve's first
+    point within 180 degrees of 0, then the reduced curve moved by a multiple of 360 at EVERY frequency to lie within
+    180 degrees of the full one.
+
+    Aligning at the first frequency only is not enough: across a lightly damped notch the phase jumps by nearly
+    180 degrees between two grid points, and unwrap may read the jump as +180 for one curve and -180 for the other
+    (a zero pair just left or just right of the axis). The two responses then agree to 1e-5 while their unwrapped
+    phases differ by 360 degrees for the rest of the band (the Galileo scene at 30 deg). Moving the reduced curve
+    point by point keeps the drawn difference equal to the true phase difference, wrapped to (-180, 180]."""
+    ph_full = phase_deg(full)
+    ph_red = phase_deg(reduced, ph_full[0] if ph_full.size else None)
+    both = np.isfinite(ph_full) & np.isfinite(ph_red)
+    ph_red = np.where(both, ph_red - 360.0 * np.round((ph_red - np.where(both, ph_full, 0.0)) / 360.0), ph_red)
+    return ph_full, ph_red
 
 
 def _frequency_axis(ax, freq, set_limits=True):
@@ -118,8 +134,7 @@ def bode_figure(freq_hz, full, reduced, title):
     ax_mag.set_title(title)
     ax_mag.legend(loc="best", fontsize="small")
     _note_zero_response(ax_mag, full, reduced)
-    ph_full = phase_deg(full)
-    ph_red = phase_deg(reduced, ph_full[0] if ph_full.size else None)
+    ph_full, ph_red = phase_pair_deg(full, reduced)
     ax_ph.semilogx(freq, ph_full, **FULL_STYLE)
     ax_ph.semilogx(freq, ph_red, **REDUCED_STYLE)
     ax_ph.set_ylabel("phase (deg)")

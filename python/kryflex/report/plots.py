@@ -33,11 +33,37 @@ RATIO_FLOOR = 1e-16
 # ----------------------------------------------------------------------------------------------- data helpers
 
 def frf_arrays(frf_entry):
-    """(freq_hz [nf], full [nf,t,a] complex, reduced [nf,t,a] complex) from one summary["frf"][label] block."""
+    """(freq_hz [nf], full [nf,t,a] complex, reduced [nf,t,a] complex) from one summary["frf"][label] block; the
+    reduced response is the chosen model's ("chosen_re"/"chosen_im" when the reducer chose the multi-angle model,
+    else the single-angle model's "reduced_re"/"reduced_im")."""
     freq = np.asarray(frf_entry["freq_hz"], dtype=float)
     full = np.asarray(frf_entry["full_re"], dtype=float) + 1j * np.asarray(frf_entry["full_im"], dtype=float)
-    reduced = np.asarray(frf_entry["reduced_re"], dtype=float) + 1j * np.asarray(frf_entry["reduced_im"], dtype=float)
+    which = "chosen" if "chosen_re" in frf_entry else "reduced"
+    reduced = (np.asarray(frf_entry[which + "_re"], dtype=float)
+               + 1j * np.asarray(frf_entry[which + "_im"], dtype=float))
     return freq, full, reduced
+
+
+# a pair whose peak is below this fraction of the largest pair's peak is measured against this fraction of it
+PAIR_PEAK_FLOOR = 1e-6
+
+
+def frf_hinf_error_curve(full, reduced):
+    """The integrand of the relative H-infinity error per input/output pair (the one accuracy measure, issue 11,
+    src/measure/frf_error.c): at each frequency, max over pairs of |Tf_ij(w) - Tr_ij(w)| / peak_ij, with
+    peak_ij = max_w |Tf_ij| (at least PAIR_PEAK_FLOOR x the largest pair's peak). Its maximum over the band is
+    the error the verdict is on. full, reduced: [nf, t, a] (or [nf])."""
+    full = np.asarray(full)
+    reduced = np.asarray(reduced)
+    if full.ndim == 1:
+        full, reduced = full[:, None, None], reduced[:, None, None]
+    peak = np.max(np.abs(full), axis=0) if full.shape[0] else np.zeros(full.shape[1:])
+    largest = float(np.max(peak)) if peak.size else 0.0
+    peak = np.maximum(peak, PAIR_PEAK_FLOOR * largest)
+    diff = np.abs(full - reduced)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(peak > 0, diff / np.where(peak > 0, peak, 1.0), np.where(diff > 0, np.inf, 0.0))
+    return ratio.reshape(ratio.shape[0], -1).max(axis=1)
 
 
 def frf_relative_error(full, reduced):
@@ -248,8 +274,9 @@ def moment_ratio_figure(series, threshold, title="Moment ratios L_full / L_reduc
     return fig
 
 
-def frf_error_figure(curves, accuracy, title="Relative frequency-response error"):
-    """Pointwise relative FRF error (see frf_relative_error) against frequency, one curve per configuration.
+def frf_error_figure(curves, accuracy, title="Relative frequency-response error of the chosen model"):
+    """|Tf - Tr| / peak |Tf| (worst input/output pair, see frf_hinf_error_curve) against frequency, one curve per
+    configuration: the peak of each curve is that configuration's relative H-infinity error, the verdict's measure.
 
     curves: [(legend label, freq_hz [nf], error [nf]), ...]; accuracy: target drawn as a horizontal line (or None).
     """
@@ -264,7 +291,7 @@ def frf_error_figure(curves, accuracy, title="Relative frequency-response error"
     if curves:
         _frequency_axis(ax, np.concatenate([np.asarray(f, dtype=float) for _, f, _ in curves]))
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("||H_full - H_red||_F / ||H_full||_F")
+    ax.set_ylabel("|T_full - T_red| / max_w |T_full|  (worst pair)")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="x-small", ncol=2)

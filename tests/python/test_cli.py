@@ -135,6 +135,55 @@ def test_reduce_writes_model_report_summary_and_plots(serial):
     assert "kryflex: results in %s" % out in serial.proc.stdout
 
 
+def report_table(markdown, caption_start):
+    """Rows (header first, cells stripped) of the Markdown table after the line starting with caption_start."""
+    lines = markdown.splitlines()
+    n = next(k for k, line in enumerate(lines) if line.startswith(caption_start)) + 1
+    while not lines[n].startswith("|"):
+        n += 1
+    rows = []
+    while n < len(lines) and lines[n].startswith("|"):
+        rows.append([cell.strip() for cell in lines[n].strip("|").split("|")])
+        n += 1
+    return [rows[0]] + rows[2:]
+
+
+@pytest.mark.parametrize("run", ["serial", "overridden"])
+def test_one_verdict_in_the_command_summary_and_report(run, request):
+    """The chosen model's relative H-inf error per pair decides everywhere: the command's last lines, summary.json
+    (target_met, error_max from C) and the report's Table 7 (angles of interest and midpoints; the pointwise error
+    only in the information table 7b)."""
+    r = request.getfixturevalue(run)
+    s = r.summary
+    chosen = s["chosen"]
+    method = s["chosen_method"]
+    prefix = "multi_angle" if method == "multi-angle" else None
+    for label in s["angle_labels"]:
+        own = (s["multi_angle"]["frf_error"] if prefix else {l: v["frf_error"] for l, v in s["frf"].items()})[label]
+        assert chosen["frf_error"][label] == own
+    errors = list(chosen["frf_error"].values()) + [m["frf_error"] for m in s["midpoints"]]
+    assert s["error_max"] >= max(errors) * (1 - 1e-12) and s["target_met"] is (s["error_max"] <= s["accuracy"])
+    assert s["target_met"] is (r.proc.returncode == EXIT_OK)
+    with open(os.path.join(r.out, "report.md")) as f:
+        markdown = f.read()
+    rows = report_table(markdown, "Table 7.")
+    assert "pointwise" not in " ".join(rows[0])
+    assert len(rows) - 1 == len(s["angle_labels"]) + len(s["midpoints"])
+    for row, err in zip(rows[1:], errors):
+        assert float(row[2]) == pytest.approx(err, rel=5e-3)
+        assert row[4] == ("PASS" if err <= s["accuracy"] else "MISS")
+    if any(v is not None for v in chosen["frf_pointwise_error"].values()):
+        assert "information only, not the verdict" in report_table(markdown, "Table 7b.")[0][1]
+    out = r.proc.stdout
+    assert "kryflex: reduced 'galileo': %s model, " % method in out
+    assert "%s reduced dofs per body" % " + ".join(str(v) for v in chosen["dofs_per_body"].values()) in out
+    m = re.search(r"relative H-inf per input/output pair, %s model, (measured against the full order|estimated[^)]*)"
+                  r"\): (\S+) at (\S+) deg" % method, out)
+    assert m, out
+    assert ("estimated" in m.group(1)) is s["error_estimated"]
+    assert float(m.group(2)) == pytest.approx(s["error_max"], rel=1e-2) and m.group(3) == chosen["worst_where"]
+
+
 def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
     """At alpha_G the single-angle model matches all c moments exactly: in double precision, to the ~1e-9 that
     moments of a model with lambda_max / lambda_1 ~ 1e8 carry (README, numerics)."""

@@ -17,7 +17,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "pointwise_definition": str (the pointwise error with a floor: information, never the verdict),
  "chosen_method": "single-angle" | "multi-angle"   (C chosen_method),
  "target_met": bool | None   (C target_met: error <= accuracy at every angle of interest AND every midpoint;
-                              None when no error was measured or estimated),
+                              None when no error was measured or estimated; a reducer that records no
+                              verdict gets the same rule applied to the errors it recorded),
  "error_max": float | None   (C error_max: the chosen model's worst error over angles and midpoints),
  "error_estimated": bool     (C error_estimated: true when the reference was the a-posteriori estimator),
  "moments_matched": c | None, "multi_moments_matched": c | None   (moments of each family's model),

@@ -154,6 +154,10 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
             midpoints.append({"angles_deg": degrees, "label": scene.label(degrees),
                               "frf_error": _none(mid_errors[k]) if k < mid_errors.size else None})
     worst, where, kind = _worst(errors, midpoints)
+    if out["target_met"] is None and worst is not None:
+        # a reducer that records no verdict (a type without the search): the same rule on the errors it measured
+        out["error_max"] = worst if out["error_max"] is None else out["error_max"]
+        out["target_met"] = bool(out["error_max"] <= float(chosen.settings.get("accuracy", reducer.scene.accuracy)))
     sizes = list(chosen.sizes)
     system_dofs = {lab: _optional_scalar(reducer, c, prefix + "reduced_dofs", has[c], int)
                    for c, lab in enumerate(labels)}

@@ -75,8 +75,8 @@ def _section_accuracy(c):
     lines += [f"Error measure (the verdict): the {s.get('error_definition') or ERROR_TEXT}. "
               + ("It is **estimated** by the a-posteriori estimator (the full-order verification was off: "
                  "`verify.full_order: false`), not measured." if estimated else
-                 "It is **measured** against the full-order model at every angle of interest and at every midpoint "
-                 "between consecutive ones."), ""]
+                 "It is **measured** against the full-order model at every angle of interest"
+                 + (" and at every midpoint between consecutive ones." if s.get("midpoints") else ".")), ""]
     measure = "relative H∞ error" + (" (estimated)" if estimated else "")
     rows, judged, passed = [], 0, 0
     for label in c.labels:

@@ -67,6 +67,11 @@ def _chosen_sentence(c):
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."
 
 
+def _row_name(c, label):
+    """The angle, marked α_G only when the chosen model is the single-angle one (α_G is its expansion angle)."""
+    return c.short_angle(label) if c.model_name.startswith("single") else c.angle(label)[4:]
+
+
 def _section_accuracy(c):
     s = c.s
     accuracy = s.get("accuracy")
@@ -84,8 +89,7 @@ def _section_accuracy(c):
         verdict = _verdict(err, accuracy)
         judged += verdict != DASH
         passed += verdict == "PASS"
-        name = c.short_angle(label) if c.model_name.startswith("single") else c.angle(label)[4:]
-        rows.append([name, "angle of interest", _fmt_error(err),
+        rows.append([_row_name(c, label), "angle of interest", _fmt_error(err),
                      _fmt_error(accuracy), verdict])
     for m in s.get("midpoints") or []:
         verdict = _verdict(m.get("frf_error"), accuracy)
@@ -111,7 +115,7 @@ def _section_accuracy(c):
                  "`kryflex reduce` exits with code 6.") if met is not None else "no verdict."
         lines += [text]
     lines += [""]
-    info_rows = [[c.short_angle(l), _fmt_error(c.chosen_error(l, "frf_pointwise_error"))] for l in c.labels]
+    info_rows = [[_row_name(c, l), _fmt_error(c.chosen_error(l, "frf_pointwise_error"))] for l in c.labels]
     if any(r[1] != DASH for r in info_rows):
         lines += [f"Table 7b. Pointwise error with a floor of the {c.model_name} ({INFO_TEXT}): per pair "
                   "max_w |T_full − T_red| / max(|T_full(w)|, floor · max_w |T_full|), floor "
@@ -167,29 +171,28 @@ def _section_choice(c):
         lines += ["The search was off (`reduction.search: false`): the paper's fixed recipe (fixed moments, "
                   "keep threshold, α_G rule).", ""]
     if hankel:
-        rows, notes = [], []
+        rows = []
         for label in c.labels:
             h = hankel.get(label)
             if not h:
                 continue
-            hsv = [v for v in (h.get("singular_values") or []) if v is not None]
             order = h.get("order")
             flex = _flexible_dofs(c, label)
-            states = None if flex is None else 2 * flex
-            bound = None
-            if states is not None and hsv and hsv[0] > 0:
-                bound = hsv[states] / hsv[0] if states < len(hsv) else 0.0
-            rows.append([c.short_angle(label), fmt_general(flex), fmt_general(states), _fmt_error(bound),
-                         fmt_general(order), DASH if order is None else str((order + 1) // 2),
-                         DASH if order is None or not flex else f"{flex / max((order + 1) // 2, 1):.2g}×"])
-        caption = ("Table 9. How close to the limit: Hankel singular values σ of the full model's flexible part "
-                   "(two first-order states (q, q̇) per mode). No model of k states can have an H∞ error below "
-                   "σ_(k+1); the column σ_(k+1)/σ₁ gives that lower bound at the chosen size, relative to σ₁. The "
-                   "Hankel order r is the reducer's count of the fewest states that can meet the target")
-        caption += f" {accuracy:g}." if accuracy is not None else "."
-        lines += [caption, ""]
-        lines += [table(["configuration", "chosen: flexible system dofs", "states k = 2 × dofs",
-                         "no model of k states can do better than σ_(k+1)/σ₁", "Hankel order r for the target",
+            needed = None if order is None else (order + 1) // 2
+            states = h.get("chosen_states", None if flex is None else 2 * flex)
+            rows.append([c.short_angle(label), fmt_general(flex), fmt_general(states),
+                         _fmt_error(h.get("bound_at_chosen")), fmt_general(order), fmt_general(needed),
+                         DASH if not needed or flex is None else f"{flex / needed:.2g}×"])
+        caption = ("Table 9. How close to the limit: the Hankel singular values σ of the full model's flexible part "
+                   "(two first-order states (q, q̇) per mode). No model of k states has an H∞ error below σ_(k+1); a "
+                   "model whose every pair is within e of its peak has one below √(t·a) · e · max|T_full|. So no "
+                   "model of the chosen size k can have a relative error per pair below "
+                   "σ_(k+1) / (√(t·a) · max|T_full|) (column 4), and the target")
+        caption += f" {accuracy:g}" if accuracy is not None else ""
+        caption += " needs at least r states (the Hankel order, column 5), about r/2 flexible dofs."
+        lines += [caption, "",
+                  table(["configuration", "chosen: flexible system dofs", "states k = 2 × dofs",
+                         "no model of k states can do better than", "Hankel order r for the target",
                          "≈ flexible dofs r/2", "chosen / needed"], rows), ""]
     return lines
 

@@ -81,8 +81,10 @@ def _degrees(angles_rad):
 def _search_rows(table):
     """The rows of the search_table result (ncand x 7) as dicts named by SEARCH_COLUMNS."""
     table = np.asarray(table, dtype=float)
-    if table.ndim != 2 or table.shape[1] != len(SEARCH_COLUMNS):
+    if table.ndim != 2 or len(SEARCH_COLUMNS) not in table.shape:
         return []
+    if table.shape[0] == len(SEARCH_COLUMNS):          # C records it 7 x ncand: one column per candidate
+        table = table.T
     rows = []
     for values in table:
         row = {}
@@ -180,11 +182,27 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     out["search"] = rows
     out["search_chosen"] = row
     hankel = {}
+    nrigid = _optional_scalar(reducer, -1, "rigid_modes", whole, int) or 0
     for c, lab in enumerate(labels):
         order = _optional_scalar(reducer, c, "hankel_order", has[c], int)
         hsv = _optional(reducer, c, "hankel_singular_values", has[c])
-        if order is not None or hsv is not None:
-            hankel[lab] = {"order": order, "singular_values": [] if hsv is None else _list(np.ravel(hsv))}
+        if order is None and hsv is None:
+            continue
+        hsv = np.array([]) if hsv is None else np.ravel(hsv)
+        entry = {"order": order, "singular_values": _list(hsv)}
+        # the scale of C's hankel_order: a model whose every pair is within e x its peak has a 2-norm error below
+        # sqrt(t a) e max|T_full|, and no model of k first-order states has one below sigma_(k+1); so at the chosen
+        # size e >= sigma_(k+1) / (sqrt(t a) max|T_full|)
+        if single_frf.get(lab) and hsv.size:
+            full = (np.asarray(single_frf[lab]["full_re"], dtype=float)
+                    + 1j * np.asarray(single_frf[lab]["full_im"], dtype=float))
+            scale = float(np.sqrt(full[0].size) * np.max(np.abs(full))) if full.size else 0.0
+            dofs = system_dofs.get(lab)
+            if scale > 0 and dofs is not None:
+                states = 2 * max(dofs - nrigid, 0)
+                entry.update(scale=scale, chosen_states=states,
+                             bound_at_chosen=float(hsv[states] / scale) if states < hsv.size else 0.0)
+        hankel[lab] = entry
     out["hankel"] = hankel
     if is_multi and single_frf:
         # the Bode plots and the plotted error show the chosen model: the multi-angle model's responses on the

@@ -73,9 +73,9 @@ def write_unverified(summary, out_dir):
     _check_json_types(summary, ())
     lines = [f"# kryflex reduction: {summary.get('scene', '?')}", "",
              "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
-             "frequency comparison against the full order; errors below are estimated. Reduced body sizes: " + ", ".join(
-                 f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ".",
-             f"Reduction angle α_G: {summary.get('reduction_label')} deg; kept Krylov modes: {summary.get('kept_modes')}.", ""]
+             "frequency comparison against the full order; errors below are estimated. Single-angle model: body sizes "
+             + ", ".join(f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ",",
+             f"reduction angle α_G {summary.get('reduction_label')} deg, kept Krylov modes {summary.get('kept_modes')}.", ""]
     try:
         c = _Context(summary)
     except (KeyError, TypeError, ValueError, IndexError):      # a summary too sparse for the sections below

@@ -95,11 +95,12 @@ def two_ranks(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def overridden(tmp_path_factory):
-    """PETSc option overrides reach every rank; -quiet silences the progress lines. 6 moments are too few for the
-    single-angle model at 30 deg: the target is missed (exit 6), the results are written all the same."""
+    """PETSc option overrides reach every rank; -quiet silences the progress lines. With 6 moments no model the search
+    tries reaches 1e-9 (the search meets 0.05 with them since issue 11): the target is missed (exit 6), the best model
+    is written all the same."""
     out = tmp_path_factory.mktemp("cli") / "galileo_overridden"
     return Run(out, cli("reduce", GALILEO, "-o", out, "-quiet", "-scene.reduction.moments", 6,
-                            "-scene.angles", "0,30", ranks=2), EXIT_TARGET)
+                            "-scene.angles", "0,30", "-scene.accuracy", "1e-9", ranks=2), EXIT_TARGET)
 
 
 @pytest.fixture(scope="module")
@@ -135,15 +136,77 @@ def test_reduce_writes_model_report_summary_and_plots(serial):
     assert "kryflex: results in %s" % out in serial.proc.stdout
 
 
+def report_table(markdown, caption_start):
+    """Rows (header first, cells stripped) of the Markdown table after the line starting with caption_start."""
+    lines = markdown.splitlines()
+    n = next(k for k, line in enumerate(lines) if line.startswith(caption_start)) + 1
+    while not lines[n].startswith("|"):
+        n += 1
+    rows = []
+    while n < len(lines) and lines[n].startswith("|"):
+        rows.append([cell.strip() for cell in lines[n].strip("|").split("|")])
+        n += 1
+    return [rows[0]] + rows[2:]
+
+
+@pytest.mark.parametrize("run", ["serial", "overridden"])
+def test_one_verdict_in_the_command_summary_and_report(run, request):
+    """The chosen model's relative H-inf error per pair decides everywhere: the command's last lines, summary.json
+    (target_met, error_max from C) and the report's Table 7 (angles of interest and midpoints; the pointwise error
+    only in the information table 7b)."""
+    r = request.getfixturevalue(run)
+    s = r.summary
+    chosen = s["chosen"]
+    method = s["chosen_method"]
+    prefix = "multi_angle" if method == "multi-angle" else None
+    for label in s["angle_labels"]:
+        own = (s["multi_angle"]["frf_error"] if prefix else {l: v["frf_error"] for l, v in s["frf"].items()})[label]
+        assert chosen["frf_error"][label] == own
+    errors = list(chosen["frf_error"].values()) + [m["frf_error"] for m in s["midpoints"]]
+    assert s["error_max"] >= max(errors) * (1 - 1e-12) and s["target_met"] is (s["error_max"] <= s["accuracy"])
+    assert s["target_met"] is (r.proc.returncode == EXIT_OK)
+    with open(os.path.join(r.out, "report.md")) as f:
+        markdown = f.read()
+    rows = report_table(markdown, "Table 7.")
+    assert "pointwise" not in " ".join(rows[0])
+    assert len(rows) - 1 == len(s["angle_labels"]) + len(s["midpoints"])
+    for row, err in zip(rows[1:], errors):
+        assert float(row[2]) == pytest.approx(err, rel=5e-3)
+        assert row[4] == ("PASS" if err <= s["accuracy"] else "MISS")
+    if s["search"]:
+        rows = report_table(markdown, "Table 8.")
+        assert len(rows) - 1 == len(s["search"])
+        k = s["search_chosen"]
+        assert k is not None and rows[1 + k][-1] == "◀ chosen"
+        assert s["search"][k]["family"] == method and s["search"][k]["reduced_dofs"] == chosen["dofs"]
+    if any(v is not None for v in chosen["frf_pointwise_error"].values()):
+        assert "information only, not the verdict" in report_table(markdown, "Table 7b.")[0][1]
+    out = r.proc.stdout
+    assert "kryflex: reduced 'galileo': %s model, " % method in out
+    assert "%s reduced dofs per body" % " + ".join(str(v) for v in chosen["dofs_per_body"].values()) in out
+    m = re.search(r"relative H-inf per input/output pair, %s model, (measured against the full order|estimated[^)]*)"
+                  r"\): (\S+) at (\S+) deg" % method, out)
+    assert m, out
+    assert ("estimated" in m.group(1)) is s["error_estimated"]
+    assert float(m.group(2)) == pytest.approx(s["error_max"], rel=1e-2) and m.group(3) == chosen["worst_where"]
+
+
 def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
-    """At alpha_G the single-angle model matches all c moments exactly: in double precision, to the ~1e-9 that
-    moments of a model with lambda_max / lambda_1 ~ 1e8 carry (README, numerics)."""
+    """At alpha_G the single-angle model matches the static moment exactly, and all c moments when the search kept
+    every mode (issue 11: after truncation with static correction only L^0 stays exact; README "Accuracy"): in
+    double precision, to the ~1e-9 that moments of a model with lambda_max / lambda_1 ~ 1e8 carry."""
     import kryflex
     s = serial.summary
     g = s["reduction_label"]
     nmom = s["settings"]["moments"]
+    assert s["chosen_method"] == "single-angle"
     assert s["reduced"]["static_gain_error"][g] < 1e-9
-    assert moment_errors(s, g).max() < 1e-8
+    errors = moment_errors(s, g)
+    assert errors[0] < 1e-8
+    if all(s["krylov"][g]["kept"]):
+        assert errors.max() < 1e-8
+    else:
+        assert errors.max() > 1e-8            # truncated: the higher moments are not exact, and are not claimed
     # independently: dense reference with exact rigid modes, against the model file and the full-order moments
     model = kryflex.ReducedModel.load(os.path.join(serial.out, "reduced.h5"))
     for label, config in zip(s["angle_labels"], s["angles_deg"]):
@@ -151,7 +214,8 @@ def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
         assert nrigid == 7
         assert normwise_errors(L_ref, np.array(s["full"]["moments"][label])).max() < 1e-8, label
         if label == g:
-            assert normwise_errors(L_ref, model.at(config).moments(nmom)).max() < 1e-8
+            mine = normwise_errors(L_ref, model.at(config).moments(nmom))
+            assert mine[0] < 1e-8 and (mine.max() < 1e-8 or not all(s["krylov"][g]["kept"]))
 
 
 def test_reduced_frequencies_are_close_to_full_order(serial, galileo_ref):
@@ -161,9 +225,12 @@ def test_reduced_frequencies_are_close_to_full_order(serial, galileo_ref):
         red = np.array(s["reduced"]["frequencies_hz"][label])
         dominant = s["dominant_modes"][label]
         assert dominant, label
-        # the dominant modes are reproduced closely at every angle of interest (not only at alpha_G)
-        for i in dominant:
-            assert np.min(np.abs(red - full[i])) / full[i] < 1e-6, (label, i)
+        # the summary's frequency error of each dominant mode is the distance to the nearest reduced frequency
+        # (issue 11: the model is the smallest meeting the FRF target, not one reproducing every dominant mode)
+        for i, err in zip(dominant, s["dominant_freq_error"][label]):
+            assert err == pytest.approx(np.min(np.abs(red - full[i])) / full[i], rel=1e-9, abs=1e-15), (label, i)
+        # the lowest flexible mode, the one every candidate keeps, is reproduced closely at every angle of interest
+        assert np.min(np.abs(red - full[0])) / full[0] < 1e-6, label
         # the full-order frequencies are right: dense eigensolve of reference.py's assembly
         Ms, Ks = ref.assemble(galileo_ref, config)[:2]
         lam = ref.eigenvalues(Ms, Ks)
@@ -190,7 +257,7 @@ def test_progress_lines_once_per_run(serial, two_ranks):
     for run in (serial, two_ranks):
         out = run.proc.stdout
         assert out.count("] configuration 0 deg") == 1
-        assert len(re.findall(r"^\[kryflex +[0-9.]+ s\] alpha_G = ", out, re.M)) == 1
+        assert len(re.findall(r"^\[kryflex +[0-9.]+ s\] searching the smallest model ", out, re.M)) == 1
         assert out.count("kryflex: results in") == 1
 
 
@@ -353,7 +420,7 @@ def test_converted_bodies_reduce_like_the_originals(converted_galileo, serial, o
     # reduced with the settings of the `overridden` run of the original files: the same reduction
     out = tmp_path / "out"
     s = Run(out, cli("reduce", scene, "-o", out, "-quiet", "-scene.reduction.moments", 6,
-                     "-scene.angles", "0,30"), EXIT_TARGET).summary
+                     "-scene.angles", "0,30", "-scene.accuracy", "1e-9"), EXIT_TARGET).summary
     ref_summary = overridden.summary
     assert s["angle_labels"] == ref_summary["angle_labels"] and s["kept_modes"] == ref_summary["kept_modes"]
     for label in ref_summary["angle_labels"]:
@@ -444,12 +511,13 @@ def test_convert_nastran_punch_into_a_scene(tmp_path):
     full = np.array(s["full"]["frequencies_hz"][label])
     lam = sl.eigh(K, M, eigvals_only=True)
     np.testing.assert_allclose(full, (np.sqrt(lam[6:]) / (2 * np.pi))[:len(full)], rtol=1e-9)
-    # the static gain is kept exactly (static correction, eq. 15-17), the dominant modes closely
+    # the static gain is kept exactly (static correction, eq. 15-17); the model meets the FRF target (issue 11: the
+    # smallest such model, which need not reproduce the dominant modes to 1e-6: here one flexible mode, 1 % off)
     assert s["reduced"]["static_gain_error"][label] < 1e-10
+    assert s["target_met"] is True and s["error_max"] <= s["accuracy"]
     red = np.array(s["reduced"]["frequencies_hz"][label])
-    assert s["dominant_modes"][label]
-    for i in s["dominant_modes"][label]:
-        assert np.min(np.abs(red - full[i])) / full[i] < 1e-6, i
+    for i, err in zip(s["dominant_modes"][label], s["dominant_freq_error"][label]):
+        assert err == pytest.approx(np.min(np.abs(red - full[i])) / full[i], rel=1e-9), i
 
 
 def test_convert_bad_input_names_it_and_writes_nothing(tmp_path):

@@ -43,9 +43,17 @@ def describe(scene, residual):
     say("  inputs: %s" % ", ".join(scene.input_names))
     say("  outputs: %s" % ", ".join(scene.output_names))
     say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
-    say("  band %g-%g Hz, damping %g, accuracy target %g, %d moments"
-         % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, int(scene.reduction["moments"])))
-    c = len(scene.input_names) * (int(scene.reduction["moments"]) - int(scene.reduction["output_blocks"])) + \
+    moments = scene.reduction["moments"]
+    if moments in (None, "auto"):
+        # the search tries up to moments_max: the memory estimate is for the largest basis it may build
+        most = int(scene.reduction.get("moments_max", 24))
+        moments_text = "moments auto (the search tries up to %d)" % most
+    else:
+        most = int(moments)
+        moments_text = "%d moments" % most
+    say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error per input/output pair), %s"
+         % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, moments_text))
+    c = len(scene.input_names) * (most - int(scene.reduction["output_blocks"])) + \
         len(scene.output_names) * int(scene.reduction["output_blocks"])
     e = info["system_dofs"]
     base = 12 * 2 * nnz + 8 * e * (c + nr) * 3

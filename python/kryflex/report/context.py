@@ -16,6 +16,19 @@ class _Context:
         self.entries = [(o, i) for o in range(len(self.outputs)) for i in range(len(self.inputs))]
         self.dominant_entry = self._dominant_entry()
         self.shown_entries = self.entries if len(self.entries) <= MAX_MOMENT_ENTRIES_SHOWN else [self.dominant_entry]
+        self.model_name = (summary.get("chosen_method") or _get(summary, ("settings", "method"))
+                           or "single-angle") + " model"
+        self.chosen = summary.get("chosen") or {}
+
+    def chosen_error(self, label, name="frf_error"):
+        """The chosen model's error at an angle of interest: name "frf_error" (relative H-inf per pair, the verdict's
+        measure) or "frf_pointwise_error" (information). Summaries without a "chosen" block (written before issue
+        11) give the single-angle model's per-angle value, the only one they hold."""
+        per = self.chosen.get(name)
+        if per is not None:
+            return per.get(label)
+        frf = (self.s.get("frf") or {}).get(label) or {}
+        return frf.get(name, frf.get("max_rel_error") if name == "frf_error" else None)
 
     def _dominant_entry(self):
         """The (output, input) entry with the largest static gain |L^0| summed over configurations."""

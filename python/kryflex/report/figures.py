@@ -33,13 +33,14 @@ def _render_plots(summary, plot_names):
     for label in c.labels:
         freq, full, red = arrays[label]
         for (o, i) in c.entries:
-            title = f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}"
+            title = (f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}, "
+                     f"{c.model_name}")
             yield plot_names["bode"][(label, (o, i))], plots.figure_png_bytes(
                 plots.bode_figure(freq, full[:, o, i], red[:, o, i], title))
     o, i = c.dominant_entry
     panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
     yield "bode_overview.png", plots.figure_png_bytes(
-        plots.bode_overview_figure(panels, f"{summary['scene']}: full vs reduced, {c.entry_name((o, i))}"))
+        plots.bode_overview_figure(panels, f"{summary['scene']}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
     for label in c.labels:
         kr = summary["krylov"][label]
         title = f"Krylov mode importance, {c.angle(label)}{' (α_G)' if label == c.label_g else ''}"
@@ -50,5 +51,7 @@ def _render_plots(summary, plot_names):
     multi = (summary.get("multi_angle") or {}).get("moment_ratios") or {}
     series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
     yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
-    curves = [(c.short_angle(l), arrays[l][0], plots.frf_relative_error(arrays[l][1], arrays[l][2])) for l in c.labels]
-    yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(curves, summary.get("accuracy")))
+    curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2]))
+              for l in c.labels]
+    yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
+        curves, summary.get("accuracy"), f"Relative frequency-response error of the chosen model ({c.model_name})"))

@@ -8,9 +8,33 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "inputs": [names], "outputs": [names], "joints": [revolute joint names] (opt),
  "angles_deg": [[a1, a2, ..] per configuration, one entry per revolute joint] (opt),
  "angle_labels": ["0", "15", ...]  (file names and table headers; e.g. "0_30" for several joints),
- "band_hz": [f0, f1] (opt), "damping": z (opt), "accuracy": target (opt),
- "settings": {"moments": c, "output_blocks", "importance", "keep_threshold", "deflation_tol",
-              "reduction_angles_deg": [[..]], "method": "single-angle" | "multi-angle"} (opt, any keys shown),
+ "band_hz": [f0, f1] (opt), "damping": z (opt), "accuracy": target (opt), "frf_floor_db": dB (opt),
+ "settings": {"moments": c, "moments_max", "output_blocks", "importance", "keep_threshold", "cluster_rtol",
+              "search", "deflation_tol", "reduction_angles_deg": [[..]], "method"} (opt, any keys shown),
+
+ -- the verdict, always on the model the reducer chose (issue 11; all (opt) for summaries written before it) --
+ "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band),
+ "pointwise_definition": str (the pointwise error with a floor: information, never the verdict),
+ "chosen_method": "single-angle" | "multi-angle"   (C chosen_method),
+ "target_met": bool | None   (C target_met: error <= accuracy at every angle of interest AND every midpoint;
+                              None when no error was measured or estimated; a reducer that records no
+                              verdict gets the same rule applied to the errors it recorded),
+ "error_max": float | None   (C error_max: the chosen model's worst error over angles and midpoints),
+ "error_estimated": bool     (C error_estimated: true when the reference was the a-posteriori estimator),
+ "moments_matched": c | None, "multi_moments_matched": c | None   (moments of each family's model),
+ "chosen": {"method", "moments": c, "dofs_per_body": {body: v}, "dofs": sum of v, "system_dofs": {<label>: h},
+            "expansion_angles_deg": [[..]], "kept_modes": [1-based Krylov modes] | None (multi-angle),
+            "kept_clusters": int | None (None: every cluster, or not known),
+            "frf_error": {<label>: e}  (THE measure, the chosen model's C frf_error / multi_frf_error),
+            "frf_pointwise_error": {<label>: e | None}  (information),
+            "worst_error": e, "worst_where": <label> or a midpoint's label, "worst_kind": "angle" | "midpoint"},
+ "midpoints": [{"angles_deg": [..], "label": "7.5", "frf_error": e | None (the chosen model's)}],
+ "search": [{"family": "single-angle" | "multi-angle", "moments": c, "kept_clusters": int | None (all),
+             "expansion_angles": n, "reduced_dofs": n (sum over bodies), "max_system_dofs": n, "error": e}]
+           (C search_table, one row per candidate evaluated), "search_chosen": row index of the chosen model | None,
+ "hankel": {<label>: {"order": r (C hankel_order: first-order states the target needs),
+                      "singular_values": [descending] (C hankel_singular_values)}},
+ -- the paper's study --
  "full": {"dofs_per_body": {body: n} (opt), "system_dofs": e (opt), "rigid_modes": r (opt),
           "body_frequencies_hz": {body: [..]} (opt; free-free component frequencies, lowest few),
           "frequencies_hz": {<label>: [lowest flexible system frequencies]},
@@ -26,12 +50,16 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
              "moment_ratios": {<label>: [t x a per k]}  (full/reduced; None where the full moment is negligible),
              "static_gain_error": {<label>: float} (opt), "reassembly_rank": {<label>: int} (opt),
              "reassembly_sigma_ratio": {<label>: float} (opt), "reassembly_seconds": float (opt)},
- "frf": {<label>: {"freq_hz": [nf], "full_re": [nf][t][a], "full_im", "reduced_re", "reduced_im",
-                   "max_rel_error": float}},
+ "frf": {<label>: {"freq_hz": [nf], "full_re": [nf][t][a], "full_im", "reduced_re", "reduced_im" (the
+                   single-angle model), "chosen_re", "chosen_im" (opt: the multi-angle model's, when it was chosen;
+                   the plots draw the chosen model), "frf_error": float (single-angle model, relative H-inf),
+                   "frf_pointwise_error": float | None (single-angle model, information),
+                   "max_rel_error": float (= frf_error, the name scripts before issue 11 read)}},
  "dominant_modes": {<label>: [0-based indices into full["frequencies_hz"][<label>]]} (opt),
  "dominant_freq_error": {<label>: [relative error of the matched reduced frequency, same order]} (opt),
  "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},
-                 "frf_max_rel_error": {<label>: float}} (opt, every part optional),
+                 "frf_error": {<label>: float}, "frf_pointwise_error": {<label>: float},
+                 "frf_max_rel_error": {<label>: float} (= frf_error)} (opt, every part optional),
  "timings_s": {stage: seconds} (opt), "notes": [str] (opt)
 }
 
@@ -102,6 +130,41 @@ def _check_matrix(value, rows, cols, path, allow_none=False):
         raise ReportError(f"{_key_text(path)} contains None; only moment ratios may be undefined")
 
 
+def _validate_accuracy(summary, labels, t, a):
+    """The verdict keys (all optional): types the report relies on."""
+    for key in ("target_met", "error_estimated"):
+        if summary.get(key) is not None and not isinstance(summary[key], bool):
+            raise ReportError(f"summary[{key!r}] must be true, false or null, got {summary[key]!r}")
+    if summary.get("chosen_method") not in (None, "single-angle", "multi-angle"):
+        raise ReportError(f"summary['chosen_method'] = {summary['chosen_method']!r}: "
+                          "'single-angle' or 'multi-angle' expected")
+    chosen = summary.get("chosen") or {}
+    for name in ("frf_error", "frf_pointwise_error"):
+        unknown = set(chosen.get(name) or {}) - set(labels)
+        if unknown:
+            raise ReportError(f"summary['chosen'][{name!r}] has labels {sorted(unknown)} not in angle_labels")
+    for k, m in enumerate(summary.get("midpoints") or []):
+        if not isinstance(m, dict) or not isinstance(m.get("label"), str) or "frf_error" not in m:
+            raise ReportError(f"summary['midpoints'][{k}] must be a dict with 'label' (str) and 'frf_error'")
+    rows = summary.get("search") or []
+    for k, row in enumerate(rows):
+        if not isinstance(row, dict) or "family" not in row or "error" not in row:
+            raise ReportError(f"summary['search'][{k}] must be a dict with at least 'family' and 'error'")
+    index = summary.get("search_chosen")
+    if index is not None and not (isinstance(index, int) and 0 <= index < len(rows)):
+        raise ReportError(f"summary['search_chosen'] = {index!r} is not a row of summary['search']")
+    for label in labels:
+        frf = summary["frf"][label]
+        if ("chosen_re" in frf) != ("chosen_im" in frf):
+            raise ReportError(f"summary['frf'][{label!r}] needs both chosen_re and chosen_im, or neither")
+        if "chosen_re" in frf:
+            for name in ("chosen_re", "chosen_im"):
+                shape = np.shape(np.asarray(frf[name], dtype=float))
+                if shape != (len(frf["freq_hz"]), t, a):
+                    raise ReportError(f"{_key_text(('frf', label, name))} has shape {shape}, expected "
+                                      f"(len(freq_hz), outputs, inputs) = {(len(frf['freq_hz']), t, a)}")
+
+
 def validate_summary(summary):
     """Raise ReportError naming the first problem; return nothing if the summary can be reported."""
     if not isinstance(summary, dict):
@@ -149,6 +212,7 @@ def validate_summary(summary):
             if shape != (nf, t, a):
                 raise ReportError(f"{_key_text(('frf', label, name))} has shape {shape}, expected "
                                   f"(len(freq_hz), outputs, inputs) = {(nf, t, a)}")
+    _validate_accuracy(summary, labels, t, a)
     for label, indices in (summary.get("dominant_modes") or {}).items():
         n_full = len(_get(summary, ("full", "frequencies_hz", label)) or [])
         bad = [i for i in indices if not isinstance(i, int) or not 0 <= i < n_full]

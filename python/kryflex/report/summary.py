@@ -3,6 +3,12 @@
 Every number is one the C reducer recorded (KFReducerGetResult); this module only names, labels and shapes them
 for JSON: arrays become nested lists, NaN ("negligible" or "not available") becomes None, moments and responses are
 laid out (k or frequency, outputs, inputs) as the report reads them.
+
+The one error measure (issue 11, src/measure/frf_error.c) is ERROR_DEFINITION: the summary's verdict (target_met,
+error_max) and every per-angle "frf_error" are of it; "frf_pointwise_error" is the notch-aware pointwise measure,
+information only. The verdict and the chosen-model blocks are always those of the model the reducer chose
+(chosen_method), never the single-angle model's when the multi-angle one was chosen. Results a reducer did not
+record (an older C library, the eigen basis, verification off) are left out or None, never invented.
 """
 import numpy as np
 
@@ -11,6 +17,15 @@ import numpy as np
 TIMINGS = [("time_assembly", "assembly"), ("time_factorization", "factorization"), ("time_basis", None),
            ("time_modes", "krylov modes"), ("time_moments", "moments"), ("time_projection", "projection"),
            ("time_verification", "verification eigensolve")]
+
+ERROR_DEFINITION = ("relative H-infinity error per input/output pair: max over pairs (i, j) of "
+                    "max_w |Tf_ij(w) - Tr_ij(w)| / max_w |Tf_ij(w)| over the band (a pair whose peak is below 1e-6 of "
+                    "the largest pair's peak is measured against 1e-6 x that peak)")
+POINTWISE_DEFINITION = ("pointwise error with a floor (information, not the verdict): max over pairs of "
+                        "max_w |Tf_ij(w) - Tr_ij(w)| / max(|Tf_ij(w)|, 10^(floor_db/20) max_w |Tf_ij|)")
+METHODS = {0: "single-angle", 1: "multi-angle"}
+SEARCH_COLUMNS = ("family", "moments", "kept_clusters", "expansion_angles", "reduced_dofs", "max_system_dofs",
+                  "error")
 
 
 def _none(x):
@@ -49,6 +64,164 @@ def _max_ratio_deviation(ratios):
     return _max_defined(abs(x - 1) for k in ratios for row in k for x in row if x is not None)
 
 
+def _optional(reducer, config, name, has):
+    """The result as C recorded it, or None when this reducer did not record it."""
+    return reducer.result(config, name) if name in has else None
+
+
+def _optional_scalar(reducer, config, name, has, kind=float):
+    return _scalar(reducer, config, name, kind) if name in has else None
+
+
+def _degrees(angles_rad):
+    """Degrees with the 12 digits a user gives (30, not 29.999999999999996)."""
+    return [float("%.12g" % d) for d in np.degrees(np.asarray(angles_rad, dtype=float))]
+
+
+def _search_rows(table):
+    """The rows of the search_table result (ncand x 7) as dicts named by SEARCH_COLUMNS."""
+    table = np.asarray(table, dtype=float)
+    if table.ndim != 2 or len(SEARCH_COLUMNS) not in table.shape:
+        return []
+    if table.shape[0] == len(SEARCH_COLUMNS):          # C records it 7 x ncand: one column per candidate
+        table = table.T
+    rows = []
+    for values in table:
+        row = {}
+        for name, v in zip(SEARCH_COLUMNS, values):
+            if name == "family":
+                row[name] = METHODS.get(int(v), str(int(v)))
+            elif name == "error":
+                row[name] = _none(v)
+            elif name == "kept_clusters":
+                row[name] = None if np.isnan(v) or v < 0 else int(v)     # None: every cluster kept
+            else:
+                row[name] = None if np.isnan(v) else int(v)
+        rows.append(row)
+    return rows
+
+
+def _chosen_row(rows, method, moments, dofs):
+    """Index of the search row of the chosen model (its family, moments and reduced dofs; the smallest error among
+    equal ones), or None when no row matches (the search was off, or an older C library)."""
+    matches = [k for k, row in enumerate(rows) if row["family"] == method and row["reduced_dofs"] == dofs
+               and (moments is None or row["moments"] == moments)]
+    if not matches:
+        return None
+    return min(matches, key=lambda k: float("inf") if rows[k]["error"] is None else rows[k]["error"])
+
+
+def _worst(per_angle, midpoints):
+    """(value, where, kind) of the largest defined error over the angles of interest ({label: e}) and the midpoints
+    ([{"label", "frf_error"}]); kind "angle" or "midpoint"; (None, None, None) when none is defined."""
+    places = [(e, label, "angle") for label, e in per_angle.items() if e is not None]
+    places += [(m["frf_error"], m["label"], "midpoint") for m in midpoints if m["frf_error"] is not None]
+    if not places:
+        return None, None, None
+    return max(places, key=lambda p: p[0])
+
+
+def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
+    """The accuracy part of the summary: the verdict of the chosen model (target_met, error_max, where, measured or
+    estimated), its errors at the angles of interest and at the midpoints, the search table and the Hankel bound."""
+    method_code = _optional_scalar(reducer, -1, "chosen_method", whole, int)
+    method = METHODS.get(method_code) if method_code is not None else chosen.settings.get("method", "single-angle")
+    is_multi = method == "multi-angle" and multi is not None
+    prefix = "multi_" if is_multi else ""
+    out = {"error_definition": ERROR_DEFINITION, "pointwise_definition": POINTWISE_DEFINITION,
+           "chosen_method": method}
+    met = _optional_scalar(reducer, -1, "target_met", whole)
+    out["target_met"] = None if met is None else bool(met)
+    out["error_max"] = _optional_scalar(reducer, -1, "error_max", whole)
+    estimated = _optional_scalar(reducer, -1, "error_estimated", whole)
+    out["error_estimated"] = bool(estimated) if estimated is not None else False
+    out["moments_matched"] = _optional_scalar(reducer, -1, "moments_matched", whole, int)
+    out["multi_moments_matched"] = _optional_scalar(reducer, -1, "multi_moments_matched", whole, int)
+
+    # the chosen model's errors at the angles of interest: THE measure, and the pointwise one for information
+    errors, pointwise = {}, {}
+    for c, lab in enumerate(labels):
+        errors[lab] = _optional_scalar(reducer, c, prefix + "frf_error", has[c])
+        pointwise[lab] = _optional_scalar(reducer, c, prefix + "frf_pointwise_error", has[c])
+    midpoints = []
+    mid_angles = _optional(reducer, -1, "midpoint_angles", whole)
+    mid_errors = _optional(reducer, -1, "midpoint_frf_error", whole)
+    if mid_angles is not None and mid_angles.size:
+        mid_angles = np.asarray(mid_angles, dtype=float)
+        if mid_angles.ndim < 2:                       # one revolute joint recorded as a vector
+            mid_angles = mid_angles.reshape(1, -1)
+        mid_errors = np.full(mid_angles.shape[1], np.nan) if mid_errors is None else np.ravel(mid_errors)
+        for k in range(mid_angles.shape[1]):
+            degrees = _degrees(mid_angles[:, k])
+            midpoints.append({"angles_deg": degrees, "label": scene.label(degrees),
+                              "frf_error": _none(mid_errors[k]) if k < mid_errors.size else None})
+    worst, where, kind = _worst(errors, midpoints)
+    if out["target_met"] is None and worst is not None:
+        # a reducer that records no verdict (a type without the search): the same rule on the errors it measured
+        out["error_max"] = worst if out["error_max"] is None else out["error_max"]
+        out["target_met"] = bool(out["error_max"] <= float(chosen.settings.get("accuracy", reducer.scene.accuracy)))
+    sizes = list(chosen.sizes)
+    system_dofs = {lab: _optional_scalar(reducer, c, prefix + "reduced_dofs", has[c], int)
+                   for c, lab in enumerate(labels)}
+    moments = out["multi_moments_matched"] if is_multi else out["moments_matched"]
+    if moments is None:
+        moments = chosen.settings.get("moments")
+        moments = moments if isinstance(moments, int) else None
+    rows = _search_rows(reducer.result(-1, "search_table")) if "search_table" in whole else []
+    row = _chosen_row(rows, method, moments, sum(sizes))
+    expansion = chosen.settings.get("reduction_angles_deg")
+    out["chosen"] = {
+        "method": method, "moments": moments, "dofs_per_body": dict(zip(scene.body_names, [int(v) for v in sizes])),
+        "dofs": int(sum(sizes)), "system_dofs": system_dofs,
+        "expansion_angles_deg": expansion,
+        "kept_clusters": rows[row]["kept_clusters"] if row is not None else None,
+        "kept_modes": None if is_multi else _ints(reducer.result(-1, "kept_modes")),
+        "frf_error": errors, "frf_pointwise_error": pointwise,
+        "worst_error": worst, "worst_where": where, "worst_kind": kind}
+    out["midpoints"] = midpoints
+    out["search"] = rows
+    out["search_chosen"] = row
+    hankel = {}
+    nrigid = _optional_scalar(reducer, -1, "rigid_modes", whole, int) or 0
+    for c, lab in enumerate(labels):
+        order = _optional_scalar(reducer, c, "hankel_order", has[c], int)
+        hsv = _optional(reducer, c, "hankel_singular_values", has[c])
+        if order is None and hsv is None:
+            continue
+        hsv = np.array([]) if hsv is None else np.ravel(hsv)
+        entry = {"order": order, "singular_values": _list(hsv)}
+        # the scale of C's hankel_order: a model whose every pair is within e x its peak has a 2-norm error below
+        # sqrt(t a) e max|T_full|, and no model of k first-order states has one below sigma_(k+1); so at the chosen
+        # size e >= sigma_(k+1) / (sqrt(t a) max|T_full|)
+        if single_frf.get(lab) and hsv.size:
+            full = (np.asarray(single_frf[lab]["full_re"], dtype=float)
+                    + 1j * np.asarray(single_frf[lab]["full_im"], dtype=float))
+            scale = float(np.sqrt(full[0].size) * np.max(np.abs(full))) if full.size else 0.0
+            dofs = system_dofs.get(lab)
+            if scale > 0 and dofs is not None:
+                states = 2 * max(dofs - nrigid, 0)
+                entry.update(scale=scale, chosen_states=states,
+                             bound_at_chosen=float(hsv[states] / scale) if states < hsv.size else 0.0)
+        hankel[lab] = entry
+    out["hankel"] = hankel
+    if is_multi and single_frf:
+        # the Bode plots and the plotted error show the chosen model: the multi-angle model's responses on the
+        # verification grid, by the C reassembly and KFReducedSystemFRF (the multi model's C frf_error is measured
+        # on the same grid from the same responses)
+        for c, lab in enumerate(labels):
+            block = single_frf.get(lab)
+            if block is None:
+                continue
+            if "multi_frf_reduced_re" in has[c]:
+                T = (reducer.result(c, "multi_frf_reduced_re") + 1j * reducer.result(c, "multi_frf_reduced_im")
+                     ).transpose(2, 0, 1)
+            else:
+                T = multi.at(reducer.configurations[c]).frf(np.asarray(block["freq_hz"], dtype=float))
+            block["chosen_re"], block["chosen_im"] = _list(T.real), _list(T.imag)
+            block["chosen_model"] = method
+    return out
+
+
 def build_summary(reducer, single, multi, chosen):
     """The summary of a solved Reducer (reducer.py): its results at every angle of interest and of the whole solve,
     with the scene's names and labels. single, multi, chosen: the reducer's models (multi may be None)."""
@@ -78,6 +251,8 @@ def build_summary(reducer, single, multi, chosen):
                             full_im=_list(reducer.result(c, "frf_full_im").transpose(2, 0, 1)),
                             reduced_re=_list(reducer.result(c, "frf_reduced_re").transpose(2, 0, 1)),
                             reduced_im=_list(reducer.result(c, "frf_reduced_im").transpose(2, 0, 1)),
+                            frf_error=_scalar(reducer, c, "frf_error"),
+                            frf_pointwise_error=_optional_scalar(reducer, c, "frf_pointwise_error", has[c]),
                             max_rel_error=_scalar(reducer, c, "frf_error"))
         if "dominant_modes" in has[c]:
             dom[lab] = _ints(reducer.result(c, "dominant_modes"))
@@ -101,10 +276,11 @@ def build_summary(reducer, single, multi, chosen):
         "inputs": list(scene.input_names), "outputs": list(scene.output_names), "joints": list(scene.revolute),
         "angles_deg": [list(c) for c in configurations], "angle_labels": labels,
         "band_hz": [float(f) for f in settings["band_hz"]], "damping": float(settings["damping"]),
-        "accuracy": float(settings["accuracy"]),
-        "settings": {key: settings[key] for key in ("basis", "moments", "output_blocks", "importance",
-                                                     "keep_threshold", "deflation_tol", "body_tol",
-                                                     "reduction_angles_deg", "method")},
+        "accuracy": float(settings["accuracy"]), "frf_floor_db": float(scene.verify["frf_floor_db"]),
+        "settings": {key: settings[key] for key in ("basis", "moments", "moments_max", "output_blocks", "importance",
+                                                     "keep_threshold", "cluster_rtol", "search", "deflation_tol",
+                                                     "body_tol", "reduction_angles_deg", "method")
+                     if key in settings},
         "full": {"dofs_per_body": dict(zip(scene.body_names, scene.body_dofs)),
                  "system_dofs": _scalar(reducer, -1, "full_system_dofs", int),
                  "rigid_modes": _scalar(reducer, -1, "rigid_modes", int),
@@ -135,6 +311,7 @@ def build_summary(reducer, single, multi, chosen):
         "timings_s": timings,
         "notes": list(reducer.notes),
     }
+    summary.update(_accuracy(reducer, scene, labels, has, whole, chosen, multi, frf))
     if multi is not None:
         m_ratios = {lab: _list(reducer.moments(c, "multi_moment_ratios")) for c, lab in enumerate(labels)}
         m_err = {lab: _list(reducer.result(c, "multi_moment_error")) for c, lab in enumerate(labels)}
@@ -142,6 +319,10 @@ def build_summary(reducer, single, multi, chosen):
             "system_dofs": {lab: _scalar(reducer, c, "multi_reduced_dofs", int) for c, lab in enumerate(labels)},
             "dofs_per_body": dict(zip(scene.body_names, _ints(reducer.result(-1, "multi_dofs_per_body")))),
             "moment_ratios": m_ratios,
+            "frf_error": {lab: _scalar(reducer, c, "multi_frf_error") for c, lab in enumerate(labels)
+                          if "multi_frf_error" in has[c]},
+            "frf_pointwise_error": {lab: _scalar(reducer, c, "multi_frf_pointwise_error")
+                                    for c, lab in enumerate(labels) if "multi_frf_pointwise_error" in has[c]},
             "frf_max_rel_error": {lab: _scalar(reducer, c, "multi_frf_error") for c, lab in enumerate(labels)
                                   if "multi_frf_error" in has[c]},
             "reduction_angles_deg": multi.settings["reduction_angles_deg"],

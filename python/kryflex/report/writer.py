@@ -23,7 +23,8 @@ import os
 from ..io.files import Staging
 from .figures import _render_plots, plot_file_names
 from .schema import _check_json_types, validate_summary
-from .sections import render_markdown
+from .context import _Context
+from .sections import _section_accuracy, _section_choice, render_markdown
 
 
 def _write_together(out_dir, files):
@@ -67,14 +68,21 @@ def write_report(summary, out_dir, between=None):
 
 def write_unverified(summary, out_dir):
     """When the full-order verification was skipped (verify.full_order: false): summary.json and a short report.md
-    with what is known without the full order (sizes, alpha_G, kept modes, full-order moments). Same guarantees as
-    write_report."""
+    with what is known without the full order (sizes, alpha_G, kept modes, the estimated error of the chosen model
+    and the search, full-order moments). Same guarantees as write_report."""
     _check_json_types(summary, ())
     lines = [f"# kryflex reduction: {summary.get('scene', '?')}", "",
              "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
-             "frequency comparison. Reduced body sizes: " + ", ".join(
-                 f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ".",
-             f"Reduction angle α_G: {summary.get('reduction_label')} deg; kept Krylov modes: {summary.get('kept_modes')}.", ""]
+             "frequency comparison against the full order; errors below are estimated. Single-angle model: body sizes "
+             + ", ".join(f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ",",
+             f"reduction angle α_G {summary.get('reduction_label')} deg, kept Krylov modes {summary.get('kept_modes')}.", ""]
+    try:
+        c = _Context(summary)
+    except (KeyError, TypeError, ValueError, IndexError):      # a summary too sparse for the sections below
+        c = None
+    if c is not None:
+        # the verdict on the chosen model: its error estimated (the a-posteriori estimator) when the reducer gave one
+        lines += _section_accuracy(c) + _section_choice(c)
     ratios = summary.get("reduced", {}).get("moment_ratios") or {}
     if ratios:
         lines += ["| angle (deg) | max abs(L_full/L_reduced - 1) |", "| :--- | ---: |"]

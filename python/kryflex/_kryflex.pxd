@@ -101,6 +101,7 @@ cdef extern from "kryflex.h" nogil:
         KF_IMPORTANCE_H2
         KF_IMPORTANCE_HINF
         KF_IMPORTANCE_STATIC
+        KF_IMPORTANCE_BAND
     ctypedef struct KFReducedBody:
         PetscInt v
         const PetscReal *M
@@ -118,6 +119,8 @@ cdef extern from "kryflex.h" nogil:
 
     PetscErrorCode KFDenseEig(PetscInt, const PetscReal*, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFDenseModeImportance(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, KFImportance, PetscReal, PetscReal*)
+    PetscErrorCode KFDenseModeImportanceBand(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, const PetscReal*, PetscReal, PetscReal, PetscReal*, PetscInt*)
+    PetscErrorCode KFModalHankelSingularValues(PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*)
     PetscErrorCode KFDenseStaticCorrection(PetscInt, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*)
     PetscErrorCode KFDenseNullSpace(PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
     PetscErrorCode KFDenseMoments(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscInt, PetscReal*)
@@ -173,7 +176,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducedModelLoad(MPI_Comm, const char*, KFReducedModel*)
 
     # ------------------------------------------------------------ error measures (src/measure)
-    PetscErrorCode KFFRFError(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*)
+    PetscErrorCode KFFRFErrors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFMomentErrors(PetscInt, PetscInt, PetscInt, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFRigidTolerance(PetscInt, const PetscReal*, PetscInt, PetscReal*)
     PetscErrorCode KFFrequencyGrid(PetscReal, PetscReal, PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*)
@@ -185,6 +188,7 @@ cdef extern from "kryflex.h" nogil:
     ctypedef enum KFReducerMethod:
         KF_METHOD_SINGLE_ANGLE
         KF_METHOD_MULTI_ANGLE
+        KF_METHOD_AUTO
 
     PetscErrorCode KFReducerCreate(MPI_Comm, KFReducer*)
     PetscErrorCode KFReducerDestroy(KFReducer*)
@@ -202,6 +206,8 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt, PetscInt)
+    PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool, PetscInt)
+    PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal)
     PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool)
     PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal, PetscReal, PetscReal)

@@ -104,6 +104,18 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt *nheld, 
    output blocks K+H^T, ... (nout blocks); columns deflated below tol (relative). V is e x c, M-orthonormal.
    Matches nin + nout moments. */
 PETSC_EXTERN PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, BV *V, PetscInt *ndeflated);
+/* The same, block by block, with what the basis is worth: blocks alternate input, output, input ... while both chains
+   have blocks left, so the first c blocks span the basis of c moments (block_end[c-1] columns) for every c; each
+   column is M-orthogonalized against the basis and the rigid modes (twice), so no rigid content creeps in with c.
+   rigid_content = max |Phi_r^T M V|, orthogonality = max |V^T M V - I|. KFKrylovInfoReset frees block_end. */
+typedef struct {
+  PetscInt   nblocks;       /* blocks of the basis (nin + nout) */
+  PetscInt  *block_end;     /* columns of the basis after each block */
+  PetscInt   ndeflated;     /* columns dropped as dependent */
+  PetscReal  rigid_content, orthogonality;
+} KFKrylovInfo;
+PETSC_EXTERN PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, BV *V, KFKrylovInfo *info);
+PETSC_EXTERN PetscErrorCode KFKrylovInfoReset(KFKrylovInfo *);
 /* The paper's raw recurrence (eq. 9), unorthogonalized, for diagnostics: returns the e x c matrix and the
    condition number of its M-Gram matrix after scaling the columns to unit norm (1/eps once the rank is lost). */
 PETSC_EXTERN PetscErrorCode KFKrylovRawBasis(KFFlexSolver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond);
@@ -279,10 +291,12 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
 
 /* ---------------------------------------------------------------- error measures (one definition everywhere) */
 
-/* Relative frequency-response error: max over frequency of ||T_full - T_red||_F / max(||T_full||_F, floor) with
-   floor = 10^(floor_db/20) max_w ||T_full||_F, so that antiresonance notches deeper than floor_db below the band's
-   peak are measured against that floor. T*: nw blocks of t x a, real and imaginary parts. */
-PETSC_EXTERN PetscErrorCode KFFRFError(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *err);
+/* The frequency-response errors of a reduced model, per input/output pair (i, j) over a frequency grid:
+   hinf = max_ij max_w |Tf_ij - Tr_ij| / max_w |Tf_ij| (relative H-infinity error: the accuracy target applies to it);
+   pointwise = max_ij max_w |Tf_ij - Tr_ij| / max(|Tf_ij(w)|, 10^(floor_db/20) max_w |Tf_ij|) (notch-aware, for
+   information). A pair whose peak is below 1e-6 of the largest pair's peak is measured against 1e-6 x that peak.
+   T*: nw blocks of t x a, real and imaginary parts; hinf or pointwise may be NULL. */
+PETSC_EXTERN PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 /* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
    below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales
    taken over nconfig configurations (Lall: nconfig blocks of nmom x t x a) so a moment that vanishes at one angle
@@ -310,7 +324,8 @@ PETSC_EXTERN PetscFunctionList KFReducerList;
 
 typedef enum {
   KF_METHOD_SINGLE_ANGLE = 0, /* the paper: one basis at alpha_G, moments exact there */
-  KF_METHOD_MULTI_ANGLE  = 1  /* bases at several angles projected together: moments exact at each */
+  KF_METHOD_MULTI_ANGLE  = 1, /* bases at several angles projected together: moments exact at each */
+  KF_METHOD_AUTO         = 2  /* the accuracy search chooses: the smaller model of the two that meets the target */
 } KFReducerMethod;
 PETSC_EXTERN const char *const KFReducerMethods[];
 PETSC_EXTERN const char *const KFImportances[];
@@ -337,8 +352,18 @@ PETSC_EXTERN PetscErrorCode KFReducerSetMethod(KFReducer, KFReducerMethod);
 PETSC_EXTERN PetscErrorCode KFReducerSetBand(KFReducer, PetscReal fmin_hz, PetscReal fmax_hz);
 PETSC_EXTERN PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal zeta);
 PETSC_EXTERN PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal target);
-/* moments matched (c in the paper), of which nout are blocks started from K+ H^T */
+/* moments matched (c in the paper), of which nout are blocks started from K+ H^T; moments PETSC_DECIDE: the accuracy
+   search chooses (up to -kf_moments_max) */
 PETSC_EXTERN PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt moments, PetscInt output_blocks);
+/* The accuracy search (default on): the smallest model (moments, single- or multi-angle basis and its expansion
+   angles, kept clusters of Krylov modes) whose relative H-infinity error (KFFRFErrors) meets the accuracy at every
+   angle of interest and every midpoint between them, against the full order (or, verification off, the richest
+   candidate as an estimator). Off: the paper's fixed recipe (moments, keep threshold, its alpha_G rule).
+   moments_max: the most moments the search tries (-kf_moments_max, 24). */
+PETSC_EXTERN PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool search, PetscInt moments_max);
+/* Krylov modes whose frequencies lie within rtol (relative) of each other form a cluster, kept or dropped whole
+   (-kf_cluster_rtol, 1e-3) */
+PETSC_EXTERN PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal rtol);
 PETSC_EXTERN PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal keep_threshold);
 PETSC_EXTERN PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool);
 PETSC_EXTERN PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal deflation_tol, PetscReal body_tol, PetscReal reassembly_rtol);

@@ -1,4 +1,4 @@
-/* The frequency-response error measure: one definition for the reducer, the verification and the Python face. */
+/* The frequency-response error measures: one definition for the reducer, the verification and the Python face. */
 #include <kryflex_impl.h>
 
 /* max that lets a NaN through, as NumPy's max does: a NaN response must not pass for a small error */
@@ -9,39 +9,54 @@ static inline PetscReal MaxNaN(PetscReal x, PetscReal y)
 }
 
 /*
-  KFFRFError - max over frequency of ||T_full - T_red||_F / max(||T_full||_F, floor), floor = 10^(floor_db/20) times
-  the band's largest ||T_full||_F: a relative error, except that in antiresonance notches deeper than floor_db below
-  the peak it is measured against that floor (a notch 1e-9 below the peak would otherwise turn rounding into a
-  'large' relative error). Same as the former Python frf_error.
+  KFFRFErrors - the two measures of a reduced frequency response against the full one, per input/output pair (i, j):
+
+    hinf      = max_ij  max_w |Tf_ij - Tr_ij| / max_w |Tf_ij|        relative H-infinity error over the band: the
+                                                                       accuracy target applies to this one
+    pointwise = max_ij  max_w |Tf_ij - Tr_ij| / max(|Tf_ij(w)|, floor_ij),  floor_ij = 10^(floor_db/20) max_w |Tf_ij|
+
+  A pair whose peak is below 1e-6 of the largest pair's peak (zero by symmetry, or nearly) is measured against 1e-6
+  times that largest peak, so that its rounding does not pass for a large relative error. pointwise is notch-aware:
+  in antiresonances deeper than floor_db below the pair's peak it is measured against that floor; it is reported for
+  information. Either output may be NULL. T*: nw blocks of t x a.
 */
-PetscErrorCode KFFRFError(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *err)
+PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise)
 {
-  const PetscInt m = t * a;
-  PetscReal     *num, *den, dmax = 0, floor, e = 0;
+  const PetscInt  m = t * a;
+  const PetscReal negligible = 1e-6;
+  PetscReal      *peak, *dmax, top = 0, eh = 0, ep = 0, fl;
 
   PetscFunctionBegin;
-  PetscValidRealPointer(err, 9);
-  PetscCheck(nw >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFError: no frequencies (nw = %" PetscInt_FMT "); give at least one", nw);
-  PetscCheck(t >= 0 && a >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFError: negative size (t %" PetscInt_FMT ", a %" PetscInt_FMT ")", t, a);
-  PetscCheck(!PetscIsInfOrNanReal(floor_db), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFError: the floor must be a finite number of dB (such as -60)");
-  PetscCall(PetscMalloc2(nw, &num, nw, &den));
-  for (PetscInt f = 0; f < nw; f++) {
-    PetscReal sn = 0, sd = 0;
-    for (PetscInt k = f * m; k < (f + 1) * m; k++) {
-      const PetscReal dre = Tfre[k] - Trre[k], dim = Tfim[k] - Trim[k];
-      sn += dre * dre + dim * dim;
-      sd += Tfre[k] * Tfre[k] + Tfim[k] * Tfim[k];
+  PetscCheck(nw >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFErrors: no frequencies (nw = %" PetscInt_FMT "); give at least one", nw);
+  PetscCheck(t >= 0 && a >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFErrors: negative size (t %" PetscInt_FMT ", a %" PetscInt_FMT ")", t, a);
+  PetscCheck(!PetscIsInfOrNanReal(floor_db), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFErrors: the floor must be a finite number of dB (such as -60)");
+  fl = PetscPowReal(10.0, floor_db / 20.0);
+  PetscCall(PetscCalloc2(PetscMax(m, 1), &peak, PetscMax(m, 1), &dmax));
+  for (PetscInt f = 0; f < nw; f++)
+    for (PetscInt k = 0; k < m; k++) {
+      const PetscReal full = PetscSqrtReal(Tfre[f * m + k] * Tfre[f * m + k] + Tfim[f * m + k] * Tfim[f * m + k]);
+      const PetscReal dre = Tfre[f * m + k] - Trre[f * m + k], dim = Tfim[f * m + k] - Trim[f * m + k];
+
+      peak[k] = MaxNaN(peak[k], full);
+      dmax[k] = MaxNaN(dmax[k], PetscSqrtReal(dre * dre + dim * dim));
     }
-    num[f] = PetscSqrtReal(sn);
-    den[f] = PetscSqrtReal(sd);
-    dmax   = f ? MaxNaN(dmax, den[f]) : den[f];
+  for (PetscInt k = 0; k < m; k++) top = MaxNaN(top, peak[k]);
+  for (PetscInt k = 0; k < m; k++) {
+    const PetscReal ref = MaxNaN(MaxNaN(peak[k], negligible * top), 1e-300);
+
+    eh = MaxNaN(eh, dmax[k] / ref);
   }
-  floor = MaxNaN(PetscPowReal(10.0, floor_db / 20.0) * dmax, 1e-300);
-  for (PetscInt f = 0; f < nw; f++) {
-    const PetscReal r = num[f] / MaxNaN(den[f], floor);
-    e                 = f ? MaxNaN(e, r) : r;
-  }
-  *err = e;
-  PetscCall(PetscFree2(num, den));
+  for (PetscInt f = 0; f < nw; f++)
+    for (PetscInt k = 0; k < m; k++) {
+      const PetscReal full = PetscSqrtReal(Tfre[f * m + k] * Tfre[f * m + k] + Tfim[f * m + k] * Tfim[f * m + k]);
+      const PetscReal dre = Tfre[f * m + k] - Trre[f * m + k], dim = Tfim[f * m + k] - Trim[f * m + k];
+      const PetscReal ref = MaxNaN(MaxNaN(full, fl * MaxNaN(peak[k], negligible * top)), 1e-300);
+
+      ep = MaxNaN(ep, PetscSqrtReal(dre * dre + dim * dim) / ref);
+    }
+  if (PetscIsNanReal(top)) eh = ep = (PetscReal)NAN;
+  if (hinf) *hinf = eh;
+  if (pointwise) *pointwise = ep;
+  PetscCall(PetscFree2(peak, dmax));
   PetscFunctionReturn(0);
 }

@@ -82,14 +82,26 @@ PetscErrorCode KFBodyBasisAdd(KFBodyBasis bb, KFSystem sys, Mat X)
   PetscCall(MatZeroEntries(Xn));
   PetscCall(KFDenseMultSmall(X, m, m, scale, 1.0, Xn));
   PetscCall(PetscFree2(gram, scale));
+  PetscCall(KFBodyBasisAddMapped(bb, sys->P, Xn));
+  PetscCall(MatDestroy(&Xn));
+  PetscCall(PetscLogEventEnd(KF_EVENT_PROJECT, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* Columns X of unit system M-norm mapped onto each body with the body maps P (n_b x e) of their configuration: what
+   KFBodyBasisAdd does after scaling, for callers that keep the maps but not the system (the accuracy search). */
+PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis bb, const Mat P[], Mat X)
+{
+  KFScene s = bb->s;
+
+  PetscFunctionBegin;
+  PetscCheck(!bb->finished, s->comm, PETSC_ERR_ORDER, "KFBodyBasisAdd() after KFBodyBasisFinish()");
   for (PetscInt b = 0; b < s->nb; b++) {
     Mat Y;
-    PetscCall(MatMatMult(sys->P[b], Xn, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+    PetscCall(MatMatMult(P[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
     PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
     bb->cols[b][bb->ncols[b]++] = Y;
   }
-  PetscCall(MatDestroy(&Xn));
-  PetscCall(PetscLogEventEnd(KF_EVENT_PROJECT, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
 

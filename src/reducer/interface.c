@@ -6,8 +6,8 @@ PetscFunctionList KFReducerList      = NULL;
 PetscLogEvent     KF_EVENT_REDUCER_SETUP, KF_EVENT_REDUCER_SOLVE, KF_EVENT_REDUCER_BASIS, KF_EVENT_REDUCER_VERIFY;
 static PetscBool  KFReducerPackageInitialized = PETSC_FALSE;
 
-const char *const KFReducerMethods[] = {"single-angle", "multi-angle", "KFReducerMethod", "KF_METHOD_", NULL};
-const char *const KFImportances[]    = {"h2", "hinf", "static", "KFImportance", "KF_IMPORTANCE_", NULL};
+const char *const KFReducerMethods[] = {"single-angle", "multi-angle", "auto", "KFReducerMethod", "KF_METHOD_", NULL};
+const char *const KFImportances[]    = {"h2", "hinf", "static", "band", "KFImportance", "KF_IMPORTANCE_", NULL};
 
 static PetscErrorCode KFReducerFinalizePackage(void)
 {
@@ -50,14 +50,17 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   PetscCall(KFReducerInitializePackage());
   PetscCall(PetscHeaderCreate(r, KF_REDUCER_CLASSID, "KFReducer", "Reduction of an articulated structure", "KF", comm, KFReducerDestroy, KFReducerView));
   r->auto_alpha              = PETSC_TRUE;
-  r->method                  = KF_METHOD_SINGLE_ANGLE;
+  r->method                  = KF_METHOD_AUTO;
   r->band[0]                 = 0.01;
   r->band[1]                 = 10.0;
   r->zeta                    = 0.0025;
   r->accuracy                = 0.05;
-  r->moments                 = 10;
+  r->moments                 = PETSC_DECIDE;
+  r->moments_max             = 24;
+  r->search                  = PETSC_TRUE;
+  r->cluster_rtol            = 1e-3;
   r->output_blocks           = 1;
-  r->importance              = KF_IMPORTANCE_H2;
+  r->importance              = KF_IMPORTANCE_BAND;
   r->keep_threshold          = 0.05;
   r->static_correction       = PETSC_TRUE;
   r->deflation_tol           = 1e-10;
@@ -253,9 +256,29 @@ PetscErrorCode KFReducerSetMoments(KFReducer r, PetscInt moments, PetscInt outpu
 {
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
-  PetscCheck(moments >= 1 && output_blocks >= 0 && moments > output_blocks, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "moments (%" PetscInt_FMT ") must exceed output_blocks (%" PetscInt_FMT ") >= 0 (-kf_moments, -kf_output_blocks)", moments, output_blocks);
+  PetscCheck(moments == PETSC_DECIDE || (moments >= 1 && output_blocks >= 0 && moments > output_blocks), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "moments (%" PetscInt_FMT ") must exceed output_blocks (%" PetscInt_FMT ") >= 0 (-kf_moments, -kf_output_blocks)", moments, output_blocks);
+  PetscCheck(output_blocks >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "output_blocks must be >= 0, got %" PetscInt_FMT " (-kf_output_blocks)", output_blocks);
   r->moments       = moments;
   r->output_blocks = output_blocks;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSetSearch(KFReducer r, PetscBool search, PetscInt moments_max)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(moments_max >= 1 && moments_max <= 1000, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "moments_max: give 1 to 1000 moments, got %" PetscInt_FMT " (-kf_moments_max)", moments_max);
+  r->search      = search;
+  r->moments_max = moments_max;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSetClusterTolerance(KFReducer r, PetscReal rtol)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(rtol >= 0 && rtol < 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "cluster_rtol: give a relative frequency gap in [0, 1), got %g (-kf_cluster_rtol)", (double)rtol);
+  r->cluster_rtol = rtol;
   PetscFunctionReturn(0);
 }
 
@@ -263,7 +286,7 @@ PetscErrorCode KFReducerSetImportance(KFReducer r, KFImportance importance, Pets
 {
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
-  PetscCheck(importance >= KF_IMPORTANCE_H2 && importance <= KF_IMPORTANCE_STATIC, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "importance: use h2, hinf or static (-kf_importance)");
+  PetscCheck(importance >= KF_IMPORTANCE_H2 && importance <= KF_IMPORTANCE_BAND, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "importance: use band, h2, hinf or static (-kf_importance)");
   PetscCheck(keep_threshold >= 0 && keep_threshold <= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "keep_threshold: importances are normalized to 1, give a value in [0, 1], got %g (-kf_keep_threshold)", (double)keep_threshold);
   r->importance     = importance;
   r->keep_threshold = keep_threshold;
@@ -326,7 +349,7 @@ PetscErrorCode KFReducerGetReducedModel(KFReducer r, KFReducedModel *model)
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCheck(r->solved, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "call KFReducerSolve() first");
-  *model = r->method == KF_METHOD_MULTI_ANGLE ? r->multi_model : r->single;
+  *model = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? r->multi_model : r->single;
   PetscFunctionReturn(0);
 }
 

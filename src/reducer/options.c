@@ -64,7 +64,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     PetscCall(KFReducerSetMultiAngles(r, nconfig, deg));
   }
   method = (PetscInt)r->method;
-  PetscCall(PetscOptionsEList("-kf_method", "single-angle (the paper: one basis at alpha_G) or multi-angle (bases at several angles)", "KFReducerSetMethod", KFReducerMethods, 2, KFReducerMethods[r->method], &method, &flg));
+  PetscCall(PetscOptionsEList("-kf_method", "auto (the smaller model that meets the accuracy), single-angle (the paper: one basis at alpha_G) or multi-angle (bases at several angles)", "KFReducerSetMethod", KFReducerMethods, 3, KFReducerMethods[r->method], &method, &flg));
   if (flg) PetscCall(KFReducerSetMethod(r, (KFReducerMethod)method));
 
   band[0] = r->band[0];
@@ -79,17 +79,46 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsReal("-kf_damping", "Uniform modal damping ratio", "KFReducerSetDamping", zeta, &zeta, &flg));
   if (flg) PetscCall(KFReducerSetDamping(r, zeta));
   accuracy = r->accuracy;
-  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative frequency-response error over the band", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
+  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative H-infinity error of the frequency response over the band, per input/output pair (KFFRFErrors)", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
   if (flg) PetscCall(KFReducerSetAccuracy(r, accuracy));
 
   moments = r->moments;
   oblocks = r->output_blocks;
-  PetscCall(PetscOptionsInt("-kf_moments", "Low-frequency moments matched exactly (c in the paper)", "KFReducerSetMoments", moments, &moments, NULL));
+  {
+    char mtext[64] = "auto";
+
+    if (moments != PETSC_DECIDE) PetscCall(PetscSNPrintf(mtext, sizeof(mtext), "%" PetscInt_FMT, moments));
+    PetscCall(PetscOptionsString("-kf_moments", "Low-frequency moments matched exactly (c in the paper), or auto: the accuracy search chooses", "KFReducerSetMoments", mtext, mtext, sizeof(mtext), &flg));
+    if (flg) {
+      PetscBool isauto;
+      char     *end;
+
+      PetscCall(PetscStrcasecmp(mtext, "auto", &isauto));
+      if (isauto) moments = PETSC_DECIDE;
+      else {
+        long v = strtol(mtext, &end, 10);
+
+        PetscCheck(*mtext && !*end && v >= 1 && v <= 1000, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_moments: give auto or a number of moments from 1 to 1000, got '%s'", mtext);
+        moments = (PetscInt)v;
+      }
+    }
+  }
   PetscCall(PetscOptionsInt("-kf_output_blocks", "Krylov blocks started from K+ H^T (of the moments)", "KFReducerSetMoments", oblocks, &oblocks, NULL));
   PetscCall(KFReducerSetMoments(r, moments, oblocks));
+  {
+    PetscBool search = r->search;
+    PetscInt  mmax   = r->moments_max;
+    PetscReal crtol  = r->cluster_rtol;
+
+    PetscCall(PetscOptionsBool("-kf_search", "The accuracy search: the smallest model that meets -kf_accuracy (false: the paper's fixed recipe)", "KFReducerSetSearch", search, &search, NULL));
+    PetscCall(PetscOptionsInt("-kf_moments_max", "The most moments the accuracy search tries", "KFReducerSetSearch", mmax, &mmax, NULL));
+    PetscCall(KFReducerSetSearch(r, search, mmax));
+    PetscCall(PetscOptionsReal("-kf_cluster_rtol", "Krylov modes this close in frequency (relative) are kept or dropped together", "KFReducerSetClusterTolerance", crtol, &crtol, NULL));
+    PetscCall(KFReducerSetClusterTolerance(r, crtol));
+  }
   importance = (PetscInt)r->importance;
   keep       = r->keep_threshold;
-  PetscCall(PetscOptionsEList("-kf_importance", "Mode importance: h2, hinf or static", "KFReducerSetImportance", KFImportances, 3, KFImportances[r->importance], &importance, NULL));
+  PetscCall(PetscOptionsEList("-kf_importance", "Mode importance: band (band-aware, cluster-invariant), h2, hinf or static", "KFReducerSetImportance", KFImportances, 4, KFImportances[r->importance], &importance, NULL));
   PetscCall(PetscOptionsReal("-kf_keep_threshold", "Keep modes whose importance (normalized to the largest) reaches this", "KFReducerSetImportance", keep, &keep, NULL));
   PetscCall(KFReducerSetImportance(r, (KFImportance)importance, keep));
   sc = r->static_correction;
@@ -170,6 +199,7 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
   if (r->auto_alpha) PetscCall(PetscViewerASCIIPrintf(viewer, "alpha_G: auto (the paper's rule)\n"));
   else PetscCall(KFReducerViewAngles_Private(viewer, "alpha_G", 1, nrev, r->alpha_g));
   if (r->nmulti) PetscCall(KFReducerViewAngles_Private(viewer, "multi-angle configurations", r->nmulti, nrev, r->multi));
+  if (r->moments == PETSC_DECIDE) PetscCall(PetscViewerASCIIPrintf(viewer, "moments auto (the accuracy search, up to %" PetscInt_FMT ")\n", r->moments_max));
   PetscCall(PetscViewerASCIIPrintf(viewer, "moments %" PetscInt_FMT " (%" PetscInt_FMT " output blocks); importance %s, keep threshold %g; static correction %s\n", r->moments, r->output_blocks, KFImportances[r->importance], (double)r->keep_threshold, r->static_correction ? "yes" : "no"));
   PetscCall(PetscViewerASCIIPrintf(viewer, "tolerances: deflation %g, body %g, reassembly %g; shift %g\n", (double)r->deflation_tol, (double)r->body_tol, (double)r->reassembly_rtol, (double)r->shift));
   PetscCall(PetscViewerASCIIPrintf(viewer, "verification: %s, %" PetscInt_FMT " frequency points, FRF floor %g dB\n", r->verify ? "full order" : "off", r->frequency_points, (double)r->frf_floor_db));

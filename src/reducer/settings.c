@@ -42,7 +42,7 @@ static PetscErrorCode KFSetString(KFReducedModel m, const char key[], const char
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KFReducerMethod method, PetscInt n, const PetscReal angles[])
+PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KFReducerMethod method, PetscInt moments, PetscInt n, const PetscReal angles[])
 {
   PetscInt    nrev;
   KFReducerType type;
@@ -53,7 +53,7 @@ PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KF
   PetscCall(KFReducerGetType(r, &type));
   PetscCall(KFSetString(m, "basis", type));
   PetscCall(KFSetReal(m, "eigen_cover", r->eigen_cover));
-  PetscCall(PetscSNPrintf(num, sizeof(num), "%" PetscInt_FMT, r->moments));
+  PetscCall(PetscSNPrintf(num, sizeof(num), "%" PetscInt_FMT, moments)); /* the moments this model matches */
   PetscCall(KFReducedModelSetSetting(m, "moments", num));
   PetscCall(PetscSNPrintf(num, sizeof(num), "%" PetscInt_FMT, r->output_blocks));
   PetscCall(KFReducedModelSetSetting(m, "output_blocks", num));

@@ -47,7 +47,7 @@ PetscErrorCode KFReducerSetUp(KFReducer r)
     for (PetscInt d = 0; d < c; d++) PetscCheck(!KFSameAngles(nrev, &r->angles[c * nrev], &r->angles[d * nrev]), comm, PETSC_ERR_ARG_WRONG, "angles of interest: configuration %" PetscInt_FMT " repeats configuration %" PetscInt_FMT " (%g deg): give each configuration once", c + 1, d + 1, (double)(r->angles[c * nrev] * 180.0 / PETSC_PI));
   for (PetscInt c = 0; c < r->nmulti; c++)
     for (PetscInt d = 0; d < c; d++) PetscCheck(!KFSameAngles(nrev, &r->multi[c * nrev], &r->multi[d * nrev]), comm, PETSC_ERR_ARG_WRONG, "multi-angle configurations: configuration %" PetscInt_FMT " repeats configuration %" PetscInt_FMT ": give each configuration once", c + 1, d + 1);
-  PetscCheck(r->moments > r->output_blocks, comm, PETSC_ERR_ARG_OUTOFRANGE, "moments (%" PetscInt_FMT ") must exceed output_blocks (%" PetscInt_FMT ")", r->moments, r->output_blocks);
+  PetscCheck(r->moments == PETSC_DECIDE || r->moments > r->output_blocks, comm, PETSC_ERR_ARG_OUTOFRANGE, "moments (%" PetscInt_FMT ") must exceed output_blocks (%" PetscInt_FMT ")", r->moments, r->output_blocks);
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_SETUP, r, 0, 0, 0));
   r->setupcalled = PETSC_TRUE;
   PetscFunctionReturn(0);
@@ -101,6 +101,8 @@ static PetscErrorCode KFReducerBasisDestroy_Private(KFReducer r, KFReducerBasis 
   PetscFunctionBegin;
   if (r->ops->destroybasis) PetscCall((*r->ops->destroybasis)(r, basis));
   PetscCall(PetscFree4(basis->lambda, basis->Phi, basis->Gr, basis->Hr));
+  PetscCall(PetscFree2(basis->Mr, basis->Kr));
+  PetscCall(PetscFree(basis->block_end));
   PetscCall(PetscMemzero(basis, sizeof(*basis)));
   PetscFunctionReturn(0);
 }
@@ -122,19 +124,18 @@ static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KF
   }
   keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, n, angles, keep, model));
-  PetscCall(KFReducerRecordSettings_Private(r, *model, method, n, angles));
+  PetscCall(KFReducerRecordSettings_Private(r, *model, method, r->build_moments, n, angles));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFReducerSolve(KFReducer r)
+static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals[], PetscReal Lfull[])
 {
   MPI_Comm         comm;
   KFSystem         sys = NULL;
   KFConfig        *configs = NULL;
   KFBodyBasis     *candidates, multi_bb = NULL;
-  KFFullReference *ref;
   PetscInt         nc = 0, nrev, nrev1, nb, nsys, a, t, nrigid, nmom, g = -1, multi_n = 0;
-  PetscReal       *Lfull, *multi_angles = NULL, *kept_g = NULL;
+  PetscReal       *multi_angles = NULL, *kept_g = NULL;
   PetscReal        times[7] = {0}, best_imp = -1;
   PetscInt         best_kept = -1, nkept_g = 0, nstatic_g = 0;
   PetscLogDouble   t0, t1;
@@ -143,35 +144,15 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
 
   PetscFunctionBegin;
-  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
-  PetscCall(KFReducerSetUp(r));
   PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
-  PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
-  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
-  PetscCall(KFReducerResultsReset_Private(r));
-  PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
   PetscCall(KFReducerGetType(r, &type));
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
   PetscCall(KFSceneGetName(r->scene, &name));
   nrev1  = PetscMax(nrev, 1);
   nrigid = 6 + nrev;
-  nmom   = r->moments;
+  nmom   = r->build_moments;
   PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
-  {
-    char dofs[256];
-    size_t used = 0;
-
-    dofs[0] = 0;
-    for (PetscInt b = 0; b < nb; b++) {
-      PetscInt nd;
-
-      PetscCall(KFSceneGetBodyInfo(r->scene, b, NULL, &nd, NULL));
-      PetscCall(PetscSNPrintf(dofs + used, sizeof(dofs) - used, "%s%" PetscInt_FMT, b ? " + " : "", nd));
-      PetscCall(PetscStrlen(dofs, &used));
-    }
-    PetscCall(KFProgress(comm, "scene '%s': %" PetscInt_FMT " bodies (%s dofs), %" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs", name, nb, dofs, nsys, nrigid, a, t));
-  }
-  PetscCall(PetscCalloc3(nc, &candidates, r->nconfig, &ref, r->nconfig * nmom * t * a, &Lfull));
+  PetscCall(PetscCalloc1(nc, &candidates));
   if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &multi_bb));
   PetscCall(PetscMalloc1(nc * nrev1, &multi_angles));
   PetscCall(KFSystemCreate(r->scene, &sys));
@@ -287,9 +268,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       if (r->verify) {
         PetscCall(KFInterruptCheck(comm));
         PetscCall(PetscTime(&t0));
-        PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
-        PetscCall(KFReducerFullReference_Private(r, sys, &ref[ci]));
-        PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+        PetscCall(KFReducerReference_Private(r, sys, &Lfull[ci * nmom * t * a], &evals[ci]));
         PetscCall(PetscTime(&t1));
         times[6] += t1 - t0;
       }
@@ -363,17 +342,394 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   } else sizes_multi[0] = 0;
   PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
 
-  PetscCall(KFInterruptCheck(comm));
-  PetscCall(KFReducerCompare_Private(r, Lfull, ref));
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
+  r->chosen = r->method == KF_METHOD_MULTI_ANGLE && r->multi_model ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
+  {
+    PetscReal mm = (PetscReal)nmom;
 
+    PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", mm));
+    if (r->multi_model) PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", mm));
+  }
   for (PetscInt i = 0; i < nc; i++) PetscCall(KFBodyBasisDestroy(&candidates[i]));
-  for (PetscInt c = 0; c < r->nconfig; c++) PetscCall(KFFullReferenceDestroy_Private(&ref[c]));
   PetscCall(KFBodyBasisDestroy(&multi_bb));
-  PetscCall(PetscFree3(candidates, ref, Lfull));
+  PetscCall(PetscFree(candidates));
   PetscCall(PetscFree(kept_g));
   PetscCall(PetscFree(multi_angles));
   PetscCall(PetscFree(configs));
+  PetscFunctionReturn(0);
+}
+
+/* the scene in one line */
+static PetscErrorCode KFReducerAnnounce_Private(KFReducer r)
+{
+  PetscInt    nb, nrev, nsys, a, t;
+  const char *name;
+  char        dofs[256];
+  size_t      used = 0;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
+  PetscCall(KFSceneGetName(r->scene, &name));
+  dofs[0] = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt nd;
+
+    PetscCall(KFSceneGetBodyInfo(r->scene, b, NULL, &nd, NULL));
+    PetscCall(PetscSNPrintf(dofs + used, sizeof(dofs) - used, "%s%" PetscInt_FMT, b ? " + " : "", nd));
+    PetscCall(PetscStrlen(dofs, &used));
+  }
+  PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "scene '%s': %" PetscInt_FMT " bodies (%s dofs), %" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs", name, nb, dofs, nsys, 6 + nrev, a, t));
+  PetscFunctionReturn(0);
+}
+
+/* the full-order reference of an evaluation point at the system's configuration; L0 (t x a) the static moment, or NULL:
+   computed here with its own factorization */
+PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, const PetscReal L0[], KFEvalPoint *p)
+{
+  PetscInt a, t;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+  PetscCall(KFReducerFullReference_Private(r, sys, &p->ref));
+  PetscCall(PetscMalloc1(PetscMax(t * a, 1), &p->L0));
+  if (L0) PetscCall(PetscArraycpy(p->L0, L0, t * a));
+  else {
+    KFFlexSolver solver;
+
+    PetscCall(KFFlexSolverCreate(sys, &solver));
+    PetscCall(KFFlexSolverSetShift(solver, r->shift));
+    PetscCall(KFFlexSolverMoments(solver, 1, p->L0));
+    PetscCall(KFFlexSolverDestroy(&solver));
+  }
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
+   the shorter way round) */
+static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
+{
+  PetscInt nrev, nrev1, nmid;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  nmid  = nrev && r->nconfig > 1 ? r->nconfig - 1 : 0;
+  *neval = r->nconfig + nmid;
+  PetscCall(PetscCalloc1(*neval, evals));
+  for (PetscInt e = 0; e < *neval; e++) {
+    KFEvalPoint *p = &(*evals)[e];
+
+    PetscCall(PetscMalloc1(nrev1, &p->angles));
+    if (e < r->nconfig) {
+      p->interest = e;
+      PetscCall(PetscArraycpy(p->angles, &r->angles[e * nrev1], nrev1));
+    } else {
+      const PetscReal *x = &r->angles[(e - r->nconfig) * nrev1], *y = &r->angles[(e - r->nconfig + 1) * nrev1];
+
+      p->interest = -1;
+      for (PetscInt j = 0; j < nrev1; j++) {
+        PetscReal d = y[j] - x[j];
+
+        while (d > PETSC_PI) d -= 2 * PETSC_PI;
+        while (d < -PETSC_PI) d += 2 * PETSC_PI;
+        p->angles[j] = x[j] + 0.5 * d;
+      }
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* the search's way: every configuration's basis kept (moments up to moments_max), the references, the search, and
+   the best model of each family */
+static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  MPI_Comm       comm;
+  KFSystem       sys;
+  KFConfig      *configs;
+  KFVisit       *visits;
+  KFCandidate    single, multi;
+  PetscInt       nc, nrev, nrev1, nb, a, t, nfull = r->build_moments, nrows;
+  PetscReal      times[7] = {0}, *rows;
+  PetscLogDouble t0, t1;
+  static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, &t));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
+  PetscCall(PetscCalloc1(nc, &visits));
+  PetscCall(KFSystemCreate(r->scene, &sys));
+  for (PetscInt i = 0; i < nc; i++) {
+    KFVisit     *v = &visits[i];
+    KFFlexSolver solver;
+    Mat          Phir;
+    PetscReal    rigid_res;
+    PetscInt     nheld;
+    char         label[128];
+
+    PetscCall(KFInterruptCheck(comm));
+    PetscCall(KFReducerConfigLabel_Private(nrev, configs[i].angles, label, sizeof(label)));
+    PetscCall(KFProgress(comm, "configuration %s deg", label));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFSystemSetAngles(sys, configs[i].angles));
+    PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
+    PetscCall(PetscTime(&t1));
+    times[0] += t1 - t0;
+    t0 = t1;
+    PetscCall(KFFlexSolverCreate(sys, &solver));
+    PetscCall(KFFlexSolverSetShift(solver, r->shift));
+    PetscCall(KFFlexSolverSetUp(solver));
+    PetscCall(PetscTime(&t1));
+    times[1] += t1 - t0;
+    t0 = t1;
+    v->basis.gram_condition = (PetscReal)NAN;
+    PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+    PetscCall((*r->ops->buildbasis)(r, sys, solver, &v->basis));
+    PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+    PetscCall(PetscTime(&t1));
+    times[2] += t1 - t0;
+    PetscCall(PetscMalloc1(nrev1, &v->angles));
+    PetscCall(PetscArraycpy(v->angles, configs[i].angles, nrev1));
+    v->interest = configs[i].interest;
+    v->is_g     = configs[i].is_g;
+    v->in_multi = configs[i].in_multi;
+    PetscCall(MatDuplicate(Phir, MAT_COPY_VALUES, &v->Phir));
+    PetscCall(PetscMalloc1(nb, &v->P));
+    for (PetscInt b = 0; b < nb; b++) PetscCall(MatDuplicate(sys->P[b], MAT_COPY_VALUES, &v->P[b]));
+    PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
+    if (v->interest >= 0) {
+      const PetscInt ci = v->interest, shape[3] = {t, a, nfull};
+
+      t0 = t1;
+      PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
+      PetscCall(PetscTime(&t1));
+      times[4] += t1 - t0;
+      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)v->basis.ndeflated));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", v->basis.gram_condition));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_rigid_content", v->basis.rigid_content));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_orthogonality", v->basis.orthogonality));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
+      if (r->verify) {
+        PetscCall(PetscTime(&t0));
+        PetscCall(KFReducerReference_Private(r, sys, &Lfull[ci * nfull * t * a], &evals[ci]));
+        PetscCall(PetscTime(&t1));
+        times[6] += t1 - t0;
+      }
+    }
+    if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis at %s deg: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", label, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
+    PetscCall(KFProgress(comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
+    PetscCall(KFFlexSolverDestroy(&solver));
+  }
+  /* the midpoints' references */
+  for (PetscInt e = r->nconfig; r->verify && e < neval; e++) {
+    char label[128];
+
+    PetscCall(KFInterruptCheck(comm));
+    PetscCall(KFReducerConfigLabel_Private(nrev, evals[e].angles, label, sizeof(label)));
+    PetscCall(KFProgress(comm, "full-order reference at the midpoint %s deg", label));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFSystemSetAngles(sys, evals[e].angles));
+    PetscCall(KFReducerReference_Private(r, sys, NULL, &evals[e]));
+    PetscCall(PetscTime(&t1));
+    times[6] += t1 - t0;
+  }
+  PetscCall(KFSystemDestroy(&sys));
+  if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
+    KFCandidate    rich = {0};
+    KFReducedModel model;
+
+    rich.family = KF_METHOD_MULTI_ANGLE;
+    rich.c      = nfull;
+    rich.kept   = -1;
+    for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
+    PetscCall(KFCandidateModel_Private(r, visits, &rich, &model));
+    for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
+    PetscCall(KFReducedModelDestroy(&model));
+    PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
+  }
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
+
+  PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFReducerSearch_Private(r, nc, visits, neval, evals, &single, &multi, &nrows, &rows));
+  {
+    const PetscInt shape[2] = {7, nrows};
+
+    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
+    PetscCall(PetscFree(rows));
+  }
+  PetscCheck(single.nexp || multi.nexp, comm, PETSC_ERR_PLIB, "the accuracy search tried no model");
+  {
+    const PetscBool sp = (PetscBool)(single.nexp && single.complete && single.error <= r->accuracy), mp = (PetscBool)(multi.nexp && multi.complete && multi.error <= r->accuracy);
+
+    if (sp && mp) r->chosen = multi.size < single.size || (multi.size == single.size && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
+    else if (sp || mp) r->chosen = sp ? KF_METHOD_SINGLE_ANGLE : KF_METHOD_MULTI_ANGLE;
+    else r->chosen = !single.nexp || (multi.nexp && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
+  }
+  if (!single.nexp) { /* multi-angle only: the single-angle model of the first expansion angle, whole, for reference */
+    single      = multi;
+    single.family = KF_METHOD_SINGLE_ANGLE;
+    single.nexp = 1;
+  }
+  PetscCall(KFCandidateModel_Private(r, visits, &single, &r->single));
+  if (multi.nexp) PetscCall(KFCandidateModel_Private(r, visits, &multi, &r->multi_model));
+  PetscCall(PetscTime(&t1));
+  times[5] += t1 - t0;
+  {
+    const PetscInt   g = single.exp[0], shape[2] = {nrev1, 1};
+    PetscInt         m, nclu, *clu, nkept = 0, nstatic;
+    PetscReal       *lambda, *Phi, *imp, *freq, *keptf, *kept, *cluf, *dofs;
+    char             label[128];
+    KFVisit         *v = &visits[g];
+
+    PetscCall(KFReducerConfigLabel_Private(nrev, v->angles, label, sizeof(label)));
+    /* the kept modes of the single-angle model, in its sub-basis: what the report's tables show */
+    PetscCall(KFVisitModes_Private(r, v, single.c, &m, &lambda, &Phi, &imp, &clu, &nclu));
+    PetscCall(PetscMalloc5(m, &freq, m, &keptf, m, &kept, m, &cluf, nb, &dofs));
+    {
+      PetscReal *ci;
+      PetscInt  *order;
+
+      PetscCall(PetscCalloc2(PetscMax(nclu, 1), &ci, PetscMax(nclu, 1), &order));
+      for (PetscInt i = 0; i < m; i++)
+        if (clu[i] >= 0) ci[clu[i]] = PetscMax(ci[clu[i]], imp[i]);
+      for (PetscInt k = 0; k < nclu; k++) { /* the kept clusters are the single.kept most important */
+        PetscInt rank = 0;
+
+        for (PetscInt q = 0; q < nclu; q++) rank += ci[q] > ci[k] || (ci[q] == ci[k] && q < k);
+        order[k] = rank;
+      }
+      for (PetscInt i = 0; i < m; i++) {
+        keptf[i] = clu[i] >= 0 && (single.kept < 0 || order[clu[i]] < single.kept) ? 1.0 : 0.0;
+        freq[i]  = PetscSqrtReal(PetscMax(lambda[i], 0)) / (2 * PETSC_PI);
+        cluf[i]  = (PetscReal)clu[i];
+        if (keptf[i] > 0) kept[nkept++] = (PetscReal)(i + 1);
+      }
+      PetscCall(PetscFree2(ci, order));
+    }
+    nstatic = nkept < m && r->static_correction ? a : 0;
+    for (PetscInt ci = 0; ci < r->nconfig; ci++) {
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &m, freq));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &m, imp));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &m, keptf));
+      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_clusters", 1, &m, cluf));
+    }
+    PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, v->angles));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)v->interest));
+    PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept, kept));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", (PetscReal)single.c));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)(6 + nrev)));
+    {
+      PetscInt nsys;
+
+      PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
+      PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
+    }
+    for (PetscInt b = 0; b < nb; b++) {
+      KFReducedBody body;
+
+      PetscCall(KFReducedModelGetBody(r->single, b, NULL, NULL, &body, NULL));
+      dofs[b] = (PetscReal)body.v;
+    }
+    PetscCall(KFReducerResultSet_Private(r, -1, "reduced_dofs_per_body", 1, &nb, dofs));
+    if (r->multi_model) {
+      PetscReal     *ma;
+      const PetscInt mshape[2] = {nrev1, multi.nexp};
+
+      for (PetscInt b = 0; b < nb; b++) {
+        KFReducedBody body;
+
+        PetscCall(KFReducedModelGetBody(r->multi_model, b, NULL, NULL, &body, NULL));
+        dofs[b] = (PetscReal)body.v;
+      }
+      PetscCall(KFReducerResultSet_Private(r, -1, "multi_dofs_per_body", 1, &nb, dofs));
+      PetscCall(PetscMalloc1(nrev1 * multi.nexp, &ma));
+      for (PetscInt e = 0; e < multi.nexp; e++) PetscCall(PetscArraycpy(&ma[e * nrev1], visits[multi.exp[e]].angles, nrev1));
+      PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, mshape, ma));
+      PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", (PetscReal)multi.c));
+      PetscCall(PetscFree(ma));
+    }
+    PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
+                           r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept < 0 ? ", every Krylov mode" : ", important clusters + static correction"), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
+    PetscCall(KFProgress(comm, "%s", r->rule));
+    PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));
+    PetscCall(PetscFree4(lambda, Phi, imp, clu));
+  }
+  {
+    char sizes[256], tmp[256] = "";
+
+    PetscCall(KFReducerModelSizes_Private(r->single, sizes, sizeof(sizes)));
+    if (r->multi_model) {
+      char ms[200];
+
+      PetscCall(KFReducerModelSizes_Private(r->multi_model, ms, sizeof(ms)));
+      PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "; %s dofs (multi-angle)", ms));
+    }
+    PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, tmp));
+  }
+  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
+  for (PetscInt i = 0; i < nc; i++) PetscCall(KFVisitDestroy_Private(r, &visits[i]));
+  PetscCall(PetscFree(visits));
+  PetscCall(PetscFree(configs));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSolve(KFReducer r)
+{
+  MPI_Comm     comm;
+  KFEvalPoint *evals;
+  PetscInt     neval, a, t, nfull;
+  PetscReal   *Lfull;
+  PetscBool    search, krylov;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(KFReducerSetUp(r));
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
+  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscObjectTypeCompare((PetscObject)r, KFREDUCERKRYLOV, &krylov));
+  search = (PetscBool)(r->search && krylov);
+  if (r->search && !krylov) PetscCall(KFReducerNote_Private(r, "the %s basis has no accuracy search: its fixed recipe was used (-kf_search applies to the krylov type)", ((PetscObject)r)->type_name));
+  /* moments: the fixed number, the search's most, or the paper's 10 for a fixed recipe without a number */
+  r->build_moments = r->moments != PETSC_DECIDE ? r->moments : (search ? r->moments_max : 10);
+  if (r->build_moments <= r->output_blocks) r->build_moments = r->output_blocks + 1;
+  nfull = r->build_moments;
+  PetscCall(KFReducerAnnounce_Private(r));
+  PetscCall(KFReducerEvalPoints_Private(r, &neval, &evals));
+  PetscCall(PetscCalloc1(r->nconfig * nfull * t * a, &Lfull));
+  if (search) PetscCall(KFReducerSolveSearch_Private(r, neval, evals, Lfull));
+  else {
+    PetscCall(KFReducerSolveFixed_Private(r, evals, Lfull));
+    if (r->verify) { /* the midpoints' references, then every point's grid */
+      KFSystem sys;
+      PetscInt nrev;
+
+      PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+      PetscCall(KFSystemCreate(r->scene, &sys));
+      for (PetscInt e = r->nconfig; e < neval; e++) {
+        PetscCall(KFInterruptCheck(comm));
+        PetscCall(KFSystemSetAngles(sys, evals[e].angles));
+        PetscCall(KFReducerReference_Private(r, sys, NULL, &evals[e]));
+      }
+      PetscCall(KFSystemDestroy(&sys));
+      for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
+    }
+  }
+  PetscCall(KFInterruptCheck(comm));
+  PetscCall(KFReducerCompare_Private(r, nfull, Lfull, neval, evals));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointDestroy_Private(&evals[e]));
+  PetscCall(PetscFree(evals));
+  PetscCall(PetscFree(Lfull));
   r->solved = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view"));

@@ -2,7 +2,7 @@
 # radians and NumPy arrays; results come back as NumPy copies, shaped as C records them (column-major over shape).
 # The models it hands out hold their own reference, so they outlive the reducer.
 
-METHODS = {"single-angle": KF_METHOD_SINGLE_ANGLE, "multi-angle": KF_METHOD_MULTI_ANGLE}
+METHODS = {"single-angle": KF_METHOD_SINGLE_ANGLE, "multi-angle": KF_METHOD_MULTI_ANGLE, "auto": KF_METHOD_AUTO}
 REDUCER_TYPES = ("krylov", "eigen")
 
 
@@ -108,8 +108,16 @@ cdef class CReducer:
     def set_accuracy(self, PetscReal target):
         check(KFReducerSetAccuracy(self.r, target))
 
-    def set_moments(self, PetscInt moments, PetscInt output_blocks=1):
-        check(KFReducerSetMoments(self.r, moments, output_blocks))
+    def set_moments(self, moments, PetscInt output_blocks=1):
+        """moments: an integer, or "auto" (None): the accuracy search chooses"""
+        cdef PetscInt c = -1 if moments in (None, "auto") else int(moments)   # -1: PETSC_DECIDE
+        check(KFReducerSetMoments(self.r, c, output_blocks))
+
+    def set_search(self, search, PetscInt moments_max=24):
+        check(KFReducerSetSearch(self.r, PETSC_TRUE if search else PETSC_FALSE, moments_max))
+
+    def set_cluster_tolerance(self, PetscReal rtol):
+        check(KFReducerSetClusterTolerance(self.r, rtol))
 
     def set_importance(self, measure, PetscReal keep_threshold):
         if measure not in IMPORTANCE:

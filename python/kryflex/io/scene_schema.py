@@ -27,9 +27,9 @@ MAX_ANGLE = 360.0                     # degrees
 MAX_MOMENTS = 200
 MAX_FREQUENCY_POINTS = 100000
 ORIENTATION_TOL = 1e-6                # orthonormality of a joint orientation as written (7 digits are enough)
-IMPORTANCES = ("h2", "hinf", "static")
+IMPORTANCES = ("band", "h2", "hinf", "static")
 BASES = ("krylov", "eigen")
-METHODS = ("single-angle", "multi-angle")
+METHODS = ("auto", "single-angle", "multi-angle")
 JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
@@ -40,12 +40,15 @@ TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
 REDUCTION_DEFAULTS = {
     "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
     "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
-    "moments": 10,               # low-frequency moments matched exactly (c in the paper)
+    "moments": "auto",           # low-frequency moments matched exactly (c in the paper): auto (the search) or a number
+    "moments_max": 24,           # the most moments the accuracy search tries
+    "search": True,              # accuracy search (false: the paper's fixed recipe: moments, keep_threshold, its alpha_G rule)
+    "cluster_rtol": 1e-3,        # Krylov modes this close in frequency (relative) are kept or dropped together
     "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
-    "importance": "h2",          # h2 | hinf | static
+    "importance": "band",        # band (band-aware, cluster-invariant) | h2 | hinf | static
     "keep_threshold": 0.05,      # keep Krylov modes whose normalized importance reaches this
     "reduction_angle": "auto",   # alpha_G: auto, or an angle (list for several joints)
-    "method": "single-angle",    # single-angle (the paper) | multi-angle (exact moments at several angles)
+    "method": "auto",            # auto (the smaller that meets the accuracy) | single-angle (the paper) | multi-angle
     "reduction_angles": None,    # multi-angle: configurations to build Krylov vectors at (default: all angles)
     "deflation_tol": 1e-10,      # Krylov block deflation (relative)
     "body_tol": 1e-10,           # per-body rank deflation of the projected modes
@@ -544,10 +547,15 @@ def _reduction(where, given, revolute):
     red["basis"] = choice(where, p + "basis", red["basis"], BASES)
     red["method"] = choice(where, p + "method", red["method"], METHODS)
     red["importance"] = choice(where, p + "importance", red["importance"], IMPORTANCES)
-    red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)
+    if red["moments"] != "auto":
+        red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)
+    red["moments_max"] = integer(where, p + "moments_max", red["moments_max"], "[1, %d]" % MAX_MOMENTS)
+    red["search"] = boolean(where, p + "search", red["search"])
+    red["cluster_rtol"] = real(where, p + "cluster_rtol", red["cluster_rtol"], "[0, 1)",
+                               "give a relative frequency gap in [0, 1)")
     red["output_blocks"] = integer(where, p + "output_blocks", red["output_blocks"], "[0, inf)",
                                    "give an integer >= 0 and below moments")
-    if red["output_blocks"] >= red["moments"]:
+    if red["moments"] != "auto" and red["output_blocks"] >= red["moments"]:
         fail(where, p + "output_blocks", "%d is not below moments (%d); give fewer output blocks than moments"
              % (red["output_blocks"], red["moments"]))
     red["keep_threshold"] = real(where, p + "keep_threshold", red["keep_threshold"], "(0, 1]",

@@ -17,6 +17,11 @@ typedef struct {
   PetscReal *Gr, *Hr;      /* size x a, t x size */
   PetscReal  gram_condition; /* of the raw recurrence (diagnostic), NaN when not computed */
   void      *data;
+  /* for the accuracy search (Krylov): the projected pencil of the whole basis and where each block ends, so that the
+     first c blocks (c moments) are a leading sub-basis; NULL/0 for bases without blocks */
+  PetscReal *Kr, *Mr;      /* size x size */
+  PetscInt   nblocks, *block_end;
+  PetscReal  rigid_content, orthogonality;
 } KFReducerBasis;
 
 struct _KFReducerOps {
@@ -73,9 +78,14 @@ struct _p_KFReducer {
   PetscReal       verify_cover;
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
+  PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */
+  PetscInt        moments_max;
+  PetscReal       cluster_rtol;
+  PetscInt        build_moments;  /* blocks the implementation builds for this solve (moments, or moments_max) */
 
   /* results of the solve */
   KFReducedModel single, multi_model;
+  KFReducerMethod chosen;         /* the family of the model KFReducerGetReducedModel returns */
   KFResultSet   *results;         /* nconfig + 1 sets; the last one holds the whole solve's */
   PetscInt       nnotes;
   char         **notes;
@@ -98,8 +108,69 @@ typedef struct {
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
 /* errors of the reassembled models against the full order at every configuration of interest (results, notes) */
-PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, const PetscReal Lfull[], KFFullReference ref[]);
-PETSC_INTERN PetscErrorCode KFReducerRecordSettings_Private(KFReducer, KFReducedModel, KFReducerMethod, PetscInt n, const PetscReal angles[]);
+PETSC_INTERN PetscErrorCode KFReducerRecordSettings_Private(KFReducer, KFReducedModel, KFReducerMethod, PetscInt moments, PetscInt n, const PetscReal angles[]);
+
+/* ---- the accuracy search (src/reducer/visit.c, evaluate.c, search.c) */
+
+/* a configuration the solve visited: its basis (the implementation's data alive), its rigid modes and body maps,
+   kept so that candidate models can be made from it after the factorization is gone */
+typedef struct {
+  PetscReal     *angles;     /* nrev1 */
+  PetscInt       interest;   /* index among the angles of interest, -1 if not one */
+  PetscBool      is_g, in_multi;
+  KFReducerBasis basis;
+  Mat            Phir;       /* e x r */
+  Mat           *P;          /* per body, n_b x e */
+} KFVisit;
+PETSC_INTERN PetscErrorCode KFVisitDestroy_Private(KFReducer, KFVisit *);
+/* system vectors of the first c blocks of a visit's basis, columns of unit M-norm: the kept clusters (the first kept in
+   importance order; -1: the whole sub-basis) plus the static correction of the others; nclusters (may be NULL): the
+   clusters of the sub-basis. KFVisitModes_Private: the sub-basis' modes, importance and clusters (caller frees with
+   PetscFree4(lambda, Phi, imp, clu)). */
+PETSC_INTERN PetscErrorCode KFVisitVectors_Private(KFReducer, KFVisit *, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters);
+PETSC_INTERN PetscErrorCode KFVisitModes_Private(KFReducer, KFVisit *, PetscInt c, PetscInt *n, PetscReal **lambda, PetscReal **Phi, PetscReal **imp, PetscInt **clu, PetscInt *nclusters);
+
+#define KF_MAX_EXPANSION 64
+/* Ritz values at or below this fraction of the largest are rigid content, not modes (spurious near-zero modes) */
+#define KF_SPURIOUS_RTOL 1e-12
+typedef struct {
+  PetscInt  family;     /* KF_METHOD_SINGLE_ANGLE or KF_METHOD_MULTI_ANGLE */
+  PetscInt  c;          /* moments (blocks) */
+  PetscInt  kept;       /* clusters kept, -1: the whole basis */
+  PetscInt  nexp, exp[KF_MAX_EXPANSION]; /* visits whose bases make the model */
+  /* after evaluation */
+  PetscInt  size, sysdofs;
+  PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */
+  PetscBool complete;   /* every evaluation point was measured */
+} KFCandidate;
+PETSC_INTERN PetscErrorCode KFCandidateModel_Private(KFReducer, KFVisit visits[], const KFCandidate *, KFReducedModel *);
+
+/* a configuration where models are measured: an angle of interest or a midpoint, with its reference response */
+typedef struct _KFEvalPoint {
+  PetscReal      *angles;      /* nrev1 */
+  PetscInt        interest;    /* index among the angles of interest, -1 for a midpoint */
+  KFFullReference ref;         /* full-order reference (ref.w2 NULL with the estimator) */
+  PetscReal      *L0;          /* t x a static moment of the full order */
+  KFReducedSystem rich;        /* the estimator's reference, NULL with the full order */
+  PetscInt        nw;
+  PetscReal      *fhz, *w, *Tre, *Tim; /* grid (Hz, rad/s) and the reference response, nw blocks of t x a */
+} KFEvalPoint;
+PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, const PetscReal L0[], KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
+/* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
+   angle of interest in Lfull */
+PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, PetscInt nfull, const PetscReal Lfull[], PetscInt neval, KFEvalPoint evals[]);
+
+/* the errors of a reduced system at an evaluation point (KFFRFErrors on its grid, the worst pair's maximum refined
+   between grid points); Trre/Trim (nw blocks) may be NULL, or receive the reduced response on the grid */
+PETSC_INTERN PetscErrorCode KFEvalPointErrors_Private(KFReducer, KFEvalPoint *, KFReducedSystem, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[]);
+/* the full-order response of a reference at nw frequencies */
+PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, const PetscReal L0[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+/* measure a candidate: error over the points (stopping at the first point above stop, stop <= 0: all), sizes */
+PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
+/* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
+PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 
 PETSC_EXTERN PetscLogEvent KF_EVENT_REDUCER_SETUP, KF_EVENT_REDUCER_SOLVE, KF_EVENT_REDUCER_BASIS, KF_EVENT_REDUCER_VERIFY;
 

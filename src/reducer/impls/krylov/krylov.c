@@ -2,15 +2,40 @@
    (eq. 12-13), and the kept modes plus the paper's static correction of the others (eq. 15-17). */
 #include <kryflex/reducerimpl.h>
 
+typedef struct {
+  PetscBool raw; /* project on the paper's raw recurrence (eq. 9) instead of the orthogonalized blocks: diagnostics */
+} KFReducer_Krylov;
+
 static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFlexSolver solver, KFReducerBasis *basis)
 {
-  BV         V;
-  PetscInt   c, a, t, nsys, l, k;
-  PetscReal *Mr, *Kr;
+  KFReducer_Krylov *kr = (KFReducer_Krylov *)r->data;
+  BV                V;
+  PetscInt          c, a, t, nsys, l, k, nblk = r->build_moments, nout, nin;
+  PetscReal        *Mr, *Kr;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, &a, &t));
-  PetscCall(KFKrylovBasis(solver, r->moments - r->output_blocks, r->output_blocks, r->deflation_tol, &V, &basis->ndeflated));
+  /* c blocks: the output blocks interleave with the first input blocks, so each prefix of c' blocks is the basis of
+     c' moments (KFKrylovBasisWithInfo) */
+  nout = PetscMin(r->output_blocks, nblk / 2);
+  nin  = nblk - nout;
+  if (kr->raw) {
+    Mat P;
+
+    PetscCall(KFKrylovRawBasis(solver, nin, nout, &P, &basis->gram_condition));
+    PetscCall(BVCreateFromMat(P, &V));
+    PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
+    PetscCall(MatDestroy(&P));
+  } else {
+    KFKrylovInfo info;
+
+    PetscCall(KFKrylovBasisWithInfo(solver, nin, nout, r->deflation_tol, &V, &info));
+    basis->ndeflated     = info.ndeflated;
+    basis->nblocks       = info.nblocks;
+    basis->block_end     = info.block_end; /* the basis owns it now */
+    basis->rigid_content = info.rigid_content;
+    basis->orthogonality = info.orthogonality;
+  }
   PetscCall(BVGetActiveColumns(V, &l, &k));
   c           = k - l;
   basis->size = c;
@@ -19,15 +44,34 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
   PetscCall(PetscMalloc2(c * c, &Mr, c * c, &Kr));
   PetscCall(KFSystemProject(sys, V, Mr, Kr, basis->Gr, basis->Hr));
   PetscCall(KFDenseEig(c, Kr, Mr, basis->lambda, basis->Phi));
-  PetscCall(PetscFree2(Mr, Kr));
-  if (nsys <= r->gram_condition_max_dofs) { /* the raw recurrence's conditioning: why the basis is orthogonalized */
+  basis->Kr = Kr;
+  basis->Mr = Mr;
+  if (!kr->raw && nsys <= r->gram_condition_max_dofs) { /* the raw recurrence's conditioning: why the basis is orthogonalized */
     Mat       P;
     PetscReal cond;
 
-    PetscCall(KFKrylovRawBasis(solver, r->moments - r->output_blocks, r->output_blocks, &P, &cond));
+    PetscCall(KFKrylovRawBasis(solver, nin, nout, &P, &cond));
     PetscCall(MatDestroy(&P));
     basis->gram_condition = PetscMin(cond, 1e300);
   }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFReducerSetFromOptions_Krylov(KFReducer r, PetscOptionItems *PetscOptionsObject)
+{
+  KFReducer_Krylov *kr = (KFReducer_Krylov *)r->data;
+
+  PetscFunctionBegin;
+  PetscOptionsHeadBegin(PetscOptionsObject, "Krylov basis (-kf_reducer_type krylov)");
+  PetscCall(PetscOptionsBool("-kf_krylov_raw", "Project on the paper's raw recurrence (eq. 9), not orthogonalized: to show its failure (needs -kf_search 0)", "KFReducerSolve", kr->raw, &kr->raw, NULL));
+  PetscOptionsHeadEnd();
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFReducerDestroy_Krylov(KFReducer r)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(r->data));
   PetscFunctionReturn(0);
 }
 
@@ -81,7 +125,13 @@ static PetscErrorCode KFReducerDestroyBasis_Krylov(KFReducer r, KFReducerBasis *
 
 PetscErrorCode KFReducerCreate_Krylov(KFReducer r)
 {
+  KFReducer_Krylov *kr;
+
   PetscFunctionBegin;
+  PetscCall(PetscNew(&kr));
+  r->data                = kr;
+  r->ops->setfromoptions = KFReducerSetFromOptions_Krylov;
+  r->ops->destroy        = KFReducerDestroy_Krylov;
   r->ops->buildbasis   = KFReducerBuildBasis_Krylov;
   r->ops->vectors      = KFReducerVectors_Krylov;
   r->ops->destroybasis = KFReducerDestroyBasis_Krylov;

@@ -1,0 +1,210 @@
+/*
+  Where models are measured: an evaluation point is an angle of interest or a midpoint between two, with the reference
+  response on a frequency grid (the full order: SLEPc modes, rigid modes and the static residual of the modes not
+  computed; or, verification off, the richest candidate model as an estimator). A reduced system's error there is
+  KFFRFErrors on the grid, with the worst pair's maximum refined between grid points (a peak of the difference can
+  fall between two points when a reduced resonance is shifted by less than the damping width).
+*/
+#include <kryflex/reducerimpl.h>
+
+/* Full-order response: rigid modes, computed flexible modes, and the static residual L^0 - sum_i H phi_i phi_i^T G /
+   omega_i^2 of the modes not computed. Tre, Tim: nw blocks of t x a. */
+PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscInt a, const PetscReal L0[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  const PetscInt n = ref->r + ref->n;
+  PetscReal     *lam, *HPhi, *PhiG, *resid;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc4(n, &lam, t * n, &HPhi, n * a, &PhiG, t * a, &resid));
+  for (PetscInt k = 0; k < n; k++) lam[k] = k < ref->r ? 0 : ref->w2[k - ref->r];
+  PetscCall(PetscArraycpy(HPhi, ref->HPr, t * ref->r));
+  PetscCall(PetscArraycpy(HPhi + t * ref->r, ref->HPhi, t * ref->n));
+  for (PetscInt j = 0; j < a; j++) {
+    for (PetscInt k = 0; k < ref->r; k++) PhiG[k + j * n] = ref->PrG[k + j * ref->r];
+    for (PetscInt k = 0; k < ref->n; k++) PhiG[ref->r + k + j * n] = ref->PhiG[k + j * ref->n];
+  }
+  PetscCall(KFModalFRF(n, lam, t, HPhi, a, PhiG, zeta, 1e-300, nw, w, Tre, Tim));
+  for (PetscInt j = 0; j < a; j++)
+    for (PetscInt i = 0; i < t; i++) {
+      PetscReal s = L0[i + j * t];
+      for (PetscInt k = 0; k < ref->n; k++) s -= ref->HPhi[i + k * t] / ref->w2[k] * ref->PhiG[k + j * ref->n];
+      resid[i + j * t] = s;
+    }
+  for (PetscInt f = 0; f < nw; f++)
+    for (PetscInt e = 0; e < t * a; e++) Tre[f * t * a + e] += resid[e];
+  PetscCall(PetscFree4(lam, HPhi, PhiG, resid));
+  PetscFunctionReturn(0);
+}
+
+/* the reference response at nw frequencies */
+static PetscErrorCode KFEvalPointResponse(KFReducer r, KFEvalPoint *p, PetscInt nw, const PetscReal w[], PetscReal re[], PetscReal im[])
+{
+  PetscInt a, t;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  if (p->rich) PetscCall(KFReducedSystemFRF(p->rich, r->zeta, nw, w, re, im));
+  else PetscCall(KFFullFRF_Private(&p->ref, t, a, p->L0, r->zeta, nw, w, re, im));
+  PetscFunctionReturn(0);
+}
+
+/* the grid (the band's log-spaced points plus 7 around each reference resonance) and the reference on it */
+PetscErrorCode KFEvalPointSetUp_Private(KFReducer r, KFEvalPoint *p)
+{
+  PetscInt   a, t, nres = 0;
+  PetscReal *fres;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  if (p->rich) {
+    const PetscReal *f;
+
+    PetscCall(KFReducedSystemGetFrequencies(p->rich, &nres, &f));
+    PetscCall(PetscMalloc1(PetscMax(nres, 1), &fres));
+    PetscCall(PetscArraycpy(fres, f, nres));
+  } else {
+    nres = p->ref.n;
+    PetscCall(PetscMalloc1(PetscMax(nres, 1), &fres));
+    for (PetscInt k = 0; k < nres; k++) fres[k] = PetscSqrtReal(p->ref.w2[k]) / (2 * PETSC_PI);
+  }
+  PetscCall(PetscMalloc1(r->frequency_points + 7 * nres, &p->fhz));
+  PetscCall(KFFrequencyGrid(r->band[0], r->band[1], r->frequency_points, nres, fres, r->zeta, &p->nw, p->fhz));
+  PetscCall(PetscFree(fres));
+  PetscCall(PetscMalloc3(p->nw, &p->w, p->nw * t * a, &p->Tre, p->nw * t * a, &p->Tim));
+  for (PetscInt f = 0; f < p->nw; f++) p->w[f] = 2 * PETSC_PI * p->fhz[f];
+  PetscCall(KFEvalPointResponse(r, p, p->nw, p->w, p->Tre, p->Tim));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *p)
+{
+  PetscFunctionBegin;
+  PetscCall(KFFullReferenceDestroy_Private(&p->ref));
+  PetscCall(KFReducedSystemDestroy(&p->rich));
+  PetscCall(PetscFree(p->L0));
+  PetscCall(PetscFree(p->fhz));
+  PetscCall(PetscFree3(p->w, p->Tre, p->Tim));
+  PetscCall(PetscFree(p->angles));
+  PetscCall(PetscMemzero(p, sizeof(*p)));
+  PetscFunctionReturn(0);
+}
+
+/* |Tf_ij - Tr_ij| / peak at one frequency */
+static PetscErrorCode KFPairError(KFReducer r, KFEvalPoint *p, KFReducedSystem rs, PetscInt ij, PetscReal w, PetscReal *e)
+{
+  PetscInt   a, t;
+  PetscReal *buf;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscMalloc1(4 * t * a, &buf));
+  PetscCall(KFEvalPointResponse(r, p, 1, &w, buf, buf + t * a));
+  PetscCall(KFReducedSystemFRF(rs, r->zeta, 1, &w, buf + 2 * t * a, buf + 3 * t * a));
+  {
+    const PetscReal dre = buf[ij] - buf[2 * t * a + ij], dim = buf[t * a + ij] - buf[3 * t * a + ij];
+    *e = PetscSqrtReal(dre * dre + dim * dim);
+  }
+  PetscCall(PetscFree(buf));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedSystem rs, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[])
+{
+  const PetscReal gr = 0.5 * (PetscSqrtReal(5.0) - 1);
+  PetscInt        a, t, ta, worst = -1, fw = 0;
+  PetscReal      *re = Trre, *im = Trim, best = -1, peak = 0;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  ta = t * a;
+  if (!re) PetscCall(PetscMalloc2(p->nw * ta, &re, p->nw * ta, &im));
+  PetscCall(KFReducedSystemFRF(rs, r->zeta, p->nw, p->w, re, im));
+  PetscCall(KFFRFErrors(p->nw, t, a, p->Tre, p->Tim, re, im, r->frf_floor_db, hinf, pointwise));
+  /* the pair and frequency that make hinf, and its peak */
+  {
+    PetscReal top = 0, *pk;
+
+    PetscCall(PetscCalloc1(PetscMax(ta, 1), &pk));
+    for (PetscInt f = 0; f < p->nw; f++)
+      for (PetscInt k = 0; k < ta; k++) pk[k] = PetscMax(pk[k], PetscSqrtReal(p->Tre[f * ta + k] * p->Tre[f * ta + k] + p->Tim[f * ta + k] * p->Tim[f * ta + k]));
+    for (PetscInt k = 0; k < ta; k++) top = PetscMax(top, pk[k]);
+    for (PetscInt f = 0; f < p->nw; f++)
+      for (PetscInt k = 0; k < ta; k++) {
+        const PetscReal dre = p->Tre[f * ta + k] - re[f * ta + k], dim = p->Tim[f * ta + k] - im[f * ta + k];
+        const PetscReal ref = PetscMax(PetscMax(pk[k], 1e-6 * top), 1e-300), e = PetscSqrtReal(dre * dre + dim * dim) / ref;
+
+        if (e > best) {
+          best  = e;
+          worst = k;
+          fw    = f;
+          peak  = ref;
+        }
+      }
+    PetscCall(PetscFree(pk));
+  }
+  /* golden-section search for the largest difference between the neighbours of the worst grid point */
+  if (worst >= 0 && p->nw > 2 && !PetscIsInfOrNanReal(*hinf)) {
+    PetscReal lo = p->w[PetscMax(fw - 1, 0)], hi = p->w[PetscMin(fw + 1, p->nw - 1)], x1, x2, e1, e2;
+
+    x1 = hi - gr * (hi - lo);
+    x2 = lo + gr * (hi - lo);
+    PetscCall(KFPairError(r, p, rs, worst, x1, &e1));
+    PetscCall(KFPairError(r, p, rs, worst, x2, &e2));
+    for (int it = 0; it < 16; it++) {
+      if (e1 > e2) {
+        hi = x2;
+        x2 = x1;
+        e2 = e1;
+        x1 = hi - gr * (hi - lo);
+        PetscCall(KFPairError(r, p, rs, worst, x1, &e1));
+      } else {
+        lo = x1;
+        x1 = x2;
+        e1 = e2;
+        x2 = lo + gr * (hi - lo);
+        PetscCall(KFPairError(r, p, rs, worst, x2, &e2));
+      }
+    }
+    *hinf = PetscMax(*hinf, PetscMax(e1, e2) / peak);
+  }
+  if (!Trre) PetscCall(PetscFree2(re, im));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], PetscReal stop, KFCandidate *cand)
+{
+  KFReducedModel model;
+  PetscInt       nb;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(KFCandidateModel_Private(r, visits, cand, &model));
+  cand->size = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(model, b, NULL, NULL, &body, NULL));
+    cand->size += body.v;
+  }
+  cand->error    = 0;
+  cand->sysdofs  = 0;
+  cand->complete = PETSC_TRUE;
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscReal       hinf;
+    PetscInt        n;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
+    cand->sysdofs = PetscMax(cand->sysdofs, n);
+    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    cand->error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(cand->error, hinf);
+    if (stop > 0 && cand->error > stop && e < neval - 1) {
+      cand->complete = PETSC_FALSE;
+      break;
+    }
+  }
+  PetscCall(KFReducedModelDestroy(&model));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,211 @@
+/*
+  The accuracy search: the smallest reduced model whose error (KFFRFErrors' relative H-infinity measure) meets the
+  scene's accuracy at every evaluation point (angles of interest and the midpoints between them).
+
+  Single-angle family, for each candidate alpha_G (the named one, or every angle of interest):
+    1. the fewest moments c whose whole Krylov basis meets the target;
+    2. for c, c + 1 and c + 2, the fewest clusters of Krylov modes (in band-aware importance order, with the static
+       correction of the rest) that still meet it, by bisection (the error falls as clusters are added).
+  Multi-angle family: expansion angles added one at a time (the angle of interest farthest from those already in),
+  and for each set the fewest moments whose whole bases meet the target.
+  Sizes are the reduced bodies' dofs summed (what is stored and simulated); ties go to the smaller error. Every model
+  tried is a row of the search table (results "search_table").
+*/
+#include <kryflex/reducerimpl.h>
+
+typedef struct {
+  PetscInt   n, nalloc;
+  PetscReal *rows; /* 7 per row */
+} KFSearchTable;
+
+static PetscErrorCode KFSearchRecord(KFSearchTable *tab, const KFCandidate *c)
+{
+  PetscFunctionBegin;
+  if (tab->n == tab->nalloc) {
+    tab->nalloc = PetscMax(64, 2 * tab->nalloc);
+    PetscCall(PetscRealloc(sizeof(PetscReal) * 7 * tab->nalloc, &tab->rows));
+  }
+  {
+    PetscReal *row = &tab->rows[7 * tab->n++];
+
+    row[0] = (PetscReal)c->family;
+    row[1] = (PetscReal)c->c;
+    row[2] = (PetscReal)c->kept;
+    row[3] = (PetscReal)c->nexp;
+    row[4] = (PetscReal)c->size;
+    row[5] = (PetscReal)c->sysdofs;
+    row[6] = c->error;
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscBool KFPasses(KFReducer r, const KFCandidate *c)
+{
+  return (PetscBool)(c->complete && c->error <= r->accuracy);
+}
+
+/* b better than a: passing beats failing; among passing the smaller, then the more accurate; among failing the more
+   accurate */
+static PetscBool KFBetter(KFReducer r, const KFCandidate *b, const KFCandidate *a)
+{
+  const PetscBool pa = KFPasses(r, a), pb = KFPasses(r, b);
+
+  if (!a->nexp) return PETSC_TRUE;
+  if (pa != pb) return pb;
+  if (pb) return (PetscBool)(b->size < a->size || (b->size == a->size && b->error < a->error));
+  return (PetscBool)(b->error < a->error);
+}
+
+static PetscErrorCode KFTry(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFSearchTable *tab, KFCandidate *c, KFCandidate *best)
+{
+  PetscFunctionBegin;
+  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  /* a candidate already worse than the target is not measured further: its error is then a lower bound */
+  PetscCall(KFCandidateEvaluate_Private(r, visits, neval, evals, r->accuracy, c));
+  PetscCall(KFSearchRecord(tab, c));
+  if (KFBetter(r, c, best)) *best = *c;
+  PetscFunctionReturn(0);
+}
+
+/* moments the bases of the expansion visits can give: beyond the last block that added columns nothing changes */
+static PetscInt KFUsefulMoments(KFVisit visits[], const KFCandidate *c, PetscInt cmax)
+{
+  PetscInt useful = 1;
+
+  for (PetscInt e = 0; e < c->nexp; e++) {
+    const KFReducerBasis *b = &visits[c->exp[e]].basis;
+
+    for (PetscInt k = 1; k < PetscMin(b->nblocks, cmax); k++)
+      if (b->block_end[k] > b->block_end[k - 1]) useful = PetscMax(useful, k + 1);
+  }
+  return PetscMin(useful, cmax);
+}
+
+/* the fewest moments in [cmin, cmax] whose whole bases meet the target (the most accurate one when none does) */
+static PetscErrorCode KFSearchMoments(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFSearchTable *tab, KFCandidate *proto, PetscInt cmin, PetscInt cmax, KFCandidate *found)
+{
+  const PetscInt useful = KFUsefulMoments(visits, proto, cmax);
+
+  PetscFunctionBegin;
+  found->nexp = 0;
+  for (PetscInt c = PetscMin(cmin, useful); c <= useful; c++) {
+    KFCandidate cand = *proto;
+
+    cand.c    = c;
+    cand.kept = -1;
+    PetscCall(KFTry(r, visits, neval, evals, tab, &cand, found));
+    if (KFPasses(r, &cand)) break;
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows)
+{
+  KFSearchTable tab  = {0, 0, NULL};
+  const PetscBool fixed = (PetscBool)(r->moments != PETSC_DECIDE);
+  const PetscInt  cmax  = r->build_moments, cmin = fixed ? r->moments : 1;
+  PetscInt        nrev, nrev1, ninterest = 0;
+  MPI_Comm        comm;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(PetscMemzero(single, sizeof(*single)));
+  PetscCall(PetscMemzero(multi, sizeof(*multi)));
+  for (PetscInt i = 0; i < nvisit; i++) ninterest += visits[i].interest >= 0;
+
+  if (r->method != KF_METHOD_MULTI_ANGLE) {
+    for (PetscInt g = 0; g < nvisit; g++) {
+      KFCandidate proto = {0}, found;
+      PetscInt    cstar;
+
+      if (r->auto_alpha ? visits[g].interest < 0 : !visits[g].is_g) continue;
+      proto.family = KF_METHOD_SINGLE_ANGLE;
+      proto.nexp   = 1;
+      proto.exp[0] = g;
+      PetscCall(KFSearchMoments(r, visits, neval, evals, &tab, &proto, cmin, cmax, &found));
+      if (KFBetter(r, &found, single)) *single = found;
+      if (!KFPasses(r, &found)) continue;
+      cstar = found.c;
+      for (PetscInt c = cstar; c <= PetscMin(cstar + 2, fixed ? cstar : KFUsefulMoments(visits, &proto, cmax)); c++) {
+        KFCandidate cand = proto, best = {0};
+        PetscInt    lo = -1, hi, nclusters, n, *clu;
+        PetscReal  *lambda, *Phi, *imp;
+
+        PetscCall(KFVisitModes_Private(r, &visits[g], c, &n, &lambda, &Phi, &imp, &clu, &nclusters));
+        PetscCall(PetscFree4(lambda, Phi, imp, clu));
+        cand.c = c;
+        hi     = nclusters; /* every cluster kept: the whole basis, which passes for c = cstar */
+        if (c > cstar) {
+          cand.kept = hi;
+          PetscCall(KFTry(r, visits, neval, evals, &tab, &cand, &best));
+          if (!KFPasses(r, &cand)) continue;
+        }
+        while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+          const PetscInt mid = (lo + hi) / 2;
+
+          cand.kept = mid;
+          PetscCall(KFTry(r, visits, neval, evals, &tab, &cand, &best));
+          if (KFPasses(r, &cand)) hi = mid;
+          else lo = mid;
+        }
+        if (best.nexp && KFBetter(r, &best, single)) *single = best;
+      }
+    }
+  }
+
+  if (r->method != KF_METHOD_SINGLE_ANGLE && ninterest > 1) {
+    KFCandidate proto = {0};
+    PetscBool   in[1024] = {PETSC_FALSE};
+
+    proto.family = KF_METHOD_MULTI_ANGLE;
+    if (r->nmulti) { /* named expansion configurations */
+      for (PetscInt i = 0; i < nvisit && proto.nexp < KF_MAX_EXPANSION; i++)
+        if (visits[i].in_multi) proto.exp[proto.nexp++] = i;
+    } else { /* start from the best single-angle model's angle (or the first angle of interest) */
+      PetscInt first = single->nexp ? single->exp[0] : -1;
+
+      for (PetscInt i = 0; first < 0 && i < nvisit; i++)
+        if (visits[i].interest >= 0) first = i;
+      proto.exp[proto.nexp++] = first;
+      in[first]               = PETSC_TRUE;
+    }
+    for (;;) {
+      KFCandidate found;
+
+      if (proto.nexp > 1) {
+        PetscCall(KFSearchMoments(r, visits, neval, evals, &tab, &proto, cmin, cmax, &found));
+        if (KFBetter(r, &found, multi)) *multi = found;
+        if (KFPasses(r, &found) || r->nmulti) break;
+      }
+      if (proto.nexp >= PetscMin(ninterest, KF_MAX_EXPANSION) || nvisit > 1024) break;
+      { /* the angle of interest farthest (in the largest joint-angle difference) from the expansion angles */
+        PetscInt  far = -1;
+        PetscReal dfar = -1;
+
+        for (PetscInt i = 0; i < nvisit; i++) {
+          PetscReal dmin = PETSC_MAX_REAL;
+
+          if (visits[i].interest < 0 || in[i]) continue;
+          for (PetscInt e = 0; e < proto.nexp; e++) {
+            PetscReal d = 0;
+
+            for (PetscInt j = 0; j < nrev1; j++) d = PetscMax(d, PetscAbsReal(visits[i].angles[j] - visits[proto.exp[e]].angles[j]));
+            dmin = PetscMin(dmin, d);
+          }
+          if (dmin > dfar) {
+            dfar = dmin;
+            far  = i;
+          }
+        }
+        if (far < 0) break;
+        proto.exp[proto.nexp++] = far;
+        in[far]                 = PETSC_TRUE;
+      }
+    }
+  }
+  *nrows = tab.n;
+  *rows  = tab.rows;
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,192 @@
+/*
+  What the accuracy search makes models from: the visited configurations (their bases, rigid modes and body maps,
+  kept after their factorization is gone) and, for a candidate (family, moments, kept clusters, expansion angles),
+  its system vectors and its reduced model.
+*/
+#include <kryflex/reducerimpl.h>
+
+PetscErrorCode KFVisitDestroy_Private(KFReducer r, KFVisit *v)
+{
+  PetscInt nb;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  if (r->ops->destroybasis && v->basis.data) PetscCall((*r->ops->destroybasis)(r, &v->basis));
+  PetscCall(PetscFree4(v->basis.lambda, v->basis.Phi, v->basis.Gr, v->basis.Hr));
+  PetscCall(PetscFree2(v->basis.Mr, v->basis.Kr));
+  PetscCall(PetscFree(v->basis.block_end));
+  PetscCall(MatDestroy(&v->Phir));
+  if (v->P)
+    for (PetscInt b = 0; b < nb; b++) PetscCall(MatDestroy(&v->P[b]));
+  PetscCall(PetscFree(v->P));
+  PetscCall(PetscFree(v->angles));
+  PetscCall(PetscMemzero(v, sizeof(*v)));
+  PetscFunctionReturn(0);
+}
+
+/* columns of the first c blocks */
+static PetscInt KFVisitColumns(const KFVisit *v, PetscInt c)
+{
+  if (!v->basis.nblocks) return v->basis.size;
+  c = PetscMin(PetscMax(c, 1), v->basis.nblocks);
+  return v->basis.block_end[c - 1];
+}
+
+/* The Krylov modes of the first c blocks (the leading sub-pencil), their importance by the reducer's measure and their
+   clusters (band importance: near-equal frequencies together; the other measures: one mode per cluster). */
+PetscErrorCode KFVisitModes_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt *n, PetscReal **lambda, PetscReal **Phi, PetscReal **imp, PetscInt **clu, PetscInt *nclusters)
+{
+  const PetscInt N = v->basis.size, m = KFVisitColumns(v, c);
+  PetscInt       a, t;
+  PetscReal     *K, *M, *G, *H;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscMalloc4(m * m, &K, m * m, &M, m * a, &G, t * m, &H));
+  for (PetscInt j = 0; j < m; j++)
+    for (PetscInt i = 0; i < m; i++) {
+      K[i + j * m] = v->basis.Kr[i + j * N];
+      M[i + j * m] = v->basis.Mr[i + j * N];
+    }
+  for (PetscInt j = 0; j < a; j++)
+    for (PetscInt i = 0; i < m; i++) G[i + j * m] = v->basis.Gr[i + j * N];
+  for (PetscInt j = 0; j < m; j++)
+    for (PetscInt i = 0; i < t; i++) H[i + j * t] = v->basis.Hr[i + j * t];
+  PetscCall(PetscMalloc4(m, lambda, m * m, Phi, m, imp, m, clu));
+  PetscCall(KFDenseEig(m, K, M, *lambda, *Phi));
+  /* a Ritz value near zero is rigid content the basis should not carry (spurious): cluster -1, never kept, never
+     corrected; with the rigid modes projected out of every block it does not occur, and the solve notes it if it does */
+  if (r->importance == KF_IMPORTANCE_BAND) {
+    PetscCall(KFDenseModeImportanceBand(m, *lambda, *Phi, a, G, t, H, r->zeta, r->band, r->cluster_rtol, KF_SPURIOUS_RTOL, *imp, *clu));
+  } else {
+    PetscReal lmax = 0;
+
+    PetscCall(KFDenseModeImportance(m, *lambda, *Phi, a, G, t, H, r->zeta, r->importance, KF_SPURIOUS_RTOL, *imp));
+    for (PetscInt i = 0; i < m; i++) lmax = PetscMax(lmax, PetscAbsReal((*lambda)[i]));
+    for (PetscInt i = 0, k = 0; i < m; i++) (*clu)[i] = (*lambda)[i] <= KF_SPURIOUS_RTOL * lmax ? -1 : k++;
+  }
+  *nclusters = 0;
+  for (PetscInt i = 0; i < m; i++) *nclusters = PetscMax(*nclusters, (*clu)[i] + 1);
+  *n = m;
+  PetscCall(PetscFree4(K, M, G, H));
+  PetscFunctionReturn(0);
+}
+
+/* clusters in descending importance (ties: ascending id, i.e. frequency) */
+static PetscErrorCode KFClusterOrder(PetscInt m, const PetscReal imp[], const PetscInt clu[], PetscInt nclusters, PetscInt order[])
+{
+  PetscReal *ci;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(PetscMax(nclusters, 1), &ci));
+  for (PetscInt i = 0; i < m; i++)
+    if (clu[i] >= 0) ci[clu[i]] = PetscMax(ci[clu[i]], imp[i]);
+  for (PetscInt k = 0; k < nclusters; k++) order[k] = k;
+  for (PetscInt k = 1; k < nclusters; k++) /* insertion sort: a few dozen clusters */
+    for (PetscInt j = k; j > 0 && ci[order[j]] > ci[order[j - 1]]; j--) {
+      PetscInt tmp = order[j];
+      order[j]     = order[j - 1];
+      order[j - 1] = tmp;
+    }
+  PetscCall(PetscFree(ci));
+  PetscFunctionReturn(0);
+}
+
+/* The Krylov combinations: kept modes (columns of Phi) and the static correction of the others (eq. 15-17), each
+   scaled to unit M-norm (c^T Mr c = 1), as KFBodyBasisAddMapped expects; X = V C on the first m columns of the BV. */
+PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters)
+{
+  const PetscInt N = v->basis.size;
+  BV             V = (BV)v->basis.data;
+  PetscInt       m, nc, *clu, *order, l0, k0, a, nk = 0, nd, ncol;
+  PetscReal     *lambda, *Phi, *imp, *C;
+  PetscBool     *keep;
+
+  PetscFunctionBegin;
+  PetscCheck(v->basis.nblocks, PetscObjectComm((PetscObject)r), PETSC_ERR_SUP, "the accuracy search needs a basis of Krylov blocks (-kf_reducer_type krylov); use -kf_search 0 with this type");
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, NULL));
+  PetscCall(KFVisitModes_Private(r, v, c, &m, &lambda, &Phi, &imp, &clu, &nc));
+  if (nclusters) *nclusters = nc;
+  PetscCall(PetscMalloc2(m, &keep, PetscMax(nc, 1), &order));
+  PetscCall(KFClusterOrder(m, imp, clu, nc, order));
+  for (PetscInt i = 0; i < m; i++) keep[i] = (PetscBool)(kept < 0 && clu[i] >= 0);
+  for (PetscInt k = 0; kept >= 0 && k < PetscMin(kept, nc); k++)
+    for (PetscInt i = 0; i < m; i++)
+      if (clu[i] == order[k]) keep[i] = PETSC_TRUE;
+  nd = 0;
+  for (PetscInt i = 0; i < m; i++) {
+    nk += keep[i];
+    nd += !keep[i] && clu[i] >= 0;
+  }
+  ncol = nk + (r->static_correction && nd ? a : 0);
+  PetscCall(PetscCalloc1(m * PetscMax(ncol, 1), &C));
+  for (PetscInt i = 0, j = 0; i < m; i++)
+    if (keep[i]) PetscCall(PetscArraycpy(&C[j++ * m], &Phi[i * m], m));
+  if (ncol > nk) {
+    PetscReal *Phid, *lamd, *G;
+
+    PetscCall(PetscMalloc3(m * nd, &Phid, nd, &lamd, m * a, &G));
+    for (PetscInt i = 0, j = 0; i < m; i++)
+      if (!keep[i] && clu[i] >= 0) {
+        PetscCall(PetscArraycpy(&Phid[j * m], &Phi[i * m], m));
+        lamd[j++] = lambda[i];
+      }
+    for (PetscInt j = 0; j < a; j++)
+      for (PetscInt i = 0; i < m; i++) G[i + j * m] = v->basis.Gr[i + j * N];
+    PetscCall(KFDenseStaticCorrection(m, nd, Phid, lamd, a, G, &C[nk * m]));
+    PetscCall(PetscFree3(Phid, lamd, G));
+  }
+  for (PetscInt j = 0; j < ncol; j++) { /* unit M-norm: c^T Mr c */
+    PetscReal q = 0;
+
+    for (PetscInt k = 0; k < m; k++)
+      for (PetscInt i = 0; i < m; i++) q += C[i + j * m] * v->basis.Mr[i + k * N] * C[k + j * m];
+    if (q > 0)
+      for (PetscInt i = 0; i < m; i++) C[i + j * m] /= PetscSqrtReal(q);
+  }
+  PetscCall(BVGetActiveColumns(V, &l0, &k0));
+  PetscCall(BVSetActiveColumns(V, 0, m));
+  PetscCall(KFBVCombine(V, ncol, C, X));
+  PetscCall(BVSetActiveColumns(V, l0, k0));
+  PetscCall(PetscFree(C));
+  PetscCall(PetscFree2(keep, order));
+  PetscCall(PetscFree4(lambda, Phi, imp, clu));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFCandidate *cand, KFReducedModel *model)
+{
+  KFBodyBasis bb;
+  PetscInt    nrev, nrev1, nb, maxdofs = 0;
+  PetscReal  *angles;
+  PetscBool   keep;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(KFBodyBasisCreate(r->scene, &bb));
+  PetscCall(PetscMalloc1(cand->nexp * nrev1, &angles));
+  for (PetscInt e = 0; e < cand->nexp; e++) {
+    KFVisit *v = &visits[cand->exp[e]];
+    Mat      X;
+
+    PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
+    PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
+    PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
+    PetscCall(MatDestroy(&X));
+    PetscCall(PetscArraycpy(&angles[e * nrev1], v->angles, nrev1));
+  }
+  PetscCall(KFBodyBasisFinish(bb, r->body_tol));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt nd;
+
+    PetscCall(KFSceneGetBodyInfo(r->scene, b, NULL, &nd, NULL));
+    maxdofs = PetscMax(maxdofs, nd);
+  }
+  keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
+  PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, cand->nexp, angles, keep, model));
+  PetscCall(KFReducerRecordSettings_Private(r, *model, (KFReducerMethod)cand->family, cand->c, cand->nexp, angles));
+  PetscCall(KFBodyBasisDestroy(&bb));
+  PetscCall(PetscFree(angles));
+  PetscFunctionReturn(0);
+}

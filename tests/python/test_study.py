@@ -71,8 +71,8 @@ def test_sizes_grow_with_c(serial):
 
 
 @pytest.mark.parametrize("method,parameter,opts", [
-    ("krylov-single", 3, dict(moments=3, output_blocks=1, method="single-angle", keep_threshold=0.0)),
-    ("krylov-multi", 4, dict(moments=4, output_blocks=1, method="multi-angle", keep_threshold=0.0)),
+    ("krylov-single", 3, dict(search=False, moments=3, output_blocks=1, method="single-angle", keep_threshold=0.0)),
+    ("krylov-multi", 3, dict(search=False, moments=3, output_blocks=1, method="multi-angle", keep_threshold=0.0)),
 ])
 def test_errors_match_dense_reference(serial, quiet_library, method, parameter, opts):
     """The CSV's error of a run against the relative H-inf error computed here with SciPy alone: the full response
@@ -84,7 +84,7 @@ def test_errors_match_dense_reference(serial, quiet_library, method, parameter, 
     r = row(rows, method, parameter)
     scene = load_scene(GALILEO)
     dense = ref.load_scene(GALILEO)
-    grid = kryflex.Reducer(scene, quiet=True, verify=True, keep_threshold=0.0, static_correction=False)
+    grid = kryflex.Reducer(scene, quiet=True, verify=True, search=False, keep_threshold=0.0, static_correction=False)
     grid.reduce()
     model = kryflex.Reducer(scene, quiet=True, verify=False, **opts).reduce().model
     errors, sizes = [], []
@@ -115,36 +115,40 @@ def test_files(serial):
     assert not [f for f in os.listdir(out) if f.startswith(".kryflex-")]
 
 
-def _rank_differences(one, two):
-    """(worst relative difference of the errors between the serial and the 2-rank CSV over the runs whose error is
-    the model's (> 1e-3), worst absolute difference over the others, whose error is the reference's floor ~2e-6)."""
+def _rank_differences(one, two, key):
+    """(worst relative difference of error column key between the serial and the 2-rank CSV over the runs whose
+    error is the model's (> 1e-3), worst absolute difference over the others, whose error is the reference's floor
+    ~2e-6), each with its row."""
     assert [(r["method"], r["parameter"]) for r in one] == [(r["method"], r["parameter"]) for r in two]
-    relative, absolute = 0.0, 0.0
+    relative, absolute = (0.0, None), (0.0, None)
     for a, b in zip(one, two):
         assert (a["size_dofs"], a["system_dofs"]) == (b["size_dofs"], b["system_dofs"]), (a, b)
-        for key in ("error_hinf", "error_pointwise"):
-            x, y = float(a[key]), float(b[key])
-            if x > 1e-3:
-                relative = max(relative, abs(x - y) / x)
-            else:
-                absolute = max(absolute, abs(x - y))
+        x, y = float(a[key]), float(b[key])
+        where = (a["method"], a["parameter"], x, y)
+        if x > 1e-3:
+            relative = max(relative, (abs(x - y) / x, where), key=lambda d: d[0])
+        else:
+            absolute = max(absolute, (abs(x - y), where), key=lambda d: d[0])
     return relative, absolute
 
 
 def test_two_ranks_same_errors(serial, two_ranks):
-    """The same runs, sizes and errors on 2 ranks: to 1e-5 relative where the error is the model's, to 1e-6 absolute
-    where it is the reference's floor. Not 1e-8: the C reducer's own full-order reference and reduced responses
-    differ by ~5e-7 (relative) between 1 and 2 ranks on Galileo (the strict test below)."""
-    relative, absolute = _rank_differences(serial[1], two_ranks[1])
-    assert relative <= 1e-5 and absolute <= 1e-6, (relative, absolute)
+    """The same runs, sizes and errors on 2 ranks: the H-inf error to 1e-5 relative where it is the model's, to 1e-6
+    absolute where it is the reference's floor; the pointwise error (divided by down to 1e-3 of a pair's peak in
+    notches) to 1e-3. Not 1e-8: the C reducer's own full-order reference and reduced responses differ by ~5e-7
+    (relative) between 1 and 2 ranks on Galileo (the strict test below)."""
+    relative, absolute = _rank_differences(serial[1], two_ranks[1], "error_hinf")
+    assert relative[0] <= 1e-5 and absolute[0] <= 1e-6, (relative, absolute)
+    relative, absolute = _rank_differences(serial[1], two_ranks[1], "error_pointwise")
+    assert relative[0] <= 1e-3 and absolute[0] <= 1e-6, (relative, absolute)
 
 
 @pytest.mark.xfail(strict=True, reason="the C reducer's verification response (frf_full) and the reduced models' "
                    "responses differ by ~5e-7 relative between 1 and 2 ranks on Galileo, so the errors agree to "
                    "~1e-6, not 1e-8")
 def test_two_ranks_same_errors_to_1e8(serial, two_ranks):
-    relative, absolute = _rank_differences(serial[1], two_ranks[1])
-    assert relative <= 1e-8 and absolute <= 1e-8 * 2e-6, (relative, absolute)
+    relative, absolute = _rank_differences(serial[1], two_ranks[1], "error_hinf")
+    assert relative[0] <= 1e-8 and absolute[0] <= 1e-8 * 2e-6, (relative, absolute)
 
 
 def test_unknown_method_refused(tmp_path):

@@ -1,0 +1,126 @@
+"""kryflex study SCENE -o OUTDIR: the speed-accuracy study of a scene (issue 11): every method swept over its size
+parameter on one full-order reference; writes study.csv, accuracy_vs_size.png, accuracy_vs_time.png and study.md.
+
+Phases as in `kryflex reduce`: the command line, the output folder (refused before any long work), the scene, the
+reference (the C reducer's full-order verification), the sweep, the files (rank 0, staged, moved into place
+together). Every reduction is collective; rank 0 writes."""
+import os
+import sys
+
+from . import common
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, from_rank0, rank,
+                     say, split_petsc_options)
+from .reduce import HELP_FLAGS, _prepare_output, _remove_if_empty, cannot_write
+
+
+def parser():
+    from ..study.sweep import METHODS
+    p = Parser(prog="kryflex study",
+               description="Sweep every reduction method over its size on one full-order reference: error against "
+                           "reduced size and against reduction time, kryflex's choice marked.",
+               epilog="Methods: %s. PETSc and -scene.<path> options apply to every run." % ", ".join(METHODS))
+    p.add_argument("scene", help="scene file (YAML)")
+    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("--cmax", type=common.nonnegative_int, default=30,
+                   help="largest number of moments c of the fixed-c Krylov sweeps (default 30)")
+    p.add_argument("--methods", default=None, help="comma list of the methods to run (default: all)")
+    p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
+    return p
+
+
+def run(argv):
+    p = parser()
+    if any(a in HELP_FLAGS for a in argv):
+        say(p.format_help())
+        return EXIT_OK
+    args = collective(lambda: _parse(p, argv))
+    from .. import _core
+    from ..io.files import Staging
+    from ..io.scene import SceneError, load_scene
+    from ..study import output
+    from ..study.sweep import Study, features
+
+    out = os.path.abspath(args.output)
+    common.interrupt_note = ": results in %s left as they were" % out
+    prepared = {}
+
+    def prepare():
+        if rank() == 0:
+            prepared["created"], prepared["path"] = _prepare_output(out)
+    try:
+        collective(prepare)
+    except SystemExit:
+        if prepared:
+            Staging(out, prepared["path"]).discard()
+            if prepared["created"]:
+                _remove_if_empty(out)
+        raise
+    created, path = from_rank0((prepared.get("created"), prepared.get("path")))
+    staging = Staging(out, path)
+
+    def clean_up():
+        staging.discard()
+        if created:
+            _remove_if_empty(out)
+    common.before_abort.append(clean_up)
+    committed = False
+    try:
+        # what the C library offers, read from the reducer's -help listing before any reducer reads its options
+        flags = collective(features)
+        scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
+                           (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+
+        def progress(msg):
+            if not args.quiet:
+                say("[kryflex study] %s" % msg, sys.stderr)
+        study = collective(lambda: Study(scene, args.cmax, args.methods, flags, progress),
+                           (ValueError, EXIT_INPUT, str))
+        progress("reference: the full-order verification at %d angle(s)" % len(scene.configurations))
+        collective(study.run_reference,
+                   (_core.Error, EXIT_NUMERIC, lambda e: "the full-order reference cannot be computed: %s" % e))
+        rows = collective(lambda: list(study.sweep()),
+                          (_core.Error, EXIT_NUMERIC, lambda e: "a study run failed: %s" % e))
+        limit = collective(study.hankel_limit,
+                           (_core.Error, EXIT_NUMERIC, lambda e: "the Hankel singular values failed: %s" % e))
+        accuracy = float(scene.accuracy)
+        cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
+
+        def write():
+            if rank() == 0:
+                output.write_csv(rows, staging.file("study.csv"))
+                output.write_figures(rows, staging.path, scene.name, accuracy, limit)
+                common.raise_if_interrupted()
+                with open(staging.file("study.md"), "w") as f:
+                    f.write(output.markdown(rows, scene.name, accuracy, study, limit))
+        collective(write, cannot)
+        collective(lambda: staging.commit() if rank() == 0 else None, cannot, interruptible=False)
+        committed = True
+    finally:
+        if not committed and rank() == 0:
+            clean_up()
+    chosen = [r for r in rows if r["method"] == "kryflex"]
+    for method, (best, small) in output.best_rows(rows, accuracy).items():
+        say("kryflex study: %-13s best error %-9s at %3s dofs; smallest meeting %g: %s" % (
+            method, output._g(best["error_hinf"]), output._i(best["system_dofs"]), accuracy,
+            "%s dofs (error %s, %s s)" % (output._i(small["system_dofs"]), output._g(small["error_hinf"]),
+                                          output._g(small["seconds"])) if small else "none"))
+    if chosen:
+        c = chosen[0]
+        say("kryflex study: kryflex's choice: %s dofs, error %s, exit code %d (%s)"
+            % (output._i(c["system_dofs"]), output._g(c["error_hinf"]), c["exit_code"], c["note"] or c["failure"]))
+    say("kryflex study: results in %s (study.csv, study.md, accuracy_vs_size.png, accuracy_vs_time.png)" % out)
+    return EXIT_OK
+
+
+def _parse(p, argv):
+    args = p.parse_args(split_petsc_options(argv, {"-o", "--output", "--cmax", "--methods"}, {"-quiet", "--quiet"}))
+    if args.methods is not None:
+        args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+        from ..study.sweep import METHODS
+        unknown = [m for m in args.methods if m not in METHODS]
+        if unknown or not args.methods:
+            raise Failure(EXIT_INPUT, "--methods %s: give a comma list of %s" % (",".join(unknown) or "(empty)",
+                                                                                 ", ".join(METHODS)))
+    if args.cmax < 1:
+        raise Failure(EXIT_INPUT, "--cmax %d: give a number of moments >= 1" % args.cmax)
+    return args

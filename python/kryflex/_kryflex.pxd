@@ -101,6 +101,7 @@ cdef extern from "kryflex.h" nogil:
         KF_IMPORTANCE_H2
         KF_IMPORTANCE_HINF
         KF_IMPORTANCE_STATIC
+        KF_IMPORTANCE_BAND
     ctypedef struct KFReducedBody:
         PetscInt v
         const PetscReal *M
@@ -118,6 +119,8 @@ cdef extern from "kryflex.h" nogil:
 
     PetscErrorCode KFDenseEig(PetscInt, const PetscReal*, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFDenseModeImportance(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, KFImportance, PetscReal, PetscReal*)
+    PetscErrorCode KFDenseModeImportanceBand(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, const PetscReal*, PetscReal, PetscReal, PetscReal*, PetscInt*)
+    PetscErrorCode KFModalHankelSingularValues(PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*)
     PetscErrorCode KFDenseStaticCorrection(PetscInt, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*)
     PetscErrorCode KFDenseNullSpace(PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
     PetscErrorCode KFDenseMoments(PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscInt, PetscReal*)

@@ -14,6 +14,9 @@ PETSC_INTERN PetscErrorCode KFDenseCheckSymmetric_Private(PetscInt n, const Pets
 /* Largest eigenvalue, and whether mode i is flexible: lambda_i > rigid_tol * max(lambda) and lambda_i > 0 */
 PETSC_INTERN PetscReal KFDenseMaxReal_Private(PetscInt n, const PetscReal x[]);
 PETSC_INTERN PetscBool KFDenseIsFlexible_Private(PetscReal lambda, PetscReal lmax, PetscReal rigid_tol);
+/* Singular values (min(m, n), descending) of A (m x n, overwritten) by LAPACK gesvd without vectors; caller names the
+   function in the error message. In hankel.c, its main user. */
+PETSC_INTERN PetscErrorCode KFDenseSingularValues_Private(PetscInt m, PetscInt n, PetscReal A[], PetscReal s[], const char caller[]);
 
 /* Tolerance of KFDenseCheckSymmetric_Private for input pencils */
 #define KF_DENSE_SYMMETRY_RTOL 1e-6

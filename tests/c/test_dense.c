@@ -1,6 +1,7 @@
 /* Tests of the small dense algebra stage (src/dense) against independent references computed here
    with plain loops and Gaussian elimination: eigenpairs, null spaces, moments, frequency responses,
-   static correction, mode importance, joint rotations and reassembly at any angle.
+   static correction, mode importance (per mode, and band-aware by cluster), Hankel singular values of modal
+   systems, joint rotations and reassembly at any angle.
    Every rank runs every check on the same data; rank 0 prints; the exit code is non-zero on failure. */
 #include "kftest.h"
 
@@ -520,6 +521,171 @@ static PetscErrorCode TestImportance(void)
   PetscFunctionReturn(0);
 }
 
+/* ------------------------------------------------------------------ band-aware importance and Hankel singular values */
+
+/* max over a uniform grid of nq frequencies on [wmin, wmax] (endpoints included) of 1/|lambda - w^2 + 2 i zeta sqrt(lambda) w| */
+static PetscReal GridPeak(PetscReal lambda, PetscReal zeta, PetscReal wmin, PetscReal wmax, PetscInt nq)
+{
+  PetscReal p = 0;
+  for (PetscInt q = 0; q < nq; q++) {
+    PetscReal w = wmin + (wmax - wmin) * q / (nq - 1), x = lambda - w * w, y = 2 * zeta * PetscSqrtReal(lambda) * w;
+    p = PetscMax(p, 1 / PetscSqrtReal(x * x + y * y));
+  }
+  return p;
+}
+
+static PetscErrorCode TestImportanceBand(void)
+{
+  /* 1 rigid mode; 0.2 Hz below the band; a cluster at 1.0 and 1.0005 Hz (gap 5e-4 relative, within cluster_rtol
+     1e-3); 2 Hz; an exactly repeated pair at 3 Hz; 5 Hz; 100 Hz far above the band [0.5, 6] Hz */
+  const PetscInt  n = 9, a = 2, t = 3, single[4] = {1, 4, 7, 8}, expect[9] = {-1, 0, 1, 1, 2, 3, 3, 4, 5};
+  const PetscReal fhz[9] = {0, 0.2, 1.0, 1.0005, 2.0, 3.0, 3.0, 5.0, 100.0}, band[2] = {0.5, 6.0}, wmin = 2 * PETSC_PI * band[0], wmax = 2 * PETSC_PI * band[1];
+  PetscReal      *Phi, *Phi2, *G, *H, *HPhi, *PhiG, lambda[9], imp[9], imp2[9], hg[9], e;
+  PetscInt        cl[9], cl2[9];
+  PetscBool       ok = PETSC_TRUE;
+  PetscErrorCode  ierr;
+
+  PetscFunctionBegin;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "KFDenseModeImportanceBand: clusters, invariance inside a cluster, the peak over the band\n"));
+  PetscCall(PetscMalloc6(n * n, &Phi, n * n, &Phi2, n * a, &G, t * n, &H, t * n, &HPhi, n * a, &PhiG));
+  RandomMatrix(n, n, Phi);
+  PetscCall(Orthonormalize(n, n, NULL, Phi)); /* M = I */
+  RandomMatrix(n, a, G);
+  RandomMatrix(t, n, H);
+  for (PetscInt i = 0; i < n; i++) lambda[i] = PetscSqr(2 * PETSC_PI * fhz[i]);
+  Mul('N', 'N', t, n, n, H, Phi, HPhi);
+  Mul('T', 'N', n, a, n, Phi, G, PhiG);
+  /* ||H phi phi^T G||_2 of a single mode: rank one, the product of the two norms */
+  for (PetscInt i = 0; i < n; i++) {
+    PetscReal h = 0, g = 0;
+    for (PetscInt r = 0; r < t; r++) h += PetscSqr(HPhi[r + i * t]);
+    for (PetscInt j = 0; j < a; j++) g += PetscSqr(PhiG[i + j * n]);
+    hg[i] = PetscSqrtReal(h * g);
+  }
+
+  PetscCall(KFDenseModeImportanceBand(n, lambda, Phi, a, G, t, H, 0.02, band, 1e-3, 1e-9, imp, cl));
+  for (PetscInt i = 0; i < n; i++) ok = (PetscBool)(ok && cl[i] == expect[i]);
+  PetscCall(CheckTrue("cluster ids: rigid -1, then 0.. ascending; 1.0 and 1.0005 Hz share one, so do the 3 Hz pair", ok));
+  PetscCall(CheckTrue("one importance per cluster (1.0 and 1.0005 Hz; the 3 Hz pair), 0 for the rigid mode", (PetscBool)(imp[2] == imp[3] && imp[5] == imp[6] && imp[0] == 0)));
+  /* single-mode clusters against the brute-force peak of their response over 20001 frequencies in the band: exact at
+     the edges (0.2 and 100 Hz peak there), ~1e-5 for the in-band peaks, whose width is ~zeta w */
+  e = 0;
+  for (int k = 0; k < 4; k++) {
+    PetscInt i = single[k], j = single[0];
+    PetscReal ref = hg[i] * GridPeak(lambda[i], 0.02, wmin, wmax, 20001) / (hg[j] * GridPeak(lambda[j], 0.02, wmin, wmax, 20001));
+    e = PetscMax(e, PetscAbsReal(imp[i] / imp[j] / ref - 1));
+  }
+  PetscCall(Check("single-mode clusters: importance ratios vs the grid peak of the response, zeta 0.02", e, 1e-4));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "    importance by mode:"));
+  for (PetscInt i = 0; i < n; i++) PetscCall(PetscPrintf(PETSC_COMM_WORLD, " %.3g", (double)imp[i]));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "\n"));
+  PetscCall(Check("100 Hz mode, 16x above the band's top: importance (small)", imp[8], 1e-2));
+  /* the band edge: above the band the peak is at wmax, 1/|lambda - wmax^2 + 2 i zeta sqrt(lambda) wmax| */
+  {
+    PetscReal e8 = hg[8] / PetscHypotReal(lambda[8] - wmax * wmax, 2 * 0.02 * PetscSqrtReal(lambda[8]) * wmax);
+    PetscReal e1 = hg[1] / PetscHypotReal(lambda[1] - wmin * wmin, 2 * 0.02 * PetscSqrtReal(lambda[1]) * wmin);
+    PetscCall(Check("modes outside the band peak at the nearest edge: |ratio / edge formula - 1|", PetscAbsReal(imp[8] / imp[1] / (e8 / e1) - 1), 1e-12));
+  }
+  /* inside the band with zeta < 1/sqrt 2 the peak is the textbook 1 / (2 zeta sqrt(1 - zeta^2) lambda), at
+     w = sqrt(lambda (1 - 2 zeta^2)): 2 and 5 Hz with zeta 0.3 (their peaks at 1.8 and 4.5 Hz, inside) */
+  PetscCall(KFDenseModeImportanceBand(n, lambda, Phi, a, G, t, H, 0.3, band, 1e-3, 1e-9, imp2, cl2));
+  e = PetscAbsReal(imp2[7] / imp2[4] / ((hg[7] / lambda[7]) / (hg[4] / lambda[4])) - 1);
+  PetscCall(Check("zeta 0.3, in-band peaks 1/(2 zeta sqrt(1-zeta^2) lambda): |ratio - 1|", e, 1e-12));
+  /* zeta > 1/sqrt 2: the response decreases in w, so every mode peaks at the lower edge */
+  PetscCall(KFDenseModeImportanceBand(n, lambda, Phi, a, G, t, H, 0.8, band, 1e-3, 1e-9, imp2, cl2));
+  e = 0;
+  for (int k = 0; k < 4; k++) {
+    PetscInt  i = single[k], j = single[0];
+    PetscReal pi = 1 / PetscHypotReal(lambda[i] - wmin * wmin, 1.6 * PetscSqrtReal(lambda[i]) * wmin), pj = 1 / PetscHypotReal(lambda[j] - wmin * wmin, 1.6 * PetscSqrtReal(lambda[j]) * wmin);
+    e = PetscMax(e, PetscAbsReal(imp2[i] / imp2[j] / (hg[i] * pi / (hg[j] * pj)) - 1));
+  }
+  PetscCall(Check("zeta 0.8 > 1/sqrt 2: every peak at the lower band edge: |ratio - 1|", e, 1e-12));
+
+  /* a rotation inside each cluster (the exactly repeated 3 Hz pair and the 1.0/1.0005 Hz pair) changes the modes
+     but not H Phi_C Phi_C^T G: the importances must not move */
+  PetscCall(PetscArraycpy(Phi2, Phi, n * n));
+  for (int p = 0; p < 2; p++) {
+    PetscInt  c0 = p ? 5 : 2;
+    PetscReal th = p ? 0.7 : 2.1, cs = PetscCosReal(th), sn = PetscSinReal(th);
+    for (PetscInt r = 0; r < n; r++) {
+      Phi2[r + c0 * n]       = cs * Phi[r + c0 * n] + sn * Phi[r + (c0 + 1) * n];
+      Phi2[r + (c0 + 1) * n] = -sn * Phi[r + c0 * n] + cs * Phi[r + (c0 + 1) * n];
+    }
+  }
+  PetscCall(KFDenseModeImportanceBand(n, lambda, Phi2, a, G, t, H, 0.02, band, 1e-3, 1e-9, imp2, cl2));
+  e = 0;
+  for (PetscInt i = 0; i < n; i++) e = PetscMax(e, PetscAbsReal(imp2[i] - imp[i]));
+  PetscCall(Check("rotation inside the two clusters: max |importance change|", e, 1e-13));
+  {
+    PetscReal h1[9], h2[9], d = 0;
+    PetscCall(KFDenseModeImportance(n, lambda, Phi, a, G, t, H, 0.02, KF_IMPORTANCE_HINF, 1e-9, h1));
+    PetscCall(KFDenseModeImportance(n, lambda, Phi2, a, G, t, H, 0.02, KF_IMPORTANCE_HINF, 1e-9, h2));
+    for (PetscInt i = 5; i < 7; i++) d = PetscMax(d, PetscAbsReal(h1[i] - h2[i]));
+    PetscCall(CheckTrue("... while the per-mode Hinf measure of the 3 Hz pair moves (the rotation is not a no-op)", (PetscBool)(d > 1e-6)));
+  }
+
+  /* zeta = 0: the floor keeps in-band peaks finite */
+  PetscCall(KFDenseModeImportanceBand(n, lambda, Phi, a, G, t, H, 0.0, band, 1e-3, 1e-9, imp2, cl2));
+  ok = PETSC_TRUE;
+  for (PetscInt i = 0; i < n; i++) ok = (PetscBool)(ok && !PetscIsInfOrNanReal(imp2[i]) && imp2[i] >= 0 && imp2[i] <= 1);
+  PetscCall(CheckTrue("zeta = 0: finite importances in [0, 1]", ok));
+
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = KFDenseModeImportance(n, lambda, Phi, a, G, t, H, 0.02, KF_IMPORTANCE_BAND, 1e-9, imp2);
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(Check("KFDenseModeImportance refuses KF_IMPORTANCE_BAND (1 = not refused)", ierr ? 0 : 1, 0));
+  {
+    const PetscReal bad[2] = {6.0, 0.5};
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    ierr = KFDenseModeImportanceBand(n, lambda, Phi, a, G, t, H, 0.02, bad, 1e-3, 1e-9, imp2, cl2);
+    PetscCall(PetscPopErrorHandler());
+    PetscCall(Check("KFDenseModeImportanceBand refuses a band with fmin > fmax (1 = not refused)", ierr ? 0 : 1, 0));
+  }
+  PetscCall(PetscFree6(Phi, Phi2, G, H, HPhi, PhiG));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode TestHankel(void)
+{
+  /* one mode, rank-one input and output maps: T(s) = h g^T / (s^2 + 2 zeta w s + w^2), whose two Hankel singular
+     values are ||h|| ||g|| (sqrt(1 + zeta^2) +- zeta) / (4 zeta w^2). Two modes whose input rows and output columns
+     are orthogonal decouple: the union of the single-mode values. */
+  const PetscReal w2[2] = {PetscSqr(2 * PETSC_PI * 1.3), PetscSqr(2 * PETSC_PI * 7.0)};
+  const PetscReal HPhi[4] = {0.6, -0.8, 1.6, 1.2}, PhiG[4] = {1.0, -2.0, 2.0, 1.0}; /* t = a = 2: columns of HPhi, rows of PhiG orthogonal */
+  PetscReal       hsv[4], ref[4], e = 0;
+  PetscErrorCode  ierr;
+
+  PetscFunctionBegin;
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "KFModalHankelSingularValues: closed forms of one mode and of decoupled modes\n"));
+  for (int z = 0; z < 2; z++) {
+    const PetscReal zeta = z ? 0.25 : 0.01;
+    PetscReal       hg[2];
+
+    for (int k = 0; k < 2; k++) {
+      hg[k]          = PetscHypotReal(HPhi[2 * k], HPhi[2 * k + 1]) * PetscHypotReal(PhiG[k], PhiG[k + 2]);
+      ref[2 * k]     = hg[k] * (PetscSqrtReal(1 + zeta * zeta) + zeta) / (4 * zeta * w2[k]);
+      ref[2 * k + 1] = hg[k] * (PetscSqrtReal(1 + zeta * zeta) - zeta) / (4 * zeta * w2[k]);
+    }
+    /* mode 0 with input 0 alone (n = a = 1: its PhiG is the single entry PhiG(0,0) = PhiG[0]) */
+    PetscCall(KFModalHankelSingularValues(1, w2, 2, HPhi, 1, PhiG, zeta, hsv));
+    {
+      const PetscReal s = PetscHypotReal(HPhi[0], HPhi[1]) * PetscAbsReal(PhiG[0]) / (4 * zeta * w2[0]);
+      e = PetscMax(PetscAbsReal(hsv[0] / (s * (PetscSqrtReal(1 + zeta * zeta) + zeta)) - 1), PetscAbsReal(hsv[1] / (s * (PetscSqrtReal(1 + zeta * zeta) - zeta)) - 1));
+    }
+    PetscCall(Check(z ? "one mode, zeta 0.25: max |hsv / closed form - 1|" : "one mode, zeta 0.01: max |hsv / closed form - 1|", e, 1e-12));
+    PetscCall(KFModalHankelSingularValues(2, w2, 2, HPhi, 2, PhiG, zeta, hsv));
+    PetscCall(PetscSortReal(4, ref));
+    e = 0;
+    for (int k = 0; k < 4; k++) e = PetscMax(e, PetscAbsReal(hsv[k] - ref[3 - k]) / ref[3]);
+    PetscCall(Check(z ? "two decoupled modes, zeta 0.25: max |hsv - union| / hsv_1" : "two decoupled modes, zeta 0.01: max |hsv - union| / hsv_1", e, 1e-12));
+  }
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = KFModalHankelSingularValues(2, w2, 2, HPhi, 2, PhiG, 0.0, hsv);
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(Check("zeta = 0 is refused (1 = not refused)", ierr ? 0 : 1, 0));
+  PetscFunctionReturn(0);
+}
+
 /* ------------------------------------------------------------------ joint rotation */
 
 static PetscErrorCode TestJointRotation(void)
@@ -793,6 +959,8 @@ int main(int argc, char **argv)
   PetscCall(TestFRF());
   PetscCall(TestStaticCorrection());
   PetscCall(TestImportance());
+  PetscCall(TestImportanceBand());
+  PetscCall(TestHankel());
   PetscCall(TestJointRotation());
   PetscCall(ReassemblyCase(PETSC_FALSE));
   PetscCall(ReassemblyCase(PETSC_TRUE));

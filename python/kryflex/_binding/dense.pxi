@@ -13,7 +13,8 @@ def dense_eig(K, M):
     return lam, Phi
 
 
-IMPORTANCE = {"h2": KF_IMPORTANCE_H2, "hinf": KF_IMPORTANCE_HINF, "static": KF_IMPORTANCE_STATIC}
+IMPORTANCE = {"h2": KF_IMPORTANCE_H2, "hinf": KF_IMPORTANCE_HINF, "static": KF_IMPORTANCE_STATIC,
+              "band": KF_IMPORTANCE_BAND}
 
 
 def mode_importance(lam, Phi, G, H, PetscReal zeta, measure="h2", PetscReal rigid_tol=1e-8):
@@ -24,6 +25,8 @@ def mode_importance(lam, Phi, G, H, PetscReal zeta, measure="h2", PetscReal rigi
     n = cl.shape[0]
     if measure not in IMPORTANCE:
         raise ValueError("importance measure %r is not one of %s" % (measure, ", ".join(IMPORTANCE)))
+    if measure == "band":
+        raise ValueError("the band measure needs the band and a cluster tolerance: use mode_importance_band")
     if cP.shape[0] != n or cP.shape[1] != n or cG.shape[0] != n or cH.shape[1] != n:
         raise ValueError("inconsistent sizes: lambda %d, Phi %s, G %s, H %s" % (n, (cP.shape[0], cP.shape[1]), (cG.shape[0], cG.shape[1]), (cH.shape[0], cH.shape[1])))
     if zeta <= 0:
@@ -33,6 +36,51 @@ def mode_importance(lam, Phi, G, H, PetscReal zeta, measure="h2", PetscReal rigi
                                 <PetscInt>cH.shape[0], real_ptr(cH), zeta, IMPORTANCE[measure], rigid_tol,
                                 real_ptr(out)))
     return out
+
+
+def mode_importance_band(lam, Phi, G, H, PetscReal zeta, band_hz, PetscReal cluster_rtol=1e-3, PetscReal rigid_tol=1e-8):
+    """Band-aware, cluster-invariant importance (KFDenseModeImportanceBand): (importance normalized to the largest,
+    cluster id per mode: 0, 1, ... in ascending frequency, -1 for rigid modes). band_hz: (fmin, fmax) in Hz."""
+    cdef cnp.ndarray cl = fortran(lam, 1, "lambda")
+    cdef cnp.ndarray cP = fortran(Phi, 2, "Phi")
+    cdef cnp.ndarray cG = fortran(G, 2, "G")
+    cdef cnp.ndarray cH = fortran(H, 2, "H")
+    cdef cnp.ndarray cb = fortran(band_hz, 1, "band_hz")
+    n = cl.shape[0]
+    if cP.shape[0] != n or cP.shape[1] != n or cG.shape[0] != n or cH.shape[1] != n:
+        raise ValueError("inconsistent sizes: lambda %d, Phi %s, G %s, H %s" % (n, (cP.shape[0], cP.shape[1]), (cG.shape[0], cG.shape[1]), (cH.shape[0], cH.shape[1])))
+    if cb.shape[0] != 2 or not 0 <= cb[0] <= cb[1]:
+        raise ValueError("band_hz must be (fmin, fmax) with 0 <= fmin <= fmax, got %r" % (band_hz,))
+    if not zeta >= 0:
+        raise ValueError("damping ratio must be >= 0, got %g" % zeta)
+    if not 0 <= cluster_rtol < 1:
+        raise ValueError("cluster_rtol must be in [0, 1), got %g" % cluster_rtol)
+    if not rigid_tol >= 0:
+        raise ValueError("rigid_tol must be >= 0, got %g" % rigid_tol)
+    cdef cnp.ndarray out = np.zeros(n)
+    cdef cnp.ndarray ids = np.zeros(n, dtype=INT_DTYPE)
+    check(KFDenseModeImportanceBand(n, real_ptr(cl), real_ptr(cP), <PetscInt>cG.shape[1], real_ptr(cG),
+                                    <PetscInt>cH.shape[0], real_ptr(cH), zeta, real_ptr(cb), cluster_rtol, rigid_tol,
+                                    real_ptr(out), int_ptr(ids)))
+    return out, ids
+
+
+def modal_hankel_singular_values(w2, HPhi, PhiG, PetscReal zeta):
+    """Hankel singular values of the damped modal system (KFModalHankelSingularValues): 2n values, descending."""
+    cdef cnp.ndarray cw = fortran(w2, 1, "w2")
+    cdef cnp.ndarray cH = fortran(HPhi, 2, "HPhi")
+    cdef cnp.ndarray cG = fortran(PhiG, 2, "PhiG")
+    n = cw.shape[0]
+    if cH.shape[1] != n or cG.shape[0] != n:
+        raise ValueError("inconsistent sizes: w2 %d, HPhi %s, PhiG %s" % (n, (cH.shape[0], cH.shape[1]), (cG.shape[0], cG.shape[1])))
+    if not zeta > 0:
+        raise ValueError("damping ratio must be > 0 for finite Gramians, got %g" % zeta)
+    if n and not np.all(cw > 0):
+        raise ValueError("w2 must hold flexible modes only (all > 0), got min %g" % cw.min())
+    cdef cnp.ndarray hsv = np.zeros(2 * n)
+    check(KFModalHankelSingularValues(n, real_ptr(cw), <PetscInt>cH.shape[0], real_ptr(cH), <PetscInt>cG.shape[1],
+                                      real_ptr(cG), zeta, real_ptr(hsv)))
+    return hsv
 
 
 def static_correction(Phid, lamd, G):

@@ -6,10 +6,11 @@ brute-force sweep").
     scripts/bench-sweep [--scene galileo|frame|solid] [--target 1e-3] [--moments 1-20] [--methods single,multi]
                         [--workdir DIR] [--cache DIR] [--csv out.csv]
 
-Candidates: method single-angle and multi-angle, moments c = 1..20, and for each (method, c) every kept set the
-reducer's own importance ranking allows: with the search off (the paper's fixed recipe) a first run keeps every
-mode (keep_threshold = KEEP_ALL), and its normalized importances at every configuration of interest give the
-thresholds of all importance-ranked prefixes. Each candidate is reduced by kryflex (search off, its own
+Candidates: method single-angle and multi-angle (with --full also every alpha_G of interest, and evenly spread
+expansion-angle subsets), moments c = 1..20, and for each (method, basis, importance ranking, c) every kept set
+the ranking allows: with the search off (the paper's fixed recipe) a first run keeps every mode (keep_threshold =
+KEEP_ALL), and its normalized importances at every configuration of interest give the thresholds of all
+importance-ranked prefixes (the reducer exposes no kept count). Rankings: band (the search's), h2, hinf. Each candidate is reduced by kryflex (search off, its own
 verification off) and checked here, independently, against the dense reference (accuracy_scenes.py: relative
 H-infinity error per input/output pair, angles of interest and midpoints, grid 4x finer than the reducer's).
 Size = the sum of the reduced bodies' dofs. The smallest candidate meeting the target is compared with the
@@ -69,7 +70,10 @@ class Evaluator:
         self._scenes = {}
 
     def scene(self, target, reduction=None):
-        key = (float(target), repr(sorted((reduction or {}).items())))
+        """(path, loaded scene) of the variant with accuracy target and the contract's reduction settings, updated
+        by the reduction keys given."""
+        reduction = dict(acs.CONTRACT_REDUCTION, **(reduction or {}))
+        key = (float(target), repr(sorted(reduction.items())))
         if key not in self._scenes:
             path = os.path.join(self.workdir, "%s_%d.yaml" % (self.spec.name, len(self._scenes)))
             self.spec.variant(path, float(target), reduction=reduction)
@@ -98,38 +102,78 @@ def importance_thresholds(reducer):
     return sorted(values, reverse=True)
 
 
-def sweep(ev, target, n_log, methods=("single", "multi"), moments=range(1, 21), log=print):
-    """Every candidate: [row dict(method, moments, keep_threshold, kept, size, sizes, error, meets, seconds)]."""
+def spread_subsets(configurations):
+    """Expansion-angle sets of 2 .. n-1 configurations, each spread evenly over the angles of interest (first and
+    last included); the full set is the multi-angle default."""
+    n = len(configurations)
+    out = []
+    for k in range(2, n):
+        idx = sorted(set(int(round(i)) for i in np.linspace(0, n - 1, k)))
+        out.append([configurations[i] for i in idx])
+    return out
+
+
+def variants(method, configurations, full):
+    """(label, -kf_ options) of the basis variants a method is swept over: the single-angle basis at the paper's
+    alpha_G (and, with full, at every angle of interest); the multi-angle basis at all angles of interest (and, with
+    full, at evenly spread subsets)."""
+    if method == "single":
+        out = [("alpha_G auto", {})]
+        if full:
+            out += [("alpha_G %s" % c, {"reduction_angle": c}) for c in configurations]
+    else:
+        out = [("all %d angles" % len(configurations), {})]
+        if full:
+            out += [("angles %s" % [c[0] if len(c) == 1 else c for c in sub],
+                     {"multi_angles": [a for c in sub for a in c]}) for sub in spread_subsets(configurations)]
+    return out
+
+
+def _first_line(e):
+    return (str(e).splitlines() or [""])[0][:120]
+
+
+def sweep(ev, target, n_log, methods=("single", "multi"), moments=range(1, 21), importances=("band", "h2"),
+          full=False, log=print):
+    """Every candidate: [row dict(method, variant, importance, moments, keep_threshold, kept, size, sizes, error,
+    meets, seconds)]; refused candidates are logged and skipped (refusals: a list of (candidate, reason))."""
     _, scene = ev.scene(target)
-    rows = []
+    rows, refusals = [], []
     for method in methods:
-        for c in moments:
-            base = dict(method=METHODS[method], moments=int(c), search=False, verify=False,
-                        output_blocks=min(int(scene.reduction["output_blocks"]), int(c) - 1))
-            try:
-                reducer, _, _ = ev.reduce(target, **base, keep_threshold=KEEP_ALL)
-            except Exception as e:   # a candidate the reducer refuses (too many moments for the model, ...)
-                log("  %-6s c=%-2d refused: %s" % (method, c, str(e).splitlines()[0][:100]))
-                continue
-            seen = set()
-            for thr in importance_thresholds(reducer) + [KEEP_ALL]:
-                try:
-                    red_c, result, secs = ev.reduce(target, **base, keep_threshold=thr)
-                except Exception as e:
-                    log("  %-6s c=%-2d keep %.3g refused: %s" % (method, c, thr, str(e).splitlines()[0][:100]))
-                    continue
-                model = result.model
-                sizes = tuple(int(s) for s in model.sizes)
-                kept = tuple(int(k) for k in np.asarray(red_c.result(-1, "kept_modes"), float).ravel()
-                             if np.isfinite(k))
-                if (sizes, kept) in seen:    # the same kept set as a larger threshold: nothing new to check
-                    continue
-                seen.add((sizes, kept))
-                checks = ev.check(model, scene, n_log)
-                err = acs.worst(checks)
-                rows.append(dict(method=method, moments=int(c), keep_threshold=thr, kept=len(kept),
-                                 size=int(sum(sizes)), sizes=sizes, error=err, meets=bool(err <= target),
-                                 seconds=secs))
+        for label, extra in variants(method, ev.spec.configurations, full):
+            for imp in importances:
+                for c in moments:
+                    base = dict(extra, method=METHODS[method], moments=int(c), search=False, verify=False,
+                                importance=imp, output_blocks=min(int(scene.reduction["output_blocks"]), int(c) - 1))
+                    what = "%s %s, importance %s, c=%d" % (method, label, imp, c)
+                    try:
+                        reducer, _, _ = ev.reduce(target, **base, keep_threshold=KEEP_ALL)
+                    except Exception as e:   # a candidate the reducer refuses
+                        refusals.append((what, _first_line(e)))
+                        continue
+                    seen = set()
+                    for thr in importance_thresholds(reducer) + [KEEP_ALL]:
+                        try:
+                            red_c, result, secs = ev.reduce(target, **base, keep_threshold=thr)
+                        except Exception as e:
+                            refusals.append(("%s keep %.3g" % (what, thr), _first_line(e)))
+                            continue
+                        model = result.model
+                        sizes = tuple(int(s) for s in model.sizes)
+                        kept = tuple(int(k) for k in np.asarray(red_c.result(-1, "kept_modes"), float).ravel()
+                                     if np.isfinite(k))
+                        if (sizes, kept) in seen:    # the kept set of a larger threshold again: nothing new
+                            continue
+                        seen.add((sizes, kept))
+                        err = acs.worst(ev.check(model, scene, n_log))
+                        rows.append(dict(method=method, variant=label, importance=imp, moments=int(c),
+                                         keep_threshold=thr, kept=len(kept), size=int(sum(sizes)), sizes=sizes,
+                                         error=err, meets=bool(err <= target), seconds=secs))
+    reasons = {}
+    for what, why in refusals:
+        reasons.setdefault(why, []).append(what)
+    for why, whats in reasons.items():
+        log("  refused %d candidate(s), e.g. %s: %s" % (len(whats), whats[0], why))
     return rows
 
 
@@ -155,15 +199,17 @@ def chosen(ev, target):
 
 def side_by_side(target, mine, best, nrows):
     lines = ["target %.0e: %d candidates evaluated" % (target, nrows),
-             "  %-22s %-8s %-4s %-10s %-6s %-14s %-10s" % ("", "method", "c", "keep_thr", "size", "sizes", "error")]
+             "  %-18s %-7s %-16s %-6s %-4s %-9s %-5s %-12s %-10s" % ("", "method", "basis", "imp.", "c",
+                                                                   "keep_thr", "size", "sizes", "error")]
     for label, r in (("reducer's choice", mine), ("sweep's smallest", best)):
         if r is None:
-            lines.append("  %-22s (no candidate meets the target)" % label)
+            lines.append("  %-18s (no candidate meets the target)" % label)
             continue
         thr = "-" if r["keep_threshold"] is None else "%.3g" % r["keep_threshold"]
         c = "-" if r["moments"] is None else "%d" % r["moments"]
-        lines.append("  %-22s %-8s %-4s %-10s %-6d %-14s %.3e" % (label, r["method"], c, thr, r["size"],
-                                                                  "+".join(map(str, r["sizes"])), r["error"]))
+        lines.append("  %-18s %-7s %-16s %-6s %-4s %-9s %-5d %-12s %.3e"
+                     % (label, r["method"], r.get("variant") or "-", r.get("importance") or "-", c, thr, r["size"],
+                        "+".join(map(str, r["sizes"])), r["error"]))
     if mine is not None and best is not None:
         lines.append("  ratio size chosen / smallest = %.2f (bound %.1f); reducer target_met %s, its error_max %s"
                      % (mine["size"] / best["size"], SIZE_FACTOR, mine.get("target_met"), mine.get("error_max")))
@@ -184,6 +230,9 @@ def main(argv=None):
                     "1e-2, 1e-3, 1e-4)")
     ap.add_argument("--moments", default="1-20", help="c values: 1-20 or 2,4,8")
     ap.add_argument("--methods", default="single,multi")
+    ap.add_argument("--importances", default="band,h2,hinf", help="importance rankings whose prefixes are swept")
+    ap.add_argument("--full", action="store_true", help="also every alpha_G of interest (single-angle) and evenly "
+                    "spread expansion-angle subsets (multi-angle)")
     ap.add_argument("--workdir", help="scene files and generated bodies (default: a temporary folder)")
     ap.add_argument("--cache", help="dense modal data cache (default: WORKDIR/dense-cache)")
     ap.add_argument("--csv", help="write every candidate to this CSV file")
@@ -202,7 +251,8 @@ def main(argv=None):
     for target in args.target or [1e-2, 1e-3, 1e-4]:
         mine, checks, n_log = chosen(ev, target)
         t0 = time.perf_counter()
-        rows = sweep(ev, target, n_log, methods=args.methods.split(","), moments=parse_range(args.moments))
+        rows = sweep(ev, target, n_log, methods=args.methods.split(","), moments=parse_range(args.moments),
+                     importances=args.importances.split(","), full=args.full)
         best = smallest(rows)
         print(side_by_side(target, mine, best, len(rows)))
         print("  sweep: %.0f s; the chosen model's checks:\n%s" % (time.perf_counter() - t0, acs.describe(checks)))
@@ -213,7 +263,8 @@ def main(argv=None):
                              sizes="+".join(map(str, mine["sizes"]))))
         sys.stdout.flush()
     if args.csv:
-        keys = ["target", "method", "moments", "keep_threshold", "kept", "size", "sizes", "error", "meets", "seconds"]
+        keys = ["target", "method", "variant", "importance", "moments", "keep_threshold", "kept", "size", "sizes",
+                "error", "meets", "seconds"]
         with open(args.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
             w.writeheader()

@@ -50,17 +50,17 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   PetscCall(KFReducerInitializePackage());
   PetscCall(PetscHeaderCreate(r, KF_REDUCER_CLASSID, "KFReducer", "Reduction of an articulated structure", "KF", comm, KFReducerDestroy, KFReducerView));
   r->auto_alpha              = PETSC_TRUE;
-  r->method                  = KF_METHOD_SINGLE_ANGLE;
+  r->method                  = KF_METHOD_AUTO;
   r->band[0]                 = 0.01;
   r->band[1]                 = 10.0;
   r->zeta                    = 0.0025;
   r->accuracy                = 0.05;
   r->moments                 = PETSC_DECIDE;
   r->moments_max             = 24;
-  r->search                  = PETSC_FALSE; /* until the search is the default (issue 11): the paper's recipe */
+  r->search                  = PETSC_TRUE;
   r->cluster_rtol            = 1e-3;
   r->output_blocks           = 1;
-  r->importance              = KF_IMPORTANCE_H2;
+  r->importance              = KF_IMPORTANCE_BAND;
   r->keep_threshold          = 0.05;
   r->static_correction       = PETSC_TRUE;
   r->deflation_tol           = 1e-10;

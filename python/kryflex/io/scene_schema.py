@@ -42,13 +42,13 @@ REDUCTION_DEFAULTS = {
     "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
     "moments": "auto",           # low-frequency moments matched exactly (c in the paper): auto (the search) or a number
     "moments_max": 24,           # the most moments the accuracy search tries
-    "search": False,             # accuracy search (false: the paper's fixed recipe: moments, keep_threshold, its alpha_G rule)
+    "search": True,              # accuracy search (false: the paper's fixed recipe: moments, keep_threshold, its alpha_G rule)
     "cluster_rtol": 1e-3,        # Krylov modes this close in frequency (relative) are kept or dropped together
     "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
-    "importance": "h2",          # h2 | hinf | static | band (band-aware, cluster-invariant)
+    "importance": "band",        # band (band-aware, cluster-invariant) | h2 | hinf | static
     "keep_threshold": 0.05,      # keep Krylov modes whose normalized importance reaches this
     "reduction_angle": "auto",   # alpha_G: auto, or an angle (list for several joints)
-    "method": "single-angle",    # single-angle (the paper) | multi-angle | auto (the smaller that meets the accuracy)
+    "method": "auto",            # auto (the smaller that meets the accuracy) | single-angle (the paper) | multi-angle
     "reduction_angles": None,    # multi-angle: configurations to build Krylov vectors at (default: all angles)
     "deflation_tol": 1e-10,      # Krylov block deflation (relative)
     "body_tol": 1e-10,           # per-body rank deflation of the projected modes

@@ -161,6 +161,8 @@ PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt 
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
 PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[]);
 PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);
+/* Whether the verification eigensolve is dense (LAPACK: every mode at once, -kf_verify_dense_max_dofs) */
+PETSC_EXTERN PetscErrorCode KFSystemEigenIsDense(KFSystem, PetscBool *dense);
 
 /* ---------------------------------------------------------------- small dense algebra (src/dense) */
 
@@ -294,8 +296,10 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
 /* The frequency-response errors of a reduced model, per input/output pair (i, j) over a frequency grid:
    hinf = max_ij max_w |Tf_ij - Tr_ij| / max_w |Tf_ij| (relative H-infinity error: the accuracy target applies to it);
    pointwise = max_ij max_w |Tf_ij - Tr_ij| / max(|Tf_ij(w)|, 10^(floor_db/20) max_w |Tf_ij|) (notch-aware, for
-   information). A pair whose peak is below 1e-6 of the largest pair's peak is measured against 1e-6 x that peak.
+   information). A pair whose peak is below KF_FRF_PAIR_FLOOR (1e-4) of the largest pair's peak is measured against that
+   floor times the largest peak.
    T*: nw blocks of t x a, real and imaginary parts; hinf or pointwise may be NULL. */
+#define KF_FRF_PAIR_FLOOR 1e-4
 PETSC_EXTERN PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 /* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
    below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales

@@ -1,6 +1,7 @@
 /*
-  Verification: the full-order reference at a configuration (SLEPc modes covering verify_cover x the band's top, the
-  rigid modes' participation, the static residual of the modes not computed), and the errors of the reassembled
+  Verification: the full-order reference at a configuration (SLEPc modes: all of a small system, else those covering
+  verify_cover x the band's top; the rigid modes' participation; the modes not computed by their first two residual
+  moments, see KFFullFRF_Private), and the errors of the reassembled
   reduced models against it and against the full-order moments at every angle of interest.
 */
 #include <kryflex/reducerimpl.h>
@@ -9,12 +10,15 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
 {
   PetscInt   nrev, nsys, a, t, nflex, nev, nconv;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
+  PetscBool  dense;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, &nsys, &a, &t));
   nflex = nsys - 6 - nrev;
   PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, 6 + nrev);
-  nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? 20 : r->verify_modes);
+  PetscCall(KFSystemEigenIsDense(sys, &dense));
+  /* dense: every mode (no residual to approximate); sparse: start at 20 */
+  nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     PetscCall(KFSystemEigen(sys, nev, &nconv, w2, HPhi, PhiG));
@@ -22,7 +26,8 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
   }
-  ref->n = nconv;
+  ref->n        = nconv;
+  ref->complete = (PetscBool)(nconv == nflex);
   PetscCall(PetscMalloc3(PetscMax(nconv, 1), &ref->w2, PetscMax(t * nconv, 1), &ref->HPhi, PetscMax(nconv * a, 1), &ref->PhiG));
   PetscCall(PetscArraycpy(ref->w2, w2, nconv));
   PetscCall(PetscArraycpy(ref->HPhi, HPhi, t * nconv));

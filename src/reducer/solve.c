@@ -274,7 +274,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
       if (r->verify) {
         PetscCall(KFInterruptCheck(comm));
         PetscCall(PetscTime(&t0));
-        PetscCall(KFReducerReference_Private(r, sys, &Lfull[ci * nmom * t * a], &evals[ci]));
+        PetscCall(KFReducerReference_Private(r, sys, nmom, &Lfull[ci * nmom * t * a], &evals[ci]));
         PetscCall(PetscTime(&t1));
         times[6] += t1 - t0;
       }
@@ -388,9 +388,9 @@ static PetscErrorCode KFReducerAnnounce_Private(KFReducer r)
   PetscFunctionReturn(0);
 }
 
-/* the full-order reference of an evaluation point at the system's configuration; L0 (t x a) the static moment, or NULL:
-   computed here with its own factorization */
-PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, const PetscReal L0[], KFEvalPoint *p)
+/* the full-order reference of an evaluation point at the system's configuration; L (nmom blocks of t x a) its first
+   moments, or NULL: the first two computed here with their own factorization */
+PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, PetscInt nmom, const PetscReal L[], KFEvalPoint *p)
 {
   PetscInt a, t;
 
@@ -398,14 +398,15 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, const Petsc
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscCall(KFReducerFullReference_Private(r, sys, &p->ref));
-  PetscCall(PetscMalloc1(PetscMax(t * a, 1), &p->L0));
-  if (L0) PetscCall(PetscArraycpy(p->L0, L0, t * a));
+  PetscCall(PetscMalloc1(PetscMax(2 * t * a, 1), &p->L0));
+  p->nmom = L ? PetscMin(nmom, 2) : 2;
+  if (L) PetscCall(PetscArraycpy(p->L0, L, p->nmom * t * a));
   else {
     KFFlexSolver solver;
 
     PetscCall(KFFlexSolverCreate(sys, &solver));
     PetscCall(KFFlexSolverSetShift(solver, r->shift));
-    PetscCall(KFFlexSolverMoments(solver, 1, p->L0));
+    PetscCall(KFFlexSolverMoments(solver, 2, p->L0));
     PetscCall(KFFlexSolverDestroy(&solver));
   }
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
@@ -522,7 +523,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
       if (r->verify) {
         PetscCall(PetscTime(&t0));
-        PetscCall(KFReducerReference_Private(r, sys, &Lfull[ci * nfull * t * a], &evals[ci]));
+        PetscCall(KFReducerReference_Private(r, sys, nfull, &Lfull[ci * nfull * t * a], &evals[ci]));
         PetscCall(PetscTime(&t1));
         times[6] += t1 - t0;
       }
@@ -540,7 +541,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFProgress(comm, "full-order reference at the midpoint %s deg", label));
     PetscCall(PetscTime(&t0));
     PetscCall(KFSystemSetAngles(sys, evals[e].angles));
-    PetscCall(KFReducerReference_Private(r, sys, NULL, &evals[e]));
+    PetscCall(KFReducerReference_Private(r, sys, 0, NULL, &evals[e]));
     PetscCall(PetscTime(&t1));
     times[6] += t1 - t0;
   }
@@ -690,7 +691,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
 {
   MPI_Comm     comm;
   KFEvalPoint *evals;
-  PetscInt     neval, a, t, nfull;
+  PetscInt     neval = 0, a, t, nfull;
   PetscReal   *Lfull;
   PetscBool    search, krylov;
 
@@ -725,7 +726,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       for (PetscInt e = r->nconfig; e < neval; e++) {
         PetscCall(KFInterruptCheck(comm));
         PetscCall(KFSystemSetAngles(sys, evals[e].angles));
-        PetscCall(KFReducerReference_Private(r, sys, NULL, &evals[e]));
+        PetscCall(KFReducerReference_Private(r, sys, 0, NULL, &evals[e]));
       }
       PetscCall(KFSystemDestroy(&sys));
       for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));

@@ -1,6 +1,20 @@
 #include <kryflex_impl.h>
 #include <slepceps.h>
 
+/* Small systems are solved densely: every mode at once, as cheap as a few */
+PetscErrorCode KFSystemEigenIsDense(KFSystem sys, PetscBool *dense)
+{
+  KFScene  s         = sys->scene;
+  PetscInt dense_max = 600;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
+  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", dense_max, &dense_max, NULL));
+  PetscOptionsEnd();
+  *dense = (PetscBool)(s->nsys <= dense_max);
+  PetscFunctionReturn(0);
+}
+
 /* Full-order modes, for verification only: generalized Hermitian problem with the rigid modes as a deflation
    space. Small systems go to LAPACK through EPS; larger ones use Krylov-Schur with shift-and-invert (MUMPS) about a
    small negative target, so that K - target M is positive definite. */
@@ -14,7 +28,6 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
   Vec      *defl, x, y;
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
   PetscReal target = 0;
-  PetscInt  dense_max = 600;
   PetscBool dense, has_target;
 
   PetscFunctionBegin;
@@ -24,11 +37,10 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
   nflex = s->nsys - r;
   PetscCheck(nev >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "ask for at least one mode");
   nev   = PetscMin(nev, nflex);
+  PetscCall(KFSystemEigenIsDense(sys, &dense));
   PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
-  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", dense_max, &dense_max, NULL));
   PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", target, &target, &has_target));
   PetscOptionsEnd();
-  dense = (PetscBool)(s->nsys <= dense_max);
   PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : "Krylov-Schur, shift-and-invert with MUMPS"));
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));

@@ -53,7 +53,7 @@ SOLID_BAND = [0.01, 20.0]
 # the day (the fixed recipe stays the default while the existing suite moves over).
 CONTRACT_REDUCTION = {"moments": "auto", "method": "auto", "search": True, "importance": "band"}
 
-PAIR_FLOOR = 1e-6          # a pair whose peak is below PAIR_FLOOR x the largest pair's peak is measured against that
+PAIR_FLOOR = 1e-4          # a pair whose peak is below PAIR_FLOOR x the largest pair's peak is measured against that
 GRID_FACTOR = 4            # the check grid is this much finer than the reducer's
 RESONANCE_SPAN = 2.0       # the reducer samples fr (1 + zeta {-2 .. 2}) around each resonance: 7 points
 

@@ -19,8 +19,8 @@ TIMINGS = [("time_assembly", "assembly"), ("time_factorization", "factorization"
            ("time_verification", "verification eigensolve")]
 
 ERROR_DEFINITION = ("relative H-infinity error per input/output pair: max over pairs (i, j) of "
-                    "max_w |Tf_ij(w) - Tr_ij(w)| / max_w |Tf_ij(w)| over the band (a pair whose peak is below 1e-6 of "
-                    "the largest pair's peak is measured against 1e-6 x that peak)")
+                    "max_w |Tf_ij(w) - Tr_ij(w)| / max_w |Tf_ij(w)| over the band (a pair whose peak is below 1e-4 of "
+                    "the largest pair's peak is measured against 1e-4 x that peak)")
 POINTWISE_DEFINITION = ("pointwise error with a floor (information, not the verdict): max over pairs of "
                         "max_w |Tf_ij(w) - Tr_ij(w)| / max(|Tf_ij(w)|, 10^(floor_db/20) max_w |Tf_ij|)")
 METHODS = {0: "single-angle", 1: "multi-angle"}

@@ -101,6 +101,7 @@ PETSC_INTERN PetscErrorCode KFReducerNote_Private(KFReducer, const char fmt[], .
 /* the full-order reference of one configuration of interest, for verification */
 typedef struct {
   PetscInt   n, r;           /* flexible modes computed, rigid-body and mechanism modes */
+  PetscBool  complete;       /* every flexible mode computed: no residual */
   PetscReal *w2;             /* n */
   PetscReal *HPhi, *PhiG;    /* t x n, n x a */
   PetscReal *HPr, *PrG;      /* t x r, r x a */
@@ -150,13 +151,14 @@ typedef struct _KFEvalPoint {
   PetscReal      *angles;      /* nrev1 */
   PetscInt        interest;    /* index among the angles of interest, -1 for a midpoint */
   KFFullReference ref;         /* full-order reference (ref.w2 NULL with the estimator) */
-  PetscReal      *L0;          /* t x a static moment of the full order */
+  PetscReal      *L0;          /* nmom (1 or 2) x t x a: the first moments of the full order (L^0, L^1) */
+  PetscInt        nmom;
   KFReducedSystem rich;        /* the estimator's reference, NULL with the full order */
   PetscInt        nw;
   PetscReal      *fhz, *w, *Tre, *Tim; /* grid (Hz, rad/s) and the reference response, nw blocks of t x a */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
-PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, const PetscReal L0[], KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
    angle of interest in Lfull */
@@ -166,7 +168,7 @@ PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, PetscInt nfull, 
    between grid points); Trre/Trim (nw blocks) may be NULL, or receive the reduced response on the grid */
 PETSC_INTERN PetscErrorCode KFEvalPointErrors_Private(KFReducer, KFEvalPoint *, KFReducedSystem, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[]);
 /* the full-order response of a reference at nw frequencies */
-PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, const PetscReal L0[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
 /* measure a candidate: error over the points (stopping at the first point above stop, stop <= 0: all), sizes */
 PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */

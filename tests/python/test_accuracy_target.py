@@ -49,7 +49,8 @@ SWEEP_MOMENTS = range(1, 13)   # the fast sweep: the search picks c = 9 on Galil
                                # scripts/bench-sweep runs c = 1..20 over band, h2 and hinf rankings (766 candidates
                                # for band + h2 at 1e-3: smallest 24 dofs, the reducer's choice 24)
 SWEEP_IMPORTANCES = ("band",)  # the search's own ranking
-SAME = 1e-6                # 2 ranks vs 1: the dense check of either model, relative
+SAME = 1e-6                # 2 ranks vs 1: the dense check of either model, relative, above the rounding floor:
+SAME_FLOOR = 1e-6          # absolute (a model at 1e-7 of the peak is at rounding: 6e-8 on 1 rank, 1.6e-7 on 2)
 SAME_REPORTED = 1e-3       # 2 ranks vs 1: the reducer's own errors, absolute, as a fraction of the target. Its
                            # full-order reference differs by ranks: Galileo at 1e-3 measured 1.9e-9 apart at 0 deg and
                            # 2.6e-7 at 45 deg (1.08e-6 on 2 ranks, as the dense check; 1.34e-6 on 1): below what could
@@ -254,4 +255,4 @@ def test_galileo_two_ranks_choose_as_one(galileo, tmp_path):
         SAME_REPORTED * FIXED_TARGET, ", ".join(apart))
     for a, b in zip(checks, serial.checks):     # the dense check of either model
         assert a.angles == b.angles
-        assert abs(a.error - b.error) <= SAME * b.error + 1e-15, (a.angles, a.error, b.error)
+        assert abs(a.error - b.error) <= SAME * b.error + SAME_FLOOR, (a.angles, a.error, b.error)

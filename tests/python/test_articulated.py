@@ -1,5 +1,8 @@
 """The articulated methodology (paper eq. 12-24) end to end, and the report that documents it.
 
+The paper's fixed recipe (reduction.search false, single-angle method: c moments, keep_threshold, its alpha_G
+rule), which the accuracy search uses as its inner step; the search itself is tested in test_accuracy_target.py.
+
 Two scenes: the Galileo-like model (meshes/galileo, c = 10 Krylov vectors) and a random 3-body frame scene
 from meshes/frames.py (3 inputs, 2 outputs, 2 revolute joints about skew axes). Each is reduced once per module.
 Every criterion is checked against an independent computation: the full-order moments from the flexible
@@ -49,6 +52,7 @@ DOMINANT_FREQ_RTOL = 5e-3    # dominant full-order modes captured to 0.5 %
 KRYLOV_FIRST = 6             # the lowest Krylov frequencies that converge to the full-order ones ...
 KRYLOV_FREQ_RTOL = 1e-6      # ... to this relative accuracy
 FRAMES_ANGLES = [[0.0, 0.0], [45.0, 120.0], [210.0, 330.0]]
+PAPER_RECIPE = {"search": False, "method": "single-angle"}
 
 
 class Case:
@@ -152,7 +156,7 @@ def galileo_spec():
 
 def reduce_galileo_variant(**reduction):
     spec = galileo_spec()
-    spec["reduction"] = dict(spec["reduction"], **reduction)
+    spec["reduction"] = dict(spec["reduction"], **dict(PAPER_RECIPE, **reduction))
     scene = kryflex.scene_from_dict(spec, base=os.path.dirname(GALILEO))
     return scene, kryflex.reduce(scene, quiet=True)
 
@@ -164,8 +168,8 @@ pytestmark = pytest.mark.usefixtures("quiet_library")   # tests/python/conftest.
 
 @pytest.fixture(scope="module")
 def galileo():
-    scene = kryflex.load_scene(GALILEO)
-    return Case("galileo", GALILEO, scene, kryflex.reduce(scene, quiet=True))
+    scene, result = reduce_galileo_variant()
+    return Case("galileo", GALILEO, scene, result)
 
 
 @pytest.fixture(scope="module")
@@ -176,7 +180,8 @@ def frames_scene(tmp_path_factory):
     with open(path) as f:
         spec = yaml.safe_load(f)
     spec["angles"] = FRAMES_ANGLES
-    spec["reduction"] = dict(spec["reduction"], moments=10, output_blocks=1, importance="h2", keep_threshold=0.05)
+    spec["reduction"] = dict(spec["reduction"], moments=10, output_blocks=1, importance="h2", keep_threshold=0.05,
+                             **PAPER_RECIPE)
     with open(path, "w") as f:
         yaml.safe_dump(spec, f, sort_keys=False)
     return path
@@ -267,7 +272,8 @@ def multi_angle_reduction(case):
         confs = case.scene.configurations
         extra = [a + 17.0 for a in confs[1]]
         assert extra not in confs
-        spec["reduction"] = dict(spec.get("reduction") or {}, method="multi-angle", reduction_angles=[confs[0], extra])
+        spec["reduction"] = dict(spec.get("reduction") or {}, search=False, method="multi-angle",
+                                 reduction_angles=[confs[0], extra])
         scene = kryflex.scene_from_dict(spec, base=os.path.dirname(case.path))
         case._multi = ([confs[0], extra], kryflex.reduce(scene, quiet=True))
     return case._multi
@@ -404,7 +410,8 @@ def expand_mode_list(text):
 @pytest.fixture(scope="module")
 def galileo_report(tmp_path_factory, galileo):
     out = str(tmp_path_factory.mktemp("report") / "galileo")
-    proc = subprocess.run([KRYFLEX_CMD, "reduce", GALILEO, "-o", out, "-quiet"], capture_output=True, text=True,
+    proc = subprocess.run([KRYFLEX_CMD, "reduce", GALILEO, "-o", out, "-quiet", "-kf_search", "0", "-kf_method",
+                           "single-angle"], capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0, proc.stderr
     with open(os.path.join(out, "summary.json")) as f:

@@ -157,3 +157,151 @@ def test_unknown_method_refused(tmp_path):
     assert proc.returncode == 2
     assert "--methods krylov" in proc.stderr and "krylov-single" in proc.stderr
     assert not os.path.exists(tmp_path / "o")
+
+
+# ---------------------------------------------------------------------------------------------- the estimator check
+
+@pytest.fixture(scope="module")
+def estimator_study(tmp_path_factory):
+    """`kryflex study` on Galileo with only the kryflex run swept: the estimator check is part of the study."""
+    out = tmp_path_factory.mktemp("estimator")
+    proc = subprocess.run([KRYFLEX, "study", GALILEO, "-o", str(out), "--methods", "kryflex", "-quiet"], env=ENV,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, "exit %d\n%s\n%s" % (proc.returncode, proc.stdout, proc.stderr)
+    from kryflex.study.estimator_output import read_csv
+    with open(os.path.join(out, "study.md")) as f:
+        md = f.read()
+    return out, read_csv(os.path.join(out, "estimator.csv")), md
+
+
+@pytest.fixture(scope="module")
+def galileo_searches(quiet_library):
+    """Galileo's accuracy search made here, apart from the study: verify.full_order on and off, with alpha_G auto
+    (the scene's) and named at each angle of interest in turn (a named alpha_G gives that angle's single-angle rows
+    alone: which rows of the auto search belong to which alpha_G, told without the study's reading of the table)."""
+    import kryflex
+    from kryflex.io.scene import load_scene
+    scene = load_scene(GALILEO)
+    runs = {}
+    for verify in (True, False):
+        r = kryflex.Reducer(scene, quiet=True, search=True, verify=verify)
+        reduction = r.reduce()
+        runs[verify, "auto"] = (r, reduction)
+        for angles in scene.configurations:
+            named = kryflex.Reducer(scene, quiet=True, search=True, verify=verify, reduction_angle=angles[0])
+            named.reduce()
+            runs[verify, angles[0]] = (named, None)
+    return scene, runs
+
+
+def _table(reducer):
+    return np.asarray(reducer.result(-1, "search_table"), float)
+
+
+def _columns(rows, error):
+    """The estimator.csv rows as search-table columns (family, c, kept, expansion angles, dofs, system dofs, error)."""
+    return np.array([[0 if r["family"] == "single-angle" else 1, r["moments"], r["kept_clusters"],
+                      r["expansion_angles"], r["reduced_dofs"], r["system_dofs"], r[error]] for r in rows]).T
+
+
+def test_estimator_join_matches_both_searches(estimator_study, galileo_searches):
+    """Every row of estimator.csv: its true error is the full-order search's, its estimate the estimator search's,
+    for the same candidate. Single-angle rows are compared with the search made with that row's alpha_G named (its
+    rows alone, in order); multi-angle rows with the auto search's multi-angle columns."""
+    _, rows, _ = estimator_study
+    scene, runs = galileo_searches
+    full, est = _table(runs[True, "auto"][0]), _table(runs[False, "auto"][0])
+    assert runs[True, "auto"][0].result(-1, "error_estimated").ravel()[0] == 0
+    assert runs[False, "auto"][0].result(-1, "error_estimated").ravel()[0] == 1
+    # on Galileo both searches try the same candidates in the same order: every one of them is joined
+    assert np.array_equal(full[:6], est[:6])
+    assert len(rows) == full.shape[1]
+    accuracy = float(scene.accuracy)
+    for verify, error in ((True, "true_error"), (False, "estimated_error")):
+        for angles in scene.configurations:
+            mine = [r for r in rows if r["family"] == "single-angle" and r["start_deg"] == "%g" % angles[0]]
+            named = _table(runs[verify, angles[0]][0])
+            expected = named[:, named[0] == 0]
+            got = _columns(mine, error)
+            assert got.shape == expected.shape, (verify, angles, got.shape, expected.shape)
+            assert np.array_equal(got[:6], expected[:6]), (verify, angles)
+            # not to the last digit: the full-order reference of a second solve in one process differs by ~3e-6
+            # relative (the eigensolver's random start vectors go on), and the richest candidate by its rounding
+            # (a named alpha_G is visited last); the errors of a whole basis (~2e-6 true, ~3e-8 estimated) are that
+            # noise: an absolute 1e-5 of the accuracy
+            assert np.allclose(got[6], expected[6], rtol=2e-5, atol=1e-5 * accuracy), (verify, angles, got[6],
+                                                                                      expected[6])
+        table = full if verify else est
+        multi = table[:, table[0] == 1]
+        got = _columns([r for r in rows if r["family"] == "multi-angle"], error)
+        assert got.shape == multi.shape and np.array_equal(got[:6], multi[:6]), (verify, got, multi)
+        assert np.allclose(got[6], multi[6], rtol=2e-5, atol=1e-5 * accuracy), (verify, got, multi)
+
+
+def test_estimator_ratios_and_false_passes(estimator_study, galileo_searches):
+    """study.md's figures recomputed from the two search tables made here, paired column by column (both searches
+    tried the same candidates): the ratios over the candidates whose two errors are exact (<= the accuracy: the
+    search measures such a candidate at every point) and over those where pass or fail is decided (true error >=
+    accuracy / 10), the false passes and false fails over all. The farthest ratio over all candidates is a whole
+    basis's, at the full-order reference's noise (~2e-6, different in every process): checked against the CSV."""
+    out, rows, md = estimator_study
+    scene, runs = galileo_searches
+    accuracy = float(scene.accuracy)
+    true, est = _table(runs[True, "auto"][0])[6], _table(runs[False, "auto"][0])[6]
+    exact = (true <= accuracy) & (est <= accuracy)
+    ratios = est[exact] / true[exact]
+    near = exact & (true >= accuracy / 10)
+    near_ratios = est[near] / true[near]
+    near_worst = near_ratios[np.argmax(np.abs(np.log(near_ratios)))]
+    false_passes = int(np.sum((est <= accuracy) & (true > accuracy)))
+    false_fails = int(np.sum((est > accuracy) & (true <= accuracy)))
+    assert near.sum() >= 3, "Galileo should have candidates near its accuracy: %s" % true
+    assert "## The error estimator against the truth" in md
+    assert "over the %d candidates whose two errors are exact: median %.3g, from" % (exact.sum(), np.median(ratios)) \
+        in md
+    csv_ratios = np.array([r["ratio"] for r in rows if not r["true_lower_bound"] and not r["estimate_lower_bound"]])
+    assert "the farthest from 1: %.3g (" % csv_ratios[np.argmax(np.abs(np.log(csv_ratios)))] in md
+    assert "(true error >= accuracy / 10 = %g): %d candidates, median ratio %.3g, the farthest from 1: %.3g (" % (
+        accuracy / 10, near.sum(), np.median(near_ratios), near_worst) in md
+    assert "(the estimate meets %g, the true error does not): %d of %d" % (accuracy, false_passes, len(true)) in md
+    assert "(the estimate misses %g, the true error meets it): %d of %d" % (accuracy, false_fails, len(true)) in md
+    assert sum(r["verdict"] == "false pass" for r in rows) == false_passes
+    # the ratio column, and the lower bounds marked: a value above the accuracy (Galileo has 11 evaluation points)
+    for r, t, e in zip(rows, true, est):
+        assert r["true_lower_bound"] == int(t > accuracy) and r["estimate_lower_bound"] == int(e > accuracy)
+        assert r["ratio"] == pytest.approx(r["estimated_error"] / r["true_error"], rel=1e-12)
+    with open(os.path.join(out, "estimate_vs_truth.png"), "rb") as f:
+        assert f.read(8) == PNG
+
+
+def test_estimator_chosen_model_against_dense_reference(estimator_study, galileo_searches, tmp_path):
+    """The full-order search's choice: its row in estimator.csv carries the search's error_max, which a dense SciPy
+    check (tests/python/accuracy_scenes.py: the dense full-order response, a grid 4x finer than the reducer's,
+    angles of interest and midpoints) reproduces to 1 %; study.md names the same error_max for both searches'
+    choices."""
+    import accuracy_scenes as acs
+    from accuracy_sweep import reducer_grid_points
+    _, rows, md = estimator_study
+    scene, runs = galileo_searches
+    reducer, reduction = runs[True, "auto"]
+    error_max = float(reducer.result(-1, "error_max").ravel()[0])
+    [chosen] = [r for r in rows if r["chosen_full_order"]]
+    assert chosen["true_error"] == pytest.approx(error_max, rel=2e-5)      # another process: reference noise
+    assert chosen["reduced_dofs"] == sum(reduction.model.sizes)
+    dense = acs.DenseReference(GALILEO, str(tmp_path / "dense"))
+    checks = acs.evaluate_model(reduction.model, dense, scene.configurations, scene.band, scene.damping,
+                                reducer_grid_points(reducer, scene))
+    assert abs(acs.worst(checks) - error_max) <= 1e-2 * acs.worst(checks), (error_max, acs.describe(checks))
+    estimated_max = float(runs[False, "auto"][0].result(-1, "error_max").ravel()[0])
+    assert "With the full order the search chose" in md and "error_max %.3g, target met" % error_max in md
+    assert "With the estimator the search chose" in md and "error_max %.3g" % estimated_max in md
+
+
+def test_no_estimator(tmp_path):
+    out = tmp_path / "o"
+    proc = subprocess.run([KRYFLEX, "study", GALILEO, "-o", str(out), "--methods", "kryflex", "--no-estimator",
+                           "-quiet"], env=ENV, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(os.listdir(out)) == ["accuracy_vs_size.png", "accuracy_vs_time.png", "study.csv", "study.md"]
+    with open(out / "study.md") as f:
+        assert "estimator" not in f.read()

@@ -1,5 +1,8 @@
 """kryflex study SCENE -o OUTDIR: the speed-accuracy study of a scene (issue 11): every method swept over its size
 parameter on one full-order reference; writes study.csv, accuracy_vs_size.png, accuracy_vs_time.png and study.md.
+Unless --no-estimator, also the check of the search's error estimator against the truth (study/estimator.py):
+estimator.csv, estimate_vs_truth.png and a section of study.md; it reuses the kryflex run's search, so it costs one
+more search, without the full-order reference.
 
 Phases as in `kryflex reduce`: the command line, the output folder (refused before any long work), the scene, the
 reference (the C reducer's full-order verification), the sweep, the files (rank 0, staged, moved into place
@@ -24,6 +27,9 @@ def parser():
     p.add_argument("--cmax", type=common.nonnegative_int, default=30,
                    help="largest number of moments c of the fixed-c Krylov sweeps (default 30)")
     p.add_argument("--methods", default=None, help="comma list of the methods to run (default: all)")
+    p.add_argument("--no-estimator", dest="estimator", action="store_false",
+                   help="skip the check of the search's error estimator against the truth (the accuracy search run "
+                        "with verify.full_order on and off, candidates joined: estimator.csv, estimate_vs_truth.png)")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
     return p
 
@@ -37,7 +43,8 @@ def run(argv):
     from .. import _core
     from ..io.files import Staging
     from ..io.scene import SceneError, load_scene
-    from ..study import output
+    from ..study import estimator_output, output
+    from ..study.estimator import run_check
     from ..study.sweep import Study, features
 
     out = os.path.abspath(args.output)
@@ -82,6 +89,12 @@ def run(argv):
                           (_core.Error, EXIT_NUMERIC, lambda e: "a study run failed: %s" % e))
         limit = collective(study.hankel_limit,
                            (_core.Error, EXIT_NUMERIC, lambda e: "the Hankel singular values failed: %s" % e))
+        check, no_check = None, "skipped (--no-estimator)"
+        if args.estimator and not flags["search"]:
+            no_check = "the C library has no accuracy search (-kf_search) to estimate errors in"
+        elif args.estimator:
+            # a reduction that fails here is the check's finding (run_check), not the study's end
+            check, no_check = collective(lambda: run_check(scene, study.default_run, progress))
         accuracy = float(scene.accuracy)
         cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
 
@@ -89,9 +102,14 @@ def run(argv):
             if rank() == 0:
                 output.write_csv(rows, staging.file("study.csv"))
                 output.write_figures(rows, staging.path, scene.name, accuracy, limit)
+                if check is not None:
+                    estimator_output.write_csv(check.rows, staging.file(estimator_output.CSV_NAME))
+                    estimator_output.write_figure(check.rows, staging.file(estimator_output.FIGURE_NAME), scene.name,
+                                                  accuracy)
                 common.raise_if_interrupted()
+                sections = [estimator_output.markdown(check, no_check)] if args.estimator else []
                 with open(staging.file("study.md"), "w") as f:
-                    f.write(output.markdown(rows, scene.name, accuracy, study, limit))
+                    f.write(output.markdown(rows, scene.name, accuracy, study, limit, sections))
         collective(write, cannot)
         collective(lambda: staging.commit() if rank() == 0 else None, cannot, interruptible=False)
         committed = True
@@ -108,12 +126,16 @@ def run(argv):
         c = chosen[0]
         say("kryflex study: kryflex's choice: %s dofs, error %s, exit code %d (%s)"
             % (output._i(c["system_dofs"]), output._g(c["error_hinf"]), c["exit_code"], c["note"] or c["failure"]))
-    say("kryflex study: results in %s (study.csv, study.md, accuracy_vs_size.png, accuracy_vs_time.png)" % out)
+    if args.estimator:
+        say("kryflex study: %s" % estimator_output.console(check, no_check))
+    say("kryflex study: results in %s (study.csv, study.md, accuracy_vs_size.png, accuracy_vs_time.png%s)"
+        % (out, ", %s, %s" % (estimator_output.CSV_NAME, estimator_output.FIGURE_NAME) if check is not None else ""))
     return EXIT_OK
 
 
 def _parse(p, argv):
-    args = p.parse_args(split_petsc_options(argv, {"-o", "--output", "--cmax", "--methods"}, {"-quiet", "--quiet"}))
+    args = p.parse_args(split_petsc_options(argv, {"-o", "--output", "--cmax", "--methods"},
+                                            {"-quiet", "--quiet", "--no-estimator"}))
     if args.methods is not None:
         args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
         from ..study.sweep import METHODS

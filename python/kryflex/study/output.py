@@ -118,8 +118,9 @@ def best_rows(rows, accuracy):
     return out
 
 
-def markdown(rows, scene_name, accuracy, study, limit=None):
-    """study.md: the summary per method, what it shows, and the whole table."""
+def markdown(rows, scene_name, accuracy, study, limit=None, sections=()):
+    """study.md: the summary per method, what it shows, further sections (lists of lines: the estimator check's),
+    and the whole table."""
     lines = ["# Speed-accuracy study: %s" % scene_name, "",
              "Reference: the full-order verification of the C reducer (%d system dofs, %d rigid/mechanism modes), "
              "at the angles of interest %s deg, on its frequency grid (%d points at the first angle). Error: %s; "
@@ -135,6 +136,8 @@ def markdown(rows, scene_name, accuracy, study, limit=None):
             _g(small["seconds"]) if small else ""))
     lines.append("")
     lines += ["## What it shows", ""] + observations(rows, accuracy, study, limit) + [""]
+    for section in sections:
+        lines += list(section) + [""]
     lines += ["## Every run", "", "| " + " | ".join(CSV_FIELDS[:12] + ("exit_code", "failure")) + " |",
               "|" + "---|" * 14]
     for r in rows:

@@ -64,6 +64,8 @@ class Study:
         self.progress = progress or (lambda msg: None)
         self.floor_db = float(scene.verify["frf_floor_db"])
         self.reference = None
+        # the kryflex run's (reducer, seconds): the estimator check (estimator.py) reuses its accuracy search
+        self.default_run = None
         self.notes = []
         self.error_measure = ("KFFRFErrors" if self.features["frf_errors"] else
                               "KFFRFError fallback: Frobenius norm over pairs, floor 0 dB (= the relative H-inf "
@@ -158,6 +160,8 @@ class Study:
         except _core.Error as e:
             row.update(exit_code=3, failure="exit 3: %s" % _one_line(e))
             return row
+        if method == "kryflex":
+            self.default_run = (reducer, row["seconds"])
         model = reduction.model
         row["size_dofs"] = int(sum(model.sizes))
         worst = (-1.0, None)

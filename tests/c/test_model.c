@@ -154,7 +154,7 @@ static PetscErrorCode TestMeasures(void)
   {
     /* 2 frequencies, 1 x 2 blocks (pairs p0, p1): Tf = (1, 0.01), (0.001, 0.02); Tr = (1, 0.011), (0.0013, 0.02) */
     const PetscReal Tfre[4] = {1, 0.01, 0.001, 0.02}, Tfim[4] = {0, 0, 0, 0}, Trre[4] = {1, 0.011, 0.0013, 0.02}, Trim[4] = {0, 0, 0, 0};
-    const PetscReal Zre[4] = {1, 0, 0.5, 0}, Zim[4] = {0, 0, 0, 0}, Zrre[4] = {1, 1e-9, 0.5, 0};
+    const PetscReal Zre[4] = {1, 0, 0.5, 0}, Zim[4] = {0, 0, 0, 0}, Zrre[4] = {1, 1e-7, 0.5, 0};
     PetscReal       pw;
     /* hinf: p0 3e-4 / 1, p1 0.001 / 0.02 = 0.05 */
     PetscCall(KFFRFErrors(2, 1, 2, Tfre, Tfim, Trre, Trim, -40, &err, &pw));
@@ -163,9 +163,11 @@ static PetscErrorCode TestMeasures(void)
     PetscCall(Check("KFFRFErrors, -40 dB floor: pointwise max(0.03, 0.1) = 0.1", RelDiff(pw, 0.1), 1e-13));
     PetscCall(KFFRFErrors(2, 1, 2, Tfre, Tfim, Trre, Trim, -80, NULL, &pw)); /* p0 at w1: 3e-4 / max(0.001, 1e-4) */
     PetscCall(Check("KFFRFErrors, -80 dB floor: pointwise 3e-4 / 0.001 = 0.3", RelDiff(pw, 0.3), 1e-13));
-    /* a pair that is zero in the full response is measured against 1e-6 of the largest pair's peak (1) */
+    /* a pair that is zero in the full response is measured against KF_FRF_PAIR_FLOOR (1e-4) of the largest pair's
+       peak (1) */
     PetscCall(KFFRFErrors(2, 1, 2, Zre, Zim, Zrre, Zim, -60, &err, NULL));
-    PetscCall(Check("KFFRFErrors: a zero pair: 1e-9 / (1e-6 x 1) = 1e-3", RelDiff(err, 1e-3), 1e-12));
+    PetscCall(Check("KFFRFErrors: a zero pair: 1e-7 / (1e-4 x 1) = 1e-3", RelDiff(err, 1e-7 / KF_FRF_PAIR_FLOOR), 1e-12));
+    PetscCall(Check("KFFRFErrors: the pair floor is 1e-4", RelDiff(KF_FRF_PAIR_FLOOR, 1e-4), 0));
   }
   {
     /* 2 moments of 1 x 2 blocks at 2 configurations; config 0 is compared */

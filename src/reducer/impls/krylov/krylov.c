@@ -24,6 +24,7 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
 
     PetscCall(KFKrylovRawBasis(solver, nin, nout, &P, &basis->gram_condition));
     PetscCall(BVCreateFromMat(P, &V));
+    PetscCall(BVSetType(V, BVSVEC)); /* the columns of P are copied into the BV only when it gets a type */
     PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
     PetscCall(MatDestroy(&P));
   } else {

@@ -47,36 +47,11 @@ def run(argv):
         return print_help(p)
     args = collective(lambda: p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet"})))
     from .. import _core
-    from ..io.files import Staging
     from ..io.scene import SceneError, load_scene
     from ..reducer import Reducer
 
     out = os.path.abspath(args.output)
-    common.interrupt_note = ": results in %s left as they were" % out
-    # the staging folder first: an output that cannot be written is refused before any long work; every rank knows
-    # its name (the model file is written by every rank together)
-    prepared = {}
-
-    def prepare():
-        if rank() == 0:
-            prepared["created"], prepared["path"] = _prepare_output(out)
-    try:
-        collective(prepare)
-    except SystemExit:
-        if prepared:
-            Staging(out, prepared["path"]).discard()
-            if prepared["created"]:
-                _remove_if_empty(out)
-        raise
-    created, path = from_rank0((prepared.get("created"), prepared.get("path")))
-    staging = Staging(out, path)
-
-    def clean_up():
-        staging.discard()
-        if created:
-            _remove_if_empty(out)
-    # a rank that ends the run alone (MPI_Abort) removes what this run made first
-    common.before_abort.append(clean_up)
+    staging, created, clean_up = staged_output(out)
     committed = False
     try:
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
@@ -180,6 +155,37 @@ def target(result):
         return None, None, None
     where = (s.get("chosen") or {}).get("worst_where")
     return bool(met), worst, where if where is not None else "?"
+
+
+def staged_output(out):
+    """The staging folder of an output folder, made before any long work so that an output that cannot be written is
+    refused first; every rank knows its name (the model file is written by every rank together). Returns (Staging,
+    whether the output folder was created, clean_up): clean_up removes what this run made, and runs too when one rank
+    ends the run alone (MPI_Abort)."""
+    from ..io.files import Staging
+    common.interrupt_note = ": results in %s left as they were" % out
+    prepared = {}
+
+    def prepare():
+        if rank() == 0:
+            prepared["created"], prepared["path"] = _prepare_output(out)
+    try:
+        collective(prepare)
+    except SystemExit:
+        if prepared:
+            Staging(out, prepared["path"]).discard()
+            if prepared["created"]:
+                _remove_if_empty(out)
+        raise
+    created, path = from_rank0((prepared.get("created"), prepared.get("path")))
+    staging = Staging(out, path)
+
+    def clean_up():
+        staging.discard()
+        if created:
+            _remove_if_empty(out)
+    common.before_abort.append(clean_up)
+    return staging, created, clean_up
 
 
 def _prepare_output(out):

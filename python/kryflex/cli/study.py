@@ -11,9 +11,9 @@ import os
 import sys
 
 from . import common
-from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, from_rank0, rank,
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, rank,
                      say, split_petsc_options)
-from .reduce import HELP_FLAGS, _prepare_output, _remove_if_empty, cannot_write
+from .reduce import HELP_FLAGS, cannot_write, staged_output
 
 
 def parser():
@@ -41,35 +41,13 @@ def run(argv):
         return EXIT_OK
     args = collective(lambda: _parse(p, argv))
     from .. import _core
-    from ..io.files import Staging
     from ..io.scene import SceneError, load_scene
     from ..study import estimator_output, output
     from ..study.estimator import run_check
     from ..study.sweep import Study, features
 
     out = os.path.abspath(args.output)
-    common.interrupt_note = ": results in %s left as they were" % out
-    prepared = {}
-
-    def prepare():
-        if rank() == 0:
-            prepared["created"], prepared["path"] = _prepare_output(out)
-    try:
-        collective(prepare)
-    except SystemExit:
-        if prepared:
-            Staging(out, prepared["path"]).discard()
-            if prepared["created"]:
-                _remove_if_empty(out)
-        raise
-    created, path = from_rank0((prepared.get("created"), prepared.get("path")))
-    staging = Staging(out, path)
-
-    def clean_up():
-        staging.discard()
-        if created:
-            _remove_if_empty(out)
-    common.before_abort.append(clean_up)
+    staging, created, clean_up = staged_output(out)
     committed = False
     try:
         # what the C library offers, read from the reducer's -help listing before any reducer reads its options

@@ -92,16 +92,22 @@ PetscErrorCode KFBodyBasisAdd(KFBodyBasis bb, KFSystem sys, Mat X)
    KFBodyBasisAdd does after scaling, for callers that keep the maps but not the system (the accuracy search). */
 PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis bb, const Mat P[], Mat X)
 {
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < bb->s->nb; b++) PetscCall(KFBodyBasisAddMappedTo(bb, b, P[b], X));
+  PetscFunctionReturn(0);
+}
+
+/* The same for one body: the accuracy search gives each body its own share of the Krylov modes */
+PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X)
+{
   KFScene s = bb->s;
+  Mat     Y;
 
   PetscFunctionBegin;
   PetscCheck(!bb->finished, s->comm, PETSC_ERR_ORDER, "KFBodyBasisAdd() after KFBodyBasisFinish()");
-  for (PetscInt b = 0; b < s->nb; b++) {
-    Mat Y;
-    PetscCall(MatMatMult(P[b], X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
-    PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
-    bb->cols[b][bb->ncols[b]++] = Y;
-  }
+  PetscCall(MatMatMult(Pb, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
+  bb->cols[b][bb->ncols[b]++] = Y;
   PetscFunctionReturn(0);
 }
 

@@ -100,6 +100,53 @@ static PetscErrorCode KFSearchMoments(KFReducer r, KFVisit visits[], PetscInt ne
   PetscFunctionReturn(0);
 }
 
+/* Each body no more than its share of the target: from a passing model that keeps k clusters in every body, body by
+   body the fewest clusters it can keep (bisection, the other bodies as found so far) with the model still meeting the
+   target. Kept only when it is smaller; recorded as one row of the table with kept clusters -2 (per body). */
+static PetscErrorCode KFShareBodies(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFSearchTable *tab, KFCandidate *best)
+{
+  KFCandidate cur, cand;
+  PetscInt    nb, k0 = best->kept;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  if (!best->nexp || !KFPasses(r, best) || nb < 2 || nb > KF_MAX_BODY_SHARE) PetscFunctionReturn(0);
+  if (k0 < 0) /* the whole basis: every cluster of the richest expansion visit */
+    for (PetscInt e = 0; e < best->nexp; e++) {
+      PetscInt n, nclusters, *clu;
+      PetscReal *lambda, *Phi, *imp;
+
+      PetscCall(KFVisitModes_Private(r, &visits[best->exp[e]], best->c, &n, &lambda, &Phi, &imp, &clu, &nclusters));
+      PetscCall(PetscFree4(lambda, Phi, imp, clu));
+      k0 = PetscMax(k0, nclusters);
+    }
+  cur       = *best;
+  cur.nbody = nb;
+  for (PetscInt b = 0; b < nb; b++) cur.bkept[b] = k0;
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt lo = -1, hi = k0;
+
+    while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+      const PetscInt mid = (lo + hi) / 2;
+
+      PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+      cand          = cur;
+      cand.bkept[b] = mid;
+      PetscCall(KFCandidateEvaluate_Private(r, visits, neval, evals, r->accuracy, &cand));
+      if (KFPasses(r, &cand)) {
+        hi  = mid;
+        cur = cand;
+      } else lo = mid;
+    }
+  }
+  if (cur.size < best->size) {
+    cur.kept = -2;
+    PetscCall(KFSearchRecord(tab, &cur));
+    *best = cur;
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows)
 {
   KFSearchTable tab  = {0, 0, NULL};
@@ -206,6 +253,8 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
       }
     }
   }
+  PetscCall(KFShareBodies(r, visits, neval, evals, &tab, single));
+  PetscCall(KFShareBodies(r, visits, neval, evals, &tab, multi));
   *nrows = tab.n;
   *rows  = tab.rows;
   PetscFunctionReturn(0);

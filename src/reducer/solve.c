@@ -605,14 +605,18 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(PetscCalloc2(PetscMax(nclu, 1), &ci, PetscMax(nclu, 1), &order));
       for (PetscInt i = 0; i < m; i++)
         if (clu[i] >= 0) ci[clu[i]] = PetscMax(ci[clu[i]], imp[i]);
-      for (PetscInt k = 0; k < nclu; k++) { /* the kept clusters are the single.kept most important */
+      PetscInt skept = single.kept;
+
+      if (single.nbody) /* each body its share: the clusters of the body that keeps the most */
+        for (PetscInt b = 0; b < single.nbody; b++) skept = PetscMax(skept, single.bkept[b]);
+      for (PetscInt k = 0; k < nclu; k++) { /* the kept clusters are the skept most important */
         PetscInt rank = 0;
 
         for (PetscInt q = 0; q < nclu; q++) rank += ci[q] > ci[k] || (ci[q] == ci[k] && q < k);
         order[k] = rank;
       }
       for (PetscInt i = 0; i < m; i++) {
-        keptf[i] = clu[i] >= 0 && (single.kept < 0 || order[clu[i]] < single.kept) ? 1.0 : 0.0;
+        keptf[i] = clu[i] >= 0 && (skept < 0 || order[clu[i]] < skept) ? 1.0 : 0.0;
         freq[i]  = PetscSqrtReal(PetscMax(lambda[i], 0)) / (2 * PETSC_PI);
         cluf[i]  = (PetscReal)clu[i];
         if (keptf[i] > 0) kept[nkept++] = (PetscReal)(i + 1);
@@ -631,6 +635,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept, kept));
     PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic));
     PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", (PetscReal)single.c));
+    { /* per body, the clusters of Krylov modes the chosen model keeps (-1: every mode) */
+      const KFCandidate *ch = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? &multi : &single;
+
+      for (PetscInt b = 0; b < nb; b++) dofs[b] = (PetscReal)(ch->nbody ? ch->bkept[b] : ch->kept);
+      PetscCall(KFReducerResultSet_Private(r, -1, "body_kept_clusters", 1, &nb, dofs));
+    }
     PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)(6 + nrev)));
     {
       PetscInt nsys;
@@ -663,7 +673,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(PetscFree(ma));
     }
     PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
-                           r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept < 0 ? ", every Krylov mode" : ", important clusters + static correction"), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
+                           r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction")), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
     PetscCall(KFProgress(comm, "%s", r->rule));
     PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));
     PetscCall(PetscFree4(lambda, Phi, imp, clu));

@@ -171,9 +171,16 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     Mat      X;
 
     PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
-    PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
-    PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
-    PetscCall(MatDestroy(&X));
+    if (!cand->nbody) {
+      PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
+      PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
+      PetscCall(MatDestroy(&X));
+    } else
+      for (PetscInt b = 0; b < nb; b++) {
+        PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
+        PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
+        PetscCall(MatDestroy(&X));
+      }
     PetscCall(PetscArraycpy(&angles[e * nrev1], v->angles, nrev1));
   }
   PetscCall(KFBodyBasisFinish(bb, r->body_tol));

@@ -53,6 +53,8 @@ def _chosen_sentence(c):
         parts.append(f"α_G = {s['reduction_label']}°")
     if ch.get("kept_modes") is not None:
         parts.append(f"kept Krylov modes {mode_ranges(ch['kept_modes'])}")
+    elif ch.get("kept_clusters") == "per body":
+        parts.append("each body its share of the mode clusters")
     elif ch.get("kept_clusters") is not None:
         parts.append(f"{ch['kept_clusters']} kept mode clusters")
     elif "kept_clusters" in ch:

@@ -94,7 +94,8 @@ def _search_rows(table):
             elif name == "error":
                 row[name] = _none(v)
             elif name == "kept_clusters":
-                row[name] = None if np.isnan(v) or v < 0 else int(v)     # None: every cluster kept
+                # None: every cluster kept; "per body": each body its share (body_kept_clusters)
+                row[name] = None if np.isnan(v) or v == -1 else ("per body" if v == -2 else int(v))
             else:
                 row[name] = None if np.isnan(v) else int(v)
         rows.append(row)

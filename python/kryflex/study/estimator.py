@@ -104,6 +104,9 @@ def _starts(reducer, scene, cands):
         if cand["family"] != SINGLE:
             starts.append(-1 if named_multi else (int(first) if first is not None else -1))
             continue
+        if cand["kept"] == -2:   # each body its share of the best single-angle model: at its alpha_G, after the blocks
+            starts.append(int(first) if auto_alpha and first is not None else -1)
+            continue
         if prev is None or (cand["kept"] == -1 and (prev["kept"] != -1 or prev["c"] >= cand["c"])):
             block += 1
         prev = cand
@@ -311,7 +314,8 @@ def start_label(cand, reducer, scene):
 
 def describe(family, c, kept, nexp, start_deg):
     """'single-angle c = 5, 3 clusters, alpha_G 30 deg' / 'multi-angle c = 2, every mode, 2 angles from 0 deg'."""
-    what = "every mode" if kept < 0 else "%d cluster%s" % (kept, "" if kept == 1 else "s")
+    what = ("every mode" if kept == -1 else "each body its share" if kept == -2
+            else "%d cluster%s" % (kept, "" if kept == 1 else "s"))
     if family in (SINGLE, FAMILIES[SINGLE]):
         where = "alpha_G %s deg" % start_deg
     else:

@@ -132,6 +132,7 @@ PETSC_INTERN PetscErrorCode KFVisitVectors_Private(KFReducer, KFVisit *, PetscIn
 PETSC_INTERN PetscErrorCode KFVisitModes_Private(KFReducer, KFVisit *, PetscInt c, PetscInt *n, PetscReal **lambda, PetscReal **Phi, PetscReal **imp, PetscInt **clu, PetscInt *nclusters);
 
 #define KF_MAX_EXPANSION 64
+#define KF_MAX_BODY_SHARE 64 /* scenes with more bodies keep one kept set for all */
 /* Ritz values at or below this fraction of the largest are rigid content, not modes (spurious near-zero modes) */
 #define KF_SPURIOUS_RTOL 1e-12
 typedef struct {
@@ -139,6 +140,8 @@ typedef struct {
   PetscInt  c;          /* moments (blocks) */
   PetscInt  kept;       /* clusters kept, -1: the whole basis */
   PetscInt  nexp, exp[KF_MAX_EXPANSION]; /* visits whose bases make the model */
+  PetscInt  nbody;      /* > 0: body b keeps its own bkept[b] clusters (its share of the target); 0: kept for all */
+  PetscInt  bkept[KF_MAX_BODY_SHARE];
   /* after evaluation */
   PetscInt  size, sysdofs;
   PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */

@@ -128,6 +128,26 @@ static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KF
   PetscFunctionReturn(0);
 }
 
+/* the reduced dofs of each body of a model, as the whole result name */
+static PetscErrorCode KFReducerRecordBodySizes_Private(KFReducer r, KFReducedModel model, const char name[])
+{
+  PetscInt   nb;
+  PetscReal *dofs;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(PetscMalloc1(nb, &dofs));
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(model, b, NULL, NULL, &body, NULL));
+    dofs[b] = (PetscReal)body.v;
+  }
+  PetscCall(KFReducerResultSet_Private(r, -1, name, 1, &nb, dofs));
+  PetscCall(PetscFree(dofs));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals[], PetscReal Lfull[])
 {
   MPI_Comm         comm;
@@ -315,29 +335,13 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     }
   }
   {
-    PetscReal *dofs;
-
-    PetscCall(PetscMalloc1(nb, &dofs));
-    for (PetscInt b = 0; b < nb; b++) {
-      KFReducedBody body;
-
-      PetscCall(KFReducedModelGetBody(r->single, b, NULL, NULL, &body, NULL));
-      dofs[b] = (PetscReal)body.v;
-    }
-    PetscCall(KFReducerResultSet_Private(r, -1, "reduced_dofs_per_body", 1, &nb, dofs));
+    PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
     if (r->multi_model) {
       const PetscInt shape[2] = {nrev1, multi_n};
 
-      for (PetscInt b = 0; b < nb; b++) {
-        KFReducedBody body;
-
-        PetscCall(KFReducedModelGetBody(r->multi_model, b, NULL, NULL, &body, NULL));
-        dofs[b] = (PetscReal)body.v;
-      }
-      PetscCall(KFReducerResultSet_Private(r, -1, "multi_dofs_per_body", 1, &nb, dofs));
+      PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
       PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, shape, multi_angles));
     }
-    PetscCall(PetscFree(dofs));
   }
   PetscCall(KFReducerModelSizes_Private(r->single, sizes, sizeof(sizes)));
   if (r->multi_model) {
@@ -648,24 +652,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
       PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
     }
-    for (PetscInt b = 0; b < nb; b++) {
-      KFReducedBody body;
-
-      PetscCall(KFReducedModelGetBody(r->single, b, NULL, NULL, &body, NULL));
-      dofs[b] = (PetscReal)body.v;
-    }
-    PetscCall(KFReducerResultSet_Private(r, -1, "reduced_dofs_per_body", 1, &nb, dofs));
+    PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
     if (r->multi_model) {
       PetscReal     *ma;
       const PetscInt mshape[2] = {nrev1, multi.nexp};
 
-      for (PetscInt b = 0; b < nb; b++) {
-        KFReducedBody body;
-
-        PetscCall(KFReducedModelGetBody(r->multi_model, b, NULL, NULL, &body, NULL));
-        dofs[b] = (PetscReal)body.v;
-      }
-      PetscCall(KFReducerResultSet_Private(r, -1, "multi_dofs_per_body", 1, &nb, dofs));
+      PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
       PetscCall(PetscMalloc1(nrev1 * multi.nexp, &ma));
       for (PetscInt e = 0; e < multi.nexp; e++) PetscCall(PetscArraycpy(&ma[e * nrev1], visits[multi.exp[e]].angles, nrev1));
       PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, mshape, ma));

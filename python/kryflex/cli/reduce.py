@@ -127,6 +127,8 @@ def chosen_text(result):
         parts.append("alpha_G = %s deg" % s["reduction_label"])
     if ch.get("kept_modes") is not None or not ch:
         parts.append("kept Krylov modes %s" % (ch.get("kept_modes") if ch else s["kept_modes"]))
+    elif ch.get("kept_clusters") == "per body":
+        parts.append("each body its share of the mode clusters")
     elif ch.get("kept_clusters") is not None:
         parts.append("%d kept mode clusters" % ch["kept_clusters"])
     else:

@@ -417,6 +417,32 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, PetscInt nm
   PetscFunctionReturn(0);
 }
 
+/* the full-order references of the midpoints (evaluation points nconfig .. neval - 1), each at its own angles;
+   seconds: the time they took */
+static PetscErrorCode KFReducerMidpointReferences_Private(KFReducer r, KFSystem sys, PetscInt neval, KFEvalPoint evals[], PetscReal *seconds)
+{
+  MPI_Comm       comm;
+  PetscInt       nrev;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+  for (PetscInt e = r->nconfig; e < neval; e++) {
+    char label[128];
+
+    PetscCall(KFInterruptCheck(comm));
+    PetscCall(KFReducerConfigLabel_Private(nrev, evals[e].angles, label, sizeof(label)));
+    PetscCall(KFProgress(comm, "full-order reference at the midpoint %s deg", label));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFSystemSetAngles(sys, evals[e].angles));
+    PetscCall(KFReducerReference_Private(r, sys, 0, NULL, &evals[e]));
+    PetscCall(PetscTime(&t1));
+    *seconds += t1 - t0;
+  }
+  PetscFunctionReturn(0);
+}
+
 /* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
    the shorter way round) */
 static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
@@ -536,19 +562,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFProgress(comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
     PetscCall(KFFlexSolverDestroy(&solver));
   }
-  /* the midpoints' references */
-  for (PetscInt e = r->nconfig; r->verify && e < neval; e++) {
-    char label[128];
-
-    PetscCall(KFInterruptCheck(comm));
-    PetscCall(KFReducerConfigLabel_Private(nrev, evals[e].angles, label, sizeof(label)));
-    PetscCall(KFProgress(comm, "full-order reference at the midpoint %s deg", label));
-    PetscCall(PetscTime(&t0));
-    PetscCall(KFSystemSetAngles(sys, evals[e].angles));
-    PetscCall(KFReducerReference_Private(r, sys, 0, NULL, &evals[e]));
-    PetscCall(PetscTime(&t1));
-    times[6] += t1 - t0;
-  }
+  if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &times[6]));
   PetscCall(KFSystemDestroy(&sys));
   if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
     KFCandidate    rich = {0};
@@ -720,16 +734,11 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   else {
     PetscCall(KFReducerSolveFixed_Private(r, evals, Lfull));
     if (r->verify) { /* the midpoints' references, then every point's grid */
-      KFSystem sys;
-      PetscInt nrev;
+      KFSystem  sys;
+      PetscReal seconds = 0;
 
-      PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
       PetscCall(KFSystemCreate(r->scene, &sys));
-      for (PetscInt e = r->nconfig; e < neval; e++) {
-        PetscCall(KFInterruptCheck(comm));
-        PetscCall(KFSystemSetAngles(sys, evals[e].angles));
-        PetscCall(KFReducerReference_Private(r, sys, 0, NULL, &evals[e]));
-      }
+      PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &seconds));
       PetscCall(KFSystemDestroy(&sys));
       for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
     }

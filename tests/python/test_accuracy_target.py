@@ -226,7 +226,7 @@ def test_galileo_size_within_sweep(galileo):
 def test_galileo_two_ranks_choose_as_one(galileo, tmp_path):
     serial = galileo.run(FIXED_TARGET)
     model_path, summary_path = tmp_path / "model.h5", tmp_path / "summary.json"
-    cmd = ["mpiexec", "-n", "2", "/usr/bin/python3", PROBE, serial.path, str(model_path), str(summary_path)]
+    cmd = ["mpiexec", "-n", "2", sys.executable, PROBE, serial.path, str(model_path), str(summary_path)]
     proc = subprocess.run(cmd, env=ENV, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, "%s: exit %d\n%s\n%s" % (" ".join(cmd), proc.returncode, proc.stdout[-2000:],
                                                           proc.stderr[-4000:])

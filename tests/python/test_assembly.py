@@ -225,7 +225,7 @@ def test_two_ranks_match_serial(any_scene, tmp_path):
     pair = any_scene
     which = pair.scene.name
     out = os.path.join(str(tmp_path), "probe.json")
-    cmd = ["mpiexec", "-n", "2", "/usr/bin/python3", os.path.join(HERE, "mpi_assembly_probe.py"), pair.path, out]
+    cmd = ["mpiexec", "-n", "2", sys.executable, os.path.join(HERE, "mpi_assembly_probe.py"), pair.path, out]
     run = subprocess.run(cmd, capture_output=True, text=True, env=MPI_ENV, cwd=ROOT, timeout=300)
     assert run.returncode == 0, f"{' '.join(cmd)} failed:\n{run.stdout[-2000:]}\n{run.stderr[-4000:]}"
     with open(out) as f:

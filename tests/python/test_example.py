@@ -20,7 +20,7 @@ import yaml
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 EXAMPLE = os.path.join(ROOT, "python", "examples", "two_body_scene.py")
-PYTHON = "/usr/bin/python3"
+PYTHON = sys.executable
 sys.path.insert(0, HERE)
 import reference as ref  # noqa: E402
 from conftest import reassembled  # noqa: E402

@@ -54,7 +54,7 @@ def stress_scenes(tmp_path_factory):
     # written by its own process: meshes/stress.py imports Galileo's generate.py, whose module name meshes/solid's
     # generator shares (test_solid_mesh.py imports that one)
     out = str(tmp_path_factory.mktemp("stress"))
-    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "meshes", "stress.py"), "--out", out, "--names",
+    subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "stress.py"), "--out", out, "--names",
                     "mimo-8x8"], check=True, capture_output=True, timeout=120)
     return {"mimo-8x8": os.path.join(out, "mimo-8x8", "scene.yaml")}
 

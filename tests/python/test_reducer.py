@@ -23,7 +23,7 @@ GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 KRYFLEX_CMD = os.path.join(ROOT, "build", "kryflex")
 EXAMPLE = os.path.join(ROOT, "build", "examples", "reduce_galileo")
 PROBE = os.path.join(HERE, "mpi_reducer_probe.py")
-PYTHON = "/usr/bin/python3"
+PYTHON = sys.executable
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 

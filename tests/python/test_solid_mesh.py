@@ -273,7 +273,7 @@ def test_scene_refers_to_existing_six_dof_nodes(tiny_scene):
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
 def test_two_ranks_write_the_same_matrices(tiny_scene, tmp_path):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
-    run = subprocess.run(["mpiexec", "-n", "2", "/usr/bin/python3", str(SOLID / "generate.py"),
+    run = subprocess.run(["mpiexec", "-n", "2", sys.executable, str(SOLID / "generate.py"),
                           "--refine", str(TINY), "-o", str(tmp_path)],
                          env=env, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr

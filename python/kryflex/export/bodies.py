@@ -1,0 +1,142 @@
+"""The reduced bodies of a model as floating-frame bodies, from the reduced model alone.
+
+A reduced body's coordinates phi (v of them) span its 6 rigid-body motions (the model's `rigid` rows: Psi^T M Phi_rig,
+so the motions' own coordinates are R = M^-1 rigid) and its flexible shapes. A multibody code (Exudyn's
+ObjectFFRFreducedOrder, or any floating-frame-of-reference body) wants them split:
+
+    phi = R r + F q      r: 6 small frame motions (translation, rotation about the body frame's origin)
+                         q: flexible coordinates, F M-orthonormal, M-orthogonal to R, K-diagonal
+
+With F M-orthogonal to the rigid motions, the frame's mass terms decouple from the flexible ones (mean-axis frame):
+mass m, centre of mass c and inertia J about the origin follow from R^T M R exactly, whatever dofs the body's nodes
+have (translations only, or rotations too: the reduced M already holds the rotary inertia of beams, shells and RBE2
+nodes). The change of coordinates [R F] is square and invertible, so at rest the floating-frame body has exactly the
+kryflex reduced body's linear dynamics.
+
+Interface nodes: their 6 rows (iface) give their translation and rotation for any phi; their positions follow from the
+rows of the rigid rotations (w x x at the node), so the reduced model needs no node coordinates. Inputs and outputs:
+per body the generalized forces R^T G (force, moment about the origin, body frame) and F^T G, and the output rows
+H R and H F.
+"""
+import dataclasses
+
+import numpy as np
+
+
+class ExportError(ValueError):
+    """A model that cannot be exported: the message names the body, the fault and the fix."""
+
+
+# how far the reduced rigid motions may be from exact ones before the export refuses the body (relative)
+RIGID_TOL = 1e-6
+
+
+def _axial(A):
+    """x from A = -skew(x) (least squares over both off-diagonal triangles)."""
+    return 0.5 * np.array([A[1, 2] - A[2, 1], A[2, 0] - A[0, 2], A[0, 1] - A[1, 0]])
+
+
+def skew(x):
+    """skew(x) y = x cross y."""
+    return np.array([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]])
+
+
+@dataclasses.dataclass(eq=False)
+class FloatingBody:
+    """One reduced body as a floating-frame body. Arrays (SI units if the scene's are; v reduced, f = v - 6 flexible
+    coordinates, a inputs, t outputs, n interfaces):
+
+    M, K, G, H, iface: the kryflex reduced body as stored (v x v, v x v, v x a, t x v, 6n x v)
+    rigid_coords R (v x 6): the reduced coordinates of the rigid motions (ux, uy, uz, rx, ry, rz about the origin)
+    modes F (v x f): flexible modes, F^T M F = I, R^T M F = 0, F^T K F diagonal (ascending)
+    mass_flex (f x f) = F^T M F, stiffness_flex (f x f) = F^T K F
+    mass, center_of_mass (3), inertia (3 x 3 about the body frame's origin)
+    interface_positions (n x 3); interface_modes (n, 6, f): interface translations and rotations per flexible mode
+    input_rigid (6 x a) = R^T G: force and moment about the origin per unit input; input_flex (f x a) = F^T G
+    output_rigid (t x 6) = H R, output_flex (t x f) = H F
+    """
+    name: str
+    interfaces: list
+    M: np.ndarray
+    K: np.ndarray
+    G: np.ndarray
+    H: np.ndarray
+    iface: np.ndarray
+    rigid_coords: np.ndarray
+    modes: np.ndarray
+    mass_flex: np.ndarray
+    stiffness_flex: np.ndarray
+    mass: float
+    center_of_mass: np.ndarray
+    inertia: np.ndarray
+    interface_positions: np.ndarray
+    interface_modes: np.ndarray
+    input_rigid: np.ndarray
+    input_flex: np.ndarray
+    output_rigid: np.ndarray
+    output_flex: np.ndarray
+
+    @property
+    def nflex(self):
+        return self.modes.shape[1]
+
+    @property
+    def frequencies_hz(self):
+        """The body's free-free flexible frequencies (Hz)."""
+        return np.sqrt(np.maximum(np.diag(self.stiffness_flex), 0)) / (2 * np.pi)
+
+
+def floating_body(name, interfaces, M, K, G, H, iface, rigid):
+    """The FloatingBody of one reduced body (the arrays of ReducedModel.bodies); ExportError when the body lacks its
+    rigid motions or its basis does not reproduce them."""
+    v = M.shape[0]
+    if rigid is None or rigid.shape != (v, 6):
+        raise ExportError("body '%s': the reduced model holds no rigid-body rows for it (a model of an older kryflex, or a "
+                          "clamped body): a floating-frame export needs them; reduce the scene again with this kryflex"
+                          % name)
+    if v < 6:
+        raise ExportError("body '%s' has %d reduced dofs, fewer than its 6 rigid motions: it cannot float" % (name, v))
+    M = 0.5 * (M + M.T)
+    K = 0.5 * (K + K.T)
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        raise ExportError("body '%s': its reduced mass matrix is not positive definite (massless reduced coordinates): "
+                          "a multibody body needs mass in every coordinate" % name) from None
+    R = np.linalg.solve(M, rigid)
+    # R^T M R is the rigid body's 6 x 6 mass matrix: m I, -m skew(c); m skew(c), J
+    Mr = R.T @ M @ R
+    mass = float(np.trace(Mr[:3, :3]) / 3)
+    if not mass > 0:
+        raise ExportError("body '%s' has no mass in its rigid translations (m = %g): check its mass matrix" % (name, mass))
+    dev = np.abs(Mr[:3, :3] - mass * np.eye(3)).max() / mass
+    if dev > RIGID_TOL:
+        raise ExportError("body '%s': its reduced rigid translations do not carry one mass (|R^T M R - m I| / m = %.2g): "
+                          "its reduced basis does not contain its rigid motions exactly" % (name, dev))
+    com = _axial(Mr[:3, 3:]) / mass
+    inertia = 0.5 * (Mr[3:, 3:] + Mr[3:, 3:].T)
+    # interface positions from the rotations' translation rows, checked against the exact rigid pattern
+    nif = iface.shape[0] // 6
+    positions = np.zeros((nif, 3))
+    for i in range(nif):
+        A = iface[6 * i:6 * i + 6] @ R
+        x = _axial(A[:3, 3:])
+        positions[i] = x
+        exact = np.block([[np.eye(3), -skew(x)], [np.zeros((3, 3)), np.eye(3)]])
+        err = np.abs(A - exact).max() / max(1.0, np.abs(exact).max())
+        if err > RIGID_TOL:
+            raise ExportError("body '%s', interface '%s': the reduced rigid motions do not move the interface node rigidly "
+                              "(error %.2g): its reduced basis does not contain the body's rigid motions" % (name, interfaces[i], err))
+    # flexible modes: the M-orthogonal complement of the rigid motions, diagonalized on K
+    Y = L.T @ R
+    Q, _ = np.linalg.qr(Y, mode="complete")
+    F0 = np.linalg.solve(L.T, Q[:, 6:])
+    lam, V = np.linalg.eigh(0.5 * ((F0.T @ K @ F0) + (F0.T @ K @ F0).T))
+    F = F0 @ V
+    Mf = F.T @ M @ F
+    Kf = F.T @ K @ F
+    imodes = np.stack([iface[6 * i:6 * i + 6] @ F for i in range(nif)]) if nif else np.zeros((0, 6, F.shape[1]))
+    return FloatingBody(name=name, interfaces=list(interfaces), M=M, K=K, G=G, H=H, iface=iface, rigid_coords=R,
+                        modes=F, mass_flex=0.5 * (Mf + Mf.T), stiffness_flex=0.5 * (Kf + Kf.T), mass=mass,
+                        center_of_mass=com, inertia=inertia, interface_positions=positions, interface_modes=imodes,
+                        input_rigid=R.T @ G, input_flex=F.T @ G, output_rigid=H @ R, output_flex=H @ F)

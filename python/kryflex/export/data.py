@@ -1,0 +1,44 @@
+"""What a multibody export holds: the model's bodies as floating-frame bodies (bodies.py), its joints, inputs,
+outputs and damping; made from a ReducedModel (from_model) or read back from the neutral file (neutral.py)."""
+import dataclasses
+
+import numpy as np
+
+from .bodies import ExportError, floating_body
+
+
+@dataclasses.dataclass(eq=False)
+class MultibodyExport:
+    """bodies: FloatingBody per body, in the model's order; joints: dicts (name, type 'revolute'|'fixed', parent,
+    child (body indices), parent_interface, child_interface (interface indices), axis (3, parent frame), R0 (3 x 3):
+    the child frame's orientation in the parent's at angle 0); revolute joints come first, in the order of the angles.
+    inputs, outputs: names; damping: the uniform modal damping ratio the reduction served; scene: the scene's name."""
+    scene: str
+    bodies: list
+    joints: list
+    inputs: list
+    outputs: list
+    damping: float
+
+    @property
+    def revolute(self):
+        return [j["name"] for j in self.joints if j["type"] == "revolute"]
+
+    def body_index(self, name):
+        names = [b.name for b in self.bodies]
+        if name not in names:
+            raise ExportError("no body '%s' in the export (bodies: %s)" % (name, ", ".join(names)))
+        return names.index(name)
+
+
+def from_model(model):
+    """The MultibodyExport of a kryflex ReducedModel (every body must float: ExportError names the one that cannot)."""
+    bodies = [floating_body(name, ifs, **arrays)
+              for name, ifs, arrays in zip(model.body_names, model.interfaces, model.bodies)]
+    joints = []
+    for j in model.joints:
+        joints.append(dict(name=j["name"], type=j["type"], parent=int(j["parent"]), child=int(j["child"]),
+                           parent_interface=int(j["parent_interface"]), child_interface=int(j["child_interface"]),
+                           axis=np.asarray(j["axis"], dtype=float), R0=np.asarray(j["R0"], dtype=float)))
+    return MultibodyExport(scene=model.scene_name, bodies=bodies, joints=joints, inputs=list(model.input_names),
+                           outputs=list(model.output_names), damping=float(model.settings.get("damping", 0.0)))

@@ -1,4 +1,4 @@
-"""The kryflex command: reduce, reassemble, info, convert. Runs alone or under mpirun.
+"""The kryflex command: reduce, reassemble, info, study, export, convert. Runs alone or under mpirun.
 
 Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)
@@ -15,6 +15,7 @@ after -kf_error_agreement_timeout seconds (cli/common.py).
 import sys
 
 from .common import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_SIGINT, Failure, agree, error, internal, say, start_agreement
+from .export import run as export
 from .info import run as info
 from .reassemble import run as reassemble
 from .reduce import run as reduce
@@ -27,6 +28,7 @@ USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structur
   kryflex info SCENE                    bodies, dofs, joints, rigid and mechanism modes, inputs, outputs, memory
   kryflex study SCENE -o OUTDIR         every method swept on one full-order reference: error vs size and time
   kryflex convert INPUT --name NAME     import Matrix Market, NumPy .npz or Nastran DMIG (.pch) body matrices
+  kryflex export REDUCED -o OUT.npz     the reduced bodies for multibody codes (--format neutral or exudyn)
 
 PETSc options may follow (e.g. -log_view, -kf_moments 12, -kf_damping 0.005, -scene.reduction.moments 12); -quiet
 silences progress. Run under MPI as: mpirun -n 2 kryflex reduce SCENE -o OUTDIR. 'kryflex COMMAND -h' for details;
@@ -47,15 +49,15 @@ def main(argv=None):
     if not argv:
         # the usage, and the one error line every refusal has (on stderr: standard output stays empty)
         say(USAGE.rstrip(), sys.stderr)
-        error("no command given: use reduce, reassemble, info, study or convert (kryflex -h)")
+        error("no command given: use reduce, reassemble, info, study, export or convert (kryflex -h)")
         return EXIT_INPUT
     cmd, rest = argv[0], argv[1:]
     if cmd == "convert":
         from ..io.convert import main as convert_main
         return convert_main(rest)
-    commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study}
+    commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study, "export": export}
     if cmd not in commands:
-        error("unknown command '%s': use reduce, reassemble, info, study or convert (kryflex -h)" % cmd)
+        error("unknown command '%s': use reduce, reassemble, info, study, export or convert (kryflex -h)" % cmd)
         return EXIT_INPUT
     if "-quiet" in rest or "--quiet" in rest:
         from petsc4py import PETSc

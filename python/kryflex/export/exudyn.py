@@ -176,8 +176,8 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, sh
         z3ff, R = np.zeros((3, 3 * f)), body.rigid_coords
         obj = mbs.AddObject(eii.ObjectFFRFreducedOrder(
             name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc,
-            modeBasis=Psi, referencePositions=xref.ravel(), physicsMass=body.mass, physicsInertia=body.inertia,
-            physicsCenterOfMass=body.center_of_mass, mPsiTildePsi=np.zeros((3 * f, f)),
+            modeBasis=Psi, referencePositions=xref.ravel(), mass=body.mass, inertia=body.inertia,
+            centerOfMass=body.center_of_mass, mPsiTildePsi=np.zeros((3 * f, f)),
             mPsiTildePsiTilde=np.zeros((3 * f, 3 * f)), mPhitTPsiTilde=z3ff, mXRefTildePsiTilde=z3ff,
             # Phit^T M Psi and xRefTilde^T M Psi: the rigid motions' couplings with the flexible shapes (~0 here)
             mPhitTPsi=R[:, :3].T @ body.M @ body.modes, mXRefTildePsi=-R[:, 3:].T @ body.M @ body.modes,
@@ -205,12 +205,17 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, sh
         P, C = data.bodies[j["parent"]], data.bodies[j["child"]]
         Jp = _joint_frame(j["axis"])              # joint frame in the parent's body frame
         Jc = R.T @ Jp                             # the same frame in the child's body frame at this configuration
-        mp = handles["bodies"][P.name]["markers"][P.interfaces[j["parent_interface"]]]["rigid"]
-        mc = handles["bodies"][C.name]["markers"][C.interfaces[j["child_interface"]]]["rigid"]
+        ends = []
+        for body, i, Jb in ((P, j["parent_interface"], Jp), (C, j["child_interface"], Jc)):
+            # the joint's own marker on the interface's 6 points, its frame turned to the joint frame
+            ends.append(mbs.AddMarker(eii.MarkerSuperElementRigid(
+                name="%s:%s/%s" % (j["name"], body.name, body.interfaces[i]),
+                bodyNumber=handles["bodies"][body.name]["object"], meshNodeNumbers=[7 * i + k for k in range(1, 7)],
+                weightingFactors=[1.0 / 6] * 6, useAlternativeApproach=True,
+                localHT=exu.HT(rotation=Jb.tolist(), translation=[0.0, 0.0, 0.0]))))
         axes = [1, 1, 1, 1, 1, 0] if j["type"] == "revolute" else [1] * 6
-        handles["joints"][j["name"]] = mbs.AddObject(eii.GenericJoint(
-            name=j["name"], markerNumbers=[mp, mc], constrainedAxes=axes, rotationMarker0=Jp.tolist(),
-            rotationMarker1=Jc.tolist(), visualization=eii.VObjectJointGeneric(show=False)))
+        handles["joints"][j["name"]] = mbs.AddObject(eii.ObjectJointGeneric(
+            name=j["name"], markerNumbers=ends, constrainedAxes=axes, visualization=eii.VObjectJointGeneric(show=False)))
     if assemble:
         mbs.Assemble()
     return SC, mbs, handles
@@ -274,3 +279,22 @@ def output_values(mbs, handles):
             total += float(part["rigid"] @ r + part["flex"] @ q)
         y[name] = total
     return y
+
+
+# eigenvalues at or below this fraction of the largest are rigid-body or mechanism modes
+ZERO_TOL = 1e-12
+
+
+def linearized_frequencies(mbs, zero_tol=ZERO_TOL):
+    """The assembled system's linearized undamped frequencies (Hz) at its initial state, through Exudyn's
+    ComputeODE2Eigenvalues (constraints by the null space of their Jacobian): (flexible frequencies ascending, number
+    of rigid-body and mechanism modes, |lambda| <= zero_tol * max |lambda|)."""
+    lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False)
+    lam = np.sort(np.real(np.asarray(lam)))
+    top = np.abs(lam).max() if lam.size else 0.0
+    zero = np.abs(lam) <= zero_tol * top
+    flex = lam[~zero]
+    if np.any(flex < 0):
+        raise ExportError("the Exudyn system has %d negative eigenvalue(s) (lowest %.3g): its linearization is unstable"
+                          % (int(np.sum(flex < 0)), flex.min()))
+    return np.sqrt(flex) / (2 * np.pi), int(zero.sum())

@@ -100,6 +100,63 @@ def test_joint_is_what_ties_the_bodies(solid, neutral):
     assert np.allclose(np.sqrt(lam[~zero]) / (2 * np.pi), own, rtol=1e-8)
 
 
+def _exudyn_linear_parts(mbs):
+    """Exudyn's own linearization at the initial state: mass matrix, stiffness (minus the Jacobian of the ODE2
+    right-hand side), constraint Jacobian (ODE2 coordinates x constraints) and the ODE2 right-hand side (the loads)."""
+    ss = exudyn.SimulationSettings()
+    sol = exudyn.MainSolverImplicitSecondOrder()
+    sol.InitializeSolver(mbs, ss)
+    n = sol.GetODE2size()
+    sol.ComputeMassMatrix(mbs)
+    M = sol.GetSystemMassMatrix().copy()
+    sol.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1, scalarFactor_ODE2_t=0, scalarFactor_ODE1=0)
+    sol.ComputeJacobianAE(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
+                          velocityLevel=False)
+    J = sol.GetSystemJacobian().copy()
+    sol.ComputeODE2RHS(mbs)
+    rhs = sol.GetSystemResidual()[:n].copy()
+    sol.FinalizeSolver(mbs, ss)
+    return M, J[:n, :n], J[:n, n:], rhs
+
+
+def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
+    """The inputs' loads (set_input) and the outputs (output_values) of the Exudyn system give kryflex's undamped
+    frequency response at 30 deg: H_y (K - w^2 M)^-1 f on the null space of Exudyn's constraint Jacobian, f from
+    Exudyn's right-hand side with the input on, H_y by central differences of output_values."""
+    import kryflex
+    from scipy.linalg import null_space
+
+    from kryflex.export.exudyn import build_mbs, output_values, set_input
+    model = kryflex.ReducedModel.load(str(solid[1]))
+    ref = model.at([30.0])
+    freqs = np.array([0.5, 3.0, 12.0])            # between resonances, below and in the band
+    T = ref.frf(freqs, damping=0.0)               # (frequencies, outputs, inputs)
+    SC, mbs, h = build_mbs(str(neutral[0]), [30.0])
+    M, K, C, rhs0 = _exudyn_linear_parts(mbs)
+    assert np.abs(rhs0).max() == 0.0              # at rest, inputs off: no load
+    N = null_space(C.T)
+    q0 = mbs.systemData.GetODE2Coordinates()
+    Hy, eps = np.zeros((len(model.output_names), len(q0))), 1e-6
+    for i in range(len(q0)):
+        for sign in (1.0, -1.0):
+            q = q0.copy()
+            q[i] += sign * eps
+            mbs.systemData.SetODE2Coordinates(q, exudyn.ConfigurationType.Current)
+            y = output_values(mbs, h)
+            Hy[:, i] += sign * np.array([y[n] for n in model.output_names]) / (2 * eps)
+    mbs.systemData.SetODE2Coordinates(q0, exudyn.ConfigurationType.Current)
+    assert output_values(mbs, h) == {n: 0.0 for n in model.output_names}
+    for k, name in enumerate(model.input_names):
+        set_input(mbs, h, name, 1.0)
+        f = _exudyn_linear_parts(mbs)[3] - rhs0
+        set_input(mbs, h, name, 0.0)
+        assert np.abs(f).max() > 0
+        for iw, w in enumerate(2 * np.pi * freqs):
+            y = Hy @ N @ np.linalg.solve(N.T @ (K - w ** 2 * M) @ N, N.T @ f)
+            err = np.abs(y - T[iw, :, k].real).max() / np.abs(T[iw, :, k]).max()
+            assert err <= 1e-7, (name, freqs[iw], err)
+
+
 def _load_petsc_dense(path):
     from petsc4py import PETSc
     viewer = PETSc.Viewer().createBinary(str(path), "r", comm=PETSc.COMM_SELF)

@@ -16,7 +16,8 @@ The package, in the order data flows through it:
     reducer    Reducer (the C KFReducer: the whole reduction policy and its verification), Reduction, reduce
     api        ReducedModel, ReducedSystem: the results of a reduction, computed in C
     report/    the summary dict of a reduction, report.md, summary.json and plots
-    cli/       the kryflex command: reduce, reassemble, info, convert
+    export/    the reduced bodies for multibody codes: the neutral file, the Exudyn system
+    cli/       the kryflex command: reduce, reassemble, info, study, export, convert
 """
 import importlib
 

@@ -104,6 +104,8 @@ def _exudyn_linear_parts(mbs):
     """Exudyn's own linearization at the initial state: mass matrix, stiffness (minus the Jacobian of the ODE2
     right-hand side), constraint Jacobian (ODE2 coordinates x constraints) and the ODE2 right-hand side (the loads)."""
     ss = exudyn.SimulationSettings()
+    ss.solution.file.write = False          # no solution/ folder in the working directory
+    ss.solution.file.writeInitialValues = False
     sol = exudyn.MainSolverImplicitSecondOrder()
     sol.InitializeSolver(mbs, ss)
     n = sol.GetODE2size()

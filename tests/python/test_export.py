@@ -191,6 +191,25 @@ def test_time_simulation_follows_kryflex_step_response(solid, neutral):
         assert err <= 1e-3, (name, err)
 
 
+def test_modal_damping_damps_each_body_mode(neutral):
+    """build_mbs(modal_damping=zeta): with the joint off, every body's flexible mode has damping ratio zeta in Exudyn's
+    complex eigenvalues."""
+    from kryflex.export import read_neutral
+    from kryflex.export.exudyn import build_mbs
+    SC, mbs, h = build_mbs(str(neutral[0]), [0.0], assemble=False, modal_damping=0.02)
+    mbs.SetObjectParameter(h["joints"]["spin_bearing"], "activeConnector", False)
+    mbs.Assemble()
+    ev, _ = mbs.ComputeODE2Eigenvalues(computeComplexEigenvalues=True, useAbsoluteValues=False,
+                                       ignoreAlgebraicEquations=True)
+    ev = ev[np.imag(ev) > 1.0]          # the flexible modes, one of each conjugate pair
+    zeta = -np.real(ev) / np.abs(ev)
+    data = read_neutral(str(neutral[0]))
+    assert len(ev) == sum(b.nflex for b in data.bodies)
+    assert np.allclose(zeta, 0.02, rtol=1e-6)
+    with pytest.raises(Exception, match="modal_damping"):
+        build_mbs(str(neutral[0]), [0.0], modal_damping=-1)
+
+
 def _load_petsc_dense(path):
     from petsc4py import PETSc
     viewer = PETSc.Viewer().createBinary(str(path), "r", comm=PETSc.COMM_SELF)

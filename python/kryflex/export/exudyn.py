@@ -136,7 +136,7 @@ def _arm(body):
     return 0.1 * r if r > 0 else 1.0
 
 
-def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, show_nodes=False):
+def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, modal_damping=0.0, show_nodes=False):
     """An Exudyn system of the reduced model at the given angles (degrees, one per revolute joint).
 
     source: a MultibodyExport, a ReducedModel, a reduced-model file (.h5) or a neutral export (.npz).
@@ -151,6 +151,9 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, sh
 
     from . import load
     data = load(source)
+    zeta = float(modal_damping)
+    if not (np.isfinite(zeta) and zeta >= 0):
+        raise ExportError("modal_damping %r: give a damping ratio >= 0" % (modal_damping,))
     place, rot = placements(data, angles_deg)
     if SC is None:
         SC = exu.SystemContainer()
@@ -173,9 +176,13 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, sh
         Mmc, Kmc = exu.MatrixContainer(), exu.MatrixContainer()
         Mmc.SetWithDenseMatrix(body.mass_flex, useDenseMatrix=True)
         Kmc.SetWithDenseMatrix(body.stiffness_flex, useDenseMatrix=True)
+        Dmc = []
+        if zeta > 0:
+            Dmc = exu.MatrixContainer()
+            Dmc.SetWithDenseMatrix(np.diag(2 * zeta * 2 * np.pi * body.frequencies_hz), useDenseMatrix=True)
         z3ff, R = np.zeros((3, 3 * f)), body.rigid_coords
         obj = mbs.AddObject(eii.ObjectFFRFreducedOrder(
-            name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc,
+            name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc, dampingMatrixReduced=Dmc,
             modeBasis=Psi, referencePositions=xref.ravel(), mass=body.mass, inertia=body.inertia,
             centerOfMass=body.center_of_mass, mPsiTildePsi=np.zeros((3 * f, f)),
             mPsiTildePsiTilde=np.zeros((3 * f, 3 * f)), mPhitTPsiTilde=z3ff, mXRefTildePsiTilde=z3ff,

@@ -326,6 +326,16 @@ def test_bad_input_is_refused_cleanly(solid, tmp_path, args, code, words):
     assert os.listdir(tmp_path) == []          # nothing written, no temporary left
 
 
+def test_two_ranks_refuse_together(solid, tmp_path):
+    """Under mpiexec -n 2 a refusal is agreed: one message, the documented code on every rank, no hang."""
+    r = run(["mpiexec", "-n", "2", KRYFLEX, "export", str(solid[1]), "-o", str(tmp_path / "x.npz"), "--format", "exudyn",
+             "--angle", "30,40"])
+    assert r.returncode == 2 and r.stderr.count("kryflex: error:") == 1 and "give 1 angle(s), got 2" in r.stderr
+    r = run(["mpiexec", "-n", "2", KRYFLEX, "export", str(tmp_path / "none.h5"), "-o", str(tmp_path / "x.npz")])
+    assert r.returncode == 5 and r.stderr.count("kryflex: error:") == 1
+    assert os.listdir(tmp_path) == []
+
+
 def test_not_a_model_file_is_refused(tmp_path):
     bad = tmp_path / "bad.h5"
     bad.write_text("not hdf5")

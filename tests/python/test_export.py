@@ -272,28 +272,94 @@ def test_neutral_file_reads_with_numpy_and_matches_full_order(solid, neutral):
             assert np.abs(z["body%d/interface_positions" % i]).max() < 1e-9
 
 
-def test_beam_bodies_export_too(tmp_path):
-    """Bodies with rotational dofs (Galileo's beams, 6-dof nodes) go the same route: the reduced mass already holds
-    their rotary inertia, and their interface rows their rotations. The joint axis is made oblique, [1, 2, 3], so that
-    the joint frame the export builds is tested off the coordinate axes."""
+@pytest.fixture(scope="module")
+def oblique(tmp_path_factory):
+    """Galileo (beams, 6-dof nodes) with its joint axis made oblique, [1, 2, 3], so that the joint frames the export
+    builds are tested off the coordinate axes: its reduced model and its export checked at 0, 60, 137.5 deg."""
     import shutil
+    out = tmp_path_factory.mktemp("oblique")
     gal = os.path.join(ROOT, "meshes", "galileo")
     for name in os.listdir(gal):
         if name.endswith((".mtx", "_nodes.txt")):
-            shutil.copy(os.path.join(gal, name), tmp_path)
+            shutil.copy(os.path.join(gal, name), out)
     text = open(os.path.join(gal, "galileo.yaml")).read()
     assert "axis: [0, 0, 1]" in text
-    (tmp_path / "oblique.yaml").write_text(text.replace("axis: [0, 0, 1]", "axis: [1, 2, 3]"))
-    red = tmp_path / "red"
-    r = run([KRYFLEX, "reduce", str(tmp_path / "oblique.yaml"), "-o", str(red), "-quiet", "-kf_verify", "0"])
+    (out / "oblique.yaml").write_text(text.replace("axis: [0, 0, 1]", "axis: [1, 2, 3]"))
+    r = run([KRYFLEX, "reduce", str(out / "oblique.yaml"), "-o", str(out / "red"), "-quiet", "-kf_verify", "0"])
     assert r.returncode == 0, r.stdout + r.stderr
-    r = run([KRYFLEX, "export", str(red / "reduced.h5"), "-o", str(tmp_path / "g.npz"), "--format", "exudyn",
+    r = run([KRYFLEX, "export", str(out / "red" / "reduced.h5"), "-o", str(out / "g.npz"), "--format", "exudyn",
              "--angle", "0", "--angle", "60", "--angle", "137.5", "--json"])
     assert r.returncode == 0, r.stdout + r.stderr
-    checks = json.loads(r.stdout)["check"]
+    return out / "red" / "reduced.h5", out / "g.npz", json.loads(r.stdout)
+
+
+def test_beam_bodies_export_too(oblique):
+    """Bodies with rotational dofs (Galileo's beams) go the same route: the reduced mass already holds their rotary
+    inertia, and their interface rows their rotations."""
+    checks = oblique[2]["check"]
     for c in checks:
         assert c["max_rel_diff"] <= MATCH and c["exudyn_zero"] == 7 and len(c["exudyn_hz"]) >= 3
     assert abs(checks[0]["exudyn_hz"][-1] - checks[1]["exudyn_hz"][-1]) > 1e-3 * checks[0]["exudyn_hz"][-1]
+
+
+def _dense_reassembly_hz(data, angles_deg):
+    """Independent reference (NumPy/SciPy, README 'To reassemble elsewhere'): the flexible frequencies of the export's
+    reduced bodies tied at the given angles, D(alpha) on the interface rows, its null space by SVD."""
+    from scipy.linalg import eigh, null_space
+    from scipy.spatial.transform import Rotation
+    sizes = [b.M.shape[0] for b in data.bodies]
+    off = np.concatenate([[0], np.cumsum(sizes)])
+    rows, irev = [], 0
+    for j in data.joints:
+        k = np.asarray(j["axis"], float) / np.linalg.norm(j["axis"])
+        if j["type"] == "revolute":
+            R = Rotation.from_rotvec(np.radians(angles_deg[irev]) * k).as_matrix() @ j["R0"]
+            irev += 1
+            E = null_space(k[None, :]).T                      # two unit vectors across the axis
+        else:
+            R, E = np.asarray(j["R0"]), np.eye(3)
+        P, C = data.bodies[j["parent"]], data.bodies[j["child"]]
+        ip, ic = P.iface[6 * j["parent_interface"]:][:6], C.iface[6 * j["child_interface"]:][:6]
+        for sel, T in ((slice(0, 3), np.eye(3)), (slice(3, 6), E)):
+            D = np.zeros((T.shape[0], off[-1]))
+            D[:, off[j["parent"]]:off[j["parent"] + 1]] = T @ ip[sel]
+            D[:, off[j["child"]]:off[j["child"] + 1]] = -T @ R @ ic[sel]
+            rows.append(D)
+    N = null_space(np.vstack(rows), rcond=1e-10)
+    Mb = np.zeros((off[-1], off[-1]))
+    Kb = np.zeros_like(Mb)
+    for b, body in enumerate(data.bodies):
+        Mb[off[b]:off[b + 1], off[b]:off[b + 1]] = body.M
+        Kb[off[b]:off[b + 1], off[b]:off[b + 1]] = body.K
+    lam = eigh(N.T @ Kb @ N, N.T @ Mb @ N, eigvals_only=True)
+    nzero = 6 + len(data.revolute)           # a free tree of bodies: 6 rigid + one mechanism per revolute joint
+    assert np.abs(lam[:nzero]).max() <= 1e-6 * lam[nzero]
+    return np.sqrt(lam[nzero:]) / (2 * np.pi)
+
+
+def test_rigid_only_body_becomes_an_exudyn_rigid_body(oblique):
+    """A body reduced to its 6 rigid motions (no flexible coordinate) becomes an ObjectRigidBody with MarkerBodyRigid
+    joints. The reference is the dense reassembly written here; it also agrees with kryflex's C reassembly."""
+    import kryflex
+    from kryflex.export import floating_body, read_neutral
+    from kryflex.export.exudyn import build_mbs
+    data = read_neutral(str(oblique[1]))
+    model = kryflex.ReducedModel.load(str(oblique[0]))
+    for a in (0.0, 60.0):
+        ref = _dense_reassembly_hz(data, [a])
+        assert np.allclose(ref, model.at([a]).frequencies_hz, rtol=1e-7)
+    stator = data.bodies[0]
+    R = stator.rigid_coords
+    M6 = R.T @ stator.M @ R
+    data.bodies[0] = floating_body(stator.name, stator.interfaces, M6, np.zeros((6, 6)), R.T @ stator.G,
+                                   stator.H @ R, stator.iface @ R, M6)
+    assert data.bodies[0].nflex == 0
+    for a in (0.0, 60.0, 137.5):
+        ref = _dense_reassembly_hz(data, [a])
+        SC, mbs, h = build_mbs(data, [a])
+        f, nzero = exudyn_frequencies(mbs)
+        assert nzero == 7 and len(f) == len(ref)
+        assert np.max(np.abs(f - ref) / ref) <= MATCH, a
 
 
 def test_two_ranks_write_the_same_export(solid, neutral, tmp_path):

@@ -170,37 +170,26 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
         node = GetRigidBodyNode(exu.NodeType.RotationRxyz, position=list(p), rotationMatrix=A.tolist())
         node.name = "frame:" + body.name
         nRigid = mbs.AddNode(node)
-        nModal = mbs.AddNode(eii.NodeGenericODE2(name="modes:" + body.name, numberOfODE2Coordinates=f,
-                                                 referenceCoordinates=[0.0] * f, initialCoordinates=[0.0] * f,
-                                                 initialCoordinates_t=[0.0] * f))
-        Mmc, Kmc = exu.MatrixContainer(), exu.MatrixContainer()
-        Mmc.SetWithDenseMatrix(body.mass_flex, useDenseMatrix=True)
-        Kmc.SetWithDenseMatrix(body.stiffness_flex, useDenseMatrix=True)
-        Dmc = []
-        if zeta > 0:
-            Dmc = exu.MatrixContainer()
-            Dmc.SetWithDenseMatrix(np.diag(2 * zeta * 2 * np.pi * body.frequencies_hz), useDenseMatrix=True)
-        z3ff, R = np.zeros((3, 3 * f)), body.rigid_coords
-        obj = mbs.AddObject(eii.ObjectFFRFreducedOrder(
-            name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc, dampingMatrixReduced=Dmc,
-            modeBasis=Psi, referencePositions=xref.ravel(), mass=body.mass, inertia=body.inertia,
-            centerOfMass=body.center_of_mass, mPsiTildePsi=np.zeros((3 * f, f)),
-            mPsiTildePsiTilde=np.zeros((3 * f, 3 * f)), mPhitTPsiTilde=z3ff, mXRefTildePsiTilde=z3ff,
-            # Phit^T M Psi and xRefTilde^T M Psi: the rigid motions' couplings with the flexible shapes (~0 here)
-            mPhitTPsi=R[:, :3].T @ body.M @ body.modes, mXRefTildePsi=-R[:, 3:].T @ body.M @ body.modes,
-            computeFFRFterms=True,
-            visualization=eii.VObjectFFRFreducedOrder(showNodes=show_nodes)))
+        if f == 0:
+            # reduced to its rigid motions: an Exudyn rigid body (inertia about the node, the frame's origin)
+            nModal, J = None, body.inertia
+            obj = mbs.AddObject(eii.ObjectRigidBody(name=body.name, nodeNumber=nRigid, mass=body.mass,
+                                                    inertia=[J[0, 0], J[1, 1], J[2, 2], J[1, 2], J[0, 2], J[0, 1]],
+                                                    centerOfMass=list(body.center_of_mass)))
+        else:
+            obj, nModal = _add_ffrf(exu, eii, mbs, body, nRigid, xref, Psi, zeta, show_nodes)
         markers = {}
         for i, name in enumerate(body.interfaces):
-            mesh = [7 * i + k for k in range(1, 7)]
-            markers[name] = dict(
-                rigid=mbs.AddMarker(eii.MarkerSuperElementRigid(name="%s/%s" % (body.name, name), bodyNumber=obj,
-                                                                meshNodeNumbers=mesh, weightingFactors=[1.0 / 6] * 6,
-                                                                useAlternativeApproach=True)),
-                position=mbs.AddMarker(eii.MarkerSuperElementPosition(name="%s/%s:position" % (body.name, name),
-                                                                      bodyNumber=obj, meshNodeNumbers=[7 * i],
-                                                                      weightingFactors=[1.0])),
-                mesh_node=7 * i)
+            markers[name] = dict(rigid=_interface_marker(exu, eii, mbs, body, obj, i, np.eye(3), "%s/%s" % (body.name, name)),
+                                 mesh_node=7 * i if f else None)
+            if f:
+                markers[name]["position"] = mbs.AddMarker(eii.MarkerSuperElementPosition(
+                    name="%s/%s:position" % (body.name, name), bodyNumber=obj, meshNodeNumbers=[7 * i],
+                    weightingFactors=[1.0]))
+            else:
+                markers[name]["position"] = mbs.AddMarker(eii.MarkerBodyPosition(
+                    name="%s/%s:position" % (body.name, name), bodyNumber=obj,
+                    localPosition=list(body.interface_positions[i])))
         handles["bodies"][body.name] = dict(object=obj, rigid_node=nRigid, modal_node=nModal, markers=markers,
                                             position=p, rotation=A, mesh_positions=xref)
         _add_inputs(mbs, eii, handles, body, nRigid, nModal)
@@ -214,18 +203,51 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
         Jc = R.T @ Jp                             # the same frame in the child's body frame at this configuration
         ends = []
         for body, i, Jb in ((P, j["parent_interface"], Jp), (C, j["child_interface"], Jc)):
-            # the joint's own marker on the interface's 6 points, its frame turned to the joint frame
-            ends.append(mbs.AddMarker(eii.MarkerSuperElementRigid(
-                name="%s:%s/%s" % (j["name"], body.name, body.interfaces[i]),
-                bodyNumber=handles["bodies"][body.name]["object"], meshNodeNumbers=[7 * i + k for k in range(1, 7)],
-                weightingFactors=[1.0 / 6] * 6, useAlternativeApproach=True,
-                localHT=exu.HT(rotation=Jb.tolist(), translation=[0.0, 0.0, 0.0]))))
+            # the joint's own marker on the interface, its frame turned to the joint frame
+            ends.append(_interface_marker(exu, eii, mbs, body, handles["bodies"][body.name]["object"], i, Jb,
+                                          "%s:%s/%s" % (j["name"], body.name, body.interfaces[i])))
         axes = [1, 1, 1, 1, 1, 0] if j["type"] == "revolute" else [1] * 6
         handles["joints"][j["name"]] = mbs.AddObject(eii.ObjectJointGeneric(
             name=j["name"], markerNumbers=ends, constrainedAxes=axes, visualization=eii.VObjectJointGeneric(show=False)))
     if assemble:
         mbs.Assemble()
     return SC, mbs, handles
+
+
+def _add_ffrf(exu, eii, mbs, body, nRigid, xref, Psi, zeta, show_nodes):
+    """The body's ObjectFFRFreducedOrder and the node of its flexible coordinates."""
+    f = body.nflex
+    nModal = mbs.AddNode(eii.NodeGenericODE2(name="modes:" + body.name, numberOfODE2Coordinates=f,
+                                             referenceCoordinates=[0.0] * f, initialCoordinates=[0.0] * f,
+                                             initialCoordinates_t=[0.0] * f))
+    Mmc, Kmc = exu.MatrixContainer(), exu.MatrixContainer()
+    Mmc.SetWithDenseMatrix(body.mass_flex, useDenseMatrix=True)
+    Kmc.SetWithDenseMatrix(body.stiffness_flex, useDenseMatrix=True)
+    Dmc = []
+    if zeta > 0:
+        Dmc = exu.MatrixContainer()
+        Dmc.SetWithDenseMatrix(np.diag(2 * zeta * 2 * np.pi * body.frequencies_hz), useDenseMatrix=True)
+    z3ff, R = np.zeros((3, 3 * f)), body.rigid_coords
+    obj = mbs.AddObject(eii.ObjectFFRFreducedOrder(
+        name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc,
+        dampingMatrixReduced=Dmc, modeBasis=Psi, referencePositions=xref.ravel(), mass=body.mass,
+        inertia=body.inertia, centerOfMass=body.center_of_mass, mPsiTildePsi=np.zeros((3 * f, f)),
+        mPsiTildePsiTilde=np.zeros((3 * f, 3 * f)), mPhitTPsiTilde=z3ff, mXRefTildePsiTilde=z3ff,
+        # Phit^T M Psi and xRefTilde^T M Psi: the rigid motions' couplings with the flexible shapes (~0 here)
+        mPhitTPsi=R[:, :3].T @ body.M @ body.modes, mXRefTildePsi=-R[:, 3:].T @ body.M @ body.modes,
+        computeFFRFterms=True, visualization=eii.VObjectFFRFreducedOrder(showNodes=show_nodes)))
+    return obj, nModal
+
+
+def _interface_marker(exu, eii, mbs, body, obj, i, frame, name):
+    """A rigid marker at interface i whose frame is `frame` (columns, body frame): on the 6 points of a flexible body
+    (MarkerSuperElementRigid), at the node of a rigid one (MarkerBodyRigid)."""
+    if body.nflex:
+        return mbs.AddMarker(eii.MarkerSuperElementRigid(
+            name=name, bodyNumber=obj, meshNodeNumbers=[7 * i + k for k in range(1, 7)], weightingFactors=[1.0 / 6] * 6,
+            useAlternativeApproach=True, localHT=exu.HT(rotation=frame.tolist(), translation=[0.0, 0.0, 0.0])))
+    return mbs.AddMarker(eii.MarkerBodyRigid(name=name, bodyNumber=obj, localHT=exu.HT(
+        rotation=frame.tolist(), translation=list(body.interface_positions[i]))))
 
 
 def _add_inputs(mbs, eii, handles, body, nRigid, nModal):
@@ -271,7 +293,8 @@ def frame_motion(mbs, handles, body):
     p = np.asarray(mbs.GetNodeOutput(h["rigid_node"], exu.OutputVariableType.Position))
     A = np.asarray(mbs.GetNodeOutput(h["rigid_node"], exu.OutputVariableType.RotationMatrix)).reshape(3, 3)
     r = np.concatenate([A0.T @ (p - p0), np.asarray(RotationMatrix2RotationVector(A0.T @ A))])
-    q = np.asarray(mbs.GetNodeOutput(h["modal_node"], exu.OutputVariableType.Coordinates))
+    q = np.zeros(0) if h["modal_node"] is None else \
+        np.asarray(mbs.GetNodeOutput(h["modal_node"], exu.OutputVariableType.Coordinates))
     return r, q
 
 

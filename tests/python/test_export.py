@@ -88,7 +88,8 @@ def test_joint_is_what_ties_the_bodies(solid, neutral):
     match above comes from the joint reproducing kryflex's interface ties, not from the bodies alone."""
     from kryflex.export import read_neutral
     from kryflex.export.exudyn import build_mbs
-    SC, mbs, h = build_mbs(str(neutral[0]), [30.0], assemble=False)
+    # no algebraic equations once the joint is off: rotation parameters without the Euler-parameter constraint
+    SC, mbs, h = build_mbs(str(neutral[0]), [30.0], assemble=False, rotation="RotationRotationVector")
     mbs.SetObjectParameter(h["joints"]["spin_bearing"], "activeConnector", False)
     mbs.Assemble()
     lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False, ignoreAlgebraicEquations=True)
@@ -196,7 +197,8 @@ def test_modal_damping_damps_each_body_mode(neutral):
     complex eigenvalues."""
     from kryflex.export import read_neutral
     from kryflex.export.exudyn import build_mbs
-    SC, mbs, h = build_mbs(str(neutral[0]), [0.0], assemble=False, modal_damping=0.02)
+    SC, mbs, h = build_mbs(str(neutral[0]), [0.0], assemble=False, modal_damping=0.02,
+                           rotation="RotationRotationVector")
     mbs.SetObjectParameter(h["joints"]["spin_bearing"], "activeConnector", False)
     mbs.Assemble()
     ev, _ = mbs.ComputeODE2Eigenvalues(computeComplexEigenvalues=True, useAbsoluteValues=False,
@@ -360,6 +362,24 @@ def test_rigid_only_body_becomes_an_exudyn_rigid_body(oblique):
         f, nzero = exudyn_frequencies(mbs)
         assert nzero == 7 and len(f) == len(ref)
         assert np.max(np.abs(f - ref) / ref) <= MATCH, a
+
+
+@pytest.mark.parametrize("rotation", ["RotationEulerParameters", "RotationRotationVector", "RotationRxyz"])
+def test_child_frame_turned_90_deg_about_y(oblique, rotation):
+    """A joint whose R0 turns the child frame 90 deg about y (Tait-Bryan angles' singular pitch): the default Euler
+    parameters and rotation vectors still match the dense reassembly; Rxyz is offered but cannot (documented)."""
+    from kryflex.export import read_neutral
+    from kryflex.export.exudyn import build_mbs
+    data = read_neutral(str(oblique[1]))
+    data.joints[0]["R0"] = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    ref = _dense_reassembly_hz(data, [0.0])
+    SC, mbs, h = build_mbs(data, [0.0], rotation=rotation)
+    try:
+        f, nzero = exudyn_frequencies(mbs)
+        ok = nzero == 7 and len(f) == len(ref) and np.max(np.abs(f - ref) / ref) <= MATCH
+    except (AssertionError, ValueError, np.linalg.LinAlgError):
+        ok = False
+    assert ok == (rotation != "RotationRxyz")
 
 
 def test_two_ranks_write_the_same_export(solid, neutral, tmp_path):

@@ -6,7 +6,7 @@
     set_input(mbs, h, "tip_force", 10.0)                          # input amplitude (scene units), any time
     y = output_values(mbs, h)                                     # outputs (dict name -> value) of the current state
 
-Per body (bodies.py): a rigid-body node (the floating frame: Tait-Bryan angles Rxyz, no extra constraint), a generic
+Per body (bodies.py): a rigid-body node (the floating frame; Euler parameters by default: no singularity), a generic
 node with the flexible coordinates q, and ObjectFFRFreducedOrder with the reduced flexible mass (identity) and
 stiffness (diagonal), and the frame's exact mass, centre of mass and inertia. The flexible shapes are M-orthogonal to
 the rigid motions, so the rigid-flexible mass couplings mPhitTPsi and mXRefTildePsi are zero; the second-order
@@ -136,7 +136,8 @@ def _arm(body):
     return 0.1 * r if r > 0 else 1.0
 
 
-def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, modal_damping=0.0, show_nodes=False):
+def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, modal_damping=0.0,
+              rotation="RotationEulerParameters", show_nodes=False):
     """An Exudyn system of the reduced model at the given angles (degrees, one per revolute joint).
 
     source: a MultibodyExport, a ReducedModel, a reduced-model file (.h5) or a neutral export (.npz).
@@ -154,6 +155,8 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
     zeta = float(modal_damping)
     if not (np.isfinite(zeta) and zeta >= 0):
         raise ExportError("modal_damping %r: give a damping ratio >= 0" % (modal_damping,))
+    if rotation not in ("RotationEulerParameters", "RotationRotationVector", "RotationRxyz"):
+        raise ExportError("rotation %r: use RotationEulerParameters, RotationRotationVector or RotationRxyz" % (rotation,))
     place, rot = placements(data, angles_deg)
     if SC is None:
         SC = exu.SystemContainer()
@@ -167,7 +170,7 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
         if not len(xref):
             # a body without interface nodes still needs one mesh node (Exudyn requires a mode basis): its frame origin
             xref, Psi = np.zeros((1, 3)), np.zeros((3, f))
-        node = GetRigidBodyNode(exu.NodeType.RotationRxyz, position=list(p), rotationMatrix=A.tolist())
+        node = GetRigidBodyNode(getattr(exu.NodeType, rotation), position=list(p), rotationMatrix=A.tolist())
         node.name = "frame:" + body.name
         nRigid = mbs.AddNode(node)
         if f == 0:

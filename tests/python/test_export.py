@@ -276,8 +276,9 @@ def test_neutral_file_reads_with_numpy_and_matches_full_order(solid, neutral):
 
 @pytest.fixture(scope="module")
 def oblique(tmp_path_factory):
-    """Galileo (beams, 6-dof nodes) with its joint axis made oblique, [1, 2, 3], so that the joint frames the export
-    builds are tested off the coordinate axes: its reduced model and its export checked at 0, 60, 137.5 deg."""
+    """Galileo (beams, 6-dof nodes) with its joint axis made oblique, [1, 2, 3], and the child frame turned (orientation
+    R0 = 53.1 deg about y), so that the joint frames and placements the export builds are tested off the coordinate
+    axes: its reduced model and its export checked at 0, 60, 137.5 deg."""
     import shutil
     out = tmp_path_factory.mktemp("oblique")
     gal = os.path.join(ROOT, "meshes", "galileo")
@@ -286,7 +287,8 @@ def oblique(tmp_path_factory):
             shutil.copy(os.path.join(gal, name), out)
     text = open(os.path.join(gal, "galileo.yaml")).read()
     assert "axis: [0, 0, 1]" in text
-    (out / "oblique.yaml").write_text(text.replace("axis: [0, 0, 1]", "axis: [1, 2, 3]"))
+    (out / "oblique.yaml").write_text(text.replace("axis: [0, 0, 1]", "axis: [1, 2, 3], orientation: [[0.6, 0, 0.8], "
+                                                                      "[0, 1, 0], [-0.8, 0, 0.6]]"))
     r = run([KRYFLEX, "reduce", str(out / "oblique.yaml"), "-o", str(out / "red"), "-quiet", "-kf_verify", "0"])
     assert r.returncode == 0, r.stdout + r.stderr
     r = run([KRYFLEX, "export", str(out / "red" / "reduced.h5"), "-o", str(out / "g.npz"), "--format", "exudyn",

@@ -405,6 +405,8 @@ def test_two_ranks_write_the_same_export(solid, neutral, tmp_path):
     (["@model", "-o", "x.npz", "--format", "exudyn", "--angle", "30,40"], 2, "give 1 angle(s), got 2"),
     (["@model", "-o", "nofolder/x.npz"], 4, "is not an existing folder"),
     (["@model"], 2, "missing"),
+    (["@model", "-o", "x.npz", "--scene", os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")], 5,
+     "was reduced from scene 'spacecraft_solid_r0.25', not from this scene 'galileo'"),
 ])
 def test_bad_input_is_refused_cleanly(solid, tmp_path, args, code, words):
     args = [str(solid[1]) if a == "@model" else a for a in args]

@@ -192,6 +192,26 @@ def test_time_simulation_follows_kryflex_step_response(solid, neutral):
         assert err <= 1e-3, (name, err)
 
 
+def test_joint_angles_follow_the_spin(neutral):
+    """joint_angles: the configured angle at build; after 1 s of a 100 N m bearing torque, the angle has changed by the
+    bodies' relative frame rotation about the axis (z here), to the small elastic rotation at the bearing."""
+    from kryflex.export.exudyn import build_mbs, frame_motion, joint_angles, set_input
+    SC, mbs, h = build_mbs(str(neutral[0]), [30.0])
+    assert joint_angles(mbs, h) == pytest.approx({"spin_bearing": 30.0}, abs=1e-12)
+    set_input(mbs, h, "bearing_torque", 100.0)
+    ss = exudyn.SimulationSettings()
+    ss.timeIntegration.numberOfSteps = 500
+    ss.timeIntegration.endTime = 1.0
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    mbs.SolveDynamic(ss)
+    turn = joint_angles(mbs, h)["spin_bearing"] - 30.0
+    rb, _ = frame_motion(mbs, h, "bus")
+    rr, _ = frame_motion(mbs, h, "rotor")
+    assert abs(turn) > 1.0                                   # degrees: a real spin, not round-off
+    assert turn == pytest.approx(np.degrees(rr[5] - rb[5]), rel=1e-2)
+
+
 def test_modal_damping_damps_each_body_mode(neutral):
     """build_mbs(modal_damping=zeta): with the joint off, every body's flexible mode has damping ratio zeta in Exudyn's
     complex eigenvalues."""

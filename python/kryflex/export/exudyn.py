@@ -1,10 +1,11 @@
 """The reduced model as an Exudyn multibody system: one ObjectFFRFreducedOrder per body, joined as the model's joints.
 
-    from kryflex.export.exudyn import build_mbs, set_input, output_values
+    from kryflex.export.exudyn import build_mbs, set_input, output_values, joint_angles
     SC, mbs, h = build_mbs("out/reduced.h5", [30.0])            # assembled, at 30 deg
     lam, _ = mbs.ComputeODE2Eigenvalues()                         # linearized: kryflex's frequencies at 30 deg
     set_input(mbs, h, "tip_force", 10.0)                          # input amplitude (scene units), any time
     y = output_values(mbs, h)                                     # outputs (dict name -> value) of the current state
+    a = joint_angles(mbs, h)                                      # revolute joints' current angles (degrees)
 
 Per body (bodies.py): a rigid-body node (the floating frame; Euler parameters by default: no singularity), a generic
 node with the flexible coordinates q, and ObjectFFRFreducedOrder with the reduced flexible mass (identity) and
@@ -331,3 +332,17 @@ def linearized_frequencies(mbs, zero_tol=ZERO_TOL):
         raise ExportError("the Exudyn system has %d negative eigenvalue(s) (lowest %.3g): its linearization is unstable"
                           % (int(np.sum(flex < 0)), flex.min()))
     return np.sqrt(flex) / (2 * np.pi), int(zero.sum())
+
+
+def joint_angles(mbs, handles):
+    """The revolute joints' current angles (dict name -> degrees): the configured angle plus the joint's relative
+    rotation about its axis since then (Exudyn's joint output; that change is wrapped to (-180, 180] deg)."""
+    import exudyn as exu
+    data, out, irev = handles["export"], {}, 0
+    for j in data.joints:
+        if j["type"] != "revolute":
+            continue
+        turn = mbs.GetObjectOutput(handles["joints"][j["name"]], exu.OutputVariableType.Rotation)[2]
+        out[j["name"]] = handles["angles_deg"][irev] + float(np.degrees(turn))
+        irev += 1
+    return out

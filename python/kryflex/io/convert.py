@@ -2,7 +2,8 @@
 
 Inputs:
   a Nastran punch file (.pch, or any bulk-data file) with DMIG stiffness and mass matrices
-      (KAAX and MAAX by default) and optionally GRID cards (here or in --grids files);
+      (KAAX and MAAX by default), with GRID (CORD, SPOINT, PARAM) cards here or in --grids files
+      (.bdf/.dat, or a run's .f06 bulk-data echo); read with pyNastran, see io/dmig.py;
   a NumPy .npz holding M and K (dense arrays 'M', 'K', or sparse parts 'M_data', 'M_indices',
       'M_indptr', 'M_shape' [, 'M_format' = csr|csc], or 'M_row', 'M_col', 'M_data', 'M_shape')
       and optionally 'nodes' (n x 5: id x y z ndof);
@@ -21,8 +22,8 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-from .bodyfiles import ConversionError, ConversionWarning, FORMATS, read_nodes, write_body
-from .dmig import scan_bulk, build_matrices, grids_from_records, nodes_from_dofs
+from .bodyfiles import ConversionError, ConversionWarning, FORMATS, dof_count, read_nodes, write_body
+from .dmig import nastran_body
 
 __all__ = ["convert", "main", "ConversionError", "ConversionWarning", "ConvertedBody"]
 
@@ -39,13 +40,15 @@ class ConvertedBody:
 
 
 def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
-            stiffness_name="KAAX", mass_name="MAAX", nodes=None):
+            stiffness_name="KAAX", mass_name="MAAX", nodes=None, mass_scale=None):
     """Convert one body and write it to out_dir; return a ConvertedBody.
 
     inputs: path of a Nastran punch file or of a .npz, or a mapping
             {'mass': file, 'stiffness': file, 'nodes': file} of Matrix Market / PETSc binary files.
-    interfaces: {interface name: node id}; grids: bulk-data file(s) with GRID cards (punch input);
-    nodes: a nodes file for a .npz that holds no 'nodes' array.
+    interfaces: {interface name: node id}; grids: bulk-data file(s) (.bdf/.dat/.pch, or a run's .f06 with
+    its bulk-data echo) with GRID, CORD, SPOINT and PARAM cards (Nastran input);
+    nodes: a nodes file for a .npz that holds no 'nodes' array;
+    mass_scale: Nastran input only: a factor on the DMIG mass, or 'wtmass' (see io/dmig.py, WTMASS).
     Raises ConversionError (message names the file and the fix); nothing is written then.
     """
     interfaces = dict(interfaces or {})
@@ -74,9 +77,9 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
                 raise ConversionError(
                     f"{path}: the nodes of a Nastran body come from its DMIG dofs; "
                     "give coordinates as GRID cards (--grids bulk.bdf), not a nodes file")
-            M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name)
+            M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name, mass_scale)
     files = write_body(out_dir, name, M, K, body_nodes, interfaces, fmt=fmt, sources=sources)
-    return ConvertedBody(files=files, size=int(sum(n[4] for n in body_nodes)),
+    return ConvertedBody(files=files, size=int(sum(dof_count(n[4]) for n in body_nodes)),
                          node_count=len(body_nodes), interfaces=interfaces)
 
 
@@ -93,44 +96,16 @@ def _no_grids(grids, what):
 
 # ---------------------------------------------------------------- Nastran punch
 
-def load_punch(path, grid_files, stiffness_name, mass_name):
-    names = (stiffness_name.upper(), mass_name.upper())
-    if names[0] == names[1]:
-        raise ConversionError(f"stiffness and mass matrix names are both {names[0]}; they must differ")
+def load_punch(path, grid_files, stiffness_name, mass_name, mass_scale=None):
+    """A Nastran body read with pyNastran: see io/dmig.py for what is read and how it is transformed."""
     for grid_file in grid_files:
         _require_file(grid_file, "GRID")
-    raw, other, records, grdset = scan_bulk(path, names)
-    matrices = build_matrices(path, names, raw, other)
-    K, dofs = matrices[names[0]]
-    M, _ = matrices[names[1]]
-    node_ndof = nodes_from_dofs(dofs)
-    ids = [g for g, _ in node_ndof]
-    coords = grids_from_records(path, records, grdset, ids)
-    origin = {gid: path for gid in coords}
-    for grid_file in grid_files:
-        _, _, more, more_set = scan_bulk(grid_file, ())
-        for gid, xyz in grids_from_records(grid_file, more, more_set, ids).items():
-            if gid in coords and coords[gid] != xyz:
-                raise ConversionError(
-                    f"GRID {gid} has coordinates {coords[gid]} in {origin[gid]} but {xyz} in {grid_file}; "
-                    "give each grid once")
-            coords[gid], origin[gid] = xyz, grid_file
-    if not coords:
-        warnings.warn(
-            f"{path}: no GRID cards for the {len(ids)} grids of the matrices (give them with --grids "
-            "bulk.bdf); node coordinates are set to 0, so rigid-body modes cannot be computed from "
-            "geometry and will then need to be supplied", ConversionWarning)
-    else:
-        missing = [g for g in ids if g not in coords]
-        if missing:
-            shown = ", ".join(str(g) for g in missing[:10])
-            raise ConversionError(
-                f"{len(missing)} grids of the DMIG matrices in {path} have no GRID card "
-                f"({shown}{', ...' if len(missing) > 10 else ''}); add the bulk-data file that defines "
-                "them with --grids")
-    nodes = [(g, *coords.get(g, (0.0, 0.0, 0.0)), n) for g, n in node_ndof]
-    sources = {"mass": f"DMIG {names[1]} of {path}", "stiffness": f"DMIG {names[0]} of {path}",
-               "nodes": f"grids of {path}"}
+    M, K, nodes, notes = nastran_body(path, grid_files, stiffness_name, mass_name, mass_scale)
+    scale = f" x {notes['mass_scale']:g}" if notes["mass_scale"] != 1.0 else ""
+    frame = " turned to basic" if notes["rotated"] else ""
+    sources = {"mass": f"DMIG {mass_name.upper()}{scale}{frame} of {path}",
+               "stiffness": f"DMIG {stiffness_name.upper()}{frame} of {path}",
+               "nodes": f"grids of {' + '.join([os.fspath(path), *map(os.fspath, grid_files)])}"}
     return M, K, nodes, sources
 
 
@@ -276,6 +251,7 @@ def _read_petsc(path):
 USAGE_EXAMPLES = """examples:
   kryflex convert model.pch --name rotor --interface bearing=101 -o bodies
   kryflex convert model.pch --grids model.bdf --name rotor --interface bearing=101 -o bodies
+  kryflex convert model.pch --grids model.f06 --name rotor --interface bearing=101 -o bodies
   kryflex convert boom.npz --name boom --interface root=1 --format mtx -o bodies
   kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
 
@@ -308,6 +284,9 @@ def build_parser():
                         help="bulk-data file with GRID cards for a punch input; repeatable")
     parser.add_argument("--stiffness-name", metavar="DMIG", help="DMIG stiffness name (default: KAAX)")
     parser.add_argument("--mass-name", metavar="DMIG", help="DMIG mass name (default: MAAX)")
+    parser.add_argument("--mass-scale", metavar="FACTOR|wtmass",
+                        help="multiply the DMIG mass by FACTOR, or by the model's PARAM,WTMASS (only for a mass "
+                             "written in weight units: a punched MAAX already holds WTMASS)")
     return parser
 
 
@@ -340,22 +319,34 @@ def _arguments_to_call(args):
     if not args.input:
         if not all(files) or not args.nodes:
             raise _UsageError("matrix-file input needs all of --mass, --stiffness and --nodes")
-        if args.grids or args.stiffness_name or args.mass_name:
-            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        if args.grids or args.stiffness_name or args.mass_name or args.mass_scale:
+            raise _UsageError("--grids/--stiffness-name/--mass-name/--mass-scale apply to Nastran punch files only")
         call["inputs"] = {"mass": args.mass, "stiffness": args.stiffness, "nodes": args.nodes}
         return call
     call["inputs"] = args.input
     if args.input.lower().endswith(".npz"):
-        if args.grids or args.stiffness_name or args.mass_name:
-            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        if args.grids or args.stiffness_name or args.mass_name or args.mass_scale:
+            raise _UsageError("--grids/--stiffness-name/--mass-name/--mass-scale apply to Nastran punch files only")
         call["nodes"] = args.nodes
     else:
         if args.nodes:
             raise _UsageError("--nodes does not apply to a punch file: its nodes come from the DMIG dofs "
                               "and GRID cards (use --grids for coordinates)")
         call.update(grids=args.grids, stiffness_name=args.stiffness_name or "KAAX",
-                    mass_name=args.mass_name or "MAAX")
+                    mass_name=args.mass_name or "MAAX", mass_scale=_mass_scale(args.mass_scale))
     return call
+
+
+def _mass_scale(text):
+    if text is None or text.strip().lower() == "wtmass":
+        return None if text is None else "wtmass"
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise _UsageError(f"--mass-scale {text!r}: give a positive number or 'wtmass'")
+    return value
 
 
 def main(argv=None):

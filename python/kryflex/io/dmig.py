@@ -305,12 +305,15 @@ class NastranDeck:
                 raise ConversionError(
                     f"{where} declares NCOL={ncol} columns but only {len(keys)} dofs appear in the matrices: "
                     "the file looks truncated")
-            columns = len(np.unique(raw[name][2] @ [8, 1]))
-            if 0 < columns < ncol:
+            present = np.unique(raw[name][2] @ [8, 1])
+            if 0 < present.size < ncol:
+                absent = [dofs[k] for k in np.flatnonzero(~np.isin(keys, present))]
+                shown = ", ".join(dof_label(x) for x in absent[:6]) + (", ..." if len(absent) > 6 else "")
                 warnings.warn(
-                    f"{where} has {columns} columns but its header declares NCOL={ncol}; Nastran leaves all-zero "
-                    "columns out (e.g. rotations without rotary inertia), otherwise the file is truncated",
-                    ConversionWarning)
+                    f"{where} has {present.size} columns but its header declares NCOL={ncol}; the dofs without a "
+                    f"column ({shown}) get zero columns in {name}, as Nastran leaves all-zero columns out (e.g. "
+                    "rotations without rotary inertia in a mass matrix); if they should not be zero, the file is "
+                    "truncated", ConversionWarning)
         result = {}
         for name, (d, gci, gcj, values, where) in raw.items():
             rows = np.searchsorted(keys, gci @ [8, 1])

@@ -109,3 +109,34 @@ def test_bad_vector_data_is_a_clear_error(bad, message):
     with pytest.raises(SceneError, match=message) as info:
         kryflex.scene_from_dict(copy.copy(spec))
     assert "not found" not in str(info.value) and "\n" not in str(info.value)
+
+
+PROBE = """
+import json, sys
+import numpy as np
+sys.path.insert(0, %r)
+import kryflex
+from petsc4py import PETSc
+PETSc.Options().setValue("kf_quiet", True)
+import test_scene_arrays as t
+model = kryflex.reduce(kryflex.scene_from_dict(t.spec_from_arrays()), quiet=True).model
+out = {str(a): model.at([a]).frequencies_hz.tolist() for a in (0.0, 45.0)}
+if PETSc.COMM_WORLD.getRank() == 0:
+    print("RESULT " + json.dumps(out))
+"""
+
+
+def test_arrays_on_two_ranks_match_serial():
+    import json
+    import subprocess
+    import sys
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    proc = subprocess.run(["mpiexec", "-n", "2", sys.executable, "-c", PROBE % HERE], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (line,) = [x for x in proc.stdout.splitlines() if x.startswith("RESULT ")]
+    parallel = json.loads(line[len("RESULT "):])
+    serial = kryflex.reduce(kryflex.scene_from_dict(spec_from_arrays()), quiet=True).model
+    for angle in (0.0, 45.0):
+        np.testing.assert_allclose(parallel[str(angle)], serial.at([angle]).frequencies_hz, rtol=1e-9)

@@ -166,7 +166,14 @@ def _read_vector(where, key, name, base):
 def _as_petsc(where, A, comm):
     """A body matrix given in memory: a petsc4py Mat as is, a SciPy sparse or NumPy array distributed as AIJ."""
     if isinstance(A, PETSc.Mat):
-        return A
+        if A.getComm().getSize() == comm.getSize():
+            return A
+        if A.getComm().getSize() > 1:
+            _fail(where, "the petsc4py Mat lives on %d ranks but the scene on %d; create it on the scene's "
+                  "communicator, or give a SciPy/NumPy matrix" % (A.getComm().getSize(), comm.getSize()))
+        import scipy.sparse as sp
+        indptr, indices, data = A.getValuesCSR()      # a sequential Mat (the same on every rank): distributed below
+        A = sp.csr_matrix((data, indices, indptr), shape=A.getSize())
     try:
         import scipy.sparse as sp
         A = sp.csr_matrix(A, dtype=np.float64)

@@ -218,3 +218,33 @@ def _component_nodes_supported():
         return True
     except scene_schema.SceneError:
         return False
+
+
+def test_op4_with_a_nodes_file(model):
+    """ASCII OUTPUT4 matrices (no dof labels) in basic dofs, their rows named by a nodes file with c/s dofs.
+    (Binary OP4 goes through the same pyNastran reader; pyNastran 1.4.1 cannot write one to test with: its
+    binary writer fails on a dense and refuses a sparse matrix.)"""
+    from pyNastran.op2.result_objects.matrix import Matrix
+    from pyNastran.op4.op4 import write_op4
+    d = model["dir"]
+    # rows in the reference's dof order, one nodes line per point, its components in the dofs field
+    dofs = model["dofs"]
+    groups = dmig.group_dofs(dofs)
+    with open(d / "nodes.txt", "w") as f:
+        for g, comps in groups:
+            xyz = model["basic"].get(g, (0.0, 0.0, 0.0))
+            f.write("%d %r %r %r %s\n" % (g, *map(float, xyz), dmig.node_dofs(comps)))
+    write_op4(str(d / "model.op4"), {"KAA": Matrix("KAA", 6, model["K"]), "MAA": Matrix("MAA", 6, model["M"])},
+              precision="double", is_binary=False)
+    out = d / "op4"
+    assert main([str(d / "model.op4"), "--nodes", str(d / "nodes.txt"), "--stiffness-name", "KAA",
+                 "--mass-name", "maa", "--name", "frame", "--format", "mtx", "-o", str(out)]) == 0
+    K, M, nodes = read_converted(out)
+    np.testing.assert_allclose(K, model["K"], rtol=0, atol=1e-15 * np.abs(model["K"]).max())
+    np.testing.assert_allclose(M, model["M"], rtol=0, atol=1e-15 * np.abs(model["M"]).max())
+    check_against_reference(K, M, nodes, model)
+    with pytest.raises(ConversionError, match=r"holds no matrix KAAX \(matrices: KAA, MAA\)"):
+        convert(str(d / "model.op4"), str(d / "x"), "frame", "mtx", {}, nodes=str(d / "nodes.txt"))
+    with pytest.raises(ConversionError, match="an OP4 matrix has no dof labels; give the nodes"):
+        convert(str(d / "model.op4"), str(d / "x"), "frame", "mtx", {}, stiffness_name="KAA", mass_name="MAA")
+    assert not (d / "x").exists()

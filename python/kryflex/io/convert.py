@@ -7,6 +7,7 @@ Inputs:
   a NumPy .npz holding M and K (dense arrays 'M', 'K', or sparse parts 'M_data', 'M_indices',
       'M_indptr', 'M_shape' [, 'M_format' = csr|csc], or 'M_row', 'M_col', 'M_data', 'M_shape')
       and optionally 'nodes' (n x 5: id x y z ndof);
+  a Nastran OUTPUT4 file (.op4, ASCII or binary) with the two matrices, plus a nodes file naming the rows;
   Matrix Market (.mtx) or PETSc binary (.petsc) mass and stiffness files plus a nodes file.
 Output: see bodyfiles.write_body.
 """
@@ -68,6 +69,9 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
         if kind == ".npz":
             _no_grids(grids, "a .npz input (coordinates go in its 'nodes' array or a nodes file)")
             M, K, body_nodes, sources = load_npz(path, nodes)
+        elif kind == ".op4":
+            _no_grids(grids, "an OP4 input (its dofs and coordinates come from the nodes file)")
+            M, K, body_nodes, sources = load_op4(path, nodes, stiffness_name, mass_name)
         elif kind in (".mtx", ".petsc"):
             raise ConversionError(
                 f"{path} is a single matrix; a body needs mass, stiffness and nodes: "
@@ -107,6 +111,42 @@ def load_punch(path, grid_files, stiffness_name, mass_name, mass_scale=None):
                "stiffness": f"DMIG {stiffness_name.upper()}{frame} of {path}",
                "nodes": f"grids of {' + '.join([os.fspath(path), *map(os.fspath, grid_files)])}"}
     return M, K, nodes, sources
+
+
+# ---------------------------------------------------------------- Nastran OUTPUT4
+
+def load_op4(path, nodes_file, stiffness_name, mass_name):
+    """Mass and stiffness from a Nastran OUTPUT4 file (ASCII or binary, read with pyNastran's OP4 reader). An OP4
+    matrix has no dof labels, so the nodes file names the rows: one line per node in the matrices' (a-set) order,
+    with its components (6, 3, c<components>, s) and basic coordinates; the rows must already be in basic dofs."""
+    if nodes_file is None:
+        raise ConversionError(
+            f"{path}: an OP4 matrix has no dof labels; give the nodes of its rows with --nodes (one 'id x y z dofs' "
+            "line per node, in the matrix order, dofs 6, 3, c<components> or s)")
+    _require_file(nodes_file, "nodes")
+    from pyNastran.op4.op4 import read_op4
+    from .dmig import _quiet_log
+    try:
+        matrices = read_op4(os.fspath(path), log=_quiet_log())
+    except Exception as exc:  # noqa: BLE001 - pyNastran raises ValueError, AssertionError, struct.error, ...
+        raise ConversionError(f"{path}: pyNastran cannot read this OP4 file "
+                              f"({' '.join(str(exc).split())[:300] or type(exc).__name__}); re-export it") from None
+    by_name = {str(k).strip().upper(): v for k, v in matrices.items()}
+    picked = []
+    for name in (stiffness_name.upper(), mass_name.upper()):
+        if name not in by_name:
+            raise ConversionError(
+                f"{path} holds no matrix {name} (matrices: {', '.join(sorted(by_name)) or 'none'}); give the "
+                "names with --stiffness-name and --mass-name")
+        data = by_name[name].data
+        try:
+            picked.append(sp.csr_matrix(data, dtype=np.float64))
+        except (TypeError, ValueError) as exc:
+            raise ConversionError(f"{path}: matrix {name} is not a real matrix ({exc})") from None
+    K, M = picked
+    sources = {"mass": f"OP4 {mass_name.upper()} of {path}", "stiffness": f"OP4 {stiffness_name.upper()} of {path}",
+               "nodes": f"nodes file {nodes_file}"}
+    return M, K, read_nodes(nodes_file), sources
 
 
 # ---------------------------------------------------------------- NumPy archive
@@ -252,6 +292,7 @@ USAGE_EXAMPLES = """examples:
   kryflex convert model.pch --name rotor --interface bearing=101 -o bodies
   kryflex convert model.pch --grids model.bdf --name rotor --interface bearing=101 -o bodies
   kryflex convert model.pch --grids model.f06 --name rotor --interface bearing=101 -o bodies
+  kryflex convert model.op4 --nodes nodes.txt --stiffness-name KAA --mass-name MAA --name rotor -o bodies
   kryflex convert boom.npz --name boom --interface root=1 --format mtx -o bodies
   kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
 
@@ -270,10 +311,10 @@ def build_parser():
         description="Convert an exported FE model (Nastran DMIG punch file, NumPy .npz, or Matrix "
                     "Market / PETSc matrices + nodes file) into a kryflex body.",
         epilog=USAGE_EXAMPLES)
-    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, or a .npz")
+    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), or a .npz")
     parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
     parser.add_argument("--stiffness", metavar="FILE", help="stiffness matrix (.mtx or .petsc)")
-    parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z ndof per line)")
+    parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z dofs per line: 6, 3, c<components> or s)")
     parser.add_argument("--name", required=True, help="body name (used in file names and the scene entry)")
     parser.add_argument("-o", "--output-dir", default=".", metavar="DIR", help="output folder (default: .)")
     parser.add_argument("--format", choices=FORMATS, default="petsc",
@@ -324,6 +365,12 @@ def _arguments_to_call(args):
         call["inputs"] = {"mass": args.mass, "stiffness": args.stiffness, "nodes": args.nodes}
         return call
     call["inputs"] = args.input
+    if args.input.lower().endswith(".op4"):
+        if args.grids or args.mass_scale:
+            raise _UsageError("--grids/--mass-scale apply to Nastran bulk-data (DMIG) input only; an OP4 input "
+                              "takes its dofs and coordinates from --nodes")
+        call.update(nodes=args.nodes, stiffness_name=args.stiffness_name or "KAAX", mass_name=args.mass_name or "MAAX")
+        return call
     if args.input.lower().endswith(".npz"):
         if args.grids or args.stiffness_name or args.mass_name or args.mass_scale:
             raise _UsageError("--grids/--stiffness-name/--mass-name/--mass-scale apply to Nastran punch files only")

@@ -208,6 +208,15 @@ def test_converted_model_reduces(model):
         pytest.xfail("the scene reader and the C library do not take c-component/s nodes yet (helper 'bc'): "
                      + proc.stderr.strip()[-200:])
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    # the full-order frequencies the reduction verified against are the reference's (massless dofs condensed)
+    import json
+    with open(d / "red" / "summary.json") as f:
+        summary = json.load(f)
+    (label,) = summary["angle_labels"]
+    full = np.array(summary["full"]["frequencies_hz"][label])
+    lam = nm.eigenvalues(model["K"], model["M"])
+    np.testing.assert_allclose(full, (np.sqrt(lam[6:]) / (2 * np.pi))[:len(full)], rtol=1e-8)
+    assert summary["reduced"]["static_gain_error"][label] < 1e-9
 
 
 def _component_nodes_supported():
@@ -248,3 +257,27 @@ def test_op4_with_a_nodes_file(model):
     with pytest.raises(ConversionError, match="an OP4 matrix has no dof labels; give the nodes"):
         convert(str(d / "model.op4"), str(d / "x"), "frame", "mtx", {}, stiffness_name="KAA", mass_name="MAA")
     assert not (d / "x").exists()
+
+
+def test_grdset_cd_and_command_line_checks(model, capsys):
+    d = model["dir"]
+    # GRDSET CD=10 stands for grid 106's CD once its field is blank: the same body, and a warning says so
+    text = d.joinpath("model.bdf").read_text().splitlines()
+    k = next(i for i, line in enumerate(text) if line.startswith("GRID*") and line.split()[1] == "106")
+    text[k + 1] = text[k + 1][:24]
+    text.insert(text.index("BEGIN BULK") + 1, "GRDSET                                          10")
+    # grid 101 has CD 0: with a GRDSET it would take CD 10 too; make it a basic-aligned CORD2R (the warning's fix)
+    text.insert(text.index("BEGIN BULK") + 1, "CORD2R        50       0      0.      0.      0.      0.      0.      1.+C50")
+    text.insert(text.index("BEGIN BULK") + 2, "+C50          1.      0.      0.")
+    j = next(i for i, line in enumerate(text) if line.startswith("GRID*") and line.split()[1] == "101")
+    text[j + 1] = text[j + 1][:24] + f"{50:>16}"
+    d.joinpath("grdset.bdf").write_text("\n".join(text) + "\n")
+    with pytest.warns(ConversionWarning, match=r"GRDSET .* sets CP=0 CD=10: 1 GRID\(s\) .* \(e.g. 106\)"):
+        M, K, nodes, _ = dmig.nastran_body(d / "model.pch", [d / "grdset.bdf"], mass_scale=1.0)
+    check_against_reference(K.toarray(), M.toarray(), nodes, model)
+    # usage errors of the new option
+    for argv in (["--mass-scale", "-1"], ["--mass-scale", "heavy"]):
+        assert main([str(d / "model.pch"), "--grids", str(d / "model.bdf"), "--name", "f", "-o", str(d / "n"),
+                     *argv]) == 2
+        assert "--mass-scale" in capsys.readouterr().err
+    assert not (d / "n").exists()

@@ -207,11 +207,19 @@ class NastranDeck:
                 seen.append(rid)
                 cid = rid
         grdset = m.grdset
+        defaulted = []
         for gid in grid_ids:
             node = m.nodes[gid]
-            if grdset is not None:   # GRDSET's CP and CD stand for blank (0) fields
+            if grdset is not None:   # GRDSET's CP and CD stand for blank fields, which pyNastran reads as 0
+                if (grdset.cp and not node.cp) or (grdset.cd and not node.cd):
+                    defaulted.append(gid)
                 node.cp = node.cp or grdset.cp
                 node.cd = node.cd or grdset.cd
+        if defaulted:
+            warnings.warn(
+                f"GRDSET ({self.origin['GRDSET']}) sets CP={grdset.cp} CD={grdset.cd}: {len(defaulted)} GRID(s) "
+                f"whose CP or CD is blank or 0 take it (e.g. {', '.join(map(str, defaulted[:5]))}); a GRID that "
+                "means an explicit 0 (basic) needs CD/CP of a basic-aligned CORD2R instead", ConversionWarning)
             for field, cid in (("CP", node.cp), ("CD", node.cd)):
                 if cid not in m.coords:
                     raise ConversionError(

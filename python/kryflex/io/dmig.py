@@ -208,23 +208,23 @@ class NastranDeck:
                 cid = rid
         grdset = m.grdset
         defaulted = []
-        for gid in grid_ids:
-            node = m.nodes[gid]
+        used = set(grid_ids)
+        for gid, node in sorted(m.nodes.items()):   # pyNastran cross-references every GRID: check them all
             if grdset is not None:   # GRDSET's CP and CD stand for blank fields, which pyNastran reads as 0
-                if (grdset.cp and not node.cp) or (grdset.cd and not node.cd):
+                if gid in used and ((grdset.cp and not node.cp) or (grdset.cd and not node.cd)):
                     defaulted.append(gid)
                 node.cp = node.cp or grdset.cp
                 node.cd = node.cd or grdset.cd
-        if defaulted:
-            warnings.warn(
-                f"GRDSET ({self.origin['GRDSET']}) sets CP={grdset.cp} CD={grdset.cd}: {len(defaulted)} GRID(s) "
-                f"whose CP or CD is blank or 0 take it (e.g. {', '.join(map(str, defaulted[:5]))}); a GRID that "
-                "means an explicit 0 (basic) needs CD/CP of a basic-aligned CORD2R instead", ConversionWarning)
             for field, cid in (("CP", node.cp), ("CD", node.cd)):
                 if cid not in m.coords:
                     raise ConversionError(
                         f"{self.where('GRID', gid)}: GRID {gid} gives {field}={cid}, but no CORD card defines "
                         f"coordinate system {cid}; add the file that defines it (--grids) or fix the GRID")
+        if defaulted:
+            warnings.warn(
+                f"GRDSET ({self.origin['GRDSET']}) sets CP={grdset.cp} CD={grdset.cd}: {len(defaulted)} GRID(s) "
+                f"whose CP or CD is blank or 0 take it (e.g. {', '.join(map(str, defaulted[:5]))}); a GRID that "
+                "means an explicit 0 (basic) needs CD/CP of a basic-aligned CORD2R instead", ConversionWarning)
         if not self._xref:
             try:
                 m.cross_reference(xref=True, xref_nodes=True, xref_elements=False, xref_properties=False,

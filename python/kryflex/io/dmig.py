@@ -4,8 +4,8 @@ The cards are read by pyNastran (pyNastran.bdf.bdf.BDF: small, large (`DMIG*`, `
 continuations, every Nastran spelling of a real); this module turns what it read into a kryflex body:
 
   files      a punch file (.pch: bulk data without BEGIN BULK), a bulk-data deck (.bdf/.dat, with or without
-             executive and case control), or a run's .f06 whose (sorted or unsorted) bulk-data echo is cut out
-             and read as bulk data. Several files are merged; a card given twice must be the same.
+             executive and case control), or a run's .f06 whose sorted bulk-data echo (ECHO=SORT, the default)
+             is cut out and read as bulk data. Several files are merged; a card given twice must be the same.
   DMIG       IFO 6 (symmetric, one triangle or both) or 1 (square), TIN 1 or 2 (real). An entry given twice must
              agree to round-off. Components 1..6 of GRIDs, component 0 (blank) of scalar points.
   nodes      every (point, component) any of the matrices uses is a dof; nodes are ordered by id (grids and
@@ -62,7 +62,8 @@ def _quiet_log():
 
 
 def f06_bulk_echo(path):
-    """The bulk-data cards echoed in a Nastran .f06 (ECHO=SORT or UNSORT), as bulk-data lines."""
+    """The bulk-data cards of a Nastran .f06's sorted bulk-data echo (ECHO=SORT, Nastran's default): the numbered
+    lines ('   12-        GRID    ...') between the echo's heading and ENDDATA, page headers skipped."""
     try:
         with open(path, "r", encoding="latin-1") as handle:
             text = handle.read()
@@ -102,7 +103,6 @@ def _read_file(path):
             if size:
                 handle.seek(size - 1)
                 last = handle.read(1)
-            head = b""
             handle.seek(0)
             head = handle.read(1 << 20)
     except OSError as exc:

@@ -201,7 +201,7 @@ def test_converted_model_reduces(model):
         "  frame: {mass: frame_M.petsc, stiffness: frame_K.petsc, nodes: frame_nodes.txt, interfaces: {root: 101}}\n"
         "inputs:\n  force: {body: frame, node: 106, dof: uz}\n"
         "outputs:\n  tip: {body: frame, node: 108, dof: uz}\n"
-        "band: [0.01, 20]\n")
+        "band: [0.1, 100]\n")
     proc = subprocess.run([KRYFLEX, "reduce", str(d / "scene.yaml"), "-o", str(d / "red"), "-quiet"], env=ENV,
                           capture_output=True, text=True, timeout=300)
     if proc.returncode != 0 and not _component_nodes_supported():
@@ -281,3 +281,19 @@ def test_grdset_cd_and_command_line_checks(model, capsys):
                      *argv]) == 2
         assert "--mass-scale" in capsys.readouterr().err
     assert not (d / "n").exists()
+
+
+def test_include_files_are_followed(model):
+    """A deck whose GRIDs sit in an INCLUDE file (relative to the deck) gives the same body."""
+    d = model["dir"]
+    lines = d.joinpath("model.bdf").read_text().splitlines()
+    grids = [k for k, line in enumerate(lines) if line.startswith("GRID*")]
+    included = [lines[k + i] for k in grids for i in (0, 1)]
+    (d / "inc").mkdir()
+    (d / "inc" / "grids.bdf").write_text("\n".join(included) + "\n")
+    rest = [line for k, line in enumerate(lines) if k not in set(grids) | {k + 1 for k in grids}]
+    rest.insert(rest.index("ENDDATA"), "INCLUDE 'inc/grids.bdf'")
+    (d / "deck.bdf").write_text("\n".join(rest) + "\n")
+    with pytest.warns(ConversionWarning):
+        M, K, nodes, _ = dmig.nastran_body(d / "model.pch", [d / "deck.bdf"])
+    check_against_reference(K.toarray(), M.toarray(), nodes, model)

@@ -515,3 +515,21 @@ def test_main_reports_warnings(tmp_path, capsys):
         handle.write("PARAM,WTMASS,0.5\n")
     assert main([str(path), "--name", "r", "-o", str(tmp_path / "o")]) == 0
     assert "kryflex convert: warning: PARAM,WTMASS=0.5" in capsys.readouterr().err
+
+
+def test_nodes_dofs_field(tmp_path):
+    # dofs.md: 6, 3, c<components ascending> or s; one spelling per set (c123456 is 6, c123 is 3)
+    path = tmp_path / "nodes.txt"
+    path.write_text("1 0 0 0 6\n2 1 0 0 c345\n3 2 0 0 s\n4 3 0 0 C123456\n5 4 0 0 c123\n6 5 0 0 3\n")
+    nodes = read_nodes(path)
+    assert [n[4] for n in nodes] == [6, "c345", "s", 6, 3, 3]
+    assert [bodyfiles.dof_count(n[4]) for n in nodes] == [6, 3, 1, 6, 3, 3]
+    for bad in ("c", "c7", "c33", "c54", "S1", "345", "c0"):
+        path.write_text(f"1 0 0 0 {bad}\n")
+        with pytest.raises(ConversionError, match=f"dofs = '{bad}'"):
+            read_nodes(path)
+    # written as read, and the body's size counts the components
+    out = tmp_path / "out"
+    write_body(str(out), "x", sp.identity(7), sp.identity(7), [(1, 0, 0, 0, "c345"), (2, 1, 0, 0, "s"),
+                                                              (3, 2, 0, 0, 3)], {})
+    assert [n[4] for n in read_nodes(out / "x_nodes.txt")] == ["c345", "s", 3]

@@ -181,7 +181,7 @@ def check_matrix(A, label, size, nodes_origin=""):
     if A.shape[0] != size:
         raise ConversionError(
             f"{label} is {A.shape[0]} x {A.shape[1]} but the nodes{nodes_origin} hold {size} dofs "
-            "(sum of ndof); "
+            "(sum of the nodes' dof counts); "
             "the nodes list must describe exactly the matrix rows, node by node")
     A.sum_duplicates()
     if not np.all(np.isfinite(A.data)):
@@ -243,7 +243,7 @@ def check_interfaces(interfaces, nodes, body):
 def write_body(out_dir, name, M, K, nodes, interfaces, fmt="petsc", sources=None):
     """Check and write a body; return {'mass', 'stiffness', 'nodes', 'snippet'} -> written paths.
 
-    M, K: scipy.sparse (or dense) symmetric matrices; nodes: rows (id, x, y, z, ndof);
+    M, K: scipy.sparse (or dense) symmetric matrices; nodes: rows (id, x, y, z, dofs) (dofs: see parse_dofs);
     interfaces: {interface name: node id}; fmt: 'petsc' (PETSc binary) or 'mtx' (Matrix Market);
     sources: optional {'mass', 'stiffness', 'nodes'} -> where each came from, quoted in errors.
     The output folder is created if needed. Raises ConversionError; nothing is written then.

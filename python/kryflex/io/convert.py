@@ -124,8 +124,9 @@ def load_op4(path, nodes_file, stiffness_name, mass_name):
             f"{path}: an OP4 matrix has no dof labels; give the nodes of its rows with --nodes (one 'id x y z dofs' "
             "line per node, in the matrix order, dofs 6, 3, c<components> or s)")
     _require_file(nodes_file, "nodes")
+    from .dmig import _pynastran, _quiet_log
+    _pynastran()
     from pyNastran.op4.op4 import read_op4
-    from .dmig import _quiet_log
     try:
         matrices = read_op4(os.fspath(path), log=_quiet_log())
     except Exception as exc:  # noqa: BLE001 - pyNastran raises ValueError, AssertionError, struct.error, ...

@@ -56,6 +56,17 @@ _F06_LINE = re.compile(r"^\s*\d+-\s{8}(.*)$")
 
 # ---------------------------------------------------------------- reading files with pyNastran
 
+def _pynastran():
+    """pyNastran's BDF class, or a clear error when this Python lacks it."""
+    try:
+        from pyNastran.bdf.bdf import BDF
+    except ImportError as exc:
+        raise ConversionError(
+            f"reading Nastran files needs pyNastran, which this Python cannot import ({exc}); run kryflex from the "
+            "project's .venv (scripts/setup installs pyNastran 1.4.1 there)") from None
+    return BDF
+
+
 def _quiet_log():
     from cpylog import SimpleLogger
     return SimpleLogger(level="critical")
@@ -93,7 +104,7 @@ def f06_bulk_echo(path):
 
 def _read_file(path):
     """One file into a pyNastran BDF (not cross-referenced)."""
-    from pyNastran.bdf.bdf import BDF
+    BDF = _pynastran()
 
     path = os.fspath(path)
     try:
@@ -149,7 +160,7 @@ class NastranDeck:
     """The cards of one or more Nastran files, merged; each card remembers its file."""
 
     def __init__(self, paths):
-        from pyNastran.bdf.bdf import BDF
+        BDF = _pynastran()
 
         self.paths = [os.fspath(p) for p in paths]
         self.model = BDF(log=_quiet_log())

@@ -7,8 +7,8 @@ masses), with the components kryflex must leave out condensed statically:
   grid 107: only uz rx ry (its ux uy rz condensed)        -> nodes-file dofs c345, CD rotated about z only
   grid 108: translations only (its rotations condensed)    -> dofs 3, CD cylindrical, CP spherical
   grids 103, 105: no rotary inertia                        -> their rotations are absent from MAAX (in KAAX)
-Coordinate systems: CORD2R 10, CORD2C 20 (defined in 10: RID=10), CORD2S 30, CORD2R 40 (z-rotation); the grids
-use them in CP and CD. The punch holds KAAX and MAAX as long-field DMIG* cards in each grid's CD system:
+Coordinate systems: CORD2R 10, CORD2C 20 (defined in 10: RID=10), CORD2S 30, CORD2R 40 (z-rotation), CORD1R 60
+(on three grids); the grids use them in CP and CD. The punch holds KAAX and MAAX as long-field DMIG* cards in each grid's CD system:
 K_cd = T^T K_basic T with u_basic = T u_cd (T = blockdiag(R, R), R's columns the CD axes at the grid), computed
 here from the coordinate-system definitions independently of the converter. The bulk data (GRID/GRID*, CORD2x,
 SPOINT, PARAM,WTMASS) goes in a .bdf and, as Nastran echoes it, in a .f06.
@@ -23,7 +23,7 @@ NOMINAL = {101: (0.0, 0.0, 0.0), 102: (2.0, 0.0, 0.0), 103: (2.0, 1.5, 0.0), 104
 BEAMS = [(101, 102), (102, 103), (103, 104), (104, 101), (101, 105), (102, 106), (103, 107), (105, 106),
          (106, 107), (105, 108), (106, 108), (101, 103), (104, 105)]
 CP = {101: 0, 102: 10, 103: 20, 104: 10, 105: 20, 106: 0, 107: 0, 108: 30}
-CD = {101: 0, 102: 10, 103: 20, 104: 20, 105: 30, 106: 10, 107: 40, 108: 20}
+CD = {101: 0, 102: 10, 103: 20, 104: 20, 105: 30, 106: 60, 107: 40, 108: 20}
 COMPONENTS = {g: [1, 2, 3, 4, 5, 6] for g in GRID_IDS}
 COMPONENTS[107] = [3, 4, 5]
 COMPONENTS[108] = [1, 2, 3]
@@ -39,6 +39,7 @@ SYSTEMS = {
     20: ("C", 10, (0.3, -0.2, 0.1), (0.1, 0.4, 1.0), (1.2, 0.1, -0.3)),
     30: ("S", 0, (-0.5, 0.2, 0.3), (-0.4, 0.1, 1.3), (0.5, 0.6, 0.2)),
     40: ("R", 0, (0.25, 0.5, 0.0), (0.25, 0.5, 2.0), (1.116025, 1.0, 0.0)),   # z-rotation by 30 degrees
+    60: ("1R", None, 104, 105, 102),      # CORD1R: origin at grid 104, z toward 105, xz-plane through 102
 }
 
 
@@ -47,8 +48,12 @@ def frame_of(cid):
     if cid == 0:
         return np.zeros(3), np.eye(3)
     kind, rid, a, b, c = SYSTEMS[cid]
-    o_r, A_r = frame_of(rid)
-    a, b, c = (o_r + A_r @ np.array(p) for p in (a, b, c))   # the points are given in RID (rectangular here)
+    if kind.startswith("1"):                                  # CORD1x: the three points are grids
+        basic = grid_fields()[1]
+        a, b, c = basic[a], basic[b], basic[c]
+    else:
+        o_r, A_r = frame_of(rid)
+        a, b, c = (o_r + A_r @ np.array(p) for p in (a, b, c))   # the points are given in RID (rectangular here)
     k = (b - a) / np.linalg.norm(b - a)
     j = np.cross(k, c - a)
     j /= np.linalg.norm(j)
@@ -60,7 +65,7 @@ def to_system(cid, p):
     """Basic point p in system cid's coordinates (r, theta deg, z) or (r, theta deg, phi deg)."""
     o, A = frame_of(cid)
     x = A.T @ (np.asarray(p) - o)
-    kind = "R" if cid == 0 else SYSTEMS[cid][0]
+    kind = "R" if cid == 0 else SYSTEMS[cid][0][-1]
     if kind == "R":
         return x
     if kind == "C":
@@ -71,7 +76,7 @@ def to_system(cid, p):
 
 def from_system(cid, q):
     o, A = frame_of(cid)
-    kind = "R" if cid == 0 else SYSTEMS[cid][0]
+    kind = "R" if cid == 0 else SYSTEMS[cid][0][-1]
     q = np.asarray(q, dtype=float)
     if kind == "R":
         x = q
@@ -87,7 +92,7 @@ def from_system(cid, q):
 def cd_axes(cid, p):
     """R: columns = system cid's displacement directions at basic point p."""
     o, A = frame_of(cid)
-    kind = "R" if cid == 0 else SYSTEMS[cid][0]
+    kind = "R" if cid == 0 else SYSTEMS[cid][0][-1]
     if kind == "R":
         return A
     x = A.T @ (np.asarray(p) - o)
@@ -262,6 +267,9 @@ def bulk_cards(fields):
     """The bulk data: PARAM, CORD2x, GRID (small field for some, GRID* for others), SPOINT."""
     lines = ["PARAM   WTMASS  %-8s" % WTMASS]
     for cid, (kind, rid, a, b, c) in SYSTEMS.items():
+        if kind.startswith("1"):
+            lines.append(f"CORD{kind:<4}{cid:>8}{a:>8}{b:>8}{c:>8}")
+            continue
         vals = [str(v) for v in (*a, *b, *c)]
         lines.append(f"CORD2{kind:<3}{cid:>8}{rid:>8}" + "".join(f"{v:>8}" for v in vals[:6]) + "+C" + str(cid))
         lines.append(f"{'+C' + str(cid):<8}" + "".join(f"{v:>8}" for v in vals[6:]))

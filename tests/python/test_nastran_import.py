@@ -272,18 +272,18 @@ def test_op4_with_a_nodes_file(model):
 
 def test_grdset_cd_and_command_line_checks(model, capsys):
     d = model["dir"]
-    # GRDSET CD=10 stands for grid 106's CD once its field is blank: the same body, and a warning says so
+    # GRDSET CD=60 stands for grid 106's CD once its field is blank: the same body, and a warning says so
     text = d.joinpath("model.bdf").read_text().splitlines()
     k = next(i for i, line in enumerate(text) if line.startswith("GRID*") and line.split()[1] == "106")
     text[k + 1] = text[k + 1][:24]
-    text.insert(text.index("BEGIN BULK") + 1, "GRDSET                                          10")
-    # grid 101 has CD 0: with a GRDSET it would take CD 10 too; make it a basic-aligned CORD2R (the warning's fix)
+    text.insert(text.index("BEGIN BULK") + 1, "GRDSET                                          60")
+    # grid 101 has CD 0: with a GRDSET it would take CD 60 too; make it a basic-aligned CORD2R (the warning's fix)
     text.insert(text.index("BEGIN BULK") + 1, "CORD2R        50       0      0.      0.      0.      0.      0.      1.+C50")
     text.insert(text.index("BEGIN BULK") + 2, "+C50          1.      0.      0.")
     j = next(i for i, line in enumerate(text) if line.startswith("GRID*") and line.split()[1] == "101")
     text[j + 1] = text[j + 1][:24] + f"{50:>16}"
     d.joinpath("grdset.bdf").write_text("\n".join(text) + "\n")
-    with pytest.warns(ConversionWarning, match=r"GRDSET .* sets CP=0 CD=10: 1 GRID\(s\) .* \(e.g. 106\)"):
+    with pytest.warns(ConversionWarning, match=r"GRDSET .* sets CP=0 CD=60: 1 GRID\(s\) .* \(e.g. 106\)"):
         M, K, nodes, _ = dmig.nastran_body(d / "model.pch", [d / "grdset.bdf"], mass_scale=1.0)
     check_against_reference(K.toarray(), M.toarray(), nodes, model)
     # usage errors of the new option

@@ -131,7 +131,7 @@ def edit(path, old, new):
     path.write_text(text.replace(old, new, 1))
 
 
-@pytest.mark.parametrize("case", ["missing grid", "unknown CP", "unknown CD", "unknown RID", "non-symmetric",
+@pytest.mark.parametrize("case", ["missing grid", "unknown CP", "unknown CD", "unknown RID", "CORD1 grid", "non-symmetric",
                                   "open component set", "grid as scalar point", "no echo"])
 def test_bad_models_give_clear_errors_and_no_output(model, case):
     d = model["dir"]
@@ -153,6 +153,9 @@ def test_bad_models_give_clear_errors_and_no_output(model, case):
     elif case == "unknown RID":
         edit(bdf, "CORD2C        20      10", "CORD2C        20      12")
         expected = "CORD2C 20 is defined in system RID=12, which no CORD card defines"
+    elif case == "CORD1 grid":
+        edit(bdf, "CORD1R        60     104     105     102", "CORD1R        60     104     105     999")
+        expected = "CORD1R 60 is defined by GRID 999, which no file defines"
     elif case == "non-symmetric":
         # a square (IFO 1) stiffness whose (101-ux, 101-uy) and (101-uy, 101-ux) entries differ
         def column(cj, entries):

@@ -311,3 +311,21 @@ def test_include_files_are_followed(model):
     with pytest.warns(ConversionWarning):
         M, K, nodes, _ = dmig.nastran_body(d / "model.pch", [d / "deck.bdf"])
     check_against_reference(K.toarray(), M.toarray(), nodes, model)
+
+
+def test_params_across_files(model):
+    """Only WTMASS matters: two files giving it differently is an error; other PARAMs may differ."""
+    d = model["dir"]
+    with open(d / "model.pch", "a") as f:
+        f.write("PARAM,POST,-1\n")
+    with open(d / "model.bdf", "r+") as f:
+        text = f.read().replace("ENDDATA", "PARAM,POST,-2\nENDDATA")
+        f.seek(0)
+        f.write(text)
+    with pytest.warns(ConversionWarning, match="WTMASS"):
+        dmig.nastran_body(d / "model.pch", [d / "model.bdf"])
+    with open(d / "model.pch", "a") as f:
+        f.write("PARAM,WTMASS,0.5\n")
+    with pytest.raises(ConversionError, match="PARAM WTMASS is defined in .*model.pch and again, differently, in "
+                                              ".*model.bdf"):
+        dmig.nastran_body(d / "model.pch", [d / "model.bdf"])

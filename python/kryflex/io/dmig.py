@@ -174,6 +174,8 @@ class NastranDeck:
                 for key, card in theirs.items():
                     if kind == "coordinate system" and key == 0:
                         continue
+                    if kind == "PARAM" and key != "WTMASS":
+                        continue                      # the only PARAM kryflex uses
                     if key in mine and not (kind == "SPOINT" or _same(mine[key], card)):
                         raise ConversionError(
                             f"{kind} {key} is defined in {self.origin[kind, key]} and again, differently, in "

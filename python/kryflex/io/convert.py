@@ -309,8 +309,9 @@ def build_parser():
     from ..cli.common import Parser    # the kryflex conventions: one 'kryflex: error:' line, on rank 0, with the fix
     parser = Parser(
         prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Convert an exported FE model (Nastran DMIG punch file, NumPy .npz, or Matrix "
-                    "Market / PETSc matrices + nodes file) into a kryflex body.",
+        description="Convert an exported FE model (Nastran DMIG punch file with GRIDs from bulk data or an "
+                    ".f06, Nastran OP4 + nodes file, NumPy .npz, or Matrix Market / PETSc matrices + nodes file) "
+                    "into a kryflex body.",
         epilog=USAGE_EXAMPLES)
     parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), or a .npz")
     parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
@@ -323,9 +324,10 @@ def build_parser():
     parser.add_argument("--interface", action="append", default=[], metavar="NAME=NODE",
                         help="interface name and its node id (6 dofs); repeat for several")
     parser.add_argument("--grids", action="append", default=[], metavar="FILE",
-                        help="bulk-data file with GRID cards for a punch input; repeatable")
-    parser.add_argument("--stiffness-name", metavar="DMIG", help="DMIG stiffness name (default: KAAX)")
-    parser.add_argument("--mass-name", metavar="DMIG", help="DMIG mass name (default: MAAX)")
+                        help="bulk data (.bdf/.dat/.pch) or a run's .f06 (its bulk-data echo) with the GRID, "
+                             "CORD, SPOINT and PARAM cards of a punch input; repeatable")
+    parser.add_argument("--stiffness-name", metavar="NAME", help="DMIG or OP4 stiffness name (default: KAAX)")
+    parser.add_argument("--mass-name", metavar="NAME", help="DMIG or OP4 mass name (default: MAAX)")
     parser.add_argument("--mass-scale", metavar="FACTOR|wtmass",
                         help="multiply the DMIG mass by FACTOR, or by the model's PARAM,WTMASS (only for a mass "
                              "written in weight units: a punched MAAX already holds WTMASS)")

@@ -205,29 +205,37 @@ def test_dmig_lower_triangle_and_square_storage(tmp_path, triangle, ifo):
     np.testing.assert_array_equal(result["MAAX"][0].toarray(), M)
 
 
-def test_dmig_missing_component_becomes_zero_row(tmp_path):
+def test_dmig_missing_component_is_left_out(tmp_path):
+    # pyNastran route: a component no matrix uses is no dof (it was a zero row and column before, which left it
+    # undetermined); the node then has the Nastran component string of what it has (dofs.md, nodes file).
     rng = random.Random(5)
     kept = [d for d in DOFS if d != (41, 6)]
     K = random_symmetric(rng, len(kept))
     M = random_symmetric(rng, len(kept))
     lines = dmig_lines("KAAX", K, kept, "small", rng) + dmig_lines("MAAX", M, kept, "small", rng)
     path = write_text(tmp_path / "partial.pch", lines)
-    with pytest.warns(ConversionWarning, match="41-rz"):
-        result = dmig.read_dmig(path)
+    result = dmig.read_dmig(path)
     K_read, dofs = result["KAAX"]
-    assert dofs == DOFS
-    where = DOFS.index((41, 6))
-    expected = np.insert(np.insert(K, where, 0.0, axis=0), where, 0.0, axis=1)
-    np.testing.assert_array_equal(K_read.toarray(), expected)
-    assert dmig.nodes_from_dofs(dofs) == [(g, GRIDS[g]) for g in sorted(GRIDS)]
+    assert dofs == kept
+    np.testing.assert_array_equal(K_read.toarray(), K)
+    groups = dmig.group_dofs(dofs)
+    assert [(g, dmig.node_dofs(c)) for g, c in groups] == \
+        [(g, "c12345" if g == 41 else GRIDS[g]) for g in sorted(GRIDS)]
 
 
-def test_dmig_scalar_point_is_a_clear_error(tmp_path):
-    lines = small_card("DMIG", ["KAAX", "0", "6", "2", "0", "", "", "1"]) + \
-        small_card("DMIG", ["KAAX", "9", "0", "", "9", "0", "1.0", ""])
+def test_dmig_scalar_point(tmp_path):
+    lines = small_card("DMIG", ["KAAX", "0", "6", "2", "0", "", "", "2"]) + \
+        small_card("DMIG", ["KAAX", "9", "0", "", "9", "0", "1.0", ""]) + \
+        small_card("DMIG", ["KAAX", "9", "", "", "4", "0", "2.0", ""]) + \
+        small_card("DMIG", ["KAAX", "4", "", "", "4", "", "3.0", ""])
     path = write_text(tmp_path / "spoint.pch", lines)
-    with pytest.raises(ConversionError, match="scalar point 9"):
-        dmig.read_dmig(path, names=("KAAX",))
+    K, dofs = dmig.read_dmig(path, names=("KAAX",))["KAAX"]
+    assert dofs == [(4, 0), (9, 0)]
+    np.testing.assert_array_equal(K.toarray(), [[3.0, 2.0], [2.0, 1.0]])
+    assert dmig.node_dofs([0]) == "s"
+    bad = write_text(tmp_path / "grid_spoint.pch", lines + small_card("GRID", ["9", "", "1.0", "2.0", "3.0"]))
+    with pytest.raises(ConversionError, match="point 9 with component 0 .* defines GRID 9"):
+        dmig.read_dmig(bad, names=("KAAX",))
 
 
 def test_dmig_conflicting_triangles_are_an_error(tmp_path):
@@ -246,10 +254,12 @@ def test_read_grids_all_layouts_and_local_systems(tmp_path):
     for gid, xyz in COORDS.items():
         # large-field coordinates carry 10 significant digits
         assert grids[gid] == pytest.approx(xyz, rel=LARGE_FIELD_RTOL, abs=0)
+    # coordinate systems are read now (test_nastran_import.py); one that no CORD card defines is an error
     local = write_text(tmp_path / "local.bdf", small_card("GRID", ["5", "3", "1.0", "2.0", "3.0"]))
-    with pytest.raises(ConversionError, match="GRID 5 is positioned in coordinate system CP=3"):
+    with pytest.raises(ConversionError, match="GRID 5 gives CP=3, but no CORD card defines coordinate system 3"):
         dmig.read_grids(local)
-    assert dmig.read_grids(local, ids=[6]) == {}   # grids not asked for are not checked
+    with pytest.raises(ConversionError, match=r"grid\(s\) used by the matrices have no GRID card .* \(6\)"):
+        dmig.read_grids(local, ids=[6])
     disp = write_text(tmp_path / "disp.bdf", small_card("GRID", ["5", "", "1.0", "2.0", "3.0", "2"]))
     with pytest.raises(ConversionError, match="CD=2"):
         dmig.read_grids(disp)
@@ -304,10 +314,10 @@ def test_convert_punch_with_separate_grid_file_and_without_grids(tmp_path):
     convert(path, tmp_path / "a", "boom", "mtx", {"root": 7}, grids=[str(bulk)])
     _, _, nodes, _ = read_body(tmp_path / "a", "boom", "mtx")
     assert nodes == expected_nodes()
-    with pytest.warns(ConversionWarning, match="rigid-body modes"):
+    # without GRID cards: an error, never nodes silently at (0, 0, 0) (issue 12)
+    with pytest.raises(ConversionError, match="have no GRID card"):
         convert(path, tmp_path / "b", "boom", "mtx", {"root": 7})
-    _, _, nodes, _ = read_body(tmp_path / "b", "boom", "mtx")
-    assert all(n[1:4] == (0.0, 0.0, 0.0) for n in nodes)
+    assert files_in(tmp_path / "b") == []
 
 
 def test_convert_npz_dense_and_sparse(tmp_path):
@@ -424,7 +434,7 @@ def test_unknown_or_translation_only_interface_node(tmp_path):
     path, _, _ = build_punch(tmp_path, "small")
     with pytest.raises(ConversionError, match="interface 'bearing' names node 106, which is not a node"):
         convert(str(path), str(tmp_path / "out"), "rotor", "petsc", {"bearing": 106})
-    with pytest.raises(ConversionError, match="interface 'pin' node 13 has 3 dofs"):
+    with pytest.raises(ConversionError, match="interface 'pin' node 13 has dofs 3"):
         convert(str(path), str(tmp_path / "out"), "rotor", "petsc", {"pin": 13})
     assert files_in(tmp_path / "out") == []
 
@@ -452,7 +462,8 @@ def test_read_nodes_errors_name_the_line(tmp_path):
         "1 0 0 0 6\n2 0 0 6\n": "line 2: expected 5 fields",
         "1 0 0 0 6\n\n# c\n1 1 1 1 6\n": "line 4: node id 1 already defined on line 1",
         "1 0 zero 0 6\n": "line 1: coordinate y = 'zero' is not a number",
-        "1 0 0 0 4\n": "line 1: ndof = '4'",
+        "1 0 0 0 4\n": "line 1: dofs = '4'",
+        "1 0 0 0 c31\n": "line 1: dofs = 'c31'",
         "a 0 0 0 6\n": "line 1: node id 'a' is not an integer",
         "# only a comment\n": "holds no node lines",
     }
@@ -499,6 +510,26 @@ def test_main_success_and_exit_codes(tmp_path, capsys):
 
 
 def test_main_reports_warnings(tmp_path, capsys):
-    path, _, _ = build_punch(tmp_path, "free", with_grids=False)
+    path, _, _ = build_punch(tmp_path, "free")
+    with open(path, "a") as handle:
+        handle.write("PARAM,WTMASS,0.5\n")
     assert main([str(path), "--name", "r", "-o", str(tmp_path / "o")]) == 0
-    assert "kryflex convert: warning:" in capsys.readouterr().err
+    assert "kryflex convert: warning: PARAM,WTMASS=0.5" in capsys.readouterr().err
+
+
+def test_nodes_dofs_field(tmp_path):
+    # dofs.md: 6, 3, c<components ascending> or s; one spelling per set (c123456 is 6, c123 is 3)
+    path = tmp_path / "nodes.txt"
+    path.write_text("1 0 0 0 6\n2 1 0 0 c345\n3 2 0 0 s\n4 3 0 0 C123456\n5 4 0 0 c123\n6 5 0 0 3\n")
+    nodes = read_nodes(path)
+    assert [n[4] for n in nodes] == [6, "c345", "s", 6, 3, 3]
+    assert [bodyfiles.dof_count(n[4]) for n in nodes] == [6, 3, 1, 6, 3, 3]
+    for bad in ("c", "c7", "c33", "c54", "S1", "345", "c0"):
+        path.write_text(f"1 0 0 0 {bad}\n")
+        with pytest.raises(ConversionError, match=f"dofs = '{bad}'"):
+            read_nodes(path)
+    # written as read, and the body's size counts the components
+    out = tmp_path / "out"
+    write_body(str(out), "x", sp.identity(7), sp.identity(7), [(1, 0, 0, 0, "c345"), (2, 1, 0, 0, "s"),
+                                                              (3, 2, 0, 0, 3)], {})
+    assert [n[4] for n in read_nodes(out / "x_nodes.txt")] == ["c345", "s", 3]

@@ -4,11 +4,13 @@ A body on disk is four files in one folder:
 
     <name>_M.petsc | <name>_M.mtx     mass matrix (sparse, symmetric)
     <name>_K.petsc | <name>_K.mtx     stiffness matrix
-    <name>_nodes.txt                  one line per node: id x y z ndof
+    <name>_nodes.txt                  one line per node: id x y z dofs
     <name>.body.yaml                  the `bodies:` entry to paste into a scene file
 
-Dofs are numbered node by node in nodes-file order (ux uy uz [rx ry rz]), so the
-matrix size is the sum of the nodes' ndof.
+Dofs are numbered node by node in nodes-file order, components ascending within a
+node, so the matrix size is the sum of the nodes' dof counts. The dofs field is 6
+(ux uy uz rx ry rz), 3 (ux uy uz), a Nastran component string prefixed with c
+listing the components present (c345 = uz rx ry), or s (a scalar point: one dof).
 
 Every file is first written under a temporary name in the output folder and the
 set is renamed only once all of them are complete, so an error (bad input, full
@@ -28,6 +30,9 @@ from .files import commit
 
 SYMMETRY_TOLERANCE = 1e-10  # relative to the largest entry: round-off of a symmetric export
 VALID_NDOF = (3, 6)
+DOFS_RULE = ("6 (ux uy uz rx ry rz), 3 (ux uy uz), c<components> (Nastran components present, ascending, "
+             "e.g. c345 = uz rx ry) or s (a scalar point)")
+_COMPONENTS = re.compile(r"^[cC](1?2?3?4?5?6?)$")
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 FORMATS = ("petsc", "mtx")
 
@@ -45,8 +50,35 @@ def matrix_file_names(name, fmt):
     return f"{name}_M.{fmt}", f"{name}_K.{fmt}"
 
 
+def parse_dofs(value):
+    """A node's dofs field (6, 3, 'c345', 's', or their text) in canonical form, or None if it is not one:
+    'c123456' is 6 and 'c123' is 3, so one set of components has one spelling."""
+    if isinstance(value, (bool, np.bool_)):
+        return None
+    if isinstance(value, (int, np.integer, float, np.floating)):
+        return int(value) if float(value) in VALID_NDOF else None
+    if not isinstance(value, str):
+        return None
+    text = value.strip()
+    if text in ("3", "6"):
+        return int(text)
+    if text.lower() == "s":
+        return "s"
+    match = _COMPONENTS.match(text)
+    if not match or not match.group(1):
+        return None
+    return {"123456": 6, "123": 3}.get(match.group(1), "c" + match.group(1))
+
+
+def dof_count(dofs):
+    """How many matrix rows a node with this (canonical) dofs field has."""
+    if dofs == "s":
+        return 1
+    return len(dofs) - 1 if isinstance(dofs, str) else int(dofs)
+
+
 def read_nodes(path):
-    """Parse a nodes file; return a list of (id, x, y, z, ndof) tuples in file order.
+    """Parse a nodes file; return a list of (id, x, y, z, dofs) tuples in file order (dofs: see parse_dofs).
 
     Raises ConversionError naming the file, the line number and what is wrong.
     """
@@ -65,7 +97,7 @@ def read_nodes(path):
         fields = text.replace(",", " ").split()
         if len(fields) != 5:
             raise ConversionError(
-                f"{where}: expected 5 fields 'id x y z ndof', found {len(fields)}: {text!r}")
+                f"{where}: expected 5 fields 'id x y z dofs', found {len(fields)}: {text!r}")
         try:
             node_id = int(fields[0])
         except ValueError:
@@ -81,25 +113,21 @@ def read_nodes(path):
             if not math.isfinite(value):
                 raise ConversionError(f"{where}: coordinate {axis} = {field!r} is not finite")
             xyz.append(value)
-        try:
-            ndof = int(fields[4])
-        except ValueError:
-            ndof = None
-        if ndof not in VALID_NDOF:
-            raise ConversionError(
-                f"{where}: ndof = {fields[4]!r}; it must be 6 (ux uy uz rx ry rz) or 3 (ux uy uz)")
+        ndof = parse_dofs(fields[4])
+        if ndof is None:
+            raise ConversionError(f"{where}: dofs = {fields[4]!r}; it must be {DOFS_RULE}")
         if node_id in first_line_of:
             raise ConversionError(
                 f"{where}: node id {node_id} already defined on line {first_line_of[node_id]}; ids must be unique")
         first_line_of[node_id] = number
         nodes.append((node_id, xyz[0], xyz[1], xyz[2], ndof))
     if not nodes:
-        raise ConversionError(f"nodes file {path} holds no node lines ('id x y z ndof')")
+        raise ConversionError(f"nodes file {path} holds no node lines ('id x y z dofs')")
     return nodes
 
 
 def normalize_nodes(nodes, source="nodes"):
-    """Turn nodes (list of tuples or an n x 5 array) into checked (id, x, y, z, ndof) tuples."""
+    """Turn nodes (list of tuples or an n x 5 array) into checked (id, x, y, z, dofs) tuples."""
     try:
         rows = [tuple(row) for row in nodes]
     except TypeError:
@@ -113,8 +141,9 @@ def normalize_nodes(nodes, source="nodes"):
         node_id, ndof = row[0], row[4]
         if not _is_integer(node_id) or int(node_id) < 0:
             raise ConversionError(f"{where}: node id {node_id!r} is not a non-negative integer")
-        if not _is_integer(ndof) or int(ndof) not in VALID_NDOF:
-            raise ConversionError(f"{where}: ndof = {ndof!r}; it must be 6 or 3")
+        ndof = parse_dofs(ndof)
+        if ndof is None:
+            raise ConversionError(f"{where}: dofs = {row[4]!r}; it must be {DOFS_RULE}")
         try:
             xyz = [float(v) for v in row[1:4]]
         except (TypeError, ValueError):
@@ -125,7 +154,7 @@ def normalize_nodes(nodes, source="nodes"):
         if node_id in seen:
             raise ConversionError(f"{where}: node id {node_id} appears twice; ids must be unique")
         seen.add(node_id)
-        result.append((node_id, xyz[0], xyz[1], xyz[2], int(ndof)))
+        result.append((node_id, xyz[0], xyz[1], xyz[2], ndof))
     if not result:
         raise ConversionError(f"{source}: no nodes given")
     return result
@@ -152,7 +181,7 @@ def check_matrix(A, label, size, nodes_origin=""):
     if A.shape[0] != size:
         raise ConversionError(
             f"{label} is {A.shape[0]} x {A.shape[1]} but the nodes{nodes_origin} hold {size} dofs "
-            "(sum of ndof); "
+            "(sum of the nodes' dof counts); "
             "the nodes list must describe exactly the matrix rows, node by node")
     A.sum_duplicates()
     if not np.all(np.isfinite(A.data)):
@@ -204,8 +233,8 @@ def check_interfaces(interfaces, nodes, body):
                 f"({len(ndof_of)} nodes, ids {min(ndof_of)}..{max(ndof_of)}); give an existing node id")
         if ndof_of[node_id_int] != 6:
             raise ConversionError(
-                f"body '{body}': interface '{iname}' node {node_id_int} has {ndof_of[node_id_int]} dofs "
-                "(translations only); interface nodes need 6 dofs (ux uy uz rx ry rz): "
+                f"body '{body}': interface '{iname}' node {node_id_int} has dofs {ndof_of[node_id_int]} "
+                "(not all six); interface nodes need 6 dofs (ux uy uz rx ry rz): "
                 "keep the rotations of this node in the exported matrices or choose another node")
         checked[iname] = node_id_int
     return checked
@@ -214,7 +243,7 @@ def check_interfaces(interfaces, nodes, body):
 def write_body(out_dir, name, M, K, nodes, interfaces, fmt="petsc", sources=None):
     """Check and write a body; return {'mass', 'stiffness', 'nodes', 'snippet'} -> written paths.
 
-    M, K: scipy.sparse (or dense) symmetric matrices; nodes: rows (id, x, y, z, ndof);
+    M, K: scipy.sparse (or dense) symmetric matrices; nodes: rows (id, x, y, z, dofs) (dofs: see parse_dofs);
     interfaces: {interface name: node id}; fmt: 'petsc' (PETSc binary) or 'mtx' (Matrix Market);
     sources: optional {'mass', 'stiffness', 'nodes'} -> where each came from, quoted in errors.
     The output folder is created if needed. Raises ConversionError; nothing is written then.
@@ -227,7 +256,7 @@ def write_body(out_dir, name, M, K, nodes, interfaces, fmt="petsc", sources=None
     sources = sources or {}
     origin = {key: f" (from {sources[key]})" if sources.get(key) else "" for key in ("mass", "stiffness", "nodes")}
     nodes = normalize_nodes(nodes, source=f"nodes of body '{name}'{origin['nodes']}")
-    size = sum(n[4] for n in nodes)
+    size = sum(dof_count(n[4]) for n in nodes)
     M = check_matrix(M, f"mass matrix M of body '{name}'{origin['mass']}", size, origin["nodes"])
     K = check_matrix(K, f"stiffness matrix K of body '{name}'{origin['stiffness']}", size, origin["nodes"])
     interfaces = check_interfaces(interfaces, nodes, name)
@@ -308,8 +337,8 @@ def _write_mtx(path, A):
 
 def _write_nodes(path, nodes, name):
     with open(path, "w", encoding="utf-8") as handle:
-        handle.write(f"# nodes of kryflex body '{name}': id x y z ndof "
-                     "(dofs numbered node by node: ux uy uz [rx ry rz])\n")
+        handle.write(f"# nodes of kryflex body '{name}': id x y z dofs (6: ux uy uz rx ry rz, 3: ux uy uz, "
+                     "c<components>: those Nastran components, s: a scalar point; dofs numbered node by node)\n")
         for node_id, x, y, z, ndof in nodes:
             handle.write(f"{node_id} {x!r} {y!r} {z!r} {ndof}\n")
 

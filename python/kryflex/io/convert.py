@@ -2,10 +2,12 @@
 
 Inputs:
   a Nastran punch file (.pch, or any bulk-data file) with DMIG stiffness and mass matrices
-      (KAAX and MAAX by default) and optionally GRID cards (here or in --grids files);
+      (KAAX and MAAX by default), with GRID (CORD, SPOINT, PARAM) cards here or in --grids files
+      (.bdf/.dat, or a run's .f06 bulk-data echo); read with pyNastran, see io/dmig.py;
   a NumPy .npz holding M and K (dense arrays 'M', 'K', or sparse parts 'M_data', 'M_indices',
       'M_indptr', 'M_shape' [, 'M_format' = csr|csc], or 'M_row', 'M_col', 'M_data', 'M_shape')
       and optionally 'nodes' (n x 5: id x y z ndof);
+  a Nastran OUTPUT4 file (.op4, ASCII or binary) with the two matrices, plus a nodes file naming the rows;
   Matrix Market (.mtx) or PETSc binary (.petsc) mass and stiffness files plus a nodes file.
 Output: see bodyfiles.write_body.
 """
@@ -21,8 +23,8 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-from .bodyfiles import ConversionError, ConversionWarning, FORMATS, read_nodes, write_body
-from .dmig import scan_bulk, build_matrices, grids_from_records, nodes_from_dofs
+from .bodyfiles import ConversionError, ConversionWarning, FORMATS, dof_count, read_nodes, write_body
+from .dmig import nastran_body
 
 __all__ = ["convert", "main", "ConversionError", "ConversionWarning", "ConvertedBody"]
 
@@ -39,13 +41,15 @@ class ConvertedBody:
 
 
 def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
-            stiffness_name="KAAX", mass_name="MAAX", nodes=None):
+            stiffness_name="KAAX", mass_name="MAAX", nodes=None, mass_scale=None):
     """Convert one body and write it to out_dir; return a ConvertedBody.
 
     inputs: path of a Nastran punch file or of a .npz, or a mapping
             {'mass': file, 'stiffness': file, 'nodes': file} of Matrix Market / PETSc binary files.
-    interfaces: {interface name: node id}; grids: bulk-data file(s) with GRID cards (punch input);
-    nodes: a nodes file for a .npz that holds no 'nodes' array.
+    interfaces: {interface name: node id}; grids: bulk-data file(s) (.bdf/.dat/.pch, or a run's .f06 with
+    its bulk-data echo) with GRID, CORD, SPOINT and PARAM cards (Nastran input);
+    nodes: a nodes file for a .npz that holds no 'nodes' array;
+    mass_scale: Nastran input only: a factor on the DMIG mass, or 'wtmass' (see io/dmig.py, WTMASS).
     Raises ConversionError (message names the file and the fix); nothing is written then.
     """
     interfaces = dict(interfaces or {})
@@ -65,6 +69,9 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
         if kind == ".npz":
             _no_grids(grids, "a .npz input (coordinates go in its 'nodes' array or a nodes file)")
             M, K, body_nodes, sources = load_npz(path, nodes)
+        elif kind == ".op4":
+            _no_grids(grids, "an OP4 input (its dofs and coordinates come from the nodes file)")
+            M, K, body_nodes, sources = load_op4(path, nodes, stiffness_name, mass_name)
         elif kind in (".mtx", ".petsc"):
             raise ConversionError(
                 f"{path} is a single matrix; a body needs mass, stiffness and nodes: "
@@ -74,9 +81,9 @@ def convert(inputs, out_dir, name, fmt="petsc", interfaces=None, grids=None,
                 raise ConversionError(
                     f"{path}: the nodes of a Nastran body come from its DMIG dofs; "
                     "give coordinates as GRID cards (--grids bulk.bdf), not a nodes file")
-            M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name)
+            M, K, body_nodes, sources = load_punch(path, grids, stiffness_name, mass_name, mass_scale)
     files = write_body(out_dir, name, M, K, body_nodes, interfaces, fmt=fmt, sources=sources)
-    return ConvertedBody(files=files, size=int(sum(n[4] for n in body_nodes)),
+    return ConvertedBody(files=files, size=int(sum(dof_count(n[4]) for n in body_nodes)),
                          node_count=len(body_nodes), interfaces=interfaces)
 
 
@@ -93,45 +100,54 @@ def _no_grids(grids, what):
 
 # ---------------------------------------------------------------- Nastran punch
 
-def load_punch(path, grid_files, stiffness_name, mass_name):
-    names = (stiffness_name.upper(), mass_name.upper())
-    if names[0] == names[1]:
-        raise ConversionError(f"stiffness and mass matrix names are both {names[0]}; they must differ")
+def load_punch(path, grid_files, stiffness_name, mass_name, mass_scale=None):
+    """A Nastran body read with pyNastran: see io/dmig.py for what is read and how it is transformed."""
     for grid_file in grid_files:
         _require_file(grid_file, "GRID")
-    raw, other, records, grdset = scan_bulk(path, names)
-    matrices = build_matrices(path, names, raw, other)
-    K, dofs = matrices[names[0]]
-    M, _ = matrices[names[1]]
-    node_ndof = nodes_from_dofs(dofs)
-    ids = [g for g, _ in node_ndof]
-    coords = grids_from_records(path, records, grdset, ids)
-    origin = {gid: path for gid in coords}
-    for grid_file in grid_files:
-        _, _, more, more_set = scan_bulk(grid_file, ())
-        for gid, xyz in grids_from_records(grid_file, more, more_set, ids).items():
-            if gid in coords and coords[gid] != xyz:
-                raise ConversionError(
-                    f"GRID {gid} has coordinates {coords[gid]} in {origin[gid]} but {xyz} in {grid_file}; "
-                    "give each grid once")
-            coords[gid], origin[gid] = xyz, grid_file
-    if not coords:
-        warnings.warn(
-            f"{path}: no GRID cards for the {len(ids)} grids of the matrices (give them with --grids "
-            "bulk.bdf); node coordinates are set to 0, so rigid-body modes cannot be computed from "
-            "geometry and will then need to be supplied", ConversionWarning)
-    else:
-        missing = [g for g in ids if g not in coords]
-        if missing:
-            shown = ", ".join(str(g) for g in missing[:10])
-            raise ConversionError(
-                f"{len(missing)} grids of the DMIG matrices in {path} have no GRID card "
-                f"({shown}{', ...' if len(missing) > 10 else ''}); add the bulk-data file that defines "
-                "them with --grids")
-    nodes = [(g, *coords.get(g, (0.0, 0.0, 0.0)), n) for g, n in node_ndof]
-    sources = {"mass": f"DMIG {names[1]} of {path}", "stiffness": f"DMIG {names[0]} of {path}",
-               "nodes": f"grids of {path}"}
+    M, K, nodes, notes = nastran_body(path, grid_files, stiffness_name, mass_name, mass_scale)
+    scale = f" x {notes['mass_scale']:g}" if notes["mass_scale"] != 1.0 else ""
+    frame = " turned to basic" if notes["rotated"] else ""
+    sources = {"mass": f"DMIG {mass_name.upper()}{scale}{frame} of {path}",
+               "stiffness": f"DMIG {stiffness_name.upper()}{frame} of {path}",
+               "nodes": f"grids of {' + '.join([os.fspath(path), *map(os.fspath, grid_files)])}"}
     return M, K, nodes, sources
+
+
+# ---------------------------------------------------------------- Nastran OUTPUT4
+
+def load_op4(path, nodes_file, stiffness_name, mass_name):
+    """Mass and stiffness from a Nastran OUTPUT4 file (ASCII or binary, read with pyNastran's OP4 reader). An OP4
+    matrix has no dof labels, so the nodes file names the rows: one line per node in the matrices' (a-set) order,
+    with its components (6, 3, c<components>, s) and basic coordinates; the rows must already be in basic dofs."""
+    if nodes_file is None:
+        raise ConversionError(
+            f"{path}: an OP4 matrix has no dof labels; give the nodes of its rows with --nodes (one 'id x y z dofs' "
+            "line per node, in the matrix order, dofs 6, 3, c<components> or s)")
+    _require_file(nodes_file, "nodes")
+    from .dmig import _pynastran, _quiet_log
+    _pynastran()
+    from pyNastran.op4.op4 import read_op4
+    try:
+        matrices = read_op4(os.fspath(path), log=_quiet_log())
+    except Exception as exc:  # noqa: BLE001 - pyNastran raises ValueError, AssertionError, struct.error, ...
+        raise ConversionError(f"{path}: pyNastran cannot read this OP4 file "
+                              f"({' '.join(str(exc).split())[:300] or type(exc).__name__}); re-export it") from None
+    by_name = {str(k).strip().upper(): v for k, v in matrices.items()}
+    picked = []
+    for name in (stiffness_name.upper(), mass_name.upper()):
+        if name not in by_name:
+            raise ConversionError(
+                f"{path} holds no matrix {name} (matrices: {', '.join(sorted(by_name)) or 'none'}); give the "
+                "names with --stiffness-name and --mass-name")
+        data = by_name[name].data
+        try:
+            picked.append(sp.csr_matrix(data, dtype=np.float64))
+        except (TypeError, ValueError) as exc:
+            raise ConversionError(f"{path}: matrix {name} is not a real matrix ({exc})") from None
+    K, M = picked
+    sources = {"mass": f"OP4 {mass_name.upper()} of {path}", "stiffness": f"OP4 {stiffness_name.upper()} of {path}",
+               "nodes": f"nodes file {nodes_file}"}
+    return M, K, read_nodes(nodes_file), sources
 
 
 # ---------------------------------------------------------------- NumPy archive
@@ -276,6 +292,8 @@ def _read_petsc(path):
 USAGE_EXAMPLES = """examples:
   kryflex convert model.pch --name rotor --interface bearing=101 -o bodies
   kryflex convert model.pch --grids model.bdf --name rotor --interface bearing=101 -o bodies
+  kryflex convert model.pch --grids model.f06 --name rotor --interface bearing=101 -o bodies
+  kryflex convert model.op4 --nodes nodes.txt --stiffness-name KAA --mass-name MAA --name rotor -o bodies
   kryflex convert boom.npz --name boom --interface root=1 --format mtx -o bodies
   kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
 
@@ -291,13 +309,14 @@ def build_parser():
     from ..cli.common import Parser    # the kryflex conventions: one 'kryflex: error:' line, on rank 0, with the fix
     parser = Parser(
         prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Convert an exported FE model (Nastran DMIG punch file, NumPy .npz, or Matrix "
-                    "Market / PETSc matrices + nodes file) into a kryflex body.",
+        description="Convert an exported FE model (Nastran DMIG punch file with GRIDs from bulk data or an "
+                    ".f06, Nastran OP4 + nodes file, NumPy .npz, or Matrix Market / PETSc matrices + nodes file) "
+                    "into a kryflex body.",
         epilog=USAGE_EXAMPLES)
-    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, or a .npz")
+    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), or a .npz")
     parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
     parser.add_argument("--stiffness", metavar="FILE", help="stiffness matrix (.mtx or .petsc)")
-    parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z ndof per line)")
+    parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z dofs per line: 6, 3, c<components> or s)")
     parser.add_argument("--name", required=True, help="body name (used in file names and the scene entry)")
     parser.add_argument("-o", "--output-dir", default=".", metavar="DIR", help="output folder (default: .)")
     parser.add_argument("--format", choices=FORMATS, default="petsc",
@@ -305,9 +324,13 @@ def build_parser():
     parser.add_argument("--interface", action="append", default=[], metavar="NAME=NODE",
                         help="interface name and its node id (6 dofs); repeat for several")
     parser.add_argument("--grids", action="append", default=[], metavar="FILE",
-                        help="bulk-data file with GRID cards for a punch input; repeatable")
-    parser.add_argument("--stiffness-name", metavar="DMIG", help="DMIG stiffness name (default: KAAX)")
-    parser.add_argument("--mass-name", metavar="DMIG", help="DMIG mass name (default: MAAX)")
+                        help="bulk data (.bdf/.dat/.pch) or a run's .f06 (its bulk-data echo) with the GRID, "
+                             "CORD, SPOINT and PARAM cards of a punch input; repeatable")
+    parser.add_argument("--stiffness-name", metavar="NAME", help="DMIG or OP4 stiffness name (default: KAAX)")
+    parser.add_argument("--mass-name", metavar="NAME", help="DMIG or OP4 mass name (default: MAAX)")
+    parser.add_argument("--mass-scale", metavar="FACTOR|wtmass",
+                        help="multiply the DMIG mass by FACTOR, or by the model's PARAM,WTMASS (only for a mass "
+                             "written in weight units: a punched MAAX already holds WTMASS)")
     return parser
 
 
@@ -340,22 +363,40 @@ def _arguments_to_call(args):
     if not args.input:
         if not all(files) or not args.nodes:
             raise _UsageError("matrix-file input needs all of --mass, --stiffness and --nodes")
-        if args.grids or args.stiffness_name or args.mass_name:
-            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        if args.grids or args.stiffness_name or args.mass_name or args.mass_scale:
+            raise _UsageError("--grids/--stiffness-name/--mass-name/--mass-scale apply to Nastran punch files only")
         call["inputs"] = {"mass": args.mass, "stiffness": args.stiffness, "nodes": args.nodes}
         return call
     call["inputs"] = args.input
+    if args.input.lower().endswith(".op4"):
+        if args.grids or args.mass_scale:
+            raise _UsageError("--grids/--mass-scale apply to Nastran bulk-data (DMIG) input only; an OP4 input "
+                              "takes its dofs and coordinates from --nodes")
+        call.update(nodes=args.nodes, stiffness_name=args.stiffness_name or "KAAX", mass_name=args.mass_name or "MAAX")
+        return call
     if args.input.lower().endswith(".npz"):
-        if args.grids or args.stiffness_name or args.mass_name:
-            raise _UsageError("--grids/--stiffness-name/--mass-name apply to Nastran punch files only")
+        if args.grids or args.stiffness_name or args.mass_name or args.mass_scale:
+            raise _UsageError("--grids/--stiffness-name/--mass-name/--mass-scale apply to Nastran punch files only")
         call["nodes"] = args.nodes
     else:
         if args.nodes:
             raise _UsageError("--nodes does not apply to a punch file: its nodes come from the DMIG dofs "
                               "and GRID cards (use --grids for coordinates)")
         call.update(grids=args.grids, stiffness_name=args.stiffness_name or "KAAX",
-                    mass_name=args.mass_name or "MAAX")
+                    mass_name=args.mass_name or "MAAX", mass_scale=_mass_scale(args.mass_scale))
     return call
+
+
+def _mass_scale(text):
+    if text is None or text.strip().lower() == "wtmass":
+        return None if text is None else "wtmass"
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise _UsageError(f"--mass-scale {text!r}: give a positive number or 'wtmass'")
+    return value
 
 
 def main(argv=None):

@@ -1,322 +1,363 @@
-"""Read Nastran DMIG matrices (e.g. KAAX, MAAX of a punch file) and GRID coordinates.
+"""Nastran models for kryflex bodies: DMIG matrices, GRIDs with coordinate systems, SPOINTs, WTMASS.
 
-Nastran bulk data comes in three layouts, all read here, mixed freely in one file:
-  small field  8-character fields: field 1 (name) + 8 data fields + field 10 (continuation marker);
-               continuation lines start with '+' or a blank field 1.
-  large field  name ending in '*' (DMIG*, GRID*): 4 data fields of 16 characters per line;
-               continuation lines start with '*' and carry the next 4 fields.
-  free field   comma separated; DMIG* ,... lines carry 4 data fields, others 8.
-Each card is turned into its list of data fields 2, 3, ... (continuation markers dropped),
-so the three layouts give the same list and the card readers below never see the layout.
+The cards are read by pyNastran (pyNastran.bdf.bdf.BDF: small, large (`DMIG*`, `GRID*`) and free field,
+continuations, every Nastran spelling of a real); this module turns what it read into a kryflex body:
 
-DMIG cards:
-  header  DMIG NAME 0 IFO TIN TOUT POLAR (blank) NCOL     IFO 6 = symmetric, 1 = square
-  column  DMIG NAME GJ CJ (blank) G1 C1 A1 B1 / G2 C2 A2 B2 / ...
-A symmetric matrix (IFO 6) stores one triangle (Nastran punches (GI,CI) <= (GJ,CJ)); the other
-half is filled here. Components: 1..6 = ux uy uz rx ry rz; 0 would be a scalar point.
-
-The dofs found in the matrices become kryflex nodes: a grid whose entries only touch
-components 1..3 becomes a 3-dof node, any other grid a 6-dof node; nodes are ordered by grid
-id, dofs by component, and components a 6-dof node lacks become zero rows and columns.
+  files      a punch file (.pch: bulk data without BEGIN BULK), a bulk-data deck (.bdf/.dat, with or without
+             executive and case control), or a run's .f06 whose sorted bulk-data echo (ECHO=SORT, the default)
+             is cut out and read as bulk data. Several files are merged; a card given twice must be the same.
+  DMIG       IFO 6 (symmetric, one triangle or both) or 1 (square), TIN 1 or 2 (real). An entry given twice must
+             agree to round-off. Components 1..6 of GRIDs, component 0 (blank) of scalar points.
+  nodes      every (point, component) any of the matrices uses is a dof; nodes are ordered by id (grids and
+             scalar points together, as Nastran sorts its a-set), components ascending. A grid keeps the
+             components the matrices use: all six -> `6`, ux uy uz -> `3`, others -> `c<components>` (e.g. a
+             grid whose rotations carry neither mass nor stiffness: `c123`, a plate grid without drilling
+             stiffness and inertia: `c12345`); a scalar point -> `s` (see README, "Nodes file").
+  positions  GRID X1 X2 X3 are in the grid's CP system (rectangular, cylindrical r theta z or spherical
+             r theta phi, angles in degrees; CORD1x/CORD2x, chained through RID); they are written in the basic
+             system. A grid the matrices use must have a GRID card (never silently at 0, 0, 0).
+  dofs       the matrix rows of a grid are in its CD system, evaluated at the grid (for CORD2C/CORD2S the axes
+             turn with the grid's position): with R the 3 x 3 matrix whose columns are the local axes in basic,
+             u_basic = T u_local, T = blockdiag(R, R) per grid, and K_basic = T K T^T (the same for M), so
+             rigid-body modes from the written coordinates are right. A grid that has only some components can
+             be transformed only if R maps their span onto itself (e.g. only `3` with a CD rotated about z);
+             otherwise the rows mix with absent components: an error names the grid.
+  WTMASS     Nastran multiplies the mass it generates from elements and mass cards by PARAM,WTMASS, so a punched
+             mass matrix (MAAX) already holds it, and DMIG input is not scaled by WTMASS (M2GG/M2PP
+             documentation). The DMIG mass is therefore used as stored; mass_scale multiplies it when it was
+             written in weight units (mass_scale='wtmass' takes the model's PARAM,WTMASS). The stiffness is never
+             scaled.
+Errors are ConversionError naming the file, the card and the fix.
 """
 
-import math
+import io
+import os
 import re
 import warnings
-from array import array
 
 import numpy as np
 import scipy.sparse as sp
 
 from .bodyfiles import ConversionError, ConversionWarning
 
-COMPONENT_NAMES = {1: "ux", 2: "uy", 3: "uz", 4: "rx", 5: "ry", 6: "rz"}
+COMPONENT_NAMES = {0: "scalar", 1: "ux", 2: "uy", 3: "uz", 4: "rx", 5: "ry", 6: "rz"}
 SUPPORTED_IFO = {1: "square", 6: "symmetric"}
 REAL_TIN = (1, 2)
-DUPLICATE_TOLERANCE = 1e-10  # a symmetric entry given in both triangles must agree to round-off
+DUPLICATE_TOLERANCE = 1e-10   # an entry given twice (both triangles) must agree to round-off
+AXIS_TOLERANCE = 1e-9         # |R[absent, present]| below this: the present components are closed under R
 
-_IMPLICIT_EXPONENT = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+))([+-]\d+)$")
+# the cards kryflex needs; the rest of a deck (elements, loads, ...) is not parsed
+CARDS = ["DMIG", "GRID", "GRDSET", "SPOINT", "PARAM",
+         "CORD1R", "CORD1C", "CORD1S", "CORD2R", "CORD2C", "CORD2S"]
+
+_F06_ECHO = re.compile(r"B\s?U\s?L\s?K\s+D\s?A\s?T\s?A\s+E\s?C\s?H\s?O")
+_F06_LINE = re.compile(r"^\s*\d+-\s{8}(.*)$")
 
 
-# ---------------------------------------------------------------- bulk-data cards
+# ---------------------------------------------------------------- reading files with pyNastran
 
-def iter_cards(path, wanted):
-    """Yield (card name without '*', data fields, first line number) for cards named in wanted."""
-    wanted = {w.upper() for w in wanted}
-    name, fields, start = None, None, 0
+def _pynastran():
+    """pyNastran's BDF class, or a clear error when this Python lacks it."""
     try:
-        handle = open(path, "r", encoding="latin-1")
+        from pyNastran.bdf.bdf import BDF
+    except ImportError as exc:
+        raise ConversionError(
+            f"reading Nastran files needs pyNastran, which this Python cannot import ({exc}); run kryflex from the "
+            "project's .venv (scripts/setup installs pyNastran 1.4.1 there)") from None
+    return BDF
+
+
+def _quiet_log():
+    from cpylog import SimpleLogger
+    return SimpleLogger(level="critical")
+
+
+def f06_bulk_echo(path):
+    """The bulk-data cards of a Nastran .f06's sorted bulk-data echo (ECHO=SORT, Nastran's default): the numbered
+    lines ('   12-        GRID    ...') between the echo's heading and ENDDATA, page headers skipped."""
+    try:
+        with open(path, "r", encoding="latin-1") as handle:
+            text = handle.read()
     except OSError as exc:
-        raise ConversionError(f"cannot read Nastran file {path}: {exc.strerror or exc}") from exc
-    unterminated = False
-    with handle:
-        for number, raw in enumerate(handle, start=1):
-            line = raw.rstrip("\r\n")
-            cut = line.find("$")
-            if cut >= 0:
-                line = line[:cut]
-            if not line.strip():
-                continue
-            unterminated = not raw.endswith("\n")  # only the last line can lack it
-            free = "," in line
-            if free:
-                tokens = [t.strip() for t in line.split(",")]
-                first = tokens[0]
-            else:
-                line = line.expandtabs(8)
-                first = line[:8].strip()
-            if first == "" or first[0] in "+*":
-                if fields is None:
-                    continue  # continuation of a card we skip
-                large = first.startswith("*")
-            else:
-                if fields is not None:
-                    yield name, fields, start
-                upper = first.upper()
-                if upper.startswith("ENDDATA"):
-                    return
-                if upper.startswith("INCLUDE"):
-                    warnings.warn(f"{path}, line {number}: INCLUDE statements are not followed; "
-                                  "pass the included file separately (e.g. with --grids)", ConversionWarning)
-                large = upper.endswith("*")
-                name = upper.rstrip("*").strip()
-                if name not in wanted:
-                    name, fields = None, None
-                    continue
-                fields, start = [], number
-            width = 4 if large else 8
-            if free:
-                data = tokens[1:1 + width]
-                if any(tokens[2 + width:]):
-                    raise ConversionError(
-                        f"{path}, line {number}: free-field line holds more than 10 fields; "
-                        "put the rest on a continuation line")
-                data += [""] * (width - len(data))
-            elif large:
-                data = [line[8 + 16 * k:24 + 16 * k] for k in range(4)]
-            else:
-                data = [line[8 + 8 * k:16 + 8 * k] for k in range(8)]
-            if not large and len(fields) % 8:
-                fields.extend([""] * (8 - len(fields) % 8))  # a small line follows half a large pair
-            fields.extend(f.strip() for f in data)
-        if fields is not None:
-            if unterminated:
-                raise ConversionError(
-                    f"{path}: the last line ({number}) has no end-of-line, so the {name} card on line {start} "
-                    "may be cut off: the file looks truncated; if it is complete, end it with a newline")
-            yield name, fields, start
-
-
-def parse_real(text, where):
-    """A Nastran real: 1.5, 1.5E+3, 1.5D+3 or the exponent-only form 1.5+3."""
-    s = text.strip().upper().replace("D", "E")
-    try:
-        value = float(s)
-    except ValueError:
-        match = _IMPLICIT_EXPONENT.match(s)
-        if not match:
-            raise ConversionError(f"{where}: {text.strip()!r} is not a number") from None
-        value = float(f"{match.group(1)}E{match.group(2)}")
-    if not math.isfinite(value):
-        raise ConversionError(f"{where}: value {text.strip()!r} is not finite")
-    return value
-
-
-def parse_int(text, where, default=None):
-    s = text.strip()
-    if not s and default is not None:
-        return default
-    try:
-        return int(s)
-    except ValueError:
-        raise ConversionError(f"{where}: {s!r} is not an integer") from None
-
-
-def _field(fields, k):
-    return fields[k] if k < len(fields) else ""
-
-
-# ---------------------------------------------------------------- scan of one file
-
-class _RawMatrix:
-    """The header and the (column, row, value) triplets of one DMIG matrix as read."""
-
-    def __init__(self, name, ifo, ncol, line):
-        self.name, self.ifo, self.ncol, self.line = name, ifo, ncol, line
-        self.col_grid, self.col_comp = array("q"), array("q")
-        self.row_grid, self.row_comp = array("q"), array("q")
-        self.values = array("d")
-        self.columns = 0
-
-
-def scan_bulk(path, names, grids=True):
-    """One pass over a bulk-data file: the DMIG matrices named in names, GRID and GRDSET cards."""
-    names = [n.upper() for n in names]
-    matrices, other_dmig = {}, set()
-    grid_records, grdset = {}, None
-    cards = ("DMIG", "GRID", "GRDSET") if grids else ("DMIG",)
-    for card, fields, line in iter_cards(path, cards):
-        where = f"{path}, line {line}"
-        if card == "DMIG":
-            mname = _field(fields, 0).upper()
-            if mname not in names:
-                other_dmig.add(mname)
-                continue
-            _read_dmig_card(where, line, mname, fields, matrices)
-        elif card == "GRID":
-            gid = parse_int(_field(fields, 0), f"{where} (GRID id)")
-            record = (_field(fields, 1), [parse_real(_field(fields, k) or "0", f"{where} (GRID {gid} x{k - 1})")
-                                          for k in (2, 3, 4)], _field(fields, 5), line)
-            if gid in grid_records and grid_records[gid][1] != record[1]:
-                raise ConversionError(
-                    f"{where}: GRID {gid} is defined again (first on line {grid_records[gid][3]}) "
-                    "with other coordinates; grid ids must be unique")
-            grid_records[gid] = record
-        elif card == "GRDSET":
-            grdset = (_field(fields, 1), _field(fields, 5), line)
-    return matrices, other_dmig, grid_records, grdset
-
-
-def _read_dmig_card(where, line, mname, fields, matrices):
-    if _field(fields, 1) == "0":
-        if mname in matrices:
-            raise ConversionError(
-                f"{where}: second header card for DMIG matrix {mname} (first on line {matrices[mname].line}); "
-                "each matrix must be defined once")
-        ifo = parse_int(_field(fields, 2), f"{where} (DMIG {mname} IFO)")
-        tin = parse_int(_field(fields, 3), f"{where} (DMIG {mname} TIN)")
-        if ifo not in SUPPORTED_IFO:
-            raise ConversionError(
-                f"{where}: DMIG {mname} has matrix form IFO={ifo}; kryflex reads square (1) or "
-                "symmetric (6) mass and stiffness matrices")
-        if tin not in REAL_TIN:
-            raise ConversionError(
-                f"{where}: DMIG {mname} has TIN={tin} (complex); mass and stiffness must be real (TIN 1 or 2)")
-        ncol = parse_int(_field(fields, 7), f"{where} (DMIG {mname} NCOL)", default=0)
-        matrices[mname] = _RawMatrix(mname, ifo, ncol, line)
-        return
-    if mname not in matrices:
-        raise ConversionError(
-            f"{where}: column card of DMIG {mname} comes before its header card "
-            f"('DMIG {mname} 0 IFO TIN ...'); the file is incomplete or out of order")
-    raw = matrices[mname]
-    gj = parse_int(_field(fields, 1), f"{where} (DMIG {mname} column grid GJ)")
-    cj = parse_int(_field(fields, 2), f"{where} (DMIG {mname} column component CJ)", default=0)
-    _check_component(gj, cj, where, mname)
-    entries = 0
-    for k in range(4, len(fields), 4):
-        g, c, a, b = (_field(fields, k + i) for i in range(4))
-        if not (g or c or a or b):
+        raise ConversionError(f"cannot read {path}: {exc.strerror or exc}") from None
+    lines, inside = [], False
+    for raw in text.splitlines():
+        if _F06_ECHO.search(raw):
+            inside = True
             continue
-        entry = f"{where} (DMIG {mname} column {gj}-{cj}, entry {entries + 1})"
-        if not g:
-            raise ConversionError(f"{entry}: value without a row grid GI")
-        if not a:
-            raise ConversionError(
-                f"{entry}: row {g}-{c} has no value; the card is incomplete (file truncated?)")
-        gi = parse_int(g, f"{entry} row grid")
-        ci = parse_int(c, f"{entry} row component", default=0)
-        _check_component(gi, ci, entry, mname)
-        value = parse_real(a, entry)
-        if b and parse_real(b, entry) != 0.0:
-            raise ConversionError(f"{entry}: imaginary part {b!r} given for a real matrix")
-        raw.col_grid.append(gj)
-        raw.col_comp.append(cj)
-        raw.row_grid.append(gi)
-        raw.row_comp.append(ci)
-        raw.values.append(value)
-        entries += 1
-    if entries == 0:
+        if not inside:
+            continue
+        match = _F06_LINE.match(raw.rstrip())
+        if match:
+            card = match.group(1)
+            lines.append(card)
+            if card.strip().upper().startswith("ENDDATA"):
+                inside = False
+        elif raw.strip().upper().startswith("ENDDATA"):
+            inside = False
+    if not lines:
         raise ConversionError(
-            f"{where}: column {gj}-{cj} of DMIG {mname} has no entries; the card is incomplete "
-            "(file truncated?)")
-    raw.columns += 1
+            f"{path} holds no bulk-data echo (no 'B U L K   D A T A   E C H O' section with numbered cards); "
+            "rerun Nastran with ECHO=SORT in the case control, or give the .bdf/.dat instead")
+    return lines
 
 
-def _check_component(grid, comp, where, mname):
-    if grid <= 0:
-        raise ConversionError(f"{where}: grid id {grid} of DMIG {mname} must be positive")
-    if comp == 0:
+def _read_file(path):
+    """One file into a pyNastran BDF (not cross-referenced)."""
+    BDF = _pynastran()
+
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(0, os.SEEK_END)
+            size = handle.tell()
+            if size:
+                handle.seek(size - 1)
+                last = handle.read(1)
+            handle.seek(0)
+            head = handle.read(1 << 20)
+    except OSError as exc:
+        raise ConversionError(f"cannot read Nastran file {path}: {exc.strerror or exc}") from None
+    if size == 0:
+        raise ConversionError(f"Nastran file {path} is empty")
+    f06 = path.lower().endswith(".f06") or _F06_ECHO.search(head.decode("latin-1")) is not None
+    if not f06 and last not in b"\n\r":
         raise ConversionError(
-            f"{where}: DMIG {mname} uses scalar point {grid} (component 0); kryflex bodies have "
-            "grid dofs only: keep scalar points out of the exported set (e.g. no SPOINTs in the a-set)")
-    if not 1 <= comp <= 6:
-        raise ConversionError(f"{where}: component {comp} of grid {grid} in DMIG {mname} must be 1..6")
+            f"{path}: the last line has no end-of-line, so its last card may be cut off: the file looks "
+            "truncated; if it is complete, end it with a newline")
+    model = BDF(log=_quiet_log())
+    model.enable_cards(CARDS)
+    try:
+        if f06:
+            deck = "\n".join(f06_bulk_echo(path)) + "\n"
+            model.read_bdf(io.StringIO(deck), punch=True, xref=False, validate=False)
+        else:
+            begin = re.search(rb"^\s*BEGIN\s+(BULK|SUPER)[^\n]*\n", head, re.M | re.I)
+            if begin is None:                                   # a punch: bulk data only
+                model.read_bdf(path, punch=True, xref=False, validate=False)
+            elif re.search(rb"^\s*CEND", head[:begin.start()], re.M | re.I):   # a whole deck
+                model.read_bdf(path, punch=False, xref=False, validate=False)
+            else:                                               # BEGIN BULK without the decks before it
+                with open(path, "r", encoding="latin-1") as handle:
+                    text = handle.read()
+                bulk = text[re.search(r"^\s*BEGIN\s+(BULK|SUPER)[^\n]*\n", text, re.M | re.I).end():]
+                model.read_bdf(io.StringIO(bulk), punch=True, xref=False, validate=False)
+    except ConversionError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pyNastran raises SyntaxError, AssertionError, RuntimeError, ...
+        detail = " ".join(str(exc).split())[:400] or type(exc).__name__
+        raise ConversionError(
+            f"{path}: pyNastran cannot read this Nastran file ({detail}); the file is incomplete "
+            "(truncated?) or holds a malformed card: fix or re-export it") from None
+    return model
 
 
-# ---------------------------------------------------------------- matrices
-
-def read_dmig(path, names=("KAAX", "MAAX")):
-    """Read the DMIG matrices named in names from a Nastran punch (or bulk-data) file.
-
-    Returns {name: (scipy.sparse CSR matrix, dof_list)} where dof_list = [(grid, component)]
-    (component 1..6) gives the meaning of each row; all matrices read in one call share the
-    same dof list, built from the dofs of all of them (see the module notes).
-    """
-    matrices, other, _, _ = scan_bulk(path, names, grids=False)
-    return build_matrices(path, names, matrices, other)
+def _same(a, b):
+    return a.raw_fields() == b.raw_fields()
 
 
-def build_matrices(path, names, matrices, other_dmig):
-    names = [n.upper() for n in names]
-    for mname in names:
-        if mname not in matrices:
-            found = ", ".join(sorted(set(matrices) | other_dmig)) or "none"
-            raise ConversionError(
-                f"{path}: no DMIG matrix {mname} (DMIG matrices in the file: {found}); the file is "
-                "incomplete, or give the right names (--stiffness-name/--mass-name)")
-        if matrices[mname].columns == 0:
-            raise ConversionError(f"{path}: DMIG {mname} has a header but no columns (file truncated?)")
-    raws = [matrices[n] for n in names]
-    keys = np.unique(np.concatenate([
-        np.concatenate([_keys(r.col_grid, r.col_comp), _keys(r.row_grid, r.row_comp)]) for r in raws]))
-    grids, comps = keys // 8, keys % 8
-    node_ids, first = np.unique(grids, return_index=True)
-    max_comp = np.maximum.reduceat(comps, first)
-    ndof = np.where(max_comp > 3, 6, 3)
-    offset = np.concatenate([[0], np.cumsum(ndof)])
-    size = int(offset[-1])
-    dof_list = [(int(g), c) for g, n in zip(node_ids, ndof) for c in range(1, n + 1)]
+class NastranDeck:
+    """The cards of one or more Nastran files, merged; each card remembers its file."""
 
-    for raw in raws:
-        if raw.ncol > len(keys):
-            raise ConversionError(
-                f"{path}: DMIG {raw.name} (header on line {raw.line}) declares NCOL={raw.ncol} columns "
-                f"but only {len(keys)} dofs appear in the file: the file looks truncated")
-    for raw in raws:
-        if 0 < raw.columns < raw.ncol:
+    def __init__(self, paths):
+        BDF = _pynastran()
+
+        self.paths = [os.fspath(p) for p in paths]
+        self.model = BDF(log=_quiet_log())
+        self.origin = {}
+        m = self.model
+        for path in self.paths:
+            part = _read_file(path)
+            for kind, mine, theirs in (("GRID", m.nodes, part.nodes), ("SPOINT", m.spoints, part.spoints),
+                                       ("coordinate system", m.coords, part.coords),
+                                       ("DMIG", m.dmig, part.dmig), ("PARAM", m.params, part.params)):
+                for key, card in theirs.items():
+                    if kind == "coordinate system" and key == 0:
+                        continue
+                    if kind == "PARAM" and key != "WTMASS":
+                        continue                      # the only PARAM kryflex uses
+                    if key in mine and not (kind == "SPOINT" or _same(mine[key], card)):
+                        raise ConversionError(
+                            f"{kind} {key} is defined in {self.origin[kind, key]} and again, differently, in "
+                            f"{path}; give each card once")
+                    mine.setdefault(key, card)
+                    self.origin.setdefault((kind, key), path)
+            if part.grdset is not None:
+                if m.grdset is not None and not _same(m.grdset, part.grdset):
+                    raise ConversionError(f"GRDSET of {path} differs from the one in {self.origin['GRDSET']}")
+                m.grdset = part.grdset
+                self.origin.setdefault("GRDSET", path)
+        self._xref = False
+
+    def where(self, kind, key):
+        return self.origin.get((kind, key), " + ".join(self.paths))
+
+    # ---------------------------------------------------------------- coordinate systems
+
+    def _check_coordinates(self, grid_ids):
+        """Every system the grids use exists, and every system's RID chain ends in basic; then cross-reference."""
+        m = self.model
+        for cid, coord in m.coords.items():
+            seen = [cid]
+            while cid != 0:
+                card = m.coords[cid]
+                rid = getattr(card, "rid", 0) or 0
+                if card.type.startswith("CORD1"):
+                    for g in (card.G1(), card.G2(), card.G3()):
+                        if g not in m.nodes:
+                            raise ConversionError(
+                                f"{self.where('coordinate system', cid)}: {card.type} {cid} is defined by GRID {g}, "
+                                "which no file defines; add the bulk data that holds it (--grids)")
+                    break
+                if rid not in m.coords:
+                    raise ConversionError(
+                        f"{self.where('coordinate system', cid)}: {card.type} {cid} is defined in system "
+                        f"RID={rid}, which no CORD card defines; add the file that defines it (--grids) or fix RID")
+                if rid in seen:
+                    raise ConversionError(
+                        f"{self.where('coordinate system', cid)}: coordinate systems "
+                        f"{' -> '.join(map(str, seen + [rid]))} refer to each other in a loop; fix RID")
+                seen.append(rid)
+                cid = rid
+        grdset = m.grdset
+        defaulted = []
+        used = set(grid_ids)
+        for gid, node in sorted(m.nodes.items()):   # pyNastran cross-references every GRID: check them all
+            if grdset is not None:   # GRDSET's CP and CD stand for blank fields, which pyNastran reads as 0
+                if gid in used and ((grdset.cp and not node.cp) or (grdset.cd and not node.cd)):
+                    defaulted.append(gid)
+                node.cp = node.cp or grdset.cp
+                node.cd = node.cd or grdset.cd
+            for field, cid in (("CP", node.cp), ("CD", node.cd)):
+                if cid not in m.coords:
+                    raise ConversionError(
+                        f"{self.where('GRID', gid)}: GRID {gid} gives {field}={cid}, but no CORD card defines "
+                        f"coordinate system {cid}; add the file that defines it (--grids) or fix the GRID")
+        if defaulted:
             warnings.warn(
-                f"{path}: DMIG {raw.name} has {raw.columns} column cards but its header (line {raw.line}) "
-                f"declares NCOL={raw.ncol}; Nastran leaves all-zero columns out (e.g. rotations without "
-                "rotary inertia), otherwise the file is truncated", ConversionWarning)
-    if size > len(keys):
-        missing = sorted(set(dof_list) - {(int(k // 8), int(k % 8)) for k in keys})
-        shown = ", ".join(f"{g}-{COMPONENT_NAMES[c]}" for g, c in missing[:8])
-        warnings.warn(
-            f"{path}: {len(missing)} dofs of the matrices' grids are absent from them ({shown}"
-            f"{', ...' if len(missing) > 8 else ''}); they are written as zero rows and columns "
-            "(no mass, no stiffness), which leaves them undetermined: re-export with every "
-            "component of these grids in the exported set (a 3-dof grid needs ux uy uz, a 6-dof grid all six)",
-            ConversionWarning)
+                f"GRDSET ({self.origin['GRDSET']}) sets CP={grdset.cp} CD={grdset.cd}: {len(defaulted)} GRID(s) "
+                f"whose CP or CD is blank or 0 take it (e.g. {', '.join(map(str, defaulted[:5]))}); a GRID that "
+                "means an explicit 0 (basic) needs CD/CP of a basic-aligned CORD2R instead", ConversionWarning)
+        if not self._xref:
+            try:
+                m.cross_reference(xref=True, xref_nodes=True, xref_elements=False, xref_properties=False,
+                                  xref_masses=False, xref_materials=False, xref_loads=False,
+                                  xref_constraints=False, xref_aero=False, xref_sets=False,
+                                  xref_optimization=False)
+            except Exception as exc:  # noqa: BLE001 - e.g. a CORD2x whose three points are collinear
+                raise ConversionError(
+                    f"{' + '.join(self.paths)}: the coordinate systems cannot be set up "
+                    f"({' '.join(str(exc).split())[:300]}); fix the CORD cards") from None
+            self._xref = True
 
-    def index(grid, comp):
-        g = np.frombuffer(grid, dtype=np.int64)
-        return offset[np.searchsorted(node_ids, g)] + np.frombuffer(comp, dtype=np.int64) - 1
+    def positions(self, grid_ids):
+        """{grid id: basic (x, y, z)} of the grids asked for; each needs a GRID card."""
+        missing = [g for g in grid_ids if g not in self.model.nodes]
+        if missing:
+            shown = ", ".join(map(str, missing[:10]))
+            raise ConversionError(
+                f"{len(missing)} grid(s) used by the matrices have no GRID card in {' + '.join(self.paths)} "
+                f"({shown}{', ...' if len(missing) > 10 else ''}), so their positions are unknown; give the bulk "
+                "data that defines them with --grids (a .bdf/.dat, or the run's .f06 with its bulk-data echo)")
+        self._check_coordinates(grid_ids)
+        return {g: tuple(float(v) for v in self.model.nodes[g].get_position()) for g in grid_ids}
 
-    result = {}
-    for raw in raws:
-        rows, cols = index(raw.row_grid, raw.row_comp), index(raw.col_grid, raw.col_comp)
-        values = np.frombuffer(raw.values, dtype=np.float64)
-        result[raw.name] = (_assemble(path, raw, rows, cols, values, size, dof_list), dof_list)
-    return result
+    def axes(self, gid, xyz):
+        """R (3 x 3): columns = the local axes of GRID gid's CD system at its basic position xyz."""
+        node = self.model.nodes[gid]
+        coord = self.model.coords[node.cd]
+        if node.cd == 0:
+            return np.eye(3)
+        beta = np.asarray(coord.beta(), dtype=float)   # rows: the system's i, j, k in basic
+        if coord.type.endswith("R"):
+            return beta.T
+        local = np.asarray(coord.transform_node_to_local(np.asarray(xyz, dtype=float)), dtype=float)
+        if coord.type.endswith("C"):     # (r, theta, z)
+            t = np.radians(local[1])
+            ax = np.array([[np.cos(t), -np.sin(t), 0.0], [np.sin(t), np.cos(t), 0.0], [0.0, 0.0, 1.0]])
+        else:                            # (r, theta from k, phi about k)
+            t, p = np.radians(local[1]), np.radians(local[2])
+            ax = np.array([[np.sin(t) * np.cos(p), np.cos(t) * np.cos(p), -np.sin(p)],
+                           [np.sin(t) * np.sin(p), np.cos(t) * np.sin(p), np.cos(p)],
+                           [np.cos(t), -np.sin(t), 0.0]])
+        return beta.T @ ax
+
+    def wtmass(self):
+        param = self.model.params.get("WTMASS")
+        return 1.0 if param is None else float(param.values[0])
+
+    # ---------------------------------------------------------------- matrices
+
+    def matrices(self, names):
+        """{name: (CSR matrix over the dofs, as stored)} and the shared dof list [(id, component)]."""
+        names = [n.upper() for n in names]
+        dmigs = self.model.dmig
+        for name in names:
+            if name not in dmigs:
+                found = ", ".join(sorted(dmigs)) or "none"
+                raise ConversionError(
+                    f"{' + '.join(self.paths)}: no DMIG matrix {name} (DMIG matrices found: {found}); the file is "
+                    "incomplete, or give the right names (--stiffness-name/--mass-name)")
+        raw = {}
+        for name in names:
+            d = dmigs[name]
+            where = f"{self.where('DMIG', name)}: DMIG {name}"
+            if d.matrix_form not in SUPPORTED_IFO:
+                raise ConversionError(
+                    f"{where} has matrix form IFO={d.matrix_form}; kryflex reads square (1) or symmetric (6) "
+                    "mass and stiffness matrices")
+            if d.tin not in REAL_TIN:
+                raise ConversionError(f"{where} has TIN={d.tin} (complex); mass and stiffness must be real "
+                                      "(TIN 1 or 2)")
+            gci = np.asarray(d.GCi, dtype=np.int64).reshape(-1, 2)
+            gcj = np.asarray(d.GCj, dtype=np.int64).reshape(-1, 2)
+            if gci.shape[0] == 0:
+                raise ConversionError(f"{where} has a header but no columns (file truncated?)")
+            values = np.asarray(d.Real, dtype=np.float64)
+            if not np.all(np.isfinite(values)):
+                raise ConversionError(f"{where} holds a non-finite value; fix the export")
+            raw[name] = (d, gci, gcj, values, where)
+        keys = np.unique(np.concatenate([np.concatenate([gci, gcj]) @ [8, 1] for _, gci, gcj, _, _ in raw.values()]))
+        dofs = [(int(k // 8), int(k % 8)) for k in keys]
+        self._check_points(dofs)
+        for name, (d, _, _, _, where) in raw.items():
+            ncol = int(d.ncols or 0)
+            if ncol > len(keys):
+                raise ConversionError(
+                    f"{where} declares NCOL={ncol} columns but only {len(keys)} dofs appear in the matrices: "
+                    "the file looks truncated")
+            present = np.unique(raw[name][2] @ [8, 1])
+            if 0 < present.size < ncol:
+                absent = [dofs[k] for k in np.flatnonzero(~np.isin(keys, present))]
+                shown = ", ".join(dof_label(x) for x in absent[:6]) + (", ..." if len(absent) > 6 else "")
+                warnings.warn(
+                    f"{where} has {present.size} columns but its header declares NCOL={ncol}; the dofs without a "
+                    f"column ({shown}) get zero columns in {name}, as Nastran leaves all-zero columns out (e.g. "
+                    "rotations without rotary inertia in a mass matrix); if they should not be zero, the file is "
+                    "truncated", ConversionWarning)
+        result = {}
+        for name, (d, gci, gcj, values, where) in raw.items():
+            rows = np.searchsorted(keys, gci @ [8, 1])
+            cols = np.searchsorted(keys, gcj @ [8, 1])
+            result[name] = _assemble(where, d.matrix_form, rows, cols, values, len(keys), dofs)
+        return result, dofs
+
+    def _check_points(self, dofs):
+        m = self.model
+        for gid, comp in dofs:
+            if comp == 0 and gid in m.nodes:
+                raise ConversionError(
+                    f"{' + '.join(self.paths)}: the matrices use point {gid} with component 0 (a scalar point), but "
+                    f"{self.where('GRID', gid)} defines GRID {gid}; grids have components 1..6")
+            if comp != 0 and gid in m.spoints:
+                raise ConversionError(
+                    f"{' + '.join(self.paths)}: the matrices use component {comp} of point {gid}, which "
+                    f"{self.where('SPOINT', gid)} declares a scalar point (SPOINT: component 0 or blank only)")
 
 
-def _keys(grid, comp):
-    return np.frombuffer(grid, dtype=np.int64) * 8 + np.frombuffer(comp, dtype=np.int64)
-
-
-def _assemble(path, raw, rows, cols, values, size, dof_list):
-    if raw.ifo == 6:  # one triangle stored: gather both triangles onto the upper one
+def _assemble(where, ifo, rows, cols, values, size, dofs):
+    """A CSR matrix from (row, column, value) triplets: one triangle (IFO 6) mirrored, duplicates checked."""
+    if ifo == 6:   # gather both triangles onto the upper one
         rows, cols = np.minimum(rows, cols), np.maximum(rows, cols)
     order = np.lexsort((rows, cols))
     rows, cols, values = rows[order], cols[order], values[order]
@@ -326,62 +367,136 @@ def _assemble(path, raw, rows, cols, values, size, dof_list):
         clash = same & (np.abs(values[1:] - values[:-1]) > DUPLICATE_TOLERANCE * scale)
         if clash.any():
             k = int(np.flatnonzero(clash)[0])
-            (gi, ci), (gj, cj) = dof_list[rows[k]], dof_list[cols[k]]
             raise ConversionError(
-                f"{path}: DMIG {raw.name} gives entry (row {gi}-{COMPONENT_NAMES[ci]}, column "
-                f"{gj}-{COMPONENT_NAMES[cj]}) twice{' (both triangles)' if raw.ifo == 6 else ''} with "
-                f"different values {values[k]:.10g} and {values[k + 1]:.10g}; give each entry once")
+                f"{where} gives entry (row {dof_label(dofs[rows[k]])}, column {dof_label(dofs[cols[k]])}) twice"
+                f"{' (both triangles)' if ifo == 6 else ''} with different values {values[k]:.10g} and "
+                f"{values[k + 1]:.10g}; give each entry once")
         keep = np.concatenate([[True], ~same])
         rows, cols, values = rows[keep], cols[keep], values[keep]
-    if raw.ifo == 6:
+    if ifo == 6:
         off = rows != cols
         rows, cols, values = (np.concatenate([rows, cols[off]]), np.concatenate([cols, rows[off]]),
                               np.concatenate([values, values[off]]))
     return sp.csr_matrix((values, (rows, cols)), shape=(size, size))
 
 
-def nodes_from_dofs(dof_list):
-    """[(grid, ndof)] in order, from a dof list made by read_dmig."""
-    nodes = []
-    for grid, comp in dof_list:
-        if nodes and nodes[-1][0] == grid:
-            nodes[-1][1] = comp
+def dof_label(dof):
+    gid, comp = dof
+    return f"{gid}-{COMPONENT_NAMES[comp]}"
+
+
+# ---------------------------------------------------------------- nodes and transforms
+
+def node_dofs(components):
+    """The nodes-file dofs field of a set of components: 6, 3, 'c<digits>' or 's' (component 0)."""
+    components = sorted(components)
+    if components == [0]:
+        return "s"
+    if components == [1, 2, 3, 4, 5, 6]:
+        return 6
+    if components == [1, 2, 3]:
+        return 3
+    return "c" + "".join(map(str, components))
+
+
+def group_dofs(dofs):
+    """[(id, [components])] in dof order."""
+    groups = []
+    for gid, comp in dofs:
+        if groups and groups[-1][0] == gid:
+            groups[-1][1].append(comp)
         else:
-            nodes.append([grid, comp])
-    return [(g, n) for g, n in nodes]
+            groups.append((gid, [comp]))
+    return groups
 
 
-# ---------------------------------------------------------------- coordinates
+def basic_transform(deck, groups, positions):
+    """T (sparse, n x n) with u_basic = T u_stored over the dofs, block by block; None when every CD is basic."""
+    rows, cols, vals = [], [], []
+    start, rotated = 0, False
+    for gid, comps in groups:
+        n = len(comps)
+        if comps == [0]:
+            rows.append(start), cols.append(start), vals.append(1.0)
+            start += 1
+            continue
+        R = deck.axes(gid, positions[gid])
+        rotated = rotated or not np.array_equal(R, np.eye(3))
+        for triple in (1, 4):
+            present = [c for c in comps if triple <= c < triple + 3]
+            if not present:
+                continue
+            inside = np.array([c - triple for c in present])
+            outside = np.array([k for k in range(3) if k not in inside], dtype=int)
+            if outside.size and np.abs(R[np.ix_(outside, inside)]).max() > AXIS_TOLERANCE:
+                node = deck.model.nodes[gid]
+                raise ConversionError(
+                    f"GRID {gid} ({deck.where('GRID', gid)}) has only components "
+                    f"{''.join(map(str, comps))} in the matrices, in its displacement system CD={node.cd}, whose "
+                    f"{'translation' if triple == 1 else 'rotation'} axes {''.join(str(c) for c in present)} do not "
+                    "map onto the same basic axes, so these rows cannot be turned into basic dofs without the "
+                    "absent components; re-export with all components of this grid (or CD=0)")
+            offset = start + comps.index(present[0])
+            block = R[np.ix_(inside, inside)]
+            for a in range(len(present)):
+                for b in range(len(present)):
+                    if block[a, b] != 0.0:
+                        rows.append(offset + a), cols.append(offset + b), vals.append(block[a, b])
+        start += n
+    if not rotated:
+        return None
+    return sp.csr_matrix((vals, (rows, cols)), shape=(start, start))
 
-def read_grids(path, ids=None):
-    """GRID coordinates of a bulk-data (or punch) file: {grid id: (x, y, z)} in the basic system.
 
-    With ids, only those grids are returned and checked. A grid with a local position system
-    (CP) or displacement system (CD) is an error: kryflex needs basic coordinates and dofs.
+def nastran_body(path, grid_files=(), stiffness_name="KAAX", mass_name="MAAX", mass_scale=None):
+    """Read a Nastran body: (M, K, nodes, notes) with M, K in basic dofs and nodes (id, x, y, z, dofs).
+
+    path: the file with the DMIG matrices; grid_files: more files with GRID/CORD/SPOINT/PARAM cards.
+    mass_scale: None (the DMIG mass as stored), a number, or 'wtmass' (the model's PARAM,WTMASS).
     """
-    _, _, records, grdset = scan_bulk(path, (), grids=True)
-    return grids_from_records(path, records, grdset, ids)
+    names = (stiffness_name.upper(), mass_name.upper())
+    if names[0] == names[1]:
+        raise ConversionError(f"stiffness and mass matrix names are both {names[0]}; they must differ")
+    deck = NastranDeck([path, *grid_files])
+    matrices, dofs = deck.matrices(names)
+    K, M = matrices[names[0]], matrices[names[1]]
+    groups = group_dofs(dofs)
+    grid_ids = [g for g, comps in groups if comps != [0]]
+    positions = deck.positions(grid_ids)
+    T = basic_transform(deck, groups, positions)
+    if T is not None:
+        K, M = (T @ K @ T.T).tocsr(), (T @ M @ T.T).tocsr()
+    wtmass = deck.wtmass()
+    if isinstance(mass_scale, str):
+        if mass_scale.lower() != "wtmass":
+            raise ConversionError(f"mass scale {mass_scale!r}: give a number or 'wtmass'")
+        mass_scale = wtmass
+    elif mass_scale is None and wtmass != 1.0:
+        warnings.warn(
+            f"PARAM,WTMASS={wtmass:g} in {deck.where('PARAM', 'WTMASS')}: the DMIG mass {names[1]} is used as "
+            "stored (a punched mass matrix already holds WTMASS; Nastran does not scale DMIG input by it); if "
+            f"{names[1]} is in weight units, convert with --mass-scale wtmass", ConversionWarning)
+    if mass_scale is not None:
+        mass_scale = float(mass_scale)
+        if not np.isfinite(mass_scale) or mass_scale <= 0:
+            raise ConversionError(f"mass scale {mass_scale!r} must be a positive number")
+        M = M * mass_scale
+    nodes = [(g, *(positions[g] if comps != [0] else (0.0, 0.0, 0.0)), node_dofs(comps)) for g, comps in groups]
+    notes = {"dofs": dofs, "wtmass": wtmass, "mass_scale": 1.0 if mass_scale is None else mass_scale,
+             "rotated": T is not None}
+    return M, K, nodes, notes
 
 
-def grids_from_records(path, records, grdset, ids=None):
-    default_cp = default_cd = ""
-    if grdset is not None:
-        default_cp, default_cd = grdset[0], grdset[1]
-    wanted = records.keys() if ids is None else [i for i in ids if i in records]
-    coords = {}
-    for gid in wanted:
-        cp_text, xyz, cd_text, line = records[gid]
-        where = f"{path}, line {line}: GRID {gid}"
-        cp = parse_int(cp_text or default_cp, f"{where} CP", default=0)
-        cd = parse_int(cd_text or default_cd, f"{where} CD", default=0)
-        if cp != 0:
-            raise ConversionError(
-                f"{where} is positioned in coordinate system CP={cp}; kryflex does not read CORD cards: "
-                "export the grids with basic coordinates (CP=0), e.g. from a run with the grids "
-                "listed in the basic system")
-        if cd != 0:
-            raise ConversionError(
-                f"{where} has displacement system CD={cd}, so its matrix rows are in that local system; "
-                "kryflex needs dofs in the basic system: set CD=0 for the exported grids and re-export")
-        coords[gid] = tuple(xyz)
-    return coords
+# ---------------------------------------------------------------- small entry points
+
+def read_dmig(path, names=("KAAX", "MAAX")):
+    """The DMIG matrices named in names as stored (in the grids' CD systems): {name: (CSR, dof list)}, the
+    dof list [(id, component)] shared by all (see the module notes)."""
+    matrices, dofs = NastranDeck([path]).matrices(names)
+    return {name: (A, dofs) for name, A in matrices.items()}
+
+
+def read_grids(paths, ids=None):
+    """Basic coordinates {grid id: (x, y, z)} of the GRIDs of one or more bulk-data files (or .f06 echoes)."""
+    deck = NastranDeck([paths] if isinstance(paths, (str, os.PathLike)) else list(paths))
+    return deck.positions(sorted(deck.model.nodes) if ids is None else list(ids))

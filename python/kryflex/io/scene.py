@@ -166,7 +166,14 @@ def _read_vector(where, key, name, base):
 def _as_petsc(where, A, comm):
     """A body matrix given in memory: a petsc4py Mat as is, a SciPy sparse or NumPy array distributed as AIJ."""
     if isinstance(A, PETSc.Mat):
-        return A
+        if A.getComm().getSize() == comm.getSize():
+            return A
+        if A.getComm().getSize() > 1:
+            _fail(where, "the petsc4py Mat lives on %d ranks but the scene on %d; create it on the scene's "
+                  "communicator, or give a SciPy/NumPy matrix" % (A.getComm().getSize(), comm.getSize()))
+        import scipy.sparse as sp
+        indptr, indices, data = A.getValuesCSR()      # a sequential Mat (the same on every rank): distributed below
+        A = sp.csr_matrix((data, indices, indptr), shape=A.getSize())
     try:
         import scipy.sparse as sp
         A = sp.csr_matrix(A, dtype=np.float64)
@@ -184,6 +191,107 @@ def _as_petsc(where, A, comm):
     M.setPreallocationCSR((local.indptr, local.indices, local.data))
     M.assemble()
     return M
+
+
+# ------------------------------------------------------------------ one resolver for every key that takes a file or data
+
+RESOLVED_KINDS = ("matrix", "vector", "dense", "nodes")
+
+
+def resolve(where, key, value, base, kind, comm=None):
+    """The value of a scene key that takes a file or, in a Python scene, the data itself: every such key is read
+    here, so each accepts the same things.
+
+    kind 'matrix': a sparse body matrix (mass, stiffness, damping): a Matrix Market / PETSc binary file, a petsc4py
+                   Mat, a SciPy sparse matrix or a NumPy array -> a petsc4py Mat on comm.
+         'vector': a load or reading vector over a body: a text or Matrix Market file, a 1-D NumPy array or list, an
+                   n x 1 SciPy matrix, a petsc4py Vec -> a 1-D float64 array (checked finite by the caller's rule).
+         'dense':  a small dense block (e.g. rigid-body modes, n x r): a text (one row per line), .npy or .mtx file,
+                   a 2-D array, a list of rows, a SciPy sparse matrix or a petsc4py Mat -> a 2-D float64 array.
+         'nodes':  a nodes file, an (n, 5) array or a list of (id, x, y, z, dofs) rows -> (ids, xyz, ndof).
+    Errors are SceneError naming '<where>: <key>', the value and the fix."""
+    if kind not in RESOLVED_KINDS:
+        raise ValueError("resolve: kind %r is not one of %s" % (kind, ", ".join(RESOLVED_KINDS)))
+    named = isinstance(value, (str, os.PathLike))
+    if kind == "nodes":
+        return _read_nodes(where, key, os.fspath(value), base) if named else schema.node_table(where, key, value)
+    if kind == "matrix":
+        if named:
+            path = _file(where, key, os.fspath(value), base, "matrix file")
+            try:
+                return _core.load_matrix(path, comm or PETSc.COMM_WORLD)
+            except _core.Error as e:
+                _fail("%s: %s" % (where, key), str(e))
+        return _as_petsc("%s: %s" % (where, key), value, comm or PETSc.COMM_WORLD)
+    if kind == "vector":
+        if named:
+            return _read_vector(where, key, os.fspath(value), base)
+        return _memory_array(where, key, value, 1)
+    if named:
+        return _read_dense(where, key, os.fspath(value), base)
+    return _memory_array(where, key, value, 2)
+
+
+def _memory_array(where, key, value, ndim):
+    """Data given in memory as a float64 array of ndim dimensions (a vector: any n, n x 1 or 1 x n shape)."""
+    w = "%s: %s" % (where, key)
+    what = "a vector (1-D array)" if ndim == 1 else "a 2-D array"
+    try:
+        if isinstance(value, PETSc.Vec):
+            scatter, full = PETSc.Scatter.toAll(value)
+            scatter.scatter(value, full, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+            data = full.getArray().copy()
+            scatter.destroy()
+            full.destroy()
+        elif isinstance(value, PETSc.Mat):
+            if value.getComm().getSize() > 1:
+                _fail(w, "a petsc4py Mat on %d ranks: give %s as a NumPy array (the same on every rank)"
+                      % (value.getComm().getSize(), what))
+            indptr, indices, vals = value.getValuesCSR()
+            import scipy.sparse as sp
+            data = sp.csr_matrix((vals, indices, indptr), shape=value.getSize()).toarray()
+        elif hasattr(value, "toarray"):
+            data = value.toarray()
+        else:
+            data = np.asarray(value, dtype=np.float64)
+        data = np.asarray(data, dtype=np.float64)
+    except SceneError:
+        raise
+    except (TypeError, ValueError) as e:
+        _fail(w, "%s is not numeric data (%s); give %s of numbers" % (type(value).__name__, e, what))
+    if ndim == 1 and data.ndim == 2 and 1 in data.shape:
+        data = data.ravel()
+    if data.ndim != ndim:
+        _fail(w, "the array has shape %s; give %s" % (data.shape, what))
+    if data.size == 0:
+        _fail(w, "the array is empty; give %s with one entry per dof" % what)
+    if not np.all(np.isfinite(data)):
+        _fail(w, "the array holds non-finite values (NaN or Inf); give finite numbers")
+    return data
+
+
+def _read_dense(where, key, name, base):
+    """A small dense matrix file: .npy, Matrix Market (.mtx), or text with one row per line."""
+    path = _file(where, key, name, base, "matrix file")
+    w = "%s: %s" % (where, key)
+    try:
+        if path.endswith(".npy"):
+            data = np.load(path, allow_pickle=False)
+        elif path.endswith(".mtx"):
+            import scipy.io
+            m = scipy.io.mmread(path)
+            data = m.toarray() if hasattr(m, "toarray") else m
+        else:
+            rows = [[float(x) for x in line.replace(",", " ").split()] for _, line in _text_lines(where, key, path, name)]
+            if len({len(r) for r in rows}) > 1:
+                _fail(w, "%s has rows of different lengths; give one row of the matrix per line" % name)
+            data = np.array(rows)
+    except SceneError:
+        raise
+    except Exception as e:  # noqa: BLE001 - any parse failure is a bad file
+        _fail(w, "cannot read %s as a matrix (%s); give .npy, .mtx or one row of numbers per line"
+              % (name, " ".join(str(e).split())[:120]))
+    return _memory_array(where, key, data, 2)
 
 
 class Scene:
@@ -208,7 +316,7 @@ class Scene:
                     mats[body["name"], key] = _file(where, "bodies.%s.%s" % (body["name"], key), body[key], base,
                                                     "matrix file")
         nodes = [body["nodes"] if not isinstance(body["nodes"], str) else
-                 _read_nodes(where, "bodies.%s.nodes" % body["name"], body["nodes"], base) for body in bodies]
+                 resolve(where, "bodies.%s.nodes" % body["name"], body["nodes"], base, "nodes") for body in bodies]
         schema.check_node_references(where, valid, nodes)
         dofs = [int(nd.sum()) for _, _, nd in nodes]
         vectors = {}
@@ -217,9 +325,10 @@ class Scene:
                 for i, t in enumerate(terms):
                     if "vector" in t:
                         tpath = "%s.%s[%d].vector" % (key, ioname, i)
-                        data = _read_vector(where, tpath, t["vector"], base)
+                        data = resolve(where, tpath, t["vector"], base, "vector")
+                        label = t["vector"] if isinstance(t["vector"], str) else "array"
                         vectors[key, ioname, i] = t["weight"] * schema.check_vector(
-                            where, "%s (%s)" % (tpath, t["vector"]), data, bodies[t["body"]]["name"], dofs[t["body"]])
+                            where, "%s (%s)" % (tpath, label), data, bodies[t["body"]]["name"], dofs[t["body"]])
 
         # the C scene
         self.cscene = _core.CScene(self.comm)
@@ -230,7 +339,7 @@ class Scene:
         self.interfaces = [[iname for iname, _ in body["interfaces"]] for body in bodies]
         for body, (ids, xyz, ndof) in zip(bodies, nodes):
             bw = "%s: bodies.%s" % (where, body["name"])
-            M, K = (self._matrix(bw + "." + key, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
+            M, K = (self._matrix(where, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
             try:
                 index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
                 for iname, nid in body["interfaces"]:
@@ -283,12 +392,10 @@ class Scene:
 
     def _matrix(self, where, body, key, path):
         """A body matrix: loaded from its (checked) file, or given in memory."""
+        A = resolve(where, "bodies.%s.%s" % (body["name"], key), body[key] if path is None else path, "", "matrix",
+                    self.comm)
         if path is None:
-            return _as_petsc(where, body[key], self.comm)
-        try:
-            A = _core.load_matrix(path, self.comm)
-        except _core.Error as e:
-            _fail(where, str(e))
+            return A
         if not PETSc.Options().getBool("kf_quiet", False):
             _core.progress("loaded %s of body '%s': %s (%d dofs)" % (key, body["name"], body[key], A.getSize()[0]),
                            self.comm)
@@ -309,9 +416,10 @@ class Scene:
 
 
 def scene_from_dict(spec, comm=None, base=None):
-    """A scene built in a script: the same keys as a scene file; body matrices may be petsc4py Mats, SciPy sparse
-    matrices or NumPy arrays, and nodes an array of rows (id, x, y, z, ndof). Relative file names are taken from
-    base (default: the working folder)."""
+    """A scene built in a script: the same keys as a scene file, and wherever a key takes a file, the data itself
+    (resolve()): body matrices as petsc4py Mats, SciPy sparse matrices or NumPy arrays, nodes as an (n, 5) array
+    or a list of (id, x, y, z, dofs) rows, input/output vectors as 1-D arrays or petsc4py Vecs. Relative file
+    names are taken from base (default: the working folder)."""
     return Scene(spec, os.path.join(base, "scene.yaml") if base else None, comm)
 
 

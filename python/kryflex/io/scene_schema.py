@@ -199,6 +199,17 @@ def file_name(where, path, value):
     return value
 
 
+def file_or_array(where, path, value, what):
+    """A key that takes a file or, in a Python scene, the data itself (io/scene.py resolve() reads either): a file
+    name is checked here, data (a NumPy / SciPy array, a petsc4py Vec or Mat, a list) when it is resolved."""
+    if isinstance(value, str):
+        return file_name(where, path, value)
+    if value is None or isinstance(value, (bool, dict, int, float)) or _is_number(value):
+        fail(where, path, "%s is neither a file name nor %s; give the file's path relative to the scene file, or "
+             "the data (a NumPy or SciPy array, a petsc4py object or a list)" % (short_repr(value), what))
+    return value
+
+
 def vector3(where, path, value, what):
     if isinstance(value, np.ndarray):
         value = value.tolist()
@@ -527,7 +538,7 @@ def _io(where, key, spec, bodies):
             if "vector" in t:
                 if "node" in t or "dof" in t:
                     fail(where, tpath, "both a vector and node/dof; give node and dof, or a vector file, not both")
-                term["vector"] = file_name(where, tpath + ".vector", t["vector"])
+                term["vector"] = file_or_array(where, tpath + ".vector", t["vector"], "a vector")
             else:
                 if "node" not in t or "dof" not in t:
                     fail(where, tpath, "node or dof is missing; give node and dof (%s), or a vector file"

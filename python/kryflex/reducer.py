@@ -102,7 +102,10 @@ class Reducer:
         r.set_multi_angles([scene.angles_rad(c) for c in multi] if multi else None)
         r.set_method(red["method"])
         r.set_band(*scene.band)
-        r.set_damping(scene.damping)
+        if getattr(scene, "damping_uniform", True):
+            r.set_damping(scene.damping)
+        else:
+            r.set_damping_model(scene.damping_model)
         r.set_accuracy(scene.accuracy)
         r.set_moments(red["moments"], int(red["output_blocks"]))
         r.set_search(bool(red["search"]), int(red["moments_max"]))

@@ -67,12 +67,12 @@ PetscErrorCode KFDampingDescribe_Private(const KFDamping *d, char buf[], size_t 
   size_t used;
 
   PetscFunctionBegin;
-  if (d->nbands == 1 && PetscIsInfReal(d->fmax_hz[0])) PetscCall(PetscSNPrintf(buf, len, "{\"modal\": %.17g", (double)d->zeta[0]));
+  if (d->nbands == 1 && d->fmax_hz[0] >= PETSC_INFINITY) PetscCall(PetscSNPrintf(buf, len, "{\"modal\": %.17g", (double)d->zeta[0]));
   else {
     PetscCall(PetscStrncpy(buf, "{\"modal\": [", len));
     for (PetscInt k = 0; k < d->nbands; k++) {
       PetscCall(PetscStrlen(buf, &used));
-      PetscCall(PetscSNPrintf(buf + used, len - used, "%s[%.17g, %.17g]", k ? ", " : "", PetscIsInfReal(d->fmax_hz[k]) ? 1e300 : (double)d->fmax_hz[k], (double)d->zeta[k]));
+      PetscCall(PetscSNPrintf(buf + used, len - used, "%s[%.17g, %.17g]", k ? ", " : "", d->fmax_hz[k] >= PETSC_INFINITY ? 1e300 : (double)d->fmax_hz[k], (double)d->zeta[k]));
     }
     PetscCall(PetscStrlcat(buf, "]", len));
   }

@@ -38,7 +38,7 @@ cdef int damping_from_dict(d, KFDamping *out) except -1:
 
 
 cdef object damping_to_dict(const KFDamping *d):
-    if d.nbands == 1 and np.isinf(d.fmax_hz[0]):
+    if d.nbands == 1 and d.fmax_hz[0] >= 1e300:   # infinity (PETSC_INFINITY in C)
         modal = float(d.zeta[0])
     else:
         modal = [[float(d.fmax_hz[k]), float(d.zeta[k])] for k in range(d.nbands)]

@@ -321,3 +321,34 @@ def test_two_ranks_agree_with_one(tmp_path):
     err = np.abs(T1 - T2).max() / np.abs(T1).max()
     print("2 ranks vs 1: %.2e" % err)
     assert err <= 1e-8
+
+
+@pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")
+def test_cli_reduce_damped_scene_file(tmp_path):
+    """The command on a scene file with damping files, a damping mapping and a velocity output: exit 0, the report
+    and summary.json say the damping, `kryflex info` prints it, and the written model's response meets the accuracy
+    against the dense reference."""
+    mats = damping_matrices()
+    damping = {"modal": [[2.0, 0.002], [100.0, 0.01]], "rayleigh": {"alpha": 0.01, "beta": 0.0}}
+    spec = galileo_spec(damping, quantities=["velocity"])
+    path = write_scene_files(str(tmp_path / "scene"), spec, mats)
+    info = subprocess.run([KRYFLEX, "info", path], env=ENV, capture_output=True, text=True, timeout=120)
+    assert info.returncode == 0, info.stderr
+    assert "damping: modal per band 0.2 % up to 2 Hz, 1 % up to 100 Hz; Rayleigh alpha 0.01" in info.stdout
+    assert "viscous damping matrices on stator, rotor" in info.stdout and "pointA_ry_velocity velocity" in info.stdout
+    out = tmp_path / "out"
+    p = subprocess.run([KRYFLEX, "reduce", path, "-o", str(out), "-quiet"], env=ENV, capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr[-3000:]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["damping_model"]["modal"] == [[2.0, 0.002], [100.0, 0.01]]
+    assert summary["damping_matrices"] == ["stator", "rotor"]
+    assert summary["output_quantities"] == ["displacement", "velocity"]
+    report = (out / "report.md").read_text()
+    assert "Damping, the same on the full and reduced models: modal per band" in report
+    model = kryflex.ReducedModel.load(str(out / "reduced.h5"))
+    f = np.geomspace(0.01, 10, 300)
+    for angles in ANGLES:
+        err = pair_hinf(dense_response([angles], f, damping, mats, ("displacement", "velocity")),
+                        model.at([angles]).frf(f))
+        assert err <= ACCURACY, (angles, err)

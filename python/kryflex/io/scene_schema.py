@@ -57,6 +57,7 @@ REDUCTION_DEFAULTS = {
     "body_tol": 1e-10,           # per-body rank deflation of the projected modes
     "reassembly_rtol": 1e-9,     # SVD rank tolerance of the reduced interface constraints
     "static_correction": True,   # eq. 15-17
+    "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
 }
@@ -626,6 +627,7 @@ def _reduction(where, given, revolute):
     red["eigen_cover"] = real(where, p + "eigen_cover", red["eigen_cover"], "[1, inf)",
                               "give a multiple >= 1 of the band's top frequency")
     red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
+    red["damped_moments"] = boolean(where, p + "damped_moments", red["damped_moments"])
     if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
         fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % short_repr(red["save_maps"]))
     red["save_maps"] = red["save_maps"] if red["save_maps"] == "auto" else bool(red["save_maps"])

@@ -346,7 +346,13 @@ def test_cli_reduce_damped_scene_file(tmp_path):
     assert summary["output_quantities"] == ["displacement", "velocity"]
     report = (out / "report.md").read_text()
     assert "Damping, the same on the full and reduced models: modal per band" in report
+    npz = tmp_path / "re.npz"
+    p = subprocess.run([KRYFLEX, "reassemble", str(out / "reduced.h5"), "--angle", "10", "-o", str(npz)], env=ENV,
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr[-2000:]
     model = kryflex.ReducedModel.load(str(out / "reduced.h5"))
+    with np.load(npz) as arrays:
+        assert np.array_equal(arrays["D_10"], model.at([10.0]).damping_matrix)
     f = np.geomspace(0.01, 10, 300)
     for angles in ANGLES:
         err = pair_hinf(dense_response([angles], f, damping, mats, ("displacement", "velocity")),

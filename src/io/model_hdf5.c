@@ -920,7 +920,20 @@ static PetscErrorCode ReadBodies(KFReader *r, hid_t f, KFReducedModel m)
       const char    *why[6]    = {"square", "the size of M", "the rows of M x the names in dataset 'inputs'", "the names in dataset 'outputs' x the rows of M", "6 per name in dataset 'interfaces' x the rows of M", "the rows of M x 6"};
       for (int k = 0; k < 6; k++) PetscCall(ReadMatrix(r, g, where, BodyArrays[k], rows[k], cols[k], why[k], PETSC_FALSE, arrays[k]));
       if (Exists(g, "map")) PetscCall(ReadMatrix(r, g, where, "map", R->full_dofs, v, "attribute 'full_dofs' x the rows of M", PETSC_FALSE, &R->map));
-      if (Exists(g, "C")) PetscCall(ReadMatrix(r, g, where, "C", v, v, "the size of M", PETSC_FALSE, &R->C));
+      if (Exists(g, "C")) {
+        PetscCall(ReadMatrix(r, g, where, "C", v, v, "the size of M", PETSC_FALSE, &R->C));
+        if (!r->st->code && R->C) { /* a viscous damping matrix is symmetric with a non-negative diagonal */
+          PetscReal top = 0, asym = 0, dmin = 0;
+          for (PetscInt i = 0; i < v; i++) {
+            dmin = PetscMin(dmin, R->C[i + i * v]);
+            for (PetscInt j = 0; j < v; j++) {
+              top  = PetscMax(top, PetscAbsReal(R->C[i + j * v]));
+              asym = PetscMax(asym, PetscAbsReal(R->C[i + j * v] - R->C[j + i * v]));
+            }
+          }
+          if (asym > 1e-8 * top || dmin < 0) PetscCall(Inconsistent(r, "%sdataset 'C' is not a damping matrix (asymmetry %g of its largest entry, smallest diagonal entry %g): write the model again with 'kryflex reduce'", where, (double)(top > 0 ? asym / top : asym), (double)dmin));
+        }
+      }
       if (!r->st->code && v > R->full_dofs) PetscCall(Inconsistent(r, "%shas %" PetscInt_FMT " reduced dofs (the rows of M) but attribute 'full_dofs' is %" PetscInt_FMT ": a reduced body is never larger than the full one", where, v, R->full_dofs));
       PetscCall(CheckNames(r, where, "interfaces", ni, R->iface_names));
       PetscCall(CheckBodyMatrices(r, where, R));

@@ -459,3 +459,23 @@ def test_frame_reference_with_modes_left_out(tmp_path):
     print("frame, %d of %d flexible modes to 2x band top: C reference vs dense direct %s"
           % (n, flex.sum(), ", ".join("%s %.2e" % kv for kv in errors.items())))
     assert max(errors.values()) <= 1e-4   # measured 1.9e-6
+
+
+def test_model_file_bad_damping(tmp_path):
+    """A model file whose C is not a damping matrix, or whose damping group is invalid: refused, naming it."""
+    model = kryflex.Reducer(kryflex.scene_from_dict(galileo_spec({"modal": 0.002}, damping_matrices())),
+                            quiet=True).reduce().model
+    path = str(tmp_path / "m.h5")
+    model.save(path)
+    for name, edit, needle in (
+            ("asym.h5", lambda h5: h5["bodies/rotor/C"].__setitem__((0, 1), 1e3), "dataset 'C' is not a damping matrix"),
+            ("alpha.h5", lambda h5: h5["damping"].attrs.__setitem__("rayleigh", np.array([-1.0, 0.0])),
+             "group 'damping' holds an invalid damping"),
+            ("quantity.h5", lambda h5: h5["damping"].attrs.__setitem__("output_quantities", np.array([7])),
+             "quantity 7")):
+        bad = str(tmp_path / name)
+        shutil.copyfile(path, bad)
+        with h5py.File(bad, "a") as h5:
+            edit(h5)
+        with pytest.raises(kryflex.ModelFileError, match=needle):
+            kryflex.ReducedModel.load(bad)

@@ -560,8 +560,8 @@ def _io(where, key, spec, bodies):
 
 def damping_spec(where, value):
     """The top-level damping: a number (the uniform modal ratio, as before) or a mapping {modal: zeta or
-    [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (uniform ratio or None, the mapping
-    normalized: absent parts zero)."""
+    [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (the uniform ratio for a number, None
+    for a mapping; the mapping normalized: absent parts zero)."""
     if not isinstance(value, dict):
         z = real(where, "damping", value, "(0, 1)", "give the modal damping ratio in (0, 1), e.g. 0.0025, or a mapping "
                  "{modal, rayleigh, structural}")
@@ -596,9 +596,7 @@ def damping_spec(where, value):
     if "structural" in value:
         out["structural"] = real(where, "damping.structural", value["structural"], "[0, 1)",
                                  "give the structural damping factor g in [0, 1) (stiffness K (1 + i g))")
-    uniform = out["modal"] if (not isinstance(out["modal"], list) and not value.get("rayleigh")
-                               and not out["structural"]) else None
-    return uniform, out
+    return None, out   # a mapping goes to the reducer whole (a zero modal ratio is allowed there)
 
 
 def _reduction(where, given, revolute):

@@ -139,6 +139,7 @@ def reduce_and_check(spec, damping_ref, matrices=None, quantities=("displacement
 CASES = {
     # name: (scene damping, dense reference's damping, body matrices)
     "matrix": ({"modal": 0.002}, {"modal": 0.002}, True),
+    "matrix_only": ({"modal": 0.0}, {"modal": 0.0}, True),     # the damping matrices alone
     "rayleigh": ({"modal": 0.0, "rayleigh": {"alpha": 0.02, "beta": 2e-5}},
                  {"rayleigh": {"alpha": 0.02, "beta": 2e-5}}, False),
     "structural": ({"structural": 0.01}, {"structural": 0.01}, False),

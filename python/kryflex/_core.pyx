@@ -9,7 +9,7 @@ Importing this module initializes PETSc and SLEPc (petsc4py's default, or kryfle
 
 import numpy as np
 cimport numpy as cnp
-from libc.string cimport memcpy
+from libc.string cimport memcpy, memset
 from cpython.mem cimport PyMem_Malloc, PyMem_Free
 from petsc4py.PETSc cimport Comm, Mat, Object, Vec, Viewer
 from slepc4py.SLEPc cimport BV
@@ -22,6 +22,7 @@ cnp.import_array()
 _runtime.init()   # a no-op after kryflex.init(argv); else keeps Python's signal handlers (see _runtime)
 
 include "_binding/common.pxi"
+include "_binding/damping.pxi"
 include "_binding/scene.pxi"
 include "_binding/system.pxi"
 include "_binding/dense.pxi"

@@ -225,3 +225,30 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerGetResult(KFReducer, PetscInt, const char*, PetscInt*, const PetscInt**, const PetscReal**)
     PetscErrorCode KFReducerGetNotes(KFReducer, PetscInt*, const char * const **)
     PetscErrorCode KFReducerGetReductionRule(KFReducer, const char**)
+
+cdef extern from "kryflex.h" nogil:
+    # ------------------------------------------------------------ damping and output quantities
+    enum: KF_MAX_DAMPING_BANDS
+    ctypedef struct KFDamping:
+        PetscInt nbands
+        PetscReal fmax_hz[16]
+        PetscReal zeta[16]
+        PetscReal alpha
+        PetscReal beta
+        PetscReal g
+    ctypedef enum KFQuantity:
+        KF_QUANTITY_DISPLACEMENT
+        KF_QUANTITY_VELOCITY
+        KF_QUANTITY_ACCELERATION
+    PetscErrorCode KFDampingSetUniform(KFDamping*, PetscReal)
+    PetscErrorCode KFSceneSetBodyDamping(KFScene, PetscInt, PetscMat)
+    PetscErrorCode KFSceneSetOutputQuantity(KFScene, PetscInt, KFQuantity)
+    PetscErrorCode KFSceneGetOutputQuantity(KFScene, PetscInt, KFQuantity*)
+    PetscErrorCode KFReducedModelSetDamping(KFReducedModel, const KFDamping*)
+    PetscErrorCode KFReducedModelGetDamping(KFReducedModel, KFDamping*)
+    PetscErrorCode KFReducedModelGetOutputQuantities(KFReducedModel, const PetscInt**)
+    PetscErrorCode KFReducedModelGetBodyDamping(KFReducedModel, PetscInt, const PetscReal**)
+    PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem, const PetscReal**, KFDamping*)
+    PetscErrorCode KFReducedSystemResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping*)
+    PetscErrorCode KFReducerGetDampingModel(KFReducer, KFDamping*)

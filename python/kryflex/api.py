@@ -28,7 +28,10 @@ class ReducedSystem:
     M, K (n x n), B = G (n x inputs), C = H (outputs x n); damping: the uniform modal damping ratio the reduction
     served; eigenvalues (ascending) and M-orthonormal modes of (K, M); rigid_modes: the rigid-body and mechanism
     modes from the bodies' rigid motions (n x r, or None when the model lacks them); frequencies_hz: the flexible
-    ones; constraint_rank, sigma_ratio: the reassembly's SVD of the interface constraints."""
+    ones; constraint_rank, sigma_ratio: the reassembly's SVD of the interface constraints.
+    damping_matrix: the viscous damping in reduced coordinates (n x n: the bodies' C_b projected and reassembled plus
+    Rayleigh alpha M + beta K), None when there is none; damping_model: {modal, rayleigh, structural} as the model
+    records it; output_quantities: per output displacement, velocity or acceleration."""
     angles_deg: tuple
     M: np.ndarray
     K: np.ndarray
@@ -42,24 +45,32 @@ class ReducedSystem:
     constraint_rank: int
     sigma_ratio: float
     handle: _core.CReducedSystem = dataclasses.field(repr=False)
+    damping_matrix: object = None
+    damping_model: dict = None
+    output_quantities: list = None
 
     @classmethod
-    def from_handle(cls, handle, angles_deg, damping):
+    def from_handle(cls, handle, angles_deg, damping, output_quantities=None):
         M, K, G, H = handle.matrices()
         lam, Phi, _, Phir = handle.modes()
         rank, ratio = handle.reassembly_info()
+        Cd, model = handle.damping()
         return cls(tuple(angles_deg), M, K, damping, G, H, handle.frequencies_hz(), Phi, lam, Phir, int(rank),
-                   float(ratio), handle)
+                   float(ratio), handle, Cd, model, output_quantities)
 
     @property
     def dofs(self):
         return self.M.shape[0]
 
     def frf(self, freqs_hz, damping=None):
-        """Frequency response (frequencies, outputs, inputs), complex, with uniform modal damping (default: the
-        model's), rigid-body and mechanism modes undamped."""
+        """Frequency response (frequencies, outputs, inputs), complex. damping None: the model's damping (modal,
+        Rayleigh, structural, the viscous matrix) and output quantities, as the reduction measured it; a number:
+        uniform modal damping of that ratio alone, displacement outputs. Rigid-body and mechanism modes get no modal
+        damping."""
         w = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
-        return self.handle.frf(self.damping if damping is None else float(damping), w)
+        if damping is None:
+            return self.handle.response(w)
+        return self.handle.frf(float(damping), w)
 
     def moments(self, k):
         """The low-frequency moments L^0 .. L^(k-1) on the flexible subspace: (k, outputs, inputs)."""
@@ -88,7 +99,7 @@ class ReducedModel(_core.CReducedModel):
             raise ValueError("the model has %d revolute joint(s) (%s): give %d angle(s), got %d"
                              % (len(self.revolute), ", ".join(self.revolute), len(self.revolute), angles.size))
         return ReducedSystem.from_handle(self.reassemble(np.radians(angles)), [float(a) for a in angles],
-                                         float(self.settings.get("damping", 0.0)))
+                                         float(self.settings.get("damping", 0.0)), self.output_quantities())
 
     # ------------------------------------------------------------------ what the model holds (copies, cached)
 
@@ -98,8 +109,10 @@ class ReducedModel(_core.CReducedModel):
 
     @property
     def bodies(self):
-        """Per body a dict of NumPy arrays: M, K (v x v), G (v x a), H (t x v), iface (6 n_if x v), rigid (v x 6)."""
-        return [{k: b[k] for k in ("M", "K", "G", "H", "iface", "rigid")} for b in self._bodies]
+        """Per body a dict of NumPy arrays: M, K (v x v), G (v x a), H (t x v), iface (6 n_if x v), rigid (v x 6), and
+        C (v x v reduced viscous damping) for a body that has one."""
+        return [{k: b[k] for k in ("M", "K", "G", "H", "iface", "rigid", "C") if b[k] is not None}
+                for b in self._bodies]
 
     @property
     def maps(self):

@@ -102,7 +102,10 @@ class Reducer:
         r.set_multi_angles([scene.angles_rad(c) for c in multi] if multi else None)
         r.set_method(red["method"])
         r.set_band(*scene.band)
-        r.set_damping(scene.damping)
+        if getattr(scene, "damping_uniform", True):
+            r.set_damping(scene.damping)
+        else:
+            r.set_damping_model(scene.damping_model)
         r.set_accuracy(scene.accuracy)
         r.set_moments(red["moments"], int(red["output_blocks"]))
         r.set_search(bool(red["search"]), int(red["moments_max"]))
@@ -115,6 +118,8 @@ class Reducer:
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]))
+        if red.get("damped_moments") and "krylov_damped" not in options:
+            options = dict(options, krylov_damped=True)   # the Krylov implementation's option (README "Damping")
         with quiet_progress(quiet), kf_options(options):
             r.set_from_options()
         self.handle = r

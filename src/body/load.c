@@ -628,6 +628,6 @@ PetscErrorCode KFMatCheckSymmetric(Mat A, const char what[], PetscReal rtol)
   PetscCall(MatAXPY(At, -1.0, A, DIFFERENT_NONZERO_PATTERN));
   PetscCall(MatNorm(At, NORM_FROBENIUS, &nD));
   PetscCall(MatDestroy(&At));
-  PetscCheck(nD <= rtol * nA, comm, PETSC_ERR_ARG_WRONG, "%s is not symmetric: ||A - A^T|| / ||A|| = %g (> %g); kryflex needs symmetric M and K: check the export (both triangles, or 'symmetric' storage)", what, (double)(nA > 0 ? nD / nA : nD), (double)rtol);
+  PetscCheck(nD <= rtol * nA, comm, PETSC_ERR_ARG_WRONG, "%s is not symmetric: ||A - A^T|| / ||A|| = %g (> %g); kryflex needs symmetric M, K and damping matrices: check the export (both triangles, or 'symmetric' storage)", what, (double)(nA > 0 ? nD / nA : nD), (double)rtol);
   PetscFunctionReturn(0);
 }

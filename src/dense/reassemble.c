@@ -127,6 +127,14 @@ static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bo
 
 PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
 {
+  PetscFunctionBegin;
+  PetscCall(KFReassembleDamped(nbodies, bodies, njoints, joints, angles, a, t, rtol, h, Mh, Kh, NULL, Gh, Hh, rank, sratio, nrigid, Phir));
+  PetscFunctionReturn(0);
+}
+
+/* KFReassemble, and with Ch the bodies' viscous damping N^T blkdiag(C_b) N (bodies without C_b add nothing) */
+PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
   PetscInt  *off, n = 0, m = 0, row = 0, irev = 0, nrev = 0, hh, vmax = 0;
   PetscReal *D, *N, *W;
 
@@ -187,6 +195,7 @@ PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], Pets
   PetscCall(PetscArrayzero(Kh, hh * hh));
   PetscCall(PetscArrayzero(Gh, hh * a));
   PetscCall(PetscArrayzero(Hh, t * hh));
+  if (Ch) PetscCall(PetscArrayzero(Ch, hh * hh));
   PetscCall(PetscMalloc1(vmax * hh, &W));
   for (PetscInt b = 0; b < nbodies; b++) {
     const KFReducedBody *B  = &bodies[b];
@@ -197,11 +206,16 @@ PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], Pets
     PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->M, v, Nb, n, 0.0, W, v));
     PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Mh, hh));
     PetscCall(KFDenseCongruenceExtended(v, hh, B->K, Nb, n, Kh));
+    if (Ch && B->C) {
+      PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->C, v, Nb, n, 0.0, W, v));
+      PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Ch, hh));
+    }
     PetscCall(KFDenseGemm_Private('T', 'N', hh, a, v, 1.0, Nb, n, B->G, v, 1.0, Gh, hh));
     PetscCall(KFDenseGemm_Private('N', 'N', t, hh, v, 1.0, B->H, t, Nb, n, 1.0, Hh, t));
   }
   PetscCall(KFDenseSymmetrize_Private(hh, Mh));
   PetscCall(KFDenseSymmetrize_Private(hh, Kh));
+  if (Ch) PetscCall(KFDenseSymmetrize_Private(hh, Ch));
   PetscCall(PetscFree(W));
   PetscCall(PetscFree(N));
   PetscCall(PetscFree(off));

@@ -213,6 +213,7 @@ typedef struct {
   PetscInt         ninterfaces;
   const PetscReal *iface;      /* (6 ninterfaces) x v */
   const PetscReal *rigid;      /* v x 6: the body's rigid-body motions, or NULL if unknown */
+  const PetscReal *C;          /* v x v viscous damping, or NULL: read by KFReassembleDamped only */
 } KFReducedBody;
 typedef struct {
   KFJointType type;
@@ -416,5 +417,71 @@ PETSC_EXTERN void           KFClearError(void);
 PETSC_EXTERN PetscErrorCode KFInterruptCatch(void);
 PETSC_EXTERN PetscErrorCode KFInterruptCheck(MPI_Comm);
 PETSC_EXTERN int            KFInterruptSignal(void);
+
+/* ---------------------------------------------------------------- damping and output quantities */
+
+/* The damping of a model beside the bodies' viscous matrices C_b (KFSceneSetBodyDamping), the same for the full-order
+   reference and the reduced model:
+   modal: ratio zeta[k] for the modes with frequency <= fmax_hz[k] (bands ascending; a mode takes the first band that
+     holds it, modes above the last band take its ratio), in the undamped modal coordinates of each model (the full
+     order's and the reduced one's); rigid-body and mechanism modes get none. Uniform: one band, fmax_hz = infinity.
+   Rayleigh: C += alpha M + beta K (exact under projection: Psi^T (alpha M + beta K) Psi = alpha M_r + beta K_r).
+   structural (hysteretic): K (1 + i g) on the flexible modes. */
+#define KF_MAX_DAMPING_BANDS 16
+typedef struct {
+  PetscInt  nbands;
+  PetscReal fmax_hz[KF_MAX_DAMPING_BANDS], zeta[KF_MAX_DAMPING_BANDS];
+  PetscReal alpha, beta, g;
+} KFDamping;
+/* uniform modal damping zeta, no Rayleigh, no structural damping */
+PETSC_EXTERN PetscErrorCode KFDampingSetUniform(KFDamping *, PetscReal zeta);
+/* collective checks with messages naming the key to fix: ratios in [0, 1), bands ascending, alpha, beta, g >= 0 */
+PETSC_EXTERN PetscErrorCode KFDampingCheck(MPI_Comm, const KFDamping *);
+/* the modal damping ratio of a mode of frequency f_hz */
+PETSC_EXTERN PetscReal      KFDampingModalRatio(const KFDamping *, PetscReal f_hz);
+/* one equivalent ratio over the band (for the frequency grid and the mode importance, which need one): the smallest
+   over the band's ends and the bands' edges of modal + Rayleigh (alpha / 2w + beta w / 2) + g / 2, floored at 1e-4 */
+PETSC_EXTERN PetscErrorCode KFDampingEffectiveRatio(const KFDamping *, const PetscReal band_hz[2], PetscReal *zeta);
+
+/* What an output reads: displacement x, velocity i w x or acceleration -w^2 x (frequency responses only; the moments
+   are those of the displacement map) */
+typedef enum {
+  KF_QUANTITY_DISPLACEMENT = 0,
+  KF_QUANTITY_VELOCITY     = 1,
+  KF_QUANTITY_ACCELERATION = 2
+} KFQuantity;
+PETSC_EXTERN const char *const KFQuantities[];
+/* a body's viscous damping matrix C_b (n_b x n_b, symmetric, same row layout as its M), referenced; NULL removes it */
+PETSC_EXTERN PetscErrorCode KFSceneSetBodyDamping(KFScene, PetscInt body, Mat C);
+PETSC_EXTERN PetscErrorCode KFSceneGetBodyDamping(KFScene, PetscInt body, Mat *C);
+PETSC_EXTERN PetscErrorCode KFSceneSetOutputQuantity(KFScene, PetscInt output, KFQuantity);
+PETSC_EXTERN PetscErrorCode KFSceneGetOutputQuantity(KFScene, PetscInt output, KFQuantity *);
+
+/* Damped frequency response in undamped modal coordinates (n modes, lambda ascending, HPhi t x n, PhiG n x a):
+   T(w) = diag((i w)^q_i) HPhi Z(w)^-1 PhiG, Z = diag(lambda_k (1 + i g) - w^2 + i w (2 zeta_k sqrt(lambda_k) + alpha +
+   beta lambda_k)) + i w Cm. Cm: the viscous damping in modal coordinates (n x n, Phi^T C Phi) or NULL; with Cm the
+   first ncoupled modes are solved together (one complex LU per frequency, ncoupled^3), the others keep Cm's diagonal.
+   Rigid modes (lambda <= rigid_tol max lambda) count as lambda = 0: no modal, stiffness or structural damping.
+   quantity: per output a KFQuantity, NULL for displacements. Tre, Tim: nw blocks of t x a. */
+PETSC_EXTERN PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[], PetscInt t, const PetscReal HPhi[], PetscInt a, const PetscReal PhiG[], const KFDamping *, const PetscReal Cm[], PetscInt ncoupled, const PetscInt quantity[], PetscReal rigid_tol, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+/* KFReassemble that also reassembles the bodies' viscous damping (KFReducedBody.C, NULL for none) into Ch (h x h,
+   sized n*n); Ch NULL: KFReassemble */
+PETSC_EXTERN PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
+/* the model's damping (what its frequency responses use) and its outputs' quantities (t values) */
+PETSC_EXTERN PetscErrorCode KFReducedModelSetDamping(KFReducedModel, const KFDamping *);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetDamping(KFReducedModel, KFDamping *);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetOutputQuantities(KFReducedModel, const PetscInt **quantity);
+/* body b's reduced viscous damping Psi_b^T C_b Psi_b (v x v), NULL when the body has none */
+PETSC_EXTERN PetscErrorCode KFReducedModelGetBodyDamping(KFReducedModel, PetscInt b, const PetscReal **C);
+/* the reduced system's viscous damping matrix (n x n: the bodies' C_b reassembled plus alpha M + beta K; NULL when
+   there is none) and the model's damping */
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem, const PetscReal **C, KFDamping *);
+/* the frequency response with the model's damping (KFReducedModelGetDamping, the viscous matrix) and output
+   quantities at nw frequencies w (rad/s): nw blocks of t x a. KFReducedSystemFRF is uniform modal damping only. */
+PETSC_EXTERN PetscErrorCode KFReducedSystemResponse(KFReducedSystem, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+/* the reducer's damping (KFReducerSetDamping sets a uniform modal ratio); options -kf_damping zeta,
+   -kf_damping_bands f1,z1,f2,z2,..., -kf_damping_rayleigh alpha,beta, -kf_damping_structural g */
+PETSC_EXTERN PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping *);
+PETSC_EXTERN PetscErrorCode KFReducerGetDampingModel(KFReducer, KFDamping *);
 
 #endif

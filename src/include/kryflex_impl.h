@@ -32,6 +32,7 @@ typedef struct {
   PetscInt     child_iface;  /* its interface eliminated by that joint */
   PetscInt     rstart, rend;
   PetscInt    *sysidx;     /* local dofs -> system dof, -1 where eliminated */
+  Mat          C;          /* viscous damping, referenced, or NULL (KFSceneSetBodyDamping) */
 } KFBodyData;
 
 typedef struct {
@@ -73,6 +74,7 @@ struct _n_KFScene {
   PetscInt    *order;      /* bodies, parents before children */
   PetscInt     nrevolute;
   PetscInt     nsys, nsys_local, sys_rstart;
+  PetscInt     nquantity, *out_quantity; /* per output a KFQuantity (KFSceneSetOutputQuantity); NULL: displacements */
 };
 
 struct _n_KFSystem {

@@ -10,6 +10,11 @@
                            checksum; optional map (full_dofs x v, gzip + fletcher32)
      /joints/<name>        attributes index, type ("revolute"/"fixed"), parent, child, parent_interface,
                            child_interface (indices), axis (3), orientation (3 x 3 R0), revolute_index (-1 if fixed)
+     /bodies/<name>/C      optional: the reduced viscous damping Psi^T C_b Psi (v x v)
+     /damping              optional group (files before it: uniform modal damping, the 'damping' setting; displacement
+                           outputs): attributes modal_bands (count), modal_fmax_hz, modal_zeta (count each, inf for
+                           the last band of a uniform ratio), rayleigh (alpha, beta), structural (g),
+                           output_quantities (per output 0 displacement, 1 velocity, 2 acceleration)
 
    Failures of the file (not of memory) are collected in a KFIOStatus with a PETSc error code and a message that
    names the file, the fault and the fix; every rank then raises the same error together. */
@@ -269,6 +274,7 @@ static PetscErrorCode KFReducedModelWriteFile_Private(KFReducedModel m, hid_t f,
       PetscCall(WriteStrings(w, g, "interfaces", ni, R->iface_names));
       for (int k = 0; k < 6; k++) PetscCall(WriteMatrix(w, g, BodyArrays[k], rows[k], cols[k], arrays[k], PETSC_FALSE, PETSC_FALSE));
       if (R->map) PetscCall(WriteMatrix(w, g, "map", R->full_dofs, v, R->map, PETSC_FALSE, PETSC_TRUE));
+      if (R->C) PetscCall(WriteMatrix(w, g, "C", v, v, R->C, PETSC_FALSE, PETSC_FALSE));
       if (g >= 0) H5Gclose(g);
     }
     if (bg >= 0) H5Gclose(bg);
@@ -298,6 +304,32 @@ static PetscErrorCode KFReducedModelWriteFile_Private(KFReducedModel m, hid_t f,
       if (g >= 0) H5Gclose(g);
     }
     if (jg >= 0) H5Gclose(jg);
+  }
+
+  if (!w->st->code) { /* the damping the model's frequency responses use, and what its outputs read */
+    const KFDamping *d  = &m->damping;
+    hid_t            dg = H5Gcreate2(f, "damping", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    long long       *q;
+
+    if (dg < 0) PetscCall(WriteFail(w, "group 'damping'"));
+    PetscCall(WriteIntAttr(w, dg, "modal_bands", d->nbands));
+    if (d->nbands) {
+      dims[0] = (hsize_t)d->nbands;
+      PetscCall(WriteNumberAttr(w, dg, "modal_fmax_hz", PETSC_TRUE, 1, dims, d->fmax_hz));
+      PetscCall(WriteNumberAttr(w, dg, "modal_zeta", PETSC_TRUE, 1, dims, d->zeta));
+    }
+    {
+      const double ab[2] = {(double)d->alpha, (double)d->beta}, g = (double)d->g;
+      dims[0]            = 2;
+      PetscCall(WriteNumberAttr(w, dg, "rayleigh", PETSC_TRUE, 1, dims, ab));
+      PetscCall(WriteNumberAttr(w, dg, "structural", PETSC_TRUE, 0, NULL, &g));
+    }
+    PetscCall(PetscMalloc1(m->noutputs, &q));
+    for (PetscInt i = 0; i < m->noutputs; i++) q[i] = (long long)m->quantity[i];
+    dims[0] = (hsize_t)m->noutputs;
+    PetscCall(WriteNumberAttr(w, dg, "output_quantities", PETSC_FALSE, 1, dims, q));
+    PetscCall(PetscFree(q));
+    if (dg >= 0) H5Gclose(dg);
   }
   PetscFunctionReturn(0);
 }
@@ -888,6 +920,20 @@ static PetscErrorCode ReadBodies(KFReader *r, hid_t f, KFReducedModel m)
       const char    *why[6]    = {"square", "the size of M", "the rows of M x the names in dataset 'inputs'", "the names in dataset 'outputs' x the rows of M", "6 per name in dataset 'interfaces' x the rows of M", "the rows of M x 6"};
       for (int k = 0; k < 6; k++) PetscCall(ReadMatrix(r, g, where, BodyArrays[k], rows[k], cols[k], why[k], PETSC_FALSE, arrays[k]));
       if (Exists(g, "map")) PetscCall(ReadMatrix(r, g, where, "map", R->full_dofs, v, "attribute 'full_dofs' x the rows of M", PETSC_FALSE, &R->map));
+      if (Exists(g, "C")) {
+        PetscCall(ReadMatrix(r, g, where, "C", v, v, "the size of M", PETSC_FALSE, &R->C));
+        if (!r->st->code && R->C) { /* a viscous damping matrix is symmetric with a non-negative diagonal */
+          PetscReal top = 0, asym = 0, dmin = 0;
+          for (PetscInt i = 0; i < v; i++) {
+            dmin = PetscMin(dmin, R->C[i + i * v]);
+            for (PetscInt j = 0; j < v; j++) {
+              top  = PetscMax(top, PetscAbsReal(R->C[i + j * v]));
+              asym = PetscMax(asym, PetscAbsReal(R->C[i + j * v] - R->C[j + i * v]));
+            }
+          }
+          if (asym > 1e-8 * top || dmin < 0) PetscCall(Inconsistent(r, "%sdataset 'C' is not a damping matrix (asymmetry %g of its largest entry, smallest diagonal entry %g): write the model again with 'kryflex reduce'", where, (double)(top > 0 ? asym / top : asym), (double)dmin));
+        }
+      }
       if (!r->st->code && v > R->full_dofs) PetscCall(Inconsistent(r, "%shas %" PetscInt_FMT " reduced dofs (the rows of M) but attribute 'full_dofs' is %" PetscInt_FMT ": a reduced body is never larger than the full one", where, v, R->full_dofs));
       PetscCall(CheckNames(r, where, "interfaces", ni, R->iface_names));
       PetscCall(CheckBodyMatrices(r, where, R));
@@ -1086,6 +1132,61 @@ static PetscErrorCode CheckTree(KFReader *r, KFReducedModel m)
   PetscFunctionReturn(0);
 }
 
+/* the damping group, or for files without it the uniform ratio of the 'damping' setting and displacement outputs */
+static PetscErrorCode ReadDamping(KFReader *r, hid_t f, KFReducedModel m)
+{
+  KFDamping *d = &m->damping;
+
+  PetscFunctionBegin;
+  if (r->st->code) PetscFunctionReturn(0);
+  PetscCall(PetscFree(m->quantity));
+  PetscCall(PetscCalloc1(PetscMax(m->noutputs, 1), &m->quantity));
+  if (!Exists(f, "damping")) {
+    for (PetscInt k = 0; k < m->nsettings; k++)
+      if (!strcmp(m->keys[k], "damping")) PetscCall(KFDampingSetUniform(d, (PetscReal)strtod(m->values[k], NULL))); /* checked by CheckSettings */
+    PetscFunctionReturn(0);
+  }
+  {
+    hid_t      dg = H5Gopen2(f, "damping", H5P_DEFAULT);
+    double     ab[2] = {0, 0}, g = 0;
+    long long  nb = 0, *q;
+    PetscBool  ok = PETSC_TRUE;
+
+    if (dg < 0) {
+      PetscCall(ReadFail(r, "group 'damping'"));
+      PetscFunctionReturn(0);
+    }
+    PetscCall(PetscMemzero(d, sizeof(*d)));
+    PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "modal_bands", PETSC_FALSE, 1, &nb));
+    if (!r->st->code && (nb < 0 || nb > KF_MAX_DAMPING_BANDS)) PetscCall(Inconsistent(r, "group 'damping': attribute 'modal_bands' is %lld, not 0 to %d", nb, KF_MAX_DAMPING_BANDS));
+    if (!r->st->code && nb > 0) {
+      d->nbands = (PetscInt)nb;
+      PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "modal_fmax_hz", PETSC_TRUE, nb, d->fmax_hz));
+      PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "modal_zeta", PETSC_TRUE, nb, d->zeta));
+    }
+    PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "rayleigh", PETSC_TRUE, 2, ab));
+    PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "structural", PETSC_TRUE, 1, &g));
+    d->alpha = ab[0];
+    d->beta  = ab[1];
+    d->g     = g;
+    for (PetscInt k = 0; k < d->nbands; k++) ok = (PetscBool)(ok && d->zeta[k] >= 0 && d->zeta[k] < 1 && d->fmax_hz[k] > 0 && (!k || d->fmax_hz[k] > d->fmax_hz[k - 1]));
+    ok = (PetscBool)(ok && d->alpha >= 0 && d->beta >= 0 && d->g >= 0 && d->g < 1);
+    if (!r->st->code && !ok) PetscCall(Inconsistent(r, "group 'damping' holds an invalid damping (ratios in [0, 1) over ascending bands, alpha, beta >= 0, 0 <= g < 1)"));
+    PetscCall(PetscMalloc1(PetscMax(m->noutputs, 1), &q));
+    PetscCall(ReadNumberAttr(r, dg, "group 'damping' ", "output_quantities", PETSC_FALSE, m->noutputs, q));
+    for (PetscInt i = 0; i < m->noutputs && !r->st->code; i++) {
+      if (q[i] < 0 || q[i] > 2) {
+        PetscCall(Inconsistent(r, "group 'damping': output %" PetscInt_FMT " has quantity %lld, not 0 (displacement), 1 (velocity) or 2 (acceleration)", i, q[i]));
+        break;
+      }
+      m->quantity[i] = (PetscInt)q[i];
+    }
+    PetscCall(PetscFree(q));
+    H5Gclose(dg);
+  }
+  PetscFunctionReturn(0);
+}
+
 /* one rank's reading of the whole file into m (created empty); file faults go to st */
 static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedModel m, KFIOStatus *st)
 {
@@ -1139,6 +1240,7 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   PetscCall(ReadSettings(&r, f, m));
   PetscCall(CheckSettings(&r, m));
   PetscCall(ReadBodies(&r, f, m));
+  PetscCall(ReadDamping(&r, f, m));
   PetscCall(ReadJoints(&r, f, m));
   PetscCall(CheckTree(&r, m));
   n = Exists(f, "reduction_angles") ? DatasetRows(f, "reduction_angles") : 0;

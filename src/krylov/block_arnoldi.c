@@ -1,4 +1,4 @@
-#include <kryflex_impl.h>
+#include <kryflex/krylovimpl.h>
 
 /* Copies the active columns [l, k) of a BV into a new dense Mat. */
 static PetscErrorCode KFBVColumnsToMat(BV V, PetscInt l, PetscInt k, Mat *X)
@@ -129,6 +129,15 @@ PetscErrorCode KFKrylovBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, P
    whose block deflates away is exhausted (its Krylov space is spanned); its later blocks add nothing. */
 PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, BV *Vout, KFKrylovInfo *info)
 {
+  PetscFunctionBegin;
+  PetscCall(KFKrylovBasisDamped_Private(solver, nin, nout, tol, NULL, Vout, info));
+  PetscFunctionReturn(0);
+}
+
+/* the same with the input chain of the damped second-order system (src/krylov/damped.c) when damp is not NULL */
+PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *damp, BV *Vout, KFKrylovInfo *info)
+{
+  KFDampedChain dch;
   KFSystem sys = solver->sys;
   KFScene  s   = sys->scene;
   PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min = 50000;
@@ -157,6 +166,7 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
     PetscCall(BVDuplicateResize(V, PetscMax(c ? t * nout : a * nin, 1), &chain[c]));
     PetscCall(BVSetActiveColumns(chain[c], 0, 0));
   }
+  if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
     int      source = (blk % 2 == 1 && made[1] < want[1]) || made[0] >= want[0] ? 1 : 0;
@@ -164,7 +174,18 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
     PetscInt k0 = k, p;
 
     made[source]++;
-    if (!done[source]) {
+    if (!done[source] && damp && !source) { /* the damped input chain: its blocks' u halves join the basis */
+      Mat      U;
+      PetscInt k0d = k;
+
+      PetscCall(KFDampedChainNext_Private(solver, &dch, sys->G, tol, &U));
+      if (U) {
+        PetscCall(KFBVAppendDeflated(sys, V, U, tol, &k, &ndefl));
+        PetscCall(MatDestroy(&U));
+      } else done[0] = PETSC_TRUE;
+      if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov damped input block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", made[0], want[0], k - k0d, k));
+      PetscCall(KFInterruptCheck(s->comm));
+    } else if (!done[source]) {
       if (!Prev[source]) PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
       else {
         PetscCall(MatMatMult(sys->Ms, Prev[source], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &B));
@@ -205,6 +226,7 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
   PetscCall(MatDestroy(&Prev[1]));
   PetscCall(BVDestroy(&chain[0]));
   PetscCall(BVDestroy(&chain[1]));
+  if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality));
   PetscCall(BVSetActiveColumns(V, 0, k));

@@ -20,6 +20,9 @@ PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm comm, PetscInt nb, Pet
   PetscCall(PetscCalloc2(nj, &m->joint_names, nj, &m->joints));
   PetscCall(PetscCalloc1(a, &m->input_names));
   PetscCall(PetscCalloc1(t, &m->output_names));
+  /* the reducer's default until it records its own (KFReducedModelSetDamping); displacement outputs */
+  PetscCall(KFDampingSetUniform(&m->damping, 0.0025));
+  PetscCall(PetscCalloc1(PetscMax(t, 1), &m->quantity));
   *model = m;
   PetscFunctionReturn(0);
 }
@@ -79,6 +82,16 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
     PetscCall(CopyArray(t * v, H, &R->H));
     PetscCall(CopyArray(6 * ni * v, iface, &R->iface));
     PetscCall(CopyArray(6 * v, rigid, &R->rigid));
+    if (B->C) { /* the reduced viscous damping Psi^T C_b Psi, as M and K (eq. 18-19) */
+      Mat Psi, CQ;
+      PetscCall(KFBodyBasisGetMap(bb, b, &Psi));
+      PetscCall(MatMatMult(B->C, Psi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &CQ));
+      PetscCall(PetscMalloc1(PetscMax(v * v, 1), &R->C));
+      PetscCall(KFMatTransposeMatMultGather(Psi, CQ, R->C));
+      PetscCall(MatDestroy(&CQ));
+      for (PetscInt i = 0; i < v; i++)
+        for (PetscInt j = 0; j < i; j++) R->C[i + j * v] = R->C[j + i * v] = 0.5 * (R->C[i + j * v] + R->C[j + i * v]);
+    }
     if (keep_maps) {
       Mat      Psi;
       PetscInt rows, cols;
@@ -97,6 +110,7 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
   }
   for (PetscInt i = 0; i < a; i++) PetscCall(PetscStrncpy(m->input_names[i], s->input_names[i], KF_MAX_NAME));
   for (PetscInt i = 0; i < t; i++) PetscCall(PetscStrncpy(m->output_names[i], s->output_names[i], KF_MAX_NAME));
+  for (PetscInt i = 0; i < t; i++) m->quantity[i] = i < s->nquantity ? s->out_quantity[i] : KF_QUANTITY_DISPLACEMENT;
   m->nangles = nangles;
   PetscCall(CopyArray(nangles * s->nrevolute, angles, &m->angles));
   *model = m;
@@ -124,12 +138,14 @@ PetscErrorCode KFReducedModelDestroy(KFReducedModel *model)
     PetscCall(PetscFree(R->iface));
     PetscCall(PetscFree(R->rigid));
     PetscCall(PetscFree(R->map));
+    PetscCall(PetscFree(R->C));
   }
   PetscCall(PetscFree(m->bodies));
   PetscCall(PetscFree2(m->joint_names, m->joints));
   PetscCall(PetscFree(m->input_names));
   PetscCall(PetscFree(m->output_names));
   PetscCall(PetscFree(m->angles));
+  PetscCall(PetscFree(m->quantity));
   for (PetscInt k = 0; k < m->nsettings; k++) {
     PetscCall(PetscFree(m->keys[k]));
     PetscCall(PetscFree(m->values[k]));
@@ -191,6 +207,7 @@ PetscErrorCode KFReducedModelGetBody(KFReducedModel m, PetscInt b, const char **
     body->ninterfaces = R->ninterfaces;
     body->iface       = R->iface;
     body->rigid       = R->rigid;
+    body->C           = R->C;
   }
   if (map) *map = R->map;
   PetscFunctionReturn(0);

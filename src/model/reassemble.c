@@ -33,6 +33,7 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   KFReducedBody  *bodies;
   PetscInt        n = 0, h, nrigid, a = m->ninputs, t = m->noutputs;
   PetscReal       rtol;
+  PetscBool       viscous = PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
@@ -44,6 +45,7 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   for (PetscInt b = 0; b < m->nb; b++) {
     PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
     n += bodies[b].v;
+    if (bodies[b].C) viscous = PETSC_TRUE;
   }
   PetscCall(PetscNew(&y));
   y->a               = a;
@@ -51,7 +53,15 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   y->nrigid_expected = 6 + m->nrevolute;
   PetscCall(PetscMalloc4(n * n, &y->M, n * n, &y->K, n * a, &y->G, t * n, &y->H));
   PetscCall(PetscMalloc1(n * n, &y->Phir));
-  PetscCall(KFReassemble(m->nb, bodies, m->nj, m->joints, angles, a, t, rtol, &h, y->M, y->K, y->G, y->H, &y->rank, &y->sratio, &nrigid, y->Phir));
+  y->damping = m->damping;
+  PetscCall(PetscMalloc1(PetscMax(t, 1), &y->quantity));
+  PetscCall(PetscArraycpy(y->quantity, m->quantity, t));
+  if (viscous || m->damping.alpha > 0 || m->damping.beta > 0) PetscCall(PetscMalloc1(n * n, &y->C));
+  PetscCall(KFReassembleDamped(m->nb, bodies, m->nj, m->joints, angles, a, t, rtol, &h, y->M, y->K, viscous ? y->C : NULL, y->G, y->H, &y->rank, &y->sratio, &nrigid, y->Phir));
+  if (y->C) { /* Rayleigh: alpha M + beta K, exact under projection */
+    if (!viscous) PetscCall(PetscArrayzero(y->C, h * h));
+    for (PetscInt e = 0; e < h * h; e++) y->C[e] += m->damping.alpha * y->M[e] + m->damping.beta * y->K[e];
+  }
   PetscCall(PetscFree(bodies));
   y->n = h;
   PetscCheck(h > 0, comm, PETSC_ERR_ARG_WRONG, "the joints' interface ties leave no free coordinate in the reduced model: reduce again with a larger body basis");

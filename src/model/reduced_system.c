@@ -2,6 +2,8 @@
 #include <kryflex/modelimpl.h>
 #include "../dense/dense_impl.h"
 
+static PetscErrorCode KFReducedSystemModalIO(KFReducedSystem);
+
 PetscErrorCode KFReducedSystemDestroy(KFReducedSystem *system)
 {
   KFReducedSystem y = *system;
@@ -13,6 +15,9 @@ PetscErrorCode KFReducedSystemDestroy(KFReducedSystem *system)
   PetscCall(PetscFree2(y->lambda, y->Phi));
   PetscCall(PetscFree(y->freq));
   PetscCall(PetscFree2(y->HPhi, y->PhiG));
+  PetscCall(PetscFree(y->quantity));
+  PetscCall(PetscFree(y->C));
+  PetscCall(PetscFree(y->Cm));
   PetscCall(PetscFree(y));
   *system = NULL;
   PetscFunctionReturn(0);
@@ -91,13 +96,59 @@ PetscErrorCode KFReducedSystemFRF(KFReducedSystem y, PetscReal zeta, PetscInt nw
 
   PetscFunctionBegin;
   PetscValidPointer(y, 1);
+  PetscCall(KFReducedSystemModalIO(y));
+  PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
+  PetscCall(KFModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, zeta, rtol, nw, w, Tre, Tim));
+  PetscFunctionReturn(0);
+}
+
+/* H Phi and Phi^T G, made once */
+static PetscErrorCode KFReducedSystemModalIO(KFReducedSystem y)
+{
+  PetscFunctionBegin;
   if (!y->HPhi) {
     PetscCall(PetscMalloc2(y->t * y->n, &y->HPhi, y->n * y->a, &y->PhiG));
     PetscCall(KFDenseGemm_Private('N', 'N', y->t, y->n, y->n, 1.0, y->H, y->t, y->Phi, y->n, 0.0, y->HPhi, y->t));
     PetscCall(KFDenseGemm_Private('T', 'N', y->n, y->a, y->n, 1.0, y->Phi, y->n, y->G, y->n, 0.0, y->PhiG, y->n));
   }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem y, const PetscReal **C, KFDamping *d)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  if (C) *C = y->C;
+  if (d) *d = y->damping;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedSystemResponse - the frequency response with the model's damping: modal ratios on the reduced model's own
+  modes, Rayleigh and the reassembled viscous matrix through Phi^T C Phi (all modes coupled: the reduced model is
+  small), structural damping, and the outputs' quantities (KFDampedModalFRF).
+*/
+PetscErrorCode KFReducedSystemResponse(KFReducedSystem y, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  PetscReal rtol;
+  KFDamping d;
+
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  PetscCall(KFReducedSystemModalIO(y));
+  d = y->damping;
+  if (y->C && !y->Cm) {
+    PetscReal *W;
+    PetscCall(PetscMalloc1(y->n * y->n, &y->Cm));
+    PetscCall(PetscMalloc1(y->n * y->n, &W));
+    PetscCall(KFDenseGemm_Private('N', 'N', y->n, y->n, y->n, 1.0, y->C, y->n, y->Phi, y->n, 0.0, W, y->n));
+    PetscCall(KFDenseGemm_Private('T', 'N', y->n, y->n, y->n, 1.0, y->Phi, y->n, W, y->n, 0.0, y->Cm, y->n));
+    PetscCall(PetscFree(W));
+  }
+  /* Rayleigh is inside C (y->C = C_bodies + alpha M + beta K): not twice */
+  if (y->C) d.alpha = d.beta = 0;
   PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
-  PetscCall(KFModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, zeta, rtol, nw, w, Tre, Tim));
+  PetscCall(KFDampedModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, &d, y->Cm, y->n, y->quantity, rtol, nw, w, Tre, Tim));
   PetscFunctionReturn(0);
 }
 

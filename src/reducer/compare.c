@@ -8,12 +8,15 @@
 
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
-  PetscInt   nrev, nsys, a, t, nflex, nev, nconv;
+  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
-  PetscBool  dense;
+  PetscBool  dense, viscous = PETSC_FALSE;
+  Mat        modes = NULL;
 
   PetscFunctionBegin;
-  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, &nsys, &a, &t));
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
+  for (PetscInt b = 0; b < nb; b++)
+    if (r->scene->bodies[b].C) viscous = PETSC_TRUE;
   nflex = nsys - 6 - nrev;
   PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, 6 + nrev);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
@@ -21,7 +24,11 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
-    PetscCall(KFSystemEigen(sys, nev, &nconv, w2, HPhi, PhiG));
+    /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
+    if (viscous) {
+      PetscCall(MatDestroy(&modes));
+      PetscCall(KFSystemEigenModes(sys, nev, &nconv, w2, &modes));
+    } else PetscCall(KFSystemEigen(sys, nev, &nconv, w2, HPhi, PhiG));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
@@ -30,11 +37,53 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   ref->complete = (PetscBool)(nconv == nflex);
   PetscCall(PetscMalloc3(PetscMax(nconv, 1), &ref->w2, PetscMax(t * nconv, 1), &ref->HPhi, PetscMax(nconv * a, 1), &ref->PhiG));
   PetscCall(PetscArraycpy(ref->w2, w2, nconv));
-  PetscCall(PetscArraycpy(ref->HPhi, HPhi, t * nconv));
-  for (PetscInt j = 0; j < a; j++) /* PhiG comes with leading dimension nev */
-    for (PetscInt i = 0; i < nconv; i++) ref->PhiG[i + j * nconv] = PhiG[i + j * nev];
-  PetscCall(PetscFree3(w2, HPhi, PhiG));
   PetscCall(KFSystemRigidIO(sys, &ref->r, NULL, NULL));
+  if (viscous) {
+    /* X = [Phi_r, modes]: H X, X^T G and X^T C X, with C = sum_b P_b^T C_b P_b never assembled */
+    Mat        X, Phir, Ms, Ks, G, Ht;
+    PetscInt   m = ref->r + nconv, nloc, lda, ldx, ldr;
+    PetscReal *XtH, *XtG;
+    PetscBool  has;
+    PetscScalar       *x;
+    const PetscScalar *p, *q;
+
+    PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, &Ht));
+    PetscCall(KFSystemGetRigidModes(sys, &Phir, NULL));
+    PetscCall(MatGetLocalSize(Ms, &nloc, NULL));
+    PetscCall(KFDenseCreate(PetscObjectComm((PetscObject)r), nloc, nsys, m, &X));
+    PetscCall(MatDenseGetArrayWrite(X, &x));
+    PetscCall(MatDenseGetLDA(X, &ldx));
+    PetscCall(MatDenseGetArrayRead(Phir, &p));
+    PetscCall(MatDenseGetLDA(Phir, &ldr));
+    PetscCall(MatDenseGetArrayRead(modes, &q));
+    PetscCall(MatDenseGetLDA(modes, &lda));
+    for (PetscInt c = 0; c < m; c++)
+      for (PetscInt i = 0; i < nloc; i++) x[i + c * ldx] = c < ref->r ? p[i + c * ldr] : q[i + (c - ref->r) * lda];
+    PetscCall(MatDenseRestoreArrayRead(modes, &q));
+    PetscCall(MatDenseRestoreArrayRead(Phir, &p));
+    PetscCall(MatDenseRestoreArrayWrite(X, &x));
+    PetscCall(PetscMalloc2(m * t, &XtH, m * a, &XtG));
+    PetscCall(PetscMalloc1(m * m, &ref->Cm));
+    PetscCall(KFMatTransposeMatMultGather(X, Ht, XtH));
+    PetscCall(KFMatTransposeMatMultGather(X, G, XtG));
+    for (PetscInt k = 0; k < nconv; k++) {
+      for (PetscInt i = 0; i < t; i++) ref->HPhi[i + k * t] = XtH[ref->r + k + i * m];
+      for (PetscInt j = 0; j < a; j++) ref->PhiG[k + j * nconv] = XtG[ref->r + k + j * m];
+    }
+    PetscCall(KFSystemProjectDamping_Private(sys, X, &has, ref->Cm));
+    /* the modes to cover x the band's top are solved together; the higher ones keep their own damping only */
+    ref->nc = ref->r;
+    for (PetscInt k = 0; k < nconv; k++)
+      if (PetscSqrtReal(w2[k]) / (2 * PETSC_PI) <= fmax) ref->nc = ref->r + k + 1;
+    PetscCall(PetscFree2(XtH, XtG));
+    PetscCall(MatDestroy(&X));
+    PetscCall(MatDestroy(&modes));
+  } else {
+    PetscCall(PetscArraycpy(ref->HPhi, HPhi, t * nconv));
+    for (PetscInt j = 0; j < a; j++) /* PhiG comes with leading dimension nev */
+      for (PetscInt i = 0; i < nconv; i++) ref->PhiG[i + j * nconv] = PhiG[i + j * nev];
+  }
+  PetscCall(PetscFree3(w2, HPhi, PhiG));
   PetscCall(PetscMalloc2(PetscMax(t * ref->r, 1), &ref->HPr, PetscMax(ref->r * a, 1), &ref->PrG));
   PetscCall(KFSystemRigidIO(sys, &ref->r, ref->HPr, ref->PrG));
   PetscFunctionReturn(0);
@@ -46,6 +95,7 @@ PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *ref)
   if (!ref->w2) PetscFunctionReturn(0);
   PetscCall(PetscFree3(ref->w2, ref->HPhi, ref->PhiG));
   PetscCall(PetscFree2(ref->HPr, ref->PrG));
+  PetscCall(PetscFree(ref->Cm));
   PetscCall(PetscMemzero(ref, sizeof(*ref)));
   PetscFunctionReturn(0);
 }

@@ -15,7 +15,7 @@
    very soft ones (1/omega_i^4 in R^1), so: none when every mode was computed, and R^1 dropped when it is not the
    small correction it must be (||R^1|| w_max^2 > ||R^0|| / 4). L: nmom blocks of t x a (nmom 1: the static residual
    alone). Tre, Tim: nw blocks of t x a. */
-PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], const KFDamping *d, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
 {
   const PetscInt n = ref->r + ref->n;
   PetscReal     *lam, *HPhi, *PhiG, *resid;
@@ -29,7 +29,7 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
     for (PetscInt k = 0; k < ref->r; k++) PhiG[k + j * n] = ref->PrG[k + j * ref->r];
     for (PetscInt k = 0; k < ref->n; k++) PhiG[ref->r + k + j * n] = ref->PhiG[k + j * ref->n];
   }
-  PetscCall(KFModalFRF(n, lam, t, HPhi, a, PhiG, zeta, 1e-300, nw, w, Tre, Tim));
+  PetscCall(KFDampedModalFRF(n, lam, t, HPhi, a, PhiG, d, ref->Cm, ref->nc, quantity, 1e-300, nw, w, Tre, Tim));
   for (PetscInt j = 0; j < a; j++)
     for (PetscInt i = 0; i < t; i++) {
       PetscReal s0 = L[i + j * t], s1 = nmom > 1 ? L[t * a + i + j * t] : 0;
@@ -56,8 +56,24 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
       if (!keep1) resid[t * a + e] = 0;
     }
   }
+  /* the residual is quasi-static: structural damping divides it by 1 + i g; then the output's quantity */
   for (PetscInt f = 0; f < nw; f++)
-    for (PetscInt e = 0; e < t * a; e++) Tre[f * t * a + e] += resid[e] + w[f] * w[f] * resid[t * a + e];
+    for (PetscInt j = 0; j < a; j++)
+      for (PetscInt i = 0; i < t; i++) {
+        const PetscInt  e  = i + j * t;
+        const PetscReal rr = resid[e] + w[f] * w[f] * resid[t * a + e], g = d->g;
+        PetscReal       xr = rr / (1 + g * g), xi = -rr * g / (1 + g * g), yr = xr, yi = xi;
+
+        if (quantity && quantity[i] == KF_QUANTITY_VELOCITY) {
+          yr = -w[f] * xi;
+          yi = w[f] * xr;
+        } else if (quantity && quantity[i] == KF_QUANTITY_ACCELERATION) {
+          yr = -w[f] * w[f] * xr;
+          yi = -w[f] * w[f] * xi;
+        }
+        Tre[f * t * a + e] += yr;
+        Tim[f * t * a + e] += yi;
+      }
   PetscCall(PetscFree4(lam, HPhi, PhiG, resid));
   PetscFunctionReturn(0);
 }
@@ -69,8 +85,8 @@ static PetscErrorCode KFEvalPointResponse(KFReducer r, KFEvalPoint *p, PetscInt 
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
-  if (p->rich) PetscCall(KFReducedSystemFRF(p->rich, r->zeta, nw, w, re, im));
-  else PetscCall(KFFullFRF_Private(&p->ref, t, a, p->nmom, p->L0, r->zeta, nw, w, re, im));
+  if (p->rich) PetscCall(KFReducedSystemResponse(p->rich, nw, w, re, im));
+  else PetscCall(KFFullFRF_Private(&p->ref, t, a, p->nmom, p->L0, &r->damping, r->scene->nquantity == t ? r->scene->out_quantity : NULL, nw, w, re, im));
   PetscFunctionReturn(0);
 }
 
@@ -125,7 +141,7 @@ static PetscErrorCode KFPairError(KFReducer r, KFEvalPoint *p, KFReducedSystem r
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(PetscMalloc1(4 * t * a, &buf));
   PetscCall(KFEvalPointResponse(r, p, 1, &w, buf, buf + t * a));
-  PetscCall(KFReducedSystemFRF(rs, r->zeta, 1, &w, buf + 2 * t * a, buf + 3 * t * a));
+  PetscCall(KFReducedSystemResponse(rs, 1, &w, buf + 2 * t * a, buf + 3 * t * a));
   {
     const PetscReal dre = buf[ij] - buf[2 * t * a + ij], dim = buf[t * a + ij] - buf[3 * t * a + ij];
     *e = PetscSqrtReal(dre * dre + dim * dim);
@@ -144,7 +160,7 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   ta = t * a;
   if (!re) PetscCall(PetscMalloc2(p->nw * ta, &re, p->nw * ta, &im));
-  PetscCall(KFReducedSystemFRF(rs, r->zeta, p->nw, p->w, re, im));
+  PetscCall(KFReducedSystemResponse(rs, p->nw, p->w, re, im));
   PetscCall(KFFRFErrors(p->nw, t, a, p->Tre, p->Tim, re, im, r->frf_floor_db, hinf, pointwise));
   /* the pair and frequency that make hinf, and its peak */
   {

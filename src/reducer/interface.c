@@ -54,6 +54,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->band[0]                 = 0.01;
   r->band[1]                 = 10.0;
   r->zeta                    = 0.0025;
+  PetscCall(KFDampingSetUniform(&r->damping, 0.0025));
   r->accuracy                = 0.05;
   r->moments                 = PETSC_DECIDE;
   r->moments_max             = 24;
@@ -231,6 +232,7 @@ PetscErrorCode KFReducerSetBand(KFReducer r, PetscReal fmin, PetscReal fmax)
   PetscCheck(fmin > 0 && fmin < fmax && PetscIsNormalReal(fmax), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "band: give 0 < f_low < f_high in Hz, got %g, %g (-kf_band low,high)", (double)fmin, (double)fmax);
   r->band[0] = fmin;
   r->band[1] = fmax;
+  PetscCall(KFReducerDampingUpdate_Private(r));
   PetscFunctionReturn(0);
 }
 
@@ -239,7 +241,11 @@ PetscErrorCode KFReducerSetDamping(KFReducer r, PetscReal zeta)
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCheck(zeta > 0 && zeta < 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "damping: the modal damping ratio must lie in (0, 1), got %g (-kf_damping)", (double)zeta);
-  r->zeta = zeta;
+  /* the modal part only: Rayleigh and structural damping set by KFReducerSetDampingModel stay */
+  r->damping.nbands     = 1;
+  r->damping.fmax_hz[0] = PETSC_INFINITY;
+  r->damping.zeta[0]    = zeta;
+  PetscCall(KFReducerDampingUpdate_Private(r));
   PetscFunctionReturn(0);
 }
 

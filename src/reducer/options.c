@@ -78,6 +78,30 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   zeta = r->zeta;
   PetscCall(PetscOptionsReal("-kf_damping", "Uniform modal damping ratio", "KFReducerSetDamping", zeta, &zeta, &flg));
   if (flg) PetscCall(KFReducerSetDamping(r, zeta));
+  {
+    KFDamping d = r->damping;
+    PetscReal bands[2 * KF_MAX_DAMPING_BANDS], ab[2] = {d.alpha, d.beta};
+    PetscInt  nb = 2 * KF_MAX_DAMPING_BANDS, nab = 2;
+    PetscBool fb, fr, fs;
+
+    PetscCall(PetscOptionsRealArray("-kf_damping_bands", "Modal damping per band: f_max_hz,zeta,f_max_hz,zeta,... (ascending; modes above the last band take its ratio)", "KFReducerSetDampingModel", bands, &nb, &fb));
+    if (fb) {
+      PetscCheck(nb % 2 == 0 && nb > 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_damping_bands: give pairs f_max_hz,zeta; got %" PetscInt_FMT " numbers", nb);
+      d.nbands = nb / 2;
+      for (PetscInt k = 0; k < d.nbands; k++) {
+        d.fmax_hz[k] = bands[2 * k];
+        d.zeta[k]    = bands[2 * k + 1];
+      }
+    }
+    PetscCall(PetscOptionsRealArray("-kf_damping_rayleigh", "Rayleigh damping C = alpha M + beta K: alpha,beta", "KFReducerSetDampingModel", ab, &nab, &fr));
+    if (fr) {
+      PetscCheck(nab == 2, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_damping_rayleigh: give alpha,beta; got %" PetscInt_FMT " numbers", nab);
+      d.alpha = ab[0];
+      d.beta  = ab[1];
+    }
+    PetscCall(PetscOptionsReal("-kf_damping_structural", "Structural (hysteretic) damping g: stiffness K (1 + i g)", "KFReducerSetDampingModel", d.g, &d.g, &fs));
+    if (fb || fr || fs) PetscCall(KFReducerSetDampingModel(r, &d));
+  }
   accuracy = r->accuracy;
   PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative H-infinity error of the frequency response over the band, per input/output pair (KFFRFErrors)", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
   if (flg) PetscCall(KFReducerSetAccuracy(r, accuracy));
@@ -196,6 +220,11 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
   } else PetscCall(PetscViewerASCIIPrintf(viewer, "no scene set\n"));
   if (r->nconfig) PetscCall(KFReducerViewAngles_Private(viewer, "angles of interest", r->nconfig, nrev, r->angles));
   PetscCall(PetscViewerASCIIPrintf(viewer, "method %s; band %g-%g Hz; damping %g; accuracy %g\n", KFReducerMethods[r->method], (double)r->band[0], (double)r->band[1], (double)r->zeta, (double)r->accuracy));
+  {
+    char buf[1024];
+    PetscCall(KFDampingDescribe_Private(&r->damping, buf, sizeof(buf)));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "damping: %s\n", buf));
+  }
   if (r->auto_alpha) PetscCall(PetscViewerASCIIPrintf(viewer, "alpha_G: auto (the paper's rule)\n"));
   else PetscCall(KFReducerViewAngles_Private(viewer, "alpha_G", 1, nrev, r->alpha_g));
   if (r->nmulti) PetscCall(KFReducerViewAngles_Private(viewer, "multi-angle configurations", r->nmulti, nrev, r->multi));

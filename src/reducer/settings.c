@@ -79,6 +79,9 @@ PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KF
   PetscCall(KFAnglesJSON(nrev, n, angles, PETSC_TRUE, buf, sizeof(buf)));
   PetscCall(KFReducedModelSetSetting(m, "reduction_angles_deg", buf));
   PetscCall(KFSetReal(m, "damping", r->zeta));
+  PetscCall(KFDampingDescribe_Private(&r->damping, buf, sizeof(buf)));
+  PetscCall(KFReducedModelSetSetting(m, "damping_model", buf));
+  PetscCall(KFReducedModelSetDamping(m, &r->damping));
   PetscCall(PetscSNPrintf(buf, sizeof(buf), "[%.17g, %.17g]", (double)r->band[0], (double)r->band[1]));
   PetscCall(KFReducedModelSetSetting(m, "band_hz", buf));
   PetscCall(KFSetReal(m, "accuracy", r->accuracy));

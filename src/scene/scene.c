@@ -33,6 +33,7 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
     PetscCall(MatDestroy(&B->K));
     PetscCall(MatDestroy(&B->G));
     PetscCall(MatDestroy(&B->Ht));
+    PetscCall(MatDestroy(&B->C));
     PetscCall(PetscFree4(B->ids, B->ndof, B->dof0, B->xyz));
     PetscCall(PetscFree(B->iface));
     PetscCall(PetscFree(B->sysidx));
@@ -46,6 +47,7 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
   PetscCall(PetscFree(s->order));
   PetscCall(PetscFree(s->input_names));
   PetscCall(PetscFree(s->output_names));
+  PetscCall(PetscFree(s->out_quantity));
   PetscCall(PetscHeaderDestroy(scene));
   PetscFunctionReturn(0);
 }

@@ -71,6 +71,27 @@ cdef class CReducedSystem:
         check(KFReducedSystemFRF(self.y, zeta, nw, real_ptr(w), real_ptr(re), real_ptr(im)))
         return (re + 1j * im).reshape(nw, a, t).transpose(0, 2, 1).copy()
 
+    def response(self, omegas):
+        """Frequency response with the model's damping (modal, Rayleigh, structural, the reassembled viscous matrix)
+        and output quantities at omegas (rad/s): complex (nw, t, a)."""
+        cdef PetscInt a, t
+        cdef cnp.ndarray w = fortran(omegas, 1, "frequencies")
+        check(KFReducedSystemGetMatrices(self.handle(), NULL, &a, &t, NULL, NULL, NULL, NULL))
+        nw = w.shape[0]
+        cdef cnp.ndarray re = np.zeros(nw * t * a)
+        cdef cnp.ndarray im = np.zeros(nw * t * a)
+        check(KFReducedSystemResponse(self.y, nw, real_ptr(w), real_ptr(re), real_ptr(im)))
+        return (re + 1j * im).reshape(nw, a, t).transpose(0, 2, 1).copy()
+
+    def damping(self):
+        """(viscous damping matrix n x n: the bodies' C_b reassembled + alpha M + beta K, or None; the damping dict)"""
+        cdef PetscInt n
+        cdef const PetscReal *C
+        cdef KFDamping d
+        check(KFReducedSystemGetMatrices(self.handle(), &n, NULL, NULL, NULL, NULL, NULL, NULL))
+        check(KFReducedSystemGetDamping(self.y, &C, &d))
+        return carray(C, n, n), damping_to_dict(&d)
+
     def view(self, Viewer viewer=None):
         check(KFReducedSystemView(self.handle(), NULL if viewer is None else viewer.vwr))
 
@@ -137,7 +158,10 @@ cdef class CReducedModel:
         for i in range(B.ninterfaces):
             check(KFReducedModelGetInterfaceName(self.m, b, i, &iname))
             interfaces.append(iname.decode())
+        cdef const PetscReal *Cb
+        check(KFReducedModelGetBodyDamping(self.m, b, &Cb))
         return dict(name=name.decode(), full_dofs=n, interfaces=interfaces, M=carray(B.M, B.v, B.v),
+                    C=carray(Cb, B.v, B.v),
                     K=carray(B.K, B.v, B.v), G=carray(B.G, B.v, a), H=carray(B.H, t, B.v),
                     iface=carray(B.iface, 6 * B.ninterfaces, B.v), rigid=carray(B.rigid, B.v, 6),
                     map=carray(Psi, n, B.v))
@@ -169,6 +193,22 @@ cdef class CReducedModel:
         nr = self.info()["revolute"]
         check(KFReducedModelGetReductionAngles(self.m, &n, &ang))
         return carray(ang, nr, n).T.copy() if nr else np.zeros((n, 0))
+
+    def damping(self):
+        """The model's damping: {modal, rayleigh: {alpha, beta}, structural} (the bodies' C are in body(b)["C"])"""
+        cdef KFDamping d
+        check(KFReducedModelGetDamping(self.m, &d))
+        return damping_to_dict(&d)
+
+    def set_damping(self, d):
+        cdef KFDamping cd
+        damping_from_dict(d, &cd)
+        check(KFReducedModelSetDamping(self.m, &cd))
+
+    def output_quantities(self):
+        cdef const PetscInt *q
+        check(KFReducedModelGetOutputQuantities(self.m, &q))
+        return [["displacement", "velocity", "acceleration"][q[i]] for i in range(self.info()["outputs"])]
 
     def set_setting(self, key, value):
         check(KFReducedModelSetSetting(self.m, cstr(key, "setting key"), cstr(value, "setting value")))

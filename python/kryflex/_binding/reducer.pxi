@@ -105,6 +105,17 @@ cdef class CReducer:
     def set_damping(self, PetscReal zeta):
         check(KFReducerSetDamping(self.r, zeta))
 
+    def set_damping_model(self, d):
+        """{modal: zeta or [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}; absent parts are zero"""
+        cdef KFDamping cd
+        damping_from_dict(d, &cd)
+        check(KFReducerSetDampingModel(self.r, &cd))
+
+    def damping_model(self):
+        cdef KFDamping d
+        check(KFReducerGetDampingModel(self.r, &d))
+        return damping_to_dict(&d)
+
     def set_accuracy(self, PetscReal target):
         check(KFReducerSetAccuracy(self.r, target))
 

@@ -74,6 +74,19 @@ cdef class CScene:
     def add_output_vector(self, PetscInt io, PetscInt body, Vec h not None):
         check(KFSceneAddOutputVector(self.s, io, body, h.vec))
 
+    def set_body_damping(self, PetscInt body, Mat C not None):
+        """body's viscous damping matrix C_b (n_b x n_b, symmetric, M's layout); checked at once"""
+        check(KFSceneSetBodyDamping(self.s, body, C.mat))
+
+    def set_output_quantity(self, PetscInt output, quantity):
+        """displacement, velocity or acceleration"""
+        check(KFSceneSetOutputQuantity(self.s, output, quantity_code(quantity, output)))
+
+    def output_quantity(self, PetscInt output):
+        cdef KFQuantity q
+        check(KFSceneGetOutputQuantity(self.s, output, &q))
+        return ["displacement", "velocity", "acceleration"][<int>q]
+
     def setup(self):
         check(KFSceneSetUp(self.s))
 

@@ -53,6 +53,14 @@ def describe(scene, residual):
         moments_text = "%d moments" % most
     say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error per input/output pair), %s"
          % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, moments_text))
+    if not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None):
+        from ..report.sections import damping_text
+        say("  damping: %s%s" % (damping_text(scene.damping_model),
+                                 "; viscous damping matrices on " + ", ".join(scene.damping_matrices)
+                                 if scene.damping_matrices else ""))
+    if any(q != "displacement" for q in getattr(scene, "output_quantities", [])):
+        say("  output quantities: %s" % ", ".join("%s %s" % (o, q) for o, q in zip(scene.output_names,
+                                                                                   scene.output_quantities)))
     c = len(scene.input_names) * (most - int(scene.reduction["output_blocks"])) + \
         len(scene.output_names) * int(scene.reduction["output_blocks"])
     e = info["system_dofs"]

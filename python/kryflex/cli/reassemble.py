@@ -17,7 +17,7 @@ def run(argv):
     p.add_argument("--angle", action="append", required=True,
                    help="angle(s) in degrees, comma-separated for several revolute joints; repeat for more configurations")
     p.add_argument("--scene", help="check that the reduced model comes from this scene")
-    p.add_argument("-o", "--output", help="write the reassembled matrices (Mh, Kh, Gh, Hh per angle) to this .npz")
+    p.add_argument("-o", "--output", help="write the reassembled matrices (Mh, Kh, Gh, Hh per angle, and the viscous damping Dh when the model has one) to this .npz")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--modes", type=nonnegative_int, default=10, help="flexible frequencies to print (default 10)")
 
@@ -59,6 +59,8 @@ def run(argv):
                                 frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]]))
             key = "_".join("%g" % a for a in angles)
             arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
+            if system.damping_matrix is not None:   # the viscous damping (bodies' C_b + Rayleigh), README "Damping"
+                arrays["D_" + key] = system.damping_matrix
         return results, arrays
     results, arrays = collective(reassemble, (_core.Error, EXIT_NUMERIC, str))
     if args.output:

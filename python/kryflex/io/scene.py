@@ -311,8 +311,8 @@ class Scene:
         # (small) nodes and vector files read and checked against each other
         mats = {}
         for body in bodies:
-            for key in ("mass", "stiffness"):
-                if isinstance(body[key], str):
+            for key in ("mass", "stiffness", "damping"):
+                if isinstance(body.get(key), str):
                     mats[body["name"], key] = _file(where, "bodies.%s.%s" % (body["name"], key), body[key], base,
                                                     "matrix file")
         nodes = [body["nodes"] if not isinstance(body["nodes"], str) else
@@ -342,6 +342,9 @@ class Scene:
             M, K = (self._matrix(where, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
             try:
                 index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
+                if body.get("damping") is not None:   # the body's viscous damping matrix C_b
+                    C = self._matrix(bw + ".damping", body, "damping", mats.get((body["name"], "damping")))
+                    self.cscene.set_body_damping(index, C)
                 for iname, nid in body["interfaces"]:
                     self.cscene.add_interface(index, iname, nid)
             except _core.Error as e:
@@ -374,13 +377,22 @@ class Scene:
                         else:
                             (self.cscene.add_input_load if is_input else self.cscene.add_output_reading)(
                                 k, t["body"], t["node"], t["dof"], t["weight"])
+                    if not is_input and terms[0]["quantity"] != "displacement":
+                        self.cscene.set_output_quantity(k, terms[0]["quantity"])
                 except _core.Error as e:
                     _fail("%s: %s.%s" % (where, key, ioname), str(e))
+        self.output_quantities = [terms[0]["quantity"] for _, terms in valid["outputs"]]
 
         # what the reduction must serve
         self.configurations = valid["configurations"]
         self.band = valid["band"]
-        self.damping = valid["damping"]
+        # damping: the uniform modal ratio (None when the scene gives more than one) and the whole description
+        uniform, self.damping_model = valid["damping"]
+        self.damping_uniform = uniform is not None
+        modal = self.damping_model["modal"]
+        self.damping = uniform if uniform is not None else (modal if not isinstance(modal, list) else
+                                                            min(z for _, z in modal))
+        self.damping_matrices = [b["name"] for b in bodies if b.get("damping") is not None]
         self.accuracy = valid["accuracy"]
         self.reduction = valid["reduction"]
         self.verify = valid["verify"]

@@ -34,9 +34,12 @@ JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
             "accuracy", "reduction", "verify"}
-BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description"}
+BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "damping"}
 JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
-TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
+TERM_KEYS = {"body", "node", "dof", "weight", "vector", "quantity"}
+QUANTITIES = ("displacement", "velocity", "acceleration")
+DAMPING_KEYS = {"modal", "rayleigh", "structural"}
+MAX_DAMPING_BANDS = 16
 REDUCTION_DEFAULTS = {
     "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
     "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
@@ -54,6 +57,7 @@ REDUCTION_DEFAULTS = {
     "body_tol": 1e-10,           # per-body rank deflation of the projected modes
     "reassembly_rtol": 1e-9,     # SVD rank tolerance of the reduced interface constraints
     "static_correction": True,   # eq. 15-17
+    "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
 }
@@ -419,7 +423,9 @@ def _bodies(where, spec):
             if key not in b:
                 fail(where, path, "'%s' is missing; give it (see the scene reference)" % key)
         body = {"name": bname, "interfaces": []}
-        for key in ("mass", "stiffness"):
+        for key in ("mass", "stiffness", "damping"):
+            if key not in b:
+                continue
             v = b[key]
             if isinstance(v, str) or v is None or _is_number(v) or isinstance(v, (bool, dict)):
                 file_name(where, path + "." + key, v)
@@ -546,9 +552,62 @@ def _io(where, key, spec, bodies):
                 term["node"] = node_id(where, tpath + ".node", t["node"])
                 term["dof_name"] = choice(where, tpath + ".dof", t["dof"], tuple(DOF_NAMES))
                 term["dof"] = DOF_NAMES[t["dof"]]
+            if "quantity" in t:
+                if key != "outputs":
+                    fail(where, tpath + ".quantity", "an input has no quantity; give quantity on outputs only")
+                term["quantity"] = choice(where, tpath + ".quantity", t["quantity"], QUANTITIES)
             checked.append(term)
+        quantities = {t["quantity"] for t in checked if "quantity" in t}
+        if len(quantities) > 1:
+            fail(where, path, "its terms read different quantities (%s); an output reads one quantity: give the same "
+                 "quantity on every term" % ", ".join(sorted(quantities)))
+        if key == "outputs":
+            q = quantities.pop() if quantities else "displacement"
+            for t in checked:
+                t["quantity"] = q
         result.append((ioname, checked))
     return result
+
+
+def damping_spec(where, value):
+    """The top-level damping: a number (the uniform modal ratio, as before) or a mapping {modal: zeta or
+    [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (the uniform ratio for a number, None
+    for a mapping; the mapping normalized: absent parts zero)."""
+    if not isinstance(value, dict):
+        z = real(where, "damping", value, "(0, 1)", "give the modal damping ratio in (0, 1), e.g. 0.0025, or a mapping "
+                 "{modal, rayleigh, structural}")
+        return z, {"modal": z, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
+    mapping(where, "damping", value, DAMPING_KEYS)
+    out = {"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
+    modal = value.get("modal", 0.0)
+    if isinstance(modal, (list, tuple, np.ndarray)):
+        bands = list(modal)
+        if not 1 <= len(bands) <= MAX_DAMPING_BANDS:
+            fail(where, "damping.modal", "%d bands; give 1 to %d pairs [f_max_hz, zeta]" % (len(bands), MAX_DAMPING_BANDS))
+        norm = []
+        for k, b in enumerate(bands):
+            bp = "damping.modal[%d]" % k
+            if not isinstance(b, (list, tuple, np.ndarray)) or len(b) != 2:
+                fail(where, bp, "%s is not a pair [f_max_hz, zeta]; give [f_max_hz, zeta]" % short_repr(b))
+            f = real(where, bp, b[0], "(0, inf)", "give the band's upper frequency in Hz, positive")
+            z = real(where, bp, b[1], "[0, 1)", "give the band's modal damping ratio in [0, 1)")
+            if norm and f <= norm[-1][0]:
+                fail(where, bp, "f_max_hz %g is not above the previous band's %g; list the bands in ascending f_max_hz"
+                     % (f, norm[-1][0]))
+            norm.append([f, z])
+        out["modal"] = norm
+    else:
+        out["modal"] = real(where, "damping.modal", modal, "[0, 1)", "give the modal damping ratio in [0, 1), or "
+                            "bands [[f_max_hz, zeta], ...]")
+    if "rayleigh" in value:
+        ray = mapping(where, "damping.rayleigh", value["rayleigh"], {"alpha", "beta"})
+        for k in ("alpha", "beta"):
+            out["rayleigh"][k] = real(where, "damping.rayleigh." + k, ray.get(k, 0.0), "[0, inf)",
+                                      "give a non-negative coefficient (C = alpha M + beta K)")
+    if "structural" in value:
+        out["structural"] = real(where, "damping.structural", value["structural"], "[0, 1)",
+                                 "give the structural damping factor g in [0, 1) (stiffness K (1 + i g))")
+    return None, out   # a mapping goes to the reducer whole (a zero modal ratio is allowed there)
 
 
 def _reduction(where, given, revolute):
@@ -577,6 +636,7 @@ def _reduction(where, given, revolute):
     red["eigen_cover"] = real(where, p + "eigen_cover", red["eigen_cover"], "[1, inf)",
                               "give a multiple >= 1 of the band's top frequency")
     red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
+    red["damped_moments"] = boolean(where, p + "damped_moments", red["damped_moments"])
     if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
         fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % short_repr(red["save_maps"]))
     red["save_maps"] = red["save_maps"] if red["save_maps"] == "auto" else bool(red["save_maps"])
@@ -646,8 +706,7 @@ def validate(spec, where, default_name="scene"):
         "outputs": _io(where, "outputs", spec, bodies),
         "configurations": _angles_of_interest(where, spec, revolute),
         "band": band,
-        "damping": real(where, "damping", spec.get("damping", DEFAULTS["damping"]), "(0, 1)",
-                        "give the modal damping ratio in (0, 1), e.g. 0.0025"),
+        "damping": damping_spec(where, spec.get("damping", DEFAULTS["damping"])),
         "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
                          "give the target relative error in (0, 1), e.g. 0.05"),
         "reduction": _reduction(where, spec.get("reduction"), revolute),

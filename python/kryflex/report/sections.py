@@ -228,8 +228,17 @@ def _section_scene(c):
     text.append("Configurations: " + ", ".join(c.angle(l) for l in c.labels) + ".")
     if s.get("band_hz"):
         text.append(f"Frequency band of interest: {s['band_hz'][0]:g} to {s['band_hz'][1]:g} Hz.")
-    if s.get("damping") is not None:
+    model = s.get("damping_model")
+    if model is not None and (damping_text(model) != f"modal {100 * s.get('damping', -1):g} %"
+                              or s.get("damping_matrices")):
+        text.append(f"Damping, the same on the full and reduced models: {damping_text(model)}"
+                    + (f"; viscous damping matrices on {', '.join(s['damping_matrices'])}"
+                       if s.get("damping_matrices") else "") + ".")
+    elif s.get("damping") is not None:
         text.append(f"Uniform modal damping: {100 * s['damping']:g} % on both the full and reduced models.")
+    quantities = s.get("output_quantities") or []
+    if any(q != "displacement" for q in quantities):
+        text.append("Output quantities: " + ", ".join(f"{o} {q}" for o, q in zip(c.outputs, quantities)) + ".")
     if s.get("accuracy") is not None:
         text.append(f"Accuracy target: {s['accuracy']:g} of the {ERROR_TEXT} (defined in the next section).")
     lines += [" ".join(text), ""]
@@ -608,3 +617,19 @@ def render_markdown(summary, plot_names):
             number += 1
             lines[k] = f"## {number}. {line[3:]}"
     return "\n".join(lines).rstrip() + "\n"
+
+
+def damping_text(d):
+    """One line for a damping description {modal, rayleigh: {alpha, beta}, structural} (README "Damping")."""
+    parts = []
+    modal = d.get("modal") or 0.0
+    if isinstance(modal, list):
+        parts.append("modal per band " + ", ".join(f"{100 * z:g} % up to {f:g} Hz" for f, z in modal))
+    elif modal:
+        parts.append(f"modal {100 * modal:g} %")
+    ray = d.get("rayleigh") or {}
+    if ray.get("alpha") or ray.get("beta"):
+        parts.append(f"Rayleigh alpha {ray.get('alpha', 0):g} 1/s, beta {ray.get('beta', 0):g} s")
+    if d.get("structural"):
+        parts.append(f"structural g = {d['structural']:g}")
+    return "; ".join(parts) or "none"

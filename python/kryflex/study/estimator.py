@@ -254,7 +254,7 @@ class EstimatorCheck:
         worst = 0.0
         for c, angles in enumerate(ref.configurations):
             grid = ref.result(c, "frf_frequencies_hz").ravel()
-            Tr = model.at(angles).frf(grid, self.scene.damping)
+            Tr = model.at(angles).frf(grid)
             hinf, _ = _core.frf_errors(ref.frf(c, "full"), Tr, float(self.scene.verify["frf_floor_db"]))
             worst = max(worst, float(hinf)) if not math.isnan(hinf) else math.inf
         return worst

@@ -172,7 +172,7 @@ class Study:
             flexible = max(flexible, len(system.frequencies_hz))
             if len(system.frequencies_hz):
                 ratios.append(float(np.min(system.frequencies_hz)) / self.full_min_hz[c])
-            Tr = system.frf(self.grids[c], self.scene.damping)
+            Tr = system.frf(self.grids[c])
             hinf, pw = self.errors(self.full[c], Tr)
             pointwise.append(pw)
             if not hinf <= worst[0]:        # NaN counts as the worst

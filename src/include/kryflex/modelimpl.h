@@ -18,6 +18,7 @@ typedef struct {
   PetscReal *iface;         /* (6 ninterfaces) x v */
   PetscReal *rigid;         /* v x 6 */
   PetscReal *map;           /* full_dofs x v, or NULL when not kept */
+  PetscReal *C;             /* v x v reduced viscous damping Psi^T C_b Psi, or NULL */
 } KFModelBody;
 
 struct _KFReducedModelOps {
@@ -37,6 +38,8 @@ struct _p_KFReducedModel {
   PetscReal    *angles;      /* nangles x nrevolute, row by row, radians */
   PetscInt      nsettings, nsettings_alloc;
   char        **keys, **values;
+  KFDamping     damping;     /* modal, Rayleigh, structural (src/model/damping.c) */
+  PetscInt     *quantity;    /* per output a KFQuantity */
 };
 
 /* A reassembled model at one configuration (plain data). */
@@ -53,6 +56,10 @@ struct _n_KFReducedSystem {
   PetscInt   nf;
   PetscReal *freq;           /* nf flexible frequencies, Hz */
   PetscReal *HPhi, *PhiG;    /* t x n, n x a: made by the first frequency response */
+  KFDamping  damping;        /* the model's */
+  PetscInt  *quantity;       /* t, the model's output quantities */
+  PetscReal *C;              /* n x n viscous damping (bodies' C_b reassembled + alpha M + beta K), or NULL */
+  PetscReal *Cm;             /* Phi^T C Phi, made by the first damped response */
 };
 
 /* an empty model on comm, with counts set and arrays allocated for nb bodies, nj joints, a inputs, t outputs */

@@ -82,6 +82,8 @@ struct _p_KFReducer {
   PetscInt        moments_max;
   PetscReal       cluster_rtol;
   PetscInt        build_moments;  /* blocks the implementation builds for this solve (moments, or moments_max) */
+  KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
+                                     (KFDampingEffectiveRatio) for the grid and the mode importance */
 
   /* results of the solve */
   KFReducedModel single, multi_model;
@@ -105,6 +107,8 @@ typedef struct {
   PetscReal *w2;             /* n */
   PetscReal *HPhi, *PhiG;    /* t x n, n x a */
   PetscReal *HPr, *PrG;      /* t x r, r x a */
+  PetscInt   nc;             /* modes coupled by the viscous damping (rigid first, then flexible), 0: none */
+  PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
 } KFFullReference;
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
@@ -171,7 +175,14 @@ PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, PetscInt nfull, 
    between grid points); Trre/Trim (nw blocks) may be NULL, or receive the reduced response on the grid */
 PETSC_INTERN PetscErrorCode KFEvalPointErrors_Private(KFReducer, KFEvalPoint *, KFReducedSystem, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[]);
 /* the full-order response of a reference at nw frequencies */
-PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], const KFDamping *, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+/* the equivalent ratio r->zeta of r->damping over r->band (src/reducer/damping.c) */
+PETSC_INTERN PetscErrorCode KFReducerDampingUpdate_Private(KFReducer);
+/* JSON text of a damping description (src/damping/damping.c) */
+PETSC_INTERN PetscErrorCode KFDampingDescribe_Private(const KFDamping *, char buf[], size_t len);
+/* the full-order viscous damping of the bodies' C_b in the modal coordinates X (e x m dense): X^T (sum_b P_b^T C_b P_b) X
+   (m x m, replicated); *has: whether any body has a C_b */
+PETSC_INTERN PetscErrorCode KFSystemProjectDamping_Private(KFSystem, Mat X, PetscBool *has, PetscReal Cm[]);
 /* measure a candidate: error over the points (stopping at the first point above stop, stop <= 0: all), sizes */
 PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */

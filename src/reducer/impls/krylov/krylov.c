@@ -1,9 +1,11 @@
 /* KFREDUCERKRYLOV: A. Y. Lee's basis, the deflated block Krylov vectors of K+ (eq. 8-9), their small eigenproblem
    (eq. 12-13), and the kept modes plus the paper's static correction of the others (eq. 15-17). */
 #include <kryflex/reducerimpl.h>
+#include <kryflex/krylovimpl.h>
 
 typedef struct {
-  PetscBool raw; /* project on the paper's raw recurrence (eq. 9) instead of the orthogonalized blocks: diagnostics */
+  PetscBool raw;    /* project on the paper's raw recurrence (eq. 9) instead of the orthogonalized blocks: diagnostics */
+  PetscBool damped; /* input blocks from the moments of the damped system (src/krylov/damped.c) */
 } KFReducer_Krylov;
 
 static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFlexSolver solver, KFReducerBasis *basis)
@@ -30,7 +32,10 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
   } else {
     KFKrylovInfo info;
 
-    PetscCall(KFKrylovBasisWithInfo(solver, nin, nout, r->deflation_tol, &V, &info));
+    if (kr->damped) { /* the viscous damping: the bodies' C_b and Rayleigh; frequency scale: the band's top */
+      KFKrylovDamping d = {r->damping.alpha, r->damping.beta, 2 * PETSC_PI * r->band[1]};
+      PetscCall(KFKrylovBasisDamped_Private(solver, nin, nout, r->deflation_tol, &d, &V, &info));
+    } else PetscCall(KFKrylovBasisWithInfo(solver, nin, nout, r->deflation_tol, &V, &info));
     basis->ndeflated     = info.ndeflated;
     basis->nblocks       = info.nblocks;
     basis->block_end     = info.block_end; /* the basis owns it now */
@@ -64,6 +69,7 @@ static PetscErrorCode KFReducerSetFromOptions_Krylov(KFReducer r, PetscOptionIte
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "Krylov basis (-kf_reducer_type krylov)");
+  PetscCall(PetscOptionsBool("-kf_krylov_damped", "Input blocks from the moments of the damped system (second-order Krylov: x_k = -K+ (C x_{k-1} + M x_{k-2})), with the bodies' damping matrices and Rayleigh damping", "KFReducerSolve", kr->damped, &kr->damped, NULL));
   PetscCall(PetscOptionsBool("-kf_krylov_raw", "Project on the paper's raw recurrence (eq. 9), not orthogonalized: to show its failure (needs -kf_search 0)", "KFReducerSolve", kr->raw, &kr->raw, NULL));
   PetscOptionsHeadEnd();
   PetscFunctionReturn(0);

@@ -30,7 +30,7 @@ class SlewStudy:
     span of the scene's angles of interest, or 60 deg when they span nothing); durations: slew durations as
     multiples of the first flexible period P1 (from periods_max down to periods_min, nrates of them, geometric);
     steps_per_period: time steps per period of the band's top frequency (h = 1 / (steps_per_period f_top), and at
-    most T/200); settle_periods: first flexible periods simulated after the slew; damping: stiffness-proportional,
+    most T/100); settle_periods: first flexible periods simulated after the slew; damping: stiffness-proportional,
     the scene's damping ratio at the first flexible frequency."""
 
     def __init__(self, scene, model, profile="slew", amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
@@ -68,7 +68,7 @@ class SlewStudy:
         return Profile(self.kind, duration, np.radians(self.amplitude_deg), np.radians(self.alpha0_deg))
 
     def step(self, duration):
-        return min(1.0 / (self.steps_per_period * self.f_top), duration / 200.0)
+        return min(1.0 / (self.steps_per_period * self.f_top), duration / 100.0)
 
     def simulate(self, bodies, duration, h=None):
         """One model along the profile of the given duration: (t, y, y_elastic)."""

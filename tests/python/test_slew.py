@@ -1,0 +1,173 @@
+"""The slewing study (python/kryflex/slew, `kryflex slew`): the ties D(alpha) against C's reassembly and the dense
+reference, the Newmark integrator against a dense SciPy solution (solve_ivp) of the assembled system at a fixed
+angle, second-order convergence in the step, the reduced model's error small at a slow slew and growing with the
+rate, and the command's files and refusals."""
+import csv
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.integrate as si
+import scipy.linalg as sl
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+sys.path.insert(0, HERE)
+import reference as ref  # noqa: E402
+
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def galileo(quiet_library):
+    import kryflex
+    scene = kryflex.load_scene(GALILEO)
+    model = kryflex.Reducer(scene, quiet=True).reduce().model
+    return scene, model
+
+
+def _flexible_hz(N, M, K):
+    lam = sl.eigh(N.T @ K @ N, N.T @ M @ N, eigvals_only=True)
+    lam = lam[lam > 1e-8 * lam.max()]
+    return np.sqrt(lam) / (2 * np.pi)
+
+
+def test_ties_give_the_reassembled_systems(galileo):
+    """The null space of D(alpha) = T(alpha) I: the full bodies give the dense reference's frequencies, the reduced
+    bodies C's reassembled ones (the same ties as KFReassemble), at angles off the reduction angle."""
+    from kryflex.slew.bodies import SlewBodies
+    scene, model = galileo
+    full, red = SlewBodies.from_scene(scene), SlewBodies.from_model(model)
+    dense = ref.load_scene(GALILEO)
+    for angle in (0.0, 37.0, 250.0):
+        Ms, Ks, _, _ = ref.assemble(dense, angle)
+        f_ref = _flexible_hz(np.eye(Ms.shape[0]), Ms, Ks)
+        Nf = sl.null_space(full.ties(np.radians([angle])))
+        f_full = _flexible_hz(Nf, full.M.toarray(), full.K.toarray())
+        assert np.allclose(f_full, f_ref, rtol=1e-8)
+        Nr = sl.null_space(red.ties(np.radians([angle])))
+        f_red = _flexible_hz(Nr, red.M.toarray(), red.K.toarray())
+        f_c = model.at([angle]).frequencies_hz
+        assert np.allclose(f_red, f_c[:len(f_red)], rtol=1e-8)
+        # rigid-body and mechanism modes: as many as C counts, and tied
+        Phi = np.asarray(full.rigid_modes(np.radians([angle])))
+        assert Phi.shape[1] == model.nrigid == 7
+        assert np.abs(full.ties(np.radians([angle])) @ Phi).max() < 1e-10 * np.abs(Phi).max()
+
+
+def _dense_solution(scene_path, angle, beta, profile, t):
+    """y(t) of the assembled system at a fixed angle (reference.py, null-space coordinates), Rayleigh damping beta K,
+    all inputs driven by profile.torque, by SciPy's solve_ivp (DOP853, tight tolerances)."""
+    dense = ref.load_scene(scene_path)
+    Ms, Ks, Gs, Hs = ref.assemble(dense, angle)
+    Cs, g = beta * Ks, Gs.sum(axis=1)
+    n = Ms.shape[0]
+    Minv = np.linalg.inv(Ms)
+
+    def rhs(time, x):
+        q, v = x[:n], x[n:]
+        return np.concatenate([v, Minv @ (g * profile.torque(time) - Cs @ v - Ks @ q)])
+    sol = si.solve_ivp(rhs, (0, t[-1]), np.zeros(2 * n), method="DOP853", t_eval=t, rtol=1e-11, atol=1e-14)
+    assert sol.success
+    return (Hs @ sol.y[:n]).T
+
+
+def test_integrator_matches_dense_reference_at_fixed_angle(galileo):
+    """At a fixed angle (amplitude 0) the time-varying model is the assembled LTI system: the Newmark histories of
+    the full bodies match a dense solve_ivp solution, with second-order convergence in the step."""
+    from kryflex.slew.bodies import SlewBodies
+    from kryflex.slew.integrator import Integrator
+    from kryflex.slew.profiles import Profile
+    scene, _ = galileo
+    full = SlewBodies.from_scene(scene)
+    angle, beta = 30.0, 2e-3
+    profile = Profile("slew", 1.5, [0.0], [np.radians(angle)])
+    errs = []
+    for h in (0.01, 0.005):
+        t, y, _ = Integrator(full, h, beta).run(profile, 3.0)
+        y_ref = _dense_solution(GALILEO, angle, beta, profile, t)
+        errs.append(np.abs(y - y_ref).max() / np.abs(y_ref).max())
+    assert errs[1] < 2e-3
+    assert 3.0 < errs[0] / errs[1] < 5.0          # second order: halving h divides the error by ~4
+
+
+def test_slewing_error_small_when_slow_and_growing_with_rate(galileo):
+    """The reduced model's error: below the scene's accuracy for a slow slew, and larger for a fast one; the full
+    and reduced models' rigid-body parts of the slow slew agree (the error is elastic)."""
+    from kryflex.slew.study import SlewStudy
+    scene, model = galileo
+    study = SlewStudy(scene, model, periods_max=1.0, periods_min=0.05, nrates=2, settle_periods=0.5)
+    slow, fast = study.sweep()
+    assert slow["peak_rate_deg_s"] < fast["peak_rate_deg_s"]
+    assert slow["error"] < 0.2 * scene.accuracy
+    assert fast["error"] > 3 * slow["error"]
+    assert study.limit([slow]) is None
+    assert study.limit([slow, fast]) in (None, fast)
+    # the total output differs from its elastic part (the slew moves the structure rigidly), in both models alike
+    _, yf, ef = slow["full"]
+    assert np.abs(yf - ef).max() > 0.1 * np.abs(ef).max()
+
+
+def test_profiles():
+    from kryflex.slew.profiles import Profile
+    t = np.linspace(0, 3, 30001)
+    for kind, rate in (("slew", 2.0), ("spinup", 1.0)):
+        p = Profile(kind, 2.0, [2.0], [0.5])
+        a = p.angles(t)[:, 0]
+        assert a[0] == 0.5
+        rate_num = np.gradient(a, t)
+        assert np.isclose(rate_num.max(), rate, rtol=1e-3) and np.isclose(p.peak_rate, rate)
+        acc = np.gradient(rate_num, t)
+        assert np.abs(acc[5:-5] - 2.0 * p.s2(t)[5:-5]).max() < 1e-3 * np.abs(acc).max()
+        assert np.isclose(np.abs(p.torque(t)).max(), 1.0) and p.torque(0.0) == 0.0
+    with pytest.raises(ValueError, match="unknown slew profile"):
+        Profile("wobble", 1.0, [1.0], [0.0])
+
+
+pytestmark_cli = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")
+
+
+@pytestmark_cli
+def test_command_writes_table_and_chart(tmp_path):
+    out = tmp_path / "slew"
+    proc = subprocess.run([KRYFLEX, "slew", GALILEO, "-o", str(out), "--rates", "2", "--periods-max", "0.5",
+                           "--periods-min", "0.1", "-quiet"], env=ENV, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    for name in ("slew.png", "slew_histories.png"):
+        assert (out / name).read_bytes()[:8] == PNG
+    with open(out / "slew.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 2 and float(rows[0]["peak_rate_deg_s"]) < float(rows[1]["peak_rate_deg_s"])
+    assert all(float(r["error"]) >= float(r["elastic_error"]) for r in rows)
+    md = (out / "slew.md").read_text()
+    assert "| slew duration (s) |" in md and "Step check" in md and "galileo" in md
+    assert "results in" in proc.stdout
+
+
+@pytestmark_cli
+@pytest.mark.parametrize("args, message", [
+    (["--rates", "1"], "at least 2 rates"),
+    (["--periods-min", "5", "--periods-max", "1"], "periods_min < periods_max"),
+    (["--profile", "wobble"], "invalid choice"),
+])
+def test_command_refuses_bad_values(tmp_path, args, message):
+    out = tmp_path / "o"
+    proc = subprocess.run([KRYFLEX, "slew", GALILEO, "-o", str(out), "-quiet"] + args, env=ENV, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert message in proc.stderr and "Traceback" not in proc.stderr
+    assert not out.exists() or not any(p.name.startswith("slew") for p in out.iterdir())
+
+
+@pytestmark_cli
+def test_command_refuses_several_ranks(tmp_path):
+    proc = subprocess.run(["mpiexec", "-n", "2", KRYFLEX, "slew", GALILEO, "-o", str(tmp_path / "o"), "-quiet"],
+                          env=ENV, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "one rank" in proc.stderr and "Traceback" not in proc.stderr

@@ -27,6 +27,8 @@ def parser():
                    help="fastest slew duration in first flexible periods P1 (default 0.02)")
     p.add_argument("--steps-per-period", type=int, default=20,
                    help="time steps per period of the band's top frequency (default 20)")
+    p.add_argument("--settle-periods", type=float, default=2.0,
+                   help="first flexible periods simulated after the slew (default 2)")
     p.add_argument("--no-step-check", dest="step_check", action="store_false",
                    help="skip the rerun of the fastest slew with half the step")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
@@ -40,7 +42,7 @@ def run(argv):
         return EXIT_OK
     args = collective(lambda: p.parse_args(split_petsc_options(
         argv, {"-o", "--output", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
-               "--steps-per-period"}, {"-quiet", "--quiet", "--no-step-check"})))
+               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check"})))
     collective(_one_rank)
     from .. import _core
     from ..io.scene import SceneError, load_scene
@@ -63,7 +65,8 @@ def run(argv):
         reduction = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the reduction failed: %s" % e))
         frf_error = _frf_error(reducer)
         study = collective(lambda: SlewStudy(scene, reduction.model, args.profile, args.amplitude, args.periods_max,
-                                             args.periods_min, args.rates, args.steps_per_period, progress=progress),
+                                             args.periods_min, args.rates, args.steps_per_period, args.settle_periods,
+                                             progress=progress),
                            (ValueError, EXIT_INPUT, str))
         rows = study.sweep()
         check = study.convergence() if args.step_check else None

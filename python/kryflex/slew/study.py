@@ -38,10 +38,14 @@ class SlewStudy:
         if scene.info["revolute"] < 1:
             raise ValueError("scene '%s' has no revolute joint: there is no angle to slew" % scene.name)
         if not (periods_max > periods_min > 0) or nrates < 2:
-            raise ValueError("give 0 < periods_min < periods_max and at least 2 rates (got %g, %g, %d)"
+            raise ValueError("give 0 < --periods-min < --periods-max and --rates of at least 2 (got %g, %g, %d)"
                              % (periods_min, periods_max, nrates))
         if steps_per_period < 4:
-            raise ValueError("steps_per_period must be at least 4 (got %d)" % steps_per_period)
+            raise ValueError("--steps-per-period must be at least 4 (got %d)" % steps_per_period)
+        if not settle_periods >= 0:
+            raise ValueError("--settle-periods must be >= 0 (got %g)" % settle_periods)
+        if amplitude_deg is not None and not np.all(np.isfinite(amplitude_deg)):
+            raise ValueError("--amplitude must be a finite angle in degrees (got %s)" % amplitude_deg)
         self.scene, self.model, self.kind = scene, model, profile
         self.progress = progress or (lambda msg: None)
         configs = np.array(scene.configurations, float).reshape(len(scene.configurations), -1)

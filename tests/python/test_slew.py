@@ -108,12 +108,13 @@ def test_integrator_matches_dense_reference_at_fixed_angle(galileo):
     assert 3.0 < errs[0] / errs[1] < 5.0          # second order: halving h divides the error by ~4
 
 
-def test_slewing_error_small_when_slow_and_growing_with_rate(galileo):
-    """The reduced model's error: below the scene's accuracy for a slow slew, and larger for a fast one; the full
-    and reduced models' rigid-body parts of the slow slew agree (the error is elastic)."""
+@pytest.mark.parametrize("profile", ["slew", "spinup"])
+def test_slewing_error_small_when_slow_and_growing_with_rate(galileo, profile):
+    """The reduced model's error: below the scene's accuracy for a slow slew (or spin-up), and larger for a fast
+    one; the slew moves the structure rigidly, so the total output differs from its elastic part."""
     from kryflex.slew.study import SlewStudy
     scene, model = galileo
-    study = SlewStudy(scene, model, periods_max=1.0, periods_min=0.05, nrates=2, settle_periods=0.5)
+    study = SlewStudy(scene, model, profile, periods_max=1.0, periods_min=0.05, nrates=2, settle_periods=0.5)
     slow, fast = study.sweep()
     assert slow["peak_rate_deg_s"] < fast["peak_rate_deg_s"]
     assert slow["error"] < 0.2 * scene.accuracy
@@ -184,3 +185,28 @@ def test_command_refuses_several_ranks(tmp_path):
                           env=ENV, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "one rank" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_integrator_agrees_with_exudyn_under_slewing(galileo):
+    """Exudyn's own solver (generalized-alpha, index 3) on the same time-varying equations (exudyn_check.py: generic
+    ODE2 object, the ties D(alpha(t)) as a coordinate-vector constraint with user functions), the full Galileo
+    bodies slewed 72 deg in 2 s: Exudyn's histories converge, as its step halves, to the Newmark solution on a fine
+    step (measured: 1.4 % at 20 ms, 0.66 % at 10 ms, first order; Newmark itself 0.088 % and 0.023 %)."""
+    pytest.importorskip("exudyn")
+    from kryflex.slew.bodies import SlewBodies
+    from kryflex.slew.exudyn_check import exudyn_history
+    from kryflex.slew.integrator import Integrator
+    from kryflex.slew.profiles import Profile
+    scene, _ = galileo
+    full = SlewBodies.from_scene(scene)
+    profile = Profile("slew", 2.0, [np.radians(72.0)], [0.0])
+    fine = 0.00125
+    tf, yf, _ = Integrator(full, fine, 2e-3).run(profile, 3.0)
+    diffs = []
+    for h in (0.02, 0.01):
+        te, ye = exudyn_history(full, profile, 3.0, h, 2e-3)
+        k = int(round(h / fine))
+        assert np.allclose(te, tf[::k])
+        diffs.append(np.abs(ye - yf[::k]).max() / np.abs(yf).max())
+    assert diffs[1] < 0.01
+    assert diffs[0] / diffs[1] > 1.6

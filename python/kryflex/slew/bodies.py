@@ -110,6 +110,9 @@ class SlewBodies:
     def from_model(cls, model):
         """A reduced model: each reduced body's coordinates (the C reduced bodies, eq. 18-19)."""
         bodies = model.bodies
+        if any(b["rigid"] is None for b in bodies):
+            raise ValueError("the reduced model lacks its bodies' rigid motions (a model from an older kryflex): "
+                             "reduce the scene again")
         revolute = model.revolute
         joints = [dict(j, angle=revolute.index(j["name"]) if j["type"] == "revolute" else None)
                   for j in model.joints]

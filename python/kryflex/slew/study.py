@@ -56,6 +56,9 @@ class SlewStudy:
         self.amplitude_deg = np.broadcast_to(np.asarray(amplitude_deg, float), self.alpha0_deg.shape).copy()
         Profile(profile, 1.0, self.amplitude_deg, self.alpha0_deg)   # checks the profile name
         system = model.at(self.alpha0_deg)
+        if not len(system.frequencies_hz):
+            raise ValueError("the reduced model of scene '%s' has no flexible mode: nothing to compare in time"
+                             % scene.name)
         self.f1 = float(system.frequencies_hz[0])
         self.P1 = 1.0 / self.f1
         self.f_top = float(scene.band[1])

@@ -59,9 +59,11 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
     settings.timeIntegration.generalizedAlpha.useNewmark = newmark
     settings.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
     settings.timeIntegration.newton.useModifiedNewton = False
-    settings.timeIntegration.newton.relativeTolerance = 1e-10
-    settings.timeIntegration.newton.absoluteTolerance = 1e-14 * max(1.0, float(np.abs(g1).max()))
+    settings.timeIntegration.adaptiveStep = False        # the fixed step h of the comparison
+    settings.timeIntegration.newton.relativeTolerance = 1e-7   # linear equations: one Newton step solves them
+    settings.timeIntegration.newton.absoluteTolerance = 1e-10 * max(1.0, float(np.abs(g1).max()))
     settings.timeIntegration.verboseMode = 0
+    settings.timeIntegration.newton.maxIterations = 5
     settings.solutionSettings.writeSolutionToFile = False
     settings.solutionSettings.sensorsWritePeriod = 0.5 * h     # every step recorded (a period of h skips some)
     settings.displayComputationTime = False

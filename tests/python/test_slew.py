@@ -168,6 +168,7 @@ def test_command_writes_table_and_chart(tmp_path):
     (["--rates", "1"], "--rates of at least 2"),
     (["--periods-min", "5", "--periods-max", "1"], "0 < --periods-min < --periods-max"),
     (["--settle-periods", "-1"], "--settle-periods must be >= 0"),
+    (["--input", "thrust"], "--input thrust: give input names of scene 'galileo' (bearing_torque)"),
     (["--profile", "wobble"], "invalid choice"),
 ])
 def test_command_refuses_bad_values(tmp_path, args, message):

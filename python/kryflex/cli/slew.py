@@ -20,6 +20,8 @@ def parser():
                    help="slew: rest to rest (cycloidal); spinup: up to a constant rate, then spinning (default slew)")
     p.add_argument("--amplitude", type=float, default=None,
                    help="angle change of every revolute joint, deg (default: the span of the scene's angles)")
+    p.add_argument("--input", default=None,
+                   help="comma list of the inputs the drive torque acts on (default: every input of the scene)")
     p.add_argument("--rates", type=int, default=10, help="number of slew durations (default 10)")
     p.add_argument("--periods-max", type=float, default=20.0,
                    help="slowest slew duration in first flexible periods P1 (default 20)")
@@ -41,7 +43,7 @@ def run(argv):
         say(p.format_help())
         return EXIT_OK
     args = collective(lambda: p.parse_args(split_petsc_options(
-        argv, {"-o", "--output", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
+        argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
                "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check"})))
     collective(_one_rank)
     from .. import _core
@@ -66,7 +68,8 @@ def run(argv):
         frf_error = _frf_error(reducer)
         study = collective(lambda: SlewStudy(scene, reduction.model, args.profile, args.amplitude, args.periods_max,
                                              args.periods_min, args.rates, args.steps_per_period, args.settle_periods,
-                                             progress=progress),
+                                             progress=progress, inputs=None if args.input is None else
+                                             [x.strip() for x in args.input.split(",") if x.strip()]),
                            (ValueError, EXIT_INPUT, str))
         rows = study.sweep()
         check = study.convergence() if args.step_check else None

@@ -12,6 +12,9 @@ floating-frame (ObjectFFRFreducedOrder) model would add the nonlinear terms the 
     t, y = exudyn_history(bodies, profile, t_end, h, damping_beta)
 """
 import numpy as np
+import scipy.sparse
+
+SPARSE_FROM = 300   # above this many coordinates Exudyn gets sparse matrices and its sparse solver
 
 
 def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=1.0, newmark=False):
@@ -29,8 +32,20 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
 
     def force(mbs_, t, item, q, q_t):
         return g1 * float(profile.torque(t))
-    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=b.M.toarray(), stiffnessMatrix=b.K.toarray(),
-                                    dampingMatrix=damping_beta * b.K.toarray(), forceUserFunction=force))
+    sparse = n > SPARSE_FROM
+
+    def matrix(A):
+        """Dense for small bodies, else Exudyn's sparse container (triplets, without zeros)."""
+        if not sparse:
+            return np.asarray(A.toarray() if hasattr(A, "toarray") else A)
+        A = scipy.sparse.coo_matrix(A)
+        keep = A.data != 0
+        mc = exu.MatrixContainer()
+        mc.SetWithSparseMatrixCSR(A.shape[0], A.shape[1],
+                                  np.column_stack([A.row[keep], A.col[keep], A.data[keep]]).astype(float))
+        return mc
+    mbs.AddObject(ObjectGenericODE2(nodeNumbers=[node], massMatrix=matrix(b.M), stiffnessMatrix=matrix(b.K),
+                                    dampingMatrix=matrix(damping_beta * b.K), forceUserFunction=force))
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
     m_body = mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=node))
     m_ground = mbs.AddMarker(MarkerNodeCoordinates(nodeNumber=ground))
@@ -43,7 +58,7 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
         return ties(t) @ (np.asarray(q_t)[:n] if velocity_level else qb)
 
     def jacobian(mbs_, t, item, q, q_t, velocity_level):
-        return ties(t)
+        return ties(t)                       # (Exudyn takes this one dense only)
     if b.nties:
         mbs.AddObject(ObjectConnectorCoordinateVector(markerNumbers=[m_body, m_ground],
                                                       scalingMarker0=np.zeros((b.nties, 1)),
@@ -53,6 +68,8 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
                                       outputVariableType=exu.OutputVariableType.Coordinates))
     mbs.Assemble()
     settings = exu.SimulationSettings()
+    if sparse:
+        settings.linearSolverType = exu.LinearSolverType.EigenSparse
     settings.timeIntegration.numberOfSteps = int(np.ceil(t_end / h - 1e-9))
     settings.timeIntegration.endTime = settings.timeIntegration.numberOfSteps * h
     settings.timeIntegration.generalizedAlpha.spectralRadius = spectral_radius

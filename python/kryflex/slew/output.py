@@ -70,9 +70,9 @@ def markdown(rows, study, limit, check, frf_error):
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
-             "(P1 %.4g s); stiffness-proportional damping %.3g at f1; accuracy %g."
+             "(P1 %.4g s); stiffness-proportional damping %.3g at f1; drive on %s; accuracy %g."
              % (s.full.dofs, s.reduced.dofs, s.kind, _deg(s.alpha0_deg), _deg(s.amplitude_deg), s.f1, s.P1, s.zeta,
-                s.accuracy), ""]
+                ", ".join(s.inputs), s.accuracy), ""]
     if frf_error is not None:
         lines += ["Frequency-domain error of the reduced model (the reduction's verification, max over the angles of "
                   "interest): %.3g." % frf_error, ""]

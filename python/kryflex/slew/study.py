@@ -34,7 +34,7 @@ class SlewStudy:
     the scene's damping ratio at the first flexible frequency."""
 
     def __init__(self, scene, model, profile="slew", amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
-                 steps_per_period=20, settle_periods=2.0, progress=None):
+                 steps_per_period=20, settle_periods=2.0, progress=None, inputs=None):
         if scene.info["revolute"] < 1:
             raise ValueError("scene '%s' has no revolute joint: there is no angle to slew" % scene.name)
         if not (periods_max > periods_min > 0) or nrates < 2:
@@ -70,6 +70,14 @@ class SlewStudy:
         self.settle_periods = float(settle_periods)
         self.full = SlewBodies.from_scene(scene)
         self.reduced = SlewBodies.from_model(model)
+        self.inputs = list(scene.input_names) if inputs is None else list(inputs)
+        unknown = [name for name in self.inputs if name not in scene.input_names]
+        if unknown or not self.inputs:
+            raise ValueError("--input %s: give input names of scene '%s' (%s)"
+                             % (",".join(unknown) or "(empty)", scene.name, ", ".join(scene.input_names)))
+        driven = [scene.input_names.index(name) for name in self.inputs]
+        for bodies in (self.full, self.reduced):   # the drive u(t) on the chosen inputs only
+            bodies.G = bodies.G[:, driven]
 
     def profile(self, duration):
         return Profile(self.kind, duration, np.radians(self.amplitude_deg), np.radians(self.alpha0_deg))

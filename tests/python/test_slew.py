@@ -150,7 +150,7 @@ def test_command_writes_table_and_chart(tmp_path):
     out = tmp_path / "slew"
     proc = subprocess.run([KRYFLEX, "slew", GALILEO, "-o", str(out), "--rates", "2", "--periods-max", "0.5",
                            "--periods-min", "0.1", "--settle-periods", "0.5", "--steps-per-period", "10",
-                           "-quiet"], env=ENV, capture_output=True, text=True, timeout=300)
+                           "--exudyn-check", "-quiet"], env=ENV, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     for name in ("slew.png", "slew_histories.png"):
         assert (out / name).read_bytes()[:8] == PNG
@@ -160,6 +160,8 @@ def test_command_writes_table_and_chart(tmp_path):
     assert all(float(r["error"]) >= float(r["elastic_error"]) for r in rows)
     md = (out / "slew.md").read_text()
     assert "| slew duration (s) |" in md and "Step check" in md and "galileo" in md
+    difference = float(md.split("relative difference from this integrator ")[1].split()[0].rstrip("."))
+    assert difference < 1e-6
     assert "results in" in proc.stdout
 
 

@@ -33,6 +33,9 @@ def parser():
                    help="first flexible periods simulated after the slew (default 2)")
     p.add_argument("--no-step-check", dest="step_check", action="store_false",
                    help="skip the rerun of the fastest slew with half the step")
+    p.add_argument("--exudyn-check", action="store_true",
+                   help="also integrate the full model's fastest slew with Exudyn's solver on the same equations and "
+                        "report the difference (dense constraint Jacobians: for small scenes)")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
     return p
 
@@ -44,7 +47,7 @@ def run(argv):
         return EXIT_OK
     args = collective(lambda: p.parse_args(split_petsc_options(
         argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
-               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check"})))
+               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check", "--exudyn-check"})))
     collective(_one_rank)
     from .. import _core
     from ..io.scene import SceneError, load_scene
@@ -73,6 +76,12 @@ def run(argv):
                            (ValueError, EXIT_INPUT, str))
         rows = study.sweep()
         check = study.convergence() if args.step_check else None
+        exudyn = None
+        if args.exudyn_check:
+            progress("the fastest slew by Exudyn's solver")
+            exudyn = collective(study.exudyn_check, (ImportError, EXIT_INPUT, lambda e: "--exudyn-check: Exudyn is not "
+                                                     "installed (%s): run scripts/setup" % e),
+                                (Exception, EXIT_NUMERIC, lambda e: "--exudyn-check: Exudyn's solution failed: %s" % e))
         limit = study.limit(rows)
         names = reduction.model.output_names
 
@@ -83,7 +92,7 @@ def run(argv):
             output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error)
             output.write_histories(rows, staging.file("slew_histories.png"), title, names)
             with open(staging.file("slew.md"), "w") as f:
-                f.write(output.markdown(rows, study, limit, check, frf_error))
+                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn))
         collective(write, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)))
         collective(staging.commit, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)),
                    interruptible=False)

@@ -5,7 +5,9 @@
 built in Exudyn from its generic items (a NodeGenericODE2 with the bodies' coordinates, an ObjectGenericODE2 with
 M, K, C and the drive as its force user function, an ObjectConnectorCoordinateVector to the ground whose constraint
 and Jacobian user functions are D(alpha(t)) z and D(alpha(t))) and integrated by Exudyn's own solver (generalized-
-alpha, index 3), so that the check shares the equations, not the integration, with integrator.py. Exudyn models the
+alpha, index 3, fixed step), so that the check shares the equations, not the integration, with integrator.py: with
+spectral radius 1 Exudyn's rule is the trapezoidal one, so at the same step the histories must agree to round-off
+(tests/python/test_slew.py; `kryflex slew --exudyn-check` reports it for the fastest slew). Exudyn models the
 slewing structure this way because the study's model is linear time-varying by design (README: slewing); a
 floating-frame (ObjectFFRFreducedOrder) model would add the nonlinear terms the study leaves out of both models.
 
@@ -17,7 +19,7 @@ import scipy.sparse
 SPARSE_FROM = 300   # above this many coordinates Exudyn gets sparse matrices and its sparse solver
 
 
-def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=1.0, newmark=False):
+def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=1.0):
     """The outputs y = H z at every step of Exudyn's generalized-alpha solution from rest: (t, y)."""
     import exudyn as exu
     from exudyn.itemInterface import (MarkerNodeCoordinates, NodeGenericODE2, NodePointGround,
@@ -73,7 +75,6 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
     settings.timeIntegration.numberOfSteps = int(np.ceil(t_end / h - 1e-9))
     settings.timeIntegration.endTime = settings.timeIntegration.numberOfSteps * h
     settings.timeIntegration.generalizedAlpha.spectralRadius = spectral_radius
-    settings.timeIntegration.generalizedAlpha.useNewmark = newmark
     settings.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
     settings.timeIntegration.newton.useModifiedNewton = False
     settings.timeIntegration.adaptiveStep = False        # the fixed step h of the comparison
@@ -81,10 +82,10 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
     settings.timeIntegration.newton.absoluteTolerance = 1e-10 * max(1.0, float(np.abs(g1).max()))
     settings.timeIntegration.verboseMode = 0
     settings.timeIntegration.newton.maxIterations = 5
-    settings.solutionSettings.writeSolutionToFile = False
-    settings.solutionSettings.sensorsWritePeriod = 0.5 * h     # every step recorded (a period of h skips some)
-    settings.displayComputationTime = False
-    settings.displayStatistics = False
+    settings.solution.file.write = False
+    settings.solution.sensors.writePeriod = 0.5 * h     # every step recorded (a period of h skips some)
+    settings.show.computationTime = False
+    settings.show.statistics = False
     exu.SolveDynamic(mbs, settings)
     data = np.asarray(mbs.GetSensorStoredData(sensor))
     _, first = np.unique(np.round(data[:, 0] / h).astype(int), return_index=True)   # one row per step

@@ -66,7 +66,7 @@ def write_histories(rows, path, title, output_names):
     plt.close(fig)
 
 
-def markdown(rows, study, limit, check, frf_error):
+def markdown(rows, study, limit, check, frf_error, exudyn=None):
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
@@ -95,6 +95,10 @@ def markdown(rows, study, limit, check, frf_error):
         lines += ["", "Step check (fastest slew, step %.3g s and half of it): error %.4g and %.4g; the full model's "
                   "elastic output changes by %.2g of its peak." % (check["step_s"], check["error"],
                                                                    check["error_half_step"], check["output_change"])]
+    if exudyn is not None:
+        lines += ["", "Exudyn check (the full model's fastest slew by Exudyn's generalized-alpha solver on the same "
+                  "equations, step %.3g s): relative difference from this integrator %.2g." % (exudyn["step_s"],
+                                                                                               exudyn["difference"])]
     lines += ["", "error: max(elastic, total), each the largest over outputs of max_t |y_full - y_red| / max_t |y_full|; "
               "elastic: of the outputs of the elastic parts (rigid-body and mechanism modes taken out M-orthogonally "
               "at alpha(t)); total: of the outputs themselves."]

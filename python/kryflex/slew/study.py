@@ -137,6 +137,21 @@ class SlewStudy:
                     output_change=float(np.abs(a["full"][2][::1] - _resample(b["full"], a["full"][0])).max()
                                         / max(np.abs(b["full"][2]).max(), np.finfo(float).tiny)))
 
+    def exudyn_check(self, periods=None):
+        """The full model's history of the fastest slew by Exudyn's solver (exudyn_check.py) at the same step:
+        its relative max difference from the Newmark history (round-off when both are right)."""
+        from .exudyn_check import exudyn_history
+        p = self.periods[-1] if periods is None else periods
+        duration = p * self.P1
+        h = self.step(duration)
+        t_end = duration + self.settle_periods * self.P1
+        t, y, _ = Integrator(self.full, h, self.damping_beta).run(self.profile(duration), t_end)
+        te, ye = exudyn_history(self.full, self.profile(duration), t_end, h, self.damping_beta)
+        if len(te) != len(t) or not np.allclose(te, t):
+            raise RuntimeError("Exudyn recorded %d steps, the integrator %d" % (len(te), len(t)))
+        return dict(periods=p, step_s=h, difference=float(np.abs(ye - y).max() / max(np.abs(y).max(),
+                                                                                        np.finfo(float).tiny)))
+
     def limit(self, rows):
         """The first row (slowest to fastest) whose error exceeds the scene's accuracy, or None."""
         for row in sorted(rows, key=lambda r: r["peak_rate_deg_s"]):

@@ -120,6 +120,8 @@ def test_slewing_error_small_when_slow_and_growing_with_rate(galileo, profile):
     assert slow["error"] < 0.2 * scene.accuracy
     assert fast["error"] > 3 * slow["error"]
     assert study.limit([slow]) is None
+    still = study.baseline()                       # the same torque, the angle held: the fixed-angle error
+    assert still["error"] < 0.2 * scene.accuracy and still["peak_rate_deg_s"] == 0.0
     assert study.limit([slow, fast]) in (None, fast)
     # the total output differs from its elastic part (the slew moves the structure rigidly), in both models alike
     _, yf, ef = slow["full"]
@@ -159,7 +161,7 @@ def test_command_writes_table_and_chart(tmp_path):
     assert len(rows) == 2 and float(rows[0]["peak_rate_deg_s"]) < float(rows[1]["peak_rate_deg_s"])
     assert all(float(r["error"]) >= float(r["elastic_error"]) for r in rows)
     md = (out / "slew.md").read_text()
-    assert "| slew duration (s) |" in md and "Step check" in md and "galileo" in md
+    assert "| slew duration (s) |" in md and "Step check" in md and "galileo" in md and "No slew" in md
     difference = float(md.split("relative difference from this integrator ")[1].split()[0].rstrip("."))
     assert difference < 1e-6
     assert "results in" in proc.stdout

@@ -75,6 +75,8 @@ def run(argv):
                                              [x.strip() for x in args.input.split(",") if x.strip()]),
                            (ValueError, EXIT_INPUT, str))
         rows = study.sweep()
+        baseline = study.baseline()
+        progress("no slew (angle held), the slowest torque: error %.3g" % baseline["error"])
         check = study.convergence() if args.step_check else None
         exudyn = None
         if args.exudyn_check:
@@ -89,10 +91,10 @@ def run(argv):
             title = "%s: %s, full %d vs reduced %d dofs" % (scene.name, args.profile, study.full.dofs,
                                                             study.reduced.dofs)
             output.write_csv(rows, staging.file("slew.csv"), names)
-            output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error)
+            output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error, baseline)
             output.write_histories(rows, staging.file("slew_histories.png"), title, names)
             with open(staging.file("slew.md"), "w") as f:
-                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn))
+                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline))
         collective(write, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)))
         collective(staging.commit, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)),
                    interruptible=False)

@@ -17,7 +17,7 @@ def write_csv(rows, path, output_names):
             w.writerow(["%.6g" % r[c] for c in COLUMNS] + ["%.6g" % e for e in r["errors"]])
 
 
-def write_chart(rows, path, title, accuracy, limit, frf_error=None):
+def write_chart(rows, path, title, accuracy, limit, frf_error=None, baseline=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -30,6 +30,9 @@ def write_chart(rows, path, title, accuracy, limit, frf_error=None):
     ax.axhline(accuracy, color="r", lw=1, label="scene accuracy %g" % accuracy)
     if frf_error is not None and frf_error > 0:
         ax.axhline(frf_error, color="g", lw=1, ls=":", label="frequency-domain error %.3g" % frf_error)
+    if baseline is not None:
+        ax.axhline(baseline["error"], color="m", lw=1, ls="-.",
+                   label="no slew (angle held), same torque: %.3g" % baseline["error"])
     if limit is not None:
         ax.axvline(limit["peak_rate_deg_s"], color="k", lw=1, ls=":",
                    label="not adequate from %.3g deg/s" % limit["peak_rate_deg_s"])
@@ -66,7 +69,7 @@ def write_histories(rows, path, title, output_names):
     plt.close(fig)
 
 
-def markdown(rows, study, limit, check, frf_error, exudyn=None):
+def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None):
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
@@ -76,6 +79,10 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None):
     if frf_error is not None:
         lines += ["Frequency-domain error of the reduced model (the reduction's verification, max over the angles of "
                   "interest): %.3g." % frf_error, ""]
+    if baseline is not None:
+        lines += ["No slew (the slowest slew's torque with the angle held at %s deg): error %.3g (elastic %.3g, total "
+                  "%.3g): the reduced model's time-domain error at a fixed angle." % (
+                      _deg(s.alpha0_deg), baseline["error"], baseline["elastic_error"], baseline["total_error"]), ""]
     lines += ["| slew duration (s) | T / P1 | peak rate (deg/s) | step (s) | error | elastic | total | "
               "full (s) | reduced (s) |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:

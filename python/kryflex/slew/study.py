@@ -79,18 +79,20 @@ class SlewStudy:
         for bodies in (self.full, self.reduced):   # the drive u(t) on the chosen inputs only
             bodies.G = bodies.G[:, driven]
 
-    def profile(self, duration):
-        return Profile(self.kind, duration, np.radians(self.amplitude_deg), np.radians(self.alpha0_deg))
+    def profile(self, duration, still=False):
+        """The angle history of the given duration; still=True: the same drive torque with the angle held at alpha0."""
+        amplitude = 0.0 * self.amplitude_deg if still else self.amplitude_deg
+        return Profile(self.kind, duration, np.radians(amplitude), np.radians(self.alpha0_deg))
 
     def step(self, duration):
         return min(1.0 / (self.steps_per_period * self.f_top), duration / 100.0)
 
-    def simulate(self, bodies, duration, h=None):
+    def simulate(self, bodies, duration, h=None, still=False):
         """One model along the profile of the given duration: (t, y, y_elastic)."""
         h = self.step(duration) if h is None else h
         t_end = duration + self.settle_periods * self.P1
         every = max(1, int(np.ceil(t_end / h / 2000)))     # at most ~2000 recorded samples per run
-        return Integrator(bodies, h, self.damping_beta).run(self.profile(duration), t_end, record_every=every)
+        return Integrator(bodies, h, self.damping_beta).run(self.profile(duration, still), t_end, record_every=every)
 
     @staticmethod
     def errors(full, reduced):
@@ -102,15 +104,15 @@ class SlewStudy:
         total = np.abs(yf - yr).max(axis=0) / np.maximum(np.abs(yf).max(axis=0), tiny)
         return elastic, total
 
-    def run(self, periods, h=None):
+    def run(self, periods, h=None, still=False):
         duration = periods * self.P1
         t0 = time.perf_counter()
-        full = self.simulate(self.full, duration, h)
+        full = self.simulate(self.full, duration, h, still)
         t1 = time.perf_counter()
-        red = self.simulate(self.reduced, duration, h)
+        red = self.simulate(self.reduced, duration, h, still)
         t2 = time.perf_counter()
         elastic, total = self.errors(full, red)
-        prof = self.profile(duration)
+        prof = self.profile(duration, still)
         return dict(duration_s=duration, periods=periods, peak_rate_deg_s=float(np.degrees(prof.peak_rate)),
                     step_s=self.step(duration) if h is None else h,
                     error=float(max(elastic.max(), total.max())), elastic_error=float(elastic.max()),
@@ -127,6 +129,11 @@ class SlewStudy:
                              row["reduced_seconds"]))
             rows.append(row)
         return rows
+
+    def baseline(self, periods=None):
+        """The slowest slew's drive torque with the angle held at alpha0: the reduced model's time-domain error at a
+        fixed angle, which the slewing errors are to be read against."""
+        return self.run(self.periods[0] if periods is None else periods, still=True)
 
     def convergence(self, periods=None):
         """The fastest slew again with half the step: the change of its error (the time discretization's share)."""

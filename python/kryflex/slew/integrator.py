@@ -8,7 +8,9 @@ with z the bodies' own coordinates and C = beta K (stiffness-proportional dampin
 the reduced bodies, so the reduced C is the projection of the full one). With the effective stiffness
 Keff = K + gamma/(beta_N h) C + M/(beta_N h^2) factored once (SciPy's SuperLU), a step is one solve and a small dense
 system of the ties: D = T(alpha) I (bodies.py), W = Keff^-1 I^T is formed once, so the ties' Schur complement
-T (I W) T^T is (ties x ties) at every step. Outputs y = H z are recorded at every step.
+T (I W) T^T is (ties x ties) at every step; its correction W T^T (T S T^T)^-1 T is kept while the angle does not
+change. Bodies up to DENSE_MAX dofs step with Keff^-1 products formed once (a few dense products per step). Outputs
+y = H z and their elastic parts are recorded every record_every steps.
 """
 import numpy as np
 import scipy.sparse.linalg as spla

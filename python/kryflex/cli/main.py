@@ -1,4 +1,4 @@
-"""The kryflex command: reduce, reassemble, info, study, export, convert. Runs alone or under mpirun.
+"""The kryflex command: reduce, reassemble, info, study, slew, export, convert. Runs alone or under mpirun.
 
 Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)
@@ -19,6 +19,7 @@ from .export import run as export
 from .info import run as info
 from .reassemble import run as reassemble
 from .reduce import run as reduce
+from .slew import run as slew
 from .study import run as study
 
 USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structures
@@ -27,6 +28,7 @@ USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structur
   kryflex reassemble REDUCED --angle A  the reduced system at any angles, from the reduced-model file alone
   kryflex info SCENE                    bodies, dofs, joints, rigid and mechanism modes, inputs, outputs, memory
   kryflex study SCENE -o OUTDIR         every method swept on one full-order reference: error vs size and time
+  kryflex slew SCENE -o OUTDIR          time simulations under slewing: full vs reduced output error against slew rate
   kryflex convert INPUT --name NAME     import Matrix Market, NumPy .npz or Nastran DMIG (.pch) body matrices
   kryflex export REDUCED -o OUT.npz     the reduced bodies for multibody codes (--format neutral or exudyn)
 
@@ -49,15 +51,16 @@ def main(argv=None):
     if not argv:
         # the usage, and the one error line every refusal has (on stderr: standard output stays empty)
         say(USAGE.rstrip(), sys.stderr)
-        error("no command given: use reduce, reassemble, info, study, export or convert (kryflex -h)")
+        error("no command given: use reduce, reassemble, info, study, slew, export or convert (kryflex -h)")
         return EXIT_INPUT
     cmd, rest = argv[0], argv[1:]
     if cmd == "convert":
         from ..io.convert import main as convert_main
         return convert_main(rest)
-    commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study, "export": export}
+    commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study, "slew": slew,
+                "export": export}
     if cmd not in commands:
-        error("unknown command '%s': use reduce, reassemble, info, study, export or convert (kryflex -h)" % cmd)
+        error("unknown command '%s': use reduce, reassemble, info, study, slew, export or convert (kryflex -h)" % cmd)
         return EXIT_INPUT
     if "-quiet" in rest or "--quiet" in rest:
         from petsc4py import PETSc

@@ -1,0 +1,127 @@
+"""kryflex slew SCENE -o OUTDIR: the slewing study (issue 15): the scene reduced as `kryflex reduce` does, then the
+full-order and the reduced model integrated in time along the same slews at increasing rates (python/kryflex/slew/);
+writes slew.csv, slew.md, slew.png and slew_histories.png. The time integration is serial: the command runs on one
+rank (under mpirun with more it refuses, exit 2)."""
+import os
+import sys
+
+from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, say, split_petsc_options
+from .reduce import HELP_FLAGS, cannot_write, staged_output
+
+
+def parser():
+    p = Parser(prog="kryflex slew",
+               description="Time simulations of the full-order and the reduced model along slews of increasing rate: "
+                           "the error of the output histories against the peak slew rate, and the rate at which the "
+                           "reduced model stops meeting the scene's accuracy.")
+    p.add_argument("scene", help="scene file (YAML)")
+    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("--profile", default="slew", choices=("slew", "spinup"),
+                   help="slew: rest to rest (cycloidal); spinup: up to a constant rate, then spinning (default slew)")
+    p.add_argument("--amplitude", type=float, default=None,
+                   help="angle change of every revolute joint, deg (default: the span of the scene's angles)")
+    p.add_argument("--input", default=None,
+                   help="comma list of the inputs the drive torque acts on (default: every input of the scene)")
+    p.add_argument("--rates", type=int, default=10, help="number of slew durations (default 10)")
+    p.add_argument("--periods-max", type=float, default=20.0,
+                   help="slowest slew duration in first flexible periods P1 (default 20)")
+    p.add_argument("--periods-min", type=float, default=0.02,
+                   help="fastest slew duration in first flexible periods P1 (default 0.02)")
+    p.add_argument("--steps-per-period", type=int, default=20,
+                   help="time steps per period of the band's top frequency (default 20)")
+    p.add_argument("--settle-periods", type=float, default=2.0,
+                   help="first flexible periods simulated after the slew (default 2)")
+    p.add_argument("--no-step-check", dest="step_check", action="store_false",
+                   help="skip the rerun of the fastest slew with half the step")
+    p.add_argument("--exudyn-check", action="store_true",
+                   help="also integrate the full model's fastest slew with Exudyn's solver on the same equations and "
+                        "report the difference (dense constraint Jacobians: for small scenes)")
+    p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
+    return p
+
+
+def run(argv):
+    p = parser()
+    if any(a in HELP_FLAGS for a in argv):
+        say(p.format_help())
+        return EXIT_OK
+    args = collective(lambda: p.parse_args(split_petsc_options(
+        argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
+               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check", "--exudyn-check"})))
+    collective(_one_rank)
+    from .. import _core
+    from ..io.scene import SceneError, load_scene
+    from ..reducer import Reducer
+    from ..slew import output
+    from ..slew.study import SlewStudy
+
+    def progress(msg):
+        if not args.quiet:
+            say("[kryflex slew] %s" % msg, sys.stderr)
+
+    out = os.path.abspath(args.output)
+    staging, created, clean_up = staged_output(out)
+    committed = False
+    try:
+        scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
+                           (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+        progress("reducing %s" % scene.name)
+        reducer = Reducer(scene, quiet=True if args.quiet else None)
+        reduction = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the reduction failed: %s" % e))
+        frf_error = _frf_error(reducer)
+        study = collective(lambda: SlewStudy(scene, reduction.model, args.profile, args.amplitude, args.periods_max,
+                                             args.periods_min, args.rates, args.steps_per_period, args.settle_periods,
+                                             progress=progress, inputs=None if args.input is None else
+                                             [x.strip() for x in args.input.split(",") if x.strip()]),
+                           (ValueError, EXIT_INPUT, str))
+        rows = study.sweep()
+        baseline = study.baseline()
+        progress("no slew (angle held), the slowest torque: error %.3g" % baseline["error"])
+        check = study.convergence() if args.step_check else None
+        exudyn = None
+        if args.exudyn_check:
+            progress("the fastest slew by Exudyn's solver")
+            exudyn = collective(study.exudyn_check, (ImportError, EXIT_INPUT, lambda e: "--exudyn-check: Exudyn is not "
+                                                     "installed (%s): run scripts/setup" % e),
+                                (Exception, EXIT_NUMERIC, lambda e: "--exudyn-check: Exudyn's solution failed: %s" % e))
+        limit = study.limit(rows)
+        names = reduction.model.output_names
+
+        def write():
+            title = "%s: %s, full %d vs reduced %d dofs" % (scene.name, args.profile, study.full.dofs,
+                                                            study.reduced.dofs)
+            output.write_csv(rows, staging.file("slew.csv"), names)
+            output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error, baseline)
+            output.write_histories(rows, staging.file("slew_histories.png"), title, names)
+            with open(staging.file("slew.md"), "w") as f:
+                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline))
+        collective(write, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)))
+        collective(staging.commit, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)),
+                   interruptible=False)
+        committed = True
+    finally:
+        if not committed:
+            clean_up()
+    say("kryflex slew: %s" % ("adequate at every rate up to %.4g deg/s" % rows[-1]["peak_rate_deg_s"] if limit is None
+                              else "not adequate from %.4g deg/s (error %.3g > %g)"
+                              % (limit["peak_rate_deg_s"], limit["error"], study.accuracy)))
+    say("kryflex slew: results in %s (slew.csv, slew.md, slew.png, slew_histories.png)" % out)
+    return EXIT_OK
+
+
+def _one_rank():
+    from petsc4py import PETSc
+    if PETSc.COMM_WORLD.getSize() > 1:
+        raise Failure(EXIT_INPUT, "kryflex slew integrates in time on one rank (%d ranks given): run it without mpirun "
+                                  "(or with -n 1)" % PETSc.COMM_WORLD.getSize())
+
+
+def _frf_error(reducer):
+    """The reduction's frequency-domain error (max over the angles of interest), or None when it was not verified."""
+    import numpy as np
+    values = []
+    for c in range(reducer.nconfig):
+        if "frf_error" in reducer.result_names(c):
+            values.append(float(np.nanmax(reducer.result(c, "frf_error"))))
+    values = [v for v in values if np.isfinite(v)]
+    return max(values) if values else None

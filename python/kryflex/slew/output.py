@@ -1,0 +1,117 @@
+"""The slewing study's files: slew.csv (one row per slew duration), slew.md (the table, the adequacy limit and the
+step check) and slew.png (error against peak slew rate, log-log, the scene's accuracy as a line), plus the time
+histories of the fastest adequate and the first inadequate slew (slew_histories.png)."""
+import csv
+
+import numpy as np
+
+COLUMNS = ("duration_s", "periods", "peak_rate_deg_s", "step_s", "error", "elastic_error", "total_error", "full_seconds",
+           "reduced_seconds")
+
+
+def write_csv(rows, path, output_names):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(list(COLUMNS) + ["error_%s" % n for n in output_names])
+        for r in rows:
+            w.writerow(["%.6g" % r[c] for c in COLUMNS] + ["%.6g" % e for e in r["errors"]])
+
+
+def write_chart(rows, path, title, accuracy, limit, frf_error=None, baseline=None):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rate = np.array([r["peak_rate_deg_s"] for r in rows])
+    err = np.array([r["elastic_error"] for r in rows])
+    tot = np.array([r["total_error"] for r in rows])
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    ax.loglog(rate, err, "o-", label="elastic output (rigid modes removed)")
+    ax.loglog(rate, tot, "s--", alpha=0.6, label="total output")
+    ax.axhline(accuracy, color="r", lw=1, label="scene accuracy %g" % accuracy)
+    if frf_error is not None and frf_error > 0:
+        ax.axhline(frf_error, color="g", lw=1, ls=":", label="frequency-domain error %.3g" % frf_error)
+    if baseline is not None:
+        ax.axhline(baseline["error"], color="m", lw=1, ls="-.",
+                   label="no slew (angle held), same torque: %.3g" % baseline["error"])
+    if limit is not None:
+        ax.axvline(limit["peak_rate_deg_s"], color="k", lw=1, ls=":",
+                   label="not adequate from %.3g deg/s" % limit["peak_rate_deg_s"])
+    ax.set_xlabel("peak slew rate (deg/s)")
+    ax.set_ylabel("relative max-norm error of the output history")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_histories(rows, path, title, output_names):
+    """The elastic output histories (full and reduced) of the slowest and the fastest slew."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    picks = [rows[0], rows[-1]]
+    fig, axes = plt.subplots(len(picks), 1, figsize=(6.4, 5.6))
+    for ax, r in zip(axes, picks):
+        tf, _, ef = r["full"]
+        tr, _, er = r["reduced"]
+        ax.plot(tf, ef[:, 0], label="full (%s)" % output_names[0])
+        ax.plot(tr, er[:, 0], "--", label="reduced")
+        ax.axvline(r["duration_s"], color="k", lw=0.8, ls=":")
+        ax.set_title("slew %.3g s (peak %.3g deg/s): error %.3g" % (r["duration_s"], r["peak_rate_deg_s"], r["error"]),
+                     fontsize=9)
+        ax.set_xlabel("t (s)")
+        ax.legend(fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None):
+    s = study
+    lines = ["# Slewing study: %s" % s.scene.name, "",
+             "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
+             "(P1 %.4g s); stiffness-proportional damping %.3g at f1; drive on %s; accuracy %g."
+             % (s.full.dofs, s.reduced.dofs, s.kind, _deg(s.alpha0_deg), _deg(s.amplitude_deg), s.f1, s.P1, s.zeta,
+                ", ".join(s.inputs), s.accuracy), ""]
+    if frf_error is not None:
+        lines += ["Frequency-domain error of the reduced model (the reduction's verification, max over the angles of "
+                  "interest): %.3g." % frf_error, ""]
+    if baseline is not None:
+        lines += ["No slew (the slowest slew's torque with the angle held at %s deg): error %.3g (elastic %.3g, total "
+                  "%.3g): the reduced model's time-domain error at a fixed angle." % (
+                      _deg(s.alpha0_deg), baseline["error"], baseline["elastic_error"], baseline["total_error"]), ""]
+    lines += ["| slew duration (s) | T / P1 | peak rate (deg/s) | step (s) | error | elastic | total | "
+              "full (s) | reduced (s) |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append("| %.4g | %.3g | %.4g | %.3g | %.3g | %.3g | %.3g | %.1f | %.1f |" % (
+            r["duration_s"], r["periods"], r["peak_rate_deg_s"], r["step_s"], r["error"], r["elastic_error"],
+            r["total_error"],
+            r["full_seconds"], r["reduced_seconds"]))
+    lines.append("")
+    if limit is None:
+        lines.append("The reduced model stays adequate (error <= %g) at every rate up to %.4g deg/s."
+                     % (s.accuracy, max(r["peak_rate_deg_s"] for r in rows)))
+    else:
+        lines.append("The reduced model stops being adequate (error > %g) at a peak slew rate of %.4g deg/s "
+                     "(slew of %.3g s = %.3g P1)." % (s.accuracy, limit["peak_rate_deg_s"], limit["duration_s"],
+                                                       limit["periods"]))
+    if check is not None:
+        lines += ["", "Step check (fastest slew, step %.3g s and half of it): error %.4g and %.4g; the full model's "
+                  "elastic output changes by %.2g of its peak." % (check["step_s"], check["error"],
+                                                                   check["error_half_step"], check["output_change"])]
+    if exudyn is not None:
+        lines += ["", "Exudyn check (the full model's fastest slew by Exudyn's generalized-alpha solver on the same "
+                  "equations, step %.3g s): relative difference from this integrator %.2g." % (exudyn["step_s"],
+                                                                                               exudyn["difference"])]
+    lines += ["", "error: max(elastic, total), each the largest over outputs of max_t |y_full - y_red| / max_t |y_full|; "
+              "elastic: of the outputs of the elastic parts (rigid-body and mechanism modes taken out M-orthogonally "
+              "at alpha(t)); total: of the outputs themselves."]
+    lines += ["", "Chart: slew.png; histories of the slowest and the fastest slew: slew_histories.png.", ""]
+    return "\n".join(lines)
+
+
+def _deg(a):
+    return ", ".join("%g" % x for x in np.atleast_1d(a))

@@ -135,12 +135,15 @@ def _rank_differences(one, two, key):
 def test_two_ranks_same_errors(serial, two_ranks):
     """The same runs, sizes and errors on 2 ranks: the H-inf error to 1e-5 relative where it is the model's, to 1e-6
     absolute where it is the reference's floor; the pointwise error (divided by down to 1e-3 of a pair's peak in
-    notches) to 1e-3. Not 1e-8: the C reducer's own full-order reference and reduced responses differ by ~5e-7
-    (relative) between 1 and 2 ranks on Galileo (the strict test below)."""
+    notches) to 1e-3 relative where it is the model's, to 1e-5 absolute where it is the reference's floor (the
+    full-order reference repeats to ~3e-6 only, SLEPc's start vectors carrying on between solves, and the pointwise
+    measure divides that noise by less than the peak: on Debian's current packages eigen-static at 8 modes reads 3.2e-6
+    on 1 rank and 1.8e-6 on 2). Not 1e-8: the C reducer's own full-order reference and reduced responses differ by
+    ~5e-7 (relative) between 1 and 2 ranks on Galileo (the strict test below)."""
     relative, absolute = _rank_differences(serial[1], two_ranks[1], "error_hinf")
     assert relative[0] <= 1e-5 and absolute[0] <= 1e-6, (relative, absolute)
     relative, absolute = _rank_differences(serial[1], two_ranks[1], "error_pointwise")
-    assert relative[0] <= 1e-3 and absolute[0] <= 1e-6, (relative, absolute)
+    assert relative[0] <= 1e-3 and absolute[0] <= 1e-5, (relative, absolute)
 
 
 @pytest.mark.xfail(strict=True, reason="the C reducer's verification response (frf_full) and the reduced models' "

@@ -46,32 +46,6 @@ static PetscErrorCode KFReducerBuildBasis_Eigen(KFReducer r, KFSystem sys, KFFle
   PetscFunctionReturn(0);
 }
 
-/* [A, B] for two tall dense Mats with the same row layout */
-static PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X)
-{
-  PetscInt           nl, N, p, q, lda, ldb, ldx;
-  const PetscScalar *pa, *pb;
-  PetscScalar       *px;
-
-  PetscFunctionBegin;
-  PetscCall(MatGetLocalSize(A, &nl, NULL));
-  PetscCall(MatGetSize(A, &N, &p));
-  PetscCall(MatGetSize(B, NULL, &q));
-  PetscCall(KFDenseCreate(PetscObjectComm((PetscObject)A), nl, N, p + q, X));
-  PetscCall(MatDenseGetLDA(A, &lda));
-  PetscCall(MatDenseGetLDA(B, &ldb));
-  PetscCall(MatDenseGetLDA(*X, &ldx));
-  PetscCall(MatDenseGetArrayRead(A, &pa));
-  PetscCall(MatDenseGetArrayRead(B, &pb));
-  PetscCall(MatDenseGetArrayWrite(*X, &px));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&px[j * ldx], &pa[j * lda], nl));
-  for (PetscInt j = 0; j < q; j++) PetscCall(PetscArraycpy(&px[(p + j) * ldx], &pb[j * ldb], nl));
-  PetscCall(MatDenseRestoreArrayWrite(*X, &px));
-  PetscCall(MatDenseRestoreArrayRead(B, &pb));
-  PetscCall(MatDenseRestoreArrayRead(A, &pa));
-  PetscFunctionReturn(0);
-}
-
 static PetscErrorCode KFReducerVectors_Eigen(KFReducer r, KFSystem sys, KFFlexSolver solver, KFReducerBasis *basis, const PetscBool kept[], PetscBool static_correction, Mat *X)
 {
   Mat        Mm = (Mat)basis->data, K, X0, S, Ms, Ks, G, Ht;

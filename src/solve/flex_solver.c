@@ -70,11 +70,18 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
   PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", check, &check, NULL));
   PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", limit, &limit, &has_limit));
   PetscOptionsEnd();
-  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine)); /* MB on this rank */
+  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine)); /* MB on this rank, rounded down */
+  if (mine > 0) need[0] = (PetscReal)mine;
+  else { /* a small model: its factors' entries (INFO(3) reals, INFO(4) integers; negative: millions) */
+    PetscInt nr, ni;
+
+    PetscCall(MatMumpsGetInfo(F, 3, &nr));
+    PetscCall(MatMumpsGetInfo(F, 4, &ni));
+    need[0] = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
+  }
   PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
   PetscCallMPI(MPI_Comm_size(node, &size));
   PetscCallMPI(MPI_Comm_rank(node, &nrank));
-  need[0] = (PetscReal)mine;
   PetscCall(MPIU_Allreduce(need, need + 1, 1, MPIU_REAL, MPIU_SUM, node));
   nnode = size;
   avail = has_limit ? limit : KFNodeMemoryAvailableMB();
@@ -82,7 +89,7 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
   /* the node whose estimate exceeds its memory by the most decides the message (same on every rank) */
   in[0] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL;
   in[1] = need[1];
-  in[2] = (PetscReal)mine;
+  in[2] = need[0];
   PetscCall(MPIU_Allreduce(in, worst, 3, MPIU_REAL, MPIU_MAX, comm));
   *estimate_mb = worst[2];
   if (worst[0] > 0) {
@@ -94,7 +101,7 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
     }
     PetscCall(MPIU_Allreduce(mine_fig, fig, 2, MPIU_REAL, MPIU_MAX, comm));
     (void)nnode;
-    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.0f MB for the %s factorization on one node, %.0f MB are available%s. Run on more nodes, add -kf_ooc (out-of-core factors, MUMPS_OOC_TMPDIR names the folder) or -kf_blr 1e-8 (block low-rank), or use a machine with more memory (-kf_memory_check 0 tries anyway)", (double)fig[0], ooc ? "out-of-core" : "in-core", (double)fig[1], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
+    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB for the %s factorization on one node, %.3g MB are available%s. Run on more nodes, add -kf_ooc (out-of-core factors, MUMPS_OOC_TMPDIR names the folder) or -kf_blr 1e-8 (block low-rank), or use a machine with more memory (-kf_memory_check 0 tries anyway)", (double)fig[0], ooc ? "out-of-core" : "in-core", (double)fig[1], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
   }
   PetscFunctionReturn(0);
 }
@@ -291,7 +298,9 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
   if (solver->refine > 0 && solver->shift == 0) {
     PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
     solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
-    for (PetscInt it = 0; it < solver->refine && rel > solver->refine_rtol; it++) {
+    for (PetscInt it = 0; it < solver->refine && rel > solver->refine_rtol && !solver->refine_stalled; it++) {
+      const PetscReal rel0 = rel;
+
       PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
       PetscCall(KFFlexSolverSolveOnce(solver, R, dX));
       solver->perf.refinement_solves++;
@@ -299,6 +308,9 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
       PetscCall(MatDestroy(&dX));
       PetscCall(MatDestroy(&R));
       PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
+      /* a step that does not halve the residual found its floor (the rounding of the rigid projection, not the
+         factor's): later blocks of this factor are not refined (rtol 0 keeps refining) */
+      if (rel > 0.5 * rel0 && solver->refine_rtol > 0) solver->refine_stalled = PETSC_TRUE;
     }
     PetscCall(MatDestroy(&R));
     solver->perf.residual_final_max = PetscMax(solver->perf.residual_final_max, rel);

@@ -167,6 +167,7 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *P
 /* The same eigensolve returning the M-normalized modes (e x nev dense, first nconv columns filled): the basis of the
    eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
 PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes);
+PETSC_EXTERN PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes); /* with its factor */
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
 PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[]);
 PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);

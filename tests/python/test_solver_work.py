@@ -141,3 +141,28 @@ def test_memory_estimate_stops_before_the_factorization(tmp_path, ranks):
     assert "not enough memory to factor the stiffness matrix" in errors[0]
     assert "-kf_memory_limit_mb" in errors[0] and "-kf_ooc" in errors[0]
     assert not (out / "summary.json").exists()  # no half-written output
+
+
+def test_modal_baseline_shares_the_factorization():
+    """The eigenvector baseline's sparse eigensolve (forced with -kf_verify_dense_max_dofs 0) runs on the flexible
+    solver's factor: one factorization in the whole run, and the modes are the dense reference's."""
+    scene = kryflex.load_scene(GALILEO)
+    angles = scene.configurations[0]
+    from petsc4py import PETSc
+    PETSc.Log.begin()
+    event = PETSc.Log.Event("MatCholFctrNum")
+    before = event.getPerfInfo()["count"]
+    reducer = kryflex.Reducer(scene, quiet=True, reducer_type="eigen", search=False, verify=False,
+                              verify_dense_max_dofs=0, check_null_pivots=False)
+    reducer.reduce()
+    # one numeric factorization per configuration: SLEPc's shift-and-invert made none of its own
+    assert event.getPerfInfo()["count"] - before == len(reducer.configurations)
+    freqs = np.ravel(reducer.result(0, "krylov_frequencies_hz"))
+    rscene = ref.load_scene(GALILEO)
+    Ms, Ks, _, _ = ref.assemble(rscene, angles)
+    lam = np.sort(ref.eigenvalues(Ms, Ks))
+    nrig = ref.rigid_count(Ms, Ks)
+    fref = np.sqrt(lam[nrig:nrig + freqs.size]) / (2 * np.pi)
+    assert freqs.size >= 1
+    assert np.allclose(freqs, fref, rtol=1e-8)
+    assert scalar(reducer, "solve_calls") > freqs.size   # the eigensolve's steps went through the flexible solver

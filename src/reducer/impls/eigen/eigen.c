@@ -16,7 +16,7 @@ static PetscErrorCode KFReducerBuildBasis_Eigen(KFReducer r, KFSystem sys, KFFle
   nev = PetscMin(nflex, 10);
   while (PETSC_TRUE) { /* double the count until the modes pass fmax */
     PetscCall(PetscMalloc1(nev, &w2));
-    PetscCall(KFSystemEigenModes(sys, nev, &nconv, w2, &modes));
+    PetscCall(KFFlexSolverEigenModes(solver, nev, &nconv, w2, &modes)); /* the flexible solver's factor: no second one */
     if (nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) > fmax)) break;
     PetscCall(PetscFree(w2));
     PetscCall(MatDestroy(&modes));

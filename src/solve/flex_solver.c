@@ -147,7 +147,14 @@ static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool o
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
-  if (estimate_mb) PetscCall(KFCheckFactorMemory(*F, ooc, estimate_mb));
+  if (estimate_mb) {
+    PetscInt used;
+
+    PetscCall(KFCheckFactorMemory(*F, ooc, estimate_mb));
+    PetscCall(MatMumpsGetInfog(*F, 7, &used)); /* the ordering MUMPS applied (auto, or a fallback) */
+    for (PetscInt k = 0; k < 7; k++)
+      if (KFOrderingIcntl[k] == used) PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", KFOrderings[k], spd ? "SYM=1" : "SYM=2", blr > 0 ? ", block low-rank" : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+  }
   PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
   PetscCall(MatFactorGetError(*F, &err));
   PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);

@@ -98,7 +98,6 @@ struct _n_KFFlexSolver {
   PetscInt  null_pivots, negative_pivots;
   PetscInt  refine;          /* at most this many iterative refinement steps against K_S per block */
   PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
-  PetscBool refine_stalled;  /* a step did not halve the residual: no more refinement with this factor */
   PetscBool setup;
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
 };

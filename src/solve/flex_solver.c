@@ -9,11 +9,11 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
   (*solver)->refine      = 1;
-  (*solver)->refine_rtol = 1e-10;
+  (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
   PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
-  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-10; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
+  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
   PetscOptionsEnd();
   PetscCheck((*solver)->refine >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
   PetscCheck((*solver)->refine_rtol >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)(*solver)->refine_rtol);

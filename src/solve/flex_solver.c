@@ -119,12 +119,12 @@ static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool o
   MatFactorError err;
   PetscReal      blr = 0;
   PetscInt       ordering = 6; /* auto */
-  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE;
+  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, user7 = PETSC_FALSE, ordering_set = PETSC_FALSE;
 
   PetscFunctionBegin;
   if (opts) {
     PetscOptionsBegin(PetscObjectComm((PetscObject)A), NULL, "kryflex factorization", "KFFlexSolverSetUp");
-    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7)): auto lets MUMPS choose (PORD in Debian's build)", "KFFlexSolverSetUp", KFOrderings, 7, KFOrderings[ordering], &ordering, NULL));
+    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7)): auto lets MUMPS choose (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 7, KFOrderings[ordering], &ordering, NULL));
     PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", blr, &blr, NULL));
     PetscCall(PetscOptionsBool("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR", "KFFlexSolverSetUp", ooc, &ooc, NULL));
     PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", spd, &spd, NULL));
@@ -138,7 +138,16 @@ static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool o
   if (null_threshold != 0) PetscCall(MatMumpsSetCntl(*F, 3, null_threshold));
   PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
   if (opts) {
-    PetscCall(MatMumpsSetIcntl(*F, 7, KFOrderingIcntl[ordering]));
+    /* PETSc 3.18 rereads ICNTL(7) from -mat_mumps_icntl_7 at the analysis (MatMumpsSetIcntl before it does not
+       hold): the choice goes through the options database for the analysis only, unless the user gave the option */
+    PetscCall(PetscOptionsHasName(NULL, ((PetscObject)A)->prefix, "-mat_mumps_icntl_7", &user7));
+    if (!user7 && KFOrderingIcntl[ordering] != 7) {
+      char val[8];
+
+      PetscCall(PetscSNPrintf(val, sizeof(val), "%d", (int)KFOrderingIcntl[ordering]));
+      PetscCall(PetscOptionsSetValue(NULL, "-mat_mumps_icntl_7", val));
+      ordering_set = PETSC_TRUE;
+    }
     if (blr > 0) {
       PetscCall(MatMumpsSetIcntl(*F, 35, 1)); /* BLR factorization, automatic choice of the variant */
       PetscCall(MatMumpsSetCntl(*F, 7, blr));
@@ -147,6 +156,7 @@ static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool o
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
+  if (ordering_set) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
   if (estimate_mb) {
     PetscInt used;
 

@@ -169,3 +169,13 @@ def test_modal_baseline_shares_the_factorization():
     assert freqs.size >= 1
     assert np.allclose(freqs, fref, rtol=1e-8)
     assert scalar(reducer, "solve_calls") > freqs.size   # the eigensolve's steps went through the flexible solver
+
+
+@pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (scripts/setup)")
+@pytest.mark.parametrize("ordering", ["amd", "pord"])
+def test_ordering_is_the_one_applied(tmp_path, ordering):
+    """-kf_ordering reaches MUMPS' analysis: the progress line reports the ordering MUMPS applied (INFOG(7))."""
+    p = subprocess.run([KRYFLEX, "reduce", GALILEO, "-o", str(tmp_path / "o"), "-kf_verify", "false",
+                        "-kf_ordering", ordering], env=ENV, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert ("MUMPS analysis: %s ordering" % ordering) in p.stdout

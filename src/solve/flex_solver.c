@@ -60,10 +60,9 @@ static PetscReal KFNodeMemoryAvailableMB(void)
 static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estimate_mb)
 {
   MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
-  PetscInt  mine, nnode;
+  PetscInt  mine;
   PetscReal limit = -1, need[2], avail, worst[3], in[3];
   PetscBool check = PETSC_TRUE, has_limit;
-  PetscMPIInt nrank, size;
 
   PetscFunctionBegin;
   PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
@@ -80,10 +79,7 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
     need[0] = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
   }
   PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCallMPI(MPI_Comm_size(node, &size));
-  PetscCallMPI(MPI_Comm_rank(node, &nrank));
   PetscCall(MPIU_Allreduce(need, need + 1, 1, MPIU_REAL, MPIU_SUM, node));
-  nnode = size;
   avail = has_limit ? limit : KFNodeMemoryAvailableMB();
   PetscCallMPI(MPI_Comm_free(&node));
   /* the node whose estimate exceeds its memory by the most decides the message (same on every rank) */
@@ -100,7 +96,6 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
       mine_fig[1] = avail;
     }
     PetscCall(MPIU_Allreduce(mine_fig, fig, 2, MPIU_REAL, MPIU_MAX, comm));
-    (void)nnode;
     SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB for the %s factorization on one node, %.3g MB are available%s. Run on more nodes, add -kf_ooc (out-of-core factors, MUMPS_OOC_TMPDIR names the folder) or -kf_blr 1e-8 (block low-rank), or use a machine with more memory (-kf_memory_check 0 tries anyway)", (double)fig[0], ooc ? "out-of-core" : "in-core", (double)fig[1], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
   }
   PetscFunctionReturn(0);

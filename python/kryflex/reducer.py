@@ -123,6 +123,7 @@ class Reducer:
         with quiet_progress(quiet), kf_options(options):
             r.set_from_options()
         self.handle = r
+        self._options = options     # again during reduce(): the options the solve's stages read (refine_rtol, blr...)
         self.configurations = self._angles_of_interest()
         self._reduction = None
 
@@ -150,7 +151,7 @@ class Reducer:
             # see _binding/common.pxi): destroyed here, a collective point, before the new ones are made
             from petsc4py import PETSc
             PETSc.garbage_cleanup(self.scene.comm)
-            with quiet_progress(self.quiet):
+            with quiet_progress(self.quiet), kf_options(self._options):
                 self.handle.setup()
                 self.handle.solve()
             chosen, single, multi = self.handle.models(ReducedModel)

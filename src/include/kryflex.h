@@ -97,6 +97,15 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverSetUp(KFFlexSolver);
 PETSC_EXTERN PetscErrorCode KFFlexSolverApply(KFFlexSolver, Mat B, Mat X);
 PETSC_EXTERN PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt *nheld, PetscInt *null_pivots, PetscInt *negative_pivots);
+/* What a flexible solver's work cost: factorization seconds (analysis + numeric) and MUMPS' memory estimate per
+   rank (MB, max over ranks), block solves (MatMatSolve calls, columns, seconds, refinement solves among them), and
+   the relative residuals ||P B - K_S X||_F / ||P B||_F of each block's first solve (max) and of its final X (max). */
+typedef struct {
+  PetscLogDouble factor_seconds, solve_seconds;
+  PetscReal      memory_estimate_mb, residual_first_max, residual_final_max;
+  PetscInt       solve_calls, solve_columns, refinement_solves, blocks;
+} KFFlexSolverPerf;
+PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
 
 /* ---------------------------------------------------------------- Krylov basis */
 
@@ -158,6 +167,7 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *P
 /* The same eigensolve returning the M-normalized modes (e x nev dense, first nconv columns filled): the basis of the
    eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
 PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes);
+PETSC_EXTERN PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes); /* with its factor */
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
 PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[]);
 PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);

@@ -98,13 +98,16 @@ struct _n_KFFlexSolver {
   PetscInt  nheld, *held;    /* held system dofs (global) */
   PetscReal shift;
   PetscInt  null_pivots, negative_pivots;
-  PetscInt  refine;          /* iterative refinement steps against K_S */
+  PetscInt  refine;          /* at most this many iterative refinement steps against K_S per block */
+  PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
   PetscBool setup;
+  KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
 };
 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */
 PETSC_INTERN PetscErrorCode KFDenseCreate(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *);
+PETSC_INTERN PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X); /* [A, B]: two tall dense Mats, same row layout */
 PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[]); /* A^T B replicated (A, B tall dense) */
 PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in long double */

@@ -32,16 +32,14 @@ static PetscErrorCode KFRemoveRigid(KFSystem sys, Vec v, Vec Mv, Vec c, Vec Pc)
    kept M-orthogonal to the rigid modes (orthogonalize, remove the rigid content, orthogonalize again, so that neither
    pass leaves rounding of the other behind); a column whose M-norm falls below tol times its norm before
    orthogonalization is linearly dependent on the basis and is dropped (deflation). */
-static PetscErrorCode KFBVAppendDeflated(KFSystem sys, BV V, Mat W, PetscReal tol, PetscInt *k, PetscInt *ndeflated)
+static PetscErrorCode KFBVAppendDeflated(KFSystem sys, BV V, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *k, PetscInt *ndeflated)
 {
-  PetscInt p;
-  Vec      Mv, c, Pc;
+  Vec Mv, c, Pc;
 
   PetscFunctionBegin;
-  PetscCall(MatGetSize(W, NULL, &p));
   PetscCall(MatCreateVecs(sys->Phi, &c, &Pc));
   PetscCall(VecDuplicate(Pc, &Mv));
-  for (PetscInt j = 0; j < p; j++) {
+  for (PetscInt j = j0; j < j1; j++) {
     Vec       w;
     PetscReal norm0, norm;
     PetscBool lindep;
@@ -169,53 +167,85 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
-    int      source = (blk % 2 == 1 && made[1] < want[1]) || made[0] >= want[0] ? 1 : 0;
-    Mat      B = source ? sys->Ht : sys->G, W;
-    PetscInt k0 = k, p;
+    int       src[2], nsrc = 0;
+    Mat       Bs[2] = {NULL, NULL}, B, W;
+    PetscInt  off[3] = {0, 0, 0}, p;
+    PetscBool fresh[2] = {PETSC_FALSE, PETSC_FALSE};
 
-    made[source]++;
-    if (!done[source] && damp && !source) { /* the damped input chain: its blocks' u halves join the basis */
+    src[0] = (blk % 2 == 1 && made[1] < want[1]) || made[0] >= want[0] ? 1 : 0;
+    made[src[0]]++;
+    if (!done[src[0]]) nsrc = 1;
+    if (nsrc && damp && !src[0]) { /* the damped input chain: its blocks' u halves join the basis (own solves) */
       Mat      U;
-      PetscInt k0d = k;
+      PetscInt k0d = k, pu;
 
+      nsrc = 0;
       PetscCall(KFDampedChainNext_Private(solver, &dch, sys->G, tol, &U));
       if (U) {
-        PetscCall(KFBVAppendDeflated(sys, V, U, tol, &k, &ndefl));
+        PetscCall(MatGetSize(U, NULL, &pu));
+        PetscCall(KFBVAppendDeflated(sys, V, U, 0, pu, tol, &k, &ndefl));
         PetscCall(MatDestroy(&U));
       } else done[0] = PETSC_TRUE;
       if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov damped input block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", made[0], want[0], k - k0d, k));
       PetscCall(KFInterruptCheck(s->comm));
-    } else if (!done[source]) {
-      if (!Prev[source]) PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
-      else {
-        PetscCall(MatMatMult(sys->Ms, Prev[source], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &B));
-        PetscCall(MatDuplicate(Prev[source], MAT_DO_NOT_COPY_VALUES, &W));
-        PetscCall(MatDestroy(&Prev[source]));
-      }
-      PetscCall(KFFlexSolverApply(solver, B, W));
-      if (made[source] > 1) PetscCall(MatDestroy(&B));
-      PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
-      /* each chain is an Arnoldi process of its own (its next block starts from its own orthonormalized block, not
-         from one the other chain has been taken out of, which would leave its Krylov space); the basis collects both */
-      {
-        PetscInt kc0 = kc[source], dummy = 0;
-
-        PetscCall(KFBVAppendDeflated(sys, chain[source], W, tol, &kc[source], &dummy));
-        if (kc[source] > kc0) {
-          PetscCall(KFBVColumnsToMat(chain[source], kc0, kc[source], &Prev[source]));
-          PetscCall(KFBVAppendDeflated(sys, V, Prev[source], tol, &k, &ndefl));
-        }
-        ndefl += dummy;
-        if (kc[source] == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
-      }
-      PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
-      PetscCall(MatDestroy(&W));
-      PetscCall(MatGetSize(source ? sys->Ht : sys->G, NULL, &p));
-      if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", made[source], want[source], k - k0, p, k));
-      PetscCall(KFInterruptCheck(s->comm)); /* a command's SIGINT/SIGTERM: every rank stops after the same block */
     }
-    info->block_end[blk] = k;
-    info->nblocks        = blk + 1;
+    /* the next block, when it belongs to the other chain, does not depend on this one: both go through the factor
+       in one block solve (one MatMatSolve of a + t columns instead of two); a damped input block has its own solves */
+    if (nsrc && blk + 1 < nblocks) {
+      int next = ((blk + 1) % 2 == 1 && made[1] < want[1]) || made[0] >= want[0] ? 1 : 0;
+      if (next != src[0] && !done[next] && !(damp && !next)) {
+        src[1] = next;
+        made[next]++;
+        nsrc = 2;
+      }
+    }
+    if (nsrc) {
+      for (int q = 0; q < nsrc; q++) {
+        const int c = src[q];
+        if (!Prev[c]) Bs[q] = c ? sys->Ht : sys->G;
+        else {
+          PetscCall(MatMatMult(sys->Ms, Prev[c], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Bs[q]));
+          PetscCall(MatDestroy(&Prev[c]));
+          fresh[q] = PETSC_TRUE;
+        }
+        PetscCall(MatGetSize(Bs[q], NULL, &p));
+        off[q + 1] = off[q] + p;
+      }
+      if (nsrc == 1) B = Bs[0];
+      else PetscCall(KFDenseHStack(Bs[0], Bs[1], &B));
+      PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
+      PetscCall(KFFlexSolverApply(solver, B, W));
+      if (nsrc == 2) PetscCall(MatDestroy(&B));
+      for (int q = 0; q < nsrc; q++)
+        if (fresh[q]) PetscCall(MatDestroy(&Bs[q]));
+      for (int q = 0; q < nsrc; q++) {
+        const int      source = src[q];
+        const PetscInt b      = blk + q, k0 = k;
+
+        PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
+        /* each chain is an Arnoldi process of its own (its next block starts from its own orthonormalized block, not
+           from one the other chain has been taken out of, which would leave its Krylov space); the basis collects
+           both */
+        {
+          PetscInt kc0 = kc[source], dummy = 0;
+
+          PetscCall(KFBVAppendDeflated(sys, chain[source], W, off[q], off[q + 1], tol, &kc[source], &dummy));
+          if (kc[source] > kc0) {
+            PetscCall(KFBVColumnsToMat(chain[source], kc0, kc[source], &Prev[source]));
+            PetscCall(KFBVAppendDeflated(sys, V, Prev[source], 0, kc[source] - kc0, tol, &k, &ndefl));
+          }
+          ndefl += dummy;
+          if (kc[source] == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
+        }
+        PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
+        if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", made[source], want[source], k - k0, off[q + 1] - off[q], k));
+        info->block_end[b] = k;
+      }
+      PetscCall(MatDestroy(&W));
+      PetscCall(KFInterruptCheck(s->comm)); /* a command's SIGINT/SIGTERM: every rank stops after the same block */
+    } else info->block_end[blk] = k;
+    if (nsrc == 2) blk++; /* the pair is done */
+    info->nblocks = blk + 1;
     if (done[0] && (done[1] || !nout)) { /* both chains exhausted: later blocks would add nothing */
       for (PetscInt b = blk + 1; b < nblocks; b++) info->block_end[b] = k;
       info->nblocks = nblocks;

@@ -175,6 +175,15 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsInt("-kf_frequency_points", "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "KFReducerSetVerification", npoints, &npoints, NULL));
   PetscCall(PetscOptionsReal("-kf_frf_floor_db", "FRF error: notches deeper than this below the band's peak count against this level", "KFFRFError", floor_db, &floor_db, NULL));
   PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
+  {
+    PetscBool full = r->full_moments_set ? r->full_moments : r->verify, set;
+
+    PetscCall(PetscOptionsBool("-kf_full_moments", "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", "KFReducerSolve", full, &full, &set));
+    if (set) {
+      r->full_moments     = full;
+      r->full_moments_set = PETSC_TRUE;
+    }
+  }
   if (r->ops->setfromoptions) PetscCall((*r->ops->setfromoptions)(r, PetscOptionsObject));
   PetscCall(PetscObjectProcessOptionsHandlers((PetscObject)r, PetscOptionsObject));
   PetscOptionsEnd();

@@ -9,6 +9,31 @@
 */
 #include <kryflex/reducerimpl.h>
 
+/* full-order moments by solves: for the verification (its reference needs the first two), or when asked for */
+static PetscBool KFReducerFullMoments_Private(KFReducer r)
+{
+  return (PetscBool)(r->verify || (r->full_moments_set && r->full_moments));
+}
+
+PetscErrorCode KFReducerAddPerf_Private(KFReducer r, KFFlexSolver solver)
+{
+  KFFlexSolverPerf p;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverGetPerf(solver, &p));
+  r->perf.factor_seconds += p.factor_seconds;
+  r->perf.solve_seconds += p.solve_seconds;
+  r->perf.memory_estimate_mb = PetscMax(r->perf.memory_estimate_mb, p.memory_estimate_mb);
+  r->perf.residual_first_max = PetscMax(r->perf.residual_first_max, p.residual_first_max);
+  r->perf.residual_final_max = PetscMax(r->perf.residual_final_max, p.residual_final_max);
+  r->perf.solve_calls += p.solve_calls;
+  r->perf.solve_columns += p.solve_columns;
+  r->perf.refinement_solves += p.refinement_solves;
+  r->perf.blocks += p.blocks;
+  PetscFunctionReturn(0);
+}
+
+
 /* one configuration the solve visits */
 typedef struct {
   const PetscReal *angles;   /* nrev (points into the reducer's arrays) */
@@ -233,11 +258,13 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     PetscCall(PetscTime(&t1));
     times[3] += t1 - t0;
 
-    if (cfg->interest >= 0) { /* full-order moments where the models are compared */
+    if (cfg->interest >= 0 && KFReducerFullMoments_Private(r)) { /* full-order moments where the models are compared */
       t0 = t1;
       PetscCall(KFFlexSolverMoments(solver, nmom, &Lfull[cfg->interest * nmom * t * a]));
       PetscCall(PetscTime(&t1));
       times[4] += t1 - t0;
+    } else if (cfg->interest >= 0) { /* not asked for: the moment checks say "not computed" (NaN) */
+      for (PetscInt e = 0; e < nmom * t * a; e++) Lfull[cfg->interest * nmom * t * a + e] = (PetscReal)NAN;
     }
     PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
 
@@ -299,6 +326,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
         times[6] += t1 - t0;
       }
     }
+    PetscCall(KFReducerAddPerf_Private(r, solver));
     PetscCall(KFFlexSolverDestroy(&solver));
     PetscCall(KFProgress(comm, "  %" PetscInt_FMT " %s vectors (%" PetscInt_FMT " deflated), %" PetscInt_FMT " of %" PetscInt_FMT " modes kept; held dofs %" PetscInt_FMT, c, type, basis.ndeflated, nkept, c, nheld));
     PetscCall(PetscFree4(imp, kept, freq, keptf));
@@ -306,6 +334,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
   }
   PetscCall(KFSystemDestroy(&sys));
   PetscCall(KFInterruptCheck(comm));
+  if (!KFReducerFullMoments_Private(r)) PetscCall(KFReducerNote_Private(r, "full-order moments not computed (verification off): the moment checks are empty; -kf_full_moments computes them"));
 
   /* alpha_G and its model; the other candidates are not needed */
   {
@@ -411,6 +440,7 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, PetscInt nm
     PetscCall(KFFlexSolverCreate(sys, &solver));
     PetscCall(KFFlexSolverSetShift(solver, r->shift));
     PetscCall(KFFlexSolverMoments(solver, 2, p->L0));
+    PetscCall(KFReducerAddPerf_Private(r, solver));
     PetscCall(KFFlexSolverDestroy(&solver));
   }
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
@@ -540,11 +570,13 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     if (v->interest >= 0) {
       const PetscInt ci = v->interest, shape[3] = {t, a, nfull};
 
-      t0 = t1;
-      PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
-      PetscCall(PetscTime(&t1));
-      times[4] += t1 - t0;
-      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
+      if (KFReducerFullMoments_Private(r)) {
+        t0 = t1;
+        PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
+        PetscCall(PetscTime(&t1));
+        times[4] += t1 - t0;
+        PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
+      }
       PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)v->basis.ndeflated));
       PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", v->basis.gram_condition));
       PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_rigid_content", v->basis.rigid_content));
@@ -560,6 +592,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     }
     if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis at %s deg: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", label, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
     PetscCall(KFProgress(comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
+    PetscCall(KFReducerAddPerf_Private(r, solver));
     PetscCall(KFFlexSolverDestroy(&solver));
   }
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &times[6]));
@@ -574,6 +607,20 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
     PetscCall(KFCandidateModel_Private(r, visits, &rich, &model));
     for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
+    if (!KFReducerFullMoments_Private(r)) {
+      /* the moment checks' reference without the full-order solves: the richest candidate holds every angle's whole
+         Krylov basis, so its moments are the full order's (to the solves' accuracy) at the angles of interest */
+      const PetscInt shape[3] = {t, a, nfull};
+
+      PetscCall(PetscTime(&t0));
+      for (PetscInt ci = 0; ci < r->nconfig; ci++) {
+        PetscCall(KFReducedSystemMoments(evals[ci].rich, nfull, &Lfull[ci * nfull * t * a]));
+        PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
+        PetscCall(KFReducerResultScalar_Private(r, ci, "full_moments_estimated", 1.0));
+      }
+      PetscCall(PetscTime(&t1));
+      times[4] += t1 - t0;
+    }
     PetscCall(KFReducedModelDestroy(&model));
     PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
   }
@@ -703,6 +750,64 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscFunctionReturn(0);
 }
 
+/* The cost of the solve, stage by stage, with the flexible solvers' factorizations and block solves apart: a result
+   "timings" (seconds: assembly, factorization, solves, basis without its solves, modes, moments, projection,
+   verification, whole; then whole without verification / (factorization + solves)), scalars for the solver's
+   work, and a table at the end of the progress lines. The ratio says how much of a reduction is not the
+   factorization and the solves (1: nothing else). */
+static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble whole)
+{
+  static const char *const stages[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
+  MPI_Comm         comm;
+  PetscReal        st[7] = {0}, tab[10], fs, ratio;
+  const PetscInt   n = 10;
+  const PetscReal *v;
+  KFFlexSolverPerf *p = &r->perf;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
+  for (PetscInt k = 0; k < 7; k++) { /* both ways of solving record every stage */
+    PetscCall(KFReducerGetResult(r, -1, stages[k], NULL, NULL, &v));
+    st[k] = v[0];
+  }
+  /* the ranks' clocks differ a little: every rank reports rank 0's figures */
+  {
+    PetscReal w = (PetscReal)whole, f = (PetscReal)p->factor_seconds, sv = (PetscReal)p->solve_seconds, buf[3] = {w, f, sv};
+
+    PetscCallMPI(MPI_Bcast(buf, 3, MPIU_REAL, 0, comm));
+    whole = buf[0];
+    p->factor_seconds = buf[1];
+    p->solve_seconds  = buf[2];
+  }
+  fs     = (PetscReal)(p->factor_seconds + p->solve_seconds);
+  ratio  = fs > 0 ? ((PetscReal)whole - st[6]) / fs : (PetscReal)NAN;
+  tab[0] = st[0];
+  tab[1] = (PetscReal)p->factor_seconds;
+  tab[2] = (PetscReal)p->solve_seconds;
+  tab[3] = st[2]; /* the basis stage, its solves included (the solves are also in tab[2]) */
+  tab[4] = st[3];
+  tab[5] = st[4];
+  tab[6] = st[5];
+  tab[7] = st[6];
+  tab[8] = (PetscReal)whole;
+  tab[9] = ratio;
+  PetscCall(KFReducerResultSet_Private(r, -1, "timings", 1, &n, tab));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_solves", (PetscReal)p->solve_seconds));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_total", (PetscReal)p->factor_seconds));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_whole", (PetscReal)whole));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_ratio", ratio));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "solve_calls", (PetscReal)p->solve_calls));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "solve_columns", (PetscReal)p->solve_columns));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "solve_blocks", (PetscReal)p->blocks));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "refinement_solves", (PetscReal)p->refinement_solves));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "solve_residual_first_max", p->residual_first_max));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "solve_residual_final_max", p->residual_final_max));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "factor_memory_estimate_mb", p->memory_estimate_mb));
+  PetscCall(KFProgress(comm, "timings (s): assembly %.3g | factorization %.3g (MUMPS estimate %.0f MB per rank) | block solves %.3g (%" PetscInt_FMT " MatMatSolve, %" PetscInt_FMT " columns, %" PetscInt_FMT " of %" PetscInt_FMT " blocks refined; residual first %.1e, final %.1e)", (double)tab[0], (double)tab[1], (double)p->memory_estimate_mb, (double)tab[2], p->solve_calls, p->solve_columns, p->refinement_solves > 0 ? PetscMin(p->refinement_solves, p->blocks) : 0, p->blocks, (double)p->residual_first_max, (double)p->residual_final_max));
+  PetscCall(KFProgress(comm, "timings (s): basis %.3g (solves included) | modes %.3g | moments %.3g | projection %.3g | verification %.3g | whole %.3g | (whole - verification) / (factorization + solves) = %.3g", (double)tab[3], (double)tab[4], (double)tab[5], (double)tab[6], (double)tab[7], (double)tab[8], (double)ratio));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSolve(KFReducer r)
 {
   MPI_Comm     comm;
@@ -710,6 +815,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscInt     neval = 0, a, t, nfull;
   PetscReal   *Lfull;
   PetscBool    search, krylov;
+  PetscLogDouble tstart, tend;
 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
@@ -719,6 +825,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
   PetscCall(KFReducerResultsReset_Private(r));
   PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
+  PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
+  PetscCall(PetscTime(&tstart));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(PetscObjectTypeCompare((PetscObject)r, KFREDUCERKRYLOV, &krylov));
   search = (PetscBool)(r->search && krylov);
@@ -745,6 +853,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   }
   PetscCall(KFInterruptCheck(comm));
   PetscCall(KFReducerCompare_Private(r, nfull, Lfull, neval, evals));
+  PetscCall(PetscTime(&tend));
+  PetscCall(KFReducerTimingTable_Private(r, tend - tstart));
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointDestroy_Private(&evals[e]));
   PetscCall(PetscFree(evals));
   PetscCall(PetscFree(Lfull));

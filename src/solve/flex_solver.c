@@ -8,11 +8,15 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCheck(sys->assembled, sys->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFFlexSolverCreate()");
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
-  (*solver)->refine = 1;
+  (*solver)->refine      = 1;
+  (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
-  PetscCall(PetscOptionsInt("-kf_refine", "Steps of iterative refinement of each solve (default 1)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
+  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
+  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
   PetscOptionsEnd();
+  PetscCheck((*solver)->refine >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
+  PetscCheck((*solver)->refine_rtol >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)(*solver)->refine_rtol);
   PetscFunctionReturn(0);
 }
 
@@ -36,20 +40,126 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
   PetscFunctionReturn(0);
 }
 
-/* MUMPS LDL^T factorization with null-pivot detection; reports the inertia MUMPS sees. */
-static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
+/* MemAvailable of this node (/proc/meminfo), in MB; -1 where it cannot be read */
+static PetscReal KFNodeMemoryAvailableMB(void)
+{
+  FILE  *f = fopen("/proc/meminfo", "r");
+  char   line[256];
+  double kb = -1;
+
+  if (!f) return -1;
+  while (fgets(line, sizeof(line), f))
+    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
+  fclose(f);
+  return kb < 0 ? -1 : kb / 1024.0;
+}
+
+/* After MUMPS' analysis: its estimate of the numerical factorization's memory (INFO(15) in-core, INFO(17)
+   out-of-core, MB per rank) summed over the ranks of each node, against the node's available memory (or
+   -kf_memory_limit_mb). Too much stops every rank with one message, before the factorization that would be killed. */
+static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estimate_mb)
+{
+  MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
+  PetscInt  mine;
+  PetscReal limit = -1, need[2], avail, worst[3], in[3];
+  PetscBool check = PETSC_TRUE, has_limit;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", check, &check, NULL));
+  PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", limit, &limit, &has_limit));
+  PetscOptionsEnd();
+  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine)); /* MB on this rank, rounded down */
+  if (mine > 0) need[0] = (PetscReal)mine;
+  else { /* a small model: its factors' entries (INFO(3) reals, INFO(4) integers; negative: millions) */
+    PetscInt nr, ni;
+
+    PetscCall(MatMumpsGetInfo(F, 3, &nr));
+    PetscCall(MatMumpsGetInfo(F, 4, &ni));
+    need[0] = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
+  }
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCall(MPIU_Allreduce(need, need + 1, 1, MPIU_REAL, MPIU_SUM, node));
+  avail = has_limit ? limit : KFNodeMemoryAvailableMB();
+  PetscCallMPI(MPI_Comm_free(&node));
+  /* the node whose estimate exceeds its memory by the most decides the message (same on every rank) */
+  in[0] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL;
+  in[1] = need[1];
+  in[2] = need[0];
+  PetscCall(MPIU_Allreduce(in, worst, 3, MPIU_REAL, MPIU_MAX, comm));
+  *estimate_mb = worst[2];
+  if (worst[0] > 0) {
+    /* every rank learns the offending node's figures: the one whose excess is worst */
+    PetscReal mine_fig[2] = {-1, -1}, fig[2];
+    if (in[0] == worst[0]) {
+      mine_fig[0] = need[1];
+      mine_fig[1] = avail;
+    }
+    PetscCall(MPIU_Allreduce(mine_fig, fig, 2, MPIU_REAL, MPIU_MAX, comm));
+    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB for the %s factorization on one node, %.3g MB are available%s. Run on more nodes, add -kf_ooc (out-of-core factors, MUMPS_OOC_TMPDIR names the folder) or -kf_blr 1e-8 (block low-rank), or use a machine with more memory (-kf_memory_check 0 tries anyway)", (double)fig[0], ooc ? "out-of-core" : "in-core", (double)fig[1], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
+  }
+  PetscFunctionReturn(0);
+}
+
+/* MUMPS' ordering (ICNTL(7)) by name; auto lets MUMPS choose among those it was built with */
+static const char *const KFOrderings[] = {"amd", "amf", "scotch", "pord", "metis", "qamd", "auto"};
+static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7};
+
+/* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
+   (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
+   options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
+static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
 {
   MatFactorInfo  info;
   MatFactorError err;
+  PetscReal      blr = 0;
+  PetscInt       ordering = 6; /* auto */
+  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, user7 = PETSC_FALSE, ordering_set = PETSC_FALSE;
 
   PetscFunctionBegin;
+  if (opts) {
+    PetscOptionsBegin(PetscObjectComm((PetscObject)A), NULL, "kryflex factorization", "KFFlexSolverSetUp");
+    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7)): auto lets MUMPS choose (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 7, KFOrderings[ordering], &ordering, NULL));
+    PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", blr, &blr, NULL));
+    PetscCall(PetscOptionsBool("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR", "KFFlexSolverSetUp", ooc, &ooc, NULL));
+    PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", spd, &spd, NULL));
+    PetscOptionsEnd();
+    PetscCheck(blr >= 0 && blr < 1, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)blr);
+  }
+  if (spd) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
   PetscCall(MatFactorInfoInitialize(&info));
   PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F));
   PetscCall(MatMumpsSetIcntl(*F, 24, 1)); /* null-pivot detection */
   if (null_threshold != 0) PetscCall(MatMumpsSetCntl(*F, 3, null_threshold));
   PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
+  if (opts) {
+    /* PETSc 3.18 rereads ICNTL(7) from -mat_mumps_icntl_7 at the analysis (MatMumpsSetIcntl before it does not
+       hold): the choice goes through the options database for the analysis only, unless the user gave the option */
+    PetscCall(PetscOptionsHasName(NULL, ((PetscObject)A)->prefix, "-mat_mumps_icntl_7", &user7));
+    if (!user7 && KFOrderingIcntl[ordering] != 7) {
+      char val[8];
+
+      PetscCall(PetscSNPrintf(val, sizeof(val), "%d", (int)KFOrderingIcntl[ordering]));
+      PetscCall(PetscOptionsSetValue(NULL, "-mat_mumps_icntl_7", val));
+      ordering_set = PETSC_TRUE;
+    }
+    if (blr > 0) {
+      PetscCall(MatMumpsSetIcntl(*F, 35, 1)); /* BLR factorization, automatic choice of the variant */
+      PetscCall(MatMumpsSetCntl(*F, 7, blr));
+    }
+    if (ooc) PetscCall(MatMumpsSetIcntl(*F, 22, 1));
+  }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
+  if (ordering_set) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
+  if (estimate_mb) {
+    PetscInt used;
+
+    PetscCall(KFCheckFactorMemory(*F, ooc, estimate_mb));
+    PetscCall(MatMumpsGetInfog(*F, 7, &used)); /* the ordering MUMPS applied (auto, or a fallback) */
+    for (PetscInt k = 0; k < 7; k++)
+      if (KFOrderingIcntl[k] == used) PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", KFOrderings[k], spd ? "SYM=1" : "SYM=2", blr > 0 ? ", block low-rank" : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+  }
   PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
   PetscCall(MatFactorGetError(*F, &err));
   PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
@@ -90,7 +200,14 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     PetscCall(PetscFree(loc));
   }
   PetscCall(KFProgress(s->comm, "factorization of the %" PetscInt_FMT "-dof system (MUMPS LDL^T, %" PetscInt_FMT " dofs held)", s->nsys, solver->nheld));
-  PetscCall(KFFactorMumps(solver->Kh, 0.0, &solver->F, &solver->null_pivots, &solver->negative_pivots));
+  {
+    PetscLogDouble t0, t1;
+
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFFactorMumps(solver->Kh, 0.0, PETSC_TRUE, &solver->F, &solver->null_pivots, &solver->negative_pivots, &solver->perf.memory_estimate_mb));
+    PetscCall(PetscTime(&t1));
+    solver->perf.factor_seconds += t1 - t0;
+  }
   PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes the joints declare: a mechanism no joint declares (an unconnected dof, a missing tie, a body in pieces). Fix the model, or declare the joint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
@@ -104,7 +221,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   if (check) {
     Mat      F0;
     PetscInt nnull, nneg;
-    PetscCall(KFFactorMumps(sys->Ks, -1e-10, &F0, &nnull, &nneg)); /* relative threshold: rigid pivots are rounding-sized */
+    PetscCall(KFFactorMumps(sys->Ks, -1e-10, PETSC_FALSE, &F0, &nnull, &nneg, NULL)); /* relative threshold: rigid pivots are rounding-sized */
     PetscCall(MatDestroy(&F0));
     /* MUMPS' threshold is a heuristic: a disagreement is worth a line, not an alarm (the held factorization above
        is the mechanism that catches undeclared modes) */
@@ -138,37 +255,82 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
         for (PetscInt j = 0; j < p; j++) w[(solver->held[k] - rstart) + j * lda] = 0;
     PetscCall(MatDenseRestoreArray(W, &w));
   }
-  PetscCall(MatMatSolve(solver->F, W, X));
+  {
+    PetscLogDouble t0, t1;
+    PetscInt       p;
+
+    PetscCall(MatGetSize(W, NULL, &p));
+    PetscCall(PetscTime(&t0));
+    PetscCall(MatMatSolve(solver->F, W, X));
+    PetscCall(PetscTime(&t1));
+    solver->perf.solve_seconds += t1 - t0;
+    solver->perf.solve_calls++;
+    solver->perf.solve_columns += p;
+  }
   PetscCall(MatDestroy(&W));
   PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE));
   PetscFunctionReturn(0);
 }
 
-/* X = K+ B, refined against K_S itself: the residual (I - M Phi Phi^T) B - K_S X goes through the factor again.
+/* R = P B - K_S X with K_S X accumulated in long double (the residual must be free of K's rounding); its relative
+   Frobenius norm against P B */
+static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat B, Mat X, Mat *R, PetscReal *rel)
+{
+  KFSystem  sys = solver->sys;
+  Mat       KX;
+  PetscReal nb, nr;
+
+  PetscFunctionBegin;
+  PetscCall(MatDuplicate(B, MAT_COPY_VALUES, R));
+  PetscCall(KFProjectFlexible(sys, *R, PETSC_TRUE));
+  PetscCall(MatNorm(*R, NORM_FROBENIUS, &nb));
+  PetscCall(KFMatMultExtended(sys->Ks, X, &KX));
+  PetscCall(MatAXPY(*R, -1.0, KX, SAME_NONZERO_PATTERN));
+  PetscCall(MatDestroy(&KX));
+  PetscCall(MatNorm(*R, NORM_FROBENIUS, &nr));
+  *rel = nb > 0 ? nr / nb : 0;
+  PetscFunctionReturn(0);
+}
+
+/* X = K+ B, refined against K_S itself when the residual says so: the residual (I - M Phi Phi^T) B - K_S X of the
+   first solve is measured, and only above -kf_refine_rtol goes through the factor again (up to -kf_refine steps).
+   The decision is a plain threshold (no adaptive rule that rounding could flip between 1 and 2 ranks).
    A stiff structure's solve loses about eps * cond digits; one step wins most of them back (the moments of a
-   20,000-dof frame moved by 3e-10 with it), at the price of one matrix product and one more block solve. */
+   20,000-dof frame moved by 3e-10 with it). Always refining doubled the solves of every reduction; a well-conditioned
+   factor's residual is near rounding, and the check costs one matrix product. */
 PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
 {
-  KFSystem sys = solver->sys;
-  Mat      R, dX, KX;
+  Mat       R, dX;
+  PetscReal rel = 0;
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(PetscLogEventBegin(KF_EVENT_SOLVE, 0, 0, 0, 0));
   PetscCall(KFFlexSolverSolveOnce(solver, B, X));
-  for (PetscInt it = 0; it < solver->refine && solver->shift == 0; it++) {
-    PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &R));
-    PetscCall(KFProjectFlexible(sys, R, PETSC_TRUE));
-    PetscCall(KFMatMultExtended(sys->Ks, X, &KX)); /* the residual must be free of K's rounding: long double */
-    PetscCall(MatAXPY(R, -1.0, KX, SAME_NONZERO_PATTERN));
-    PetscCall(MatDestroy(&KX));
-    PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
-    PetscCall(KFFlexSolverSolveOnce(solver, R, dX));
-    PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
-    PetscCall(MatDestroy(&dX));
+  solver->perf.blocks++;
+  if (solver->refine > 0 && solver->shift == 0) {
+    PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
+    solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
+    for (PetscInt it = 0; it < solver->refine && rel > solver->refine_rtol; it++) {
+      PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
+      PetscCall(KFFlexSolverSolveOnce(solver, R, dX));
+      solver->perf.refinement_solves++;
+      PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
+      PetscCall(MatDestroy(&dX));
+      PetscCall(MatDestroy(&R));
+      PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
+    }
     PetscCall(MatDestroy(&R));
+    solver->perf.residual_final_max = PetscMax(solver->perf.residual_final_max, rel);
   }
   PetscCall(PetscLogEventEnd(KF_EVENT_SOLVE, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver solver, KFFlexSolverPerf *perf)
+{
+  PetscFunctionBegin;
+  *perf = solver->perf;
   PetscFunctionReturn(0);
 }
 

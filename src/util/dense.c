@@ -116,3 +116,29 @@ PetscErrorCode KFMatInner(Mat A, Mat B, PetscReal out[])
   PetscCall(KFMatTransposeMatMultGather(A, B, out));
   PetscFunctionReturn(0);
 }
+
+/* [A, B] for two tall dense Mats with the same row layout */
+PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X)
+{
+  PetscInt           nl, N, p, q, lda, ldb, ldx;
+  const PetscScalar *pa, *pb;
+  PetscScalar       *px;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatGetSize(A, &N, &p));
+  PetscCall(MatGetSize(B, NULL, &q));
+  PetscCall(KFDenseCreate(PetscObjectComm((PetscObject)A), nl, N, p + q, X));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(B, &ldb));
+  PetscCall(MatDenseGetLDA(*X, &ldx));
+  PetscCall(MatDenseGetArrayRead(A, &pa));
+  PetscCall(MatDenseGetArrayRead(B, &pb));
+  PetscCall(MatDenseGetArrayWrite(*X, &px));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&px[j * ldx], &pa[j * lda], nl));
+  for (PetscInt j = 0; j < q; j++) PetscCall(PetscArraycpy(&px[(p + j) * ldx], &pb[j * ldb], nl));
+  PetscCall(MatDenseRestoreArrayWrite(*X, &px));
+  PetscCall(MatDenseRestoreArrayRead(B, &pb));
+  PetscCall(MatDenseRestoreArrayRead(A, &pa));
+  PetscFunctionReturn(0);
+}

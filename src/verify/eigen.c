@@ -18,7 +18,34 @@ PetscErrorCode KFSystemEigenIsDense(KFSystem sys, PetscBool *dense)
 /* Full-order modes, for verification only: generalized Hermitian problem with the rigid modes as a deflation
    space. Small systems go to LAPACK through EPS; larger ones use Krylov-Schur with shift-and-invert (MUMPS) about a
    small negative target, so that K - target M is positive definite. */
-static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+/* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor (PCSHELL in a preonly KSP): the eigensolve
+   shares the reduction's factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
+   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space. */
+static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
+{
+  KFFlexSolver       solver;
+  Mat                B, X;
+  const PetscScalar *pb;
+  PetscScalar       *px;
+  PetscInt           n, N;
+
+  PetscFunctionBegin;
+  PetscCall(PCShellGetContext(pc, &solver));
+  PetscCall(VecGetLocalSize(b, &n));
+  PetscCall(VecGetSize(b, &N));
+  PetscCall(VecGetArrayRead(b, &pb));
+  PetscCall(VecGetArrayWrite(x, &px));
+  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, (PetscScalar *)pb, &B));
+  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, px, &X));
+  PetscCall(KFFlexSolverApply(solver, B, X));
+  PetscCall(MatDestroy(&B));
+  PetscCall(MatDestroy(&X));
+  PetscCall(VecRestoreArrayWrite(x, &px));
+  PetscCall(VecRestoreArrayRead(b, &pb));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   EPS       eps;
@@ -41,7 +68,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
   PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
   PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", target, &target, &has_target));
   PetscOptionsEnd();
-  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : "Krylov-Schur, shift-and-invert with MUMPS"));
+  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));
   PetscCall(EPSSetProblemType(eps, EPS_GHEP));
@@ -49,6 +76,22 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
     PetscCall(EPSSetType(eps, EPSLAPACK));
     PetscCall(EPSSetDimensions(eps, s->nsys, PETSC_DEFAULT, PETSC_DEFAULT));
     PetscCall(EPSSetWhichEigenpairs(eps, EPS_SMALLEST_REAL));
+  } else if (solver) { /* the flexible solver's factor: target 0, no deflation space (K+ removes the rigid modes) */
+    PetscCall(KFFlexSolverSetUp(solver));
+    PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
+    PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
+    PetscCall(EPSSetTarget(eps, 0.0));
+    PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_REAL));
+    PetscCall(EPSGetST(eps, &st));
+    PetscCall(STSetType(st, STSINVERT));
+    PetscCall(STGetKSP(st, &ksp));
+    PetscCall(KSPSetType(ksp, KSPPREONLY));
+    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(PCSetType(pc, PCSHELL));
+    PetscCall(PCShellSetContext(pc, solver));
+    PetscCall(PCShellSetApply(pc, KFFlexPCApply));
+    PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
+    PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
   } else {
     PetscReal nK, nM;
     if (!has_target) {
@@ -128,14 +171,22 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
 PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, NULL, NULL, modes));
+  PetscFunctionReturn(0);
+}
+
+/* KFSystemEigenModes with the flexible solver's factorization (the modal baseline: one factorization, as Krylov) */
+PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemEigenSolve(solver->sys, solver, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 

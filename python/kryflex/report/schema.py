@@ -38,7 +38,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "full": {"dofs_per_body": {body: n} (opt), "system_dofs": e (opt), "rigid_modes": r (opt),
           "body_frequencies_hz": {body: [..]} (opt; free-free component frequencies, lowest few),
           "frequencies_hz": {<label>: [lowest flexible system frequencies]},
-          "moments": {<label>: [t x a nested list, per k = 0..c-1]}},
+          "moments": {<label>: [t x a nested list, per k = 0..c-1]} (None entries: not computed, the fixed recipe
+                     without verification or -kf_full_moments)},
  "krylov": {<label>: {"frequency_hz": [c], "importance": [c] (normalized), "kept": [c bools],
                       "deflations": int (opt), "gram_condition_raw": float|None (opt)}},
  "reduction_label": <label> of alpha_G, "reduction_rule": str (opt; why this alpha_G),
@@ -60,7 +61,10 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},
                  "frf_error": {<label>: float}, "frf_pointwise_error": {<label>: float},
                  "frf_max_rel_error": {<label>: float} (= frf_error)} (opt, every part optional),
- "timings_s": {stage: seconds} (opt), "notes": [str] (opt)
+ "timings_s": {stage: seconds} (opt), "notes": [str] (opt),
+ "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
+                 solves)), "solve_calls", "solve_columns", "refinement_solves", "residual_first_max",
+                 "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
 }
 
 This module depends only on the standard library, NumPy and plots.py (no compiled kryflex code).
@@ -199,7 +203,7 @@ def validate_summary(summary):
                               "one entry per Krylov mode")
         for kind in ("moments",):
             for k, matrix in enumerate(summary["full"][kind][label]):
-                _check_matrix(matrix, t, a, ("full", kind, label, k))
+                _check_matrix(matrix, t, a, ("full", kind, label, k), allow_none=True)  # None: not computed
         for k, matrix in enumerate(summary["reduced"]["moment_ratios"][label]):
             _check_matrix(matrix, t, a, ("reduced", "moment_ratios", label, k), allow_none=True)
         frf = summary["frf"][label]

@@ -34,6 +34,22 @@ def _none(x):
     return None if np.isnan(x) else x
 
 
+PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves_s"), ("time_whole", "whole_s"),
+               ("time_ratio", "ratio"), ("solve_calls", "solve_calls"), ("solve_columns", "solve_columns"),
+               ("refinement_solves", "refinement_solves"), ("solve_residual_first_max", "residual_first_max"),
+               ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
+
+
+def _performance(reducer, whole):
+    """The flexible solver's share of the run (C KFReducerSolve's timing table): seconds, counts, residuals."""
+    out = {}
+    for name, key in PERFORMANCE:
+        if name in whole:
+            v = _none(reducer.result(-1, name).ravel()[0])
+            out[key] = int(v) if v is not None and key in ("solve_calls", "solve_columns", "refinement_solves") else v
+    return out
+
+
 def _list(a):
     """Nested lists of floats (None for NaN) of an array."""
     a = np.asarray(a, dtype=float)
@@ -313,6 +329,7 @@ def build_summary(reducer, single, multi, chosen):
                     "reassembly_seconds": float(np.median(reassembly_seconds)) if reassembly_seconds else None},
         "frf": frf, "dominant_modes": dom, "dominant_freq_error": dom_err,
         "timings_s": timings,
+        "performance": _performance(reducer, whole),
         "notes": list(reducer.notes),
     }
     summary.update(_accuracy(reducer, scene, labels, has, whole, chosen, multi, frf))

@@ -151,6 +151,8 @@ class Study:
         opts = dict(opts)
         if method != "kryflex":
             opts.setdefault("verify", False)     # the study's reference measures it; no second verification
+            if method.startswith("krylov"):      # its moment diagnostics need the full-order moments
+                opts.setdefault("full_moments", True)
         row = _row(method, parameter, error_measure=self.error_measure, chosen=int(method == "kryflex"))
         try:
             reducer = _core_reducer(self.scene, opts)

@@ -81,6 +81,8 @@ struct _p_KFReducer {
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */
   PetscInt        moments_max;
   PetscReal       cluster_rtol;
+  PetscBool       full_moments, full_moments_set; /* full-order moments by solves: -kf_full_moments, default -kf_verify */
+  KFFlexSolverPerf perf;          /* the flexible solvers' work during the solve, summed (KFReducerAddPerf_Private) */
   PetscInt        build_moments;  /* blocks the implementation builds for this solve (moments, or moments_max) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
@@ -169,6 +171,7 @@ PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, Pets
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
    angle of interest in Lfull */
+PETSC_INTERN PetscErrorCode KFReducerAddPerf_Private(KFReducer, KFFlexSolver);
 PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, PetscInt nfull, const PetscReal Lfull[], PetscInt neval, KFEvalPoint evals[]);
 
 /* the errors of a reduced system at an evaluation point (KFFRFErrors on its grid, the worst pair's maximum refined

@@ -16,7 +16,7 @@ static PetscErrorCode KFReducerBuildBasis_Eigen(KFReducer r, KFSystem sys, KFFle
   nev = PetscMin(nflex, 10);
   while (PETSC_TRUE) { /* double the count until the modes pass fmax */
     PetscCall(PetscMalloc1(nev, &w2));
-    PetscCall(KFSystemEigenModes(sys, nev, &nconv, w2, &modes));
+    PetscCall(KFFlexSolverEigenModes(solver, nev, &nconv, w2, &modes)); /* the flexible solver's factor: no second one */
     if (nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) > fmax)) break;
     PetscCall(PetscFree(w2));
     PetscCall(MatDestroy(&modes));
@@ -43,32 +43,6 @@ static PetscErrorCode KFReducerBuildBasis_Eigen(KFReducer r, KFSystem sys, KFFle
     for (PetscInt j = 0; j < m; j++) basis->Hr[i + j * t] = HrT[j + i * m];
   PetscCall(PetscFree(HrT));
   PetscCall(PetscFree(w2));
-  PetscFunctionReturn(0);
-}
-
-/* [A, B] for two tall dense Mats with the same row layout */
-static PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X)
-{
-  PetscInt           nl, N, p, q, lda, ldb, ldx;
-  const PetscScalar *pa, *pb;
-  PetscScalar       *px;
-
-  PetscFunctionBegin;
-  PetscCall(MatGetLocalSize(A, &nl, NULL));
-  PetscCall(MatGetSize(A, &N, &p));
-  PetscCall(MatGetSize(B, NULL, &q));
-  PetscCall(KFDenseCreate(PetscObjectComm((PetscObject)A), nl, N, p + q, X));
-  PetscCall(MatDenseGetLDA(A, &lda));
-  PetscCall(MatDenseGetLDA(B, &ldb));
-  PetscCall(MatDenseGetLDA(*X, &ldx));
-  PetscCall(MatDenseGetArrayRead(A, &pa));
-  PetscCall(MatDenseGetArrayRead(B, &pb));
-  PetscCall(MatDenseGetArrayWrite(*X, &px));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&px[j * ldx], &pa[j * lda], nl));
-  for (PetscInt j = 0; j < q; j++) PetscCall(PetscArraycpy(&px[(p + j) * ldx], &pb[j * ldb], nl));
-  PetscCall(MatDenseRestoreArrayWrite(*X, &px));
-  PetscCall(MatDenseRestoreArrayRead(B, &pb));
-  PetscCall(MatDenseRestoreArrayRead(A, &pa));
   PetscFunctionReturn(0);
 }
 

@@ -113,9 +113,21 @@ static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bo
   for (PetscInt b = 0; b < nbodies; b++)
     if (!bodies[b].rigid) PetscFunctionReturn(0);
   PetscCall(PetscCalloc4(n * nr, &R, PetscMax(m, 1) * nr, &E, nr * nr, &Z, n * nr, &Y));
+  /* a body with boundary conditions stores only the motions they allow, the other columns zero: skip those */
+  nr = 0;
   for (PetscInt b = 0; b < nbodies; b++)
-    for (PetscInt k = 0; k < 6; k++)
-      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + (6 * b + k) * n] = bodies[b].rigid[i + k * bodies[b].v];
+    for (PetscInt k = 0; k < 6; k++) {
+      PetscBool zero = PETSC_TRUE;
+      for (PetscInt i = 0; i < bodies[b].v && zero; i++) zero = (PetscBool)(bodies[b].rigid[i + k * bodies[b].v] == 0);
+      if (zero) continue;
+      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + nr * n] = bodies[b].rigid[i + k * bodies[b].v];
+      nr++;
+    }
+  if (!nr) { /* clamped: no rigid motion at all */
+    *nrigid = 0;
+    PetscCall(PetscFree4(R, E, Z, Y));
+    PetscFunctionReturn(0);
+  }
   PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, R, n, 0.0, E, PetscMax(m, 1)));
   PetscCall(KFDenseNullSpace(m, nr, E, rtol, &r, Z, &rk, &ratio));
   PetscCall(KFDenseGemm_Private('N', 'N', n, r, nr, 1.0, R, n, Z, nr, 0.0, Y, n));

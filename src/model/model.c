@@ -99,6 +99,11 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
   for (PetscInt i = 0; i < t; i++) PetscCall(PetscStrncpy(m->output_names[i], s->output_names[i], KF_MAX_NAME));
   m->nangles = nangles;
   PetscCall(CopyArray(nangles * s->nrevolute, angles, &m->angles));
+  if (s->nrigid >= 0) { /* the count geometry, joints and boundary conditions gave (KFReducedModelGetInfo) */
+    char value[32];
+    PetscCall(PetscSNPrintf(value, sizeof(value), "%" PetscInt_FMT, s->nrigid));
+    PetscCall(KFReducedModelSetSetting(m, "rigid_modes", value));
+  }
   *model = m;
   PetscFunctionReturn(0);
 }
@@ -139,8 +144,9 @@ PetscErrorCode KFReducedModelDestroy(KFReducedModel *model)
   PetscFunctionReturn(0);
 }
 
-/* nrigid: 6 + revolute joints, the rigid-body and mechanism modes of a free tree (a configuration's count comes
-   from the bodies' rigid motions: KFReducedSystemGetModes) */
+/* nrigid: the rigid-body and mechanism modes the scene had (setting rigid_modes, recorded from geometry, joints and
+   boundary conditions), else 6 + revolute joints, those of a free tree (a configuration's count comes from the
+   bodies' rigid motions: KFReducedSystemGetModes) */
 PetscErrorCode KFReducedModelGetInfo(KFReducedModel m, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *ninputs, PetscInt *noutputs, PetscInt *nrigid)
 {
   PetscFunctionBegin;
@@ -150,7 +156,14 @@ PetscErrorCode KFReducedModelGetInfo(KFReducedModel m, PetscInt *nbodies, PetscI
   if (nrevolute) *nrevolute = m->nrevolute;
   if (ninputs) *ninputs = m->ninputs;
   if (noutputs) *noutputs = m->noutputs;
-  if (nrigid) *nrigid = 6 + m->nrevolute;
+  if (nrigid) {
+    *nrigid = 6 + m->nrevolute;
+    for (PetscInt k = 0; k < m->nsettings; k++) {
+      PetscBool same;
+      PetscCall(PetscStrcmp(m->keys[k], "rigid_modes", &same));
+      if (same) *nrigid = (PetscInt)strtol(m->values[k], NULL, 10);
+    }
+  }
   PetscFunctionReturn(0);
 }
 

@@ -171,13 +171,16 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
   PetscFunctionReturn(0);
 }
 
-/* The body's 6 rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with
-   them reassembly finds the system's rigid and mechanism modes exactly, at any angle. */
+/* The body's rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with them
+   reassembly finds the system's rigid and mechanism modes exactly, at any angle. A body with boundary conditions
+   keeps only the motions they allow (Phi_geom Z, KFBodyAdmissibleRigid), the other columns are zero: reassembly
+   skips zero columns, so a clamped body contributes no motion and a grounded revolute joint one. */
 static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rigid)
 {
   Mat          Phi, MPhi;
   PetscScalar *p;
-  PetscInt     v, lda, node = 0;
+  PetscInt     v, lda, rb = 6;
+  PetscReal    Z[36], *full;
   MPI_Comm     comm = PetscObjectComm((PetscObject)Psi);
 
   PetscFunctionBegin;
@@ -186,30 +189,26 @@ static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rig
   PetscCall(MatDenseGetLDA(Phi, &lda));
   PetscCall(MatDenseGetArray(Phi, &p));
   for (PetscInt i = B->rstart; i < B->rend; i++) {
-    PetscInt   comp;
-    PetscReal *x;
-    while (node + 1 < B->nnodes && B->dof0[node + 1] <= i) node++;
-    comp = i - B->dof0[node];
-    x    = &B->xyz[3 * node];
-    for (int m = 0; m < 6; m++) {
-      PetscReal w[3] = {0, 0, 0}, val;
-      if (m < 3) val = (comp == m) ? 1.0 : 0.0;
-      else {
-        w[m - 3] = 1;
-        if (comp < 3) { /* (w x x)_comp */
-          PetscReal c[3] = {w[1] * x[2] - w[2] * x[1], w[2] * x[0] - w[0] * x[2], w[0] * x[1] - w[1] * x[0]};
-          val = c[comp];
-        } else val = w[comp - 3];
-      }
-      p[(i - B->rstart) + m * lda] = val;
-    }
+    PetscInt node, comp;
+    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
   }
   PetscCall(MatDenseRestoreArray(Phi, &p));
   PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
-  PetscCall(PetscMalloc1(v * 6, rigid));
-  PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, *rigid));
+  PetscCall(PetscMalloc1(v * 6, &full));
+  PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, full));
   PetscCall(MatDestroy(&MPhi));
   PetscCall(MatDestroy(&Phi));
+  if (B->nclamp + B->nspring) PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
+  else {
+    PetscCall(PetscArrayzero(Z, 36));
+    for (int k = 0; k < 6; k++) Z[k + 6 * k] = 1;
+  }
+  PetscCall(PetscCalloc1(v * 6, rigid));
+  for (PetscInt j = 0; j < rb; j++)
+    for (PetscInt k = 0; k < 6; k++)
+      for (PetscInt i = 0; i < v; i++) (*rigid)[i + j * v] += full[i + k * v] * Z[k + 6 * j];
+  PetscCall(PetscFree(full));
   PetscFunctionReturn(0);
 }
 

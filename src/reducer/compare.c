@@ -14,8 +14,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, &nsys, &a, &t));
-  nflex = nsys - 6 - nrev;
-  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, 6 + nrev);
+  PetscCall(KFSystemRigidIO(sys, &nflex, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
+  nflex = nsys - nflex;
+  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nsys - nflex);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   /* dense: every mode (no residual to approximate); sparse: start at 20 */
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
@@ -112,7 +113,7 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, &t));
   ta       = t * a;
-  expected = 6 + nrev;
+  PetscCall(KFReducedModelGetInfo(model, NULL, NULL, NULL, NULL, NULL, &expected));
   PetscCall(KFReducerConfigLabel_Private(nrev, p->angles, label, sizeof(label)));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducedModelReassemble(model, p->angles, &rs));

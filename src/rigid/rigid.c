@@ -22,75 +22,137 @@ static PetscBool InSubtree(KFScene s, PetscInt b, PetscInt j)
   return PETSC_FALSE;
 }
 
+/* Value at (body b, node, component comp) of candidate m: 0-2 translations, 3-5 rotations about the root frame's
+   axes, 6+ the rotation of revolute joint m-6's child subtree about the joint axis; in the body frame. */
+static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, PetscInt comp, PetscInt m)
+{
+  KFScene     s = y->scene;
+  KFBodyData *B = &s->bodies[b];
+  PetscReal  *Q = y->Q[b], *o = y->o[b];
+  PetscReal   t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, disp[3], x[3];
+
+  for (int c = 0; c < 3; c++) {
+    x[c] = o[c];
+    for (int k = 0; k < 3; k++) x[c] += Q[c + 3 * k] * B->xyz[3 * node + k];
+  }
+  if (m < 3) t[m] = 1;
+  else if (m < 6) w[m - 3] = 1;
+  else {
+    /* mechanism: the child subtree of revolute joint m-6 turns about the joint axis through the joint */
+    PetscInt j;
+    for (j = 0; j < s->nj; j++)
+      if (s->joints[j].revolute == m - 6) break;
+    if (!InSubtree(s, b, j)) return 0;
+    {
+      KFJointData *J  = &s->joints[j];
+      KFBodyData  *Pb = &s->bodies[J->parent];
+      PetscReal   *Qp = y->Q[J->parent], *op = y->o[J->parent], *xp = &Pb->xyz[3 * Pb->iface[J->parent_iface].node];
+      for (int c = 0; c < 3; c++) {
+        PetscReal yj = op[c];
+        for (int k = 0; k < 3; k++) {
+          w[c] += Qp[c + 3 * k] * J->axis[k];
+          yj += Qp[c + 3 * k] * xp[k];
+        }
+        x[c] -= yj;
+      }
+    }
+  }
+  Cross(w, x, disp);
+  for (int c = 0; c < 3; c++) disp[c] += t[c];
+  { /* back to the body frame: Q^T */
+    PetscReal v = 0;
+    for (int k = 0; k < 3; k++) v += Q[k + 3 * (comp % 3)] * (comp < 3 ? disp[k] : w[k]);
+    return v;
+  }
+}
+
+/* The candidates restricted to what the boundary conditions allow: combinations Z of the 6 + nrevolute geometric
+   motions that vanish on every clamped and spring dof (the null space of the small matrix D of their values there,
+   by SVD). A clamp leaves none, a grounded revolute joint one (its mechanism), springs on one node some. */
 static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
 {
   KFScene      s = y->scene;
-  PetscInt     r = 6 + s->nrevolute, lda;
+  PetscInt     ncand = 6 + s->nrevolute, lda, nbc = 0, r, row = 0;
   PetscScalar *a;
+  PetscReal   *D, *Z;
+  Mat          C;
 
   PetscFunctionBegin;
-  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, Phi));
-  PetscCall(MatDenseGetLDA(*Phi, &lda));
-  PetscCall(MatDenseGetArrayWrite(*Phi, &a));
-  for (PetscInt m = 0; m < r; m++)
+  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, ncand, &C));
+  PetscCall(MatDenseGetLDA(C, &lda));
+  PetscCall(MatDenseGetArrayWrite(C, &a));
+  for (PetscInt m = 0; m < ncand; m++)
     for (PetscInt i = 0; i < s->nsys_local; i++) a[i + m * lda] = 0;
   for (PetscInt b = 0; b < s->nb; b++) {
     KFBodyData *B = &s->bodies[b];
-    PetscReal  *Q = y->Q[b], *o = y->o[b];
-    PetscInt    node = 0;
     for (PetscInt i = B->rstart; i < B->rend; i++) {
-      PetscInt  sys = B->sysidx[i - B->rstart], comp;
-      PetscReal yv[3];
+      PetscInt sys = B->sysidx[i - B->rstart], node, comp;
       if (sys < 0) continue;
-      while (node + 1 < B->nnodes && B->dof0[node + 1] <= i) node++;
-      comp = i - B->dof0[node];
-      for (int c = 0; c < 3; c++) {
-        yv[c] = o[c];
-        for (int k = 0; k < 3; k++) yv[c] += Q[c + 3 * k] * B->xyz[3 * node + k];
-      }
-      for (PetscInt m = 0; m < r; m++) {
-        PetscReal t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, disp[3], rot[3], x[3] = {yv[0], yv[1], yv[2]};
-        if (m < 3) t[m] = 1;
-        else if (m < 6) w[m - 3] = 1;
-        else {
-          /* mechanism: the child subtree of revolute joint m-6 turns about the joint axis through the joint */
-          PetscInt j = 0;
-          for (j = 0; j < s->nj; j++)
-            if (s->joints[j].revolute == m - 6) break;
-          if (!InSubtree(s, b, j)) continue;
-          {
-            KFJointData *J  = &s->joints[j];
-            KFBodyData  *Pb = &s->bodies[J->parent];
-            PetscReal   *Qp = y->Q[J->parent], *op = y->o[J->parent], *xp = &Pb->xyz[3 * Pb->iface[J->parent_iface].node];
-            for (int c = 0; c < 3; c++) {
-              PetscReal yj = op[c];
-              w[c]         = 0;
-              for (int k = 0; k < 3; k++) {
-                w[c] += Qp[c + 3 * k] * J->axis[k];
-                yj += Qp[c + 3 * k] * xp[k];
-              }
-              x[c] -= yj;
-            }
-          }
-        }
-        Cross(w, x, disp);
-        for (int c = 0; c < 3; c++) disp[c] += t[c];
-        /* back to the body frame: Q^T */
-        for (int c = 0; c < 3; c++) {
-          rot[c] = 0;
-          for (int k = 0; k < 3; k++) rot[c] += Q[k + 3 * c] * (comp < 3 ? disp[k] : w[k]);
-        }
-        a[(sys - s->sys_rstart) + m * lda] = rot[comp % 3];
-      }
+      PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+      for (PetscInt m = 0; m < ncand; m++) a[(sys - s->sys_rstart) + m * lda] = KFRigidCandidateValue(y, b, node, comp, m);
     }
   }
   for (PetscInt j = 0; j < s->nj; j++) {
     PetscInt beta = s->joints[j].beta;
     if (beta >= s->sys_rstart && beta < s->sys_rstart + s->nsys_local) a[(beta - s->sys_rstart) + (6 + s->joints[j].revolute) * lda] = 1.0;
   }
-  PetscCall(MatDenseRestoreArrayWrite(*Phi, &a));
-  PetscCall(MatAssemblyBegin(*Phi, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(*Phi, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatDenseRestoreArrayWrite(C, &a));
+  PetscCall(MatAssemblyBegin(C, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(C, MAT_FINAL_ASSEMBLY));
+
+  for (PetscInt b = 0; b < s->nb; b++) nbc += s->bodies[b].nclamp + s->bodies[b].nspring;
+  if (!nbc) {
+    *Phi = C;
+    PetscFunctionReturn(0);
+  }
+  /* D (nbc x ncand): every rank has the node coordinates and frames, so D is the same everywhere without messages */
+  PetscCall(PetscMalloc2(nbc * ncand, &D, ncand * ncand, &Z));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    for (PetscInt k = 0; k < B->nclamp + B->nspring; k++, row++) {
+      PetscInt dof = k < B->nclamp ? B->clamp[k] : B->spring_dof[k - B->nclamp], node, comp;
+      PetscCall(KFBodyDofComponent(B, dof, &node, &comp));
+      for (PetscInt m = 0; m < ncand; m++) D[row + m * nbc] = KFRigidCandidateValue(y, b, node, comp, m);
+    }
+  }
+  PetscCall(KFDenseNullSpace(nbc, ncand, D, 1e-10, &r, Z, NULL, NULL));
+  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, Phi));
+  if (r) PetscCall(KFDenseMultSmall(C, ncand, r, Z, 1.0, *Phi));
+  PetscCall(MatDestroy(&C));
+  PetscCall(PetscFree2(D, Z));
+  PetscFunctionReturn(0);
+}
+
+/* Value at (node, comp) of body-frame rigid motion m (0-2 translations, 3-5 rotations about the body origin) */
+PetscReal KFBodyRigidValue(const KFBodyData *B, PetscInt node, PetscInt comp, PetscInt m)
+{
+  const PetscReal *x = &B->xyz[3 * node];
+  PetscReal        w[3] = {0, 0, 0};
+
+  if (m < 3) return comp == m ? 1.0 : 0.0;
+  w[m - 3] = 1;
+  if (comp >= 3) return w[comp - 3];
+  {
+    PetscReal c[3];
+    Cross(w, x, c);
+    return c[comp];
+  }
+}
+
+PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *B, PetscInt *rb, PetscReal Z[36])
+{
+  PetscInt   nbc = B->nclamp + B->nspring;
+  PetscReal *D;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(6 * nbc + 1, &D));
+  for (PetscInt k = 0; k < nbc; k++) {
+    PetscInt dof = k < B->nclamp ? B->clamp[k] : B->spring_dof[k - B->nclamp], node, comp;
+    PetscCall(KFBodyDofComponent(B, dof, &node, &comp));
+    for (PetscInt m = 0; m < 6; m++) D[k + m * nbc] = KFBodyRigidValue(B, node, comp, m);
+  }
+  PetscCall(KFDenseNullSpace(nbc, 6, D, 1e-10, rb, Z, NULL, NULL));
+  PetscCall(PetscFree(D));
   PetscFunctionReturn(0);
 }
 
@@ -107,6 +169,7 @@ PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[])
   PetscCall(PetscObjectGetComm((PetscObject)X, &comm));
   PetscCall(MatGetSize(X, NULL, &r));
   PetscCall(MatGetLocalSize(X, &nl, NULL));
+  if (!r) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1(r * r, &Gm));
   for (int pass = 0; pass < 2; pass++) {
     PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
@@ -145,6 +208,8 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscReal nKP, nK, nP;
 
   PetscFunctionBegin;
+  *res = 0;
+  if (!y->nrigid) PetscFunctionReturn(0);
   PetscCall(MatMatMult(y->Ks, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KP));
   PetscCall(MatNorm(KP, NORM_FROBENIUS, &nKP));
   PetscCall(MatNorm(y->Ks, NORM_FROBENIUS, &nK));
@@ -175,10 +240,16 @@ PetscErrorCode KFSystemComputeRigidModes(KFSystem y)
   PetscCall(PetscLogEventBegin(KF_EVENT_RIGID, 0, 0, 0, 0));
   PetscCall(KFRigidTolFromOptions(y->scene->comm, &tol));
   PetscCall(KFSystemRigidFromGeometry(y, &y->Phi));
+  PetscCall(MatGetSize(y->Phi, NULL, &y->nrigid));
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "rigid-body modes from node coordinates"));
-  y->nrigid = 6 + y->scene->nrevolute;
   PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
-  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the rigid-body modes built from node coordinates strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or a body is not free-free; fix the nodes files or supply rigid modes (-kf_rigid_tol to loosen)", (double)y->rigid_residual, (double)tol);
+  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the %" PetscInt_FMT " rigid-body and mechanism modes built from node coordinates, joints and boundary conditions strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or K holds supports the scene does not declare (clamped dofs exported as stiff springs: declare them as constraints); fix the nodes files or supply rigid modes (-kf_rigid_tol to loosen)", y->nrigid, (double)y->rigid_residual, (double)tol);
+  if (y->scene->nrigid < 0) {
+    PetscInt nbc = 0;
+    for (PetscInt b = 0; b < y->scene->nb; b++) nbc += y->scene->bodies[b].nclamp + y->scene->bodies[b].nspring;
+    PetscCall(KFProgress(y->scene->comm, "rigid-body and mechanism modes: %" PetscInt_FMT " (of 6 + %" PetscInt_FMT " revolute joints; %" PetscInt_FMT " clamped or spring dofs), ||K Phi|| / (||K|| ||Phi||) = %.1e", y->nrigid, y->scene->nrevolute, nbc, (double)y->rigid_residual));
+  }
+  y->scene->nrigid = y->nrigid;
   PetscCall(PetscLogEventEnd(KF_EVENT_RIGID, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -197,6 +268,7 @@ PetscErrorCode KFSystemSetRigidModes(KFSystem y, Mat Phi)
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "supplied rigid-body modes"));
   y->nrigid     = r;
   y->user_rigid = PETSC_TRUE;
+  y->scene->nrigid = r;
   PetscCall(KFRigidTolFromOptions(y->scene->comm, &tol));
   PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
   PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the supplied rigid-body modes strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g", (double)y->rigid_residual, (double)tol);
@@ -222,6 +294,7 @@ PetscErrorCode KFProjectFlexible(KFSystem y, Mat X, PetscBool left)
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(y));
   PetscCall(MatGetSize(y->Phi, NULL, &r));
+  if (!r) PetscFunctionReturn(0); /* clamped: every motion is flexible */
   PetscCall(MatGetSize(X, NULL, &p));
   PetscCall(PetscMalloc1(r * p, &c));
   if (!left) {

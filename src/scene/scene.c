@@ -9,7 +9,8 @@ PetscErrorCode KFSceneCreate(MPI_Comm comm, KFScene *scene)
   PetscCall(KFInitialize());
   PetscCall(KFModelInitializePackage());
   PetscCall(PetscHeaderCreate(s, KF_SCENE_CLASSID, "KFScene", "Articulated multi-flexible-body scene", "KF", comm, KFSceneDestroy, KFSceneView));
-  s->comm = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
+  s->comm   = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
+  s->nrigid = -1;
   PetscCall(PetscStrncpy(s->name, "scene", sizeof(s->name)));
   *scene = s;
   PetscFunctionReturn(0);
@@ -36,6 +37,8 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
     PetscCall(PetscFree4(B->ids, B->ndof, B->dof0, B->xyz));
     PetscCall(PetscFree(B->iface));
     PetscCall(PetscFree(B->sysidx));
+    PetscCall(PetscFree(B->clamp));
+    PetscCall(PetscFree2(B->spring_dof, B->spring_k));
   }
   for (PetscInt k = 0; k < s->nin_terms; k++) PetscCall(VecDestroy(&s->in_terms[k].v));
   for (PetscInt k = 0; k < s->nout_terms; k++) PetscCall(VecDestroy(&s->out_terms[k].v));
@@ -164,12 +167,142 @@ static PetscErrorCode KFBodyFindInterface(KFScene s, PetscInt body, const char n
   PetscFunctionReturn(0);
 }
 
+/* node and component (0..5) of body dof i: dofs are numbered node by node, components ascending */
+PetscErrorCode KFBodyDofComponent(KFBodyData *B, PetscInt dof, PetscInt *node, PetscInt *comp)
+{
+  PetscInt lo = 0, hi = B->nnodes - 1;
+
+  PetscFunctionBegin;
+  while (lo < hi) { /* the last node whose first dof is <= dof */
+    PetscInt mid = (lo + hi + 1) / 2;
+    if (B->dof0[mid] <= dof) lo = mid;
+    else hi = mid - 1;
+  }
+  *node = lo;
+  *comp = dof - B->dof0[lo];
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFBodyAddClamp(KFScene s, KFBodyData *B, PetscInt dof)
+{
+  PetscFunctionBegin;
+  for (PetscInt k = 0; k < B->nclamp; k++)
+    if (B->clamp[k] == dof) PetscFunctionReturn(0);
+  PetscCall(PetscRealloc(sizeof(PetscInt) * (B->nclamp + 1), &B->clamp));
+  B->clamp[B->nclamp++] = dof;
+  PetscFunctionReturn(0);
+}
+
+static const char *const KFComponentNames[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+
+PetscErrorCode KFSceneAddConstraint(KFScene s, PetscInt body, PetscInt node_id, const char dofs[])
+{
+  KFBodyData *B;
+  PetscInt    node;
+  PetscBool   seen[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add a constraint after KFSceneSetUp()");
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "constraint: body index %" PetscInt_FMT " does not exist", body);
+  B = &s->bodies[body];
+  PetscCall(KFBodyFindNode(B, node_id, &node));
+  PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': a constraint names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, node_id);
+  if (!dofs || !dofs[0]) {
+    for (PetscInt c = 0; c < B->ndof[node]; c++) PetscCall(KFBodyAddClamp(s, B, B->dof0[node] + c));
+    PetscFunctionReturn(0);
+  }
+  for (const char *p = dofs; *p; p++) {
+    PetscInt c = *p - '1';
+    PetscCheck(c >= 0 && c < 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint dofs '%s' is not a component string; give digits 1-6 (1 2 3 = ux uy uz, 4 5 6 = rx ry rz), e.g. \"123456\"", B->name, node_id, dofs);
+    PetscCheck(!seen[c], s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint dofs '%s' lists component %d twice", B->name, node_id, dofs, (int)c + 1);
+    seen[c] = PETSC_TRUE;
+    PetscCheck(c < B->ndof[node], s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint on component %d (%s), which the node does not have (it has %" PetscInt_FMT " dofs); clamp only the components the node carries", B->name, node_id, (int)c + 1, KFComponentNames[c], B->ndof[node]);
+    PetscCall(KFBodyAddClamp(s, B, B->dof0[node] + c));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddSpring(KFScene s, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal k)
+{
+  KFBodyData *B;
+  PetscInt    node;
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add a spring after KFSceneSetUp()");
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "spring: body index %" PetscInt_FMT " does not exist", body);
+  B = &s->bodies[body];
+  PetscCall(KFBodyFindNode(B, node_id, &node));
+  PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': a spring names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, node_id);
+  PetscCheck(comp >= 0 && comp < B->ndof[node], s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": spring on component %s, which the node does not have (it has %" PetscInt_FMT " dofs)", B->name, node_id, comp >= 0 && comp < 6 ? KFComponentNames[comp] : "?", B->ndof[node]);
+  PetscCheck(k > 0 && !PetscIsInfOrNanReal(k), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": spring stiffness %g; give a finite positive number", B->name, node_id, (double)k);
+  {
+    PetscInt  *dof;
+    PetscReal *kk;
+    PetscCall(PetscMalloc2(B->nspring + 1, &dof, B->nspring + 1, &kk));
+    if (B->nspring) {
+      PetscCall(PetscArraycpy(dof, B->spring_dof, B->nspring));
+      PetscCall(PetscArraycpy(kk, B->spring_k, B->nspring));
+    }
+    PetscCall(PetscFree2(B->spring_dof, B->spring_k));
+    B->spring_dof = dof;
+    B->spring_k   = kk;
+  }
+  B->spring_dof[B->nspring] = B->dof0[node] + comp;
+  B->spring_k[B->nspring++] = k;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetRigidCount(KFScene s, PetscInt *nrigid)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  *nrigid = s->nrigid;
+  PetscFunctionReturn(0);
+}
+
+/* A joint to ground clamps its child's interface node: all 6 dofs (fixed), or all but the rotation about the axis
+   (revolute; the axis in the child's frame must be one of its coordinate axes, so that the clamp is by component). */
+static PetscErrorCode KFSceneAddGroundJoint(KFScene s, const char name[], KFJointType type, PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9])
+{
+  KFBodyData *C;
+  PetscInt    k = -1, free_comp = -1;
+
+  PetscFunctionBegin;
+  PetscCheck(child >= 0 && child < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': child body does not exist", name);
+  C = &s->bodies[child];
+  for (PetscInt i = 0; i < C->ninterfaces; i++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(C->iface[i].name, child_interface, &same));
+    if (same) k = i;
+  }
+  PetscCheck(k >= 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': child body '%s' has no interface named '%s'; declare it under the body's interfaces", name, C->name, child_interface ? child_interface : "(null)");
+  if (type == KF_JOINT_REVOLUTE) {
+    PetscReal a[3], nrm = PetscSqrtReal(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    PetscCheck(nrm > 0 && !PetscIsInfOrNanReal(nrm), s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': the rotation axis is zero or not finite; give a direction such as [0, 0, 1]", name);
+    for (int i = 0; i < 3; i++) { /* the axis in the child's frame: R0^T axis */
+      a[i] = 0;
+      for (int j = 0; j < 3; j++) a[i] += (R0 ? R0[j + 3 * i] : (PetscReal)(i == j)) * axis[j] / nrm;
+    }
+    for (int i = 0; i < 3; i++)
+      if (PetscAbsReal(PetscAbsReal(a[i]) - 1) < 1e-10) free_comp = 3 + i;
+    PetscCheck(free_comp >= 0, s->comm, PETSC_ERR_SUP, "joint '%s' to ground: the axis (%g, %g, %g) in body '%s''s frame is not one of its coordinate axes; a grounded revolute joint clamps by component, so give an axis along x, y or z of the child's frame (or clamp the node with constraints)", name, (double)a[0], (double)a[1], (double)a[2], C->name);
+  }
+  for (PetscInt c = 0; c < 6; c++)
+    if (c != free_comp) PetscCall(KFBodyAddClamp(s, C, C->iface[k].dof0 + c));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSceneAddJoint(KFScene s, const char name[], KFJointType type, PetscInt parent, const char parent_interface[], PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9])
 {
   KFJointData *J;
 
   PetscFunctionBegin;
   PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add joint %s after KFSceneSetUp()", name);
+  PetscCheck(type == KF_JOINT_REVOLUTE || type == KF_JOINT_FIXED, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': unknown type", name);
+  if (parent == KF_GROUND) {
+    PetscCall(KFSceneAddGroundJoint(s, name, type, child, child_interface, axis, R0));
+    PetscFunctionReturn(0);
+  }
   PetscCheck(parent >= 0 && parent < s->nb && child >= 0 && child < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': parent or child body does not exist", name);
   PetscCheck(parent != child, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s' ties body '%s' to itself; a joint connects two different bodies", name, s->bodies[parent].name);
   PetscCheck(type == KF_JOINT_REVOLUTE || type == KF_JOINT_FIXED, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': unknown type", name);

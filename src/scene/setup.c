@@ -89,6 +89,13 @@ static PetscErrorCode KFSceneNumberDofs(KFScene s)
       B->sysidx[i - B->rstart] = (i >= e0 && i < e1) ? -1 : 0;
       if (B->sysidx[i - B->rstart] == 0) nlocal++;
     }
+    for (PetscInt k = 0; k < B->nclamp; k++) { /* clamped dofs are no system dofs: P_b reads them as zero */
+      PetscInt dof = B->clamp[k];
+      if (dof >= B->rstart && dof < B->rend && B->sysidx[dof - B->rstart] == 0) {
+        B->sysidx[dof - B->rstart] = -2;
+        nlocal--;
+      }
+    }
   }
   if (rank == size - 1) nlocal += s->nrevolute;
   PetscCallMPI(MPI_Scan(&nlocal, &next, 1, MPIU_INT, MPI_SUM, s->comm));
@@ -149,6 +156,38 @@ static PetscErrorCode KFSceneBuildIO(KFScene s)
   PetscFunctionReturn(0);
 }
 
+/* Boundary conditions checked against the tree (a clamp on a dof the parent joint ties would ground the parent
+   through the joint: clamp the parent's node instead); springs to ground added to a copy of K. */
+static PetscErrorCode KFSceneApplyBoundaryConditions(KFScene s)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    if (B->nclamp) PetscCall(PetscSortInt(B->nclamp, B->clamp));
+    if (B->child_iface >= 0) {
+      PetscInt e0 = B->iface[B->child_iface].dof0;
+      for (PetscInt k = 0; k < B->nclamp; k++) {
+        PetscInt node, comp;
+        PetscCall(KFBodyDofComponent(B, B->clamp[k], &node, &comp));
+        PetscCheck(B->clamp[k] < e0 || B->clamp[k] >= e0 + 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": the node is tied to the parent body by joint '%s', so it cannot be clamped or grounded on its own; constrain the parent's interface node instead", B->name, B->ids[node], s->joints[B->parent_joint].name);
+      }
+    }
+    if (B->nspring) {
+      Mat K;
+      PetscCall(MatDuplicate(B->K, MAT_COPY_VALUES, &K));
+      PetscCall(MatSetOption(K, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+      for (PetscInt k = 0; k < B->nspring; k++)
+        if (B->spring_dof[k] >= B->rstart && B->spring_dof[k] < B->rend) PetscCall(MatSetValue(K, B->spring_dof[k], B->spring_dof[k], B->spring_k[k], ADD_VALUES));
+      PetscCall(MatAssemblyBegin(K, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(K, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatDestroy(&B->K));
+      B->K     = K;
+      B->own_K = PETSC_TRUE;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSceneSetUp(KFScene s)
 {
   PetscFunctionBegin;
@@ -157,6 +196,7 @@ PetscErrorCode KFSceneSetUp(KFScene s)
   PetscCheck(s->ninputs >= 1 && s->noutputs >= 1, s->comm, PETSC_ERR_ARG_WRONG, "the scene needs at least one input and one output");
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyCheck(s, &s->bodies[b]));
   PetscCall(KFSceneCheckTree(s));
+  PetscCall(KFSceneApplyBoundaryConditions(s));
   PetscCall(KFSceneNumberDofs(s));
   PetscCall(KFSceneBuildIO(s));
   s->setup = PETSC_TRUE;

@@ -57,12 +57,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, PetscInt nev, PetscInt *n
       PetscCall(MatNorm(sys->Ms, NORM_FROBENIUS, &nM));
       target = -1e-8 * nK / nM;
     }
-    PetscCall(MatCreateVecs(sys->Ks, &x, NULL));
-    PetscCall(VecDuplicateVecs(x, r, &defl));
-    for (PetscInt k = 0; k < r; k++) PetscCall(MatGetColumnVector(sys->Phi, defl[k], k));
-    PetscCall(EPSSetDeflationSpace(eps, r, defl));
-    PetscCall(VecDestroyVecs(r, &defl));
-    PetscCall(VecDestroy(&x));
+    if (r) { /* a clamped scene has no rigid modes to deflate */
+      PetscCall(MatCreateVecs(sys->Ks, &x, NULL));
+      PetscCall(VecDuplicateVecs(x, r, &defl));
+      for (PetscInt k = 0; k < r; k++) PetscCall(MatGetColumnVector(sys->Phi, defl[k], k));
+      PetscCall(EPSSetDeflationSpace(eps, r, defl));
+      PetscCall(VecDestroyVecs(r, &defl));
+      PetscCall(VecDestroy(&x));
+    }
     PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
     PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
     PetscCall(EPSSetTarget(eps, target));
@@ -149,6 +151,7 @@ PetscErrorCode KFSystemRigidIO(KFSystem sys, PetscInt *nrigid, PetscReal HPhi[],
   PetscCall(KFSystemComputeRigidModes(sys));
   r = sys->nrigid;
   if (nrigid) *nrigid = r;
+  if (!r) PetscFunctionReturn(0);
   if (HPhi) {
     PetscCall(PetscMalloc1(r * t, &tmp));
     PetscCall(KFMatTransposeMatMultGather(sys->Phi, sys->Ht, tmp)); /* r x t */

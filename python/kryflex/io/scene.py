@@ -235,12 +235,25 @@ class Scene:
                 index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
                 for iname, nid in body["interfaces"]:
                     self.cscene.add_interface(index, iname, nid)
+                for c in body["constraints"]:
+                    self.cscene.add_constraint(index, c["node"], c["dofs"])
+                for c in body["springs"]:
+                    self.cscene.add_spring(index, c["node"], c["dof"], c["stiffness"])
             except _core.Error as e:
                 _fail(bw, str(e))
 
         self.joints, self.revolute = [], list(valid["revolute"])
+        self.ground_joints = []
         for j in valid["joints"]:
             p, c = j["parent"], j["child"]
+            if j.get("ground"):   # a boundary condition on the child, no joint of the tree (no angle)
+                try:
+                    self.cscene.add_ground_joint(j["name"], j["type"], c, j["child_interface"], j["axis"],
+                                                 None if j["R0"] is None else np.array(j["R0"]))
+                except _core.Error as e:
+                    _fail("%s: joints.%s" % (where, j["name"]), str(e))
+                self.ground_joints.append(dict(name=j["name"], type=j["type"], child=c))
+                continue
             try:
                 self.cscene.add_joint(j["name"], j["type"], p, j["parent_interface"], c, j["child_interface"],
                                       j["axis"], None if j["R0"] is None else np.array(j["R0"]))

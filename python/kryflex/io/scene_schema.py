@@ -34,7 +34,10 @@ JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
             "accuracy", "reduction", "verify"}
-BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description"}
+BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "constraints", "springs"}
+CONSTRAINT_KEYS = {"node", "dofs"}
+SPRING_KEYS = {"node", "dof", "stiffness"}
+GROUND = "ground"                     # a joint's parent: the child's interface node is grounded
 JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
 TERM_KEYS = {"body", "node", "dof", "weight", "vector"}
 REDUCTION_DEFAULTS = {
@@ -425,10 +428,49 @@ def _bodies(where, spec):
             for iname, nid in ifaces.items():
                 iname = name(where, path + ".interfaces", iname, "interface")
                 body["interfaces"].append((iname, node_id(where, "%s.interfaces.%s" % (path, iname), nid)))
+        body["constraints"], body["springs"] = _boundary_conditions(where, path, b)
         if any(n == body["name"] for n in (x["name"] for x in bodies)):
             fail(where, path, "body '%s' is defined twice; give each body a unique name" % bname)
         bodies.append(body)
     return bodies
+
+
+def _boundary_conditions(where, path, b):
+    """constraints: [{node, dofs}] (clamped components, a Nastran component string, default all the node has) and
+    springs: [{node, dof, stiffness}] (springs to ground) of one body."""
+    constraints, springs = [], []
+    for key, keys, out in (("constraints", CONSTRAINT_KEYS, constraints), ("springs", SPRING_KEYS, springs)):
+        raw = b.get(key)
+        if raw is None:
+            continue
+        if isinstance(raw, dict):
+            raw = [raw]
+        if not isinstance(raw, list):
+            fail(where, path + "." + key, "%s is not a list; give a list of {%s}" % (short_repr(raw), ", ".join(sorted(keys))))
+        for i, c in enumerate(raw):
+            cpath = "%s.%s[%d]" % (path, key, i)
+            mapping(where, cpath, c, keys)
+            if "node" not in c:
+                fail(where, cpath, "'node' is missing; give the node id")
+            entry = {"node": node_id(where, cpath + ".node", c["node"])}
+            if key == "constraints":
+                dofs = c.get("dofs", "")
+                if isinstance(dofs, (int, np.integer)) and not isinstance(dofs, bool):
+                    dofs = str(dofs)      # YAML reads dofs: 123456 as a number
+                text(where, cpath + ".dofs", dofs)
+                if dofs and (not re.fullmatch(r"[1-6]+", dofs) or len(set(dofs)) != len(dofs)):
+                    fail(where, cpath + ".dofs", "%s is not a component string; give digits 1-6 once each (1 2 3 = "
+                         "ux uy uz, 4 5 6 = rx ry rz), e.g. \"123456\"" % short_repr(dofs))
+                entry["dofs"] = "".join(sorted(dofs))
+            else:
+                if "dof" not in c or "stiffness" not in c:
+                    fail(where, cpath, "give node, dof (%s) and stiffness" % ", ".join(DOF_NAMES))
+                entry["dof_name"] = choice(where, cpath + ".dof", c["dof"], tuple(DOF_NAMES))
+                entry["dof"] = DOF_NAMES[c["dof"]]
+                entry["stiffness"] = real(where, cpath + ".stiffness", c["stiffness"], "(0, inf)",
+                                          "give the spring stiffness as a positive number")
+            out.append(entry)
+    return constraints, springs
 
 
 def _joints(where, spec, bodies):
@@ -446,6 +488,9 @@ def _joints(where, spec, bodies):
         seen.add(jname)
         mapping(where, path, j, JOINT_KEYS)
         kind = choice(where, path + ".type", j.get("type", "revolute"), JOINT_TYPES)
+        if _ref(j.get("parent")) == GROUND and GROUND not in names:
+            joints.append(_ground_joint(where, path, jname, kind, j, bodies, names))
+            continue
         for key in ("parent", "child", "parent_interface", "child_interface"):
             if key not in j:
                 fail(where, path, "'%s' is missing; give it" % key)
@@ -469,8 +514,31 @@ def _joints(where, spec, bodies):
                        "parent_interface": _ref(j["parent_interface"]), "child_interface": _ref(j["child_interface"]),
                        "axis": axis if kind == "revolute" else [0.0, 0.0, 1.0],
                        "R0": None if R0 is None else rotation(where, path + ".orientation", R0)})
-    _tree(where, names, joints)
+    _tree(where, names, [j for j in joints if not j.get("ground")])
     return joints
+
+
+def _ground_joint(where, path, jname, kind, j, bodies, names):
+    """A joint with parent: ground grounds its child's interface node (no parent_interface)."""
+    if "parent_interface" in j:
+        fail(where, path + ".parent_interface", "a joint to ground has no parent interface; remove the key")
+    for key in ("child", "child_interface"):
+        if key not in j:
+            fail(where, path, "'%s' is missing; give it" % key)
+    if _ref(j["child"]) not in names:
+        fail(where, path + ".child", unknown_body(j["child"], names))
+    c = names.index(_ref(j["child"]))
+    have = [i for i, _ in bodies[c]["interfaces"]]
+    if _ref(j["child_interface"]) not in have:
+        fail(where, path + ".child_interface", "body '%s' has no interface %s (it has: %s); declare it under bodies.%s."
+             "interfaces" % (names[c], short_repr(j["child_interface"]), ", ".join(have) or "none", names[c]))
+    axis = vector3(where, path + ".axis", j.get("axis", [0, 0, 1]), "the rotation axis")
+    if not any(axis):
+        fail(where, path + ".axis", "%s is zero; give a direction such as [0, 0, 1]" % short_repr(j.get("axis")))
+    R0 = j.get("orientation")
+    return {"name": jname, "type": kind, "ground": True, "parent": -1, "child": c, "parent_interface": None,
+            "child_interface": _ref(j["child_interface"]), "axis": axis if kind == "revolute" else [0.0, 0.0, 1.0],
+            "R0": None if R0 is None else rotation(where, path + ".orientation", R0)}
 
 
 def _tree(where, names, joints):
@@ -616,7 +684,7 @@ def validate(spec, where, default_name="scene"):
             text(where, key, spec[key])
     bodies = _bodies(where, spec)
     joints = _joints(where, spec, bodies)
-    revolute = [j["name"] for j in joints if j["type"] == "revolute"]
+    revolute = [j["name"] for j in joints if j["type"] == "revolute" and not j.get("ground")]
     band = spec.get("band", DEFAULTS["band"])
     if isinstance(band, (tuple, np.ndarray)):
         band = list(band)

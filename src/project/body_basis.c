@@ -212,6 +212,57 @@ static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rig
   PetscFunctionReturn(0);
 }
 
+/* The rigid motions a body's boundary conditions allow (Phi_geom Z, n_b x rb), each of unit M-norm (columns without
+   mass are dropped): in a scene whose conditions remove rigid modes, the system's remaining modes need not move a
+   body in every way it may move, and reassembly at other angles needs them all. */
+static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
+{
+  PetscReal    Z[36], *nrm;
+  PetscInt     rb, lda, k = 0;
+  Mat          Phi, MPhi;
+  PetscScalar *p, *x;
+  MPI_Comm     comm = PetscObjectComm((PetscObject)B->M);
+
+  PetscFunctionBegin;
+  PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, PetscMax(rb, 1), &Phi));
+  PetscCall(MatDenseGetLDA(Phi, &lda));
+  PetscCall(MatDenseGetArray(Phi, &p));
+  for (PetscInt i = B->rstart; i < B->rend; i++) {
+    PetscInt node, comp;
+    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+    for (PetscInt j = 0; j < rb; j++) {
+      PetscReal v = 0;
+      for (int m = 0; m < 6; m++) v += KFBodyRigidValue(B, node, comp, m) * Z[m + 6 * j];
+      p[(i - B->rstart) + j * lda] = v;
+    }
+  }
+  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+  PetscCall(PetscMalloc1(PetscMax(rb, 1) * PetscMax(rb, 1), &nrm));
+  PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, nrm));
+  PetscCall(MatDestroy(&MPhi));
+  for (PetscInt j = 0; j < rb; j++) k += nrm[j + j * PetscMax(rb, 1)] > 0;
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, k, X));
+  PetscCall(MatDenseGetArray(Phi, &p));
+  PetscCall(MatDenseGetArray(*X, &x));
+  {
+    PetscInt ldx, c = 0;
+    PetscCall(MatDenseGetLDA(*X, &ldx));
+    for (PetscInt j = 0; j < rb; j++) {
+      PetscReal g = nrm[j + j * PetscMax(rb, 1)];
+      if (!(g > 0)) continue;
+      for (PetscInt i = 0; i < B->rend - B->rstart; i++) x[i + c * ldx] = p[i + j * lda] / PetscSqrtReal(g);
+      c++;
+    }
+  }
+  PetscCall(MatDenseRestoreArray(*X, &x));
+  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(MatDestroy(&Phi));
+  PetscCall(PetscFree(nrm));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
 {
   KFScene s = bb->s;
@@ -226,6 +277,12 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     PetscReal  *W, *MW, *Q;
     Mat         Wm, MWm, AQ;
     PetscCheck(bb->ncols[b] > 0, s->comm, PETSC_ERR_ORDER, "no vectors were added to the body basis");
+    if (s->nrigid >= 0 && s->nrigid < 6 + s->nrevolute) { /* boundary conditions took rigid modes away */
+      Mat X;
+      PetscCall(KFBodyAdmissibleRigidColumns(B, &X));
+      PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
+      bb->cols[b][bb->ncols[b]++] = X;
+    }
     for (PetscInt k = 0; k < bb->ncols[b]; k++) {
       PetscInt mk;
       PetscCall(MatGetSize(bb->cols[b][k], NULL, &mk));

@@ -75,3 +75,78 @@ def hinf_error(Tf, Tr):
     peak = np.abs(Tf).max(axis=0)
     floor = 1e-4 * peak.max()
     return float((np.abs(Tf - Tr).max(axis=0) / np.maximum(peak, floor)).max())
+
+
+def rot_z(deg):
+    a = np.radians(deg)
+    return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1.0]])
+
+
+def tie_rows(n, i_p, i_c, R, revolute_axis=None):
+    """Rows of u_p - R u_c = 0 (translations) and of the rotations (all 3, or the 2 perpendicular to the axis)."""
+    rows = []
+    for comp0 in (0, 3):
+        E = np.eye(3)
+        if comp0 == 3 and revolute_axis is not None:
+            E = sl.null_space(np.asarray(revolute_axis, float)[None, :]).T
+        for e in E:
+            r = np.zeros(n)
+            r[i_p + comp0:i_p + comp0 + 3] += e
+            r[i_c + comp0:i_c + comp0 + 3] -= e @ R
+            rows.append(r)
+    return rows
+
+
+def grounded_arm():
+    """Body 'post' (a beam along z, 1 m) on a revolute joint to ground at its base (axis z), body 'arm' (a beam
+    along x, 1.5 m in its own frame) on a revolute joint (axis z) at the post's top."""
+    Kp, Mp, np_ = beam([(0.0, 0.0, z) for z in np.linspace(0, 1.0, 6)], tip_mass=2.0)
+    Ka, Ma, na = beam([(x, 0.0, 0.0) for x in np.linspace(0, 1.5, 7)], tip_mass=0.3)
+    spec = {"name": "grounded_arm",
+            "bodies": {"post": {"mass": Mp, "stiffness": Kp, "nodes": np_, "interfaces": {"base": 1, "top": 6}},
+                       "arm": {"mass": Ma, "stiffness": Ka, "nodes": na, "interfaces": {"root": 1}}},
+            "joints": {"pivot": {"type": "revolute", "parent": "ground", "child": "post", "child_interface": "base",
+                                 "axis": [0, 0, 1]},
+                       "elbow": {"type": "revolute", "parent": "post", "parent_interface": "top", "child": "arm",
+                                 "child_interface": "root", "axis": [0, 0, 1]}},
+            "inputs": {"torque": [{"body": "arm", "node": 1, "dof": "rz"}, {"body": "post", "node": 6, "dof": "rz",
+                                                                             "weight": -1.0}],
+                       "push": [{"body": "arm", "node": 7, "dof": "uz"}]},
+            "outputs": {"tip_y": [{"body": "arm", "node": 7, "dof": "uy"}],
+                        "tip_z": [{"body": "arm", "node": 7, "dof": "uz"}],
+                        "post_x": [{"body": "post", "node": 6, "dof": "ux"}]},
+            "angles": [0.0, 40.0, 90.0], "band": BAND, "damping": ZETA, "accuracy": 0.02}
+    return spec
+
+
+def grounded_arm_reference(spec, angle_deg):
+    """Dense system of grounded_arm at the elbow angle: stacked dofs, constraint null space (SVD)."""
+    Mp, Kp = spec["bodies"]["post"]["mass"], spec["bodies"]["post"]["stiffness"]
+    Ma, Ka = spec["bodies"]["arm"]["mass"], spec["bodies"]["arm"]["stiffness"]
+    npost = len(Kp)
+    n = npost + len(Ka)
+    M = sl.block_diag(Mp, Ma)
+    K = sl.block_diag(Kp, Ka)
+    rows = []
+    for c in (0, 1, 2, 3, 4):         # ground: base translations and rx, ry
+        r = np.zeros(n)
+        r[c] = 1
+        rows.append(r)
+    rows += tie_rows(n, 6 * 5, npost, rot_z(angle_deg), revolute_axis=[0, 0, 1])
+    P = sl.null_space(np.array(rows))
+    G = np.zeros((n, 2))
+    G[npost + 5, 0] = 1
+    G[6 * 5 + 5, 0] = -1
+    G[npost + 6 * 6 + 2, 1] = 1
+    H = np.zeros((3, n))
+    H[0, npost + 6 * 6 + 1] = 1
+    H[1, npost + 6 * 6 + 2] = 1
+    H[2, 6 * 5 + 0] = 1
+    Ks = P.T @ K @ P
+    return P.T @ M @ P, 0.5 * (Ks + Ks.T), P.T @ G, H @ P
+
+
+def rigid_null(Ks, rtol=1e-9):
+    """Null space of Ks by SVD (relative tolerance)."""
+    U, s, Vt = np.linalg.svd(Ks)
+    return Vt[s <= rtol * s[0]].T

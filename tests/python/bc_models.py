@@ -150,3 +150,78 @@ def rigid_null(Ks, rtol=1e-9):
     """Null space of Ks by SVD (relative tolerance)."""
     U, s, Vt = np.linalg.svd(Ks)
     return Vt[s <= rtol * s[0]].T
+
+
+def clamped_beam():
+    """A 2 m cantilever along x, clamped at node 1."""
+    K, M, nodes = beam([(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 11)])
+    return {"name": "clamped", "bodies": {"beam": {"mass": M, "stiffness": K, "nodes": nodes,
+                                                   "constraints": [{"node": 1, "dofs": "123456"}]}},
+            "inputs": {"fy": [{"body": "beam", "node": 11, "dof": "uy"}], "fz": [{"body": "beam", "node": 8, "dof": "uz"}]},
+            "outputs": {"y": [{"body": "beam", "node": 11, "dof": "uy"}], "z": [{"body": "beam", "node": 6, "dof": "uz"}],
+                        "t": [{"body": "beam", "node": 11, "dof": "rx"}]},
+            "band": BAND, "damping": ZETA, "accuracy": 0.01}
+
+
+def sprung_beam():
+    """A free beam along x on vertical (uz) springs at both ends: 4 rigid modes (ux, uy, rx, rz) remain."""
+    K, M, nodes = beam([(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 11)])
+    return {"name": "sprung", "bodies": {"beam": {"mass": M, "stiffness": K, "nodes": nodes,
+                                                  "springs": [{"node": 1, "dof": "uz", "stiffness": 2e4},
+                                                              {"node": 11, "dof": "uz", "stiffness": 5e3}]}},
+            "inputs": {"fz": [{"body": "beam", "node": 11, "dof": "uz"}], "fy": [{"body": "beam", "node": 6, "dof": "uy"}]},
+            "outputs": {"z": [{"body": "beam", "node": 9, "dof": "uz"}], "y": [{"body": "beam", "node": 11, "dof": "uy"}]},
+            "band": BAND, "damping": ZETA, "accuracy": 0.01}
+
+
+def single_body_reference(spec):
+    """Dense system of a one-body spec: clamped dofs removed, springs added; G, H from the point terms."""
+    b = spec["bodies"]["beam"]
+    K, M = np.array(b["stiffness"], float), np.array(b["mass"], float)
+    first = {int(r[0]): 6 * i for i, r in enumerate(b["nodes"])}
+    names = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
+    for s in b.get("springs", []):
+        d = first[s["node"]] + names[s["dof"]]
+        K[d, d] += s["stiffness"]
+    clamped = [first[c["node"]] + int(ch) - 1 for c in b.get("constraints", []) for ch in c["dofs"]]
+    keep = np.setdiff1d(np.arange(len(K)), clamped)
+
+    def terms(section):
+        A = np.zeros((len(K), len(spec[section])))
+        for j, (_, ts) in enumerate(spec[section].items()):
+            for t in ts:
+                A[first[t["node"]] + names[t["dof"]], j] += t.get("weight", 1.0)
+        return A[keep]
+    return M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], terms("inputs"), terms("outputs").T
+
+
+CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm}
+
+
+def bad_case(name):
+    """Specs with one bad boundary condition each (the message must name it)."""
+    if name == "unknown_node":
+        spec = clamped_beam()
+        spec["bodies"]["beam"]["constraints"] = [{"node": 99, "dofs": "123"}]
+    elif name == "missing_component":
+        spec = clamped_beam()
+        spec["bodies"]["beam"]["nodes"][0][4] = 3
+        K = spec["bodies"]["beam"]["stiffness"]
+        spec["bodies"]["beam"]["stiffness"] = K[3:, 3:]
+        spec["bodies"]["beam"]["mass"] = spec["bodies"]["beam"]["mass"][3:, 3:]
+        spec["bodies"]["beam"]["constraints"] = [{"node": 1, "dofs": "1234"}]
+    elif name == "oblique_ground_axis":
+        spec = grounded_arm()
+        spec["joints"]["pivot"]["axis"] = [0, 1, 1]
+    elif name == "tied_clamp":
+        spec = grounded_arm()
+        spec["bodies"]["arm"]["constraints"] = [{"node": 1, "dofs": "3"}]
+    elif name == "undeclared_support":
+        # K carries a support the scene does not declare: a stiff spring inside K on node 1's uz
+        spec = clamped_beam()
+        del spec["bodies"]["beam"]["constraints"]
+        spec["bodies"]["beam"]["stiffness"] = spec["bodies"]["beam"]["stiffness"].copy()
+        spec["bodies"]["beam"]["stiffness"][2, 2] += 1e6
+    else:
+        raise KeyError(name)
+    return spec

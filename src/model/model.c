@@ -13,6 +13,7 @@ PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm comm, PetscInt nb, Pet
   /* one kind so far: reduced bodies reassembled at any angle (the view would otherwise say "type not yet set") */
   PetscCall(PetscObjectChangeTypeName((PetscObject)m, "reduced-bodies"));
   m->nb       = nb;
+  m->nrigid   = -1;
   m->nj       = nj;
   m->ninputs  = a;
   m->noutputs = t;
@@ -99,11 +100,7 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
   for (PetscInt i = 0; i < t; i++) PetscCall(PetscStrncpy(m->output_names[i], s->output_names[i], KF_MAX_NAME));
   m->nangles = nangles;
   PetscCall(CopyArray(nangles * s->nrevolute, angles, &m->angles));
-  if (s->nrigid >= 0) { /* the count geometry, joints and boundary conditions gave (KFReducedModelGetInfo) */
-    char value[32];
-    PetscCall(PetscSNPrintf(value, sizeof(value), "%" PetscInt_FMT, s->nrigid));
-    PetscCall(KFReducedModelSetSetting(m, "rigid_modes", value));
-  }
+  m->nrigid = s->nrigid; /* the count geometry, joints and boundary conditions gave (the reducer records it too) */
   *model = m;
   PetscFunctionReturn(0);
 }
@@ -157,11 +154,11 @@ PetscErrorCode KFReducedModelGetInfo(KFReducedModel m, PetscInt *nbodies, PetscI
   if (ninputs) *ninputs = m->ninputs;
   if (noutputs) *noutputs = m->noutputs;
   if (nrigid) {
-    *nrigid = 6 + m->nrevolute;
+    *nrigid = m->nrigid >= 0 ? m->nrigid : 6 + m->nrevolute;
     for (PetscInt k = 0; k < m->nsettings; k++) {
       PetscBool same;
       PetscCall(PetscStrcmp(m->keys[k], "rigid_modes", &same));
-      if (same) *nrigid = (PetscInt)strtol(m->values[k], NULL, 10);
+      if (same && m->nrigid < 0) *nrigid = (PetscInt)strtol(m->values[k], NULL, 10);
     }
   }
   PetscFunctionReturn(0);

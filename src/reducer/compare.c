@@ -6,6 +6,8 @@
 */
 #include <kryflex/reducerimpl.h>
 
+PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
+
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
   PetscInt   nrev, nsys, a, t, nflex, nev, nconv;
@@ -16,6 +18,11 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, &nsys, &a, &t));
   PetscCall(KFSystemRigidIO(sys, &nflex, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
   nflex = nsys - nflex;
+  {
+    PetscInt n0; /* massless dofs carry infinite eigenvalues: no flexible modes of theirs to compute */
+    PetscCall(KFSystemMasslessCount(sys, &n0));
+    nflex -= n0;
+  }
   PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nsys - nflex);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   /* dense: every mode (no residual to approximate); sparse: start at 20 */

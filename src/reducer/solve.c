@@ -125,6 +125,15 @@ static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KF
   keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, n, angles, keep, model));
   PetscCall(KFReducerRecordSettings_Private(r, *model, method, r->build_moments, n, angles));
+  {
+    PetscInt nrigid;
+    char     value[32];
+    PetscCall(KFSceneGetRigidCount(r->scene, &nrigid));
+    if (nrigid >= 0) { /* saved with the model: KFReducedModelGetInfo after a load */
+      PetscCall(PetscSNPrintf(value, sizeof(value), "%" PetscInt_FMT, nrigid));
+      PetscCall(KFReducedModelSetSetting(*model, "rigid_modes", value));
+    }
+  }
   PetscFunctionReturn(0);
 }
 

@@ -53,14 +53,41 @@ static PetscErrorCode KFBodyCheck(KFScene s, KFBodyData *B)
   PetscCheck(rs == rsK && re == reK, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP, "body '%s': M and K are distributed differently over the ranks; load them with the same layout", B->name);
   B->rstart = rs;
   B->rend   = re;
-  /* a mass matrix needs a positive diagonal; a stiffness matrix a non-negative one (else it is indefinite) */
+  /* a mass matrix needs a non-negative diagonal (massless dofs, e.g. rotations of a lumped-mass model, are fine:
+     the Krylov recurrence on K+ M copes, the verification condenses them); a stiffness matrix a non-negative one
+     (else it is indefinite); a dof with neither mass nor stiffness has no equation at all */
   PetscCall(MatCreateVecs(B->M, &d, NULL));
   PetscCall(MatGetDiagonal(B->M, d));
   PetscCall(VecMin(d, NULL, &dmin));
-  PetscCheck(dmin > 0, s->comm, PETSC_ERR_ARG_WRONG, "mass matrix M of body '%s' is not positive definite: its diagonal has an entry %g <= 0; every dof needs mass (add lumped mass or inertia)", B->name, (double)dmin);
-  PetscCall(MatGetDiagonal(B->K, d));
-  PetscCall(VecMin(d, NULL, &dmin));
-  PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "stiffness matrix K of body '%s' is indefinite: its diagonal has a negative entry %g; check the export", B->name, (double)dmin);
+  PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "mass matrix M of body '%s' is indefinite: its diagonal has a negative entry %g; check the export (masses and inertias are >= 0)", B->name, (double)dmin);
+  {
+    Vec                dk;
+    const PetscScalar *m, *k;
+    PetscInt           bad = PETSC_MAX_INT, first;
+    PetscCall(VecDuplicate(d, &dk));
+    PetscCall(MatGetDiagonal(B->K, dk));
+    PetscCall(VecMin(dk, NULL, &dmin));
+    PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "stiffness matrix K of body '%s' is indefinite: its diagonal has a negative entry %g; check the export", B->name, (double)dmin);
+    PetscCall(VecGetArrayRead(d, &m));
+    PetscCall(VecGetArrayRead(dk, &k));
+    for (PetscInt i = 0; i < re - rs && bad == PETSC_MAX_INT; i++)
+      if (PetscRealPart(m[i]) == 0 && PetscRealPart(k[i]) == 0) {
+        PetscBool held = PETSC_FALSE; /* clamped, or given a spring: determined after all */
+        for (PetscInt c = 0; c < B->nclamp; c++) held = (PetscBool)(held || B->clamp[c] == rs + i);
+        for (PetscInt c = 0; c < B->nspring; c++) held = (PetscBool)(held || B->spring_dof[c] == rs + i);
+        if (!held) bad = rs + i;
+      }
+    PetscCall(VecRestoreArrayRead(d, &m));
+    PetscCall(VecRestoreArrayRead(dk, &k));
+    PetscCall(VecDestroy(&dk));
+    PetscCall(MPIU_Allreduce(&bad, &first, 1, MPIU_INT, MPI_MIN, s->comm));
+    if (first != PETSC_MAX_INT) {
+      PetscInt          node, comp;
+      static const char *cn[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+      PetscCall(KFBodyDofComponent(B, first, &node, &comp));
+      SETERRQ(s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ", component %s (dof %" PetscInt_FMT "): the dof has neither mass nor stiffness, so nothing determines its motion; remove it from the model (and the nodes file), give it stiffness, or clamp it (constraints)", B->name, B->ids[node], comp < 6 ? cn[comp] : "?", first + 1);
+    }
+  }
   PetscCall(VecDestroy(&d));
   PetscFunctionReturn(0);
 }

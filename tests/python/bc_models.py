@@ -195,7 +195,6 @@ def single_body_reference(spec):
     return M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], terms("inputs"), terms("outputs").T
 
 
-CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm}
 
 
 def bad_case(name):
@@ -225,3 +224,42 @@ def bad_case(name):
     else:
         raise KeyError(name)
     return spec
+
+
+def lumped_frame():
+    """A free-free L-shaped frame (x leg 2 m, y leg 1.5 m) with lumped translational masses only: every rotation is
+    massless (M has zero rows), as in many exported models."""
+    pts = [(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 9)] + [(2.0, y, 0.0) for y in np.linspace(0.25, 1.5, 6)]
+    n = len(pts)
+    K = np.zeros((6 * n, 6 * n))
+    M = np.zeros((6 * n, 6 * n))
+    for e in range(n - 1):
+        k, m = beam_element(pts[e], pts[e + 1])
+        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += k
+        lm = np.trace(m[:3, :3]) / 3 + np.trace(m[6:9, 6:9]) / 3       # the element's mass, half to each end
+        for node in (e, e + 1):
+            M[6 * node:6 * node + 3, 6 * node:6 * node + 3] += 0.5 * lm * np.eye(3) * 1.0
+    M[6 * (n - 1):6 * (n - 1) + 3, 6 * (n - 1):6 * (n - 1) + 3] += 0.4 * np.eye(3)
+    nodes = [[i + 1, *p, 6] for i, p in enumerate(pts)]
+    return {"name": "lumped", "bodies": {"beam": {"mass": M, "stiffness": K, "nodes": nodes}},
+            "inputs": {"fz": [{"body": "beam", "node": n, "dof": "uz"}], "mx": [{"body": "beam", "node": 5, "dof": "rx"}]},
+            "outputs": {"z": [{"body": "beam", "node": 3, "dof": "uz"}], "ry": [{"body": "beam", "node": n, "dof": "ry"}],
+                        "y": [{"body": "beam", "node": 9, "dof": "uy"}]},
+            "band": BAND, "damping": ZETA, "accuracy": 0.01}
+
+
+def condensed_frf(Ms, Ks, Gs, Hs, f_hz, zeta=ZETA):
+    """FRF of a pencil with massless dofs (zero rows of Ms): static condensation onto the dofs with mass, the
+    condensed loads and readings, the rigid modes from the condensed K's null space."""
+    z = np.flatnonzero(~np.abs(Ms).any(axis=1))
+    m = np.setdiff1d(np.arange(len(Ms)), z)
+    X = np.linalg.solve(Ks[np.ix_(z, z)], Ks[np.ix_(z, m)])
+    T = np.vstack([np.eye(len(m)), -X])              # full = T x_m, rows ordered (m, z)
+    order = np.concatenate([m, z])
+    Kf, Mf, Gf, Hf = Ks[np.ix_(order, order)], Ms[np.ix_(order, order)], Gs[order], Hs[:, order]
+    Kc = T.T @ Kf @ T
+    Kc = 0.5 * (Kc + Kc.T)
+    return modal_frf(T.T @ Mf @ T, Kc, T.T @ Gf, Hf @ T, f_hz, zeta, rigid=rigid_null(Kc))
+
+
+CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm, "lumped": lumped_frame}

@@ -1,4 +1,5 @@
-"""Boundary conditions (issue 12): clamped, sprung and grounded-articulated models reduce to their stated accuracy,
+"""Boundary conditions and massless dofs (issue 12): clamped, sprung, grounded-articulated and lumped-mass (massless
+rotations) models reduce to their stated accuracy,
 checked against dense NumPy/SciPy references written in bc_models.py (not against kryflex's own report), on 1 and 2
 ranks; the rigid and mechanism modes are derived (and the reduced systems carry them); bad conditions fail with a
 message naming them, on every rank, without hanging."""
@@ -19,7 +20,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 TIMEOUT = 240
 
 # the rigid and mechanism modes each case must have (free beam on uz springs at both ends: ux, uy, rx, rz)
-EXPECTED_RIGID = {"clamped": 0, "sprung": 4, "grounded": 2}
+EXPECTED_RIGID = {"clamped": 0, "sprung": 4, "grounded": 2, "lumped": 6}
 
 
 def probe(case, ranks, tmp_path):
@@ -60,7 +61,10 @@ def test_reduced_frf_meets_accuracy_against_dense_reference(runs, case, ranks):
         Ms, Ks, Gs, Hs = reference(case, spec, angle)
         R = bc_models.rigid_null(Ks)
         assert R.shape[1] == EXPECTED_RIGID[case]            # the reference agrees with what the case must have
-        Tf = bc_models.modal_frf(Ms, Ks, Gs, Hs, r["f"], rigid=R)
+        if case == "lumped":   # massless rotations: the reference condenses them
+            Tf = bc_models.condensed_frf(Ms, Ks, Gs, Hs, r["f"])
+        else:
+            Tf = bc_models.modal_frf(Ms, Ks, Gs, Hs, r["f"], rigid=R)
         err = bc_models.hinf_error(Tf, r["T"][k])
         assert err <= spec["accuracy"], "%s at %s deg: FRF error %.3g against the dense reference > %g" % (
             case, angle, err, spec["accuracy"])
@@ -100,3 +104,23 @@ def test_bad_boundary_conditions_fail_clearly(tmp_path, case, ranks):
     assert BAD[case] in p.stdout, p.stdout
     assert "Traceback" not in p.stderr
     assert not out.exists()
+
+
+def test_massless_dofs_verified_by_condensation():
+    """The verification of a model with massless rotations condenses them (no LAPACK sygvd failure) and says so."""
+    p = subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, %r); import kryflex, bc_models; "
+                        "kryflex.Reducer(kryflex.scene_from_dict(bc_models.lumped_frame()), quiet=False).reduce()" % HERE],
+                       env=ENV, capture_output=True, text=True, timeout=TIMEOUT)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "massless dofs condensed" in p.stdout + p.stderr
+
+
+def test_dof_without_mass_or_stiffness_is_named():
+    import kryflex
+    spec = bc_models.lumped_frame()
+    K = spec["bodies"]["beam"]["stiffness"].copy()
+    K[9, :] = 0        # node 2, rx: no stiffness and (lumped) no mass
+    K[:, 9] = 0
+    spec["bodies"]["beam"]["stiffness"] = K
+    with pytest.raises(kryflex.SceneError, match=r"node 2, component rx .*neither mass nor stiffness"):
+        kryflex.scene_from_dict(spec)

@@ -46,6 +46,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSceneAddInterface(KFScene, PetscInt, const char*, PetscInt)
     PetscErrorCode KFSceneAddJoint(KFScene, const char*, KFJointType, PetscInt, const char*, PetscInt, const char*, const PetscReal*, const PetscReal*)
     PetscErrorCode KFSceneAddConstraint(KFScene, PetscInt, PetscInt, const char*)
+    PetscErrorCode KFSceneAddBodyComponents(KFScene, const char*, PetscMat, PetscMat, PetscInt, const PetscInt*, const PetscReal*, const PetscInt*, PetscInt*)
     PetscErrorCode KFSceneAddSpring(KFScene, PetscInt, PetscInt, PetscInt, PetscReal)
     PetscErrorCode KFSceneGetRigidCount(KFScene, PetscInt*)
     PetscErrorCode KFSceneSetNumIO(KFScene, PetscInt, PetscInt)

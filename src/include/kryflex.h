@@ -41,6 +41,15 @@ PETSC_EXTERN PetscErrorCode KFSceneDestroy(KFScene *);
 /* M and K are referenced (not copied); nodes: ids, coordinates (3 per node), dofs per node (3 or 6).
    Dofs are ordered node by node in the given order, ux uy uz [rx ry rz]. */
 PETSC_EXTERN PetscErrorCode KFSceneAddBody(KFScene, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt ndof[], PetscInt *body);
+/* Any dof layout: comps[i] is node i's set of components, bit c for component c (0..5: ux uy uz rx ry rz), e.g.
+   (1 << 2) | (1 << 3) | (1 << 4) for a plate node carrying uz rx ry (Nastran "c345"); KF_SCALAR_POINT (0) for a scalar
+   point (one dof without geometric meaning: its rigid-motion values come from static condensation, and inputs and
+   outputs address it as component KF_COMPONENT_SCALAR). Dofs are numbered node by node, components ascending.
+   Interface nodes need all six components. */
+#define KF_SCALAR_POINT     0
+#define KF_COMPONENT_SCALAR 6
+#define KF_COMPONENTS_ALL   63
+PETSC_EXTERN PetscErrorCode KFSceneAddBodyComponents(KFScene, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt comps[], PetscInt *body);
 PETSC_EXTERN PetscErrorCode KFSceneAddInterface(KFScene, PetscInt body, const char name[], PetscInt node_id);
 /* axis: unit vector in the parent's frame (ignored for fixed joints);
    R0: child frame orientation in the parent frame at angle 0 (column-major 3x3), NULL for identity.

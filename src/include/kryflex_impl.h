@@ -24,6 +24,10 @@ typedef struct {
   PetscInt     n;          /* dofs */
   PetscInt     nnodes;
   PetscInt    *ids, *ndof, *dof0;
+  PetscInt    *comps;      /* per node: bit c set when component c (ux uy uz rx ry rz) is present; 0: scalar point */
+  PetscInt     nscalar;    /* scalar points, their dofs and their values in the 6 body-frame rigid motions */
+  PetscInt    *scalar_of_node; /* node -> index among the scalar points, -1 */
+  PetscReal   *scalar_rigid;   /* nscalar x 6, by static condensation (minimum strain energy) */
   PetscReal   *xyz;
   PetscInt     ninterfaces;
   KFInterface *iface;
@@ -120,8 +124,12 @@ PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); 
 PETSC_INTERN PetscErrorCode KFBodyFindNode(KFBodyData *, PetscInt id, PetscInt *node);
 PETSC_INTERN PetscErrorCode KFExprAdd(KFExpr *, PetscInt idx, PetscReal c);
 PETSC_INTERN PetscErrorCode KFExprAXPY(KFExpr *, PetscReal a, const KFExpr *);
-/* node and component (0..5: ux uy uz rx ry rz) of body dof i */
+/* node and component (0..5: ux uy uz rx ry rz; KF_COMPONENT_SCALAR for a scalar point) of body dof i */
 PETSC_INTERN PetscErrorCode KFBodyDofComponent(KFBodyData *, PetscInt dof, PetscInt *node, PetscInt *comp);
+/* the body dof of (node, comp), or -1 when the node has no such component */
+PETSC_INTERN PetscInt KFBodyNodeDof(const KFBodyData *, PetscInt node, PetscInt comp);
+/* scalar points' rigid-motion values (static condensation); called by KFSceneSetUp */
+PETSC_INTERN PetscErrorCode KFSceneScalarRigid(KFScene);
 /* the body's rigid motions its boundary conditions allow: Z (6 x rb, column-major, ld 6) combines the 6 body-frame
    motions (ux uy uz rx ry rz about the body origin) into motions that vanish on clamped and spring dofs */
 PETSC_INTERN PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *, PetscInt *rb, PetscReal Z[36]);

@@ -1,4 +1,5 @@
 #include <kryflex_impl.h>
+#include <petscblaslapack.h>
 
 /* Rigid-body and mechanism modes from node coordinates and joints: 6 rigid motions of the whole scene
    (translations and rotations in the root frame) and, per revolute joint, the rotation of the child's subtree about
@@ -23,18 +24,15 @@ static PetscBool InSubtree(KFScene s, PetscInt b, PetscInt j)
 }
 
 /* Value at (body b, node, component comp) of candidate m: 0-2 translations, 3-5 rotations about the root frame's
-   axes, 6+ the rotation of revolute joint m-6's child subtree about the joint axis; in the body frame. */
+   axes, 6+ the rotation of revolute joint m-6's child subtree about the joint axis. On body b the candidate is a
+   body-frame rigid motion, translation t_b at the body origin and rotation w_b: its value at any dof (scalar points
+   included) is that combination of the body's 6 motions (KFBodyRigidValue). */
 static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, PetscInt comp, PetscInt m)
 {
-  KFScene     s = y->scene;
-  KFBodyData *B = &s->bodies[b];
-  PetscReal  *Q = y->Q[b], *o = y->o[b];
-  PetscReal   t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, disp[3], x[3];
+  KFScene   s = y->scene;
+  PetscReal *Q = y->Q[b], *o = y->o[b];
+  PetscReal  t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, anchor[3] = {0, 0, 0}, d[3], disp[3], val = 0;
 
-  for (int c = 0; c < 3; c++) {
-    x[c] = o[c];
-    for (int k = 0; k < 3; k++) x[c] += Q[c + 3 * k] * B->xyz[3 * node + k];
-  }
   if (m < 3) t[m] = 1;
   else if (m < 6) w[m - 3] = 1;
   else {
@@ -48,22 +46,60 @@ static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, Pe
       KFBodyData  *Pb = &s->bodies[J->parent];
       PetscReal   *Qp = y->Q[J->parent], *op = y->o[J->parent], *xp = &Pb->xyz[3 * Pb->iface[J->parent_iface].node];
       for (int c = 0; c < 3; c++) {
-        PetscReal yj = op[c];
+        anchor[c] = op[c];
         for (int k = 0; k < 3; k++) {
           w[c] += Qp[c + 3 * k] * J->axis[k];
-          yj += Qp[c + 3 * k] * xp[k];
+          anchor[c] += Qp[c + 3 * k] * xp[k];
         }
-        x[c] -= yj;
       }
     }
   }
-  Cross(w, x, disp);
-  for (int c = 0; c < 3; c++) disp[c] += t[c];
-  { /* back to the body frame: Q^T */
-    PetscReal v = 0;
-    for (int k = 0; k < 3; k++) v += Q[k + 3 * (comp % 3)] * (comp < 3 ? disp[k] : w[k]);
-    return v;
+  for (int c = 0; c < 3; c++) d[c] = o[c] - anchor[c];
+  Cross(w, d, disp);
+  for (int c = 0; c < 3; c++) disp[c] += t[c]; /* the motion of the body origin */
+  for (int c = 0; c < 3; c++) { /* in the body frame: Q^T */
+    PetscReal tb = 0, wb = 0;
+    for (int k = 0; k < 3; k++) {
+      tb += Q[k + 3 * c] * disp[k];
+      wb += Q[k + 3 * c] * w[k];
+    }
+    val += tb * KFBodyRigidValue(&s->bodies[b], node, comp, c) + wb * KFBodyRigidValue(&s->bodies[b], node, comp, 3 + c);
   }
+  return val;
+}
+
+/* The independent combinations of the columns of C (a dof layout without some components sees some candidates not
+   at all: a plate of uz rx ry nodes in the xy plane does not see ux, uy, rz): the eigenvectors of the small Gram
+   matrix C^T C above a relative 1e-20 (singular values 1e-10), scaled. */
+static PetscErrorCode KFRigidIndependent(Mat C, Mat *Phi)
+{
+  PetscInt   n, N, nl, k = 0;
+  PetscReal *G, *Id, *lam, *V, *W;
+  MPI_Comm   comm;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)C, &comm));
+  PetscCall(MatGetSize(C, &N, &n));
+  PetscCall(MatGetLocalSize(C, &nl, NULL));
+  if (!n) {
+    PetscCall(MatDuplicate(C, MAT_COPY_VALUES, Phi));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscMalloc5(n * n, &G, n * n, &Id, n, &lam, n * n, &V, n * n, &W));
+  PetscCall(KFMatTransposeMatMultGather(C, C, G));
+  for (PetscInt i = 0; i < n * n; i++) Id[i] = (i % (n + 1)) == 0;
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < j; i++) G[i + j * n] = G[j + i * n] = 0.5 * (G[i + j * n] + G[j + i * n]);
+  PetscCall(KFDenseEig(n, G, Id, lam, V));
+  for (PetscInt j = 0; j < n; j++)
+    if (lam[j] > 1e-20 * lam[n - 1] && lam[j] > 0) {
+      for (PetscInt i = 0; i < n; i++) W[i + k * n] = V[i + j * n] / PetscSqrtReal(lam[j]);
+      k++;
+    }
+  PetscCall(KFDenseCreate(comm, nl, N, k, Phi));
+  if (k) PetscCall(KFDenseMultSmall(C, n, k, W, 1.0, *Phi));
+  PetscCall(PetscFree5(G, Id, lam, V, W));
+  PetscFunctionReturn(0);
 }
 
 /* The candidates restricted to what the boundary conditions allow: combinations Z of the 6 + nrevolute geometric
@@ -102,7 +138,7 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
 
   for (PetscInt b = 0; b < s->nb; b++) nbc += s->bodies[b].nclamp + s->bodies[b].nspring;
   if (!nbc) {
-    *Phi = C;
+    PetscCall(KFRigidIndependent(C, Phi));
     PetscFunctionReturn(0);
   }
   /* D (nbc x ncand): every rank has the node coordinates and frames, so D is the same everywhere without messages */
@@ -116,8 +152,13 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
     }
   }
   PetscCall(KFDenseNullSpace(nbc, ncand, D, 1e-10, &r, Z, NULL, NULL));
-  PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, Phi));
-  if (r) PetscCall(KFDenseMultSmall(C, ncand, r, Z, 1.0, *Phi));
+  {
+    Mat R;
+    PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, &R));
+    if (r) PetscCall(KFDenseMultSmall(C, ncand, r, Z, 1.0, R));
+    PetscCall(KFRigidIndependent(R, Phi));
+    PetscCall(MatDestroy(&R));
+  }
   PetscCall(MatDestroy(&C));
   PetscCall(PetscFree2(D, Z));
   PetscFunctionReturn(0);
@@ -129,6 +170,7 @@ PetscReal KFBodyRigidValue(const KFBodyData *B, PetscInt node, PetscInt comp, Pe
   const PetscReal *x = &B->xyz[3 * node];
   PetscReal        w[3] = {0, 0, 0};
 
+  if (comp == KF_COMPONENT_SCALAR) return B->scalar_rigid ? B->scalar_rigid[B->scalar_of_node[node] + m * B->nscalar] : 0;
   if (m < 3) return comp == m ? 1.0 : 0.0;
   w[m - 3] = 1;
   if (comp >= 3) return w[comp - 3];
@@ -137,6 +179,72 @@ PetscReal KFBodyRigidValue(const KFBodyData *B, PetscInt node, PetscInt comp, Pe
     Cross(w, x, c);
     return c[comp];
   }
+}
+
+/* Scalar points have no geometry: each of a body's 6 rigid motions gives them the values of least strain energy with
+   the geometric dofs following the motion, x_s = -K_ss^-1 K_sg g (static condensation). A rigid motion then strains
+   nothing exactly when the body is rigid in that motion, which the check against K verifies as for any dof. */
+PetscErrorCode KFSceneScalarRigid(KFScene s)
+{
+  PetscFunctionBegin;
+  for (PetscInt bi = 0; bi < s->nb; bi++) {
+    KFBodyData  *B  = &s->bodies[bi];
+    PetscInt     ns = B->nscalar, *sd, lda, k = 0;
+    Mat          C, Y, *sub;
+    IS           is;
+    PetscScalar *c;
+    PetscReal   *Ys, *Kss;
+    PetscBLASInt bn, six = 6, info;
+
+    if (!ns || B->scalar_rigid) continue;
+    PetscCall(PetscMalloc1(ns, &sd));
+    PetscCall(PetscMalloc1(6 * ns, &Ys));
+    PetscCall(PetscMalloc1(ns * ns, &Kss));
+    for (PetscInt i = 0; i < B->nnodes; i++)
+      if (!B->comps[i]) sd[k++] = B->dof0[i];
+    PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, 6, &C));
+    PetscCall(MatDenseGetLDA(C, &lda));
+    PetscCall(MatDenseGetArray(C, &c));
+    for (PetscInt i = B->rstart; i < B->rend; i++) {
+      PetscInt node, comp;
+      PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+      for (PetscInt m = 0; m < 6; m++) c[(i - B->rstart) + m * lda] = comp == KF_COMPONENT_SCALAR ? 0 : KFBodyRigidValue(B, node, comp, m);
+    }
+    PetscCall(MatDenseRestoreArray(C, &c));
+    PetscCall(MatMatMult(B->K, C, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+    PetscCall(PetscArrayzero(Ys, 6 * ns));
+    PetscCall(MatDenseGetLDA(Y, &lda));
+    PetscCall(MatDenseGetArray(Y, &c));
+    for (PetscInt q = 0; q < ns; q++)
+      if (sd[q] >= B->rstart && sd[q] < B->rend)
+        for (PetscInt m = 0; m < 6; m++) Ys[q + m * ns] = -PetscRealPart(c[(sd[q] - B->rstart) + m * lda]);
+    PetscCall(MatDenseRestoreArray(Y, &c));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, Ys, (PetscMPIInt)(6 * ns), MPIU_REAL, MPIU_SUM, s->comm));
+    PetscCall(MatDestroy(&Y));
+    PetscCall(MatDestroy(&C));
+    /* K_ss on every rank */
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, ns, sd, PETSC_COPY_VALUES, &is));
+    PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+    PetscCall(ISDestroy(&is));
+    for (PetscInt i = 0; i < ns; i++) {
+      PetscInt           nc;
+      const PetscInt    *cols;
+      const PetscScalar *vals;
+      for (PetscInt j = 0; j < ns; j++) Kss[i + j * ns] = 0;
+      PetscCall(MatGetRow(sub[0], i, &nc, &cols, &vals));
+      for (PetscInt j = 0; j < nc; j++) Kss[i + cols[j] * ns] = PetscRealPart(vals[j]);
+      PetscCall(MatRestoreRow(sub[0], i, &nc, &cols, &vals));
+    }
+    PetscCall(MatDestroySubMatrices(1, &sub));
+    PetscCall(PetscBLASIntCast(ns, &bn));
+    PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, Kss, &bn, &info));
+    PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': the stiffness among its %" PetscInt_FMT " scalar points is singular (leading minor %d): a scalar point not held by stiffness has no defined rigid motion; tie it to the structure, clamp it, or give it a spring", B->name, ns, (int)info);
+    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bn, &six, Kss, &bn, Ys, &bn, &info));
+    B->scalar_rigid = Ys; /* ns x 6 */
+    PetscCall(PetscFree(sd));
+    PetscCall(PetscFree(Kss));
+  }
+  PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *B, PetscInt *rb, PetscReal Z[36])

@@ -172,7 +172,7 @@ static PetscErrorCode KFSceneBuildIO(KFScene s)
         } else {
           PetscInt node, dof;
           PetscCall(KFBodyFindNode(B, T->node_id, &node));
-          dof = B->dof0[node] + T->comp;
+          dof = KFBodyNodeDof(B, node, T->comp);
           if (dof >= B->rstart && dof < B->rend) PetscCall(MatSetValue(*A, dof, T->io, T->w, ADD_VALUES));
         }
       }
@@ -224,6 +224,7 @@ PetscErrorCode KFSceneSetUp(KFScene s)
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyCheck(s, &s->bodies[b]));
   PetscCall(KFSceneCheckTree(s));
   PetscCall(KFSceneApplyBoundaryConditions(s));
+  PetscCall(KFSceneScalarRigid(s));
   PetscCall(KFSceneNumberDofs(s));
   PetscCall(KFSceneBuildIO(s));
   s->setup = PETSC_TRUE;

@@ -221,6 +221,15 @@ def bad_case(name):
         del spec["bodies"]["beam"]["constraints"]
         spec["bodies"]["beam"]["stiffness"] = spec["bodies"]["beam"]["stiffness"].copy()
         spec["bodies"]["beam"]["stiffness"][2, 2] += 1e6
+    elif name == "plate_ux_output":
+        spec = plate_c345()
+        spec["outputs"]["z"] = [{"body": "beam", "node": 1, "dof": "ux"}]
+    elif name == "plate_interface":
+        spec = plate_c345()
+        spec["bodies"]["beam"]["interfaces"] = {"hinge": 2}
+    elif name == "scalar_as_ux":
+        spec = scalar_points()
+        spec["inputs"]["fs"] = [{"body": "beam", "node": 101, "dof": "uz"}]
     else:
         raise KeyError(name)
     return spec
@@ -262,4 +271,75 @@ def condensed_frf(Ms, Ks, Gs, Hs, f_hz, zeta=ZETA):
     return modal_frf(T.T @ Mf @ T, Kc, T.T @ Gf, Hf @ T, f_hz, zeta, rigid=rigid_null(Kc))
 
 
+def grillage(nx=4, ny=3, hx=0.5, hy=0.5):
+    """A free-free grillage of beams in the xy plane: nodes (i, j), beams along x and y."""
+    pts = [(i * hx, j * hy, 0.0) for j in range(ny) for i in range(nx)]
+    n = len(pts)
+    K = np.zeros((6 * n, 6 * n))
+    M = np.zeros((6 * n, 6 * n))
+    for j in range(ny):
+        for i in range(nx):
+            a = j * nx + i
+            for b in ([a + 1] if i + 1 < nx else []) + ([a + nx] if j + 1 < ny else []):
+                k, m = beam_element(pts[a], pts[b], Iy=4e-7, Iz=4e-7)
+                idx = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
+                K[np.ix_(idx, idx)] += k
+                M[np.ix_(idx, idx)] += m
+    return K, M, pts
+
+
+def plate_c345():
+    """The grillage's out-of-plane part only (uz rx ry per node, nodes 'c345'): exactly decoupled from the in-plane
+    part for beams in the xy plane. 3 rigid modes remain (uz, rx, ry)."""
+    K, M, pts = grillage()
+    keep = np.array([6 * i + c for i in range(len(pts)) for c in (2, 3, 4)])
+    nodes = [[i + 1, *p, "c345"] for i, p in enumerate(pts)]
+    n = len(pts)
+    return {"name": "plate", "bodies": {"beam": {"mass": M[np.ix_(keep, keep)], "stiffness": K[np.ix_(keep, keep)],
+                                                 "nodes": nodes}},
+            "inputs": {"fz": [{"body": "beam", "node": n, "dof": "uz"}], "mx": [{"body": "beam", "node": 6, "dof": "rx"}]},
+            "outputs": {"z": [{"body": "beam", "node": 1, "dof": "uz"}], "ry": [{"body": "beam", "node": n - 1, "dof": "ry"}]},
+            "band": BAND, "damping": ZETA, "accuracy": 0.01}
+
+
+def scalar_points():
+    """A free beam with two scalar points: each a mass on a spring to a node's uz (a CELAS/CMASS pair on SPOINTs);
+    the scalar points follow the rigid motions by static condensation, so 6 rigid modes remain."""
+    K0, M0, nodes = beam([(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 9)])
+    n0 = len(K0)
+    K = np.zeros((n0 + 2, n0 + 2))
+    M = np.zeros((n0 + 2, n0 + 2))
+    K[:n0, :n0], M[:n0, :n0] = K0, M0
+    for s, (node, k, m) in enumerate(((9, 3e4, 0.3), (5, 8e3, 0.2))):
+        d, q = 6 * (node - 1) + 2, n0 + s
+        K[np.ix_([d, q], [d, q])] += k * np.array([[1, -1], [-1, 1]])
+        M[q, q] += m
+    nodes = nodes + [[101, 0.0, 0.0, 0.0, "s"], [102, 0.0, 0.0, 0.0, "s"]]
+    return {"name": "spoints", "bodies": {"beam": {"mass": M, "stiffness": K, "nodes": nodes}},
+            "inputs": {"fs": [{"body": "beam", "node": 101, "dof": "s"}], "fz": [{"body": "beam", "node": 3, "dof": "uz"}]},
+            "outputs": {"s2": [{"body": "beam", "node": 102, "dof": "s"}], "z": [{"body": "beam", "node": 9, "dof": "uz"}]},
+            "band": BAND, "damping": ZETA, "accuracy": 0.01}
+
+
+def layout_reference(spec):
+    """Dense (M, K, G, H) of a one-body spec with any layout: dofs node by node, components ascending."""
+    b = spec["bodies"]["beam"]
+    first, comps, d = {}, {}, 0
+    for r in b["nodes"]:
+        c = r[4]
+        comps[int(r[0])] = [6] if c == "s" else ([int(ch) - 1 for ch in c[1:]] if isinstance(c, str) else list(range(int(c))))
+        first[int(r[0])] = d
+        d += len(comps[int(r[0])])
+    names = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5, "s": 6}
+
+    def terms(section):
+        A = np.zeros((d, len(spec[section])))
+        for j, (_, ts) in enumerate(spec[section].items()):
+            for t in ts:
+                A[first[t["node"]] + comps[t["node"]].index(names[t["dof"]]), j] += t.get("weight", 1.0)
+        return A
+    return np.array(b["mass"]), np.array(b["stiffness"]), terms("inputs"), terms("outputs").T
+
+
 CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm, "lumped": lumped_frame}
+CASES.update(plate=plate_c345, spoints=scalar_points)

@@ -1,5 +1,5 @@
-"""Boundary conditions and massless dofs (issue 12): clamped, sprung, grounded-articulated and lumped-mass (massless
-rotations) models reduce to their stated accuracy,
+"""Boundary conditions, massless dofs and dof layouts (issue 12): clamped, sprung, grounded-articulated, lumped-mass
+(massless rotations), plate (c345 nodes) and scalar-point models reduce to their stated accuracy,
 checked against dense NumPy/SciPy references written in bc_models.py (not against kryflex's own report), on 1 and 2
 ranks; the rigid and mechanism modes are derived (and the reduced systems carry them); bad conditions fail with a
 message naming them, on every rank, without hanging."""
@@ -20,7 +20,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 TIMEOUT = 240
 
 # the rigid and mechanism modes each case must have (free beam on uz springs at both ends: ux, uy, rx, rz)
-EXPECTED_RIGID = {"clamped": 0, "sprung": 4, "grounded": 2, "lumped": 6}
+EXPECTED_RIGID = {"clamped": 0, "sprung": 4, "grounded": 2, "lumped": 6, "plate": 3, "spoints": 6}
 
 
 def probe(case, ranks, tmp_path):
@@ -35,6 +35,8 @@ def probe(case, ranks, tmp_path):
 def reference(case, spec, angle):
     if case == "grounded":
         Ms, Ks, Gs, Hs = bc_models.grounded_arm_reference(spec, angle)
+    elif case in ("plate", "spoints"):
+        Ms, Ks, Gs, Hs = bc_models.layout_reference(spec)
     else:
         Ms, Ks, Gs, Hs = bc_models.single_body_reference(spec)
     return Ms, Ks, Gs, Hs
@@ -93,6 +95,9 @@ BAD = {
     "oblique_ground_axis": "is not one of its coordinate axes",
     "tied_clamp": "tied to the parent body by joint 'elbow'",
     "undeclared_support": "strain the structure",
+    "plate_ux_output": "node 1 of body 'beam' has 3 dofs (c345), so no 'ux'",
+    "plate_interface": "node 2 has 3 dofs (c345); interface nodes need 6",
+    "scalar_as_ux": "node 101 of body 'beam' has 1 dofs (a scalar point), so no 'uz'",
 }
 
 

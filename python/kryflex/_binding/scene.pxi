@@ -47,6 +47,22 @@ cdef class CScene:
                              int_ptr(cids), real_ptr(cxyz), int_ptr(cndof), &b))
         return b
 
+    def add_body_components(self, name, Mat M not None, Mat K not None, ids, xyz, comps):
+        """A body with any dof layout: comps[i] is node i's component set, bit c for component c (ux uy uz rx ry
+        rz), 0 for a scalar point."""
+        cdef cnp.ndarray cids = index_array(ids, "body %r node ids" % name)
+        cdef cnp.ndarray ccomps = index_array(comps, "body %r node components" % name)
+        cdef cnp.ndarray cxyz = np.ascontiguousarray(xyz, dtype=np.float64).reshape(-1, 3)
+        cdef PetscInt b = -1
+        if not (cids.shape[0] == ccomps.shape[0] == cxyz.shape[0]):
+            raise ValueError("body %r: ids, coordinates and component sets must have one entry per node (%d, %d, %d)"
+                             % (name, cids.shape[0], cxyz.shape[0], ccomps.shape[0]))
+        if cids.shape[0] == 0:
+            raise ValueError("body %r has no nodes" % name)
+        check(KFSceneAddBodyComponents(self.s, cstr(name, "body name"), M.mat, K.mat, <PetscInt>cids.shape[0],
+                                       int_ptr(cids), real_ptr(cxyz), int_ptr(ccomps), &b))
+        return b
+
     def add_interface(self, PetscInt body, name, PetscInt node_id):
         check(KFSceneAddInterface(self.s, body, cstr(name, "interface name"), node_id))
 

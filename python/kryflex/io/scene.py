@@ -127,7 +127,8 @@ def _read_nodes(where, key, name, base):
             _fail("%s: %s" % (where, key), "%s line %d: %r is not 'id x y z ndof'; give five numbers per line"
                   % (name, lineno, line[:80]))
         try:
-            rows.append([int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), int(parts[4])])
+            dofs = parts[4] if parts[4][:1] in ("c", "s") else int(parts[4])   # c345, s: other layouts
+            rows.append([int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), dofs])
         except ValueError:
             _fail("%s: %s" % (where, key), "%s line %d: %r is not numbers; give 'id x y z ndof' (integer id and "
                   "ndof)" % (name, lineno, line[:80]))
@@ -228,11 +229,12 @@ class Scene:
         self.body_dofs = dofs
         self.body_nodes = nodes
         self.interfaces = [[iname for iname, _ in body["interfaces"]] for body in bodies]
-        for body, (ids, xyz, ndof) in zip(bodies, nodes):
+        for body, table in zip(bodies, nodes):
+            ids, xyz, _ = table
             bw = "%s: bodies.%s" % (where, body["name"])
             M, K = (self._matrix(bw + "." + key, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
             try:
-                index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
+                index = self.cscene.add_body_components(body["name"], M, K, ids, xyz, table.comps)
                 for iname, nid in body["interfaces"]:
                     self.cscene.add_interface(index, iname, nid)
                 for c in body["constraints"]:

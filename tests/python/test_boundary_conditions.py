@@ -91,7 +91,7 @@ def test_two_ranks_agree_with_one(runs, case):
 
 BAD = {
     "unknown_node": "node 99",
-    "missing_component": "component 4 (rx), which the node does not have",
+    "missing_component": "node 1 of body 'beam' has no component rx (it is c123)",
     "oblique_ground_axis": "is not one of its coordinate axes",
     "tied_clamp": "tied to the parent body by joint 'elbow'",
     "undeclared_support": "strain the structure",

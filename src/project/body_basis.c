@@ -208,6 +208,21 @@ static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rig
   for (PetscInt j = 0; j < rb; j++)
     for (PetscInt k = 0; k < 6; k++)
       for (PetscInt i = 0; i < v; i++) (*rigid)[i + j * v] += full[i + k * v] * Z[k + 6 * j];
+  { /* a combination the layout does not see (ux uy rz of a plate) keeps only rounding: zero it against the scale of
+       the unrestricted motions, so that reassembly skips it */
+    PetscReal scale = 0;
+    for (PetscInt k = 0; k < 6; k++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < v; i++) c += PetscSqr(full[i + k * v]);
+      scale = PetscMax(scale, c);
+    }
+    for (PetscInt j = 0; j < rb; j++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < v; i++) c += PetscSqr((*rigid)[i + j * v]);
+      if (!(c > 1e-16 * scale))
+        for (PetscInt i = 0; i < v; i++) (*rigid)[i + j * v] = 0;
+    }
+  }
   PetscCall(PetscFree(full));
   PetscFunctionReturn(0);
 }
@@ -217,49 +232,50 @@ static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rig
    body in every way it may move, and reassembly at other angles needs them all. */
 static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
 {
-  PetscReal    Z[36], *nrm;
-  PetscInt     rb, lda, k = 0;
+  PetscReal    Z[36], G6[36], g[6], scale = 0;
+  PetscInt     rb, lda, ldx, k = 0, keep[6];
   Mat          Phi, MPhi;
   PetscScalar *p, *x;
   MPI_Comm     comm = PetscObjectComm((PetscObject)B->M);
 
   PetscFunctionBegin;
   PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
-  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, PetscMax(rb, 1), &Phi));
+  /* the 6 body motions and their M-Gram matrix: its largest diagonal is the scale a kept motion's mass is measured
+     against (a combination the layout does not see has only rounding left) */
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, &Phi));
   PetscCall(MatDenseGetLDA(Phi, &lda));
   PetscCall(MatDenseGetArray(Phi, &p));
   for (PetscInt i = B->rstart; i < B->rend; i++) {
     PetscInt node, comp;
     PetscCall(KFBodyDofComponent(B, i, &node, &comp));
-    for (PetscInt j = 0; j < rb; j++) {
-      PetscReal v = 0;
-      for (int m = 0; m < 6; m++) v += KFBodyRigidValue(B, node, comp, m) * Z[m + 6 * j];
-      p[(i - B->rstart) + j * lda] = v;
-    }
+    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
   }
   PetscCall(MatDenseRestoreArray(Phi, &p));
   PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
-  PetscCall(PetscMalloc1(PetscMax(rb, 1) * PetscMax(rb, 1), &nrm));
-  PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, nrm));
+  PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, G6));
   PetscCall(MatDestroy(&MPhi));
-  for (PetscInt j = 0; j < rb; j++) k += nrm[j + j * PetscMax(rb, 1)] > 0;
+  for (int m = 0; m < 6; m++) scale = PetscMax(scale, G6[m + 6 * m]);
+  for (PetscInt j = 0; j < rb; j++) {
+    g[j] = 0;
+    for (int q = 0; q < 6; q++)
+      for (int m = 0; m < 6; m++) g[j] += Z[m + 6 * j] * G6[m + 6 * q] * Z[q + 6 * j];
+    if (g[j] > 1e-16 * scale) keep[k++] = j;
+  }
   PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, k, X));
+  PetscCall(MatDenseGetLDA(*X, &ldx));
   PetscCall(MatDenseGetArray(Phi, &p));
   PetscCall(MatDenseGetArray(*X, &x));
-  {
-    PetscInt ldx, c = 0;
-    PetscCall(MatDenseGetLDA(*X, &ldx));
-    for (PetscInt j = 0; j < rb; j++) {
-      PetscReal g = nrm[j + j * PetscMax(rb, 1)];
-      if (!(g > 0)) continue;
-      for (PetscInt i = 0; i < B->rend - B->rstart; i++) x[i + c * ldx] = p[i + j * lda] / PetscSqrtReal(g);
-      c++;
+  for (PetscInt c = 0; c < k; c++) {
+    PetscInt j = keep[c];
+    for (PetscInt i = 0; i < B->rend - B->rstart; i++) {
+      PetscReal v = 0;
+      for (int m = 0; m < 6; m++) v += PetscRealPart(p[i + m * lda]) * Z[m + 6 * j];
+      x[i + c * ldx] = v / PetscSqrtReal(g[j]);
     }
   }
   PetscCall(MatDenseRestoreArray(*X, &x));
   PetscCall(MatDenseRestoreArray(Phi, &p));
   PetscCall(MatDestroy(&Phi));
-  PetscCall(PetscFree(nrm));
   PetscFunctionReturn(0);
 }
 

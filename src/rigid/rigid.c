@@ -70,8 +70,9 @@ static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, Pe
 
 /* The independent combinations of the columns of C (a dof layout without some components sees some candidates not
    at all: a plate of uz rx ry nodes in the xy plane does not see ux, uy, rz): the eigenvectors of the small Gram
-   matrix C^T C above a relative 1e-20 (singular values 1e-10), scaled. */
-static PetscErrorCode KFRigidIndependent(Mat C, Mat *Phi)
+   matrix C^T C above 1e-20 scale2 (singular values 1e-10 of the candidates' scale: ||C_0||_F^2 of the unrestricted
+   candidates, since a restriction to a space the layout does not see leaves columns of rounding size only), scaled. */
+static PetscErrorCode KFRigidIndependent(Mat C, PetscReal scale2, Mat *Phi)
 {
   PetscInt   n, N, nl, k = 0;
   PetscReal *G, *Id, *lam, *V, *W;
@@ -92,7 +93,7 @@ static PetscErrorCode KFRigidIndependent(Mat C, Mat *Phi)
     for (PetscInt i = 0; i < j; i++) G[i + j * n] = G[j + i * n] = 0.5 * (G[i + j * n] + G[j + i * n]);
   PetscCall(KFDenseEig(n, G, Id, lam, V));
   for (PetscInt j = 0; j < n; j++)
-    if (lam[j] > 1e-20 * lam[n - 1] && lam[j] > 0) {
+    if (lam[j] > 1e-20 * scale2 && lam[j] > 0) {
       for (PetscInt i = 0; i < n; i++) W[i + k * n] = V[i + j * n] / PetscSqrtReal(lam[j]);
       k++;
     }
@@ -110,7 +111,7 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
   KFScene      s = y->scene;
   PetscInt     ncand = 6 + s->nrevolute, lda, nbc = 0, r, row = 0;
   PetscScalar *a;
-  PetscReal   *D, *Z;
+  PetscReal   *D, *Z, scale2;
   Mat          C;
 
   PetscFunctionBegin;
@@ -136,9 +137,11 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
   PetscCall(MatAssemblyBegin(C, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(C, MAT_FINAL_ASSEMBLY));
 
+  PetscCall(MatNorm(C, NORM_FROBENIUS, &scale2));
+  scale2 *= scale2;
   for (PetscInt b = 0; b < s->nb; b++) nbc += s->bodies[b].nclamp + s->bodies[b].nspring;
   if (!nbc) {
-    PetscCall(KFRigidIndependent(C, Phi));
+    PetscCall(KFRigidIndependent(C, scale2, Phi));
     PetscFunctionReturn(0);
   }
   /* D (nbc x ncand): every rank has the node coordinates and frames, so D is the same everywhere without messages */
@@ -156,7 +159,7 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
     Mat R;
     PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, r, &R));
     if (r) PetscCall(KFDenseMultSmall(C, ncand, r, Z, 1.0, R));
-    PetscCall(KFRigidIndependent(R, Phi));
+    PetscCall(KFRigidIndependent(R, scale2, Phi));
     PetscCall(MatDestroy(&R));
   }
   PetscCall(MatDestroy(&C));
@@ -327,6 +330,54 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscFunctionReturn(0);
 }
 
+/* The dof where the rigid modes strain the structure most (largest row of K Phi), as "body 'b', node n, component c" */
+static PetscErrorCode KFSystemRigidWorstDof(KFSystem y, char where[], size_t len)
+{
+  KFScene            s = y->scene;
+  Mat                KP;
+  const PetscScalar *a;
+  PetscInt           lda, r, best = -1, gbest;
+  PetscReal          vmax = -1, gmax, found[3] = {-1, -1, -1}, all[3];
+  static const char *cn[] = {"ux", "uy", "uz", "rx", "ry", "rz", "s"};
+
+  PetscFunctionBegin;
+  PetscCall(MatMatMult(y->Ks, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KP));
+  PetscCall(MatGetSize(KP, NULL, &r));
+  PetscCall(MatDenseGetLDA(KP, &lda));
+  PetscCall(MatDenseGetArrayRead(KP, &a));
+  for (PetscInt i = 0; i < s->nsys_local; i++) {
+    PetscReal v = 0;
+    for (PetscInt k = 0; k < r; k++) v += PetscRealPart(a[i + k * lda]) * PetscRealPart(a[i + k * lda]);
+    if (v > vmax) {
+      vmax = v;
+      best = s->sys_rstart + i;
+    }
+  }
+  PetscCall(MatDenseRestoreArrayRead(KP, &a));
+  PetscCall(MatDestroy(&KP));
+  PetscCall(MPIU_Allreduce(&vmax, &gmax, 1, MPIU_REAL, MPIU_MAX, s->comm));
+  if (vmax < gmax) best = -1;
+  PetscCall(MPIU_Allreduce(&best, &gbest, 1, MPIU_INT, MPI_MAX, s->comm));
+  for (PetscInt b = 0; b < s->nb; b++) { /* the body dof that is system dof gbest (on the rank that owns it) */
+    KFBodyData *B = &s->bodies[b];
+    for (PetscInt i = 0; i < B->rend - B->rstart; i++)
+      if (B->sysidx[i] == gbest) {
+        PetscInt node, comp;
+        PetscCall(KFBodyDofComponent(B, B->rstart + i, &node, &comp));
+        found[0] = b;
+        found[1] = node;
+        found[2] = comp;
+      }
+  }
+  PetscCall(MPIU_Allreduce(found, all, 3, MPIU_REAL, MPIU_MAX, s->comm));
+  if (all[0] < 0) PetscCall(PetscSNPrintf(where, len, "system dof %" PetscInt_FMT " (a joint's free rotation)", gbest));
+  else {
+    KFBodyData *B = &s->bodies[(PetscInt)all[0]];
+    PetscCall(PetscSNPrintf(where, len, "body '%s', node %" PetscInt_FMT ", component %s", B->name, B->ids[(PetscInt)all[1]], cn[(PetscInt)all[2]]));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* -kf_rigid_tol: how much strain the rigid-body modes may show, ||K Phi|| / (||K|| ||Phi||) */
 static PetscErrorCode KFRigidTolFromOptions(MPI_Comm comm, PetscReal *tol)
 {
@@ -351,7 +402,11 @@ PetscErrorCode KFSystemComputeRigidModes(KFSystem y)
   PetscCall(MatGetSize(y->Phi, NULL, &y->nrigid));
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "rigid-body modes from node coordinates"));
   PetscCall(KFSystemRigidResidual(y, &y->rigid_residual));
-  PetscCheck(y->rigid_residual <= tol, y->scene->comm, PETSC_ERR_ARG_WRONG, "the %" PetscInt_FMT " rigid-body and mechanism modes built from node coordinates, joints and boundary conditions strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g. The node coordinates do not match K (wrong units, order, or missing coordinates), or K holds supports the scene does not declare (clamped dofs exported as stiff springs: declare them as constraints); fix the nodes files or supply rigid modes (-kf_rigid_tol to loosen)", y->nrigid, (double)y->rigid_residual, (double)tol);
+  if (y->rigid_residual > tol) {
+    char where[2 * KF_MAX_NAME + 64];
+    PetscCall(KFSystemRigidWorstDof(y, where, sizeof(where)));
+    SETERRQ(y->scene->comm, PETSC_ERR_ARG_WRONG, "the %" PetscInt_FMT " rigid-body and mechanism modes built from node coordinates, joints and boundary conditions strain the structure: ||K Phi|| / (||K|| ||Phi||) = %g > %g, most at %s. The node coordinates do not match K (wrong units, order, or missing coordinates), or K holds supports the scene does not declare (clamped dofs exported as stiff springs: declare them as constraints); fix the nodes files or supply rigid modes (-kf_rigid_tol to loosen)", y->nrigid, (double)y->rigid_residual, (double)tol, where);
+  }
   if (y->scene->nrigid < 0) {
     PetscInt nbc = 0;
     for (PetscInt b = 0; b < y->scene->nb; b++) nbc += y->scene->bodies[b].nclamp + y->scene->bodies[b].nspring;

@@ -337,9 +337,25 @@ def layout_reference(spec):
         for j, (_, ts) in enumerate(spec[section].items()):
             for t in ts:
                 A[first[t["node"]] + comps[t["node"]].index(names[t["dof"]]), j] += t.get("weight", 1.0)
-        return A
-    return np.array(b["mass"]), np.array(b["stiffness"]), terms("inputs"), terms("outputs").T
+        return A[keep]
+    K = np.array(b["stiffness"], float)
+    for s in b.get("springs", []):
+        i = first[s["node"]] + comps[s["node"]].index(names[s["dof"]])
+        K[i, i] += s["stiffness"]
+    clamped = [first[c["node"]] + comps[c["node"]].index(int(ch) - 1) for c in b.get("constraints", [])
+               for ch in (c.get("dofs") or "".join(str(x + 1) for x in comps[c["node"]]))]
+    keep = np.setdiff1d(np.arange(d), clamped)
+    return (np.array(b["mass"])[np.ix_(keep, keep)], K[np.ix_(keep, keep)], terms("inputs"), terms("outputs").T)
+
+
+def plate_supported():
+    """The c345 plate clamped at node 1 (uz rx ry) and node 4 (all it has), on a spring at node 12: no rigid mode."""
+    spec = plate_c345()
+    spec["name"] = "plate_supported"
+    spec["bodies"]["beam"]["constraints"] = [{"node": 1, "dofs": "345"}, {"node": 4}]
+    spec["bodies"]["beam"]["springs"] = [{"node": 12, "dof": "uz", "stiffness": 500.0}]
+    return spec
 
 
 CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm, "lumped": lumped_frame}
-CASES.update(plate=plate_c345, spoints=scalar_points)
+CASES.update(plate=plate_c345, spoints=scalar_points, plate_supported=plate_supported)

@@ -173,6 +173,12 @@ static PetscErrorCode KFSceneBuildIO(KFScene s)
           PetscInt node, dof;
           PetscCall(KFBodyFindNode(B, T->node_id, &node));
           dof = KFBodyNodeDof(B, node, T->comp);
+          { /* a load on a clamped dof goes to ground, a reading of one is always zero: say so rather than reduce
+               a column of zeros */
+            PetscInt at;
+            PetscCall(PetscFindInt(dof, B->nclamp, B->clamp, &at));
+            PetscCheck(at < 0, s->comm, PETSC_ERR_ARG_WRONG, "%s '%s' acts on body '%s', node %" PetscInt_FMT ", component %" PetscInt_FMT " (0-5: ux..rz), which is clamped: %s; move it to a dof that moves", pass ? "output" : "input", pass ? s->output_names[T->io] : s->input_names[T->io], B->name, T->node_id, T->comp, pass ? "it would always read zero" : "the load would go straight to ground");
+          }
           if (dof >= B->rstart && dof < B->rend) PetscCall(MatSetValue(*A, dof, T->io, T->w, ADD_VALUES));
         }
       }

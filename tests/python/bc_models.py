@@ -221,6 +221,9 @@ def bad_case(name):
         del spec["bodies"]["beam"]["constraints"]
         spec["bodies"]["beam"]["stiffness"] = spec["bodies"]["beam"]["stiffness"].copy()
         spec["bodies"]["beam"]["stiffness"][2, 2] += 1e6
+    elif name == "clamped_output":
+        spec = plate_supported()
+        spec["outputs"]["z"] = [{"body": "beam", "node": 1, "dof": "uz"}]
     elif name == "plate_ux_output":
         spec = plate_c345()
         spec["outputs"]["z"] = [{"body": "beam", "node": 1, "dof": "ux"}]
@@ -354,6 +357,7 @@ def plate_supported():
     spec["name"] = "plate_supported"
     spec["bodies"]["beam"]["constraints"] = [{"node": 1, "dofs": "345"}, {"node": 4}]
     spec["bodies"]["beam"]["springs"] = [{"node": 12, "dof": "uz", "stiffness": 500.0}]
+    spec["outputs"]["z"] = [{"body": "beam", "node": 2, "dof": "uz"}]     # node 1 is clamped
     return spec
 
 

@@ -95,6 +95,7 @@ BAD = {
     "oblique_ground_axis": "is not one of its coordinate axes",
     "tied_clamp": "tied to the parent body by joint 'elbow'",
     "undeclared_support": "most at body 'beam', node 1, component uz",
+    "clamped_output": "output 'z' acts on body 'beam', node 1, component 2 (0-5: ux..rz), which is clamped",
     "plate_ux_output": "node 1 of body 'beam' has 3 dofs (c345), so no 'ux'",
     "plate_interface": "node 2 has 3 dofs (c345); interface nodes need 6",
     "scalar_as_ux": "node 101 of body 'beam' has 1 dofs (a scalar point), so no 'uz'",
@@ -144,3 +145,27 @@ def test_massless_dofs_sparse_verification(tmp_path, ranks):
     spec = bc_models.lumped_frame()
     Tf = bc_models.condensed_frf(*bc_models.single_body_reference(spec), r["f"])
     assert bc_models.hinf_error(Tf, r["T"][0]) <= spec["accuracy"]
+
+
+def test_reduced_system_takes_rigid_modes_from_geometry():
+    """Item 5: the reassembled system's first r modes are the geometric rigid modes (eigenvalue exactly 0, same span
+    as rigid_modes, M-orthonormal), not the lowest eigenvectors of the reduced pencil; its FRF is then the dense
+    reference's (checked above) and its rigid part equals H Phi_r Phi_r^T G / (-w^2) from rigid_modes alone."""
+    import kryflex
+    spec = bc_models.sprung_beam()
+    model = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True).reduce().model
+    s = model.at([])
+    R = s.rigid_modes
+    r = R.shape[1]
+    assert r == EXPECTED_RIGID["sprung"]
+    assert np.all(s.eigenvalues[:r] == 0)
+    P = s.modes[:, :r]
+    assert np.allclose(P.T @ s.M @ P, np.eye(r), atol=1e-12)
+    # the same span: R = P (P^T M R)
+    assert np.abs(R - P @ (P.T @ s.M @ R)).max() <= 1e-10 * np.abs(R).max()
+    # the rigid part of the response at a frequency far below the flexible ones: -H Phi_r Phi_r^T G / w^2
+    w = 2 * np.pi * 1e-4
+    Rm = R @ np.linalg.inv(np.linalg.cholesky(R.T @ s.M @ R)).T
+    T = s.frf([1e-4])[0]
+    Trig = -(s.C @ Rm) @ (Rm.T @ s.B) / w**2
+    assert np.abs(T - Trig).max() <= 1e-6 * np.abs(Trig).max()

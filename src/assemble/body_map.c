@@ -86,7 +86,8 @@ PETSC_INTERN PetscErrorCode KFSystemBuildBodyMaps(KFSystem sys)
         PetscInt dof = B->rstart + i;
         dnz[i]       = 1;
         onz[i]       = 0;
-        if (B->sysidx[i] < 0) {
+        if (B->sysidx[i] == -2) dnz[i] = 0; /* clamped: an empty row */
+        else if (B->sysidx[i] < 0) {
           const KFExpr *x = &E[b][6 * B->child_iface + (dof - e0)];
           dnz[i]          = 0;
           for (PetscInt k = 0; k < x->n; k++) {
@@ -101,7 +102,7 @@ PETSC_INTERN PetscErrorCode KFSystemBuildBodyMaps(KFSystem sys)
     for (PetscInt i = 0; i < nl; i++) {
       PetscInt dof = B->rstart + i;
       if (B->sysidx[i] >= 0) PetscCall(MatSetValue(sys->P[b], dof, B->sysidx[i], 1.0, INSERT_VALUES));
-      else {
+      else if (B->sysidx[i] == -1) {
         const KFExpr *x = &E[b][6 * B->child_iface + (dof - e0)];
         PetscScalar   vals[KF_MAX_TERMS];
         for (PetscInt k = 0; k < x->n; k++) vals[k] = x->c[k];

@@ -113,9 +113,50 @@ static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bo
   for (PetscInt b = 0; b < nbodies; b++)
     if (!bodies[b].rigid) PetscFunctionReturn(0);
   PetscCall(PetscCalloc4(n * nr, &R, PetscMax(m, 1) * nr, &E, nr * nr, &Z, n * nr, &Y));
+  /* a body with boundary conditions (or a layout that does not see some motions) stores only the motions it has,
+     the other columns zero, or of rounding size after a restriction: skip those below 1e-10 of the largest */
+  {
+    PetscReal cmax = 0;
+    for (PetscInt b = 0; b < nbodies; b++)
+      for (PetscInt k = 0; k < 6; k++) {
+        PetscReal c = 0;
+        for (PetscInt i = 0; i < bodies[b].v; i++) c += PetscSqr(bodies[b].rigid[i + k * bodies[b].v]);
+        cmax = PetscMax(cmax, c);
+      }
+    ratio = cmax; /* reused below as the squared threshold's scale */
+  }
+  nr = 0;
   for (PetscInt b = 0; b < nbodies; b++)
-    for (PetscInt k = 0; k < 6; k++)
-      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + (6 * b + k) * n] = bodies[b].rigid[i + k * bodies[b].v];
+    for (PetscInt k = 0; k < 6; k++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < bodies[b].v; i++) c += PetscSqr(bodies[b].rigid[i + k * bodies[b].v]);
+      if (!(c > 1e-20 * ratio)) continue;
+      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + nr * n] = bodies[b].rigid[i + k * bodies[b].v];
+      nr++;
+    }
+  if (!nr) { /* clamped: no rigid motion at all */
+    *nrigid = 0;
+    PetscCall(PetscFree4(R, E, Z, Y));
+    PetscFunctionReturn(0);
+  }
+  { /* dependent motions (a body whose conditions leave combinations that mix motions its layout does not see):
+       R <- R V_k on the eigenvectors of R^T R above 1e-12 of the largest (singular values 1e-6: the bodies' bases hold
+       their rigid motions to about 1e-8); independent columns are kept as they are */
+    PetscReal *Gm, *Id, *lam, *V, *R2;
+    PetscInt   k = 0;
+    PetscCall(PetscMalloc5(nr * nr, &Gm, nr * nr, &Id, nr, &lam, nr * nr, &V, n * nr, &R2));
+    PetscCall(KFDenseGemm_Private('T', 'N', nr, nr, n, 1.0, R, n, R, n, 0.0, Gm, nr));
+    PetscCall(KFDenseSymmetrize_Private(nr, Gm));
+    for (PetscInt i = 0; i < nr * nr; i++) Id[i] = (i % (nr + 1)) == 0;
+    PetscCall(KFDenseEig(nr, Gm, Id, lam, V));
+    for (PetscInt j = 0; j < nr; j++) k += lam[j] > 1e-12 * lam[nr - 1];
+    if (k < nr) {
+      PetscCall(KFDenseGemm_Private('N', 'N', n, k, nr, 1.0, R, n, V + (nr - k) * nr, nr, 0.0, R2, n));
+      PetscCall(PetscArraycpy(R, R2, n * k));
+      nr = k;
+    }
+    PetscCall(PetscFree5(Gm, Id, lam, V, R2));
+  }
   PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, R, n, 0.0, E, PetscMax(m, 1)));
   PetscCall(KFDenseNullSpace(m, nr, E, rtol, &r, Z, &rk, &ratio));
   PetscCall(KFDenseGemm_Private('N', 'N', n, r, nr, 1.0, R, n, Z, nr, 0.0, Y, n));

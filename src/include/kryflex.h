@@ -41,12 +41,34 @@ PETSC_EXTERN PetscErrorCode KFSceneDestroy(KFScene *);
 /* M and K are referenced (not copied); nodes: ids, coordinates (3 per node), dofs per node (3 or 6).
    Dofs are ordered node by node in the given order, ux uy uz [rx ry rz]. */
 PETSC_EXTERN PetscErrorCode KFSceneAddBody(KFScene, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt ndof[], PetscInt *body);
+/* Any dof layout: comps[i] is node i's set of components, bit c for component c (0..5: ux uy uz rx ry rz), e.g.
+   (1 << 2) | (1 << 3) | (1 << 4) for a plate node carrying uz rx ry (Nastran "c345"); KF_SCALAR_POINT (0) for a scalar
+   point (one dof without geometric meaning: its rigid-motion values come from static condensation, and inputs and
+   outputs address it as component KF_COMPONENT_SCALAR). Dofs are numbered node by node, components ascending.
+   Interface nodes need all six components. */
+#define KF_SCALAR_POINT     0
+#define KF_COMPONENT_SCALAR 6
+#define KF_COMPONENTS_ALL   63
+PETSC_EXTERN PetscErrorCode KFSceneAddBodyComponents(KFScene, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt comps[], PetscInt *body);
 PETSC_EXTERN PetscErrorCode KFSceneAddInterface(KFScene, PetscInt body, const char name[], PetscInt node_id);
 /* axis: unit vector in the parent's frame (ignored for fixed joints);
    R0: child frame orientation in the parent frame at angle 0 (column-major 3x3), NULL for identity.
    The child's frame is R(alpha) = Rot(axis, alpha) R0: a child vector v_c reads R v_c in the parent frame.
    Ties (parent node p, child node c): u_p = R u_c ; (theta_p - R theta_c) parallel to axis (revolute). */
 PETSC_EXTERN PetscErrorCode KFSceneAddJoint(KFScene, const char name[], KFJointType, PetscInt parent, const char parent_interface[], PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9]);
+/* Boundary conditions. KF_GROUND as the parent of KFSceneAddJoint (parent_interface NULL) grounds the child's
+   interface node: a fixed joint clamps its 6 dofs, a revolute joint its translations and the rotations perpendicular
+   to the axis (the axis, in the child's frame R0^T axis, must lie along one of the child's x, y, z axes). A grounded
+   joint has no angle (it turns the whole structure, which no input, output or stiffness sees).
+   KFSceneAddConstraint clamps components of a node: dofs a Nastran component string ("123456", "3", "456"), NULL or
+   "" for all the node has. KFSceneAddSpring adds a spring to ground of the given stiffness on one component
+   (0..5: ux uy uz rx ry rz). The rigid-body and mechanism modes are then derived (geometry restricted to what the
+   conditions allow) and checked against K; a scene with none takes a plain Cholesky path. */
+#define KF_GROUND (-1)
+PETSC_EXTERN PetscErrorCode KFSceneAddConstraint(KFScene, PetscInt body, PetscInt node_id, const char dofs[]);
+PETSC_EXTERN PetscErrorCode KFSceneAddSpring(KFScene, PetscInt body, PetscInt node_id, PetscInt component, PetscReal stiffness);
+/* rigid-body and mechanism modes of the scene (after a system derived them, e.g. KFSystemComputeRigidModes), else -1 */
+PETSC_EXTERN PetscErrorCode KFSceneGetRigidCount(KFScene, PetscInt *nrigid);
 PETSC_EXTERN PetscErrorCode KFSceneSetNumIO(KFScene, PetscInt ninputs, PetscInt noutputs);
 /* input column j gets weight at (body, node_id, component); several terms may share an input */
 PETSC_EXTERN PetscErrorCode KFSceneAddInputLoad(KFScene, PetscInt input, PetscInt body, PetscInt node_id, PetscInt component, PetscReal weight);
@@ -178,6 +200,9 @@ PETSC_EXTERN PetscErrorCode KFSystemEigenIsDense(KFSystem, PetscBool *dense);
 
 /* Generalized symmetric eigenproblem K phi = lambda M phi (M SPD), ascending; Phi M-orthonormal (n x n). */
 PETSC_EXTERN PetscErrorCode KFDenseEig(PetscInt n, const PetscReal K[], const PetscReal M[], PetscReal lambda[], PetscReal Phi[]);
+/* the same with the r rigid-body and mechanism modes known (Phir, n x r, from geometry): they come first, with
+   eigenvalue exactly 0 and M-orthonormalized; the flexible modes are those of the pencil on their M-complement */
+PETSC_EXTERN PetscErrorCode KFDenseEigRigid(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[]);
 
 typedef enum {
   KF_IMPORTANCE_H2     = 0, /* ||H phi|| ||phi^T G|| / (2 sqrt(zeta w^3)) */

@@ -24,6 +24,10 @@ typedef struct {
   PetscInt     n;          /* dofs */
   PetscInt     nnodes;
   PetscInt    *ids, *ndof, *dof0;
+  PetscInt    *comps;      /* per node: bit c set when component c (ux uy uz rx ry rz) is present; 0: scalar point */
+  PetscInt     nscalar;    /* scalar points, their dofs and their values in the 6 body-frame rigid motions */
+  PetscInt    *scalar_of_node; /* node -> index among the scalar points, -1 */
+  PetscReal   *scalar_rigid;   /* nscalar x 6, by static condensation (minimum strain energy) */
   PetscReal   *xyz;
   PetscInt     ninterfaces;
   KFInterface *iface;
@@ -31,8 +35,14 @@ typedef struct {
   PetscInt     parent_joint; /* joint in which this body is the child; -1 for the root */
   PetscInt     child_iface;  /* its interface eliminated by that joint */
   PetscInt     rstart, rend;
-  PetscInt    *sysidx;     /* local dofs -> system dof, -1 where eliminated */
   Mat          C;          /* viscous damping, referenced, or NULL (KFSceneSetBodyDamping) */
+  PetscInt    *sysidx;     /* local dofs -> system dof, -1 where tied by the parent joint, -2 where clamped */
+  /* boundary conditions (KFSceneAddConstraint, KFSceneAddSpring, joints to ground): body dofs, replicated */
+  PetscInt     nclamp, nspring;
+  PetscInt    *clamp;      /* clamped body dofs (eliminated: the body's map P_b reads them as zero) */
+  PetscInt    *spring_dof; /* springs to ground, added to the diagonal of K at set-up */
+  PetscReal   *spring_k;
+  PetscBool    own_K;      /* K is the scene's copy with the springs added */
 } KFBodyData;
 
 typedef struct {
@@ -75,6 +85,7 @@ struct _n_KFScene {
   PetscInt     nrevolute;
   PetscInt     nsys, nsys_local, sys_rstart;
   PetscInt     nquantity, *out_quantity; /* per output a KFQuantity (KFSceneSetOutputQuantity); NULL: displacements */
+  PetscInt     nrigid;     /* rigid-body and mechanism modes once a system derived them (-1 before) */
 };
 
 struct _n_KFSystem {
@@ -118,6 +129,17 @@ PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); 
 PETSC_INTERN PetscErrorCode KFBodyFindNode(KFBodyData *, PetscInt id, PetscInt *node);
 PETSC_INTERN PetscErrorCode KFExprAdd(KFExpr *, PetscInt idx, PetscReal c);
 PETSC_INTERN PetscErrorCode KFExprAXPY(KFExpr *, PetscReal a, const KFExpr *);
+/* node and component (0..5: ux uy uz rx ry rz; KF_COMPONENT_SCALAR for a scalar point) of body dof i */
+PETSC_INTERN PetscErrorCode KFBodyDofComponent(KFBodyData *, PetscInt dof, PetscInt *node, PetscInt *comp);
+/* the body dof of (node, comp), or -1 when the node has no such component */
+PETSC_INTERN PetscInt KFBodyNodeDof(const KFBodyData *, PetscInt node, PetscInt comp);
+/* scalar points' rigid-motion values (static condensation); called by KFSceneSetUp */
+PETSC_INTERN PetscErrorCode KFSceneScalarRigid(KFScene);
+/* the body's rigid motions its boundary conditions allow: Z (6 x rb, column-major, ld 6) combines the 6 body-frame
+   motions (ux uy uz rx ry rz about the body origin) into motions that vanish on clamped and spring dofs */
+PETSC_INTERN PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *, PetscInt *rb, PetscReal Z[36]);
+/* value at (node, comp) of body-frame rigid motion m (0..5) */
+PETSC_INTERN PetscReal KFBodyRigidValue(const KFBodyData *, PetscInt node, PetscInt comp, PetscInt m);
 
 PETSC_EXTERN PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
 

@@ -54,7 +54,7 @@ static PetscErrorCode KFBVAppendDeflated(KFSystem sys, BV V, Mat W, PetscInt j0,
     PetscCall(BVSetActiveColumns(V, 0, *k + 1));
     /* orthogonalize only: BVOrthonormalizeColumn would swap a dependent column for a random vector */
     PetscCall(BVOrthogonalizeColumn(V, *k, NULL, &norm, &lindep));
-    if (!lindep && norm > tol * norm0) {
+    if (!lindep && norm > tol * norm0 && sys->nrigid > 0) {
       Vec v;
 
       PetscCall(BVGetColumn(V, *k, &v));

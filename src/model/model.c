@@ -13,6 +13,7 @@ PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm comm, PetscInt nb, Pet
   /* one kind so far: reduced bodies reassembled at any angle (the view would otherwise say "type not yet set") */
   PetscCall(PetscObjectChangeTypeName((PetscObject)m, "reduced-bodies"));
   m->nb       = nb;
+  m->nrigid   = -1;
   m->nj       = nj;
   m->ninputs  = a;
   m->noutputs = t;
@@ -113,6 +114,7 @@ PetscErrorCode KFReducedModelCreateFromBodyBasis(KFScene s, KFBodyBasis bb, Pets
   for (PetscInt i = 0; i < t; i++) m->quantity[i] = i < s->nquantity ? s->out_quantity[i] : KF_QUANTITY_DISPLACEMENT;
   m->nangles = nangles;
   PetscCall(CopyArray(nangles * s->nrevolute, angles, &m->angles));
+  m->nrigid = s->nrigid; /* the count geometry, joints and boundary conditions gave (the reducer records it too) */
   *model = m;
   PetscFunctionReturn(0);
 }
@@ -155,8 +157,9 @@ PetscErrorCode KFReducedModelDestroy(KFReducedModel *model)
   PetscFunctionReturn(0);
 }
 
-/* nrigid: 6 + revolute joints, the rigid-body and mechanism modes of a free tree (a configuration's count comes
-   from the bodies' rigid motions: KFReducedSystemGetModes) */
+/* nrigid: the rigid-body and mechanism modes the scene had (setting rigid_modes, recorded from geometry, joints and
+   boundary conditions), else 6 + revolute joints, those of a free tree (a configuration's count comes from the
+   bodies' rigid motions: KFReducedSystemGetModes) */
 PetscErrorCode KFReducedModelGetInfo(KFReducedModel m, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *ninputs, PetscInt *noutputs, PetscInt *nrigid)
 {
   PetscFunctionBegin;
@@ -166,7 +169,14 @@ PetscErrorCode KFReducedModelGetInfo(KFReducedModel m, PetscInt *nbodies, PetscI
   if (nrevolute) *nrevolute = m->nrevolute;
   if (ninputs) *ninputs = m->ninputs;
   if (noutputs) *noutputs = m->noutputs;
-  if (nrigid) *nrigid = 6 + m->nrevolute;
+  if (nrigid) {
+    *nrigid = m->nrigid >= 0 ? m->nrigid : 6 + m->nrevolute;
+    for (PetscInt k = 0; k < m->nsettings; k++) {
+      PetscBool same;
+      PetscCall(PetscStrcmp(m->keys[k], "rigid_modes", &same));
+      if (same && m->nrigid < 0) *nrigid = (PetscInt)strtol(m->values[k], NULL, 10);
+    }
+  }
   PetscFunctionReturn(0);
 }
 

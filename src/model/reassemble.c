@@ -50,7 +50,7 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   PetscCall(PetscNew(&y));
   y->a               = a;
   y->t               = t;
-  y->nrigid_expected = 6 + m->nrevolute;
+  PetscCall(KFReducedModelGetInfo(m, NULL, NULL, NULL, NULL, NULL, &y->nrigid_expected));
   PetscCall(PetscMalloc4(n * n, &y->M, n * n, &y->K, n * a, &y->G, t * n, &y->H));
   PetscCall(PetscMalloc1(n * n, &y->Phir));
   y->damping = m->damping;
@@ -73,7 +73,10 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
     PetscCall(PetscFree(y->Phir));
   }
   PetscCall(PetscMalloc2(h, &y->lambda, h * h, &y->Phi));
-  PetscCall(KFDenseEig(h, y->K, y->M, y->lambda, y->Phi));
+  /* the rigid modes from the bodies' geometric motions, not the lowest eigenvectors (the frequency response and the
+     verification take them from here) */
+  if (y->phir_known && y->nrigid <= h) PetscCall(KFDenseEigRigid(h, y->K, y->M, y->nrigid, y->Phir, y->lambda, y->Phi));
+  else PetscCall(KFDenseEig(h, y->K, y->M, y->lambda, y->Phi));
   y->nf = PetscMax(h - y->nrigid, 0);
   PetscCall(PetscMalloc1(y->nf, &y->freq));
   for (PetscInt i = 0; i < y->nf; i++) y->freq[i] = PetscSqrtReal(PetscMax(y->lambda[y->nrigid + i], 0.0)) / (2 * PETSC_PI);

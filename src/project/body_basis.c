@@ -171,13 +171,16 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
   PetscFunctionReturn(0);
 }
 
-/* The body's 6 rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with
-   them reassembly finds the system's rigid and mechanism modes exactly, at any angle. */
+/* The body's rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with them
+   reassembly finds the system's rigid and mechanism modes exactly, at any angle. A body with boundary conditions
+   keeps only the motions they allow (Phi_geom Z, KFBodyAdmissibleRigid), the other columns are zero: reassembly
+   skips zero columns, so a clamped body contributes no motion and a grounded revolute joint one. */
 static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rigid)
 {
   Mat          Phi, MPhi;
   PetscScalar *p;
-  PetscInt     v, lda, node = 0;
+  PetscInt     v, lda, rb = 6;
+  PetscReal    Z[36], *full;
   MPI_Comm     comm = PetscObjectComm((PetscObject)Psi);
 
   PetscFunctionBegin;
@@ -186,29 +189,92 @@ static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rig
   PetscCall(MatDenseGetLDA(Phi, &lda));
   PetscCall(MatDenseGetArray(Phi, &p));
   for (PetscInt i = B->rstart; i < B->rend; i++) {
-    PetscInt   comp;
-    PetscReal *x;
-    while (node + 1 < B->nnodes && B->dof0[node + 1] <= i) node++;
-    comp = i - B->dof0[node];
-    x    = &B->xyz[3 * node];
-    for (int m = 0; m < 6; m++) {
-      PetscReal w[3] = {0, 0, 0}, val;
-      if (m < 3) val = (comp == m) ? 1.0 : 0.0;
-      else {
-        w[m - 3] = 1;
-        if (comp < 3) { /* (w x x)_comp */
-          PetscReal c[3] = {w[1] * x[2] - w[2] * x[1], w[2] * x[0] - w[0] * x[2], w[0] * x[1] - w[1] * x[0]};
-          val = c[comp];
-        } else val = w[comp - 3];
-      }
-      p[(i - B->rstart) + m * lda] = val;
-    }
+    PetscInt node, comp;
+    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
   }
   PetscCall(MatDenseRestoreArray(Phi, &p));
   PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
-  PetscCall(PetscMalloc1(v * 6, rigid));
-  PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, *rigid));
+  PetscCall(PetscMalloc1(v * 6, &full));
+  PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, full));
   PetscCall(MatDestroy(&MPhi));
+  PetscCall(MatDestroy(&Phi));
+  if (B->nclamp + B->nspring) PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
+  else {
+    PetscCall(PetscArrayzero(Z, 36));
+    for (int k = 0; k < 6; k++) Z[k + 6 * k] = 1;
+  }
+  PetscCall(PetscCalloc1(v * 6, rigid));
+  for (PetscInt j = 0; j < rb; j++)
+    for (PetscInt k = 0; k < 6; k++)
+      for (PetscInt i = 0; i < v; i++) (*rigid)[i + j * v] += full[i + k * v] * Z[k + 6 * j];
+  { /* a combination the layout does not see (ux uy rz of a plate) keeps only rounding: zero it against the scale of
+       the unrestricted motions, so that reassembly skips it */
+    PetscReal scale = 0;
+    for (PetscInt k = 0; k < 6; k++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < v; i++) c += PetscSqr(full[i + k * v]);
+      scale = PetscMax(scale, c);
+    }
+    for (PetscInt j = 0; j < rb; j++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < v; i++) c += PetscSqr((*rigid)[i + j * v]);
+      if (!(c > 1e-16 * scale))
+        for (PetscInt i = 0; i < v; i++) (*rigid)[i + j * v] = 0;
+    }
+  }
+  PetscCall(PetscFree(full));
+  PetscFunctionReturn(0);
+}
+
+/* The rigid motions a body's boundary conditions allow (Phi_geom Z, n_b x rb), each of unit M-norm (columns without
+   mass are dropped): in a scene whose conditions remove rigid modes, the system's remaining modes need not move a
+   body in every way it may move, and reassembly at other angles needs them all. */
+static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
+{
+  PetscReal    Z[36], G6[36], g[6], scale = 0;
+  PetscInt     rb, lda, ldx, k = 0, keep[6];
+  Mat          Phi, MPhi;
+  PetscScalar *p, *x;
+  MPI_Comm     comm = PetscObjectComm((PetscObject)B->M);
+
+  PetscFunctionBegin;
+  PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
+  /* the 6 body motions and their M-Gram matrix: its largest diagonal is the scale a kept motion's mass is measured
+     against (a combination the layout does not see has only rounding left) */
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, &Phi));
+  PetscCall(MatDenseGetLDA(Phi, &lda));
+  PetscCall(MatDenseGetArray(Phi, &p));
+  for (PetscInt i = B->rstart; i < B->rend; i++) {
+    PetscInt node, comp;
+    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
+  }
+  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+  PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, G6));
+  PetscCall(MatDestroy(&MPhi));
+  for (int m = 0; m < 6; m++) scale = PetscMax(scale, G6[m + 6 * m]);
+  for (PetscInt j = 0; j < rb; j++) {
+    g[j] = 0;
+    for (int q = 0; q < 6; q++)
+      for (int m = 0; m < 6; m++) g[j] += Z[m + 6 * j] * G6[m + 6 * q] * Z[q + 6 * j];
+    if (g[j] > 1e-16 * scale) keep[k++] = j;
+  }
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, k, X));
+  PetscCall(MatDenseGetLDA(*X, &ldx));
+  PetscCall(MatDenseGetArray(Phi, &p));
+  PetscCall(MatDenseGetArray(*X, &x));
+  for (PetscInt c = 0; c < k; c++) {
+    PetscInt j = keep[c];
+    for (PetscInt i = 0; i < B->rend - B->rstart; i++) {
+      PetscReal v = 0;
+      for (int m = 0; m < 6; m++) v += PetscRealPart(p[i + m * lda]) * Z[m + 6 * j];
+      x[i + c * ldx] = v / PetscSqrtReal(g[j]);
+    }
+  }
+  PetscCall(MatDenseRestoreArray(*X, &x));
+  PetscCall(MatDenseRestoreArray(Phi, &p));
   PetscCall(MatDestroy(&Phi));
   PetscFunctionReturn(0);
 }
@@ -227,6 +293,12 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     PetscReal  *W, *MW, *Q;
     Mat         Wm, MWm, AQ;
     PetscCheck(bb->ncols[b] > 0, s->comm, PETSC_ERR_ORDER, "no vectors were added to the body basis");
+    if (s->nrigid >= 0 && s->nrigid < 6 + s->nrevolute) { /* boundary conditions took rigid modes away */
+      Mat X;
+      PetscCall(KFBodyAdmissibleRigidColumns(B, &X));
+      PetscCall(PetscRealloc(sizeof(Mat) * (bb->ncols[b] + 1), &bb->cols[b]));
+      bb->cols[b][bb->ncols[b]++] = X;
+    }
     for (PetscInt k = 0; k < bb->ncols[b]; k++) {
       PetscInt mk;
       PetscCall(MatGetSize(bb->cols[b][k], NULL, &mk));

@@ -6,9 +6,11 @@
 */
 #include <kryflex/reducerimpl.h>
 
+PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
+
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
-  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb;
+  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
   PetscBool  dense, viscous = PETSC_FALSE;
   Mat        modes = NULL;
@@ -17,8 +19,13 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
   for (PetscInt b = 0; b < nb; b++)
     if (r->scene->bodies[b].C) viscous = PETSC_TRUE;
-  nflex = nsys - 6 - nrev;
-  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, 6 + nrev);
+  PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
+  {
+    PetscInt n0; /* massless dofs carry infinite eigenvalues: no flexible modes of theirs to compute */
+    PetscCall(KFSystemMasslessCount(sys, &n0));
+    nflex = nsys - nrigid - n0;
+  }
+  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nrigid);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   /* dense: every mode (no residual to approximate); sparse: start at 20 */
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
@@ -162,7 +169,7 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, &t));
   ta       = t * a;
-  expected = 6 + nrev;
+  PetscCall(KFReducedModelGetInfo(model, NULL, NULL, NULL, NULL, NULL, &expected));
   PetscCall(KFReducerConfigLabel_Private(nrev, p->angles, label, sizeof(label)));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducedModelReassemble(model, p->angles, &rs));

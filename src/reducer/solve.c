@@ -150,6 +150,15 @@ static PetscErrorCode KFReducerMakeModel_Private(KFReducer r, KFBodyBasis bb, KF
   keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, n, angles, keep, model));
   PetscCall(KFReducerRecordSettings_Private(r, *model, method, r->build_moments, n, angles));
+  {
+    PetscInt nrigid;
+    char     value[32];
+    PetscCall(KFSceneGetRigidCount(r->scene, &nrigid));
+    if (nrigid >= 0) { /* saved with the model: KFReducedModelGetInfo after a load */
+      PetscCall(PetscSNPrintf(value, sizeof(value), "%" PetscInt_FMT, nrigid));
+      PetscCall(KFReducedModelSetSetting(*model, "rigid_modes", value));
+    }
+  }
   PetscFunctionReturn(0);
 }
 
@@ -359,6 +368,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
       PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept_g, kept_g));
       PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic_g));
       PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
+      PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
       one = (PetscReal)nrigid;
       PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", one));
     }
@@ -417,7 +427,7 @@ static PetscErrorCode KFReducerAnnounce_Private(KFReducer r)
     PetscCall(PetscSNPrintf(dofs + used, sizeof(dofs) - used, "%s%" PetscInt_FMT, b ? " + " : "", nd));
     PetscCall(PetscStrlen(dofs, &used));
   }
-  PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "scene '%s': %" PetscInt_FMT " bodies (%s dofs), %" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs", name, nb, dofs, nsys, 6 + nrev, a, t));
+  PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "scene '%s': %" PetscInt_FMT " bodies (%s dofs), %" PetscInt_FMT " system dofs, %" PetscInt_FMT " revolute joints, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs", name, nb, dofs, nsys, nrev, a, t));
   PetscFunctionReturn(0);
 }
 
@@ -706,7 +716,11 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       for (PetscInt b = 0; b < nb; b++) dofs[b] = (PetscReal)(ch->nbody ? ch->bkept[b] : ch->kept);
       PetscCall(KFReducerResultSet_Private(r, -1, "body_kept_clusters", 1, &nb, dofs));
     }
-    PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)(6 + nrev)));
+    {
+      PetscInt nrigid;
+      PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
+      PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)nrigid));
+    }
     {
       PetscInt nsys;
 

@@ -52,7 +52,8 @@ static PetscErrorCode FNVAxis(unsigned long long *h, PetscReal x)
   KFSceneGetFingerprint - 16 hex digits identifying a scene's structure: the FNV-1a hash of the canonical text
 
     kryflex-scene-1
-    bodies <nb>      then per body: name, dofs, number of interfaces, interface names
+    bodies <nb>      then per body: name, dofs, number of interfaces, interface names (and, for a body with
+                     clamped dofs, "clamped", their count and their body dof indices)
     joints <nj>      then per joint: name, revolute|fixed, parent name, child name, parent interface name,
                      child interface name, axis x y z (%.12f; a fixed joint's axis is ignored and written 0 0 1)
     inputs <a>       then the input names
@@ -76,6 +77,13 @@ PetscErrorCode KFSceneGetFingerprint(KFScene s, char fp[17])
     PetscCall(FNVInt(&h, B->n));
     PetscCall(FNVInt(&h, B->ninterfaces));
     for (PetscInt i = 0; i < B->ninterfaces; i++) FNVField(&h, B->iface[i].name);
+    /* boundary conditions change the reduced bodies (clamped dofs read zero): a body with any enters them (sorted
+       at set-up); a body without keeps the fingerprint it always had */
+    if (B->nclamp) {
+      FNVField(&h, "clamped");
+      PetscCall(FNVInt(&h, B->nclamp));
+      for (PetscInt k = 0; k < B->nclamp; k++) PetscCall(FNVInt(&h, B->clamp[k]));
+    }
   }
   FNVField(&h, "joints");
   PetscCall(FNVInt(&h, s->nj));

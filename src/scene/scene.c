@@ -9,7 +9,8 @@ PetscErrorCode KFSceneCreate(MPI_Comm comm, KFScene *scene)
   PetscCall(KFInitialize());
   PetscCall(KFModelInitializePackage());
   PetscCall(PetscHeaderCreate(s, KF_SCENE_CLASSID, "KFScene", "Articulated multi-flexible-body scene", "KF", comm, KFSceneDestroy, KFSceneView));
-  s->comm = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
+  s->comm   = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
+  s->nrigid = -1;
   PetscCall(PetscStrncpy(s->name, "scene", sizeof(s->name)));
   *scene = s;
   PetscFunctionReturn(0);
@@ -35,8 +36,12 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
     PetscCall(MatDestroy(&B->Ht));
     PetscCall(MatDestroy(&B->C));
     PetscCall(PetscFree4(B->ids, B->ndof, B->dof0, B->xyz));
+    PetscCall(PetscFree2(B->comps, B->scalar_of_node));
+    PetscCall(PetscFree(B->scalar_rigid));
     PetscCall(PetscFree(B->iface));
     PetscCall(PetscFree(B->sysidx));
+    PetscCall(PetscFree(B->clamp));
+    PetscCall(PetscFree2(B->spring_dof, B->spring_k));
   }
   for (PetscInt k = 0; k < s->nin_terms; k++) PetscCall(VecDestroy(&s->in_terms[k].v));
   for (PetscInt k = 0; k < s->nout_terms; k++) PetscCall(VecDestroy(&s->out_terms[k].v));
@@ -62,10 +67,33 @@ PetscErrorCode KFSceneDestroy(KFScene *scene)
     } \
   } while (0)
 
+static PetscInt KFPopCount(PetscInt mask)
+{
+  PetscInt n = 0;
+  for (int c = 0; c < 6; c++) n += (mask >> c) & 1;
+  return n;
+}
+
 PetscErrorCode KFSceneAddBody(KFScene s, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt ndof[], PetscInt *body)
 {
+  PetscInt *comps;
+
+  PetscFunctionBegin;
+  PetscCheck(nnodes > 0, s->comm, PETSC_ERR_ARG_SIZ, "body '%s' has no nodes: its nodes file must list 'id x y z ndof' per node", name);
+  PetscCall(PetscMalloc1(nnodes, &comps));
+  for (PetscInt i = 0; i < nnodes; i++) {
+    PetscCheck(ndof[i] == 3 || ndof[i] == 6, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": %" PetscInt_FMT " dofs per node; KFSceneAddBody takes 6 (ux uy uz rx ry rz) or 3 (ux uy uz): use KFSceneAddBodyComponents for other layouts", name, ids[i], ndof[i]);
+    comps[i] = ndof[i] == 6 ? KF_COMPONENTS_ALL : 7;
+  }
+  PetscCall(KFSceneAddBodyComponents(s, name, M, K, nnodes, ids, xyz, comps, body));
+  PetscCall(PetscFree(comps));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddBodyComponents(KFScene s, const char name[], Mat M, Mat K, PetscInt nnodes, const PetscInt ids[], const PetscReal xyz[], const PetscInt comps[], PetscInt *body)
+{
   KFBodyData *B;
-  PetscInt    n = 0, mM, nM, mK, nK;
+  PetscInt    n = 0, mM, nM, mK, nK, *ndof;
 
   PetscFunctionBegin;
   PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add body %s after KFSceneSetUp()", name);
@@ -75,15 +103,17 @@ PetscErrorCode KFSceneAddBody(KFScene s, const char name[], Mat M, Mat K, PetscI
     PetscCheck(!same, s->comm, PETSC_ERR_ARG_WRONG, "body '%s' is defined twice: give each body a unique name", name);
   }
   PetscCheck(nnodes > 0, s->comm, PETSC_ERR_ARG_SIZ, "body '%s' has no nodes: its nodes file must list 'id x y z ndof' per node", name);
+  PetscCall(PetscMalloc1(nnodes, &ndof));
   for (PetscInt i = 0; i < nnodes; i++) {
-    PetscCheck(ndof[i] == 3 || ndof[i] == 6, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": %" PetscInt_FMT " dofs per node; kryflex takes 6 (ux uy uz rx ry rz) or 3 (ux uy uz)", name, ids[i], ndof[i]);
+    PetscCheck(comps[i] >= 0 && comps[i] <= KF_COMPONENTS_ALL, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": component set %" PetscInt_FMT " is not a set of the six components (bits 0-5) or a scalar point (0)", name, ids[i], comps[i]);
+    ndof[i] = comps[i] ? KFPopCount(comps[i]) : 1;
     n += ndof[i];
   }
   PetscCall(MatGetSize(M, &mM, &nM));
   PetscCall(MatGetSize(K, &mK, &nK));
   PetscCheck(mM == nM && mK == nK, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': M is %" PetscInt_FMT " x %" PetscInt_FMT " and K is %" PetscInt_FMT " x %" PetscInt_FMT "; both must be square", name, mM, nM, mK, nK);
   PetscCheck(mM == mK, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': M is %" PetscInt_FMT " x %" PetscInt_FMT " but K is %" PetscInt_FMT " x %" PetscInt_FMT "; they must have the same size", name, mM, nM, mK, nK);
-  PetscCheck(mM == n, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': its nodes carry %" PetscInt_FMT " dofs but M and K are %" PetscInt_FMT " x %" PetscInt_FMT "; the nodes file must match the matrices (6 or 3 dofs per node, node by node)", name, n, mM, mM);
+  PetscCheck(mM == n, s->comm, PETSC_ERR_ARG_SIZ, "body '%s': its nodes carry %" PetscInt_FMT " dofs but M and K are %" PetscInt_FMT " x %" PetscInt_FMT "; the nodes file must match the matrices (the components each node lists, node by node)", name, n, mM, mM);
   KF_GROW(s->bodies, s->nb, s->nb_alloc);
   B = &s->bodies[s->nb];
   PetscCall(PetscStrncpy(B->name, name, sizeof(B->name)));
@@ -94,6 +124,12 @@ PetscErrorCode KFSceneAddBody(KFScene s, const char name[], Mat M, Mat K, PetscI
   B->n = n;
   B->nnodes = nnodes;
   PetscCall(PetscMalloc4(nnodes, &B->ids, nnodes, &B->ndof, nnodes, &B->dof0, 3 * nnodes, &B->xyz));
+  PetscCall(PetscMalloc2(nnodes, &B->comps, nnodes, &B->scalar_of_node));
+  B->nscalar = 0;
+  for (PetscInt i = 0; i < nnodes; i++) {
+    B->comps[i]          = comps[i];
+    B->scalar_of_node[i] = comps[i] ? -1 : B->nscalar++;
+  }
   for (PetscInt i = 0, d = 0; i < nnodes; i++) {
     B->ids[i]  = ids[i];
     B->ndof[i] = ndof[i];
@@ -110,6 +146,7 @@ PetscErrorCode KFSceneAddBody(KFScene s, const char name[], Mat M, Mat K, PetscI
     for (PetscInt i = 1; i < nnodes; i++) PetscCheck(sorted[i] != sorted[i - 1], s->comm, PETSC_ERR_ARG_WRONG, "body '%s': node id %" PetscInt_FMT " appears twice in its nodes list", name, sorted[i]);
     PetscCall(PetscFree(sorted));
   }
+  PetscCall(PetscFree(ndof));
   B->parent_joint = -1;
   B->child_iface  = -1;
   if (body) *body = s->nb;
@@ -140,7 +177,7 @@ PetscErrorCode KFSceneAddInterface(KFScene s, PetscInt body, const char name[], 
   B = &s->bodies[body];
   PetscCall(KFBodyFindNode(B, node_id, &node));
   PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': interface '%s' names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, name, node_id);
-  PetscCheck(B->ndof[node] == 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': interface '%s' (node %" PetscInt_FMT ") has %" PetscInt_FMT " dofs; interface nodes need 6 (translations and rotations)", B->name, name, node_id, B->ndof[node]);
+  PetscCheck(B->comps[node] == KF_COMPONENTS_ALL, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': interface '%s' (node %" PetscInt_FMT ") has %" PetscInt_FMT " dofs; an interface node needs all six components (ux uy uz rx ry rz: a joint ties translations and rotations)", B->name, name, node_id, B->ndof[node]);
   alloc = B->ninterfaces;
   PetscCall(PetscRealloc(sizeof(KFInterface) * (alloc + 1), &B->iface));
   PetscCall(PetscStrncpy(B->iface[alloc].name, name, KF_MAX_NAME));
@@ -166,12 +203,181 @@ static PetscErrorCode KFBodyFindInterface(KFScene s, PetscInt body, const char n
   PetscFunctionReturn(0);
 }
 
+/* node and component (0..5) of body dof i: dofs are numbered node by node, components ascending */
+PetscErrorCode KFBodyDofComponent(KFBodyData *B, PetscInt dof, PetscInt *node, PetscInt *comp)
+{
+  PetscInt lo = 0, hi = B->nnodes - 1;
+
+  PetscFunctionBegin;
+  while (lo < hi) { /* the last node whose first dof is <= dof */
+    PetscInt mid = (lo + hi + 1) / 2;
+    if (B->dof0[mid] <= dof) lo = mid;
+    else hi = mid - 1;
+  }
+  *node = lo;
+  if (!B->comps[lo]) *comp = KF_COMPONENT_SCALAR;
+  else { /* the (dof - dof0)-th component present */
+    PetscInt k = dof - B->dof0[lo];
+    for (PetscInt c = 0; c < 6; c++)
+      if ((B->comps[lo] >> c) & 1) {
+        if (!k--) {
+          *comp = c;
+          break;
+        }
+      }
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscInt KFBodyNodeDof(const KFBodyData *B, PetscInt node, PetscInt comp)
+{
+  PetscInt off = 0;
+
+  if (!B->comps[node]) return comp == KF_COMPONENT_SCALAR ? B->dof0[node] : -1;
+  if (comp < 0 || comp > 5 || !((B->comps[node] >> comp) & 1)) return -1;
+  for (PetscInt c = 0; c < comp; c++) off += (B->comps[node] >> c) & 1;
+  return B->dof0[node] + off;
+}
+
+static PetscErrorCode KFBodyAddClamp(KFScene s, KFBodyData *B, PetscInt dof)
+{
+  PetscFunctionBegin;
+  for (PetscInt k = 0; k < B->nclamp; k++)
+    if (B->clamp[k] == dof) PetscFunctionReturn(0);
+  PetscCall(PetscRealloc(sizeof(PetscInt) * (B->nclamp + 1), &B->clamp));
+  B->clamp[B->nclamp++] = dof;
+  PetscFunctionReturn(0);
+}
+
+static const char *const KFComponentNames[] = {"ux", "uy", "uz", "rx", "ry", "rz", "s"};
+
+/* "c345"-style description of a node's components, for messages */
+static const char *KFNodeLayout(const KFBodyData *B, PetscInt node, char buf[8])
+{
+  PetscInt k = 0;
+  if (!B->comps[node]) return "a scalar point";
+  buf[k++] = 'c';
+  for (int c = 0; c < 6; c++)
+    if ((B->comps[node] >> c) & 1) buf[k++] = (char)('1' + c);
+  buf[k] = 0;
+  return buf;
+}
+
+PetscErrorCode KFSceneAddConstraint(KFScene s, PetscInt body, PetscInt node_id, const char dofs[])
+{
+  KFBodyData *B;
+  PetscInt    node;
+  PetscBool   seen[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add a constraint after KFSceneSetUp()");
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "constraint: body index %" PetscInt_FMT " does not exist", body);
+  B = &s->bodies[body];
+  PetscCall(KFBodyFindNode(B, node_id, &node));
+  PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': a constraint names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, node_id);
+  if (!dofs || !dofs[0]) {
+    for (PetscInt c = 0; c < B->ndof[node]; c++) PetscCall(KFBodyAddClamp(s, B, B->dof0[node] + c));
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(B->comps[node], s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT " is a scalar point: clamp it without dofs (its one dof)", B->name, node_id);
+  for (const char *p = dofs; *p; p++) {
+    PetscInt c = *p - '1';
+    PetscCheck(c >= 0 && c < 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint dofs '%s' is not a component string; give digits 1-6 (1 2 3 = ux uy uz, 4 5 6 = rx ry rz), e.g. \"123456\"", B->name, node_id, dofs);
+    PetscCheck(!seen[c], s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint dofs '%s' lists component %d twice", B->name, node_id, dofs, (int)c + 1);
+    seen[c] = PETSC_TRUE;
+    {
+      char lay[8];
+      PetscCheck(KFBodyNodeDof(B, node, c) >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": constraint on component %d (%s), which the node does not have (it has %" PetscInt_FMT " dofs, %s); clamp only the components the node carries", B->name, node_id, (int)c + 1, KFComponentNames[c], B->ndof[node], KFNodeLayout(B, node, lay));
+    }
+    PetscCall(KFBodyAddClamp(s, B, KFBodyNodeDof(B, node, c)));
+  }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneAddSpring(KFScene s, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal k)
+{
+  KFBodyData *B;
+  PetscInt    node;
+
+  PetscFunctionBegin;
+  PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add a spring after KFSceneSetUp()");
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "spring: body index %" PetscInt_FMT " does not exist", body);
+  B = &s->bodies[body];
+  PetscCall(KFBodyFindNode(B, node_id, &node));
+  PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s': a spring names node %" PetscInt_FMT ", which is not in the body's nodes list; use one of its node ids", B->name, node_id);
+  {
+    char lay[8];
+    PetscCheck(KFBodyNodeDof(B, node, comp) >= 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": spring on component %s, which the node does not have (it has %" PetscInt_FMT " dofs, %s)", B->name, node_id, comp >= 0 && comp <= 6 ? KFComponentNames[comp] : "?", B->ndof[node], KFNodeLayout(B, node, lay));
+  }
+  PetscCheck(k > 0 && !PetscIsInfOrNanReal(k), s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body '%s', node %" PetscInt_FMT ": spring stiffness %g; give a finite positive number", B->name, node_id, (double)k);
+  {
+    PetscInt  *dof;
+    PetscReal *kk;
+    PetscCall(PetscMalloc2(B->nspring + 1, &dof, B->nspring + 1, &kk));
+    if (B->nspring) {
+      PetscCall(PetscArraycpy(dof, B->spring_dof, B->nspring));
+      PetscCall(PetscArraycpy(kk, B->spring_k, B->nspring));
+    }
+    PetscCall(PetscFree2(B->spring_dof, B->spring_k));
+    B->spring_dof = dof;
+    B->spring_k   = kk;
+  }
+  B->spring_dof[B->nspring] = KFBodyNodeDof(B, node, comp);
+  B->spring_k[B->nspring++] = k;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSceneGetRigidCount(KFScene s, PetscInt *nrigid)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(s, KF_SCENE_CLASSID, 1);
+  *nrigid = s->nrigid;
+  PetscFunctionReturn(0);
+}
+
+/* A joint to ground clamps its child's interface node: all 6 dofs (fixed), or all but the rotation about the axis
+   (revolute; the axis in the child's frame must be one of its coordinate axes, so that the clamp is by component). */
+static PetscErrorCode KFSceneAddGroundJoint(KFScene s, const char name[], KFJointType type, PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9])
+{
+  KFBodyData *C;
+  PetscInt    k = -1, free_comp = -1;
+
+  PetscFunctionBegin;
+  PetscCheck(child >= 0 && child < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': child body does not exist", name);
+  C = &s->bodies[child];
+  for (PetscInt i = 0; i < C->ninterfaces; i++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(C->iface[i].name, child_interface, &same));
+    if (same) k = i;
+  }
+  PetscCheck(k >= 0, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': child body '%s' has no interface named '%s'; declare it under the body's interfaces", name, C->name, child_interface ? child_interface : "(null)");
+  if (type == KF_JOINT_REVOLUTE) {
+    PetscReal a[3], nrm = PetscSqrtReal(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    PetscCheck(nrm > 0 && !PetscIsInfOrNanReal(nrm), s->comm, PETSC_ERR_ARG_WRONG, "joint '%s': the rotation axis is zero or not finite; give a direction such as [0, 0, 1]", name);
+    for (int i = 0; i < 3; i++) { /* the axis in the child's frame: R0^T axis */
+      a[i] = 0;
+      for (int j = 0; j < 3; j++) a[i] += (R0 ? R0[j + 3 * i] : (PetscReal)(i == j)) * axis[j] / nrm;
+    }
+    for (int i = 0; i < 3; i++)
+      if (PetscAbsReal(PetscAbsReal(a[i]) - 1) < 1e-10) free_comp = 3 + i;
+    PetscCheck(free_comp >= 0, s->comm, PETSC_ERR_SUP, "joint '%s' to ground: the axis (%g, %g, %g) in body '%s''s frame is not one of its coordinate axes; a grounded revolute joint clamps by component, so give an axis along x, y or z of the child's frame (or clamp the node with constraints)", name, (double)a[0], (double)a[1], (double)a[2], C->name);
+  }
+  for (PetscInt c = 0; c < 6; c++)
+    if (c != free_comp) PetscCall(KFBodyAddClamp(s, C, C->iface[k].dof0 + c));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSceneAddJoint(KFScene s, const char name[], KFJointType type, PetscInt parent, const char parent_interface[], PetscInt child, const char child_interface[], const PetscReal axis[3], const PetscReal R0[9])
 {
   KFJointData *J;
 
   PetscFunctionBegin;
   PetscCheck(!s->setup, s->comm, PETSC_ERR_ORDER, "cannot add joint %s after KFSceneSetUp()", name);
+  PetscCheck(type == KF_JOINT_REVOLUTE || type == KF_JOINT_FIXED, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': unknown type", name);
+  if (parent == KF_GROUND) {
+    PetscCall(KFSceneAddGroundJoint(s, name, type, child, child_interface, axis, R0));
+    PetscFunctionReturn(0);
+  }
   PetscCheck(parent >= 0 && parent < s->nb && child >= 0 && child < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': parent or child body does not exist", name);
   PetscCheck(parent != child, s->comm, PETSC_ERR_ARG_WRONG, "joint '%s' ties body '%s' to itself; a joint connects two different bodies", name, s->bodies[parent].name);
   PetscCheck(type == KF_JOINT_REVOLUTE || type == KF_JOINT_FIXED, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "joint '%s': unknown type", name);
@@ -240,7 +446,10 @@ static PetscErrorCode KFSceneAddTerm(KFScene s, PetscBool input, PetscInt io, Pe
     PetscInt    node;
     PetscCall(KFBodyFindNode(B, node_id, &node));
     PetscCheck(node >= 0, s->comm, PETSC_ERR_ARG_WRONG, "%s %" PetscInt_FMT ": body '%s' has no node %" PetscInt_FMT, input ? "input" : "output", io, B->name, node_id);
-    PetscCheck(comp >= 0 && comp < B->ndof[node], s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT ": node %" PetscInt_FMT " of body '%s' has %" PetscInt_FMT " dofs, component %" PetscInt_FMT " does not exist (rotations rx ry rz need a 6-dof node)", input ? "input" : "output", io, node_id, B->name, B->ndof[node], comp);
+    {
+      char lay[8];
+      PetscCheck(KFBodyNodeDof(B, node, comp) >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT ": node %" PetscInt_FMT " of body '%s' has no component %s (it has %" PetscInt_FMT " dofs, %s); address only the components the node carries", input ? "input" : "output", io, node_id, B->name, comp >= 0 && comp <= 6 ? KFComponentNames[comp] : "?", B->ndof[node], KFNodeLayout(B, node, lay));
+    }
   } else {
     PetscInt n;
     PetscCall(VecGetSize(v, &n));

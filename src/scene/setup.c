@@ -53,14 +53,41 @@ static PetscErrorCode KFBodyCheck(KFScene s, KFBodyData *B)
   PetscCheck(rs == rsK && re == reK, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP, "body '%s': M and K are distributed differently over the ranks; load them with the same layout", B->name);
   B->rstart = rs;
   B->rend   = re;
-  /* a mass matrix needs a positive diagonal; a stiffness matrix a non-negative one (else it is indefinite) */
+  /* a mass matrix needs a non-negative diagonal (massless dofs, e.g. rotations of a lumped-mass model, are fine:
+     the Krylov recurrence on K+ M copes, the verification condenses them); a stiffness matrix a non-negative one
+     (else it is indefinite); a dof with neither mass nor stiffness has no equation at all */
   PetscCall(MatCreateVecs(B->M, &d, NULL));
   PetscCall(MatGetDiagonal(B->M, d));
   PetscCall(VecMin(d, NULL, &dmin));
-  PetscCheck(dmin > 0, s->comm, PETSC_ERR_ARG_WRONG, "mass matrix M of body '%s' is not positive definite: its diagonal has an entry %g <= 0; every dof needs mass (add lumped mass or inertia)", B->name, (double)dmin);
-  PetscCall(MatGetDiagonal(B->K, d));
-  PetscCall(VecMin(d, NULL, &dmin));
-  PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "stiffness matrix K of body '%s' is indefinite: its diagonal has a negative entry %g; check the export", B->name, (double)dmin);
+  PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "mass matrix M of body '%s' is indefinite: its diagonal has a negative entry %g; check the export (masses and inertias are >= 0)", B->name, (double)dmin);
+  {
+    Vec                dk;
+    const PetscScalar *m, *k;
+    PetscInt           bad = PETSC_MAX_INT, first;
+    PetscCall(VecDuplicate(d, &dk));
+    PetscCall(MatGetDiagonal(B->K, dk));
+    PetscCall(VecMin(dk, NULL, &dmin));
+    PetscCheck(dmin >= 0, s->comm, PETSC_ERR_ARG_WRONG, "stiffness matrix K of body '%s' is indefinite: its diagonal has a negative entry %g; check the export", B->name, (double)dmin);
+    PetscCall(VecGetArrayRead(d, &m));
+    PetscCall(VecGetArrayRead(dk, &k));
+    for (PetscInt i = 0; i < re - rs && bad == PETSC_MAX_INT; i++)
+      if (PetscRealPart(m[i]) == 0 && PetscRealPart(k[i]) == 0) {
+        PetscBool held = PETSC_FALSE; /* clamped, or given a spring: determined after all */
+        for (PetscInt c = 0; c < B->nclamp; c++) held = (PetscBool)(held || B->clamp[c] == rs + i);
+        for (PetscInt c = 0; c < B->nspring; c++) held = (PetscBool)(held || B->spring_dof[c] == rs + i);
+        if (!held) bad = rs + i;
+      }
+    PetscCall(VecRestoreArrayRead(d, &m));
+    PetscCall(VecRestoreArrayRead(dk, &k));
+    PetscCall(VecDestroy(&dk));
+    PetscCall(MPIU_Allreduce(&bad, &first, 1, MPIU_INT, MPI_MIN, s->comm));
+    if (first != PETSC_MAX_INT) {
+      PetscInt          node, comp;
+      static const char *cn[] = {"ux", "uy", "uz", "rx", "ry", "rz"};
+      PetscCall(KFBodyDofComponent(B, first, &node, &comp));
+      SETERRQ(s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ", component %s (dof %" PetscInt_FMT "): the dof has neither mass nor stiffness, so nothing determines its motion; remove it from the model (and the nodes file), give it stiffness, or clamp it (constraints)", B->name, B->ids[node], comp < 6 ? cn[comp] : "?", first + 1);
+    }
+  }
   PetscCall(VecDestroy(&d));
   PetscFunctionReturn(0);
 }
@@ -88,6 +115,13 @@ static PetscErrorCode KFSceneNumberDofs(KFScene s)
     for (PetscInt i = B->rstart; i < B->rend; i++) {
       B->sysidx[i - B->rstart] = (i >= e0 && i < e1) ? -1 : 0;
       if (B->sysidx[i - B->rstart] == 0) nlocal++;
+    }
+    for (PetscInt k = 0; k < B->nclamp; k++) { /* clamped dofs are no system dofs: P_b reads them as zero */
+      PetscInt dof = B->clamp[k];
+      if (dof >= B->rstart && dof < B->rend && B->sysidx[dof - B->rstart] == 0) {
+        B->sysidx[dof - B->rstart] = -2;
+        nlocal--;
+      }
     }
   }
   if (rank == size - 1) nlocal += s->nrevolute;
@@ -138,12 +172,50 @@ static PetscErrorCode KFSceneBuildIO(KFScene s)
         } else {
           PetscInt node, dof;
           PetscCall(KFBodyFindNode(B, T->node_id, &node));
-          dof = B->dof0[node] + T->comp;
+          dof = KFBodyNodeDof(B, node, T->comp);
+          { /* a load on a clamped dof goes to ground, a reading of one is always zero: say so rather than reduce
+               a column of zeros */
+            PetscInt at;
+            PetscCall(PetscFindInt(dof, B->nclamp, B->clamp, &at));
+            PetscCheck(at < 0, s->comm, PETSC_ERR_ARG_WRONG, "%s '%s' acts on body '%s', node %" PetscInt_FMT ", component %" PetscInt_FMT " (0-5: ux..rz), which is clamped: %s; move it to a dof that moves", pass ? "output" : "input", pass ? s->output_names[T->io] : s->input_names[T->io], B->name, T->node_id, T->comp, pass ? "it would always read zero" : "the load would go straight to ground");
+          }
           if (dof >= B->rstart && dof < B->rend) PetscCall(MatSetValue(*A, dof, T->io, T->w, ADD_VALUES));
         }
       }
       PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
       PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Boundary conditions checked against the tree (a clamp on a dof the parent joint ties would ground the parent
+   through the joint: clamp the parent's node instead); springs to ground added to a copy of K. */
+static PetscErrorCode KFSceneApplyBoundaryConditions(KFScene s)
+{
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    if (B->nclamp) PetscCall(PetscSortInt(B->nclamp, B->clamp));
+    if (B->child_iface >= 0) {
+      PetscInt e0 = B->iface[B->child_iface].dof0;
+      for (PetscInt k = 0; k < B->nclamp; k++) {
+        PetscInt node, comp;
+        PetscCall(KFBodyDofComponent(B, B->clamp[k], &node, &comp));
+        PetscCheck(B->clamp[k] < e0 || B->clamp[k] >= e0 + 6, s->comm, PETSC_ERR_ARG_WRONG, "body '%s', node %" PetscInt_FMT ": the node is tied to the parent body by joint '%s', so it cannot be clamped or grounded on its own; constrain the parent's interface node instead", B->name, B->ids[node], s->joints[B->parent_joint].name);
+      }
+    }
+    if (B->nspring) {
+      Mat K;
+      PetscCall(MatDuplicate(B->K, MAT_COPY_VALUES, &K));
+      PetscCall(MatSetOption(K, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+      for (PetscInt k = 0; k < B->nspring; k++)
+        if (B->spring_dof[k] >= B->rstart && B->spring_dof[k] < B->rend) PetscCall(MatSetValue(K, B->spring_dof[k], B->spring_dof[k], B->spring_k[k], ADD_VALUES));
+      PetscCall(MatAssemblyBegin(K, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(K, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatDestroy(&B->K));
+      B->K     = K;
+      B->own_K = PETSC_TRUE;
     }
   }
   PetscFunctionReturn(0);
@@ -157,6 +229,8 @@ PetscErrorCode KFSceneSetUp(KFScene s)
   PetscCheck(s->ninputs >= 1 && s->noutputs >= 1, s->comm, PETSC_ERR_ARG_WRONG, "the scene needs at least one input and one output");
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyCheck(s, &s->bodies[b]));
   PetscCall(KFSceneCheckTree(s));
+  PetscCall(KFSceneApplyBoundaryConditions(s));
+  PetscCall(KFSceneScalarRigid(s));
   PetscCall(KFSceneNumberDofs(s));
   PetscCall(KFSceneBuildIO(s));
   s->setup = PETSC_TRUE;

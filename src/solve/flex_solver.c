@@ -182,7 +182,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
   PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
   if (solver->shift > 0) PetscCall(MatAXPY(solver->Kh, solver->shift, sys->Ms, UNKNOWN_NONZERO_PATTERN));
-  else {
+  else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
     Vec       d;
     PetscReal dsum;
     PetscInt  rstart, rend, nloc = 0, *loc;
@@ -209,7 +209,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     solver->perf.factor_seconds += t1 - t0;
   }
   PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
-  PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes the joints declare: a mechanism no joint declares (an unconnected dof, a missing tie, a body in pieces). Fix the model, or declare the joint", solver->null_pivots, sys->nrigid);
+  PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes that geometry, joints and boundary conditions give: a mechanism nothing declares (an unconnected dof, a missing tie, a body in pieces, a support missing from the scene's constraints). Fix the model, or declare the joint or constraint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
 
   /* cross-check (small models by default): MUMPS' null pivots of K_S itself should number the rigid modes */

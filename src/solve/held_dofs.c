@@ -33,6 +33,11 @@ PETSC_INTERN PetscErrorCode KFSelectClampDofs(KFScene s, PetscInt *nheld, PetscI
   }
   PetscCall(PetscMalloc1(6 + s->nrevolute, held));
   PetscCall(MPIU_Allreduce(loc, *held, 6, MPIU_INT, MPI_MAX, s->comm));
+  for (int d = 0; d < 6; d++)
+    if ((*held)[d] < 0) { /* the node is clamped or tied: no clamp choice here */
+      PetscCall(PetscFree(*held));
+      PetscFunctionReturn(0);
+    }
   k = 6;
   for (PetscInt j = 0; j < s->nj; j++)
     if (s->joints[j].beta >= 0) (*held)[k++] = s->joints[j].beta;

@@ -1,5 +1,126 @@
 #include <kryflex_impl.h>
 #include <slepceps.h>
+#include "../dense/dense_impl.h"
+#include <petscblaslapack.h>
+
+/* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
+   eigenvalues, which a dense generalized eigensolver cannot take (LAPACK sygv needs M positive definite) */
+PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem sys, PetscInt *n0)
+{
+  Vec                v;
+  const PetscScalar *x;
+  PetscInt           nl, c = 0;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateVecs(sys->Ms, NULL, &v));
+  PetscCall(MatGetRowMaxAbs(sys->Ms, v, NULL));
+  PetscCall(VecGetLocalSize(v, &nl));
+  PetscCall(VecGetArrayRead(v, &x));
+  for (PetscInt i = 0; i < nl; i++) c += PetscAbsScalar(x[i]) == 0;
+  PetscCall(VecRestoreArrayRead(v, &x));
+  PetscCall(VecDestroy(&v));
+  PetscCall(MPIU_Allreduce(&c, n0, 1, MPIU_INT, MPI_SUM, sys->scene->comm));
+  PetscFunctionReturn(0);
+}
+
+/* replicated column-major copy of any small parallel matrix */
+static PetscErrorCode KFGatherAny(Mat A, PetscReal out[])
+{
+  Mat D;
+
+  PetscFunctionBegin;
+  PetscCall(MatConvert(A, MATDENSE, MAT_INITIAL_MATRIX, &D));
+  PetscCall(KFDenseGather(D, out));
+  PetscCall(MatDestroy(&D));
+  PetscFunctionReturn(0);
+}
+
+/* The dense verification of a system with massless dofs: they are condensed statically (K_cc = K_mm - K_m0 K_00^-1
+   K_0m on the dofs with mass, whose M_mm is then positive definite), the pencil solved with the rigid modes known
+   (KFDenseEigRigid), and each mode expanded to the massless dofs by x_0 = -K_00^-1 K_0m x_m. Exact: the massless
+   rows of K x = lambda M x say K_0m x_m + K_00 x_0 = 0. */
+static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+{
+  KFScene      s = sys->scene;
+  PetscInt     n = s->nsys, a = s->ninputs, t = s->noutputs, r = sys->nrigid, n0 = 0, nm = 0, *im, *iz, got;
+  PetscReal   *K, *M, *G, *Ht, *Phr, *K00, *X, *Kc, *Mc, *Pm, *lam, *V, *x;
+  PetscBLASInt b0, bm, info;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc4(n * n, &K, n * n, &M, n * a, &G, n * t, &Ht));
+  PetscCall(PetscMalloc1(n * PetscMax(r, 1), &Phr));
+  PetscCall(KFGatherAny(sys->Ks, K));
+  PetscCall(KFGatherAny(sys->Ms, M));
+  PetscCall(KFDenseGather(sys->G, G));
+  PetscCall(KFDenseGather(sys->Ht, Ht));
+  if (r) PetscCall(KFDenseGather(sys->Phi, Phr));
+  PetscCall(PetscMalloc2(n, &im, n, &iz));
+  for (PetscInt i = 0; i < n; i++) {
+    PetscBool zero = PETSC_TRUE;
+    for (PetscInt j = 0; j < n && zero; j++) zero = (PetscBool)(M[i + j * n] == 0);
+    if (zero) iz[n0++] = i;
+    else im[nm++] = i;
+  }
+  PetscCall(PetscMalloc5(n0 * n0 + 1, &K00, n0 * nm + 1, &X, nm * nm, &Kc, nm * nm, &Mc, nm * PetscMax(r, 1), &Pm));
+  PetscCall(PetscMalloc3(nm, &lam, nm * nm, &V, n, &x));
+  for (PetscInt j = 0; j < n0; j++)
+    for (PetscInt i = 0; i < n0; i++) K00[i + j * n0] = K[iz[i] + iz[j] * n];
+  for (PetscInt j = 0; j < nm; j++)
+    for (PetscInt i = 0; i < n0; i++) X[i + j * n0] = K[iz[i] + im[j] * n];
+  PetscCall(PetscBLASIntCast(n0, &b0));
+  PetscCall(PetscBLASIntCast(nm, &bm));
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &b0, K00, &b0, &info));
+  PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the %" PetscInt_FMT " massless dofs of the system are not held by stiffness (their stiffness block is singular at its leading minor %d): a massless dof or group of them can move freely, a mechanism without inertia; clamp it or connect it", n0, (int)info);
+  PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &b0, &bm, K00, &b0, X, &b0, &info)); /* X = K00^-1 K0m */
+  for (PetscInt j = 0; j < nm; j++)
+    for (PetscInt i = 0; i < nm; i++) {
+      Kc[i + j * nm] = K[im[i] + im[j] * n];
+      Mc[i + j * nm] = M[im[i] + im[j] * n];
+      for (PetscInt k = 0; k < n0; k++) Kc[i + j * nm] -= K[im[i] + iz[k] * n] * X[k + j * n0];
+    }
+  PetscCall(KFDenseSymmetrize_Private(nm, Kc));
+  for (PetscInt j = 0; j < r; j++)
+    for (PetscInt i = 0; i < nm; i++) Pm[i + j * nm] = Phr[im[i] + j * n];
+  PetscCall(KFDenseEigRigid(nm, Kc, Mc, r, Pm, lam, V));
+  got = PetscMax(PetscMin(nev, nm - r), 0);
+  if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));
+  for (PetscInt k = 0; k < got; k++) {
+    const PetscReal *v = V + (r + k) * nm;
+    omega2[k] = lam[r + k];
+    for (PetscInt i = 0; i < nm; i++) x[im[i]] = v[i];
+    for (PetscInt i = 0; i < n0; i++) {
+      x[iz[i]] = 0;
+      for (PetscInt j = 0; j < nm; j++) x[iz[i]] -= X[i + j * n0] * v[j];
+    }
+    if (HPhi)
+      for (PetscInt q = 0; q < t; q++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < n; i++) d += Ht[i + q * n] * x[i];
+        HPhi[q + k * t] = d;
+      }
+    if (PhiG)
+      for (PetscInt q = 0; q < a; q++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < n; i++) d += G[i + q * n] * x[i];
+        PhiG[k + q * nev] = d;
+      }
+    if (modes) {
+      PetscScalar *c;
+      PetscInt     ld;
+      PetscCall(MatDenseGetLDA(*modes, &ld));
+      PetscCall(MatDenseGetArray(*modes, &c));
+      for (PetscInt i = 0; i < s->nsys_local; i++) c[i + k * ld] = x[s->sys_rstart + i];
+      PetscCall(MatDenseRestoreArray(*modes, &c));
+    }
+  }
+  *nconv = got;
+  PetscCall(PetscFree4(K, M, G, Ht));
+  PetscCall(PetscFree(Phr));
+  PetscCall(PetscFree2(im, iz));
+  PetscCall(PetscFree5(K00, X, Kc, Mc, Pm));
+  PetscCall(PetscFree3(lam, V, x));
+  PetscFunctionReturn(0);
+}
 
 /* Small systems are solved densely: every mode at once, as cheap as a few */
 PetscErrorCode KFSystemEigenIsDense(KFSystem sys, PetscBool *dense)
@@ -65,6 +186,16 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
   PetscCheck(nev >= 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "ask for at least one mode");
   nev   = PetscMin(nev, nflex);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
+  if (dense) {
+    PetscInt n0;
+    PetscCall(KFSystemMasslessCount(sys, &n0));
+    if (n0) {
+      PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, %" PetscInt_FMT " massless dofs condensed)", PetscMin(nev, nflex - n0), s->nsys, n0));
+      PetscCall(KFSystemEigenCondensed(sys, nev, nconv, omega2, HPhi, PhiG, modes));
+      PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
+      PetscFunctionReturn(0);
+    }
+  }
   PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
   PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", target, &target, &has_target));
   PetscOptionsEnd();
@@ -100,12 +231,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
       PetscCall(MatNorm(sys->Ms, NORM_FROBENIUS, &nM));
       target = -1e-8 * nK / nM;
     }
-    PetscCall(MatCreateVecs(sys->Ks, &x, NULL));
-    PetscCall(VecDuplicateVecs(x, r, &defl));
-    for (PetscInt k = 0; k < r; k++) PetscCall(MatGetColumnVector(sys->Phi, defl[k], k));
-    PetscCall(EPSSetDeflationSpace(eps, r, defl));
-    PetscCall(VecDestroyVecs(r, &defl));
-    PetscCall(VecDestroy(&x));
+    if (r) { /* a clamped scene has no rigid modes to deflate */
+      PetscCall(MatCreateVecs(sys->Ks, &x, NULL));
+      PetscCall(VecDuplicateVecs(x, r, &defl));
+      for (PetscInt k = 0; k < r; k++) PetscCall(MatGetColumnVector(sys->Phi, defl[k], k));
+      PetscCall(EPSSetDeflationSpace(eps, r, defl));
+      PetscCall(VecDestroyVecs(r, &defl));
+      PetscCall(VecDestroy(&x));
+    }
     PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
     PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
     PetscCall(EPSSetTarget(eps, target));
@@ -200,6 +333,7 @@ PetscErrorCode KFSystemRigidIO(KFSystem sys, PetscInt *nrigid, PetscReal HPhi[],
   PetscCall(KFSystemComputeRigidModes(sys));
   r = sys->nrigid;
   if (nrigid) *nrigid = r;
+  if (!r) PetscFunctionReturn(0);
   if (HPhi) {
     PetscCall(PetscMalloc1(r * t, &tmp));
     PetscCall(KFMatTransposeMatMultGather(sys->Phi, sys->Ht, tmp)); /* r x t */

@@ -47,6 +47,22 @@ cdef class CScene:
                              int_ptr(cids), real_ptr(cxyz), int_ptr(cndof), &b))
         return b
 
+    def add_body_components(self, name, Mat M not None, Mat K not None, ids, xyz, comps):
+        """A body with any dof layout: comps[i] is node i's component set, bit c for component c (ux uy uz rx ry
+        rz), 0 for a scalar point."""
+        cdef cnp.ndarray cids = index_array(ids, "body %r node ids" % name)
+        cdef cnp.ndarray ccomps = index_array(comps, "body %r node components" % name)
+        cdef cnp.ndarray cxyz = np.ascontiguousarray(xyz, dtype=np.float64).reshape(-1, 3)
+        cdef PetscInt b = -1
+        if not (cids.shape[0] == ccomps.shape[0] == cxyz.shape[0]):
+            raise ValueError("body %r: ids, coordinates and component sets must have one entry per node (%d, %d, %d)"
+                             % (name, cids.shape[0], cxyz.shape[0], ccomps.shape[0]))
+        if cids.shape[0] == 0:
+            raise ValueError("body %r has no nodes" % name)
+        check(KFSceneAddBodyComponents(self.s, cstr(name, "body name"), M.mat, K.mat, <PetscInt>cids.shape[0],
+                                       int_ptr(cids), real_ptr(cxyz), int_ptr(ccomps), &b))
+        return b
+
     def add_interface(self, PetscInt body, name, PetscInt node_id):
         check(KFSceneAddInterface(self.s, body, cstr(name, "interface name"), node_id))
 
@@ -55,9 +71,30 @@ cdef class CScene:
         cdef KFJointType t = joint_type(kind, name)
         cdef cnp.ndarray cax = axis_vector(axis, "joint %r" % name)
         cdef cnp.ndarray cR0 = None if R0 is None else column_major_3x3(R0, "joint %r: orientation" % name)
-        check(KFSceneAddJoint(self.s, cstr(name, "joint name"), t, parent, cstr(parent_interface, "interface name"),
+        cdef bytes pif = b"" if parent_interface is None else cstr(parent_interface, "interface name")
+        check(KFSceneAddJoint(self.s, cstr(name, "joint name"), t, parent, NULL if parent_interface is None else <const char*>pif,
                               child, cstr(child_interface, "interface name"), real_ptr(cax),
                               NULL if cR0 is None else real_ptr(cR0)))
+
+    def add_ground_joint(self, name, kind, PetscInt child, child_interface, axis=(0, 0, 1), R0=None):
+        """A joint to ground (KF_GROUND): clamps the child's interface node (a revolute joint leaves the rotation
+        about its axis free)."""
+        self.add_joint(name, kind, -1, None, child, child_interface, axis, R0)
+
+    def add_constraint(self, PetscInt body, PetscInt node_id, dofs=None):
+        """Clamps components of a node: dofs a Nastran component string ("123456"), None for all it has."""
+        cdef bytes d = b"" if dofs is None else cstr(dofs, "constraint dofs")
+        check(KFSceneAddConstraint(self.s, body, node_id, d))
+
+    def add_spring(self, PetscInt body, PetscInt node_id, PetscInt comp, PetscReal stiffness):
+        check(KFSceneAddSpring(self.s, body, node_id, comp, stiffness))
+
+    def rigid_count(self):
+        """Rigid-body and mechanism modes derived from geometry, joints and boundary conditions (-1 before a
+        system derived them)."""
+        cdef PetscInt r
+        check(KFSceneGetRigidCount(self.s, &r))
+        return r
 
     def set_num_io(self, PetscInt ninputs, PetscInt noutputs):
         check(KFSceneSetNumIO(self.s, ninputs, noutputs))

@@ -127,7 +127,8 @@ def _read_nodes(where, key, name, base):
             _fail("%s: %s" % (where, key), "%s line %d: %r is not 'id x y z ndof'; give five numbers per line"
                   % (name, lineno, line[:80]))
         try:
-            rows.append([int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), int(parts[4])])
+            dofs = parts[4] if parts[4][:1] in ("c", "s") else int(parts[4])   # c345, s: other layouts
+            rows.append([int(parts[0]), float(parts[1]), float(parts[2]), float(parts[3]), dofs])
         except ValueError:
             _fail("%s: %s" % (where, key), "%s line %d: %r is not numbers; give 'id x y z ndof' (integer id and "
                   "ndof)" % (name, lineno, line[:80]))
@@ -337,22 +338,36 @@ class Scene:
         self.body_dofs = dofs
         self.body_nodes = nodes
         self.interfaces = [[iname for iname, _ in body["interfaces"]] for body in bodies]
-        for body, (ids, xyz, ndof) in zip(bodies, nodes):
+        for body, table in zip(bodies, nodes):
+            ids, xyz, _ = table
             bw = "%s: bodies.%s" % (where, body["name"])
             M, K = (self._matrix(where, body, key, mats.get((body["name"], key))) for key in ("mass", "stiffness"))
             try:
-                index = self.cscene.add_body(body["name"], M, K, ids, xyz, ndof)
+                index = self.cscene.add_body_components(body["name"], M, K, ids, xyz, table.comps)
                 if body.get("damping") is not None:   # the body's viscous damping matrix C_b
                     C = self._matrix(bw + ".damping", body, "damping", mats.get((body["name"], "damping")))
                     self.cscene.set_body_damping(index, C)
                 for iname, nid in body["interfaces"]:
                     self.cscene.add_interface(index, iname, nid)
+                for c in body["constraints"]:
+                    self.cscene.add_constraint(index, c["node"], c["dofs"])
+                for c in body["springs"]:
+                    self.cscene.add_spring(index, c["node"], c["dof"], c["stiffness"])
             except _core.Error as e:
                 _fail(bw, str(e))
 
         self.joints, self.revolute = [], list(valid["revolute"])
+        self.ground_joints = []
         for j in valid["joints"]:
             p, c = j["parent"], j["child"]
+            if j.get("ground"):   # a boundary condition on the child, no joint of the tree (no angle)
+                try:
+                    self.cscene.add_ground_joint(j["name"], j["type"], c, j["child_interface"], j["axis"],
+                                                 None if j["R0"] is None else np.array(j["R0"]))
+                except _core.Error as e:
+                    _fail("%s: joints.%s" % (where, j["name"]), str(e))
+                self.ground_joints.append(dict(name=j["name"], type=j["type"], child=c))
+                continue
             try:
                 self.cscene.add_joint(j["name"], j["type"], p, j["parent_interface"], c, j["child_interface"],
                                       j["axis"], None if j["R0"] is None else np.array(j["R0"]))

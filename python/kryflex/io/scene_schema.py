@@ -18,7 +18,8 @@ import numpy as np
 
 from .yaml_load import short_repr
 
-DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
+DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5, "s": 6}   # s: a scalar point's one dof
+ALL_COMPONENTS = 63                   # bit c: component c present (KF_COMPONENTS_ALL); 0: a scalar point
 NODE_DOFS = (3, 6)                    # src/scene/scene.c KFSceneAddBody: ux uy uz (+ rx ry rz)
 MAX_NODE_ID = 2 ** 31 - 1             # PetscInt is 32-bit in this build
 MAX_NAME = 63                         # KF_MAX_NAME (64) holds the terminating NUL
@@ -34,7 +35,11 @@ JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
             "accuracy", "reduction", "verify"}
-BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "damping"}
+BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "constraints", "springs",
+             "damping"}
+CONSTRAINT_KEYS = {"node", "dofs"}
+SPRING_KEYS = {"node", "dof", "stiffness"}
+GROUND = "ground"                     # a joint's parent: the child's interface node is grounded
 JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", "axis", "orientation"}
 TERM_KEYS = {"body", "node", "dof", "weight", "vector", "quantity"}
 QUANTITIES = ("displacement", "velocity", "acceleration")
@@ -314,6 +319,41 @@ def _reduction_angle(where, value, revolute):
 
 # ------------------------------------------------------------------ nodes
 
+class NodeTable(tuple):
+    """(ids, xyz, ndof) of a body's nodes, ndof the dofs per node; .comps the component sets (bit c: component c of
+    ux uy uz rx ry rz; 0: a scalar point)."""
+    def __new__(cls, ids, xyz, ndof, comps):
+        t = tuple.__new__(cls, (ids, xyz, ndof))
+        t.comps = comps
+        return t
+
+
+def node_components(value):
+    """A node's dofs column: 6, 3, a Nastran component string 'c345' (components ascending) or 's' (scalar point);
+    the component set, or None if the value is none of these."""
+    if isinstance(value, str):
+        v = value.strip()
+        if v in ("6", "3"):
+            return ALL_COMPONENTS if v == "6" else 7
+        if v == "s":
+            return 0
+        if re.fullmatch(r"c[1-6]+", v) and list(v[1:]) == sorted(set(v[1:])):
+            return sum(1 << (int(ch) - 1) for ch in v[1:])
+        return None
+    if _is_number(value) and float(value) in NODE_DOFS:
+        return ALL_COMPONENTS if float(value) == 6 else 7
+    return None
+
+
+def layout_name(comps):
+    return "a scalar point" if comps == 0 else "c" + "".join(str(c + 1) for c in range(6) if comps >> c & 1)
+
+
+def _table(ids, xyz, comps):
+    comps = np.asarray(comps, dtype=np.int32)
+    ndof = np.array([bin(int(c)).count("1") or 1 for c in comps], dtype=np.int32)
+    return NodeTable(ids, xyz, ndof, comps)
+
 def node_table(where, path, rows, labels=None):
     """Node rows (id, x, y, z, ndof) as (ids int32, xyz float64, ndof int32); labels[i] says where row i was written
     (e.g. 'line 12'), default '[i]'."""
@@ -329,7 +369,7 @@ def node_table(where, path, rows, labels=None):
         fail(where, path, "no nodes; list 'id x y z ndof' per node")
     table = _node_array(rows)
     if table is not None:
-        return table
+        return _table(*table)
     # row by row: the first bad row, and what is wrong with it
     n = len(rows)
     ids = np.empty(n, dtype=np.int32)
@@ -344,15 +384,17 @@ def node_table(where, path, rows, labels=None):
         ids[i] = node_id(where, at(i), r[0])
         for c in range(3):
             xyz[i, c] = real(where, at(i), r[1 + c], "(-inf, inf)", "give the coordinates as finite numbers")
-        if not _is_number(r[4]) or float(r[4]) not in NODE_DOFS:
-            fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz)" % (ids[i], short_repr(r[4])))
-        ndof[i] = int(r[4])
+        comps = node_components(r[4])
+        if comps is None:
+            fail(where, at(i), "node %d has ndof %s; give 6 (ux uy uz rx ry rz) or 3 (ux uy uz), a component string "
+                 "such as c345 (uz rx ry, components ascending) or s (a scalar point)" % (ids[i], short_repr(r[4])))
+        ndof[i] = comps
         k = first.setdefault(int(ids[i]), i)
         if k != i:
             fail(where, at(i), "node id %d appears twice (%s and %s); give each node once"
                  % (ids[i], labels[k] if labels is not None else "[%d]" % k,
                     labels[i] if labels is not None else "[%d]" % i))
-    return ids, xyz, ndof
+    return _table(ids, xyz, ndof)
 
 
 def _node_array(rows):
@@ -370,20 +412,35 @@ def _node_array(rows):
     ids = ids.astype(np.int32)
     if np.unique(ids).size != ids.size:
         return None
-    return ids, np.ascontiguousarray(xyz), ndof.astype(np.int32)
+    return ids, np.ascontiguousarray(xyz), np.where(ndof == 6, ALL_COMPONENTS, 7).astype(np.int32)
 
 
 def check_node_references(where, valid, nodes):
     """Interfaces on existing 6-dof nodes, input/output terms on existing nodes and dofs. nodes[b] = (ids, xyz, ndof)."""
-    index = [dict(zip(ids.tolist(), nd.tolist())) for ids, _, nd in nodes]
+    index = [dict(zip(t[0].tolist(), t.comps.tolist())) for t in nodes]
+    count = lambda c: bin(c).count("1") or 1   # noqa: E731 - dofs of a component set
     for b, body in enumerate(valid["bodies"]):
         for iname, nid in body["interfaces"]:
             path = "bodies.%s.interfaces.%s" % (body["name"], iname)
             if nid not in index[b]:
                 fail(where, path, "node %d is not in the body's nodes list; use one of its node ids" % nid)
-            if index[b][nid] != 6:
-                fail(where, path, "node %d has %d dofs; interface nodes need 6 (translations and rotations)"
-                     % (nid, index[b][nid]))
+            if index[b][nid] != ALL_COMPONENTS:
+                fail(where, path, "node %d has %d dofs (%s); interface nodes need 6 (translations and rotations: a "
+                     "joint ties them all)" % (nid, count(index[b][nid]), layout_name(index[b][nid])))
+        for key in ("constraints", "springs"):
+            for i, c in enumerate(body.get(key, [])):
+                path = "bodies.%s.%s[%d]" % (body["name"], key, i)
+                comps = index[b].get(c["node"])
+                if comps is None:
+                    fail(where, path + ".node", "body '%s' has no node %d; use one of its node ids"
+                         % (body["name"], c["node"]))
+                wanted = [int(ch) - 1 for ch in c["dofs"]] if key == "constraints" else [c["dof"]]
+                for w in wanted:
+                    if (w == 6) != (comps == 0) or (w < 6 and not comps >> w & 1):
+                        fail(where, path, "node %d of body '%s' has no component %s (it is %s); %s only the "
+                             "components the node carries" % (c["node"], body["name"],
+                                                             list(DOF_NAMES)[w], layout_name(comps),
+                                                             "clamp" if key == "constraints" else "attach springs to"))
     for key in ("inputs", "outputs"):
         for ioname, terms in valid[key]:
             for i, t in enumerate(terms):
@@ -391,12 +448,15 @@ def check_node_references(where, valid, nodes):
                     continue
                 path = "%s.%s[%d]" % (key, ioname, i)
                 body = valid["bodies"][t["body"]]["name"]
-                nd = index[t["body"]].get(t["node"])
-                if nd is None:
+                comps = index[t["body"]].get(t["node"])
+                if comps is None:
                     fail(where, path + ".node", "body '%s' has no node %d; use one of its node ids" % (body, t["node"]))
-                if t["dof"] >= nd:
-                    fail(where, path + ".dof", "node %d of body '%s' has %d dofs, so no %s; rotations rx ry rz need "
-                         "a 6-dof node" % (t["node"], body, nd, short_repr(t["dof_name"])))
+                w = t["dof"]
+                if (w == 6) != (comps == 0) or (w < 6 and not comps >> w & 1):
+                    fail(where, path + ".dof", "node %d of body '%s' has %d dofs (%s), so no %s; address a component "
+                         "the node carries (rotations rx ry rz need a 6-dof node or a layout that lists them, e.g. "
+                         "c345; a scalar point's dof is s)" % (t["node"], body, count(comps), layout_name(comps),
+                                                              short_repr(t["dof_name"])))
 
 
 def check_vector(where, path, data, body, ndofs):
@@ -442,10 +502,49 @@ def _bodies(where, spec):
             for iname, nid in ifaces.items():
                 iname = name(where, path + ".interfaces", iname, "interface")
                 body["interfaces"].append((iname, node_id(where, "%s.interfaces.%s" % (path, iname), nid)))
+        body["constraints"], body["springs"] = _boundary_conditions(where, path, b)
         if any(n == body["name"] for n in (x["name"] for x in bodies)):
             fail(where, path, "body '%s' is defined twice; give each body a unique name" % bname)
         bodies.append(body)
     return bodies
+
+
+def _boundary_conditions(where, path, b):
+    """constraints: [{node, dofs}] (clamped components, a Nastran component string, default all the node has) and
+    springs: [{node, dof, stiffness}] (springs to ground) of one body."""
+    constraints, springs = [], []
+    for key, keys, out in (("constraints", CONSTRAINT_KEYS, constraints), ("springs", SPRING_KEYS, springs)):
+        raw = b.get(key)
+        if raw is None:
+            continue
+        if isinstance(raw, dict):
+            raw = [raw]
+        if not isinstance(raw, list):
+            fail(where, path + "." + key, "%s is not a list; give a list of {%s}" % (short_repr(raw), ", ".join(sorted(keys))))
+        for i, c in enumerate(raw):
+            cpath = "%s.%s[%d]" % (path, key, i)
+            mapping(where, cpath, c, keys)
+            if "node" not in c:
+                fail(where, cpath, "'node' is missing; give the node id")
+            entry = {"node": node_id(where, cpath + ".node", c["node"])}
+            if key == "constraints":
+                dofs = c.get("dofs", "")
+                if isinstance(dofs, (int, np.integer)) and not isinstance(dofs, bool):
+                    dofs = str(dofs)      # YAML reads dofs: 123456 as a number
+                text(where, cpath + ".dofs", dofs)
+                if dofs and (not re.fullmatch(r"[1-6]+", dofs) or len(set(dofs)) != len(dofs)):
+                    fail(where, cpath + ".dofs", "%s is not a component string; give digits 1-6 once each (1 2 3 = "
+                         "ux uy uz, 4 5 6 = rx ry rz), e.g. \"123456\"" % short_repr(dofs))
+                entry["dofs"] = "".join(sorted(dofs))
+            else:
+                if "dof" not in c or "stiffness" not in c:
+                    fail(where, cpath, "give node, dof (%s) and stiffness" % ", ".join(DOF_NAMES))
+                entry["dof_name"] = choice(where, cpath + ".dof", c["dof"], tuple(DOF_NAMES))
+                entry["dof"] = DOF_NAMES[c["dof"]]
+                entry["stiffness"] = real(where, cpath + ".stiffness", c["stiffness"], "(0, inf)",
+                                          "give the spring stiffness as a positive number")
+            out.append(entry)
+    return constraints, springs
 
 
 def _joints(where, spec, bodies):
@@ -463,6 +562,9 @@ def _joints(where, spec, bodies):
         seen.add(jname)
         mapping(where, path, j, JOINT_KEYS)
         kind = choice(where, path + ".type", j.get("type", "revolute"), JOINT_TYPES)
+        if _ref(j.get("parent")) == GROUND and GROUND not in names:
+            joints.append(_ground_joint(where, path, jname, kind, j, bodies, names))
+            continue
         for key in ("parent", "child", "parent_interface", "child_interface"):
             if key not in j:
                 fail(where, path, "'%s' is missing; give it" % key)
@@ -486,8 +588,31 @@ def _joints(where, spec, bodies):
                        "parent_interface": _ref(j["parent_interface"]), "child_interface": _ref(j["child_interface"]),
                        "axis": axis if kind == "revolute" else [0.0, 0.0, 1.0],
                        "R0": None if R0 is None else rotation(where, path + ".orientation", R0)})
-    _tree(where, names, joints)
+    _tree(where, names, [j for j in joints if not j.get("ground")])
     return joints
+
+
+def _ground_joint(where, path, jname, kind, j, bodies, names):
+    """A joint with parent: ground grounds its child's interface node (no parent_interface)."""
+    if "parent_interface" in j:
+        fail(where, path + ".parent_interface", "a joint to ground has no parent interface; remove the key")
+    for key in ("child", "child_interface"):
+        if key not in j:
+            fail(where, path, "'%s' is missing; give it" % key)
+    if _ref(j["child"]) not in names:
+        fail(where, path + ".child", unknown_body(j["child"], names))
+    c = names.index(_ref(j["child"]))
+    have = [i for i, _ in bodies[c]["interfaces"]]
+    if _ref(j["child_interface"]) not in have:
+        fail(where, path + ".child_interface", "body '%s' has no interface %s (it has: %s); declare it under bodies.%s."
+             "interfaces" % (names[c], short_repr(j["child_interface"]), ", ".join(have) or "none", names[c]))
+    axis = vector3(where, path + ".axis", j.get("axis", [0, 0, 1]), "the rotation axis")
+    if not any(axis):
+        fail(where, path + ".axis", "%s is zero; give a direction such as [0, 0, 1]" % short_repr(j.get("axis")))
+    R0 = j.get("orientation")
+    return {"name": jname, "type": kind, "ground": True, "parent": -1, "child": c, "parent_interface": None,
+            "child_interface": _ref(j["child_interface"]), "axis": axis if kind == "revolute" else [0.0, 0.0, 1.0],
+            "R0": None if R0 is None else rotation(where, path + ".orientation", R0)}
 
 
 def _tree(where, names, joints):
@@ -687,7 +812,7 @@ def validate(spec, where, default_name="scene"):
             text(where, key, spec[key])
     bodies = _bodies(where, spec)
     joints = _joints(where, spec, bodies)
-    revolute = [j["name"] for j in joints if j["type"] == "revolute"]
+    revolute = [j["name"] for j in joints if j["type"] == "revolute" and not j.get("ground")]
     band = spec.get("band", DEFAULTS["band"])
     if isinstance(band, (tuple, np.ndarray)):
         band = list(band)

@@ -30,6 +30,7 @@ struct _p_KFReducedModel {
   char          scene_name[PETSC_MAX_PATH_LEN];
   char          fingerprint[17];
   PetscInt      nb, nj, nrevolute, ninputs, noutputs;
+  PetscInt      nrigid;      /* rigid-body and mechanism modes of the scene (-1: unknown; setting rigid_modes) */
   KFModelBody  *bodies;
   char        (*joint_names)[KF_MAX_NAME];
   KFJointDef   *joints;      /* revolute joints in revolute order, as KFReassemble consumes the angles */

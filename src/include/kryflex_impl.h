@@ -75,6 +75,10 @@ struct _n_KFScene {
   PetscInt     nsys, nsys_local, sys_rstart;
 };
 
+/* the body-wise flexible solve (src/solve/bodywise.c): body factors kept per system, the interface problem per solver */
+typedef struct _n_KFBodyFactors *KFBodyFactors;
+typedef struct _n_KFBodywise    *KFBodywise;
+
 struct _n_KFSystem {
   KFScene   scene;
   PetscInt  nb;              /* bodies: destroying needs no scene */
@@ -88,6 +92,8 @@ struct _n_KFSystem {
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;
+  KFBodyFactors bodyf;       /* body-wise solve: the bodies' factorizations, valid at every angle */
+  PetscInt   nfactor;        /* sparse factorizations made for this system's solves (all angles) */
 };
 
 struct _n_KFFlexSolver {
@@ -98,7 +104,14 @@ struct _n_KFFlexSolver {
   PetscInt  null_pivots, negative_pivots;
   PetscInt  refine;          /* iterative refinement steps against K_S */
   PetscBool setup;
+  KFBodywise bw;             /* -kf_flex_solver bodywise: the interface problem; NULL for the monolithic solve */
 };
+
+/* the body-wise flexible solve (src/solve/bodywise.c) */
+PETSC_INTERN PetscErrorCode KFBodywiseSetUp(KFFlexSolver); /* sets solver->bw when -kf_flex_solver selects it */
+PETSC_INTERN PetscErrorCode KFBodywiseSolve(KFFlexSolver, Mat W, Mat X);
+PETSC_INTERN PetscErrorCode KFBodywiseDestroy(KFBodywise *);
+PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */

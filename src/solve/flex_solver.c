@@ -31,13 +31,14 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
   if (!*solver) PetscFunctionReturn(0);
   PetscCall(MatDestroy(&(*solver)->Kh));
   PetscCall(MatDestroy(&(*solver)->F));
+  PetscCall(KFBodywiseDestroy(&(*solver)->bw));
   PetscCall(PetscFree((*solver)->held));
   PetscCall(PetscFree(*solver));
   PetscFunctionReturn(0);
 }
 
 /* MUMPS LDL^T factorization with null-pivot detection; reports the inertia MUMPS sees. */
-static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
+PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
 {
   MatFactorInfo  info;
   MatFactorError err;
@@ -68,6 +69,9 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
   PetscCheck(solver->shift >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)solver->shift);
+  PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
+  solver->setup = (PetscBool)(solver->bw != NULL);
+  if (solver->setup) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
   PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
@@ -91,6 +95,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   }
   PetscCall(KFProgress(s->comm, "factorization of the %" PetscInt_FMT "-dof system (MUMPS LDL^T, %" PetscInt_FMT " dofs held)", s->nsys, solver->nheld));
   PetscCall(KFFactorMumps(solver->Kh, 0.0, &solver->F, &solver->null_pivots, &solver->negative_pivots));
+  sys->nfactor++;
   PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes the joints declare: a mechanism no joint declares (an unconnected dof, a missing tie, a body in pieces). Fix the model, or declare the joint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
@@ -138,7 +143,8 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
         for (PetscInt j = 0; j < p; j++) w[(solver->held[k] - rstart) + j * lda] = 0;
     PetscCall(MatDenseRestoreArray(W, &w));
   }
-  PetscCall(MatMatSolve(solver->F, W, X));
+  if (solver->bw) PetscCall(KFBodywiseSolve(solver, W, X));
+  else PetscCall(MatMatSolve(solver->F, W, X));
   PetscCall(MatDestroy(&W));
   PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE));
   PetscFunctionReturn(0);

@@ -104,6 +104,7 @@ struct _n_KFFlexSolver {
   PetscInt  null_pivots, negative_pivots;
   PetscInt  refine;          /* iterative refinement steps against K_S */
   PetscBool setup;
+  KFFlexSolverType type;     /* as asked (auto by default) */
   KFBodywise bw;             /* -kf_flex_solver bodywise: the interface problem; NULL for the monolithic solve */
 };
 

@@ -151,23 +151,46 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, 
   PetscFunctionReturn(0);
 }
 
-/* -kf_flex_solver: which implementation this solver uses. auto stays monolithic (see README: the body-wise path
-   pays off on multi-angle reductions; measured in scripts/bench-bodywise). */
+const char *const KFFlexSolverTypes[] = {"auto", "monolithic", "bodywise", "KFFlexSolverType", "KF_FLEX_SOLVER_", NULL};
+
+PetscErrorCode KFFlexSolverSetType(KFFlexSolver solver, KFFlexSolverType type)
+{
+  PetscFunctionBegin;
+  PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the type before KFFlexSolverSetUp()");
+  solver->type = type;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFlexSolverGetType(KFFlexSolver solver, KFFlexSolverType *type)
+{
+  PetscFunctionBegin;
+  PetscCheck(solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call KFFlexSolverSetUp() first");
+  *type = solver->bw ? KF_FLEX_SOLVER_BODYWISE : KF_FLEX_SOLVER_MONOLITHIC;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
+{
+  PetscFunctionBegin;
+  *n = sys->nfactor;
+  PetscFunctionReturn(0);
+}
+
+/* -kf_flex_solver: which implementation this solver uses. auto: see KFAUTO below. */
 static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
 {
-  KFSystem    sys = solver->sys;
-  KFScene     s   = sys->scene;
-  const char *types[] = {"monolithic", "bodywise", "auto"};
-  PetscInt    type = 2;
-  PetscBool   all_iface = PETSC_TRUE;
+  KFSystem         sys = solver->sys;
+  KFScene          s   = sys->scene;
+  KFFlexSolverType type = solver->type;
+  PetscBool        all_iface = PETSC_TRUE;
 
   PetscFunctionBegin;
   PetscOptionsBegin(s->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEList("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body for the whole reduction and a dense interface problem per configuration), auto", "KFFlexSolverSetUp", types, 3, types[type], &type, NULL));
+  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
   PetscOptionsEnd();
   for (PetscInt b = 0; b < s->nb; b++) all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
   *use = PETSC_FALSE;
-  if (type == 1) {
+  if (type == KF_FLEX_SOLVER_BODYWISE) {
     if (s->nb > 1 && all_iface) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : "a body without interface node"));
   }

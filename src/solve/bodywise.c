@@ -176,23 +176,36 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
   PetscFunctionReturn(0);
 }
 
-/* -kf_flex_solver: which implementation this solver uses. auto: see KFAUTO below. */
+/* -kf_flex_solver: which implementation this solver uses.
+   auto: body-wise from the second configuration a system is set to on, when every body has an interface node and the
+   dense interface problem is small; monolithic otherwise. The body factorizations cost about one factorization of
+   K_S and the body-wise solves about the monolithic ones (scripts/bench-bodywise, 57k-dof solid pair, 10 moments:
+   0.92x at 1 configuration, 1.27x faster over 6), so a system solved at one configuration only stays monolithic and
+   one visited at several pays one monolithic and one body-wise set-up, then only interface problems. */
+#define KF_AUTO_MAX_INTERFACE 3000
 static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
 {
   KFSystem         sys = solver->sys;
   KFScene          s   = sys->scene;
   KFFlexSolverType type = solver->type;
   PetscBool        all_iface = PETSC_TRUE;
+  PetscInt         nG = s->nrevolute;
 
   PetscFunctionBegin;
   PetscOptionsBegin(s->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
+  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise from a system's second configuration on)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
   PetscOptionsEnd();
-  for (PetscInt b = 0; b < s->nb; b++) all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
+  for (PetscInt b = 0; b < s->nb; b++) {
+    all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
+    nG += 6 * s->bodies[b].ninterfaces; /* at most: shared nodes and tied dofs count once */
+  }
   *use = PETSC_FALSE;
   if (type == KF_FLEX_SOLVER_BODYWISE) {
     if (s->nb > 1 && all_iface) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : "a body without interface node"));
+  } else if (type == KF_FLEX_SOLVER_AUTO) {
+    *use = (PetscBool)(s->nb > 1 && all_iface && nG <= KF_AUTO_MAX_INTERFACE && (sys->nconfig > 1 || sys->bodyf));
+    if (*use && !sys->bodyf) PetscCall(KFProgress(s->comm, "flexible solve: body-wise from this system's second configuration on (-kf_flex_solver auto; monolithic or bodywise to choose)"));
   }
   PetscFunctionReturn(0);
 }
@@ -380,7 +393,7 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
   KFScene       s   = sys->scene;
   KFBodyFactors bf;
   KFBodywise    bw;
-  PetscBool     use;
+  PetscBool     use = PETSC_FALSE;
   PetscInt      nfact = 0;
 
   PetscFunctionBegin;

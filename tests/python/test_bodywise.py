@@ -162,13 +162,8 @@ def test_single_body_falls_back_to_monolithic(tmp_path, capfd):
 
 
 def reduce_with(path, kind):
-    opts = PETSc.Options()
-    opts.setValue("kf_flex_solver", kind)
-    try:
-        reducer = kryflex.Reducer(kryflex.load_scene(path), quiet=True, method="multi-angle", search=False)
-        return reducer.reduce()
-    finally:
-        opts.delValue("kf_flex_solver")
+    return kryflex.Reducer(kryflex.load_scene(path), quiet=True, method="multi-angle", search=False,
+                           flex_solver=kind).reduce()
 
 
 def numbers(x):
@@ -205,3 +200,37 @@ def test_multi_angle_reduction_same_model(scenes):
         assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
     assert sm["error_max"] <= 1e-8 and sb["error_max"] <= 1e-8
     print("error_max monolithic %.2e, body-wise %.2e" % (sm["error_max"], sb["error_max"]))
+
+
+def test_scene_key_and_command_line(scenes, tmp_path):
+    """reduction.flex_solver in the scene file, -kf_flex_solver on the command line (which wins), a bad value a clear
+    error: the progress lines say which solve ran and count the factorizations (Galileo, 6 angles: 2 bodies)."""
+    with open(GALILEO) as f:
+        spec = yaml.safe_load(f)
+    gdir = os.path.dirname(GALILEO)
+    for body in spec["bodies"].values():
+        for key in ("mass", "stiffness", "nodes"):
+            if isinstance(body.get(key), str):
+                body[key] = os.path.join(gdir, body[key])
+    spec.setdefault("reduction", {})["flex_solver"] = "bodywise"
+    path = tmp_path / "galileo_bodywise.yaml"
+    with open(path, "w") as f:
+        yaml.safe_dump(spec, f, sort_keys=False)
+    assert kryflex.load_scene(str(path)).reduction["flex_solver"] == "bodywise"
+    p = subprocess.run([KRYFLEX_CMD, "reduce", str(path), "-o", str(tmp_path / "out")], capture_output=True,
+                       text=True, env=ENV, timeout=600)
+    assert p.returncode == 0, p.stderr
+    out = p.stdout + p.stderr
+    assert out.count("body-wise solve: factorization of body") == 2, out
+    assert "2 sparse factorizations for this system so far" in out
+    assert "factorization of the 28-dof system" not in out.split("body-wise solve")[-1]
+    p = subprocess.run([KRYFLEX_CMD, "reduce", str(path), "-o", str(tmp_path / "out2"), "-kf_flex_solver",
+                        "monolithic"], capture_output=True, text=True, env=ENV, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert "body-wise solve" not in p.stdout + p.stderr
+    spec["reduction"]["flex_solver"] = "substructured"
+    with open(path, "w") as f:
+        yaml.safe_dump(spec, f, sort_keys=False)
+    p = subprocess.run([KRYFLEX_CMD, "reduce", str(path), "-o", str(tmp_path / "out3")], capture_output=True,
+                       text=True, env=ENV, timeout=600)
+    assert p.returncode == 2 and "flex_solver" in p.stderr and "Traceback" not in p.stderr, p.stderr

@@ -33,7 +33,7 @@ RECORD = 4096                 # bytes per rank in an agreement: the code, then t
 LATER_OPTIONS = ("kf_quiet", "kf_reducer_view", "kf_reducer_view_pre", "kf_model_view", "kf_eigen_cover",
                  "kf_verify_dense_max_dofs", "kf_verify_target", "kf_refine", "kf_null_pivot_check_max_dofs",
                  "kf_check_null_pivots", "kf_held_cond_max", "kf_rigid_tol", "kf_progress_min_dofs",
-                 "kf_error_agreement_timeout")
+                 "kf_error_agreement_timeout", "kf_flex_solver")
 # option prefixes of PETSc/SLEPc objects the library configures (the verification eigensolver: -kf_verify_eps_...)
 LATER_PREFIXES = ("kf_verify_",)
 

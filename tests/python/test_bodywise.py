@@ -234,3 +234,34 @@ def test_scene_key_and_command_line(scenes, tmp_path):
     p = subprocess.run([KRYFLEX_CMD, "reduce", str(path), "-o", str(tmp_path / "out3")], capture_output=True,
                        text=True, env=ENV, timeout=600)
     assert p.returncode == 2 and "flex_solver" in p.stderr and "Traceback" not in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_unconnected_node_is_a_clear_collective_error(scenes, tmp_path, ranks):
+    """A node of body1 that no element reaches (zero rows and columns of K, some mass): 6 zero-energy modes the joints
+    do not declare. Body-wise, body1's interior factor finds them: an error naming the body, the same exit code on
+    every rank count, no traceback."""
+    import shutil
+    src = os.path.dirname(scenes["frames"])
+    work = tmp_path / "frames_loose"
+    shutil.copytree(src, work)
+    K = scipy.io.mmread(str(work / "body1_K.mtx")).tocsr()
+    M = scipy.io.mmread(str(work / "body1_M.mtx")).tocsr()
+    n = K.shape[0]
+    scipy.io.mmwrite(str(work / "body1_K.mtx"), sp.block_diag([K, sp.csr_matrix((6, 6))]).tocoo(), symmetry="symmetric")
+    scipy.io.mmwrite(str(work / "body1_M.mtx"), sp.block_diag([M, 1e-3 * sp.eye(6)]).tocoo(), symmetry="symmetric")
+    with open(work / "body1_nodes.txt", "a") as f:
+        f.write("999 0.3 0.2 0.1 6\n")
+    cmd = [KRYFLEX_CMD, "reduce", str(work / "scene.yaml"), "-o", str(tmp_path / f"out{ranks}"),
+           "-kf_flex_solver", "bodywise", "-kf_verify", "false"]
+    if ranks > 1:
+        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    p = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=600)
+    mono = subprocess.run([KRYFLEX_CMD, "reduce", str(work / "scene.yaml"), "-o", str(tmp_path / "mono"),
+                           "-kf_flex_solver", "monolithic", "-kf_verify", "false"], capture_output=True, text=True,
+                          env=ENV, timeout=600)
+    assert "6 zero-energy mode(s)" in mono.stderr, mono.stderr    # the monolithic solve finds them too
+    assert p.returncode == mono.returncode and p.returncode not in (0, 1), p.stdout + p.stderr
+    assert "body body1" in p.stderr and "6 zero-energy mode(s)" in p.stderr, p.stderr
+    assert "Traceback" not in p.stderr
+    assert n == 216

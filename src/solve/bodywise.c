@@ -428,6 +428,33 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
   PetscFunctionReturn(0);
 }
 
+/* Copies between a system-layout dense S and a body-layout dense B (same columns) on the body's kept dofs: a kept
+   dof's system row is on the rank that owns its body row (KFSystemBuildBodyMaps preallocates P_b so). */
+static PetscErrorCode KFCopyKept(KFScene s, const KFBodyData *B, Mat Sm, Mat Bm, PetscBool to_body)
+{
+  PetscInt     p, lds, ldb, nl = B->rend - B->rstart;
+  PetscScalar *a, *b;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(Sm, NULL, &p));
+  PetscCall(MatDenseGetLDA(Sm, &lds));
+  PetscCall(MatDenseGetLDA(Bm, &ldb));
+  PetscCall(MatDenseGetArray(Sm, &a));
+  PetscCall(MatDenseGetArray(Bm, &b));
+  for (PetscInt i = 0; i < nl; i++) {
+    PetscInt r = B->sysidx[i] - s->sys_rstart;
+    if (B->sysidx[i] < 0) continue;
+    PetscCheck(r >= 0 && r < s->nsys_local, PETSC_COMM_SELF, PETSC_ERR_PLIB, "body %s: kept dof %" PetscInt_FMT " is not on its body row's rank", B->name, B->sysidx[i]);
+    if (to_body)
+      for (PetscInt j = 0; j < p; j++) b[i + j * ldb] = a[r + j * lds];
+    else
+      for (PetscInt j = 0; j < p; j++) a[r + j * lds] = b[i + j * ldb];
+  }
+  PetscCall(MatDenseRestoreArray(Sm, &a));
+  PetscCall(MatDenseRestoreArray(Bm, &b));
+  PetscFunctionReturn(0);
+}
+
 /* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute */
 PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
 {
@@ -448,7 +475,9 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
   for (PetscInt b = 0; b < s->nb; b++) {
     PetscInt ng = bf->ng[b];
     Mat      Fb;
-    PetscCall(MatMatMult(sys->P[b], W, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Fb)); /* interior rows: f_b,I */
+    KFBodyData *B = &s->bodies[b];
+    PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &Fb));
+    PetscCall(KFCopyKept(s, B, W, Fb, PETSC_TRUE)); /* interior rows: f_b,I (the interior dofs are kept) */
     PetscCall(KFZeroGammaRows(&s->bodies[b], ng, bf->gif[b], Fb));
     PetscCall(MatDuplicate(Fb, MAT_DO_NOT_COPY_VALUES, &Y[b]));
     PetscCall(MatMatSolve(bf->F[b], Fb, Y[b])); /* K_II^-1 f_b,I, zero on Gamma */
@@ -471,14 +500,11 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
   PetscCall(MatZeroEntries(X));
   for (PetscInt b = 0; b < s->nb; b++) {
     PetscInt ng = bf->ng[b];
-    Mat      PtY;
     PetscCall(PetscMalloc1(ng * p + 1, &z));
     PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
     PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
     PetscCall(PetscFree(z));
-    PetscCall(MatTransposeMatMult(sys->P[b], Y[b], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &PtY)); /* Y is zero on Gamma */
-    PetscCall(MatAXPY(X, 1.0, PtY, SAME_NONZERO_PATTERN));
-    PetscCall(MatDestroy(&PtY));
+    PetscCall(KFCopyKept(s, &s->bodies[b], X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
     PetscCall(MatDestroy(&Y[b]));
   }
   PetscCall(MatGetOwnershipRange(X, &rstart, &rend));

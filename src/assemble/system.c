@@ -112,7 +112,6 @@ PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
   PetscCall(MatSetOption(y->Ms, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatSetOption(y->Ks, MAT_SYMMETRIC, PETSC_TRUE));
   y->assembled = PETSC_TRUE;
-  y->nconfig++;
   PetscCall(MatDestroy(&y->Phi)); /* rigid modes depend on the angles: set or compute them again */
   y->user_rigid = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));

@@ -94,7 +94,6 @@ struct _n_KFSystem {
   PetscBool  user_rigid;
   KFBodyFactors bodyf;       /* body-wise solve: the bodies' factorizations, valid at every angle */
   PetscInt   nfactor;        /* sparse factorizations made for this system's solves (all angles) */
-  PetscInt   nconfig;        /* configurations set (KFSystemSetAngles calls): -kf_flex_solver auto reads it */
 };
 
 struct _n_KFFlexSolver {

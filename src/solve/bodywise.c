@@ -26,6 +26,7 @@ PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
 struct _n_KFBodyFactors {
   PetscReal   shift; /* K_b + shift M_b is what was factored */
   PetscInt    nb;
+  PetscBool   factored; /* Kb, F, Psi, S made (ng and gif are made first: the interface needs only them) */
   PetscInt   *ng;     /* |Gamma_b| = 6 x the body's distinct interface nodes */
   PetscInt  **gif;    /* per body and Gamma node: an interface at that node (its expressions are the node's) */
   Mat        *Kb, *F; /* the interior-held body stiffness and its MUMPS factor */
@@ -84,17 +85,13 @@ static PetscErrorCode KFZeroGammaRows(const KFBodyData *B, PetscInt ng, const Pe
   PetscFunctionReturn(0);
 }
 
-/* One body: its Gamma nodes, the interior factor, Psi_b and S_b. */
-static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, KFBodyFactors bf)
+/* One body's Gamma: its distinct interface nodes (two interface names may share a node) */
+static PetscErrorCode KFBodyGammaNodes(KFScene s, PetscInt b, KFBodyFactors bf)
 {
-  KFBodyData *B = &s->bodies[b];
-  PetscInt    ng = 0, rstart, rend, nloc = 0, *loc, nnull, nneg;
-  Vec         d;
-  PetscReal   dsum;
-  Mat         E, KE, KPhi;
+  KFBodyData *B  = &s->bodies[b];
+  PetscInt    ng = 0;
 
   PetscFunctionBegin;
-  /* distinct interface nodes (two interface names may share a node) */
   PetscCall(PetscMalloc1(PetscMax(B->ninterfaces, 1), &bf->gif[b]));
   for (PetscInt i = 0; i < B->ninterfaces; i++) {
     PetscBool seen = PETSC_FALSE;
@@ -104,7 +101,19 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, 
   ng *= 6;
   bf->ng[b] = ng;
   PetscCheck(ng > 0, s->comm, PETSC_ERR_PLIB, "body %s has no interface node", B->name);
+  PetscFunctionReturn(0);
+}
 
+/* One body: the interior factor, Psi_b and S_b. */
+static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, KFBodyFactors bf)
+{
+  KFBodyData *B = &s->bodies[b];
+  PetscInt    ng = bf->ng[b], rstart, rend, nloc = 0, *loc, nnull, nneg;
+  Vec         d;
+  PetscReal   dsum;
+  Mat         E, KE, KPhi;
+
+  PetscFunctionBegin;
   PetscCall(MatDuplicate(B->K, MAT_COPY_VALUES, &bf->Kb[b]));
   if (shift > 0) PetscCall(MatAXPY(bf->Kb[b], shift, B->M, DIFFERENT_NONZERO_PATTERN));
   PetscCall(MatCreateVecs(bf->Kb[b], &d, NULL));
@@ -177,13 +186,14 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
 }
 
 /* -kf_flex_solver: which implementation this solver uses.
-   auto: body-wise from the second configuration a system is set to on, when every body has an interface node and the
-   dense interface problem is small; monolithic otherwise. The body factorizations cost about one factorization of
-   K_S and the body-wise solves about the monolithic ones (scripts/bench-bodywise, 57k-dof solid pair, 10 moments:
-   0.92x at 1 configuration, 1.27x faster over 6), so a system solved at one configuration only stays monolithic and
-   one visited at several pays one monolithic and one body-wise set-up, then only interface problems. */
+   auto: body-wise when the scene has a revolute joint (its reductions visit several configurations), two or more
+   bodies, an interface node on every body and a small dense interface problem, and when the monolithic solve's held
+   dofs are interface unknowns; monolithic otherwise. The choice depends on the scene only, not on which
+   configurations a system visited before, so every solve of a scene takes the same path. Measured
+   (scripts/bench-bodywise, solid pair): the body factorizations cost about one factorization of K_S, a body-wise
+   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs). */
 #define KF_AUTO_MAX_INTERFACE 3000
-static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
+static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFlexSolverType *asked)
 {
   KFSystem         sys = solver->sys;
   KFScene          s   = sys->scene;
@@ -193,8 +203,9 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
 
   PetscFunctionBegin;
   PetscOptionsBegin(s->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise from a system's second configuration on)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
+  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for articulated multi-body scenes)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
   PetscOptionsEnd();
+  *asked = type;
   for (PetscInt b = 0; b < s->nb; b++) {
     all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
     nG += 6 * s->bodies[b].ninterfaces; /* at most: shared nodes and tied dofs count once */
@@ -204,8 +215,7 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
     if (s->nb > 1 && all_iface) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : "a body without interface node"));
   } else if (type == KF_FLEX_SOLVER_AUTO) {
-    *use = (PetscBool)(s->nb > 1 && all_iface && nG <= KF_AUTO_MAX_INTERFACE && (sys->nconfig > 1 || sys->bodyf));
-    if (*use && !sys->bodyf) PetscCall(KFProgress(s->comm, "flexible solve: body-wise from this system's second configuration on (-kf_flex_solver auto; monolithic or bodywise to choose)"));
+    *use = (PetscBool)(s->nb > 1 && all_iface && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0);
   }
   PetscFunctionReturn(0);
 }
@@ -314,7 +324,7 @@ PetscErrorCode KFBodywiseDestroy(KFBodywise *bw)
 
 /* The held dofs: the monolithic solve's when they are all interface unknowns (its clamp is: a root interface node and
    the joints' rotations), else a pivoted-QR choice among the interface unknowns, where the rigid modes live. */
-static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw)
+static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw, PetscBool auto_only, PetscBool *same)
 {
   KFSystem  sys = solver->sys;
   KFScene   s   = sys->scene;
@@ -327,6 +337,8 @@ static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw)
     PetscCall(PetscFindInt(solver->held[k], bw->nG, bw->Gidx, &g));
     inG = (PetscBool)(inG && g >= 0);
   }
+  *same = inG;
+  if (!inG && auto_only) PetscFunctionReturn(0); /* auto: the monolithic solve, with these held dofs */
   if (!inG) {
     PetscInt     r, nl, rstart, lda;
     PetscReal   *phi;
@@ -389,15 +401,16 @@ static PetscErrorCode KFBodywiseFactorInterface(KFScene s, KFBodyFactors bf, KFB
 /* -kf_flex_solver bodywise: set the solver up body-wise (solver->bw non-NULL) or leave it to the monolithic path */
 PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
 {
-  KFSystem      sys = solver->sys;
-  KFScene       s   = sys->scene;
-  KFBodyFactors bf;
-  KFBodywise    bw;
-  PetscBool     use = PETSC_FALSE;
-  PetscInt      nfact = 0;
+  KFSystem         sys = solver->sys;
+  KFScene          s   = sys->scene;
+  KFBodyFactors    bf;
+  KFBodywise       bw;
+  KFFlexSolverType asked;
+  PetscBool        use = PETSC_FALSE, same = PETSC_TRUE;
+  PetscInt         nfact = 0;
 
   PetscFunctionBegin;
-  PetscCall(KFBodywiseWanted(solver, &use));
+  PetscCall(KFBodywiseWanted(solver, &use, &asked));
   if (!use) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
@@ -408,19 +421,32 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
     bf->nb    = s->nb;
     PetscCall(PetscCalloc6(s->nb, &bf->ng, s->nb, &bf->gif, s->nb, &bf->Kb, s->nb, &bf->F, s->nb, &bf->Psi, s->nb, &bf->S));
     sys->bodyf = bf;
+    for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
+  }
+  bf = sys->bodyf;
+  PetscCall(PetscNew(&bw));
+  bw->nb = s->nb;
+  PetscCall(KFBodywiseInterface(sys, bf, bw));
+  if (solver->shift == 0) PetscCall(KFBodywiseHeld(solver, bw, (PetscBool)(asked == KF_FLEX_SOLVER_AUTO), &same));
+  if (!same && asked == KF_FLEX_SOLVER_AUTO) {
+    /* the monolithic held dofs are off the interface (a clamp elsewhere): auto keeps the monolithic solve */
+    PetscCall(KFBodywiseDestroy(&bw));
+    PetscCall(PetscFree(solver->held));
+    solver->nheld = 0;
+    PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
+    PetscFunctionReturn(0);
+  }
+  solver->bw = bw;
+  if (!bf->factored) {
+    if (asked == KF_FLEX_SOLVER_AUTO) PetscCall(KFProgress(s->comm, "flexible solve: body-wise, the bodies factored once for all configurations (-kf_flex_solver auto; monolithic or bodywise to choose)"));
     for (PetscInt b = 0; b < s->nb; b++) {
       PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
       PetscCall(KFBodyFactorSetUp(s, b, solver->shift, bf));
     }
-    nfact = s->nb;
+    bf->factored = PETSC_TRUE;
+    nfact        = s->nb;
     sys->nfactor += s->nb;
   }
-  bf = sys->bodyf;
-  PetscCall(PetscNew(&bw));
-  bw->nb     = s->nb;
-  solver->bw = bw;
-  PetscCall(KFBodywiseInterface(sys, bf, bw));
-  if (solver->shift == 0) PetscCall(KFBodywiseHeld(solver, bw));
   PetscCall(KFBodywiseFactorInterface(s, bf, bw));
   PetscCall(KFProgress(s->comm, "body-wise solve of the %" PetscInt_FMT "-dof system: dense interface problem of %" PetscInt_FMT " unknowns (%" PetscInt_FMT " held), %" PetscInt_FMT " body factorizations now, %" PetscInt_FMT " sparse factorizations for this system so far", s->nsys, bw->nG, solver->nheld, nfact, sys->nfactor));
   solver->null_pivots = solver->negative_pivots = 0; /* both checked body by body and by the interface Cholesky */

@@ -132,7 +132,7 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, 
   PetscCall(PetscFree(loc));
   PetscCall(KFFactorMumps(bf->Kb[b], 0.0, &bf->F[b], &nnull, &nneg));
   PetscCheck(nneg == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held is indefinite (MUMPS found %" PetscInt_FMT " negative pivots): its K is not positive semi-definite (check its export and units)", B->name, nneg);
-  PetscCheck(nnull == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held still has %" PetscInt_FMT " zero-energy mode(s): a part of the body no interface node holds (an unconnected dof, a body in pieces). Fix the model", B->name, nnull);
+  PetscCheck(nnull == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held still has %" PetscInt_FMT " zero-energy mode(s): a mechanism no joint declares, in a part of the body no interface node holds (an unconnected dof, a body in pieces). Fix the model, or declare the joint", B->name, nnull);
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */
   PetscCall(KFDenseCreate(s->comm, rend - rstart, B->n, ng, &E));

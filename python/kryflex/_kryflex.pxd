@@ -90,6 +90,13 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFFlexSolverApply(KFFlexSolver, PetscMat, PetscMat)
     PetscErrorCode KFFlexSolverDestroy(KFFlexSolver*)
     PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt*, PetscInt*, PetscInt*)
+    ctypedef enum KFFlexSolverType:
+        KF_FLEX_SOLVER_AUTO
+        KF_FLEX_SOLVER_MONOLITHIC
+        KF_FLEX_SOLVER_BODYWISE
+    PetscErrorCode KFFlexSolverSetType(KFFlexSolver, KFFlexSolverType)
+    PetscErrorCode KFFlexSolverGetType(KFFlexSolver, KFFlexSolverType*)
+    PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt*)
     PetscErrorCode KFFlexSolverMoments(KFFlexSolver, PetscInt, PetscReal*)
     PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt, PetscInt, PetscReal, SlepcBV*, PetscInt*)
     PetscErrorCode KFKrylovRawBasis(KFFlexSolver, PetscInt, PetscInt, PetscMat*, PetscReal*)

@@ -92,6 +92,11 @@ class Reducer:
         self.scene = scene
         self.quiet = quiet
         red, ver = scene.reduction, scene.verify
+        # the flexible solve is read by every solver the solve makes, not by the reducer: kept for reduce()
+        self._flex_solver = (options.pop("flex_solver"), True) if "flex_solver" in options else \
+            (red.get("flex_solver", "auto"), False)
+        if self._flex_solver[0] not in ("auto", "monolithic", "bodywise"):
+            raise ValueError("flex_solver: give auto, monolithic or bodywise, got %r" % (self._flex_solver[0],))
         r = _core.CReducer(scene.comm)
         r.set_type(red["basis"])
         r.set_scene(scene.cscene)
@@ -151,13 +156,22 @@ class Reducer:
             # see _binding/common.pxi): destroyed here, a collective point, before the new ones are made
             from petsc4py import PETSc
             PETSc.garbage_cleanup(self.scene.comm)
-            with quiet_progress(self.quiet), kf_options(self._options):
+            with quiet_progress(self.quiet), kf_options(self._options), self._flex_solver_option():
                 self.handle.setup()
                 self.handle.solve()
             chosen, single, multi = self.handle.models(ReducedModel)
             from .report.summary import build_summary
             self._reduction = Reduction(chosen, build_summary(self, single, multi, chosen), single, multi)
         return self._reduction
+
+    def _flex_solver_option(self):
+        """-kf_flex_solver for the solve: the keyword given to this reducer; else the scene's reduction.flex_solver
+        unless the options (command line) give one."""
+        from petsc4py import PETSc
+        value, keyword = self._flex_solver
+        if keyword or (value != "auto" and not PETSc.Options().hasName("kf_flex_solver")):
+            return kf_options({"flex_solver": value})
+        return contextlib.nullcontext()
 
     # ------------------------------------------------------------------ what the solve recorded
 

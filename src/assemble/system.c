@@ -37,6 +37,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(MatDestroy(&y->G));
   PetscCall(MatDestroy(&y->Ht));
   PetscCall(MatDestroy(&y->Phi));
+  PetscCall(KFBodyFactorsDestroy(&y->bodyf));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
   *sys = NULL;

@@ -128,6 +128,21 @@ typedef struct {
   PetscInt       solve_calls, solve_columns, refinement_solves, blocks;
 } KFFlexSolverPerf;
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
+/* Which implementation of K+ (src/solve/bodywise.c): monolithic (one factorization of K_S per configuration),
+   bodywise (one factorization per body interior, kept on the KFSystem for all its configurations, and a dense
+   interface problem per configuration: the same K+ B), auto. -kf_flex_solver overrides. */
+typedef enum {
+  KF_FLEX_SOLVER_AUTO,
+  KF_FLEX_SOLVER_MONOLITHIC,
+  KF_FLEX_SOLVER_BODYWISE
+} KFFlexSolverType;
+PETSC_EXTERN const char *const KFFlexSolverTypes[];
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetType(KFFlexSolver, KFFlexSolverType);
+/* the implementation set up (after KFFlexSolverSetUp): monolithic or bodywise */
+PETSC_EXTERN PetscErrorCode KFFlexSolverGetType(KFFlexSolver, KFFlexSolverType *);
+/* sparse factorizations made for the solves on this system so far (all its configurations; a null-pivot cross-check
+   is not counted) */
+PETSC_EXTERN PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt *);
 
 /* ---------------------------------------------------------------- Krylov basis */
 

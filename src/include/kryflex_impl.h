@@ -88,6 +88,10 @@ struct _n_KFScene {
   PetscInt     nrigid;     /* rigid-body and mechanism modes once a system derived them (-1 before) */
 };
 
+/* the body-wise flexible solve (src/solve/bodywise.c): body factors kept per system, the interface problem per solver */
+typedef struct _n_KFBodyFactors *KFBodyFactors;
+typedef struct _n_KFBodywise    *KFBodywise;
+
 struct _n_KFSystem {
   KFScene   scene;
   PetscInt  nb;              /* bodies: destroying needs no scene */
@@ -101,6 +105,8 @@ struct _n_KFSystem {
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;
+  KFBodyFactors bodyf;       /* body-wise solve: the bodies' factorizations, valid at every angle */
+  PetscInt   nfactor;        /* sparse factorizations made for this system's solves (all angles) */
 };
 
 struct _n_KFFlexSolver {
@@ -113,7 +119,15 @@ struct _n_KFFlexSolver {
   PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
   PetscBool setup;
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
+  KFFlexSolverType type;     /* as asked (auto by default) */
+  KFBodywise bw;             /* -kf_flex_solver bodywise: the interface problem; NULL for the monolithic solve */
 };
+
+/* the body-wise flexible solve (src/solve/bodywise.c) */
+PETSC_INTERN PetscErrorCode KFBodywiseSetUp(KFFlexSolver); /* sets solver->bw when -kf_flex_solver selects it */
+PETSC_INTERN PetscErrorCode KFBodywiseSolve(KFFlexSolver, Mat W, Mat X);
+PETSC_INTERN PetscErrorCode KFBodywiseDestroy(KFBodywise *);
+PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */

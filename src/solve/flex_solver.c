@@ -35,6 +35,7 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
   if (!*solver) PetscFunctionReturn(0);
   PetscCall(MatDestroy(&(*solver)->Kh));
   PetscCall(MatDestroy(&(*solver)->F));
+  PetscCall(KFBodywiseDestroy(&(*solver)->bw));
   PetscCall(PetscFree((*solver)->held));
   PetscCall(PetscFree(*solver));
   PetscFunctionReturn(0);
@@ -108,7 +109,7 @@ static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7};
 /* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
    (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
    options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
-static PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
+PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
 {
   MatFactorInfo  info;
   MatFactorError err;
@@ -178,6 +179,9 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
   PetscCheck(solver->shift >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)solver->shift);
+  PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
+  solver->setup = (PetscBool)(solver->bw != NULL);
+  if (solver->setup) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
   PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
@@ -207,6 +211,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     PetscCall(KFFactorMumps(solver->Kh, 0.0, PETSC_TRUE, &solver->F, &solver->null_pivots, &solver->negative_pivots, &solver->perf.memory_estimate_mb));
     PetscCall(PetscTime(&t1));
     solver->perf.factor_seconds += t1 - t0;
+    sys->nfactor++;
   }
   PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes that geometry, joints and boundary conditions give: a mechanism nothing declares (an unconnected dof, a missing tie, a body in pieces, a support missing from the scene's constraints). Fix the model, or declare the joint or constraint", solver->null_pivots, sys->nrigid);
@@ -261,7 +266,8 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
 
     PetscCall(MatGetSize(W, NULL, &p));
     PetscCall(PetscTime(&t0));
-    PetscCall(MatMatSolve(solver->F, W, X));
+    if (solver->bw) PetscCall(KFBodywiseSolve(solver, W, X));
+    else PetscCall(MatMatSolve(solver->F, W, X));
     PetscCall(PetscTime(&t1));
     solver->perf.solve_seconds += t1 - t0;
     solver->perf.solve_calls++;

@@ -43,6 +43,13 @@ cdef class CSystem:
         check(KFSystemGetRigidModes(self.y, &Phi, &res))
         return wrap_mat(Phi, True), res
 
+    def factor_count(self):
+        """Sparse factorizations made for the flexible solves on this system so far, all configurations (a
+        body-wise solve factors each body once for all of them)."""
+        cdef PetscInt n
+        check(KFSystemGetFactorCount(self.y, &n))
+        return int(n)
+
     def set_rigid_modes(self, Mat Phi not None):
         check(KFSystemSetRigidModes(self.y, Phi.mat))
 
@@ -127,11 +134,25 @@ cdef class FlexSolver:
     cdef KFFlexSolver f
     cdef readonly CSystem system
 
-    def __cinit__(self, CSystem system not None, shift=None):
+    def __cinit__(self, CSystem system not None, shift=None, type=None):
         self.system = system
         check(KFFlexSolverCreate(system.y, &self.f))
         if shift is not None:
             check(KFFlexSolverSetShift(self.f, float(shift)))
+        if type is not None:
+            types = {"auto": KF_FLEX_SOLVER_AUTO, "monolithic": KF_FLEX_SOLVER_MONOLITHIC,
+                     "bodywise": KF_FLEX_SOLVER_BODYWISE}
+            if type not in types:
+                raise ValueError("type: give one of %s, got %r" % (", ".join(types), type))
+            check(KFFlexSolverSetType(self.f, types[type]))
+
+    @property
+    def type(self):
+        """The implementation set up: "monolithic" or "bodywise" (-kf_flex_solver; sets the solver up)."""
+        cdef KFFlexSolverType t
+        check(KFFlexSolverSetUp(self.f))
+        check(KFFlexSolverGetType(self.f, &t))
+        return "bodywise" if t == KF_FLEX_SOLVER_BODYWISE else "monolithic"
 
     def __dealloc__(self):
         if self.f != NULL:

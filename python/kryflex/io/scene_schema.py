@@ -31,6 +31,7 @@ ORIENTATION_TOL = 1e-6                # orthonormality of a joint orientation as
 IMPORTANCES = ("band", "h2", "hinf", "static")
 BASES = ("krylov", "eigen")
 METHODS = ("auto", "single-angle", "multi-angle")
+FLEX_SOLVERS = ("auto", "monolithic", "bodywise")   # -kf_flex_solver, src/solve/bodywise.c
 JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
@@ -65,6 +66,7 @@ REDUCTION_DEFAULTS = {
     "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
+    "flex_solver": "auto",       # the flexible solve: auto | monolithic | bodywise (bodies factored once)
 }
 VERIFY_DEFAULTS = {
     "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
@@ -741,6 +743,7 @@ def _reduction(where, given, revolute):
     p = "reduction."
     red["basis"] = choice(where, p + "basis", red["basis"], BASES)
     red["method"] = choice(where, p + "method", red["method"], METHODS)
+    red["flex_solver"] = choice(where, p + "flex_solver", red["flex_solver"], FLEX_SOLVERS)
     red["importance"] = choice(where, p + "importance", red["importance"], IMPORTANCES)
     if red["moments"] != "auto":
         red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)

@@ -47,12 +47,13 @@ def solid(tmp_path_factory, quiet_library):
     r = run([KRYFLEX, "reduce", str(out / "spacecraft.yaml"), "-o", str(out / "red"), "-quiet",
              "-scene.reduction.method", "multi-angle", "-kf_search", "0", "-kf_verify", "0"])
     assert r.returncode == 0, r.stdout + r.stderr
-    return kryflex.load_scene(str(out / "spacecraft.yaml")), kryflex.ReducedModel.load(str(out / "red" / "reduced.h5"))
+    path = str(out / "spacecraft.yaml")
+    return kryflex.load_scene(path), kryflex.ReducedModel.load(str(out / "red" / "reduced.h5")), path
 
 
 def _study(solid, amplitude_deg):
     from kryflex.slew.study import SlewStudy
-    scene, model = solid
+    scene, model, _ = solid
     return SlewStudy(scene, model, amplitude_deg=amplitude_deg, inputs=["bearing_torque"])
 
 
@@ -93,3 +94,23 @@ def test_exudyn_adds_the_neglected_terms_in_proportion_to_the_amplitude(solid):
     share = _share(large)
     assert share / NONLINEAR_FACTOR <= large["exudyn_vs_reduced"] <= NONLINEAR_FACTOR * share
     assert large["exudyn_vs_reduced"] > 30 * small["exudyn_vs_reduced"]
+
+
+def test_command_reports_the_exudyn_comparison(solid, tmp_path):
+    """kryflex slew --exudyn-ffrf: slew.md holds the table (the slowest and the middle slew); the command reduces the
+    scene as `kryflex reduce` does (its own, smaller model), and the Exudyn-vs-linear column is the neglected terms'
+    share 2A/pi again (within NONLINEAR_FACTOR)."""
+    out = tmp_path / "slew"
+    r = run([sys.executable, "-m", "kryflex", "slew", solid[2], "-o", str(out), "--input", "bearing_torque",
+             "--rates", "2", "--periods-max", "20", "--periods-min", "2", "--amplitude", "1", "--no-step-check",
+             "--exudyn-ffrf", "-quiet"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = (out / "slew.md").read_text()
+    assert "Reduced bodies in Exudyn's floating-frame formulation" in text
+    rows = [line.split("|")[1:-1] for line in text.splitlines() if line.startswith("| 20 |") or line.startswith("| 2 |")]
+    rows = [[float(x) for x in row] for row in rows if len(row) == 7]
+    assert [row[0] for row in rows] == [20.0, 2.0]
+    for row in rows:
+        share = row[6]
+        assert share == pytest.approx(2 * np.radians(row[1]) / np.pi, rel=1e-2)
+        assert share / NONLINEAR_FACTOR <= row[5] <= NONLINEAR_FACTOR * share

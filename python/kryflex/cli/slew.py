@@ -36,6 +36,10 @@ def parser():
     p.add_argument("--exudyn-check", action="store_true",
                    help="also integrate the full model's fastest slew with Exudyn's solver on the same equations and "
                         "report the difference (dense constraint Jacobians: for small scenes)")
+    p.add_argument("--exudyn-ffrf", action="store_true",
+                   help="also slew the reduced bodies in Exudyn's nonlinear floating-frame formulation (driven by the "
+                        "torque) for the slowest and the middle slew, and compare them with the full and the reduced "
+                        "model along Exudyn's angle history (for small scenes)")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines")
     return p
 
@@ -47,7 +51,8 @@ def run(argv):
         return EXIT_OK
     args = collective(lambda: p.parse_args(split_petsc_options(
         argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--rates", "--periods-max", "--periods-min",
-               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check", "--exudyn-check"})))
+               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check", "--exudyn-check",
+                                                             "--exudyn-ffrf"})))
     collective(_one_rank)
     from .. import _core
     from ..io.scene import SceneError, load_scene
@@ -84,6 +89,15 @@ def run(argv):
             exudyn = collective(study.exudyn_check, (ImportError, EXIT_INPUT, lambda e: "--exudyn-check: Exudyn is not "
                                                      "installed (%s): run scripts/setup" % e),
                                 (Exception, EXIT_NUMERIC, lambda e: "--exudyn-check: Exudyn's solution failed: %s" % e))
+        ffrf = None
+        if args.exudyn_ffrf:
+            progress("the reduced bodies in Exudyn's floating-frame formulation")
+            ffrf = collective(study.exudyn_ffrf, (ImportError, EXIT_INPUT, lambda e: "--exudyn-ffrf: Exudyn is not "
+                                                  "installed (%s): run scripts/setup" % e),
+                              (Exception, EXIT_NUMERIC, lambda e: "--exudyn-ffrf: Exudyn's solution failed: %s" % e))
+            for r in ffrf:
+                progress("Exudyn FFRF, %.3g P1 (turn %.3g deg): reduced vs full %.3g, the reduction alone %.3g"
+                         % (r["periods"], r["turn_deg"], r["exudyn_vs_full"], r["reduced_vs_full"]))
         limit = study.limit(rows)
         names = reduction.model.output_names
 
@@ -94,7 +108,7 @@ def run(argv):
             output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error, baseline)
             output.write_histories(rows, staging.file("slew_histories.png"), title, names)
             with open(staging.file("slew.md"), "w") as f:
-                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline))
+                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline, ffrf))
         collective(write, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)))
         collective(staging.commit, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)),
                    interruptible=False)

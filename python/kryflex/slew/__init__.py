@@ -8,6 +8,8 @@ against the slew rate.
     integrator.py  Integrator: Newmark (trapezoidal) with the ties on the positions, one factorization per run
     study.py       SlewStudy: the sweep over slew rates, the error measure, the adequacy limit, the step check
     output.py      slew.csv, slew.md, slew.png, slew_histories.png
+    exudyn_check.py  Exudyn: the same linear equations (exudyn_history), and the reduced bodies as nonlinear
+                   floating-frame bodies against the full model along Exudyn's angle history (ffrf_comparison)
 
 The command is `kryflex slew SCENE -o OUTDIR` (cli/slew.py); scripts/bench-slew runs it on Galileo and a frame scene.
 """

@@ -69,7 +69,7 @@ def write_histories(rows, path, title, output_names):
     plt.close(fig)
 
 
-def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None):
+def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, ffrf=None):
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
@@ -106,6 +106,15 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None):
         lines += ["", "Exudyn check (the full model's fastest slew by Exudyn's generalized-alpha solver on the same "
                   "equations, step %.3g s): relative difference from this integrator %.2g." % (exudyn["step_s"],
                                                                                                exudyn["difference"])]
+    if ffrf:
+        lines += ["", "Reduced bodies in Exudyn's floating-frame formulation (nonlinear, undamped, driven by the slew's "
+                  "torque) against this integrator along Exudyn's angle history, elastic-output errors "
+                  "(2A/pi: the share of the centrifugal loads the linear model neglects):", "",
+                  "| T / P1 | turn (deg) | peak rate (deg/s) | Exudyn reduced vs full | reduced vs full | "
+                  "Exudyn vs reduced | 2A/pi |", "|---:|---:|---:|---:|---:|---:|---:|"]
+        lines += ["| %.3g | %.4g | %.4g | %.3g | %.3g | %.3g | %.3g |" % (
+            r["periods"], r["turn_deg"], r["peak_rate_deg_s"], r["exudyn_vs_full"], r["reduced_vs_full"],
+            r["exudyn_vs_reduced"], 2 * np.radians(r["turn_deg"]) / np.pi) for r in ffrf]
     lines += ["", "error: max(elastic, total), each the largest over outputs of max_t |y_full - y_red| / max_t |y_full|; "
               "elastic: of the outputs of the elastic parts (rigid-body and mechanism modes taken out M-orthogonally "
               "at alpha(t)); total: of the outputs themselves."]

@@ -159,6 +159,15 @@ class SlewStudy:
         return dict(periods=p, step_s=h, difference=float(np.abs(ye - y).max() / max(np.abs(y).max(),
                                                                                         np.finfo(float).tiny)))
 
+    def exudyn_ffrf(self, periods=None):
+        """The reduced bodies in Exudyn's floating-frame formulation against this integrator's full and reduced
+        bodies (exudyn_check.ffrf_comparison), for the slowest slew and the middle one of the sweep (or the given
+        durations, in P1): one dict per duration."""
+        from .exudyn_check import ffrf_comparison
+        if periods is None:
+            periods = [self.periods[0], self.periods[len(self.periods) // 2]]
+        return [ffrf_comparison(self, p) for p in periods]
+
     def limit(self, rows):
         """The first row (slowest to fastest) whose error exceeds the scene's accuracy, or None."""
         for row in sorted(rows, key=lambda r: r["peak_rate_deg_s"]):

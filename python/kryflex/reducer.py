@@ -94,7 +94,7 @@ class Reducer:
         red, ver = scene.reduction, scene.verify
         # the flexible solve is read by every solver the solve makes, not by the reducer: kept for reduce()
         self._flex_solver = (options.pop("flex_solver"), True) if "flex_solver" in options else \
-            (red.get("flex_solver", "auto"), False)
+            (red.get("flex_solver", "monolithic"), False)
         if self._flex_solver[0] not in ("auto", "monolithic", "bodywise"):
             raise ValueError("flex_solver: give auto, monolithic or bodywise, got %r" % (self._flex_solver[0],))
         r = _core.CReducer(scene.comm)
@@ -169,7 +169,7 @@ class Reducer:
         unless the options (command line) give one."""
         from petsc4py import PETSc
         value, keyword = self._flex_solver
-        if keyword or (value != "auto" and not PETSc.Options().hasName("kf_flex_solver")):
+        if keyword or (value != "monolithic" and not PETSc.Options().hasName("kf_flex_solver")):
             return kf_options({"flex_solver": value})
         return contextlib.nullcontext()
 

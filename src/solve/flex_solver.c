@@ -8,6 +8,7 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCheck(sys->assembled, sys->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFFlexSolverCreate()");
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
+  (*solver)->type   = KF_FLEX_SOLVER_MONOLITHIC; /* body-wise only when asked (-kf_flex_solver bodywise or auto) */
   (*solver)->refine      = 1;
   (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");

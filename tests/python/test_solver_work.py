@@ -31,7 +31,8 @@ EXIT_NUMERIC = 3
 sys.path.insert(0, HERE)
 import reference as ref  # noqa: E402
 
-SAME_MODEL_RTOL = 1e-7      # refinement moves a solve by ~1e-10 relative; the models' FRFs must agree far below targets
+SAME_MODEL_RTOL = 1e-6      # unrefined solves leave residuals ~1e-9 (Galileo); the FRFs moved 1.5e-7 of the peak after the
+                            # merge with the damped response path: the models must agree far below the targets (1e-3)
 MOMENT_RTOL = 1e-6          # the richest candidate's moments against the dense reference (normwise per k)
 MOMENTS_CHECKED = 4         # the lowest moments: the higher ones of a stiff model carry rounding ~cond^k
 

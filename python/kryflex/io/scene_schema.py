@@ -66,7 +66,7 @@ REDUCTION_DEFAULTS = {
     "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
-    "flex_solver": "auto",       # the flexible solve: auto | monolithic | bodywise (bodies factored once)
+    "flex_solver": "monolithic", # the flexible solve: monolithic | bodywise (bodies factored once) | auto
 }
 VERIFY_DEFAULTS = {
     "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)

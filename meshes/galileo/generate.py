@@ -124,6 +124,112 @@ def system_frequencies_alpha0(Ms, Ks, Mr, Kr):
     return free_free_frequencies("system (alpha = 0)", M, K, nrigid=7)
 
 
+# ------------------------------------------------------------------ the fitted model (fit.py, fit.json)
+# Lee's Table 1 (A. Y. Lee, "A Krylov Model Reduction Methodology for Articulated, Multi-Flexible Body Structures",
+# Jet Propulsion Laboratory): free-free flexible frequencies of the rotor and the stator, and of the system at
+# alpha = 0 (modes 8-28), in Hz, as published.
+PAPER_ROTOR_HZ = [0.1221, 1.0579, 2.8638, 3.4223, 4.9894, 5.2217, 73.425, 75.821, 76.998, 116.50, 116.51,
+                  994.70, 994.70, 2108.5, 2431.9]
+PAPER_STATOR_HZ = [57.253, 57.455, 225.24, 225.31, 1217.7, 1404.7]
+PAPER_SYSTEM_HZ = [0.1106, 1.0521, 1.9403, 2.3975, 2.8446, 3.4648, 4.9930, 5.4793, 6.8081, 9.2953, 56.060, 73.429,
+                   75.823, 76.999, 144.69, 144.73, 712.64, 712.65, 1217.7, 1985.9, 2108.5]
+FIT_FILE = os.path.join(HERE, "fit.json")
+
+# The lumped masses the fit may scale (log factors, one per entry), in this order: each entry names the body, the
+# dofs (0-based, in the body's dof order) that share one factor, and what they are.
+MASS_PARAMETERS = [
+    ("stator", (0, 1, 2), "bearing node mass"), ("stator", (3,), "bearing node Jxx"),
+    ("stator", (4,), "bearing node Jyy"), ("stator", (5,), "bearing node Jzz"),
+    ("stator", (6, 7, 8), "point A mass"), ("stator", (9,), "point A Jxx"), ("stator", (10,), "point A Jyy"),
+    ("stator", (11,), "point A Jzz"),
+    ("rotor", (0, 1, 2), "hub mass"), ("rotor", (3,), "hub Jxx"), ("rotor", (4,), "hub Jyy"), ("rotor", (5,), "hub Jzz"),
+] + [("rotor", (6 + 3 * a, 7 + 3 * a, 8 + 3 * a), name + " mass") for a, (_, name, *_) in enumerate(ROTOR_APPENDAGES)]
+
+
+def rigid_modes(table):
+    """Rigid-body motions of a node table [(id, x, ndof)]: columns ux uy uz (translation) and rx ry rz (small
+    rotation about the origin: u = theta x x, node rotations = theta)."""
+    rows = []
+    for _, x, ndof in table:
+        x = np.asarray(x, float)
+        block = np.zeros((ndof, 6))
+        block[:3, :3] = np.eye(3)
+        block[:3, 3:] = -np.array([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]])
+        if ndof == 6:
+            block[3:, 3:] = np.eye(3)
+        rows.append(block)
+    return np.vstack(rows)
+
+
+def _m_orthonormal(V, M):
+    """V's columns made M-orthonormal by the Cholesky factor of V^T M V (unique, smooth in M: no sign choices)."""
+    L = np.linalg.cholesky(V.T @ M @ V)
+    return sl.solve_triangular(L, V.T, lower=True).T
+
+
+def flexible_basis(M, table):
+    """A deterministic M-orthonormal basis of the complement of the rigid modes: the unit vectors of every dof but
+    the first node's 6 (a rigid motion that keeps the first node still is zero, so they span a complement), with
+    the rigid part removed, M-orthonormalized."""
+    R = _m_orthonormal(rigid_modes(table), M)
+    E = np.eye(M.shape[0])[:, 6:]
+    return _m_orthonormal(E - R @ (R.T @ M @ E), M)
+
+
+def skew(p, n):
+    S = np.zeros((n, n))
+    S[np.triu_indices(n, 1)] = p
+    return S - S.T
+
+
+def modal_stiffness(M, table, freqs_hz, rotation):
+    """K = M Phi diag((2 pi f)^2) Phi^T M with Phi = flexible_basis(M) expm(skew(rotation)): free-free with exactly
+    the rigid modes of the node geometry in its null space and exactly the flexible frequencies freqs_hz, whatever
+    the rotation (which sets the mode shapes, among them how much each mode moves the interface)."""
+    n = M.shape[0] - 6
+    Phi = flexible_basis(M, table) @ sl.expm(skew(np.asarray(rotation, float), n))
+    MP = M @ Phi
+    K = (MP * (2 * np.pi * np.asarray(freqs_hz, float)) ** 2) @ MP.T
+    return 0.5 * (K + K.T)
+
+
+def n_rotation(body_dofs):
+    n = body_dofs - 6
+    return n * (n - 1) // 2
+
+
+def fitted_bodies(params):
+    """The fitted stator and rotor from a parameter vector [mass log factors, stator rotation, rotor rotation]:
+    ((Ms, Ks, table), (Mr, Kr, table)). Masses are the stick model's times the factors; stiffness by
+    modal_stiffness with Table 1's component frequencies."""
+    Ms, _, ts = build_stator()
+    Mr, _, tr = build_rotor()
+    params = np.asarray(params, float)
+    nm = len(MASS_PARAMETERS)
+    for (body, dofs, _), q in zip(MASS_PARAMETERS, params[:nm]):
+        M = Ms if body == "stator" else Mr
+        for d in dofs:
+            M[d, d] *= np.exp(q)
+    ns = n_rotation(Ms.shape[0])
+    Ks = modal_stiffness(Ms, ts, PAPER_STATOR_HZ, params[nm:nm + ns])
+    Kr = modal_stiffness(Mr, tr, PAPER_ROTOR_HZ, params[nm + ns:])
+    return (Ms, Ks, ts), (Mr, Kr, tr)
+
+
+def load_fit(path=FIT_FILE):
+    """The parameter vector fit.py wrote (fit.json: mass log factors by name, then the rotations)."""
+    import json
+    with open(path) as f:
+        fit = json.load(f)
+    masses = [fit["mass_log_factors"][name] for _, _, name in MASS_PARAMETERS]
+    return np.array(masses + fit["stator_rotation"] + fit["rotor_rotation"], float)
+
+
+def build_bodies(path=FIT_FILE):
+    """The committed Galileo-like bodies: fitted_bodies(load_fit(path))."""
+    return fitted_bodies(load_fit(path))
+
+
 # ------------------------------------------------------------------ files
 
 def write_scene(out_dir):
@@ -131,6 +237,8 @@ def write_scene(out_dir):
 # Galileo-like 28-dof model (Lee, "A Krylov model reduction methodology for articulated,
 # multi-flexible body structures", Table 1, Fig. 2). Generated by meshes/galileo/generate.py.
 name: galileo
+# the report adds the paper's Tables 1-6 and Fig. 3 beside kryflex's (README: The paper's example)
+paper: lee
 bodies:
   stator:
     mass: stator_M.mtx

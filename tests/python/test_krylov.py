@@ -7,7 +7,7 @@ checked against each other (the paper's Table 6 claim, to 1e-8) and the full one
 here: in 40-digit arithmetic with mpmath on the 28-dof Galileo model, and with the independent NumPy reference
 (tests/python/reference.py), which assembles the system its own way.
 
-Run: cd /work/main && PYTHONPATH=python /usr/bin/python3 -m pytest -q tests/python/test_krylov.py
+Run (from the repository root): PYTHONPATH=python .venv/bin/python -m pytest -q tests/python/test_krylov.py
 """
 import importlib.util
 import json

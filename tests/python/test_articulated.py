@@ -49,7 +49,8 @@ STATIC_GAIN_RTOL_GALILEO = 3e-10
 MOMENT_RTOL = 1e-8           # "exact" moment match, relative
 SIGNIFICANT = 1e-2           # entries at least this fraction of their moment's largest entry are checked one by one
 DOMINANT_FREQ_RTOL = 5e-3    # dominant full-order modes captured to 0.5 %
-KRYLOV_FIRST = 6             # the lowest Krylov frequencies that converge to the full-order ones ...
+KRYLOV_FIRST = 4             # the lowest Krylov frequencies that converge to the full-order ones ... (Galileo
+                             # fitted to the paper has 10 modes below 10 Hz: c = 10 converges its lowest 4 to 1e-6)
 KRYLOV_FREQ_RTOL = 1e-6      # ... to this relative accuracy
 FRAMES_ANGLES = [[0.0, 0.0], [45.0, 120.0], [210.0, 330.0]]
 PAPER_RECIPE = {"search": False, "method": "single-angle"}
@@ -471,8 +472,12 @@ def test_report_flags_inexact_moments_with_the_ratio(galileo, galileo_report):
         for kk in range(Lf.shape[0]):
             assert float(rows[kk][col]) == pytest.approx(float(Lf[kk, 0, 0] / Lr[kk, 0, 0]), abs=5e-9), (label, kk)
         if label == label_g:
-            assert dev <= MOMENT_RTOL and not mine
-            continue
+            # the static moment is exact at alpha_G whatever was kept (README, What is exact); the higher ones too
+            # only when no Krylov mode was dropped, else they are flagged like any other angle's
+            assert abs(Lf[0, 0, 0] / Lr[0, 0, 0] - 1) <= MOMENT_RTOL
+            if all(summary["krylov"][label]["kept"]):
+                assert dev <= MOMENT_RTOL and not mine
+                continue
         if dev >= 2 * MOMENT_RTOL:
             flagged += 1
             assert len(mine) == 1, "no note for the inexact moments at %s deg (max |ratio - 1| %.2e)" % (label, dev)

@@ -187,8 +187,9 @@ def _errors(prob, x):
     f60, i60 = prob.modes(x, prob.P60)
     e0 = np.abs(f0 / prob.target - 1)
     e60 = np.abs(f60 / prob.target60 - 1)
+    imp = max(np.abs(i0[:LOW] - MIC_0).max(), np.abs(i60[:LOW] - MIC_60).max())
     return (f"0 deg: band {e0[:LOW].max():.2%}, above {e0[LOW:].max():.2%}; 60 deg: band {e60[:LOW].max():.2%}, "
-            f"above {e60[LOW:].max():.2%}; importance off by {max(np.abs(i0[:LOW] - MIC_0).max(), np.abs(i60[:LOW] - MIC_60).max()):.3f}"), e0
+            f"above {e60[LOW:].max():.2%}; importance off by {imp:.3f}"), e0
 
 
 def fit(starts, seed, max_nfev, log=lambda text: print(text, flush=True)):

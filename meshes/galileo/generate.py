@@ -149,7 +149,8 @@ MASS_PARAMETERS = [
     ("stator", (4,), "bearing node Jyy"), ("stator", (5,), "bearing node Jzz"),
     ("stator", (6, 7, 8), "point A mass"), ("stator", (9,), "point A Jxx"), ("stator", (10,), "point A Jyy"),
     ("stator", (11,), "point A Jzz"),
-    ("rotor", (0, 1, 2), "hub mass"), ("rotor", (3,), "hub Jxx"), ("rotor", (4,), "hub Jyy"), ("rotor", (5,), "hub Jzz"),
+    ("rotor", (0, 1, 2), "hub mass"), ("rotor", (3,), "hub Jxx"), ("rotor", (4,), "hub Jyy"),
+    ("rotor", (5,), "hub Jzz"),
 ] + [("rotor", (6 + 3 * a, 7 + 3 * a, 8 + 3 * a), name + " mass") for a, (_, name, *_) in enumerate(ROTOR_APPENDAGES)]
 
 

@@ -165,7 +165,8 @@ def _table4(p):
             for m in range(n)]
     lines = [f"Table P4c (paper's Table 4, system columns). Full and reduced system frequencies at α_G = {label}° "
              "(the paper's at its α_G = 60°, shown when kryflex's α_G is the same).", "",
-             table(["Mode", "Ω full, paper", "Ω full, kryflex", "ω reduced, paper", "ω reduced, kryflex"], rows), ""]
+             table(["Mode", "Ω full, paper", "Ω full, kryflex", "ω reduced, paper", "ω reduced, kryflex"], rows),
+             ""]
     bodies = p.get("reduced_body_hz") or {}
     if bodies:
         rows = []
@@ -215,7 +216,7 @@ def _table5(p):
             f"{len(labels)} angles). Why: L^k = H (K⁺M)^k K⁺ G scales with 1/mass and depends on the mode shapes "
             "at the bearing and at point A; the paper gives none of these (its frequencies are unchanged when "
             "every mass and stiffness is scaled together), and its sign conventions for the torque and the "
-            "rotation are not stated. The fit matches frequencies and normalized importances, which fix neither. "
+            "rotation are not stated. The fit (meshes/galileo/fit.py) matches frequencies, which fix neither. "
             "The paper's L^k (k ≥ 3) vanish at 0°, consistent with its Table 2: the 0.1106 Hz mode has MIC 0 "
             "there, and the modes above 1 Hz contribute to L^k a factor (2π · 1 Hz)^-2k less than to L^0")
     zero = [abs(p["moments"][labels[0]][k][o][i]) / max(abs(p["moments"][labels[0]][0][o][i]), 1e-300)

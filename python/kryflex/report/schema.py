@@ -60,7 +60,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},
                  "frf_error": {<label>: float}, "frf_pointwise_error": {<label>: float},
                  "frf_max_rel_error": {<label>: float} (= frf_error)} (opt, every part optional),
- "timings_s": {stage: seconds} (opt), "notes": [str] (opt)
+ "timings_s": {stage: seconds} (opt), "notes": [str] (opt),
+ "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
 }
 
 This module depends only on the standard library, NumPy and plots.py (no compiled kryflex code).

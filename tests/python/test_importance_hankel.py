@@ -10,7 +10,7 @@ damped modal system (KFModalHankelSingularValues), against references computed h
   here with SciPy) has H-infinity error >= hsv[r] (and <= 2 sum_{k>=r} hsv[k], which checks the truncation and the
   frequency grid that measures it).
 
-Run: cd /work/main && PYTHONPATH=python /usr/bin/python3 -m pytest -q tests/python/test_importance_hankel.py
+Run (from the repository root): PYTHONPATH=python .venv/bin/python -m pytest -q tests/python/test_importance_hankel.py
 """
 import numpy as np
 import pytest

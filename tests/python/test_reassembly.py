@@ -197,7 +197,7 @@ def test_exactly_the_rigid_and_mechanism_modes(case):
         assert np.linalg.norm(Kh @ Phir) <= 1e-12 * np.linalg.norm(Kh) * np.linalg.norm(Phir)
         lam = generalized_eigenvalues(Kh, Mh)
         top = lam.max()
-        zero = np.abs(lam) <= 1e-12 * top
+        zero = np.abs(lam) <= 1e-10 * top   # 3e-12 on Galileo fitted to the paper (a dense modal K); gap below
         assert zero.sum() == case.nrigid and np.all(zero[:case.nrigid]), (a, lam[:case.nrigid + 1] / top)
         assert lam[case.nrigid] >= 1e6 * np.abs(lam[:case.nrigid]).max()
 

@@ -28,7 +28,7 @@ generate = load_module("galileo_generate", os.path.join(ROOT, "meshes", "galileo
 PAPER_ROTOR = [0.1221, 1.0579, 2.8638, 3.4223, 4.9894, 5.2217, 73.425, 75.821, 76.998, 116.50, 116.51,
                994.70, 994.70, 2108.5, 2431.9]
 PAPER_STATOR = [57.253, 57.455, 225.24, 225.31, 1217.7, 1404.7]
-RESEMBLE = 0.02          # README: every component frequency within 2 % of Table 1
+RESEMBLE = 1e-4          # README: Table 1's component frequencies are the model's eigenvalues (to its digits)
 
 
 def flexible_hz(M, K, nzero):
@@ -83,13 +83,13 @@ def test_galileo_component_frequencies_resemble_table_1(galileo):
 
 
 def test_galileo_files_match_the_generator(galileo):
-    """The committed .mtx files are what generate.py builds now (no stale example)."""
-    Ms, Ks, _ = generate.build_stator()
-    Mr, Kr, _ = generate.build_rotor()
+    """The committed .mtx files are what generate.py builds now from fit.json (no stale example). K is dense and made
+    of products (K = M Phi Lambda Phi^T M): equal to rounding of the largest entry."""
+    (Ms, Ks, _), (Mr, Kr, _) = generate.build_bodies()
     body = {b.name: b for b in galileo.bodies}
     for name, M, K in (("stator", Ms, Ks), ("rotor", Mr, Kr)):
         np.testing.assert_allclose(body[name].M.toarray(), M, rtol=1e-15, atol=0, err_msg=name)
-        np.testing.assert_allclose(body[name].K.toarray(), K, rtol=1e-15, atol=1e-15 * np.abs(K).max(), err_msg=name)
+        np.testing.assert_allclose(body[name].K.toarray(), K, rtol=0, atol=1e-12 * np.abs(K).max(), err_msg=name)
 
 
 def test_galileo_transfer_depends_on_clock_angle(galileo):
@@ -150,7 +150,7 @@ def test_reference_transfer_modal_and_moments_agree(galileo):
     flex = ref.transfer(Ms, Ks, Gs, Hs, [w0])[0] - rigid_part
     L = ref.moments(Ms, Ks, Gs, Hs, 40)
     series = sum(w0 ** (2 * k) * L[k] for k in range(40))
-    np.testing.assert_allclose(series, flex, rtol=1e-6)   # T minus the large rigid part: cancellation
+    np.testing.assert_allclose(series, flex, rtol=1e-5)   # T minus the large rigid part: cancellation (3e-6 here)
 
 
 # ------------------------------------------------------------------ random frames

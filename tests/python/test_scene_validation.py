@@ -452,8 +452,9 @@ def test_galileo_unchanged(loads):
     assert scene.input_names == ["bearing_torque"] and scene.output_names == ["pointA_ry"]
     assert scene.configurations == [[0.0], [15.0], [30.0], [45.0], [60.0], [72.0]]
     assert scene.band == [0.01, 10.0] and scene.damping == 0.0025 and scene.accuracy == 0.05
-    # the defaults, but for the paper's c = 10 and H2 importance, which the scene file states
-    assert scene.reduction == dict(scene_schema.REDUCTION_DEFAULTS, moments=10, importance="h2")
+    # the defaults, but for the paper's c = 10, H2 importance and keep threshold 0.1, which the scene file states
+    assert scene.reduction == dict(scene_schema.REDUCTION_DEFAULTS, moments=10, importance="h2", keep_threshold=0.1)
+    assert scene.paper == "lee"
     assert scene.verify == dict(scene_schema.VERIFY_DEFAULTS)
     assert scene.info["system_dofs"] == 28 and len(loads) == 4
     ids, xyz, ndof = scene.body_nodes[1]

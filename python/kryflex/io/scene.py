@@ -335,6 +335,7 @@ class Scene:
         self.cscene = _core.CScene(self.comm)
         self.cscene.set_name(self.name)   # recorded in reduced models, with the input and output names
         self.body_names = [body["name"] for body in bodies]
+        self.matrix_files = mats               # {(body, "mass" | "stiffness"): path} for bodies given as files
         self.body_dofs = dofs
         self.body_nodes = nodes
         self.interfaces = [[iname for iname, _ in body["interfaces"]] for body in bodies]
@@ -411,6 +412,7 @@ class Scene:
         self.accuracy = valid["accuracy"]
         self.reduction = valid["reduction"]
         self.verify = valid["verify"]
+        self.paper = valid["paper"]            # "lee": the report compares with the paper (report/paper.py)
         try:
             self.cscene.setup()
         except _core.Error as e:

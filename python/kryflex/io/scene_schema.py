@@ -35,7 +35,8 @@ FLEX_SOLVERS = ("auto", "monolithic", "bodywise")   # -kf_flex_solver, src/solve
 JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
-            "accuracy", "reduction", "verify"}
+            "accuracy", "reduction", "verify", "paper"}
+PAPERS = ("lee",)                     # paper: lee adds the report's side-by-side section (report/paper.py)
 BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "constraints", "springs",
              "damping"}
 CONSTRAINT_KEYS = {"node", "dofs"}
@@ -813,6 +814,10 @@ def validate(spec, where, default_name="scene"):
     for key in ("description", "units"):
         if key in spec:
             text(where, key, spec[key])
+    paper = spec.get("paper")
+    if paper is not None and paper not in PAPERS:
+        fail(where, "paper", "%s is not a paper kryflex can compare with; give one of %s (or leave the key out)"
+             % (short_repr(paper), ", ".join(PAPERS)))
     bodies = _bodies(where, spec)
     joints = _joints(where, spec, bodies)
     revolute = [j["name"] for j in joints if j["type"] == "revolute" and not j.get("ground")]
@@ -839,4 +844,5 @@ def validate(spec, where, default_name="scene"):
                          "give the target relative error in (0, 1), e.g. 0.05"),
         "reduction": _reduction(where, spec.get("reduction"), revolute),
         "verify": _verify(where, spec.get("verify")),
+        "paper": paper,
     }

@@ -2,6 +2,7 @@
 from . import plots
 from .context import _Context
 from .formatting import RATIO_EXACT_TOL, safe_name
+from .paper import paper_figures
 
 
 def plot_file_names(summary):
@@ -55,3 +56,4 @@ def _render_plots(summary, plot_names):
               for l in c.labels]
     yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
         curves, summary.get("accuracy"), f"Relative frequency-response error of the chosen model ({c.model_name})"))
+    yield from paper_figures(summary)

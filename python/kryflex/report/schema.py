@@ -65,6 +65,7 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
                  solves)), "solve_calls", "solve_columns", "refinement_solves", "residual_first_max",
                  "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
+ "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
 }
 
 This module depends only on the standard library, NumPy and plots.py (no compiled kryflex code).

@@ -10,6 +10,7 @@ from . import plots
 from .context import _Context
 from .formatting import (DASH, MAX_MISMATCHES_LISTED, RATIO_EXACT_TOL, decade_scale, fmt_freq, fmt_general,
                          fmt_percent, fmt_ratio, mode_ranges, table)
+from .paper import section_paper
 from .schema import _get
 
 ERROR_TEXT = "relative H∞ error per input/output pair over the band"
@@ -609,7 +610,8 @@ def render_markdown(summary, plot_names):
     lines = []
     for section in (_section_scene, _section_accuracy, _section_choice, _section_full_frequencies, _section_krylov,
                     _section_alpha_g, _section_kept, _section_reduced, _section_moments, _section_ratios,
-                    _section_multi, lambda c: _section_frf(c, plot_names), _section_timings, _section_notes):
+                    _section_multi, lambda c: _section_frf(c, plot_names), lambda c: section_paper(c.s),
+                    _section_timings, _section_notes):
         lines += section(c)
     number = 0
     for k, line in enumerate(lines):

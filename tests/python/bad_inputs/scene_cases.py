@@ -42,6 +42,8 @@ CASES = [
     S("accuracy_string", text("accuracy: 0.05", "accuracy: tight"), ["accuracy", "tight"]),
     S("moments_float", set_key("reduction.moments", 10.5), ["reduction.moments", "10.5"]),
     S("moments_string", set_key("reduction.moments", "ten"), ["reduction.moments", "ten"]),
+    S("paper_unknown", set_key("paper", "smith"), ["paper", "smith", "lee"]),
+    S("paper_not_a_string", set_key("paper", 3), ["paper", "3"]),
     S("band_string", text("band: [0.01, 10.0]", "band: 0.01-10"), ["band", "0.01-10"]),
     S("band_element_string", text("band: [0.01, 10.0]", "band: [0.01, ten]"), ["band", "ten"]),
     S("weight_not_a_number", text("weight: -1.0", "weight: heavy"), ["inputs.bearing_torque[1]", "heavy"]),  # existing

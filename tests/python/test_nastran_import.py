@@ -207,9 +207,6 @@ def test_converted_model_reduces(model):
         "band: [0.1, 100]\n")
     proc = subprocess.run([KRYFLEX, "reduce", str(d / "scene.yaml"), "-o", str(d / "red"), "-quiet"], env=ENV,
                           capture_output=True, text=True, timeout=300)
-    if proc.returncode != 0 and not _component_nodes_supported():
-        pytest.xfail("the scene reader and the C library do not take c-component/s nodes yet (helper 'bc'): "
-                     + proc.stderr.strip()[-200:])
     assert proc.returncode == 0, proc.stdout + proc.stderr
     # the full-order frequencies the reduction verified against are the reference's (massless dofs condensed)
     import json
@@ -231,16 +228,6 @@ def test_converted_model_reduces(model):
     model_py = kryflex.reduce(kryflex.scene_from_dict(spec), quiet=True).model
     np.testing.assert_allclose(model_py.at([]).frequencies_hz, summary["reduced"]["frequencies_hz"][label],
                                rtol=1e-8)
-
-
-def _component_nodes_supported():
-    """Whether this build's scene reader takes the nodes-file dofs field of dofs.md (c345, s)."""
-    from kryflex.io import scene_schema
-    try:
-        scene_schema.node_table("probe", "nodes", [[1, 0.0, 0.0, 0.0, "c345"], [2, 0.0, 0.0, 0.0, "s"]])
-        return True
-    except scene_schema.SceneError:
-        return False
 
 
 def test_op4_with_a_nodes_file(model):

@@ -382,15 +382,16 @@ def fixed_recipe_error(mats, damping, c, damped):
 
 def test_damped_moments_at_equal_size():
     """Damped moments (second-order Krylov) against the undamped basis at equal size, heavy non-proportional damping
-    (scripts/bench-damped-krylov, its default case): with 3 moments the damped basis is 10x closer (1.5e-2 against
-    1.6e-1, 18 dofs each); from 4 moments on it is not better (README "Damping"), so it stays an option."""
+    (scripts/bench-damped-krylov, its default case): with 3 moments the damped basis is closer: 10x on the Galileo stick
+    model (1.5e-2 against 1.6e-1, 18 dofs each), 1.7x on the model refitted to the paper's Table 1 (7.8e-3 against
+    1.35e-2); from 4 moments on it is not better (README "Damping"), so it stays an option."""
     mats = damping_matrices(scale=20.0)
     damping = {"modal": 0.0, "rayleigh": {"alpha": 0.5, "beta": 0.0}}
     size_u, err_u = fixed_recipe_error(mats, damping, 3, False)
     size_d, err_d = fixed_recipe_error(mats, damping, 3, True)
     print("c = 3: undamped %d dofs %.3e, damped %d dofs %.3e" % (size_u, err_u, size_d, err_d))
     assert size_u == size_d
-    assert err_d < err_u / 5
+    assert err_d < err_u / 1.5
 
 
 def test_damped_moments_scene_key_meets_accuracy():

@@ -136,6 +136,25 @@ PetscErrorCode KFSystemEigenIsDense(KFSystem sys, PetscBool *dense)
   PetscFunctionReturn(0);
 }
 
+/* Krylov-Schur for the nev eigenvalues nearest target by shift-and-invert with a direct solve: the PC to set */
+static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, PC *pc)
+{
+  ST  st;
+  KSP ksp;
+
+  PetscFunctionBegin;
+  PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
+  PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
+  PetscCall(EPSSetTarget(eps, target));
+  PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_REAL));
+  PetscCall(EPSGetST(eps, &st));
+  PetscCall(STSetType(st, STSINVERT));
+  PetscCall(STGetKSP(st, &ksp));
+  PetscCall(KSPSetType(ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(ksp, pc));
+  PetscFunctionReturn(0);
+}
+
 /* Full-order modes, for verification only: generalized Hermitian problem with the rigid modes as a deflation
    space. Small systems go to LAPACK through EPS; larger ones use Krylov-Schur with shift-and-invert (MUMPS) about a
    small negative target, so that K - target M is positive definite. */
@@ -170,8 +189,6 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
 {
   KFScene   s = sys->scene;
   EPS       eps;
-  ST        st;
-  KSP       ksp;
   PC        pc;
   Vec      *defl, x, y;
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
@@ -209,15 +226,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     PetscCall(EPSSetWhichEigenpairs(eps, EPS_SMALLEST_REAL));
   } else if (solver) { /* the flexible solver's factor: target 0, no deflation space (K+ removes the rigid modes) */
     PetscCall(KFFlexSolverSetUp(solver));
-    PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
-    PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
-    PetscCall(EPSSetTarget(eps, 0.0));
-    PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_REAL));
-    PetscCall(EPSGetST(eps, &st));
-    PetscCall(STSetType(st, STSINVERT));
-    PetscCall(STGetKSP(st, &ksp));
-    PetscCall(KSPSetType(ksp, KSPPREONLY));
-    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(KFEPSShiftInvert(eps, nev, 0.0, &pc));
     PetscCall(PCSetType(pc, PCSHELL));
     PetscCall(PCShellSetContext(pc, solver));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
@@ -239,15 +248,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
       PetscCall(VecDestroyVecs(r, &defl));
       PetscCall(VecDestroy(&x));
     }
-    PetscCall(EPSSetType(eps, EPSKRYLOVSCHUR));
-    PetscCall(EPSSetDimensions(eps, nev, PETSC_DEFAULT, PETSC_DEFAULT));
-    PetscCall(EPSSetTarget(eps, target));
-    PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_REAL));
-    PetscCall(EPSGetST(eps, &st));
-    PetscCall(STSetType(st, STSINVERT));
-    PetscCall(STGetKSP(st, &ksp));
-    PetscCall(KSPSetType(ksp, KSPPREONLY));
-    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(KFEPSShiftInvert(eps, nev, target, &pc));
     PetscCall(PCSetType(pc, PCCHOLESKY));
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));

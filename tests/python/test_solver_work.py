@@ -31,9 +31,9 @@ EXIT_NUMERIC = 3
 sys.path.insert(0, HERE)
 import reference as ref  # noqa: E402
 
-SAME_MODEL_RTOL = 1e-5      # unrefined solves leave residuals ~1e-9 (Galileo); in the merged tree the two runs' FRFs differ
-                            # by 1.5e-7..1.1e-6 of the peak from run to run (not understood yet: see the closing note of
-                            # issue 14's first stop); the models must agree far below the targets (1e-3)
+SAME_MODEL_RTOL = 1e-5      # Galileo refitted to the paper: unrefined first solves leave residuals 1.1e-7 (the stick model
+                            # ~1e-9), and the refined and unrefined models' FRFs differ by up to 1.1e-6 of the peak; the
+                            # models must agree far below the targets (1e-3)
 MOMENT_RTOL = 1e-6          # the richest candidate's moments against the dense reference (normwise per k)
 MOMENTS_CHECKED = 4         # the lowest moments: the higher ones of a stiff model carry rounding ~cond^k
 
@@ -59,17 +59,18 @@ def runs():
     """Galileo without verification: the default, full-order moments forced, and refinement always on."""
     return {"default": reduce(verify=False),
             "full": reduce(verify=False, full_moments=True),
-            "loose_refine": reduce(verify=False, full_moments=True, refine_rtol=1e-8),
+            "loose_refine": reduce(verify=False, full_moments=True, refine_rtol=1e-6),
             "always_refine": reduce(verify=False, full_moments=True, refine_rtol=0.0)}
 
 
 def test_refinement_decided_by_residual_keeps_the_model(runs):
     scene, r_def, red_def = runs["loose_refine"]
     _, r_all, red_all = runs["always_refine"]
-    # the always-refined run refines every block; with a tolerance above Galileo's first-solve residuals (~1e-9)
-    # none is refined; the residual of each block's first solve is what decides
+    # the always-refined run refines every block; with a tolerance above Galileo's first-solve residuals (1.1e-7 on
+    # the model refitted to the paper, ~1e-9 on the stick model) none is refined; the residual of each block's first
+    # solve is what decides
     assert scalar(r_all, "refinement_solves") == scalar(r_all, "solve_blocks") > 0
-    assert scalar(r_def, "solve_residual_first_max") <= 1e-8
+    assert scalar(r_def, "solve_residual_first_max") <= 1e-6
     assert scalar(r_def, "refinement_solves") == 0
     assert scalar(r_def, "solve_calls") < scalar(r_all, "solve_calls")
     # the residuals are measured, and refinement never makes the final one worse than the first

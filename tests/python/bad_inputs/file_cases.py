@@ -27,6 +27,7 @@ def GOOD(name, prepare, argv=("info", "{scene}")):
 
 
 K_ROTOR = ["bodies.rotor.stiffness", "rotor_K.mtx"]
+M_ROTOR = ["bodies.rotor.mass", "rotor_M.mtx"]   # a sparse (diagonal) matrix: Galileo's K files hold every entry
 K_STATOR = ["bodies.stator.stiffness", "stator_K.mtx"]
 
 CASES = [
@@ -47,8 +48,8 @@ CASES = [
     F("nodes_mismatch", e.text("106 0 0 -1.1000000000000001 3", "106 0 0 -1.1000000000000001 6", "rotor_nodes.txt"),
       ["rotor", "24", "21"], fix=r"must match"),                                                       # existing
     F("mtx_not_square", e.mtx_size_line("rotor_K.mtx", "21 20 109"), K_ROTOR + ["21", "20"]),
-    F("mtx_extra_entries", e.mtx_append_entries("rotor_K.mtx", ["21 1 1.0", "21 2 1.0"], bump_count=False),
-      K_ROTOR + ["109"]),
+    F("mtx_extra_entries", e.mtx_append_entries("rotor_M.mtx", ["21 1 1.0", "21 2 1.0"], bump_count=False),
+      M_ROTOR + ["re:more than the 21 entries", "line 25"]),
     R("truncated_mtx", e.cut_mtx("rotor_K.mtx", inside_line=False), K_ROTOR, fix=r"truncated.*re-export"),  # existing
     F("truncated_mtx_inside_line", e.cut_mtx("rotor_K.mtx", inside_line=True), K_ROTOR,
       fix=r"(truncated|corrupt).*re-export"),                                                         # existing
@@ -101,7 +102,7 @@ CASES = [
     GOOD("good_mtx_coordinate_capitalised",
          e.mtx_banner("rotor_K.mtx", "%%MatrixMarket MATRIX Coordinate Real Symmetric")),
     GOOD("good_mtx_crlf", e.all_of(e.crlf("rotor_K.mtx"), e.crlf("rotor_M.mtx"))),
-    GOOD("good_mtx_subnormal_value", e.mtx_append_entries("rotor_K.mtx", ["12 9 1e-310"], bump_count=True)),
+    GOOD("good_mtx_subnormal_value", e.mtx_append_entries("rotor_M.mtx", ["12 9 1e-310"], bump_count=True)),
     GOOD("good_mtx_comments_blank_lines", e.comments_and_blank_lines("rotor_K.mtx")),
     GOOD("good_nodes_crlf_comments", e.all_of(e.crlf("rotor_nodes.txt"),
                                               e.text("# id x y z ndof", "# id x y z ndof\n\n   # indented comment",

@@ -171,6 +171,25 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
   PetscFunctionReturn(0);
 }
 
+/* the body's 6 rigid motions (translations, rotations about its frame's axes) on its own dofs, n_b x 6 dense */
+static PetscErrorCode KFBodyRigidMotions(MPI_Comm comm, KFBodyData *B, Mat *Phi)
+{
+  PetscInt     lda;
+  PetscScalar *p;
+
+  PetscFunctionBegin;
+  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, Phi));
+  PetscCall(MatDenseGetLDA(*Phi, &lda));
+  PetscCall(MatDenseGetArray(*Phi, &p));
+  for (PetscInt i = B->rstart; i < B->rend; i++) {
+    PetscInt node, comp;
+    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
+    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
+  }
+  PetscCall(MatDenseRestoreArray(*Phi, &p));
+  PetscFunctionReturn(0);
+}
+
 /* The body's rigid motions from its node coordinates, in reduced coordinates Psi^T M Phi_geom (v x 6): with them
    reassembly finds the system's rigid and mechanism modes exactly, at any angle. A body with boundary conditions
    keeps only the motions they allow (Phi_geom Z, KFBodyAdmissibleRigid), the other columns are zero: reassembly
@@ -178,22 +197,13 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
 static PetscErrorCode KFBodyRigidReduced(KFBodyData *B, Mat Psi, PetscReal **rigid)
 {
   Mat          Phi, MPhi;
-  PetscScalar *p;
-  PetscInt     v, lda, rb = 6;
+  PetscInt     v, rb = 6;
   PetscReal    Z[36], *full;
   MPI_Comm     comm = PetscObjectComm((PetscObject)Psi);
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(Psi, NULL, &v));
-  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, &Phi));
-  PetscCall(MatDenseGetLDA(Phi, &lda));
-  PetscCall(MatDenseGetArray(Phi, &p));
-  for (PetscInt i = B->rstart; i < B->rend; i++) {
-    PetscInt node, comp;
-    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
-    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
-  }
-  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(KFBodyRigidMotions(comm, B, &Phi));
   PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
   PetscCall(PetscMalloc1(v * 6, &full));
   PetscCall(KFMatTransposeMatMultGather(Psi, MPhi, full));
@@ -242,15 +252,7 @@ static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
   PetscCall(KFBodyAdmissibleRigid(B, &rb, Z));
   /* the 6 body motions and their M-Gram matrix: its largest diagonal is the scale a kept motion's mass is measured
      against (a combination the layout does not see has only rounding left) */
-  PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, 6, &Phi));
-  PetscCall(MatDenseGetLDA(Phi, &lda));
-  PetscCall(MatDenseGetArray(Phi, &p));
-  for (PetscInt i = B->rstart; i < B->rend; i++) {
-    PetscInt node, comp;
-    PetscCall(KFBodyDofComponent(B, i, &node, &comp));
-    for (int m = 0; m < 6; m++) p[(i - B->rstart) + m * lda] = KFBodyRigidValue(B, node, comp, m);
-  }
-  PetscCall(MatDenseRestoreArray(Phi, &p));
+  PetscCall(KFBodyRigidMotions(comm, B, &Phi));
   PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
   PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, G6));
   PetscCall(MatDestroy(&MPhi));
@@ -263,6 +265,7 @@ static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
   }
   PetscCall(KFDenseCreate(comm, B->rend - B->rstart, B->n, k, X));
   PetscCall(MatDenseGetLDA(*X, &ldx));
+  PetscCall(MatDenseGetLDA(Phi, &lda));
   PetscCall(MatDenseGetArray(Phi, &p));
   PetscCall(MatDenseGetArray(*X, &x));
   for (PetscInt c = 0; c < k; c++) {

@@ -109,6 +109,17 @@ def internal(exc):
                    % (type(exc).__name__, exc))
 
 
+def load_reduced_model(reduced, scene=None):
+    """A reduced-model file, checked against the scene file it is to serve when one is named (kryflex reassemble,
+    kryflex export): raises ModelFileError, SceneError, or the binding's error for a scene the model does not fit."""
+    from ..api import ReducedModel
+    from ..io.scene import load_scene
+    model = ReducedModel.load(reduced)
+    if scene:
+        model.check_scene(load_scene(scene), reduced)
+    return model
+
+
 def collective(fn, *errors, interruptible=True):
     """Runs one phase, fn(), on every rank and ends it with an agreement: returns fn()'s value when it succeeded on
     every rank, else every rank exits (SystemExit) with the agreed code. errors: (exception class, exit code, message

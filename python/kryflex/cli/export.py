@@ -4,8 +4,8 @@ import os
 
 import numpy as np
 
-from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, rank,
-                     say, split_petsc_options)
+from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective,
+                     load_reduced_model, rank, say, split_petsc_options)
 from .reassemble import _angles
 
 FORMATS = ("neutral", "exudyn")
@@ -48,14 +48,12 @@ def run(argv):
     args = collective(parse)
 
     from .. import _core
-    from ..api import ModelFileError, ReducedModel
+    from ..api import ModelFileError
     from ..export import ExportError, from_model, write_neutral
-    from ..io.scene import SceneError, load_scene
+    from ..io.scene import SceneError
 
     def load():
-        model = ReducedModel.load(args.reduced)
-        if args.scene:
-            model.check_scene(load_scene(args.scene), args.reduced)
+        model = load_reduced_model(args.reduced, args.scene)
         return model, from_model(model)
     model, data = collective(load, (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
                              (ExportError, EXIT_MODEL, lambda e: "%s: cannot export: %s" % (args.reduced, e)),

@@ -7,7 +7,7 @@ import numpy as np
 
 from . import common
 from .common import (EXIT_INPUT, EXIT_MODEL, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective,
-                     nonnegative_int, rank, say, split_petsc_options)
+                     load_reduced_model, nonnegative_int, rank, say, split_petsc_options)
 
 
 def run(argv):
@@ -33,15 +33,10 @@ def run(argv):
     import time
 
     from .. import _core
-    from ..api import ModelFileError, ReducedModel
-    from ..io.scene import SceneError, load_scene
+    from ..api import ModelFileError
+    from ..io.scene import SceneError
 
-    def load():
-        model = ReducedModel.load(args.reduced)
-        if args.scene:
-            model.check_scene(load_scene(args.scene), args.reduced)
-        return model
-    model = collective(load, (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
+    model = collective(lambda: load_reduced_model(args.reduced, args.scene), (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
                        (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
 
     def reassemble():

@@ -91,6 +91,9 @@ struct _n_KFScene {
 /* the body-wise flexible solve (src/solve/bodywise.c): body factors kept per system, the interface problem per solver */
 typedef struct _n_KFBodyFactors *KFBodyFactors;
 typedef struct _n_KFBodywise    *KFBodywise;
+typedef struct _n_KFHeldEntries *KFHeldEntries; /* K_S's held rows and columns, saved while they are held */
+PETSC_INTERN PetscErrorCode KFHoldDofsInPlace(Mat, PetscInt, const PetscInt[], PetscScalar, KFHeldEntries *);
+PETSC_INTERN PetscErrorCode KFRestoreHeldDofs(Mat, KFHeldEntries *);
 
 struct _n_KFSystem {
   KFScene   scene;
@@ -111,7 +114,7 @@ struct _n_KFSystem {
 
 struct _n_KFFlexSolver {
   KFSystem  sys;
-  Mat       Kh, F;           /* held (or shifted) stiffness and its MUMPS factor */
+  Mat       Kh, F;           /* shifted stiffness (NULL without a shift: K_S is factored in place) and the MUMPS factor */
   PetscInt  nheld, *held;    /* held system dofs (global) */
   PetscReal shift;
   PetscInt  null_pivots, negative_pivots;

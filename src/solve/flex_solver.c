@@ -176,6 +176,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   KFScene   s   = sys->scene;
   PetscBool check;
   PetscInt  check_max = 20000;
+  KFHeldEntries held = NULL;
 
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
@@ -185,31 +186,33 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   if (solver->setup) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
-  PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
-  if (solver->shift > 0) PetscCall(MatAXPY(solver->Kh, solver->shift, sys->Ms, UNKNOWN_NONZERO_PATTERN));
-  else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
+  if (solver->shift > 0) {
+    PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
+    PetscCall(MatAXPY(solver->Kh, solver->shift, sys->Ms, UNKNOWN_NONZERO_PATTERN));
+  } else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
     Vec       d;
     PetscReal dsum;
-    PetscInt  rstart, rend, nloc = 0, *loc;
     PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
-    PetscCall(MatCreateVecs(solver->Kh, &d, NULL));
-    PetscCall(MatGetDiagonal(solver->Kh, d));
+    PetscCall(MatCreateVecs(sys->Ks, &d, NULL));
+    PetscCall(MatGetDiagonal(sys->Ks, d));
     PetscCall(VecNorm(d, NORM_1, &dsum));
     PetscCall(VecDestroy(&d));
-    PetscCall(MatGetOwnershipRange(solver->Kh, &rstart, &rend));
-    PetscCall(PetscMalloc1(solver->nheld, &loc));
-    for (PetscInt k = 0; k < solver->nheld; k++)
-      if (solver->held[k] >= rstart && solver->held[k] < rend) loc[nloc++] = solver->held[k];
-    /* a unit-scaled identity on the held rows keeps the factor well conditioned */
-    PetscCall(MatZeroRowsColumns(solver->Kh, nloc, loc, dsum / s->nsys, NULL, NULL));
-    PetscCall(PetscFree(loc));
+    /* a unit-scaled identity on the held rows keeps the factor well conditioned; K_S is held in place (no copy of
+       the system's largest matrix) and restored after the factorization */
+    PetscCall(KFHoldDofsInPlace(sys->Ks, solver->nheld, solver->held, dsum / s->nsys, &held));
   }
   PetscCall(KFProgress(s->comm, "factorization of the %" PetscInt_FMT "-dof system (MUMPS LDL^T, %" PetscInt_FMT " dofs held)", s->nsys, solver->nheld));
   {
     PetscLogDouble t0, t1;
 
     PetscCall(PetscTime(&t0));
-    PetscCall(KFFactorMumps(solver->Kh, 0.0, PETSC_TRUE, &solver->F, &solver->null_pivots, &solver->negative_pivots, &solver->perf.memory_estimate_mb));
+    PetscErrorCode ierr;
+
+    ierr = KFFactorMumps(solver->Kh ? solver->Kh : sys->Ks, 0.0, PETSC_TRUE, &solver->F, &solver->null_pivots, &solver->negative_pivots, &solver->perf.memory_estimate_mb);
+    /* K_S unheld again even when the factorization failed (a caller may retry with other options) */
+    PetscCall(KFRestoreHeldDofs(sys->Ks, &held));
+    if (!solver->Kh) PetscCall(MatSetOption(sys->Ks, MAT_SPD, PETSC_FALSE)); /* -kf_spd holds for the held K_S only */
+    PetscCall(ierr);
     PetscCall(PetscTime(&t1));
     solver->perf.factor_seconds += t1 - t0;
     sys->nfactor++;

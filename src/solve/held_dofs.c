@@ -155,3 +155,103 @@ PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, PetscInt *nheld, Pets
   }
   PetscFunctionReturn(0);
 }
+
+/* Holding dofs in K_S itself, for the time of its factorization: a copy of K_S (the largest matrix of a run after the
+   factor) is what the held factorization used to cost in memory, and K_S is needed unchanged afterwards (residuals,
+   verification). KFHoldDofsInPlace saves the entries of the held rows and columns (the pattern of K_S is symmetric,
+   so a held column's rows are its row's columns), zeroes them with a scaled unit diagonal; KFRestoreHeldDofs writes
+   the saved values back into the same (kept) pattern, bit for bit. */
+struct _n_KFHeldEntries {
+  PetscInt     n;       /* saved local entries */
+  PetscInt    *row, *col;
+  PetscScalar *val;
+};
+
+PETSC_INTERN PetscErrorCode KFHoldDofsInPlace(Mat K, PetscInt nheld, const PetscInt held[], PetscScalar diag, KFHeldEntries *saved)
+{
+  MPI_Comm     comm;
+  PetscInt     rstart, rend, nloc = 0, *loc, npairs = 0, cap = 0, *pairs = NULL, *allpairs, total, nrowent = 0;
+  PetscMPIInt  size, mine, *counts, *displs;
+  KFHeldEntries h;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)K, &comm));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(MatGetOwnershipRange(K, &rstart, &rend));
+  PetscCall(PetscNew(&h));
+  PetscCall(PetscMalloc1(PetscMax(nheld, 1), &loc));
+  /* (row, held column) pairs of the held rows this rank owns: every entry a held row or column holds */
+  for (PetscInt k = 0; k < nheld; k++) {
+    PetscInt           r = held[k], nc;
+    const PetscInt    *cols;
+    if (r < rstart || r >= rend) continue;
+    loc[nloc++] = r;
+    PetscCall(MatGetRow(K, r, &nc, &cols, NULL));
+    nrowent += nc;
+    if (npairs + 2 * nc > cap) {
+      cap = 2 * (npairs + 2 * nc);
+      PetscCall(PetscRealloc(sizeof(PetscInt) * cap, &pairs));
+    }
+    for (PetscInt j = 0; j < nc; j++) {
+      pairs[npairs++] = cols[j];
+      pairs[npairs++] = r;
+    }
+    PetscCall(MatRestoreRow(K, r, &nc, &cols, NULL));
+  }
+  PetscCall(PetscMPIIntCast(npairs, &mine));
+  PetscCall(PetscMalloc2(size, &counts, size, &displs));
+  PetscCallMPI(MPI_Allgather(&mine, 1, MPI_INT, counts, 1, MPI_INT, comm));
+  displs[0] = 0;
+  for (PetscMPIInt p = 1; p < size; p++) displs[p] = displs[p - 1] + counts[p - 1];
+  total = displs[size - 1] + counts[size - 1];
+  PetscCall(PetscMalloc1(PetscMax(total, 1), &allpairs));
+  PetscCallMPI(MPI_Allgatherv(pairs, mine, MPIU_INT, allpairs, counts, displs, MPIU_INT, comm));
+  PetscCall(PetscFree(pairs));
+  PetscCall(PetscFree2(counts, displs));
+  /* each rank saves the entries of its own rows: the held columns' entries (i, r) and the held rows (r, c) */
+  PetscCall(PetscMalloc3(total / 2 + nrowent + 1, &h->row, total / 2 + nrowent + 1, &h->col, total / 2 + nrowent + 1, &h->val));
+  for (PetscInt q = 0; q < total / 2; q++) {
+    PetscInt i = allpairs[2 * q], r = allpairs[2 * q + 1];
+    if (i < rstart || i >= rend) continue;
+    h->row[h->n] = i;
+    h->col[h->n] = r;
+    PetscCall(MatGetValues(K, 1, &i, 1, &r, &h->val[h->n]));
+    h->n++;
+  }
+  for (PetscInt k = 0; k < nloc; k++) { /* the held rows themselves */
+    PetscInt           r = loc[k], nc;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscCall(MatGetRow(K, r, &nc, &cols, &vals));
+    for (PetscInt j = 0; j < nc; j++) {
+      h->row[h->n] = r;
+      h->col[h->n] = cols[j];
+      h->val[h->n] = vals[j];
+      h->n++;
+    }
+    PetscCall(MatRestoreRow(K, r, &nc, &cols, &vals));
+  }
+  PetscCall(PetscFree(allpairs));
+  /* MatZeroRowsColumns keeps the pattern (the entries become zeros), so the restore inserts into existing entries */
+  PetscCall(MatZeroRowsColumns(K, nloc, loc, diag, NULL, NULL));
+  PetscCall(PetscFree(loc));
+  *saved = h;
+  PetscFunctionReturn(0);
+}
+
+PETSC_INTERN PetscErrorCode KFRestoreHeldDofs(Mat K, KFHeldEntries *saved)
+{
+  KFHeldEntries h = *saved;
+
+  PetscFunctionBegin;
+  if (!h) PetscFunctionReturn(0);
+  PetscCall(MatSetOption(K, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE)); /* the pattern must not grow */
+  for (PetscInt k = 0; k < h->n; k++) PetscCall(MatSetValues(K, 1, &h->row[k], 1, &h->col[k], &h->val[k], INSERT_VALUES));
+  PetscCall(MatAssemblyBegin(K, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(K, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatSetOption(K, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_FALSE));
+  PetscCall(PetscFree3(h->row, h->col, h->val));
+  PetscCall(PetscFree(h));
+  *saved = NULL;
+  PetscFunctionReturn(0);
+}

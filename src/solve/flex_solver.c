@@ -56,14 +56,34 @@ static PetscReal KFNodeMemoryAvailableMB(void)
   return kb < 0 ? -1 : kb / 1024.0;
 }
 
-/* After MUMPS' analysis: its estimate of the numerical factorization's memory (INFO(15) in-core, INFO(17)
-   out-of-core, MB per rank) summed over the ranks of each node, against the node's available memory (or
-   -kf_memory_limit_mb). Too much stops every rank with one message, before the factorization that would be killed. */
-static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estimate_mb)
+/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core
+   (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
+static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
+{
+  PetscInt mine;
+
+  PetscFunctionBegin;
+  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine));
+  if (mine > 0) *mb = (PetscReal)mine;
+  else {
+    PetscInt nr, ni;
+
+    PetscCall(MatMumpsGetInfo(F, 3, &nr));
+    PetscCall(MatMumpsGetInfo(F, 4, &ni));
+    *mb = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* After MUMPS' analysis: its estimates of the factorization's memory in core and out of core, summed over the ranks
+   of each node, against the node's available memory (or -kf_memory_limit_mb). ooc_mode: 0 in core, 1 out of core,
+   2 auto (in core when it fits on every node, else out of core when that fits: *ooc tells which, and MUMPS is told
+   before its factorization). Too much either way stops every rank with one message, before the factorization that
+   would be killed. */
+static PetscErrorCode KFCheckFactorMemory(Mat F, PetscInt ooc_mode, PetscBool *ooc, PetscReal *estimate_mb)
 {
   MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
-  PetscInt  mine;
-  PetscReal limit = -1, need[2], avail, worst[3], in[3];
+  PetscReal limit = -1, mine[2], need[2], avail, in[5], worst[5];
   PetscBool check = PETSC_TRUE, has_limit;
 
   PetscFunctionBegin;
@@ -71,35 +91,34 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscBool ooc, PetscReal *estim
   PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", check, &check, NULL));
   PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", limit, &limit, &has_limit));
   PetscOptionsEnd();
-  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine)); /* MB on this rank, rounded down */
-  if (mine > 0) need[0] = (PetscReal)mine;
-  else { /* a small model: its factors' entries (INFO(3) reals, INFO(4) integers; negative: millions) */
-    PetscInt nr, ni;
-
-    PetscCall(MatMumpsGetInfo(F, 3, &nr));
-    PetscCall(MatMumpsGetInfo(F, 4, &ni));
-    need[0] = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
-  }
+  PetscCall(KFFactorEstimateMB(F, PETSC_FALSE, &mine[0]));
+  PetscCall(KFFactorEstimateMB(F, PETSC_TRUE, &mine[1]));
   PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCall(MPIU_Allreduce(need, need + 1, 1, MPIU_REAL, MPIU_SUM, node));
+  PetscCall(MPIU_Allreduce(mine, need, 2, MPIU_REAL, MPIU_SUM, node));
   avail = has_limit ? limit : KFNodeMemoryAvailableMB();
   PetscCallMPI(MPI_Comm_free(&node));
-  /* the node whose estimate exceeds its memory by the most decides the message (same on every rank) */
-  in[0] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL;
-  in[1] = need[1];
-  in[2] = need[0];
-  PetscCall(MPIU_Allreduce(in, worst, 3, MPIU_REAL, MPIU_MAX, comm));
-  *estimate_mb = worst[2];
-  if (worst[0] > 0) {
-    /* every rank learns the offending node's figures: the one whose excess is worst */
-    PetscReal mine_fig[2] = {-1, -1}, fig[2];
-    if (in[0] == worst[0]) {
-      mine_fig[0] = need[1];
-      mine_fig[1] = avail;
+  /* the node whose estimate exceeds its memory by the most decides (same on every rank) */
+  in[0] = (check && avail >= 0) ? need[0] - avail : -PETSC_MAX_REAL; /* in core */
+  in[1] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL; /* out of core */
+  in[2] = mine[0];
+  in[3] = mine[1];
+  in[4] = 0;
+  PetscCall(MPIU_Allreduce(in, worst, 5, MPIU_REAL, MPIU_MAX, comm));
+  *ooc = (PetscBool)(ooc_mode == 1 || (ooc_mode == 2 && worst[0] > 0 && worst[1] <= 0));
+  *estimate_mb = worst[*ooc ? 3 : 2];
+  if (worst[*ooc ? 1 : 0] > 0) {
+    /* every rank learns the offending node's figures */
+    PetscReal fig[3], myfig[3] = {-1, -1, -1};
+    if (in[*ooc ? 1 : 0] == worst[*ooc ? 1 : 0]) {
+      myfig[0] = need[0];
+      myfig[1] = need[1];
+      myfig[2] = avail;
     }
-    PetscCall(MPIU_Allreduce(mine_fig, fig, 2, MPIU_REAL, MPIU_MAX, comm));
-    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB for the %s factorization on one node, %.3g MB are available%s. Run on more nodes, add -kf_ooc (out-of-core factors, MUMPS_OOC_TMPDIR names the folder) or -kf_blr 1e-8 (block low-rank), or use a machine with more memory (-kf_memory_check 0 tries anyway)", (double)fig[0], ooc ? "out-of-core" : "in-core", (double)fig[1], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
+    PetscCall(MPIU_Allreduce(myfig, fig, 3, MPIU_REAL, MPIU_MAX, comm));
+    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB in core and %.3g MB out of core (-kf_ooc) for the factorization on one node, %.3g MB are available%s. Run on more nodes or a machine with more memory, free memory on this one, or try anyway with -kf_memory_check 0", (double)fig[0], (double)fig[1], (double)fig[2], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
   }
+  if (*ooc && ooc_mode == 2) PetscCall(KFProgress(comm, "  the in-core factorization would need %.4g MB on one node, %.4g MB are available: the factors go out of core (%.4g MB in core; the folder MUMPS_OOC_TMPDIR, default the working directory; -kf_ooc false keeps them in core)", (double)need[0], (double)avail, (double)need[1]));
+  if (*ooc) PetscCall(MatMumpsSetIcntl(F, 22, 1)); /* read by MUMPS at the factorization */
   PetscFunctionReturn(0);
 }
 
@@ -116,6 +135,7 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   MatFactorError err;
   PetscReal      blr = 0;
   PetscInt       ordering = 6; /* auto */
+  PetscInt       ooc_mode = 0; /* 0 in core, 1 out of core, 2 auto */
   PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, user7 = PETSC_FALSE, ordering_set = PETSC_FALSE;
 
   PetscFunctionBegin;
@@ -123,7 +143,25 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
     PetscOptionsBegin(PetscObjectComm((PetscObject)A), NULL, "kryflex factorization", "KFFlexSolverSetUp");
     PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7)): auto lets MUMPS choose (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 7, KFOrderings[ordering], &ordering, NULL));
     PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", blr, &blr, NULL));
-    PetscCall(PetscOptionsBool("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR", "KFFlexSolverSetUp", ooc, &ooc, NULL));
+    {
+      char      val[16] = "auto";
+      PetscBool set, on;
+
+      ooc_mode = 2;
+      PetscCall(PetscOptionsString("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", "KFFlexSolverSetUp", val, val, sizeof(val), &set));
+      if (set && !val[0]) ooc_mode = 1; /* a bare -kf_ooc */
+      else if (set) {
+        PetscCall(PetscStrcasecmp(val, "auto", &on));
+        if (!on) {
+          PetscErrorCode ierr;
+          PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+          ierr = PetscOptionsStringToBool(val, &on);
+          PetscCall(PetscPopErrorHandler());
+          PetscCheck(!ierr, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
+          ooc_mode = on ? 1 : 0;
+        }
+      }
+    }
     PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", spd, &spd, NULL));
     PetscOptionsEnd();
     PetscCheck(blr >= 0 && blr < 1, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)blr);
@@ -149,7 +187,7 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
       PetscCall(MatMumpsSetIcntl(*F, 35, 1)); /* BLR factorization, automatic choice of the variant */
       PetscCall(MatMumpsSetCntl(*F, 7, blr));
     }
-    if (ooc) PetscCall(MatMumpsSetIcntl(*F, 22, 1));
+    if (ooc_mode == 1) PetscCall(MatMumpsSetIcntl(*F, 22, 1)); /* auto: decided after the analysis */
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
@@ -157,10 +195,10 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   if (estimate_mb) {
     PetscInt used;
 
-    PetscCall(KFCheckFactorMemory(*F, ooc, estimate_mb));
+    PetscCall(KFCheckFactorMemory(*F, ooc_mode, &ooc, estimate_mb));
     PetscCall(MatMumpsGetInfog(*F, 7, &used)); /* the ordering MUMPS applied (auto, or a fallback) */
     for (PetscInt k = 0; k < 7; k++)
-      if (KFOrderingIcntl[k] == used) PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", KFOrderings[k], spd ? "SYM=1" : "SYM=2", blr > 0 ? ", block low-rank" : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+      if (KFOrderingIcntl[k] == used) PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", KFOrderings[k], spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
   }
   PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
   PetscCall(MatFactorGetError(*F, &err));

@@ -182,3 +182,51 @@ def test_ordering_is_the_one_applied(tmp_path, ordering):
                         "-kf_ordering", ordering], env=ENV, capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert ("MUMPS analysis: %s ordering" % ordering) in p.stdout
+
+
+@pytest.fixture(scope="module")
+def solid14k(tmp_path_factory):
+    """The 13,513-dof solid pair: large enough that MUMPS' in-core and out-of-core estimates differ (31 / 13 MB)."""
+    out = tmp_path_factory.mktemp("solid14k")
+    r = subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "1", "-o",
+                        str(out)], env=ENV, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return os.path.join(out, "spacecraft.yaml")
+
+
+def _reduce_solid(scene, out, ranks, *options):
+    cmd = (["mpiexec", "-n", str(ranks)] if ranks > 1 else []) + [
+        KRYFLEX, "reduce", scene, "-o", str(out), "-kf_verify", "false", "-scene.angles", "30",
+        "-kf_error_agreement_timeout", "5", *options]
+    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (scripts/setup)")
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_out_of_core_when_only_that_fits(solid14k, tmp_path, ranks):
+    """-kf_ooc auto (the default): a limit between MUMPS' out-of-core and in-core estimates (read off the refusal at a
+    tiny limit) factors out of core and says so, with the in-core run's model; -kf_ooc false refuses at that limit."""
+    import re
+    import json
+    p = _reduce_solid(solid14k, tmp_path / "refused", ranks, "-kf_memory_limit_mb", "1e-3")
+    assert p.returncode == EXIT_NUMERIC, p.stderr
+    m = re.search(r"estimates ([0-9.e+]+) MB in core and ([0-9.e+]+) MB out of core", p.stderr)
+    assert m, p.stderr
+    incore, ooc = float(m.group(1)), float(m.group(2))
+    assert ooc < incore
+    between = str((incore * ooc) ** 0.5)
+    p = _reduce_solid(solid14k, tmp_path / "ooc", ranks, "-kf_memory_limit_mb", between)
+    assert p.returncode == 0, p.stderr
+    assert "the factors go out of core" in p.stdout + p.stderr
+    p = _reduce_solid(solid14k, tmp_path / "incore", ranks)
+    assert p.returncode == 0, p.stderr
+    assert "the factors go out of core" not in p.stdout + p.stderr
+    a = json.load(open(tmp_path / "ooc" / "summary.json"))
+    b = json.load(open(tmp_path / "incore" / "summary.json"))
+    assert a["reduced"]["dofs_per_body"] == b["reduced"]["dofs_per_body"]
+    fa, fb = (np.array(x["reduced"]["frequencies_hz"]["30"]) for x in (a, b))
+    assert np.allclose(fa, fb, rtol=1e-9, atol=0)   # the same model to rounding (out of core orders sums differently)
+    assert abs(a["error_max"] - b["error_max"]) <= 1e-6 * b["error_max"]
+    p = _reduce_solid(solid14k, tmp_path / "forced", ranks, "-kf_memory_limit_mb", between, "-kf_ooc", "false")
+    assert p.returncode == EXIT_NUMERIC, p.stderr
+    assert not (tmp_path / "forced" / "summary.json").exists()

@@ -626,12 +626,15 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     KFCandidate    rich = {0};
     KFReducedModel model;
 
+    PetscCall(PetscTime(&t0)); /* its model is projection work (the bodies' bases and reduced matrices) */
     rich.family = KF_METHOD_MULTI_ANGLE;
     rich.c      = nfull;
     rich.kept   = -1;
     for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
     PetscCall(KFCandidateModel_Private(r, visits, &rich, &model));
     for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
+    PetscCall(PetscTime(&t1));
+    times[5] += t1 - t0;
     if (!KFReducerFullMoments_Private(r)) {
       /* the moment checks' reference without the full-order solves: the richest candidate holds every angle's whole
          Krylov basis, so its moments are the full order's (to the solves' accuracy) at the angles of interest */

@@ -34,6 +34,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(MatDestroy(&y->G));
   PetscCall(MatDestroy(&y->Ht));
   PetscCall(MatDestroy(&y->Phi));
+  PetscCall(MatDestroy(&y->MPhi));
   PetscCall(KFBodyFactorsDestroy(&y->bodyf));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
@@ -80,6 +81,7 @@ PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
   PetscCall(MatSetOption(y->Ks, MAT_SYMMETRIC, PETSC_TRUE));
   y->assembled = PETSC_TRUE;
   PetscCall(MatDestroy(&y->Phi)); /* rigid modes depend on the angles: set or compute them again */
+  PetscCall(MatDestroy(&y->MPhi));
   y->user_rigid = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));
   PetscFunctionReturn(0);

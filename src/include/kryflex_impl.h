@@ -101,6 +101,7 @@ struct _n_KFSystem {
   Mat       *P;              /* per body, n_b x e */
   Mat        Ms, Ks, G, Ht;
   Mat        Phi;            /* rigid modes, e x r, M-orthonormal */
+  Mat        MPhi;           /* Ms Phi, made by the first projection, destroyed with Phi */
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;

@@ -78,7 +78,12 @@ static PetscErrorCode KFBodyRowsGet(KFScene s, PetscInt b, Mat A, KFBodyRows *R)
     PetscCall(PetscObjectTypeCompare((PetscObject)A, MATMPIAIJ, &mpi));
   }
   PetscCall(MatGetOwnershipRangeColumn(A, &cstart, &cend));
-  PetscCheck(cstart == B->rstart && cend == B->rend, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP, "body '%s': its matrices' local columns [%" PetscInt_FMT ", %" PetscInt_FMT ") differ from its local rows [%" PetscInt_FMT ", %" PetscInt_FMT "); create them with equal row and column layouts", B->name, cstart, cend, B->rstart, B->rend);
+  { /* a collective verdict: a rank that stopped alone would leave the others waiting in the scatter below */
+    PetscBool same = (PetscBool)(cstart == B->rstart && cend == B->rend), all;
+
+    PetscCall(MPIU_Allreduce(&same, &all, 1, MPIU_BOOL, MPI_LAND, s->comm));
+    PetscCheck(all, s->comm, PETSC_ERR_ARG_INCOMP, "body '%s': its matrices' local columns differ from their local rows on some rank; create them with equal row and column layouts (the default for square matrices)", B->name);
+  }
   if (mpi) PetscCall(MatMPIAIJGetSeqAIJ(A, &R->Ad, &R->Ao, &R->garray));
   else R->Ad = A;
   R->rstart = B->rstart;

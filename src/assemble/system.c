@@ -2,6 +2,7 @@
 
 PETSC_INTERN PetscErrorCode KFSystemBuildBodyMaps(KFSystem);
 PETSC_INTERN PetscErrorCode KFSystemBuildFrames(KFSystem);
+PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem, PetscBool mass, Mat *S);
 
 PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
 {
@@ -14,7 +15,7 @@ PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
   y->scene = s;
   y->nb    = s->nb;
   PetscCall(PetscCalloc1(PetscMax(s->nrevolute, 1), &y->angles));
-  PetscCall(PetscCalloc5(s->nb, &y->Q, s->nb, &y->o, s->nb, &y->P, s->nb, &y->PtMP, s->nb, &y->PtKP));
+  PetscCall(PetscCalloc3(s->nb, &y->Q, s->nb, &y->o, s->nb, &y->P));
   *sys = y;
   PetscFunctionReturn(0);
 }
@@ -25,52 +26,19 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
 
   PetscFunctionBegin;
   if (!y) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < y->nb; b++) {
-    PetscCall(MatDestroy(&y->P[b]));
-    PetscCall(MatDestroy(&y->PtMP[b]));
-    PetscCall(MatDestroy(&y->PtKP[b]));
-  }
-  PetscCall(PetscFree5(y->Q, y->o, y->P, y->PtMP, y->PtKP));
+  for (PetscInt b = 0; b < y->nb; b++) PetscCall(MatDestroy(&y->P[b]));
+  PetscCall(PetscFree3(y->Q, y->o, y->P));
   PetscCall(PetscFree(y->angles));
   PetscCall(MatDestroy(&y->Ms));
   PetscCall(MatDestroy(&y->Ks));
   PetscCall(MatDestroy(&y->G));
   PetscCall(MatDestroy(&y->Ht));
   PetscCall(MatDestroy(&y->Phi));
+  PetscCall(MatDestroy(&y->MPhi));
   PetscCall(KFBodyFactorsDestroy(&y->bodyf));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
   *sys = NULL;
-  PetscFunctionReturn(0);
-}
-
-/* sum_b P_b^T A_b P_b: the first angle computes the products and the union pattern, later angles reuse both */
-static PetscErrorCode KFSystemSumPtAP(KFSystem y, PetscBool mass, Mat *S)
-{
-  KFScene  s     = y->scene;
-  Mat     *parts = mass ? y->PtMP : y->PtKP;
-  PetscBool reuse = (PetscBool)(*S != NULL);
-
-  PetscFunctionBegin;
-  for (PetscInt b = 0; b < s->nb; b++) {
-    Mat A = mass ? s->bodies[b].M : s->bodies[b].K;
-    PetscCall(MatPtAP(A, y->P[b], reuse ? MAT_REUSE_MATRIX : MAT_INITIAL_MATRIX, PETSC_DEFAULT, &parts[b]));
-  }
-  if (!reuse) {
-    Vec zero;
-    PetscCall(MatDuplicate(parts[0], MAT_COPY_VALUES, S));
-    for (PetscInt b = 1; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], DIFFERENT_NONZERO_PATTERN));
-    /* every diagonal entry present (an unconnected dof has none): the factorization and the held-dof identity rows
-       need them, and a dof without stiffness must reach MUMPS as a null pivot, not as a missing entry */
-    PetscCall(MatSetOption(*S, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
-    PetscCall(MatCreateVecs(*S, &zero, NULL));
-    PetscCall(VecSet(zero, 0.0));
-    PetscCall(MatDiagonalSet(*S, zero, ADD_VALUES));
-    PetscCall(VecDestroy(&zero));
-  } else {
-    PetscCall(MatZeroEntries(*S));
-    for (PetscInt b = 0; b < s->nb; b++) PetscCall(MatAXPY(*S, 1.0, parts[b], SUBSET_NONZERO_PATTERN));
-  }
   PetscFunctionReturn(0);
 }
 
@@ -105,14 +73,15 @@ PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
   }
   PetscCall(KFSystemBuildFrames(y));
   PetscCall(KFSystemBuildBodyMaps(y));
-  PetscCall(KFSystemSumPtAP(y, PETSC_TRUE, &y->Ms));
-  PetscCall(KFSystemSumPtAP(y, PETSC_FALSE, &y->Ks));
+  PetscCall(KFSystemSumBodies(y, PETSC_TRUE, &y->Ms)); /* src/assemble/sum.c: P_b^T A_b P_b without products */
+  PetscCall(KFSystemSumBodies(y, PETSC_FALSE, &y->Ks));
   PetscCall(KFSystemSumPtX(y, PETSC_TRUE, &y->G));
   PetscCall(KFSystemSumPtX(y, PETSC_FALSE, &y->Ht));
   PetscCall(MatSetOption(y->Ms, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatSetOption(y->Ks, MAT_SYMMETRIC, PETSC_TRUE));
   y->assembled = PETSC_TRUE;
   PetscCall(MatDestroy(&y->Phi)); /* rigid modes depend on the angles: set or compute them again */
+  PetscCall(MatDestroy(&y->MPhi));
   y->user_rigid = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));
   PetscFunctionReturn(0);

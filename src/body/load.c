@@ -615,19 +615,153 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
   PetscFunctionReturn(0);
 }
 
+/* sum over the entries of a local block of (a_ij - t_ij)^2, where t_ij is the transposed entry found by binary
+   search in the (sorted) row j of the same block, and of a_ij^2: one pass over the entries, no transpose built.
+   An entry without its transposed partner counts twice, for the two positions of A - A^T it fills. */
+static PetscErrorCode KFSeqAIJAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
+{
+  const PetscInt    *ia, *ja;
+  const PetscScalar *va;
+  PetscInt           m;
+  PetscBool          done;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "cannot get the rows of the matrix");
+  PetscCall(MatSeqAIJGetArrayRead(A, &va));
+  for (PetscInt i = 0; i < m; i++)
+    for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
+      const PetscInt j = ja[k];
+      PetscReal      a = PetscRealPart(va[k]);
+      PetscInt       lo, hi;
+
+      *aa += a * a;
+      if (j == i) continue;
+      if (j >= m) { /* a rectangular block has no transposed partner here */
+        *dd += 2 * a * a;
+        continue;
+      }
+      lo = ia[j];
+      hi = ia[j + 1];
+      while (hi - lo > 0) { /* the entry (j, i) in the sorted row j */
+        PetscInt mid = lo + (hi - lo) / 2;
+        if (ja[mid] < i) lo = mid + 1;
+        else hi = mid;
+      }
+      if (lo < ia[j + 1] && ja[lo] == i) *dd += PetscSqr(a - PetscRealPart(va[lo]));
+      else *dd += 2 * a * a;
+    }
+  PetscCall(MatSeqAIJRestoreArrayRead(A, &va));
+  PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+/* the off-process couplings of an MPIAIJ matrix: (a_ij - a_ji)^2 over the positions (i local, j remote), with a_ji
+   from the transpose of a matrix holding only those couplings (a thin layer: cheap to transpose) */
+static PetscErrorCode KFMPIAIJOffAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
+{
+  Mat                Ad, Ao, O, Ot;
+  const PetscInt    *garray, *ib, *jb;
+  const PetscScalar *vb;
+  PetscInt           m, n, rstart, *onz, *cols, maxrow = 0;
+  PetscBool          done;
+
+  PetscFunctionBegin;
+  PetscCall(MatMPIAIJGetSeqAIJ(A, &Ad, &Ao, &garray));
+  PetscCall(MatGetLocalSize(A, &m, &n));
+  PetscCall(MatGetOwnershipRange(A, &rstart, NULL));
+  PetscCall(MatGetRowIJ(Ao, 0, PETSC_FALSE, PETSC_FALSE, &m, &ib, &jb, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "cannot get the rows of the matrix");
+  PetscCall(MatSeqAIJGetArrayRead(Ao, &vb));
+  PetscCall(PetscMalloc1(m + 1, &onz));
+  for (PetscInt i = 0; i < m; i++) {
+    onz[i] = ib[i + 1] - ib[i];
+    maxrow = PetscMax(maxrow, onz[i]);
+  }
+  PetscCall(MatCreateAIJ(PetscObjectComm((PetscObject)A), m, n, PETSC_DETERMINE, PETSC_DETERMINE, 0, NULL, 0, onz, &O));
+  PetscCall(PetscMalloc1(maxrow + 1, &cols));
+  for (PetscInt i = 0; i < m; i++) {
+    const PetscInt row = rstart + i;
+
+    for (PetscInt k = ib[i]; k < ib[i + 1]; k++) cols[k - ib[i]] = garray[jb[k]];
+    PetscCall(MatSetValues(O, 1, &row, onz[i], cols, vb + ib[i], INSERT_VALUES));
+  }
+  PetscCall(MatAssemblyBegin(O, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(O, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatTranspose(O, MAT_INITIAL_MATRIX, &Ot));
+  /* row i of A's off-process part against row i of O^T, both sorted by global column: a merge */
+  for (PetscInt i = 0; i < m; i++) {
+    const PetscInt    *tc;
+    const PetscScalar *tv;
+    PetscInt           nt, p = ib[i], q = 0, row = rstart + i;
+
+    PetscCall(MatGetRow(Ot, row, &nt, &tc, &tv));
+    while (p < ib[i + 1] || q < nt) {
+      const PetscInt cp = p < ib[i + 1] ? garray[jb[p]] : PETSC_MAX_INT, cq = q < nt ? tc[q] : PETSC_MAX_INT;
+      PetscReal      a = 0, t = 0;
+
+      if (cp <= cq) a = PetscRealPart(vb[p++]);
+      if (cq <= cp) t = PetscRealPart(tv[q++]);
+      if (cp <= cq) *aa += a * a;
+      *dd += PetscSqr(a - t);
+    }
+    PetscCall(MatRestoreRow(Ot, row, &nt, &tc, &tv));
+  }
+  PetscCall(MatSeqAIJRestoreArrayRead(Ao, &vb));
+  PetscCall(MatRestoreRowIJ(Ao, 0, PETSC_FALSE, PETSC_FALSE, &m, &ib, &jb, &done));
+  PetscCall(PetscFree(cols));
+  PetscCall(PetscFree(onz));
+  PetscCall(MatDestroy(&Ot));
+  PetscCall(MatDestroy(&O));
+  PetscFunctionReturn(0);
+}
+
+/* ||A - A^T||_F <= rtol ||A||_F, collective. AIJ matrices in one pass over their entries (the local block against
+   itself, the off-process couplings against their transpose); other types through MatTranspose. The whole
+   transpose and a DIFFERENT_NONZERO_PATTERN MatAXPY cost 0.7 s per matrix of a 100,000-dof solid body. */
 PetscErrorCode KFMatCheckSymmetric(Mat A, const char what[], PetscReal rtol)
 {
-  Mat       At;
   PetscReal nA, nD;
   MPI_Comm  comm;
+  PetscBool seq, mpi;
 
   PetscFunctionBegin;
   PetscCall(PetscObjectGetComm((PetscObject)A, &comm));
-  PetscCall(MatTranspose(A, MAT_INITIAL_MATRIX, &At));
-  PetscCall(MatNorm(A, NORM_FROBENIUS, &nA));
-  PetscCall(MatAXPY(At, -1.0, A, DIFFERENT_NONZERO_PATTERN));
-  PetscCall(MatNorm(At, NORM_FROBENIUS, &nD));
-  PetscCall(MatDestroy(&At));
+  PetscCall(PetscObjectTypeCompare((PetscObject)A, MATSEQAIJ, &seq));
+  PetscCall(PetscObjectTypeCompare((PetscObject)A, MATMPIAIJ, &mpi));
+  if (mpi) { /* the local block is square in local indices only when rows and columns are laid out alike (everywhere) */
+    PetscInt  rs, re, cs, ce;
+    PetscBool same, all;
+
+    PetscCall(MatGetOwnershipRange(A, &rs, &re));
+    PetscCall(MatGetOwnershipRangeColumn(A, &cs, &ce));
+    same = (PetscBool)(rs == cs && re == ce);
+    PetscCall(MPIU_Allreduce(&same, &all, 1, MPIU_BOOL, MPI_LAND, comm));
+    mpi = all;
+  }
+  if (seq || mpi) {
+    PetscReal loc[2] = {0, 0}, sum[2];
+
+    if (seq) PetscCall(KFSeqAIJAsymmetry(A, &loc[0], &loc[1]));
+    else {
+      Mat Ad;
+
+      PetscCall(MatMPIAIJGetSeqAIJ(A, &Ad, NULL, NULL));
+      PetscCall(KFSeqAIJAsymmetry(Ad, &loc[0], &loc[1]));
+      PetscCall(KFMPIAIJOffAsymmetry(A, &loc[0], &loc[1]));
+    }
+    PetscCall(MPIU_Allreduce(loc, sum, 2, MPIU_REAL, MPIU_SUM, comm));
+    nD = PetscSqrtReal(sum[0]);
+    nA = PetscSqrtReal(sum[1]);
+  } else {
+    Mat At;
+
+    PetscCall(MatTranspose(A, MAT_INITIAL_MATRIX, &At));
+    PetscCall(MatNorm(A, NORM_FROBENIUS, &nA));
+    PetscCall(MatAXPY(At, -1.0, A, DIFFERENT_NONZERO_PATTERN));
+    PetscCall(MatNorm(At, NORM_FROBENIUS, &nD));
+    PetscCall(MatDestroy(&At));
+  }
   PetscCheck(nD <= rtol * nA, comm, PETSC_ERR_ARG_WRONG, "%s is not symmetric: ||A - A^T|| / ||A|| = %g (> %g); kryflex needs symmetric M, K and damping matrices: check the export (both triangles, or 'symmetric' storage)", what, (double)(nA > 0 ? nD / nA : nD), (double)rtol);
   PetscFunctionReturn(0);
 }

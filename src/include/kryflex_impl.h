@@ -102,9 +102,9 @@ struct _n_KFSystem {
   PetscReal *angles;
   PetscReal (*Q)[9], (*o)[3]; /* body frame -> root frame: y = Q x + o */
   Mat       *P;              /* per body, n_b x e */
-  Mat       *PtMP, *PtKP;    /* per body contributions, kept for reuse across angles */
   Mat        Ms, Ks, G, Ht;
   Mat        Phi;            /* rigid modes, e x r, M-orthonormal */
+  Mat        MPhi;           /* Ms Phi, made by the first projection, destroyed with Phi */
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;
@@ -146,6 +146,9 @@ PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); 
 PETSC_INTERN PetscErrorCode KFBodyFindNode(KFBodyData *, PetscInt id, PetscInt *node);
 PETSC_INTERN PetscErrorCode KFExprAdd(KFExpr *, PetscInt idx, PetscReal c);
 PETSC_INTERN PetscErrorCode KFExprAXPY(KFExpr *, PetscReal a, const KFExpr *);
+/* how each body's interface dofs read in system dofs at the system's angles, replicated (src/assemble/body_map.c) */
+PETSC_INTERN PetscErrorCode KFSystemInterfaceExprs(KFSystem, KFExpr ***);
+PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
 /* node and component (0..5: ux uy uz rx ry rz; KF_COMPONENT_SCALAR for a scalar point) of body dof i */
 PETSC_INTERN PetscErrorCode KFBodyDofComponent(KFBodyData *, PetscInt dof, PetscInt *node, PetscInt *comp);
 /* the body dof of (node, comp), or -1 when the node has no such component */

@@ -182,6 +182,18 @@ static PetscErrorCode KFReducerRecordBodySizes_Private(KFReducer r, KFReducedMod
   PetscFunctionReturn(0);
 }
 
+/* the factorization stage's time outside MUMPS (the stiffness copied, dofs held, the factor's options): the stage's
+   seconds less the solver's factorization seconds */
+static PetscErrorCode KFReducerAddFactorSetUp_Private(KFFlexSolver solver, PetscLogDouble stage, PetscReal *setup)
+{
+  KFFlexSolverPerf p;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverGetPerf(solver, &p));
+  *setup += (PetscReal)PetscMax(stage - p.factor_seconds, 0);
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals[], PetscReal Lfull[])
 {
   MPI_Comm         comm;
@@ -190,7 +202,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
   KFBodyBasis     *candidates, multi_bb = NULL;
   PetscInt         nc = 0, nrev, nrev1, nb, nsys, a, t, nrigid, nmom, g = -1, multi_n = 0;
   PetscReal       *multi_angles = NULL, *kept_g = NULL;
-  PetscReal        times[7] = {0}, best_imp = -1;
+  PetscReal        times[7] = {0}, best_imp = -1, setup_s = 0;
   PetscInt         best_kept = -1, nkept_g = 0, nstatic_g = 0;
   PetscLogDouble   t0, t1;
   const char      *name, *type;
@@ -237,6 +249,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));
     times[1] += t1 - t0;
+    PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &setup_s));
     PetscCall(KFInterruptCheck(comm));
 
     t0 = t1;
@@ -392,6 +405,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
   PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
 
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", setup_s));
   r->chosen = r->method == KF_METHOD_MULTI_ANGLE && r->multi_model ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
   {
     PetscReal mm = (PetscReal)nmom;
@@ -528,7 +542,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   KFVisit       *visits;
   KFCandidate    single, multi;
   PetscInt       nc, nrev, nrev1, nb, a, t, nfull = r->build_moments, nrows;
-  PetscReal      times[7] = {0}, *rows;
+  PetscReal      times[7] = {0}, *rows, setup_s = 0;
   PetscLogDouble t0, t1;
   static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
 
@@ -561,6 +575,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));
     times[1] += t1 - t0;
+    PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &setup_s));
     t0 = t1;
     v->basis.gram_condition = (PetscReal)NAN;
     PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
@@ -611,12 +626,15 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     KFCandidate    rich = {0};
     KFReducedModel model;
 
+    PetscCall(PetscTime(&t0)); /* its model is projection work (the bodies' bases and reduced matrices) */
     rich.family = KF_METHOD_MULTI_ANGLE;
     rich.c      = nfull;
     rich.kept   = -1;
     for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
     PetscCall(KFCandidateModel_Private(r, visits, &rich, &model));
     for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
+    PetscCall(PetscTime(&t1));
+    times[5] += t1 - t0;
     if (!KFReducerFullMoments_Private(r)) {
       /* the moment checks' reference without the full-order solves: the richest candidate holds every angle's whole
          Krylov basis, so its moments are the full order's (to the solves' accuracy) at the angles of interest */
@@ -758,6 +776,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, tmp));
   }
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", setup_s));
   for (PetscInt i = 0; i < nc; i++) PetscCall(KFVisitDestroy_Private(r, &visits[i]));
   PetscCall(PetscFree(visits));
   PetscCall(PetscFree(configs));
@@ -768,12 +787,13 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
    "timings" (seconds: assembly, factorization, solves, basis without its solves, modes, moments, projection,
    verification, whole; then whole without verification / (factorization + solves)), scalars for the solver's
    work, and a table at the end of the progress lines. The ratio says how much of a reduction is not the
-   factorization and the solves (1: nothing else). */
+   factorization and the solves (1: nothing else). The table accounts for every second of whole: "factor set-up" is
+   the factorization stage outside MUMPS (time_factor_setup), "other" what no stage holds (time_other). */
 static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble whole)
 {
   static const char *const stages[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
   MPI_Comm         comm;
-  PetscReal        st[7] = {0}, tab[10], fs, ratio;
+  PetscReal        st[7] = {0}, tab[10], fs, ratio, setup, other;
   const PetscInt   n = 10;
   const PetscReal *v;
   KFFlexSolverPerf *p = &r->perf;
@@ -793,6 +813,12 @@ static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble w
     p->factor_seconds = buf[1];
     p->solve_seconds  = buf[2];
   }
+  PetscCall(KFReducerGetResult(r, -1, "time_factor_setup", NULL, NULL, &v));
+  setup = v[0];
+  /* what no stage holds (the announcement, the estimator's richest model, the comparison, destroying the system):
+     the table accounts for every second of whole */
+  other = (PetscReal)whole;
+  for (PetscInt k = 0; k < 7; k++) other -= st[k];
   fs     = (PetscReal)(p->factor_seconds + p->solve_seconds);
   ratio  = fs > 0 ? ((PetscReal)whole - st[6]) / fs : (PetscReal)NAN;
   tab[0] = st[0];
@@ -810,6 +836,7 @@ static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble w
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_total", (PetscReal)p->factor_seconds));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_whole", (PetscReal)whole));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_ratio", ratio));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_other", other));
   PetscCall(KFReducerResultScalar_Private(r, -1, "solve_calls", (PetscReal)p->solve_calls));
   PetscCall(KFReducerResultScalar_Private(r, -1, "solve_columns", (PetscReal)p->solve_columns));
   PetscCall(KFReducerResultScalar_Private(r, -1, "solve_blocks", (PetscReal)p->blocks));
@@ -817,8 +844,8 @@ static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble w
   PetscCall(KFReducerResultScalar_Private(r, -1, "solve_residual_first_max", p->residual_first_max));
   PetscCall(KFReducerResultScalar_Private(r, -1, "solve_residual_final_max", p->residual_final_max));
   PetscCall(KFReducerResultScalar_Private(r, -1, "factor_memory_estimate_mb", p->memory_estimate_mb));
-  PetscCall(KFProgress(comm, "timings (s): assembly %.3g | factorization %.3g (MUMPS estimate %.0f MB per rank) | block solves %.3g (%" PetscInt_FMT " MatMatSolve, %" PetscInt_FMT " columns, %" PetscInt_FMT " of %" PetscInt_FMT " blocks refined; residual first %.1e, final %.1e)", (double)tab[0], (double)tab[1], (double)p->memory_estimate_mb, (double)tab[2], p->solve_calls, p->solve_columns, p->refinement_solves > 0 ? PetscMin(p->refinement_solves, p->blocks) : 0, p->blocks, (double)p->residual_first_max, (double)p->residual_final_max));
-  PetscCall(KFProgress(comm, "timings (s): basis %.3g (solves included) | modes %.3g | moments %.3g | projection %.3g | verification %.3g | whole %.3g | (whole - verification) / (factorization + solves) = %.3g", (double)tab[3], (double)tab[4], (double)tab[5], (double)tab[6], (double)tab[7], (double)tab[8], (double)ratio));
+  PetscCall(KFProgress(comm, "timings (s): assembly %.3g | factor set-up %.3g | factorization %.3g (MUMPS estimate %.0f MB per rank) | block solves %.3g (%" PetscInt_FMT " MatMatSolve, %" PetscInt_FMT " columns, %" PetscInt_FMT " of %" PetscInt_FMT " blocks refined; residual first %.1e, final %.1e)", (double)tab[0], (double)setup, (double)tab[1], (double)p->memory_estimate_mb, (double)tab[2], p->solve_calls, p->solve_columns, p->refinement_solves > 0 ? PetscMin(p->refinement_solves, p->blocks) : 0, p->blocks, (double)p->residual_first_max, (double)p->residual_final_max));
+  PetscCall(KFProgress(comm, "timings (s): basis %.3g (solves included) | modes %.3g | moments %.3g | projection %.3g | verification %.3g | other %.3g | whole %.3g | (whole - verification) / (factorization + solves) = %.3g", (double)tab[3], (double)tab[4], (double)tab[5], (double)tab[6], (double)tab[7], (double)other, (double)tab[8], (double)ratio));
   PetscFunctionReturn(0);
 }
 
@@ -862,6 +889,13 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       PetscCall(KFSystemCreate(r->scene, &sys));
       PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &seconds));
       PetscCall(KFSystemDestroy(&sys));
+      { /* the midpoints' references are verification too */
+        const PetscReal *v;
+
+        PetscCall(KFReducerGetResult(r, -1, "time_verification", NULL, NULL, &v));
+        seconds += v[0];
+        PetscCall(KFReducerResultScalar_Private(r, -1, "time_verification", seconds));
+      }
       for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
     }
   }

@@ -5,6 +5,8 @@
    For a soft vector x of a stiff structure, K x is a small difference of large terms: in double its rounding is
    eps |K| |x|, far above |K x|; accumulated in long double it is eps |K x|. The residuals of iterative refinement and
    the reduced stiffness matrices need that. */
+#define KF_EXT_CHUNK 8
+
 static PetscErrorCode KFSeqAIJMultExtended(Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy)
 {
   const PetscInt    *ia, *ja, *ib = NULL, *jb = NULL;
@@ -21,14 +23,31 @@ static PetscErrorCode KFSeqAIJMultExtended(Mat A, PetscInt ncols, const PetscSca
     PetscCheck(done && mb == m, PETSC_COMM_SELF, PETSC_ERR_SUP, "cannot get the rows of the off-process block");
     PetscCall(MatSeqAIJGetArrayRead(B, &b));
   }
-  for (PetscInt j = 0; j < ncols; j++)
+  /* rows outer, a chunk of columns inner: each row of A is read once per chunk instead of once per column, and the
+     chunk's sums are independent chains the CPU overlaps (each entry is summed in the same order as column by column,
+     so Y is the same to the bit) */
+  for (PetscInt j0 = 0; j0 < ncols; j0 += KF_EXT_CHUNK) {
+    const PetscInt nj = PetscMin(KF_EXT_CHUNK, ncols - j0);
+
     for (PetscInt i = 0; i < m; i++) {
-      long double s = 0;
-      for (PetscInt k = ia[i]; k < ia[i + 1]; k++) s += (long double)a[k] * (long double)x[ja[k] + j * ldx];
+      long double s[KF_EXT_CHUNK] = {0};
+
+      for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
+        const long double    ak = (long double)a[k];
+        const PetscScalar   *xk = x + ja[k] + j0 * ldx;
+
+        for (PetscInt j = 0; j < nj; j++) s[j] += ak * (long double)xk[j * ldx];
+      }
       if (B)
-        for (PetscInt k = ib[i]; k < ib[i + 1]; k++) s += (long double)b[k] * (long double)xg[jb[k] + j * ldg];
-      y[i + j * ldy] = (PetscScalar)s;
+        for (PetscInt k = ib[i]; k < ib[i + 1]; k++) {
+          const long double  bk = (long double)b[k];
+          const PetscScalar *xk = xg + jb[k] + j0 * ldg;
+
+          for (PetscInt j = 0; j < nj; j++) s[j] += bk * (long double)xk[j * ldg];
+        }
+      for (PetscInt j = 0; j < nj; j++) y[i + (j0 + j) * ldy] = (PetscScalar)s[j];
     }
+  }
   PetscCall(MatSeqAIJRestoreArrayRead(A, &a));
   PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
   if (B) {

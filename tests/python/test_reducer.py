@@ -249,7 +249,7 @@ def test_summary_holds_the_reducer_results(name, solved):
     # timings: the reducer's stages that took time, under the report's names
     names = {"time_assembly": "assembly", "time_factorization": "factorization", "time_basis": "krylov",
              "time_modes": "krylov modes", "time_moments": "moments", "time_projection": "projection",
-             "time_verification": "verification eigensolve"}
+             "time_verification": "verification eigensolve", "time_other": "other"}
     expected = {names[k]: float(r.result(-1, k)[0]) for k in names if float(r.result(-1, k)[0]) > 0}
     assert summary["timings_s"] == expected and "assembly" in expected and "verification eigensolve" in expected
 

@@ -116,6 +116,11 @@ def test_timing_table_is_recorded(runs):
     assert factor > 0 and solves > 0 and whole >= factor + solves
     assert ratio == pytest.approx((whole - t[7]) / (factor + solves), rel=1e-12)
     assert scalar(r, "time_ratio") == pytest.approx(ratio, rel=1e-12)
+    # every second of whole is in a stage or in "other"; the factorization stage holds its set-up outside MUMPS
+    stages = ["time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection",
+              "time_verification"]
+    assert sum(scalar(r, k) for k in stages) + scalar(r, "time_other") == pytest.approx(whole, rel=1e-9)
+    assert 0 <= scalar(r, "time_factor_setup") <= scalar(r, "time_factorization")
 
 
 @pytest.mark.parametrize("opts", [{"ordering": "amd"}, {"blr": 1e-10}, {"spd": True}])

@@ -16,7 +16,7 @@ import numpy as np
 # basis of the reducer's type)
 TIMINGS = [("time_assembly", "assembly"), ("time_factorization", "factorization"), ("time_basis", None),
            ("time_modes", "krylov modes"), ("time_moments", "moments"), ("time_projection", "projection"),
-           ("time_verification", "verification eigensolve")]
+           ("time_verification", "verification eigensolve"), ("time_other", "other")]
 
 ERROR_DEFINITION = ("relative H-infinity error per input/output pair: max over pairs (i, j) of "
                     "max_w |Tf_ij(w) - Tr_ij(w)| / max_w |Tf_ij(w)| over the band (a pair whose peak is below 1e-4 of "

@@ -1,0 +1,102 @@
+"""The system matrices sum_b P_b^T A_b P_b, written directly by src/assemble/sum.c, against NumPy.
+
+A hand-made chain of three bodies: a root, a child on a revolute joint, and a grandchild fixed to the child's tied
+interface node (its interface dofs read through the child's expressions: the root's dofs and the joint's rotation),
+with a partly clamped root node.  M_S and K_S must equal the products P_b^T A_b P_b computed densely from kryflex's
+own body maps P_b (the maps themselves are checked against the constraint equations in test_assembly.py), at a first
+angle (a new matrix) and at a later one (the same pattern refilled); AIJ and dense body matrices give the same
+system; every diagonal entry is stored (a joint's free rotation has no row of its own in any body).
+"""
+import numpy as np
+import pytest
+from petsc4py import PETSc
+
+from kryflex import _core
+
+NODES = {"root": [1, 2], "child": [1, 2, 3], "grandchild": [1, 2]}
+
+
+def spd(n, seed):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    S = A @ A.T + n * np.eye(n)
+    S[np.abs(S) < 0.3] = 0.0  # some structural zeros, symmetric
+    return S
+
+
+def petsc(D, dense):
+    n = D.shape[0]
+    if dense:
+        m = PETSc.Mat().createDense([n, n])
+        m.setUp()
+    else:
+        m = PETSc.Mat().createAIJ([n, n], nnz=n)
+    r0, r1 = m.getOwnershipRange()
+    for i in range(r0, r1):
+        cols = np.nonzero(D[i])[0].astype(PETSc.IntType)
+        m.setValues([i], cols, D[i, cols])
+    m.assemble()
+    return m
+
+
+def chain(dense):
+    s = _core.CScene()
+    mats = {}
+    for k, (name, ids) in enumerate(NODES.items()):
+        n = 6 * len(ids)
+        M, K = spd(n, 10 + k), spd(n, 20 + k)
+        mats[name] = (M, K)
+        xyz = np.arange(3.0 * len(ids)).reshape(-1, 3) + k
+        s.add_body(name, petsc(M, dense), petsc(K, dense), ids, xyz, [6] * len(ids))
+    s.add_interface(0, "hub", 2)
+    s.add_interface(1, "hub", 1)
+    s.add_interface(1, "arm", 1)        # the grandchild hangs on the child's tied node
+    s.add_interface(2, "arm", 1)
+    s.add_joint("spin", "revolute", 0, "hub", 1, "hub", axis=(0.0, 0.6, 0.8))
+    s.add_joint("weld", "fixed", 1, "arm", 2, "arm")
+    s.add_constraint(0, 1, "123")
+    s.set_num_io(1, 1)
+    s.add_input_load(0, 0, 2, 0)
+    s.add_output_reading(0, 2, 2, 0)
+    s.setup()
+    return s, mats
+
+
+def dense_of(A):
+    n, m = A.getSize()
+    out = np.zeros((n, m))
+    r0, r1 = A.getOwnershipRange()
+    for i in range(r0, r1):
+        cols, vals = A.getRow(i)
+        out[i, cols] = vals
+    return out
+
+
+@pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])
+def test_sum_equals_dense_products(dense):
+    scene, mats = chain(dense)
+    system = _core.CSystem(scene)
+    for angle in (0.0, 0.7, 2.9):      # 0: zero coefficients stay in the pattern; later angles refill it
+        system.set_angles([angle])
+        Ms, Ks, _, _ = system.matrices()
+        P = [dense_of(system.body_map(b)) for b in range(3)]
+        for S, which in ((Ms, 0), (Ks, 1)):
+            ref = sum(P[b].T @ mats[name][which] @ P[b] for b, name in enumerate(NODES))
+            got = dense_of(S)
+            assert np.linalg.norm(got - ref) <= 1e-14 * np.linalg.norm(ref), (angle, which)
+            assert np.allclose(got, got.T, rtol=0, atol=1e-13 * np.abs(ref).max())
+            for i in range(S.getSize()[0]):                  # every diagonal entry stored
+                assert i in S.getRow(i)[0], (angle, which, i)
+        # the joint's free rotation (the last system dof) reads through both tied nodes
+        assert np.count_nonzero(P[1][:, -1]) and np.count_nonzero(P[2][:, -1])
+
+
+def test_aij_and_dense_bodies_give_the_same_system():
+    out = []
+    for dense in (False, True):
+        scene, _ = chain(dense)
+        system = _core.CSystem(scene)
+        system.set_angles([1.1])
+        out.append([dense_of(A) for A in system.matrices()[:2]])
+    for a, b in zip(*out):
+        assert np.array_equal(a, b)

@@ -137,6 +137,7 @@ PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal 
 PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in long double */
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
+PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MX, const char what[]); /* MX = M X of the result */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis, const Mat P[], Mat X); /* X: columns of unit system M-norm */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis, PetscInt body, Mat Pb, Mat X); /* to one body only */
 PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); /* X <- (I - Phi Phi^T M) X, or (I - M Phi Phi^T) X if left */

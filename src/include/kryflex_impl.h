@@ -138,8 +138,11 @@ PETSC_INTERN PetscErrorCode KFDenseCreate(MPI_Comm, PetscInt nlocal, PetscInt N,
 PETSC_INTERN PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X); /* [A, B]: two tall dense Mats, same row layout */
 PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[]); /* A^T B replicated (A, B tall dense) */
 PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */
+PETSC_INTERN PetscErrorCode KFArrayTransposeMultGather(MPI_Comm, PetscInt nl, PetscInt p, const PetscScalar *A, PetscInt lda, PetscInt q, const PetscScalar *B, PetscInt ldb, PetscReal out[]); /* the same on local row blocks */
+PETSC_INTERN PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const PetscScalar *A, PetscInt lda, const PetscReal c[], PetscReal alpha, PetscScalar *X, PetscInt ldx);
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in long double */
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
+PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MX, const char what[]); /* MX = M X of the result */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis, const Mat P[], Mat X); /* X: columns of unit system M-norm */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis, PetscInt body, Mat Pb, Mat X); /* to one body only */
 PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); /* X <- (I - Phi Phi^T M) X, or (I - M Phi Phi^T) X if left */
@@ -162,5 +165,6 @@ PETSC_INTERN PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *, PetscInt *rb, Pe
 PETSC_INTERN PetscReal KFBodyRigidValue(const KFBodyData *, PetscInt node, PetscInt comp, PetscInt m);
 
 PETSC_EXTERN PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
+PETSC_EXTERN PetscLogEvent KF_EVENT_BODY_BASIS, KF_EVENT_BODY_REDUCE; /* nested in KF_EVENT_ORTHO */
 
 #endif

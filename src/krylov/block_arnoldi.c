@@ -1,77 +1,264 @@
 #include <kryflex/krylovimpl.h>
+#include <petscblaslapack.h>
 
-/* Copies the active columns [l, k) of a BV into a new dense Mat. */
-static PetscErrorCode KFBVColumnsToMat(BV V, PetscInt l, PetscInt k, Mat *X)
+/* A growing M-orthonormal basis: its columns in a BV and, beside them, M times each column (MV: local rows,
+   column-major, leading dimension nl), computed when the column was made, so that no column's product with M is
+   formed twice. */
+typedef struct {
+  BV           V;
+  PetscScalar *MV;
+  PetscInt     k, nl;
+} KFMBasis;
+
+/* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
+typedef struct {
+  KFSystem sys;
+  Mat      MPhi; /* NULL without rigid modes (clamped) */
+  PetscInt r;
+} KFRigidSpace;
+
+static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
 {
-  Mat      A;
-  PetscInt l0, k0;
+  PetscInt nl, m;
 
   PetscFunctionBegin;
-  PetscCall(BVGetActiveColumns(V, &l0, &k0));
-  PetscCall(BVSetActiveColumns(V, l, k));
-  PetscCall(BVGetMat(V, &A));
-  PetscCall(MatDuplicate(A, MAT_COPY_VALUES, X));
-  PetscCall(BVRestoreMat(V, &A));
-  PetscCall(BVSetActiveColumns(V, l0, k0));
+  PetscCall(BVGetSizes(V, &nl, NULL, &m));
+  mb->V  = V;
+  mb->k  = 0;
+  mb->nl = nl;
+  PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
   PetscFunctionReturn(0);
 }
 
-/* v <- v - Phi (Phi^T M v): the rigid content a column picks up from Gram-Schmidt's rounding (DESIGN.md: it creeps
-   back and grows with the number of moments) */
-static PetscErrorCode KFRemoveRigid(KFSystem sys, Vec v, Vec Mv, Vec c, Vec Pc)
+/* y = M x for p local columns x (nl x p, leading dimension nl): one sparse-times-dense product for the whole block
+   (several times faster per column than one MatMult per column) */
+static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x, PetscScalar *y)
 {
+  Mat                X, Y;
+  PetscInt           N, ldy;
+  const PetscScalar *py;
+
   PetscFunctionBegin;
-  PetscCall(MatMult(sys->Ms, v, Mv));
-  PetscCall(MatMultTranspose(sys->Phi, Mv, c));
-  PetscCall(MatMult(sys->Phi, c, Pc));
-  PetscCall(VecAXPY(v, -1.0, Pc));
+  PetscCall(MatGetSize(M, &N, NULL));
+  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)M), nl, PETSC_DECIDE, N, p, x, &X));
+  PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(MatDenseGetLDA(Y, &ldy));
+  PetscCall(MatDenseGetArrayRead(Y, &py));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&y[j * nl], &py[j * ldy], nl));
+  PetscCall(MatDenseRestoreArrayRead(Y, &py));
+  PetscCall(MatDestroy(&Y));
+  PetscCall(MatDestroy(&X));
   PetscFunctionReturn(0);
 }
 
-/* Appends the columns of W to V, each M-orthonormalized against all before it (Gram-Schmidt with refinement) and
-   kept M-orthogonal to the rigid modes (orthogonalize, remove the rigid content, orthogonalize again, so that neither
-   pass leaves rounding of the other behind); a column whose M-norm falls below tol times its norm before
-   orthogonalization is linearly dependent on the basis and is dropped (deflation). */
-static PetscErrorCode KFBVAppendDeflated(KFSystem sys, BV V, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *k, PetscInt *ndeflated)
+/* One classical Gram-Schmidt pass of the block w (nl x p, mw = M w) against the rigid modes and the basis columns:
+   the coefficients Phi^T M w and V^T M w come from mw, then w -= Phi c_r + V c_v, and mw with it when update is set
+   (from the kept products M Phi and M V: exact up to rounding of the small correction, so only worth it when the
+   coefficients are small, i.e. on the second pass). */
+static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool update)
 {
-  Vec Mv, c, Pc;
+  const PetscInt     r = rs->r, k = mb->k, nl = mb->nl;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  PetscReal         *c;
+  const PetscScalar *phi = NULL, *mphi = NULL, *v;
+  PetscInt           ldp = nl, ldmp = nl;
 
   PetscFunctionBegin;
-  PetscCall(MatCreateVecs(sys->Phi, &c, &Pc));
-  PetscCall(VecDuplicate(Pc, &Mv));
-  for (PetscInt j = j0; j < j1; j++) {
-    Vec       w;
-    PetscReal norm0, norm;
-    PetscBool lindep;
-    PetscCall(MatDenseGetColumnVecRead(W, j, &w));
-    PetscCall(BVInsertVec(V, *k, w));
-    PetscCall(MatDenseRestoreColumnVecRead(W, j, &w));
-    PetscCall(BVNormColumn(V, *k, NORM_2, &norm0));
-    if (norm0 == 0) {
+  if (!r && !k) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc1((r + k) * p + 1, &c));
+  PetscCall(BVGetArrayRead(mb->V, &v));
+  if (r) {
+    PetscCall(MatDenseGetLDA(rs->sys->Phi, &ldp));
+    PetscCall(MatDenseGetLDA(rs->MPhi, &ldmp));
+    PetscCall(MatDenseGetArrayRead(rs->sys->Phi, &phi));
+    PetscCall(MatDenseGetArrayRead(rs->MPhi, &mphi));
+  }
+  /* [Phi V]^T (M w) in one reduction: r rows for the rigid modes, then k for the basis */
+  {
+    PetscReal *loc;
+    PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
+    if (nl > 0 && p > 0) {
+      PetscBLASInt bn, bp, bld, bmw, bq;
+      PetscScalar  one = 1.0, zero = 0.0;
+      PetscCall(PetscBLASIntCast(nl, &bn));
+      PetscCall(PetscBLASIntCast(p, &bp));
+      PetscCall(PetscBLASIntCast(nl, &bmw));
+      PetscCall(PetscBLASIntCast(r + k, &bq));
+      if (r) {
+        PetscBLASInt br;
+        PetscCall(PetscBLASIntCast(r, &br));
+        PetscCall(PetscBLASIntCast(ldp, &bld));
+        /* rows 0..r-1 of the (r + k) x p result */
+        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &br, &bp, &bn, &one, phi, &bld, mw, &bmw, &zero, loc, &bq));
+      }
+      if (k) {
+        PetscBLASInt bk;
+        PetscCall(PetscBLASIntCast(k, &bk));
+        PetscCall(PetscBLASIntCast(nl, &bld));
+        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bk, &bp, &bn, &one, v, &bld, mw, &bmw, &zero, loc + r, &bq));
+      }
+    }
+    PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, comm));
+    PetscCall(PetscFree(loc));
+  }
+  /* w -= [Phi V] c, and mw -= [M Phi, M V] c: column j of c starts at c + j (r + k), rigid rows first */
+  if (nl > 0 && p > 0) {
+    PetscBLASInt bn, bp, bld, bw, bq;
+    PetscScalar  one = 1.0, mone = -1.0;
+    PetscCall(PetscBLASIntCast(nl, &bn));
+    PetscCall(PetscBLASIntCast(p, &bp));
+    PetscCall(PetscBLASIntCast(nl, &bw));
+    PetscCall(PetscBLASIntCast(r + k, &bq));
+    if (r) {
+      PetscBLASInt br;
+      PetscCall(PetscBLASIntCast(r, &br));
+      PetscCall(PetscBLASIntCast(ldp, &bld));
+      PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, phi, &bld, c, &bq, &one, w, &bw));
+      if (update) {
+        PetscCall(PetscBLASIntCast(ldmp, &bld));
+        PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, mphi, &bld, c, &bq, &one, mw, &bw));
+      }
+    }
+    if (k) {
+      PetscBLASInt bk;
+      PetscCall(PetscBLASIntCast(k, &bk));
+      PetscCall(PetscBLASIntCast(nl, &bld));
+      PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, v, &bld, c + r, &bq, &one, w, &bw));
+      if (update) PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, mb->MV, &bld, c + r, &bq, &one, mw, &bw));
+    }
+  }
+  if (r) {
+    PetscCall(MatDenseRestoreArrayRead(rs->sys->Phi, &phi));
+    PetscCall(MatDenseRestoreArrayRead(rs->MPhi, &mphi));
+  }
+  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  PetscCall(PetscFree(c));
+  PetscFunctionReturn(0);
+}
+
+/* the M-norms sqrt(w_j^T M w_j) of p local columns from their products; each local sum in long double: the columns
+   are normalized by these, and a plain running sum's rounding (~sqrt(n) eps) showed in |V^T M V - I| */
+static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const PetscScalar *w, const PetscScalar *mw, PetscReal nrm[])
+{
+  PetscFunctionBegin;
+  for (PetscInt j = 0; j < p; j++) {
+    long double d = 0;
+    for (PetscInt i = 0; i < nl; i++) d += (long double)PetscRealPart(w[i + j * nl]) * (long double)PetscRealPart(mw[i + j * nl]);
+    nrm[j] = (PetscReal)d;
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, nrm, (PetscMPIInt)p, MPIU_REAL, MPIU_SUM, comm));
+  for (PetscInt j = 0; j < p; j++) nrm[j] = PetscSqrtReal(PetscMax(nrm[j], 0));
+  PetscFunctionReturn(0);
+}
+
+/* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
+   it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
+   is dropped (deflation). MW, when given, is M W (the caller has it); otherwise it is formed here.
+
+   Block classical Gram-Schmidt, twice (DESIGN.md: rigid content creeps back through rounding, so the rigid modes are
+   projected out of every block together with the basis): pass 1 takes [Phi V]^T M W from the block's product, pass 2
+   the same from a fresh product of the projected block, which is what makes it a refinement (a product updated
+   through pass 1 would carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Then the block's
+   own columns, in order, by Gram-Schmidt on the (pass-2) products; a column that loses more than half of its norm there
+   gets a fresh product and one more pass against everything (DGKS's criterion), so that the near-dependent inputs of a
+   block stay as orthogonal as the rest. Two block products with M per append, whatever the basis size, instead of
+   several mat-vecs per column. */
+static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, Mat MW, PetscReal tol, PetscInt *ndeflated)
+{
+  const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  Mat                Ms   = rs->sys->Ms;
+  PetscScalar       *w, *mw;
+  const PetscScalar *src;
+  PetscInt           ld;
+  PetscReal         *nrm0;
+
+  PetscFunctionBegin;
+  if (p <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscMalloc3(nl * p + 1, &w, nl * p + 1, &mw, p, &nrm0));
+  PetscCall(MatDenseGetLDA(W, &ld));
+  PetscCall(MatDenseGetArrayRead(W, &src));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
+  PetscCall(MatDenseRestoreArrayRead(W, &src));
+  if (MW) {
+    PetscCall(MatDenseGetLDA(MW, &ld));
+    PetscCall(MatDenseGetArrayRead(MW, &src));
+    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&mw[j * nl], &src[(j0 + j) * ld], nl));
+    PetscCall(MatDenseRestoreArrayRead(MW, &src));
+  } else PetscCall(KFMProduct(Ms, nl, p, w, mw));
+  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_FALSE)); /* pass 1 */
+  PetscCall(KFMProduct(Ms, nl, p, w, mw));
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE)); /* pass 2 */
+  for (PetscInt j = 0; j < p; j++) {
+    PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
+    PetscReal    nb, na;
+
+    if (!(nrm0[j] > 0)) { /* a zero column: nothing to add */
       (*ndeflated)++;
       continue;
     }
-    PetscCall(BVSetActiveColumns(V, 0, *k + 1));
-    /* orthogonalize only: BVOrthonormalizeColumn would swap a dependent column for a random vector */
-    PetscCall(BVOrthogonalizeColumn(V, *k, NULL, &norm, &lindep));
-    if (!lindep && norm > tol * norm0 && sys->nrigid > 0) {
-      Vec v;
+    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &nb));
+    if (mb->k > k0) { /* the block's columns kept so far: the trailing columns of the basis */
+      const PetscInt kb = mb->k - k0;
+      PetscReal     *c;
+      const PetscScalar *vb;
 
-      PetscCall(BVGetColumn(V, *k, &v));
-      PetscCall(KFRemoveRigid(sys, v, Mv, c, Pc));
-      PetscCall(BVRestoreColumn(V, *k, &v));
-      PetscCall(BVOrthogonalizeColumn(V, *k, NULL, &norm, &lindep));
+      PetscCall(PetscMalloc1(kb, &c));
+      PetscCall(BVGetArrayRead(mb->V, &vb));
+      PetscCall(KFArrayTransposeMultGather(comm, nl, kb, vb + k0 * nl, nl, 1, mwj, nl, c));
+      PetscCall(KFArrayMultSmall(nl, kb, 1, vb + k0 * nl, nl, c, -1.0, wj, nl));
+      PetscCall(BVRestoreArrayRead(mb->V, &vb));
+      PetscCall(KFArrayMultSmall(nl, kb, 1, mb->MV + k0 * nl, nl, c, -1.0, mwj, nl));
+      PetscCall(PetscFree(c));
     }
-    if (lindep || norm <= tol * norm0) (*ndeflated)++;
-    else {
-      PetscCall(BVScaleColumn(V, *k, 1.0 / norm));
-      (*k)++;
+    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
+    if (na > tol * nrm0[j] && na < PETSC_SQRT2 / 2 * nb) { /* cancellation within the block: refine with a fresh product */
+      PetscCall(KFMProduct(Ms, nl, 1, wj, mwj));
+      PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE));
+      PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     }
+    if (!(na > tol * nrm0[j])) {
+      (*ndeflated)++;
+      continue;
+    }
+    PetscCall(BVGetArray(mb->V, &v));
+    for (PetscInt i = 0; i < nl; i++) {
+      v[i + mb->k * nl]      = wj[i] / na;
+      mb->MV[i + mb->k * nl] = mwj[i] / na;
+    }
+    PetscCall(BVRestoreArray(mb->V, &v));
+    mb->k++;
   }
-  PetscCall(BVSetActiveColumns(V, 0, *k));
-  PetscCall(VecDestroy(&Mv));
-  PetscCall(VecDestroy(&c));
-  PetscCall(VecDestroy(&Pc));
+  PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
+  PetscCall(PetscFree3(w, mw, nrm0));
+  PetscFunctionReturn(0);
+}
+
+/* the columns [k0, k) of the basis and of its M-product as two new dense Mats */
+static PetscErrorCode KFMBasisColumns(KFMBasis *mb, PetscInt k0, Mat *Q, Mat *MQ)
+{
+  const PetscScalar *v;
+  PetscScalar       *q, *mq;
+  PetscInt           N, ldq, ldm, p = mb->k - k0;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+
+  PetscFunctionBegin;
+  PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
+  PetscCall(KFDenseCreate(comm, mb->nl, N, p, Q));
+  PetscCall(KFDenseCreate(comm, mb->nl, N, p, MQ));
+  PetscCall(MatDenseGetLDA(*Q, &ldq));
+  PetscCall(MatDenseGetLDA(*MQ, &ldm));
+  PetscCall(BVGetArrayRead(mb->V, &v));
+  PetscCall(MatDenseGetArrayWrite(*Q, &q));
+  PetscCall(MatDenseGetArrayWrite(*MQ, &mq));
+  for (PetscInt j = 0; j < p; j++) {
+    PetscCall(PetscArraycpy(&q[j * ldq], &v[(k0 + j) * mb->nl], mb->nl));
+    PetscCall(PetscArraycpy(&mq[j * ldm], &mb->MV[(k0 + j) * mb->nl], mb->nl));
+  }
+  PetscCall(MatDenseRestoreArrayWrite(*MQ, &mq));
+  PetscCall(MatDenseRestoreArrayWrite(*Q, &q));
+  PetscCall(BVRestoreArrayRead(mb->V, &v));
   PetscFunctionReturn(0);
 }
 
@@ -141,9 +328,10 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min = 50000;
   PetscInt made[2] = {0, 0}, want[2] = {nin, nout}, nblocks = nin + nout;
   PetscBool done[2] = {PETSC_FALSE, PETSC_FALSE};
-  Mat      Prev[2] = {NULL, NULL};
+  Mat      Prev[2] = {NULL, NULL}; /* per chain: M times its last orthonormalized block, the next right-hand side */
   BV       V, chain[2] = {NULL, NULL};
-  PetscInt kc[2] = {0, 0};
+  KFMBasis     basis, mchain[2];
+  KFRigidSpace rs;
 
   PetscFunctionBegin;
   PetscCheck(nin >= 1 && nout >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the Krylov basis needs at least one input block (got %" PetscInt_FMT " input and %" PetscInt_FMT " output blocks)", nin, nout);
@@ -157,13 +345,17 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(BVCreate(s->comm, &V));
   PetscCall(BVSetSizes(V, s->nsys_local, s->nsys, PetscMax(maxcols, 1)));
   PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
-  /* classical Gram-Schmidt, refined when the norm drops (DGKS): as safe as always refining, half the work */
-  PetscCall(BVSetOrthogonalization(V, BV_ORTHOG_CGS, BV_ORTHOG_REFINE_IFNEEDED, PETSC_DEFAULT, BV_ORTHOG_BLOCK_GS));
   PetscCall(BVSetFromOptions(V));
+  PetscCall(KFMBasisCreate(V, &basis));
   for (int c = 0; c < 2; c++) {
     PetscCall(BVDuplicateResize(V, PetscMax(c ? t * nout : a * nin, 1), &chain[c]));
     PetscCall(BVSetActiveColumns(chain[c], 0, 0));
+    PetscCall(KFMBasisCreate(chain[c], &mchain[c]));
   }
+  rs.sys  = sys;
+  rs.MPhi = NULL;
+  PetscCall(MatGetSize(sys->Phi, NULL, &rs.r));
+  if (rs.r) PetscCall(MatMatMult(sys->Ms, sys->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &rs.MPhi));
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
@@ -183,7 +375,8 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
       PetscCall(KFDampedChainNext_Private(solver, &dch, sys->G, tol, &U));
       if (U) {
         PetscCall(MatGetSize(U, NULL, &pu));
-        PetscCall(KFBVAppendDeflated(sys, V, U, 0, pu, tol, &k, &ndefl));
+        PetscCall(KFMBasisAppend(&rs, &basis, U, 0, pu, NULL, tol, &ndefl));
+        k = basis.k;
         PetscCall(MatDestroy(&U));
       } else done[0] = PETSC_TRUE;
       if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov damped input block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", made[0], want[0], k - k0d, k));
@@ -203,9 +396,9 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
       for (int q = 0; q < nsrc; q++) {
         const int c = src[q];
         if (!Prev[c]) Bs[q] = c ? sys->Ht : sys->G;
-        else {
-          PetscCall(MatMatMult(sys->Ms, Prev[c], MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Bs[q]));
-          PetscCall(MatDestroy(&Prev[c]));
+        else { /* M times the chain's last block: kept from its orthonormalization, no product here */
+          Bs[q]    = Prev[c];
+          Prev[c]  = NULL;
           fresh[q] = PETSC_TRUE;
         }
         PetscCall(MatGetSize(Bs[q], NULL, &p));
@@ -227,15 +420,20 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
            from one the other chain has been taken out of, which would leave its Krylov space); the basis collects
            both */
         {
-          PetscInt kc0 = kc[source], dummy = 0;
+          KFMBasis *mc  = &mchain[source];
+          PetscInt  kc0 = mc->k, dummy = 0;
 
-          PetscCall(KFBVAppendDeflated(sys, chain[source], W, off[q], off[q + 1], tol, &kc[source], &dummy));
-          if (kc[source] > kc0) {
-            PetscCall(KFBVColumnsToMat(chain[source], kc0, kc[source], &Prev[source]));
-            PetscCall(KFBVAppendDeflated(sys, V, Prev[source], 0, kc[source] - kc0, tol, &k, &ndefl));
+          PetscCall(KFMBasisAppend(&rs, mc, W, off[q], off[q + 1], NULL, tol, &dummy));
+          if (mc->k > kc0) { /* the chain's new columns join the basis with their products M Q (no product of its own for pass 1) */
+            Mat Q;
+
+            PetscCall(KFMBasisColumns(mc, kc0, &Q, &Prev[source]));
+            PetscCall(KFMBasisAppend(&rs, &basis, Q, 0, mc->k - kc0, Prev[source], tol, &ndefl));
+            PetscCall(MatDestroy(&Q));
+            k = basis.k;
           }
           ndefl += dummy;
-          if (kc[source] == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
+          if (mc->k == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
         }
         PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
         if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", made[source], want[source], k - k0, off[q + 1] - off[q], k));
@@ -256,6 +454,10 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(MatDestroy(&Prev[1]));
   PetscCall(BVDestroy(&chain[0]));
   PetscCall(BVDestroy(&chain[1]));
+  PetscCall(PetscFree(mchain[0].MV));
+  PetscCall(PetscFree(mchain[1].MV));
+  PetscCall(PetscFree(basis.MV));
+  PetscCall(MatDestroy(&rs.MPhi));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality));

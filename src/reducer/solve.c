@@ -778,6 +778,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", setup_s));
   for (PetscInt i = 0; i < nc; i++) PetscCall(KFVisitDestroy_Private(r, &visits[i]));
+  PetscCall(KFCandidateCacheReset_Private(r)); /* its body bases belong to these visits */
   PetscCall(PetscFree(visits));
   PetscCall(PetscFree(configs));
   PetscFunctionReturn(0);

@@ -154,36 +154,79 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The last candidate's finished body basis, kept for the next model with the same vectors: the family and the
+   settings recorded differ, the body bases do not. The estimator's richest model (every basis whole) and the search's
+   first candidate (the same at one expansion angle), and the search's last candidate and the model made of it, are
+   such pairs: each is a body basis (products with M and K, Gram-Schmidt, K Psi in extended precision) not made twice.
+   One entry: a body basis holds n_b x v per body. */
+typedef struct {
+  KFCandidate key;
+  KFBodyBasis bb;
+} KFCandidateCache;
+
+/* the same vectors: the same visits, moments, kept clusters (per body when shared); not the family */
+static PetscBool KFSameVectors(const KFCandidate *a, const KFCandidate *b)
+{
+  if (a->c != b->c || a->kept != b->kept || a->nexp != b->nexp || a->nbody != b->nbody) return PETSC_FALSE;
+  for (PetscInt e = 0; e < a->nexp; e++)
+    if (a->exp[e] != b->exp[e]) return PETSC_FALSE;
+  for (PetscInt k = 0; k < a->nbody; k++)
+    if (a->bkept[k] != b->bkept[k]) return PETSC_FALSE;
+  return PETSC_TRUE;
+}
+
+PetscErrorCode KFCandidateCacheReset_Private(KFReducer r)
+{
+  KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
+
+  PetscFunctionBegin;
+  if (!cc) PetscFunctionReturn(0);
+  PetscCall(KFBodyBasisDestroy(&cc->bb));
+  PetscCall(PetscFree(r->candcache));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFCandidate *cand, KFReducedModel *model)
 {
-  KFBodyBasis bb;
-  PetscInt    nrev, nrev1, nb, maxdofs = 0;
-  PetscReal  *angles;
-  PetscBool   keep;
+  KFBodyBasis       bb;
+  PetscInt          nrev, nrev1, nb, maxdofs = 0;
+  PetscReal        *angles;
+  PetscBool         keep;
+  KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
   nrev1 = PetscMax(nrev, 1);
-  PetscCall(KFBodyBasisCreate(r->scene, &bb));
   PetscCall(PetscMalloc1(cand->nexp * nrev1, &angles));
-  for (PetscInt e = 0; e < cand->nexp; e++) {
-    KFVisit *v = &visits[cand->exp[e]];
-    Mat      X;
-
-    PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
-    if (!cand->nbody) {
-      PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
-      PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
-      PetscCall(MatDestroy(&X));
-    } else
-      for (PetscInt b = 0; b < nb; b++) {
-        PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
-        PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
-        PetscCall(MatDestroy(&X));
-      }
-    PetscCall(PetscArraycpy(&angles[e * nrev1], v->angles, nrev1));
+  for (PetscInt e = 0; e < cand->nexp; e++) PetscCall(PetscArraycpy(&angles[e * nrev1], visits[cand->exp[e]].angles, nrev1));
+  if (!cc) {
+    PetscCall(PetscNew(&cc));
+    r->candcache = cc;
   }
-  PetscCall(KFBodyBasisFinish(bb, r->body_tol));
+  if (!cc->bb || !KFSameVectors(&cc->key, cand)) { /* not the vectors of the last model: a body basis of its own */
+    PetscCall(KFBodyBasisDestroy(&cc->bb));
+    PetscCall(KFBodyBasisCreate(r->scene, &bb));
+    for (PetscInt e = 0; e < cand->nexp; e++) {
+      KFVisit *v = &visits[cand->exp[e]];
+      Mat      X;
+
+      PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
+      if (!cand->nbody) {
+        PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
+        PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
+        PetscCall(MatDestroy(&X));
+      } else
+        for (PetscInt b = 0; b < nb; b++) {
+          PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
+          PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
+          PetscCall(MatDestroy(&X));
+        }
+    }
+    PetscCall(KFBodyBasisFinish(bb, r->body_tol));
+    cc->key = *cand;
+    cc->bb  = bb;
+  }
+  bb = cc->bb;
   for (PetscInt b = 0; b < nb; b++) {
     PetscInt nd;
 
@@ -193,7 +236,6 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, cand->nexp, angles, keep, model));
   PetscCall(KFReducerRecordSettings_Private(r, *model, (KFReducerMethod)cand->family, cand->c, cand->nexp, angles));
-  PetscCall(KFBodyBasisDestroy(&bb));
-  PetscCall(PetscFree(angles));
+  PetscCall(PetscFree(angles)); /* bb stays in the cache */
   PetscFunctionReturn(0);
 }

@@ -270,22 +270,37 @@ PetscErrorCode KFBodyAdmissibleRigid(KFBodyData *B, PetscInt *rb, PetscReal Z[36
 /* M-orthonormalizes the columns (Cholesky of the small Gram matrix, twice for accuracy) */
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[])
 {
-  PetscInt     r, nl, lda;
+  PetscFunctionBegin;
+  PetscCall(KFMOrthonormalizeProduct(M, X, 2, NULL, what));
+  PetscFunctionReturn(0);
+}
+
+/* The same with the given number of passes, each with a fresh product M X (one pass is enough for columns that are
+   M-orthonormal to a few digits already: the body basis after its Gram-Schmidt). MX, if asked for, is M times the
+   result: the last pass's product transformed as X was (X <- X L^-T, MX <- MX L^-T), so that the caller needs no
+   further product with M (its error is rounding times the condition of L, ~1 after the first pass). */
+PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MXout, const char what[])
+{
+  PetscInt     r, nl, lda, ldm;
   PetscReal   *Gm;
-  PetscScalar *x;
-  Mat          MX;
+  PetscScalar *x, *mx;
+  Mat          MX = NULL;
   MPI_Comm     comm;
 
   PetscFunctionBegin;
   PetscCall(PetscObjectGetComm((PetscObject)X, &comm));
   PetscCall(MatGetSize(X, NULL, &r));
   PetscCall(MatGetLocalSize(X, &nl, NULL));
-  if (!r) PetscFunctionReturn(0);
+  if (MXout) *MXout = NULL;
+  if (!r) {
+    if (MXout) PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MXout));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscMalloc1(r * r, &Gm));
-  for (int pass = 0; pass < 2; pass++) {
+  for (PetscInt pass = 0; pass < passes; pass++) {
+    PetscCall(MatDestroy(&MX));
     PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
     PetscCall(KFMatTransposeMatMultGather(X, MX, Gm));
-    PetscCall(MatDestroy(&MX));
     /* Cholesky Gm = L L^T, then X <- X L^-T */
     for (PetscInt j = 0; j < r; j++) {
       PetscReal d = Gm[j + j * r];
@@ -299,16 +314,26 @@ PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[])
       }
     }
     PetscCall(MatDenseGetLDA(X, &lda));
+    PetscCall(MatDenseGetLDA(MX, &ldm));
     PetscCall(MatDenseGetArray(X, &x));
-    for (PetscInt i = 0; i < nl; i++)
-      for (PetscInt j = 0; j < r; j++) {
-        PetscReal v = PetscRealPart(x[i + j * lda]);
-        for (PetscInt k = 0; k < j; k++) v -= Gm[j + k * r] * PetscRealPart(x[i + k * lda]);
-        x[i + j * lda] = v / Gm[j + j * r];
-      }
+    PetscCall(MatDenseGetArray(MX, &mx));
+    if (nl > 0) { /* X <- X L^-T, and MX with it (the last pass's product is then M X of the result) */
+      PetscBLASInt bn, br, bla, blm, bld;
+      PetscScalar  one = 1.0;
+      PetscCall(PetscBLASIntCast(nl, &bn));
+      PetscCall(PetscBLASIntCast(r, &br));
+      PetscCall(PetscBLASIntCast(lda, &bla));
+      PetscCall(PetscBLASIntCast(ldm, &blm));
+      bld = br;
+      PetscCallBLAS("BLAStrsm", BLAStrsm_("R", "L", "T", "N", &bn, &br, &one, Gm, &bld, x, &bla));
+      if (MXout && pass == passes - 1) PetscCallBLAS("BLAStrsm", BLAStrsm_("R", "L", "T", "N", &bn, &br, &one, Gm, &bld, mx, &blm));
+    }
+    PetscCall(MatDenseRestoreArray(MX, &mx));
     PetscCall(MatDenseRestoreArray(X, &x));
   }
   PetscCall(PetscFree(Gm));
+  if (MXout) *MXout = MX;
+  else PetscCall(MatDestroy(&MX));
   PetscFunctionReturn(0);
 }
 

@@ -34,21 +34,13 @@ PetscErrorCode KFDenseGather(Mat A, PetscReal out[])
   PetscFunctionReturn(0);
 }
 
-/* A^T B for tall dense A (N x p) and B (N x q) with the same row layout: local products (BLAS) summed over ranks. */
-PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
+/* A^T B for local row blocks A (nl x p, leading dimension lda) and B (nl x q): local products (BLAS) summed over the
+   ranks of comm into out (p x q, column-major, replicated) */
+PetscErrorCode KFArrayTransposeMultGather(MPI_Comm comm, PetscInt nl, PetscInt p, const PetscScalar *a, PetscInt lda, PetscInt q, const PetscScalar *b, PetscInt ldb, PetscReal out[])
 {
-  PetscInt           nl, p, q, lda, ldb;
-  const PetscScalar *a, *b;
-  PetscReal         *buf;
-  MPI_Comm           comm;
+  PetscReal *buf;
 
   PetscFunctionBegin;
-  PetscCall(PetscObjectGetComm((PetscObject)A, &comm));
-  PetscCall(MatGetLocalSize(A, &nl, NULL));
-  PetscCall(MatGetSize(A, NULL, &p));
-  PetscCall(MatGetSize(B, NULL, &q));
-  PetscCall(MatDenseGetLDA(A, &lda));
-  PetscCall(MatDenseGetLDA(B, &ldb));
   PetscCall(PetscCalloc1(p * q + 1, &buf));
   if (nl > 0 && p > 0 && q > 0) {
     PetscBLASInt bp, bq, bn, bla, blb;
@@ -58,14 +50,50 @@ PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
     PetscCall(PetscBLASIntCast(nl, &bn));
     PetscCall(PetscBLASIntCast(lda, &bla));
     PetscCall(PetscBLASIntCast(ldb, &blb));
-    PetscCall(MatDenseGetArrayRead(A, &a));
-    PetscCall(MatDenseGetArrayRead(B, &b));
     PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bp, &bq, &bn, &one, a, &bla, b, &blb, &zero, buf, &bp));
-    PetscCall(MatDenseRestoreArrayRead(A, &a));
-    PetscCall(MatDenseRestoreArrayRead(B, &b));
   }
   PetscCall(MPIU_Allreduce(buf, out, (PetscMPIInt)(p * q), MPIU_REAL, MPIU_SUM, comm));
   PetscCall(PetscFree(buf));
+  PetscFunctionReturn(0);
+}
+
+/* X += alpha A c for local row blocks A (nl x r, leading dimension lda), X (nl x p) and a small replicated c (r x p,
+   column-major) */
+PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const PetscScalar *a, PetscInt lda, const PetscReal c[], PetscReal alpha, PetscScalar *x, PetscInt ldx)
+{
+  PetscBLASInt bn, br, bp, bla, blx;
+  PetscScalar  one = 1.0, al = alpha;
+
+  PetscFunctionBegin;
+  if (nl == 0 || r == 0 || p == 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(nl, &bn));
+  PetscCall(PetscBLASIntCast(r, &br));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &al, a, &bla, c, &br, &one, x, &blx));
+  PetscFunctionReturn(0);
+}
+
+/* A^T B for tall dense A (N x p) and B (N x q) with the same row layout: local products (BLAS) summed over ranks. */
+PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
+{
+  PetscInt           nl, p, q, lda, ldb;
+  const PetscScalar *a, *b;
+  MPI_Comm           comm;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectGetComm((PetscObject)A, &comm));
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatGetSize(A, NULL, &p));
+  PetscCall(MatGetSize(B, NULL, &q));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(B, &ldb));
+  PetscCall(MatDenseGetArrayRead(A, &a));
+  PetscCall(MatDenseGetArrayRead(B, &b));
+  PetscCall(KFArrayTransposeMultGather(comm, nl, p, a, lda, q, b, ldb, out));
+  PetscCall(MatDenseRestoreArrayRead(A, &a));
+  PetscCall(MatDenseRestoreArrayRead(B, &b));
   PetscFunctionReturn(0);
 }
 
@@ -83,16 +111,7 @@ PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c
   PetscCall(MatDenseGetLDA(X, &ldx));
   PetscCall(MatDenseGetArrayRead(A, &a));
   PetscCall(MatDenseGetArray(X, &x));
-  {
-    PetscBLASInt bn, br, bp, bla, blx;
-    PetscScalar  one = 1.0, al = alpha;
-    PetscCall(PetscBLASIntCast(nl, &bn));
-    PetscCall(PetscBLASIntCast(r, &br));
-    PetscCall(PetscBLASIntCast(p, &bp));
-    PetscCall(PetscBLASIntCast(lda, &bla));
-    PetscCall(PetscBLASIntCast(ldx, &blx));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &al, a, &bla, c, &br, &one, x, &blx));
-  }
+  PetscCall(KFArrayMultSmall(nl, r, p, a, lda, c, alpha, x, ldx));
   PetscCall(MatDenseRestoreArrayRead(A, &a));
   PetscCall(MatDenseRestoreArray(X, &x));
   PetscFunctionReturn(0);

@@ -2,6 +2,7 @@
 #include <stdarg.h>
 
 PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
+PetscLogEvent KF_EVENT_BODY_BASIS, KF_EVENT_BODY_REDUCE;
 static PetscBool     kf_initialized = PETSC_FALSE;
 static PetscLogDouble kf_t0;
 
@@ -34,6 +35,10 @@ PetscErrorCode KFInitialize(void)
   PetscCall(PetscLogEventRegister("KFSolve", classid, &KF_EVENT_SOLVE));
   PetscCall(PetscLogEventRegister("KFOrthogonalize", classid, &KF_EVENT_ORTHO));
   PetscCall(PetscLogEventRegister("KFProject", classid, &KF_EVENT_PROJECT));
+  /* inside KFOrthogonalize: the body bases (KFBodyBasisFinish), and of them the reduced matrices (K Psi and the
+     projections); the rest of KFOrthogonalize is the Krylov basis */
+  PetscCall(PetscLogEventRegister("KFBodyBasis", classid, &KF_EVENT_BODY_BASIS));
+  PetscCall(PetscLogEventRegister("KFBodyReduce", classid, &KF_EVENT_BODY_REDUCE));
   PetscCall(PetscLogEventRegister("KFMoments", classid, &KF_EVENT_MOMENTS));
   PetscCall(PetscLogEventRegister("KFVerify", classid, &KF_EVENT_VERIFY));
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "kryflex progress lines", "KFProgress");

@@ -52,6 +52,7 @@ typedef struct {
 struct _p_KFReducer {
   PETSCHEADER(struct _KFReducerOps);
   void     *data; /* the implementation's */
+  void     *candcache; /* the last candidate's finished body basis (visit.c), during a search only */
   KFScene   scene;
   PetscBool setupcalled, solved;
 
@@ -154,6 +155,7 @@ typedef struct {
   PetscBool complete;   /* every evaluation point was measured */
 } KFCandidate;
 PETSC_INTERN PetscErrorCode KFCandidateModel_Private(KFReducer, KFVisit visits[], const KFCandidate *, KFReducedModel *);
+PETSC_INTERN PetscErrorCode KFCandidateCacheReset_Private(KFReducer);
 
 /* a configuration where models are measured: an angle of interest or a midpoint, with its reference response */
 typedef struct _KFEvalPoint {

@@ -115,7 +115,7 @@ def split(total_dofs):
     aspect span / width. Returns (bus_dofs, boom_segments, (nx, ny))."""
     total_dofs = int(total_dofs)
     if total_dofs < 1000:
-        raise ValueError("write_panel_scene: total_dofs %d is too small: give at least 1000" % total_dofs)
+        raise ValueError("--dofs %d is too small for a bus, two wings and a boom: give at least 1000" % total_dofs)
     bus = int(min(60000, max(300, 0.03 * total_dofs)))
     nseg = max(8, int(0.03 * total_dofs / 24))
     panel_nodes = (total_dofs - bus - 24 * (nseg + 1)) / 12.0
@@ -134,9 +134,9 @@ def write_panel_scene(out_dir, total_dofs, seed=0, fmt="auto", nangles=2):
     """
     import yaml
 
+    bus_dofs, nseg, (nx, ny) = split(total_dofs)     # checks total_dofs before anything is written
     rng = np.random.default_rng(seed)
     os.makedirs(out_dir, exist_ok=True)
-    bus_dofs, nseg, (nx, ny) = split(total_dofs)
     bus = frames.random_frame_body(bus_dofs, rng, spacing=BUS_SIDE / max(1.0, (bus_dofs / 6 / 2.5) ** (1 / 3)))
     bus.xyz -= bus.xyz.mean(axis=0)
     wing = panel_body(nx, ny)
@@ -231,6 +231,12 @@ def main():
                     help="matrix files; auto = .mtx up to %d dofs per body, PETSc binary above" % frames.MTX_MAX_DOFS)
     ap.add_argument("--out", required=True, help="output directory")
     args = ap.parse_args()
+    if args.angles < 1:
+        ap.error("--angles %d: give at least 1 configuration" % args.angles)
+    try:
+        split(args.dofs)
+    except ValueError as e:
+        ap.error(str(e))          # exit 2, one line, before anything is written
     print(write_panel_scene(args.out, args.dofs, args.seed, args.format, args.angles))
 
 

@@ -211,7 +211,7 @@ def write_panel_scene(out_dir, total_dofs, seed=0, fmt="auto", nangles=2):
         "band": [0.01, BAND_TOP_HZ],
         "damping": 0.005,
         "accuracy": 0.05,
-        "reduction": {"moments": "auto", "moments_max": 200, "importance": "h2", "keep_threshold": 0.05},
+        "reduction": {"moments": "auto", "moments_max": 100, "importance": "h2", "keep_threshold": 0.05},
     }
     path = os.path.join(out_dir, "scene.yaml")
     with open(path, "w") as f:

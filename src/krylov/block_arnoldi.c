@@ -355,7 +355,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   rs.sys  = sys;
   rs.MPhi = NULL;
   PetscCall(MatGetSize(sys->Phi, NULL, &rs.r));
-  if (rs.r) PetscCall(MatMatMult(sys->Ms, sys->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &rs.MPhi));
+  PetscCall(KFSystemGetMPhi(sys, &rs.MPhi)); /* the system's own: no product here */
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
@@ -457,7 +457,6 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(PetscFree(mchain[0].MV));
   PetscCall(PetscFree(mchain[1].MV));
   PetscCall(PetscFree(basis.MV));
-  PetscCall(MatDestroy(&rs.MPhi));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality));

@@ -484,16 +484,30 @@ PetscErrorCode KFSystemGetRigidModes(KFSystem y, Mat *Phi, PetscReal *residual)
    Both go through M Phi, computed once per set of rigid modes (M symmetric: Phi^T M X = (M Phi)^T X): every block
    solve projects three times, and a sparse product with M per projection cost more than the rest of the solve's
    glue at 200k dofs. */
-PetscErrorCode KFProjectFlexible(KFSystem y, Mat X, PetscBool left)
+/* M Phi, formed once per set of rigid modes (NULL without rigid modes) and kept on the system for every projection and
+   the Krylov basis' Gram-Schmidt */
+PetscErrorCode KFSystemGetMPhi(KFSystem y, Mat *MPhi)
 {
-  PetscInt   r, p;
-  PetscReal *c;
+  PetscInt r;
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(y));
   PetscCall(MatGetSize(y->Phi, NULL, &r));
-  if (!r) PetscFunctionReturn(0); /* clamped: every motion is flexible */
-  if (!y->MPhi) PetscCall(MatMatMult(y->Ms, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &y->MPhi));
+  if (r && !y->MPhi) PetscCall(MatMatMult(y->Ms, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &y->MPhi));
+  *MPhi = r ? y->MPhi : NULL;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFProjectFlexible(KFSystem y, Mat X, PetscBool left)
+{
+  Mat        MPhi;
+  PetscInt   r, p;
+  PetscReal *c;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemGetMPhi(y, &MPhi));
+  if (!MPhi) PetscFunctionReturn(0); /* clamped: every motion is flexible */
+  PetscCall(MatGetSize(y->Phi, NULL, &r));
   PetscCall(MatGetSize(X, NULL, &p));
   PetscCall(PetscMalloc1(r * p, &c));
   if (!left) {

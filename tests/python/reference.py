@@ -279,3 +279,21 @@ def modal_frf(Ms, Ks, Gs, Hs, omegas, zeta, rtol=RIGID_RTOL):
         d = lam - w**2 + 2j * zeta * np.sqrt(lam) * w
         out.append((hp / d) @ pg)
     return np.array(out)
+
+
+def petsc_matrix(D, dense=False):
+    """The dense array D as a distributed PETSc matrix (AIJ holding D's nonzeros only, or dense), each rank setting its
+    own rows: the tests' way to hand a small hand-made body to the library."""
+    from petsc4py import PETSc
+    n = D.shape[0]
+    if dense:
+        m = PETSc.Mat().createDense([n, n])
+        m.setUp()
+    else:
+        m = PETSc.Mat().createAIJ([n, n], nnz=n)
+    r0, r1 = m.getOwnershipRange()
+    for i in range(r0, r1):
+        cols = np.nonzero(D[i])[0].astype(PETSc.IntType)
+        m.setValues([i], cols, D[i, cols])
+    m.assemble()
+    return m

@@ -9,9 +9,9 @@ system; every diagonal entry is stored (a joint's free rotation has no row of it
 """
 import numpy as np
 import pytest
-from petsc4py import PETSc
 
 from kryflex import _core
+from reference import petsc_matrix
 
 NODES = {"root": [1, 2], "child": [1, 2, 3], "grandchild": [1, 2]}
 
@@ -24,21 +24,6 @@ def spd(n, seed):
     return S
 
 
-def petsc(D, dense):
-    n = D.shape[0]
-    if dense:
-        m = PETSc.Mat().createDense([n, n])
-        m.setUp()
-    else:
-        m = PETSc.Mat().createAIJ([n, n], nnz=n)
-    r0, r1 = m.getOwnershipRange()
-    for i in range(r0, r1):
-        cols = np.nonzero(D[i])[0].astype(PETSc.IntType)
-        m.setValues([i], cols, D[i, cols])
-    m.assemble()
-    return m
-
-
 def chain(dense):
     s = _core.CScene()
     mats = {}
@@ -47,7 +32,7 @@ def chain(dense):
         M, K = spd(n, 10 + k), spd(n, 20 + k)
         mats[name] = (M, K)
         xyz = np.arange(3.0 * len(ids)).reshape(-1, 3) + k
-        s.add_body(name, petsc(M, dense), petsc(K, dense), ids, xyz, [6] * len(ids))
+        s.add_body(name, petsc_matrix(M, dense), petsc_matrix(K, dense), ids, xyz, [6] * len(ids))
     s.add_interface(0, "hub", 2)
     s.add_interface(1, "hub", 1)
     s.add_interface(1, "arm", 1)        # the grandchild hangs on the child's tied node

@@ -1,7 +1,10 @@
 #include <kryflex_impl.h>
 
 /* The paper's recurrence (eq. 9) without orthogonalization: kept only to show how fast its vectors lose
-   independence (the condition number of their M-Gram matrix). */
+   independence (the condition number of their M-Gram matrix). Each column is scaled to unit 2-norm as it is made: the
+   raw vectors shrink or grow like omega_1^(-2k), which overflows or underflows a double after a few hundred steps on a
+   structure whose first mode is far from 1 rad/s, and a column's scale changes neither the span nor (columns are
+   made unit below anyway) the Gram matrix' conditioning. */
 PetscErrorCode KFKrylovRawBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond)
 {
   KFSystem   sys = solver->sys;
@@ -16,22 +19,27 @@ PetscErrorCode KFKrylovRawBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout
   for (int source = 0; source < 2; source++) {
     Mat B = source ? sys->Ht : sys->G, W;
     for (PetscInt blk = 0; blk < (source ? nout : nin); blk++) {
-      const PetscScalar *w;
-      PetscScalar       *p;
-      PetscInt           nl, q;
+      PetscScalar *w, *p;
+      PetscReal   *norms;
+      PetscInt     nl, q;
       PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
       PetscCall(KFFlexSolverApply(solver, B, W));
       if (blk > 0) PetscCall(MatDestroy(&B));
       PetscCall(MatGetLocalSize(W, &nl, NULL));
       PetscCall(MatGetSize(W, NULL, &q));
+      PetscCall(PetscMalloc1(q, &norms));
+      PetscCall(MatGetColumnNorms(W, NORM_2, norms));
       PetscCall(MatDenseGetLDA(*Praw, &lda));
       PetscCall(MatDenseGetLDA(W, &ldw));
-      PetscCall(MatDenseGetArrayRead(W, &w));
+      PetscCall(MatDenseGetArray(W, &w));
       PetscCall(MatDenseGetArray(*Praw, &p));
-      for (PetscInt j = 0; j < q; j++)
-        for (PetscInt i = 0; i < nl; i++) p[i + (col + j) * lda] = w[i + j * ldw];
+      for (PetscInt j = 0; j < q; j++) {
+        PetscReal scale = norms[j] > 0 ? 1.0 / norms[j] : 1.0; /* a zero column (an input K+ does not see) stays zero */
+        for (PetscInt i = 0; i < nl; i++) p[i + (col + j) * lda] = w[i + j * ldw] *= scale;
+      }
       PetscCall(MatDenseRestoreArray(*Praw, &p));
-      PetscCall(MatDenseRestoreArrayRead(W, &w));
+      PetscCall(MatDenseRestoreArray(W, &w));
+      PetscCall(PetscFree(norms));
       col += q;
       PetscCall(MatMatMult(sys->Ms, W, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &B)); /* next: K+ M x_k */
       PetscCall(MatDestroy(&W));

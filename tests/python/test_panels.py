@@ -93,6 +93,24 @@ def test_reduced_against_dense_reference(small):
     assert errors["krylov10"] > 1e-2
 
 
+def test_most_moments_raw_recurrence_does_not_overflow(small):
+    """200 moments, the most the scene allows: the raw recurrence behind the `gram_condition_raw` diagnostic grows
+    like omega_1^(-2k) and overflowed a double near 190 moments on this scene ("KFDenseEig: stiffness matrix K has an
+    Inf or NaN entry", exit 3). Now the reduction runs, the diagnostic says the raw vectors lost independence long
+    ago (condition at least 1e12, finite), and the orthogonalized basis' model still matches the dense response."""
+    path, dense, system = small
+    scene = kryflex.load_scene(path)
+    scene.configurations = [ANGLES]
+    scene.reduction.update(keep_threshold=1e-9, search=False, reduction_angle=ANGLES, method="single-angle",
+                           output_blocks=1, moments=200)
+    reducer = kryflex.Reducer(scene, quiet=True)
+    model = reducer.reduce().model
+    cond = float(np.ravel(reducer.result(0, "gram_condition_raw"))[0])
+    assert np.isfinite(cond) and cond >= 1e12, cond
+    freqs = np.ravel(reducer.result(0, "frf_frequencies_hz"))
+    assert pair_error(model.at(ANGLES).frf(freqs), dense_frf(path, system, freqs)) < 1e-3
+
+
 def test_two_ranks_agree(small, tmp_path):
     """kryflex reduce on 1 and 2 ranks: the same reduced FRF, to 1e-6 of each pair's peak (1.8e-8 measured: 200
     Krylov vectors carry the ranks' different round-off), far below the model's own error (8e-6 against dense)."""

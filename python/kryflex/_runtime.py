@@ -9,6 +9,7 @@ alive by a reference cycle on one rank only (a frame held by a plotting library,
 that rank when PETSc's collective clean-up runs on the others, and the ranks would wait for each other forever.
 """
 import atexit
+import contextlib
 import gc
 import sys
 
@@ -61,3 +62,18 @@ def _keep_python_signals():
     PETSc.Options().setValue("no_signal_handler", True)   # popped once: a second init must not pop another
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def quiet_progress(quiet):
+    """-kf_quiet set for the duration of the block when quiet is true (the C progress lines read it at each line)."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    added = bool(quiet) and not opts.getBool("kf_quiet", False)
+    if added:
+        opts.setValue("kf_quiet", True)
+    try:
+        yield
+    finally:
+        if added:
+            opts.delValue("kf_quiet")

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import _core
 from .api import ReducedModel
+from ._runtime import quiet_progress
 
 
 class Reduction:
@@ -58,21 +59,6 @@ def kf_options(options):
                 opts.delValue(name)
             else:
                 opts.setValue(name, value)
-
-
-@contextlib.contextmanager
-def quiet_progress(quiet):
-    """-kf_quiet set for the duration of the block when quiet is true (the C progress lines read it at each line)."""
-    from petsc4py import PETSc
-    opts = PETSc.Options()
-    added = bool(quiet) and not opts.getBool("kf_quiet", False)
-    if added:
-        opts.setValue("kf_quiet", True)
-    try:
-        yield
-    finally:
-        if added:
-            opts.delValue("kf_quiet")
 
 
 def _save_maps(value):

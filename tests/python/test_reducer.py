@@ -357,14 +357,16 @@ def test_quiet_silences_the_progress_lines_for_the_call_only(scenes, capfd):
     if was:
         opts.delValue("kf_quiet")
     try:
-        scene = kryflex.load_scene(scenes["frames"])
         capfd.readouterr()
+        scene = kryflex.load_scene(scenes["frames"], quiet=True)      # loading the body files: silent too
         kryflex.Reducer(scene, quiet=True).reduce()
         assert "[kryflex" not in capfd.readouterr().out
         assert not opts.hasName("kf_quiet")
         scene.verify["full_order"] = False
         kryflex.Reducer(scene).reduce()
         assert "[kryflex" in capfd.readouterr().out
+        kryflex.load_scene(scenes["frames"])
+        assert "loaded stiffness of body" in capfd.readouterr().out
     finally:
         if was:
             opts.setValue("kf_quiet", True)

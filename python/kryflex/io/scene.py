@@ -13,6 +13,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from .. import _core
+from .._runtime import quiet_progress
 from . import scene_schema as schema
 from . import yaml_load
 from .scene_schema import (DOF_NAMES, TOP_KEYS, BODY_KEYS, JOINT_KEYS, TERM_KEYS,  # noqa: F401 - the scene's keys
@@ -444,16 +445,18 @@ class Scene:
         return "_".join("%g" % a for a in config) if config else "fixed"
 
 
-def scene_from_dict(spec, comm=None, base=None):
+def scene_from_dict(spec, comm=None, base=None, quiet=None):
     """A scene built in a script: the same keys as a scene file, and wherever a key takes a file, the data itself
     (resolve()): body matrices as petsc4py Mats, SciPy sparse matrices or NumPy arrays, nodes as an (n, 5) array
     or a list of (id, x, y, z, dofs) rows, input/output vectors as 1-D arrays or petsc4py Vecs. Relative file
-    names are taken from base (default: the working folder)."""
-    return Scene(spec, os.path.join(base, "scene.yaml") if base else None, comm)
+    names are taken from base (default: the working folder). quiet=True: no progress lines while loading."""
+    with quiet_progress(quiet):
+        return Scene(spec, os.path.join(base, "scene.yaml") if base else None, comm)
 
 
-def load_scene(path, comm=None, overrides=True):
-    """Reads a scene file (YAML) and its body files; -scene.<path> PETSc options override its values."""
+def load_scene(path, comm=None, overrides=True, quiet=None):
+    """Reads a scene file (YAML) and its body files; -scene.<path> PETSc options override its values. quiet=True: no
+    progress lines while loading (the body files read), as Reducer(scene, quiet=True) has none while reducing."""
     where = os.path.basename(str(path))
     if not os.path.isfile(path):
         if os.path.exists(path):
@@ -468,4 +471,5 @@ def load_scene(path, comm=None, overrides=True):
         raise SceneError("%s: cannot read the scene file (%s); check its permissions" % (where, e.strerror)) from None
     if overrides and isinstance(spec, dict):
         _apply_overrides(spec, where)
-    return Scene(spec, path, comm)
+    with quiet_progress(quiet):
+        return Scene(spec, path, comm)

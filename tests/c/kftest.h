@@ -1,4 +1,5 @@
-/* What the C tests share: pass/fail lines on rank 0 with a failure count, and the nodes files of meshes/. */
+/* What the C tests share: pass/fail lines on rank 0 with a failure count, the nodes files of meshes/, and the Galileo
+   bodies. */
 #ifndef KFTEST_H
 #define KFTEST_H
 
@@ -56,6 +57,29 @@ static inline PetscErrorCode ReadNodes(const char path[], PetscInt *nnodes, Pets
   PetscCall(PetscFClose(PETSC_COMM_SELF, fp));
   PetscCheck(n > 0, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s holds no nodes", path);
   *nnodes = n;
+  PetscFunctionReturn(0);
+}
+
+/* A body of meshes/galileo/ (stem: "stator" or "rotor") added to the scene under the given name; the scene holds its
+   own references to the matrices. */
+static inline PetscErrorCode AddGalileoBody(KFScene scene, const char stem[], const char name[], PetscInt *body)
+{
+  char       path[PETSC_MAX_PATH_LEN];
+  Mat        M, K;
+  PetscInt   nnodes = 0, *ids, *ndof;
+  PetscReal *xyz;
+
+  PetscFunctionBegin;
+  PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_M.mtx", stem));
+  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &M));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_K.mtx", stem));
+  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &K));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "meshes/galileo/%s_nodes.txt", stem));
+  PetscCall(ReadNodes(path, &nnodes, &ids, &xyz, &ndof));
+  PetscCall(KFSceneAddBody(scene, name, M, K, nnodes, ids, xyz, ndof, body));
+  PetscCall(PetscFree3(ids, xyz, ndof));
+  PetscCall(MatDestroy(&M));
+  PetscCall(MatDestroy(&K));
   PetscFunctionReturn(0);
 }
 

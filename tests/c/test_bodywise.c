@@ -5,29 +5,8 @@
    body-wise); -kf_flex_solver auto going body-wise for this articulated scene; a single-body scene falling back. */
 #include "kftest.h"
 
-#define GALILEO "meshes/galileo/"
 #define SAME    1e-10
 
-static PetscErrorCode AddBody(KFScene scene, const char file[], const char name[], PetscInt *body)
-{
-  char       path[PETSC_MAX_PATH_LEN];
-  Mat        M, K;
-  PetscInt   nnodes = 0, *ids, *ndof;
-  PetscReal *xyz;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_M.mtx", file));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &M));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_K.mtx", file));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &K));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_nodes.txt", file));
-  PetscCall(ReadNodes(path, &nnodes, &ids, &xyz, &ndof));
-  PetscCall(KFSceneAddBody(scene, name, M, K, nnodes, ids, xyz, ndof, body));
-  PetscCall(PetscFree3(ids, xyz, ndof));
-  PetscCall(MatDestroy(&M));
-  PetscCall(MatDestroy(&K));
-  PetscFunctionReturn(0);
-}
 
 static PetscErrorCode ChainScene(PetscBool single, KFScene *scene)
 {
@@ -36,11 +15,11 @@ static PetscErrorCode ChainScene(PetscBool single, KFScene *scene)
 
   PetscFunctionBegin;
   PetscCall(KFSceneCreate(PETSC_COMM_WORLD, scene));
-  PetscCall(AddBody(*scene, "stator", "stator", &stator));
+  PetscCall(AddGalileoBody(*scene, "stator", "stator", &stator));
   PetscCall(KFSceneSetNumIO(*scene, 1, single ? 1 : 2));
   if (!single) {
-    PetscCall(AddBody(*scene, "rotor", "rotor", &rotor));
-    PetscCall(AddBody(*scene, "stator", "arm", &arm));
+    PetscCall(AddGalileoBody(*scene, "rotor", "rotor", &rotor));
+    PetscCall(AddGalileoBody(*scene, "stator", "arm", &arm));
     PetscCall(KFSceneAddInterface(*scene, stator, "bearing", 1));
     PetscCall(KFSceneAddInterface(*scene, stator, "hinge", 2));
     PetscCall(KFSceneAddInterface(*scene, rotor, "bearing", 101));

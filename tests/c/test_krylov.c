@@ -7,30 +7,9 @@
 #include "kftest.h"
 #include <slepcsys.h>
 
-#define GALILEO "meshes/galileo/"
 #define NMOM    10
 #define MATCH   1e-8 /* the paper's Table 6: L_full^k / L_reduced^k = 1 to 8 digits */
 
-static PetscErrorCode AddBody(KFScene scene, const char name[], PetscInt *body)
-{
-  char       path[PETSC_MAX_PATH_LEN];
-  Mat        M, K;
-  PetscInt   nnodes = 0, *ids, *ndof;
-  PetscReal *xyz;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_M.mtx", name));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &M));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_K.mtx", name));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &K));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_nodes.txt", name));
-  PetscCall(ReadNodes(path, &nnodes, &ids, &xyz, &ndof));
-  PetscCall(KFSceneAddBody(scene, name, M, K, nnodes, ids, xyz, ndof, body));
-  PetscCall(PetscFree3(ids, xyz, ndof));
-  PetscCall(MatDestroy(&M)); /* the scene holds its own references */
-  PetscCall(MatDestroy(&K));
-  PetscFunctionReturn(0);
-}
 
 /* Stator (node 1 bearing, node 2 point A) and rotor (node 101 hub) joined by a revolute bearing about z;
    input: +torque about z on the stator's bearing node, -torque on the rotor's; output: rotation about y at A. */
@@ -41,8 +20,8 @@ static PetscErrorCode GalileoScene(KFScene *scene)
 
   PetscFunctionBegin;
   PetscCall(KFSceneCreate(PETSC_COMM_WORLD, scene));
-  PetscCall(AddBody(*scene, "stator", &stator));
-  PetscCall(AddBody(*scene, "rotor", &rotor));
+  PetscCall(AddGalileoBody(*scene, "stator", "stator", &stator));
+  PetscCall(AddGalileoBody(*scene, "rotor", "rotor", &rotor));
   PetscCall(KFSceneAddInterface(*scene, stator, "bearing", 1));
   PetscCall(KFSceneAddInterface(*scene, rotor, "bearing", 101));
   PetscCall(KFSceneAddJoint(*scene, "spin_bearing", KF_JOINT_REVOLUTE, stator, "bearing", rotor, "bearing", z, NULL));

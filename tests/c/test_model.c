@@ -18,7 +18,6 @@
 #include <unistd.h>
 #include <sys/stat.h>
 
-#define GALILEO "meshes/galileo/"
 
 static PetscBool Same(PetscInt n, const PetscReal a[], const PetscReal b[])
 {
@@ -34,26 +33,6 @@ static PetscReal RelDiff(PetscReal x, PetscReal y)
 
 /* ------------------------------------------------------------------ the Galileo-like scene */
 
-static PetscErrorCode AddBody(KFScene scene, const char stem[], const char name[], PetscInt *body)
-{
-  char       path[PETSC_MAX_PATH_LEN];
-  Mat        M, K;
-  PetscInt   nnodes = 0, *ids, *ndof;
-  PetscReal *xyz;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_M.mtx", stem));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &M));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_K.mtx", stem));
-  PetscCall(KFMatLoadFile(PETSC_COMM_WORLD, path, &K));
-  PetscCall(PetscSNPrintf(path, sizeof(path), GALILEO "%s_nodes.txt", stem));
-  PetscCall(ReadNodes(path, &nnodes, &ids, &xyz, &ndof));
-  PetscCall(KFSceneAddBody(scene, name, M, K, nnodes, ids, xyz, ndof, body));
-  PetscCall(PetscFree3(ids, xyz, ndof));
-  PetscCall(MatDestroy(&M));
-  PetscCall(MatDestroy(&K));
-  PetscFunctionReturn(0);
-}
 
 /* stator and rotor on a revolute bearing about z; a torque pair in, the rotation about y at point A out */
 static PetscErrorCode GalileoScene(const char rotor_name[], KFScene *scene)
@@ -64,8 +43,8 @@ static PetscErrorCode GalileoScene(const char rotor_name[], KFScene *scene)
   PetscFunctionBegin;
   PetscCall(KFSceneCreate(PETSC_COMM_WORLD, scene));
   PetscCall(KFSceneSetName(*scene, "galileo"));
-  PetscCall(AddBody(*scene, "stator", "stator", &stator));
-  PetscCall(AddBody(*scene, "rotor", rotor_name, &rotor));
+  PetscCall(AddGalileoBody(*scene, "stator", "stator", &stator));
+  PetscCall(AddGalileoBody(*scene, "rotor", rotor_name, &rotor));
   PetscCall(KFSceneAddInterface(*scene, stator, "bearing", 1));
   PetscCall(KFSceneAddInterface(*scene, stator, "point_a", 2));
   PetscCall(KFSceneAddInterface(*scene, rotor, "hub", 101));

@@ -16,10 +16,11 @@
    per entry in the same order, so Y is the same to the bit on any x86-64. */
 #define KF_EXT_CHUNK 8 /* columns per sweep over A: one AVX-512 register, two AVX2 ones */
 
-/* y[i + j ldy] (j < nj) = sum_k a_ik x_k for a chunk of KF_EXT_CHUNK columns stored row by row (xt: nc x 8, xgt: the
-   off-process block's ghost rows, ng x 8, zero-padded past nj): row by row, each row of A read once per chunk, the
-   chunk's eight sums independent and contiguous */
-static inline __attribute__((always_inline)) void KFExtKernel(PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
+/* y[i + j ldy] (j < nj) = sum_k a_ik x_k for a chunk of W columns stored row by row (xt: nc x W, xgt: the
+   off-process block's ghost rows, ng x W, zero-padded past nj): row by row, each row of A read once per chunk, the
+   chunk's W sums independent and contiguous. W is a constant at each call (8, 4, 2 or 1: a block of 3 columns, the
+   refinement residual's usual size, costs 4 sums per entry, not 8); a column's operations do not depend on W. */
+static inline __attribute__((always_inline)) void KFExtKernel(const int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
 {
   for (PetscInt i = 0; i < m; i++) {
     double s[KF_EXT_CHUNK] = {0}, c[KF_EXT_CHUNK] = {0};
@@ -31,9 +32,9 @@ static inline __attribute__((always_inline)) void KFExtKernel(PetscInt m, const 
       if (!ir) continue;
       for (PetscInt k = ir[i]; k < ir[i + 1]; k++) {
         const double  ak = ar[k];
-        const double *xk = xr + (size_t)jr[k] * KF_EXT_CHUNK;
+        const double *xk = xr + (size_t)jr[k] * W;
 
-        for (int j = 0; j < KF_EXT_CHUNK; j++) {
+        for (int j = 0; j < W; j++) {
           const double p = ak * xk[j], pe = __builtin_fma(ak, xk[j], -p); /* TwoProduct: ak xk = p + pe */
           const double t = s[j] + p, z = t - s[j], e = (s[j] - (t - z)) + (p - z); /* TwoSum: s + p = t + e */
 
@@ -46,27 +47,42 @@ static inline __attribute__((always_inline)) void KFExtKernel(PetscInt m, const 
   }
 }
 
+/* one body per instruction set, the chunk width a constant in each branch */
+#define KF_EXT_KERNEL_WIDTHS(W, ...) \
+  do { \
+    if (W == 8) KFExtKernel(8, __VA_ARGS__); \
+    else if (W == 4) KFExtKernel(4, __VA_ARGS__); \
+    else if (W == 2) KFExtKernel(2, __VA_ARGS__); \
+    else KFExtKernel(1, __VA_ARGS__); \
+  } while (0)
+
 #if defined(__GNUC__) && defined(__x86_64__)
   #define KF_EXT_DISPATCH 1
-__attribute__((target("avx512f,fma"))) static void KFExtKernelAVX512(PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
+__attribute__((target("avx512f,fma"))) static void KFExtKernelAVX512(int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
 {
-  KFExtKernel(m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
+  KF_EXT_KERNEL_WIDTHS(W, m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
 }
-__attribute__((target("avx2,fma"))) static void KFExtKernelAVX2(PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
+__attribute__((target("avx2,fma"))) static void KFExtKernelAVX2(int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
 {
-  KFExtKernel(m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
+  KF_EXT_KERNEL_WIDTHS(W, m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
 }
 #endif
-static void KFExtKernelGeneric(PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
+static void KFExtKernelGeneric(int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy)
 {
-  KFExtKernel(m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
+  KF_EXT_KERNEL_WIDTHS(W, m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy);
 }
 
-/* columns j0 .. j0 + nj - 1 of x (nr rows, leading dimension ldx) row by row into xt (nr x 8, zero-padded) */
-static void KFExtTransposeChunk(PetscInt nr, const PetscScalar *x, PetscInt ldx, PetscInt j0, PetscInt nj, PetscScalar *xt)
+/* the chunk width for nj columns: the smallest of 1, 2, 4, 8 that holds them */
+static int KFExtWidth(PetscInt nj)
+{
+  return nj > 4 ? 8 : nj > 2 ? 4 : nj > 1 ? 2 : 1;
+}
+
+/* columns j0 .. j0 + nj - 1 of x (nr rows, leading dimension ldx) row by row into xt (nr x W, zero-padded) */
+static void KFExtTransposeChunk(PetscInt nr, const PetscScalar *x, PetscInt ldx, PetscInt j0, PetscInt nj, int W, PetscScalar *xt)
 {
   for (PetscInt r = 0; r < nr; r++)
-    for (PetscInt j = 0; j < KF_EXT_CHUNK; j++) xt[r * KF_EXT_CHUNK + j] = j < nj ? x[r + (j0 + j) * ldx] : 0.0;
+    for (PetscInt j = 0; j < W; j++) xt[r * W + j] = j < nj ? x[r + (j0 + j) * ldx] : 0.0;
 }
 
 static PetscErrorCode KFSeqAIJMultExtended(Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy)
@@ -76,7 +92,7 @@ static PetscErrorCode KFSeqAIJMultExtended(Mat A, PetscInt ncols, const PetscSca
   PetscScalar       *xt, *xgt;
   PetscInt           m, mb, nc, ng = 0;
   PetscBool          done;
-  void (*kernel)(PetscInt, const PetscInt *, const PetscInt *, const PetscScalar *, const PetscScalar *, const PetscInt *, const PetscInt *, const PetscScalar *, const PetscScalar *, PetscInt, PetscScalar *, PetscInt) = KFExtKernelGeneric;
+  void (*kernel)(int, PetscInt, const PetscInt *, const PetscInt *, const PetscScalar *, const PetscScalar *, const PetscInt *, const PetscInt *, const PetscScalar *, const PetscScalar *, PetscInt, PetscScalar *, PetscInt) = KFExtKernelGeneric;
 
   PetscFunctionBegin;
 #if defined(KF_EXT_DISPATCH)
@@ -98,10 +114,11 @@ static PetscErrorCode KFSeqAIJMultExtended(Mat A, PetscInt ncols, const PetscSca
   PetscCall(PetscMalloc2(nc * KF_EXT_CHUNK + 1, &xt, ng * KF_EXT_CHUNK + 1, &xgt));
   for (PetscInt j0 = 0; j0 < ncols; j0 += KF_EXT_CHUNK) {
     const PetscInt nj = PetscMin(KF_EXT_CHUNK, ncols - j0);
+    const int      W  = KFExtWidth(nj);
 
-    KFExtTransposeChunk(nc, x, ldx, j0, nj, xt);
-    if (B) KFExtTransposeChunk(ng, xg, ldg, j0, nj, xgt);
-    kernel(m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
+    KFExtTransposeChunk(nc, x, ldx, j0, nj, W, xt);
+    if (B) KFExtTransposeChunk(ng, xg, ldg, j0, nj, W, xgt);
+    kernel(W, m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
   }
   PetscCall(PetscFree2(xt, xgt));
   PetscCall(MatSeqAIJRestoreArrayRead(A, &a));

@@ -73,7 +73,7 @@ PetscErrorCode KFBodyBasisAdd(KFBodyBasis bb, KFSystem sys, Mat X)
   PetscCall(PetscLogEventBegin(KF_EVENT_PROJECT, 0, 0, 0, 0));
   /* unit system M-norm per column */
   PetscCall(MatDuplicate(X, MAT_COPY_VALUES, &Xn));
-  PetscCall(MatMatMult(sys->Ms, Xn, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+  PetscCall(KFMatMultDense(sys->Ms, Xn, &MX));
   PetscCall(PetscMalloc2(m * m, &gram, m * m, &scale));
   PetscCall(KFMatTransposeMatMultGather(Xn, MX, gram));
   PetscCall(MatDestroy(&MX));
@@ -294,7 +294,7 @@ static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
   /* the 6 body motions and their M-Gram matrix: its largest diagonal is the scale a kept motion's mass is measured
      against (a combination the layout does not see has only rounding left) */
   PetscCall(KFBodyRigidMotions(comm, B, &Phi));
-  PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+  PetscCall(KFMatMultDense(B->M, Phi, &MPhi));
   PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, G6));
   PetscCall(MatDestroy(&MPhi));
   for (int m = 0; m < 6; m++) scale = PetscMax(scale, G6[m + 6 * m]);
@@ -370,7 +370,7 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
       }
       PetscCall(MatDenseRestoreArray(Wm, &w));
     }
-    PetscCall(MatMatMult(B->M, Wm, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MWm));
+    PetscCall(KFMatMultDense(B->M, Wm, &MWm));
     PetscCall(PetscMalloc3(nl * m + 1, &W, nl * m + 1, &MW, nl * m + 1, &Q));
     {
       const PetscScalar *w, *mw;

@@ -112,6 +112,24 @@ int main(int argc, char **argv)
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &errx, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &errd, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &cancel, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+  { /* KFMatMultDense: the plain product's own bits (the same sums in the same order as MatMatMult) */
+    Mat                Yp;
+    const PetscScalar *yp, *yd;
+    PetscInt           ldp, ldd, nl;
+    PetscBool          same = PETSC_TRUE;
+    PetscCall(KFMatMultDense(A, X, &Yp));
+    PetscCall(MatGetLocalSize(Yp, &nl, NULL));
+    PetscCall(MatDenseGetLDA(Yp, &ldp));
+    PetscCall(MatDenseGetLDA(Yd, &ldd));
+    PetscCall(MatDenseGetArrayRead(Yp, &yp));
+    PetscCall(MatDenseGetArrayRead(Yd, &yd));
+    for (PetscInt j = 0; j < ncols; j++)
+      for (PetscInt i = 0; i < nl; i++) same = (PetscBool)(same && yp[i + j * ldp] == yd[i + j * ldd]);
+    PetscCall(MatDenseRestoreArrayRead(Yp, &yp));
+    PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
+    PetscCall(MatDestroy(&Yp));
+    PetscCall(CheckTrue("KFMatMultDense gives MatMatMult's bits (11 columns: chunks of 8 and 4)", same));
+  }
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  cancellation |A||x| / |Ax| up to %.1e\n", (double)cancel));
   PetscCall(CheckTrue("the data cancel (|A||x| / |Ax| > 1e8): a test the plain product fails", (PetscBool)(cancel > 1e8)));
   PetscCall(CheckTrue("the plain double product is off by more than 1e-6 relative here", (PetscBool)(errd > 1e-6)));
@@ -141,14 +159,14 @@ int main(int argc, char **argv)
     for (PetscInt r = 0; r < ng; r++)
       for (PetscInt j = 0; j < 8; j++) xgt[r * 8 + j] = xall[colmap[r] + j * n];
     PetscCall(MatDenseRestoreArrayRead(X, &x));
-    KFExtKernelGeneric(8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
+    KFExtKernelGeneric(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
     __builtin_cpu_init();
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-      KFExtKernelAVX2(8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFExtKernelAVX2(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) {
-      KFExtKernelAVX512(8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFExtKernelAVX512(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
     for (int W = 4; W >= 1; W /= 2) { /* the narrower chunks: each column's sums as in the chunk of 8 */
@@ -157,7 +175,7 @@ int main(int argc, char **argv)
       PetscCall(MatDenseRestoreArrayRead(X, &x));
       for (PetscInt r = 0; r < ng; r++)
         for (PetscInt j = 0; j < W; j++) xgt[r * W + j] = xall[colmap[r] + j * n];
-      KFExtKernelGeneric(W, m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
+      KFExtKernelGeneric(PETSC_TRUE, W, m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
       for (PetscInt e = 0; e < m * W; e++) same &= y0[e] == y1[e];
     }
     PetscCall(PetscFree4(xt, xgt, y0, y1));

@@ -159,23 +159,23 @@ int main(int argc, char **argv)
     for (PetscInt r = 0; r < ng; r++)
       for (PetscInt j = 0; j < 8; j++) xgt[r * 8 + j] = xall[colmap[r] + j * n];
     PetscCall(MatDenseRestoreArrayRead(X, &x));
-    KFExtKernelGeneric(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
+    KFKernelsGeneric[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
     __builtin_cpu_init();
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-      KFExtKernelAVX2(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFKernelsAVX2[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) {
-      KFExtKernelAVX512(PETSC_TRUE, 8, m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFKernelsAVX512[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
-    for (int W = 4; W >= 1; W /= 2) { /* the narrower chunks: each column's sums as in the chunk of 8 */
+    for (int slot = 1, W = 4; slot < 4; slot++, W /= 2) { /* the narrower chunks: each column's sums as in the chunk of 8 */
       PetscCall(MatDenseGetArrayRead(X, &x));
       KFExtTransposeChunk(nc, x, ldx, 0, W, W, xt);
       PetscCall(MatDenseRestoreArrayRead(X, &x));
       for (PetscInt r = 0; r < ng; r++)
         for (PetscInt j = 0; j < W; j++) xgt[r * W + j] = xall[colmap[r] + j * n];
-      KFExtKernelGeneric(PETSC_TRUE, W, m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
+      KFKernelsGeneric[1][slot](m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
       for (PetscInt e = 0; e < m * W; e++) same &= y0[e] == y1[e];
     }
     PetscCall(PetscFree4(xt, xgt, y0, y1));

@@ -180,9 +180,11 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
         q[i]  = W[i + jmax * nl] / nrm;
         mq[i] = MW[i + jmax * nl] / nrm;
       }
-      /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement) */
+      /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement); the first pass's
+         update also sums the second pass's dot products (each column's sum in the same order as a sweep of its
+         own: the same numbers, one sweep over W fewer per chosen column) */
+      KFColumnDots(nl, m, mq, W, used, dots);
       for (int pass = 0; pass < 2; pass++) {
-        KFColumnDots(nl, m, mq, W, used, dots);
         PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
         for (PetscInt j = 0; j < m; j++) {
           PetscReal *w = &W[j * nl], *mw = &MW[j * nl], d = 0;
@@ -195,6 +197,7 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
               for (PetscInt i = 0; i < nl; i++) {
                 w[i] -= c * q[i];
                 mw[i] -= c * mq[i];
+                d += mq[i] * w[i];
               }
             else
               for (PetscInt i = 0; i < nl; i++) {
@@ -202,9 +205,12 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
                 mw[i] -= c * mq[i];
                 d += w[i] * mw[i];
               }
-          } else if (pass == 1)
+          } else if (pass == 0)
+            for (PetscInt i = 0; i < nl; i++) d += mq[i] * w[i];
+          else
             for (PetscInt i = 0; i < nl; i++) d += w[i] * mw[i];
-          if (pass == 1) res[j] = d;
+          if (pass == 0) dots[j] = d; /* the second pass's coefficient (local part) */
+          else res[j] = d;
         }
       }
     }

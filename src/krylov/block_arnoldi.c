@@ -41,7 +41,7 @@ static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x,
   PetscFunctionBegin;
   PetscCall(MatGetSize(M, &N, NULL));
   PetscCall(MatCreateDense(PetscObjectComm((PetscObject)M), nl, PETSC_DECIDE, N, p, x, &X));
-  PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(KFMatMultDense(M, X, &Y));
   PetscCall(MatDenseGetLDA(Y, &ldy));
   PetscCall(MatDenseGetArrayRead(Y, &py));
   for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&y[j * nl], &py[j * ldy], nl));
@@ -275,7 +275,7 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *
   PetscCall(MatGetSize(sys->Phi, NULL, &r));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(BVGetMat(V, &A));
-  PetscCall(MatMatMult(sys->Ms, A, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MA));
+  PetscCall(KFMatMultDense(sys->Ms, A, &MA));
   PetscCall(PetscMalloc2(PetscMax(r * k, 1), &c, k * k, &g));
   if (r) PetscCall(KFMatTransposeMatMultGather(sys->Phi, MA, c));
   PetscCall(KFMatTransposeMatMultGather(A, MA, g));

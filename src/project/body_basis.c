@@ -73,7 +73,7 @@ PetscErrorCode KFBodyBasisAdd(KFBodyBasis bb, KFSystem sys, Mat X)
   PetscCall(PetscLogEventBegin(KF_EVENT_PROJECT, 0, 0, 0, 0));
   /* unit system M-norm per column */
   PetscCall(MatDuplicate(X, MAT_COPY_VALUES, &Xn));
-  PetscCall(MatMatMult(sys->Ms, Xn, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+  PetscCall(KFMatMultDense(sys->Ms, Xn, &MX));
   PetscCall(PetscMalloc2(m * m, &gram, m * m, &scale));
   PetscCall(KFMatTransposeMatMultGather(Xn, MX, gram));
   PetscCall(MatDestroy(&MX));
@@ -180,9 +180,11 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
         q[i]  = W[i + jmax * nl] / nrm;
         mq[i] = MW[i + jmax * nl] / nrm;
       }
-      /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement) */
+      /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement); the first pass's
+         update also sums the second pass's dot products (each column's sum in the same order as a sweep of its
+         own: the same numbers, one sweep over W fewer per chosen column) */
+      KFColumnDots(nl, m, mq, W, used, dots);
       for (int pass = 0; pass < 2; pass++) {
-        KFColumnDots(nl, m, mq, W, used, dots);
         PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
         for (PetscInt j = 0; j < m; j++) {
           PetscReal *w = &W[j * nl], *mw = &MW[j * nl], d = 0;
@@ -195,6 +197,7 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
               for (PetscInt i = 0; i < nl; i++) {
                 w[i] -= c * q[i];
                 mw[i] -= c * mq[i];
+                d += mq[i] * w[i];
               }
             else
               for (PetscInt i = 0; i < nl; i++) {
@@ -202,9 +205,12 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
                 mw[i] -= c * mq[i];
                 d += w[i] * mw[i];
               }
-          } else if (pass == 1)
+          } else if (pass == 0)
+            for (PetscInt i = 0; i < nl; i++) d += mq[i] * w[i];
+          else
             for (PetscInt i = 0; i < nl; i++) d += w[i] * mw[i];
-          if (pass == 1) res[j] = d;
+          if (pass == 0) dots[j] = d; /* the second pass's coefficient (local part) */
+          else res[j] = d;
         }
       }
     }
@@ -294,7 +300,7 @@ static PetscErrorCode KFBodyAdmissibleRigidColumns(KFBodyData *B, Mat *X)
   /* the 6 body motions and their M-Gram matrix: its largest diagonal is the scale a kept motion's mass is measured
      against (a combination the layout does not see has only rounding left) */
   PetscCall(KFBodyRigidMotions(comm, B, &Phi));
-  PetscCall(MatMatMult(B->M, Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MPhi));
+  PetscCall(KFMatMultDense(B->M, Phi, &MPhi));
   PetscCall(KFMatTransposeMatMultGather(Phi, MPhi, G6));
   PetscCall(MatDestroy(&MPhi));
   for (int m = 0; m < 6; m++) scale = PetscMax(scale, G6[m + 6 * m]);
@@ -370,7 +376,7 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
       }
       PetscCall(MatDenseRestoreArray(Wm, &w));
     }
-    PetscCall(MatMatMult(B->M, Wm, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MWm));
+    PetscCall(KFMatMultDense(B->M, Wm, &MWm));
     PetscCall(PetscMalloc3(nl * m + 1, &W, nl * m + 1, &MW, nl * m + 1, &Q));
     {
       const PetscScalar *w, *mw;

@@ -11,7 +11,7 @@ PetscErrorCode KFSystemProject(KFSystem sys, BV V, PetscReal Mr[], PetscReal Kr[
   PetscCall(PetscLogEventBegin(KF_EVENT_PROJECT, 0, 0, 0, 0));
   PetscCall(BVGetActiveColumns(V, &l, &c));
   PetscCall(BVGetMat(V, &Vd));
-  PetscCall(MatMatMult(sys->Ms, Vd, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AV));
+  PetscCall(KFMatMultDense(sys->Ms, Vd, &AV));
   PetscCall(KFMatTransposeMatMultGather(Vd, AV, Mr));
   PetscCall(MatDestroy(&AV));
   PetscCall(KFMatMultExtended(sys->Ks, Vd, &AV)); /* soft Krylov vectors: K V without K's rounding */

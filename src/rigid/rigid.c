@@ -293,13 +293,13 @@ PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt pass
   PetscCall(MatGetLocalSize(X, &nl, NULL));
   if (MXout) *MXout = NULL;
   if (!r) {
-    if (MXout) PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MXout));
+    if (MXout) PetscCall(KFMatMultDense(M, X, MXout));
     PetscFunctionReturn(0);
   }
   PetscCall(PetscMalloc1(r * r, &Gm));
   for (PetscInt pass = 0; pass < passes; pass++) {
     PetscCall(MatDestroy(&MX));
-    PetscCall(MatMatMult(M, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &MX));
+    PetscCall(KFMatMultDense(M, X, &MX));
     PetscCall(KFMatTransposeMatMultGather(X, MX, Gm));
     /* Cholesky Gm = L L^T, then X <- X L^-T */
     for (PetscInt j = 0; j < r; j++) {

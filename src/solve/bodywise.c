@@ -273,6 +273,37 @@ static PetscErrorCode KFBodyPivotsCheck(KFScene s, PetscInt b, PetscInt nnull, P
   PetscFunctionReturn(0);
 }
 
+/* An error on one rank alone (a spread body's factorization on its owner: MUMPS, the memory check) would leave the
+   other ranks waiting: the owner keeps the first message, and KFBodyErrorsCheck raises it on every rank. */
+typedef struct {
+  PetscErrorCode code;
+  char           msg[1024];
+} KFBodyError;
+
+static PetscErrorCode KFBodyErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
+{
+  KFBodyError *e = (KFBodyError *)ctx;
+
+  if (!e->code && mess) {
+    e->code = n;
+    PetscStrncpy(e->msg, mess, sizeof(e->msg));
+  }
+  return n;
+}
+
+static PetscErrorCode KFBodyErrorsCheck(KFScene s, KFBodyError *e)
+{
+  PetscMPIInt rank, first, mine;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  mine = e->code ? rank : PETSC_MPI_INT_MAX;
+  PetscCall(MPIU_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, s->comm));
+  if (first == PETSC_MPI_INT_MAX) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Bcast(e, (PetscMPIInt)sizeof(*e), MPI_BYTE, first, s->comm));
+  SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread)", e->msg, (int)first);
+}
+
 /* All bodies' factors: spread, each body gathered onto its owner and factored there (the ranks at once), then S_b
    broadcast from the owner; else each body on all ranks in turn. */
 static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, PetscReal shift, KFBodyFactors bf)
@@ -314,12 +345,21 @@ static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, PetscReal shift, KFBodyFa
       PetscCall(KFBodySFCreate(s, b, bf));
     }
     /* the ranks factor their own bodies at the same time: no communication until every rank is done */
-    for (PetscInt b = 0; b < s->nb; b++)
-      if (Kq[b]) {
-        PetscCall(KFBodyFactorSetUp(s, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]));
+    {
+      KFBodyError    e = {0, ""};
+      PetscErrorCode ierr = 0;
+
+      PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
+      for (PetscInt b = 0; b < s->nb && !ierr; b++)
+        if (Kq[b]) ierr = KFBodyFactorSetUp(s, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
+      PetscCall(PetscPopErrorHandler());
+      if (ierr && !e.code) e.code = ierr;
+      for (PetscInt b = 0; b < s->nb; b++) {
         PetscCall(MatDestroy(&Kq[b]));
         PetscCall(MatDestroy(&Mq[b]));
       }
+      PetscCall(KFBodyErrorsCheck(s, &e));
+    }
     for (PetscInt b = 0; b < s->nb; b++) {
       PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
       if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));

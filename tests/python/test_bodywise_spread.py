@@ -94,3 +94,16 @@ def test_two_rank_reduction_same_model(frame, tmp_path):
         a, b = numbers(sm[key]), numbers(sb[key])
         assert len(a) == len(b) > 0, key
         assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
+
+
+def test_error_on_one_owner_is_collective(tmp_path):
+    """A spread body's factorization fails on its owner alone (the memory check with a tiny -kf_memory_limit_mb): every
+    rank stops with the owner's message and the 1-rank exit code, no traceback, no hang, no output folder."""
+    opts = ["reduce", GALILEO, "-kf_flex_solver", "bodywise", "-kf_memory_limit_mb", "1e-6", "-kf_ooc", "false"]
+    one = subprocess.run([KRYFLEX_CMD] + opts + ["-o", str(tmp_path / "one")], capture_output=True, text=True,
+                         env=ENV, timeout=300)
+    two = subprocess.run(["mpiexec", "-n", "2", KRYFLEX_CMD] + opts + ["-o", str(tmp_path / "two")],
+                         capture_output=True, text=True, env=ENV, timeout=300)
+    assert one.returncode not in (0, 1) and two.returncode == one.returncode, two.stdout + two.stderr
+    assert "not enough memory to factor" in two.stderr and "which factors the body alone" in two.stderr, two.stderr
+    assert "Traceback" not in two.stderr and not (tmp_path / "two").exists()

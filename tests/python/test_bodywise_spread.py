@@ -107,3 +107,24 @@ def test_error_on_one_owner_is_collective(tmp_path):
     assert one.returncode not in (0, 1) and two.returncode == one.returncode, two.stdout + two.stderr
     assert "not enough memory to factor" in two.stderr and "which factors the body alone" in two.stderr, two.stderr
     assert "Traceback" not in two.stderr and not (tmp_path / "two").exists()
+
+
+def test_scene_key_turns_spread_off(tmp_path):
+    """reduction.bodywise_spread: false in the scene file: on 2 ranks every body is factored on all ranks; the command
+    line's -kf_bodywise_spread wins over the key"""
+    import yaml
+    with open(GALILEO) as f:
+        spec = yaml.safe_load(f)
+    gdir = os.path.dirname(GALILEO)
+    for body in spec["bodies"].values():
+        for key in ("mass", "stiffness", "nodes"):
+            if isinstance(body.get(key), str):
+                body[key] = os.path.join(gdir, body[key])
+    spec.setdefault("reduction", {}).update(flex_solver="bodywise", bodywise_spread=False, search=False)
+    path = tmp_path / "galileo.yaml"
+    with open(path, "w") as f:
+        yaml.safe_dump(spec, f, sort_keys=False)
+    out = reduce_cli(str(path), 2, tmp_path / "off")
+    assert "factored on rank" not in out and "body-wise solve: factorization of body" in out, out
+    out = reduce_cli(str(path), 2, tmp_path / "on", "-kf_bodywise_spread", "true")
+    assert "factored on rank 0 alone" in out and "factored on rank 1 alone" in out, out

@@ -401,7 +401,9 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
    dofs are interface unknowns; monolithic otherwise. The choice depends on the scene only, not on which
    configurations a system visited before, so every solve of a scene takes the same path. Measured
    (scripts/bench-bodywise, solid pair): the body factorizations cost about one factorization of K_S, a body-wise
-   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs). */
+   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs), and at
+   202k dofs faster already at one configuration (1.15x on 1 rank; spread over 2 ranks 1.68x, README). On more ranks
+   than bodies (or -kf_bodywise_spread false) auto keeps the monolithic solve. */
 #define KF_AUTO_MAX_INTERFACE 3000
 static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFlexSolverType *asked)
 {
@@ -428,7 +430,14 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
     if (s->nb > 1 && all_iface && !bcs) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : (bcs ? "the body-wise solve does not take clamped dofs or joints to ground yet" : "a body without interface node")));
   } else if (type == KF_FLEX_SOLVER_AUTO) {
-    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0);
+    PetscMPIInt size;
+    PetscBool   spread = PETSC_TRUE;
+
+    /* on several ranks only when the bodies can be spread: every body distributed over all ranks paid a distributed
+       MUMPS solve per body per block and came out even with the monolithic solve (README, run 4) */
+    PetscCallMPI(MPI_Comm_size(s->comm, &size));
+    PetscCall(PetscOptionsGetBool(NULL, NULL, "-kf_bodywise_spread", &spread, NULL));
+    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && (size == 1 || (spread && size <= s->nb)));
   }
   PetscFunctionReturn(0);
 }

@@ -128,3 +128,13 @@ def test_scene_key_turns_spread_off(tmp_path):
     assert "factored on rank" not in out and "body-wise solve: factorization of body" in out, out
     out = reduce_cli(str(path), 2, tmp_path / "on", "-kf_bodywise_spread", "true")
     assert "factored on rank 0 alone" in out and "factored on rank 1 alone" in out, out
+
+
+@pytest.mark.parametrize("ranks,opts,bodywise", [(2, (), True), (3, (), False),
+                                                  (2, ("-kf_bodywise_spread", "false"), False)])
+def test_auto_spreads_or_stays_monolithic(ranks, opts, bodywise, tmp_path):
+    """-kf_flex_solver auto on Galileo (2 bodies, a revolute joint): body-wise with the bodies spread when they can be
+    (2 ranks), monolithic when they cannot (3 ranks, or the spread turned off)"""
+    out = reduce_cli(GALILEO, ranks, tmp_path / "out", "-kf_flex_solver", "auto", "-kf_search", "false", *opts)
+    assert ("factored on rank 1 alone" in out) == bodywise, out
+    assert ("body-wise solve" in out) == bodywise, out

@@ -20,6 +20,7 @@
 PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
 PETSC_INTERN PetscErrorCode KFSelectPivotedDofs(Mat Phi, PetscInt *nheld, PetscInt **held);
 PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb);
+PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprs(KFSystem, KFExpr ***);
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
 
@@ -301,7 +302,7 @@ static PetscErrorCode KFBodyErrorsCheck(KFScene s, KFBodyError *e)
   PetscCall(MPIU_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, s->comm));
   if (first == PETSC_MPI_INT_MAX) PetscFunctionReturn(0);
   PetscCallMPI(MPI_Bcast(e, (PetscMPIInt)sizeof(*e), MPI_BYTE, first, s->comm));
-  SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread)", e->msg, (int)first);
+  SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread%s)", e->msg, (int)first, e->code == PETSC_ERR_MEM ? "; the ranks of a node factor their bodies at the same time, each checked against its share of the node's memory unless -kf_memory_limit_mb is given" : "");
 }
 
 /* All bodies' factors: spread, each body gathered onto its owner and factored there (the ranks at once), then S_b
@@ -348,11 +349,34 @@ static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, PetscReal shift, KFBodyFa
     {
       KFBodyError    e = {0, ""};
       PetscErrorCode ierr = 0;
+      PetscBool      has_limit, share = PETSC_FALSE;
+      MPI_Comm       node;
+      PetscMPIInt    nn;
 
+      /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
+         memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
+         theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
+         (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
+      PetscCall(PetscOptionsHasName(NULL, NULL, "-kf_memory_limit_mb", &has_limit));
+      PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+      PetscCallMPI(MPI_Comm_size(node, &nn));
+      if (!has_limit && nn > 1) {
+        PetscReal avail = KFNodeMemoryAvailableMB(), least;
+        char      val[32];
+
+        PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
+        if (least > 0) {
+          PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
+          PetscCall(PetscOptionsSetValue(NULL, "-kf_memory_limit_mb", val));
+          share = PETSC_TRUE;
+        }
+      }
+      PetscCallMPI(MPI_Comm_free(&node));
       PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
       for (PetscInt b = 0; b < s->nb && !ierr; b++)
         if (Kq[b]) ierr = KFBodyFactorSetUp(s, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
       PetscCall(PetscPopErrorHandler());
+      if (share) PetscCall(PetscOptionsClearValue(NULL, "-kf_memory_limit_mb"));
       if (ierr && !e.code) e.code = ierr;
       for (PetscInt b = 0; b < s->nb; b++) {
         PetscCall(MatDestroy(&Kq[b]));

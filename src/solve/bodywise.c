@@ -115,6 +115,8 @@ static PetscErrorCode KFBodyGammaNodes(KFScene s, PetscInt b, KFBodyFactors bf)
   PetscFunctionReturn(0);
 }
 
+#define KF_TINY_BODY 100 /* dofs */
+
 /* One body: the interior factor, Psi_b and S_b, from the body's K and M on their communicator (the scene's, or the
    owner's PETSC_COMM_SELF when the bodies are spread over the ranks). The pivots' counts are returned for the caller
    to check collectively. */
@@ -145,7 +147,9 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
   PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's (shifted) K for S_b */
   PetscCall(MatZeroRowsColumns(bf->Kb[b], nloc, loc, dsum / B->n, NULL, NULL));
   PetscCall(PetscFree(loc));
-  PetscCall(KFFactorMumps(bf->Kb[b], 0.0, PETSC_TRUE, &bf->F[b], nnull, nneg, &estimate_mb)); /* the user's ordering, BLR, OOC and memory check apply */
+  /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
+     few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
+  PetscCall(KFFactorMumps(bf->Kb[b], 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */

@@ -138,3 +138,12 @@ def test_auto_spreads_or_stays_monolithic(ranks, opts, bodywise, tmp_path):
     out = reduce_cli(GALILEO, ranks, tmp_path / "out", "-kf_flex_solver", "auto", "-kf_search", "false", *opts)
     assert ("factored on rank 1 alone" in out) == bodywise, out
     assert ("body-wise solve" in out) == bodywise, out
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_pord_ordering_on_tiny_bodies(ranks, tmp_path):
+    """-kf_ordering pord with Galileo's 12-dof stator: PORD stops the process on a graph of a few vertices, so a tiny
+    body takes MUMPS' default ordering (the reduction completes, as the monolithic one does)"""
+    out = reduce_cli(GALILEO, ranks, tmp_path / "out", "-kf_flex_solver", "bodywise", "-kf_ordering", "pord",
+                     "-kf_search", "false")
+    assert "body-wise solve" in out and "orderMinPriority" not in out

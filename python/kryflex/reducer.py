@@ -155,9 +155,14 @@ class Reducer:
         unless the options (command line) give one."""
         from petsc4py import PETSc
         value, keyword = self._flex_solver
+        opts = {}
         if keyword or (value != "monolithic" and not PETSc.Options().hasName("kf_flex_solver")):
-            return kf_options({"flex_solver": value})
-        return contextlib.nullcontext()
+            opts["flex_solver"] = value
+        # reduction.bodywise_spread: false unless the options (command line, keyword bodywise_spread) say
+        if not self.scene.reduction.get("bodywise_spread", True) and "bodywise_spread" not in self._options \
+                and not PETSc.Options().hasName("kf_bodywise_spread"):
+            opts["bodywise_spread"] = False
+        return kf_options(opts) if opts else contextlib.nullcontext()
 
     # ------------------------------------------------------------------ what the solve recorded
 

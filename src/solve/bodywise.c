@@ -15,10 +15,12 @@
    on the KFSystem, which lives for the whole reduction while the solvers are made per angle. */
 #include <kryflex_impl.h>
 #include <petscblaslapack.h>
+#include <petscsf.h>
 
 PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
 PETSC_INTERN PetscErrorCode KFSelectPivotedDofs(Mat Phi, PetscInt *nheld, PetscInt **held);
 PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb);
+PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprs(KFSystem, KFExpr ***);
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
 
@@ -32,6 +34,13 @@ struct _n_KFBodyFactors {
   Mat        *Kb, *F; /* the interior-held body stiffness and its MUMPS factor */
   Mat        *Psi;    /* n_b x |Gamma_b|: K_II^-1 K_IG on the interior rows, 0 on Gamma */
   PetscReal **S;      /* |Gamma_b|^2, replicated: the body's Schur complement on its interface */
+  /* bodies spread over the ranks (-kf_bodywise_spread): body b's interior is factored by rank owner[b] alone
+     (sequential MUMPS on its gathered K_b), so the ranks factor and solve different bodies at the same time instead of
+     every body on all ranks. Kb, F and Psi are then sequential on the owner and NULL elsewhere; sf[b] moves a dense
+     block's body rows between the body's row layout (leaves) and the owner's whole body (roots). */
+  PetscBool    spread;
+  PetscMPIInt *owner;
+  PetscSF     *sf;
 };
 
 /* per solver (one angle): the interface problem */
@@ -53,7 +62,9 @@ PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *bf)
     PetscCall(MatDestroy(&(*bf)->Psi[b]));
     PetscCall(PetscFree((*bf)->S[b]));
     PetscCall(PetscFree((*bf)->gif[b]));
+    if ((*bf)->sf) PetscCall(PetscSFDestroy(&(*bf)->sf[b]));
   }
+  PetscCall(PetscFree2((*bf)->owner, (*bf)->sf));
   PetscCall(PetscFree6((*bf)->ng, (*bf)->gif, (*bf)->Kb, (*bf)->F, (*bf)->Psi, (*bf)->S));
   PetscCall(PetscFree(*bf));
   PetscFunctionReturn(0);
@@ -104,19 +115,24 @@ static PetscErrorCode KFBodyGammaNodes(KFScene s, PetscInt b, KFBodyFactors bf)
   PetscFunctionReturn(0);
 }
 
-/* One body: the interior factor, Psi_b and S_b. */
-static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, KFBodyFactors bf)
+#define KF_TINY_BODY 100 /* dofs */
+
+/* One body: the interior factor, Psi_b and S_b, from the body's K and M on their communicator (the scene's, or the
+   owner's PETSC_COMM_SELF when the bodies are spread over the ranks). The pivots' counts are returned for the caller
+   to check collectively. */
+static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, PetscReal shift, KFBodyFactors bf, PetscInt *nnull, PetscInt *nneg)
 {
   KFBodyData *B = &s->bodies[b];
-  PetscInt    ng = bf->ng[b], rstart, rend, nloc = 0, *loc, nnull, nneg;
+  PetscInt    ng = bf->ng[b], rstart, rend, nloc = 0, *loc;
   PetscReal   estimate_mb;
   Vec         d;
   PetscReal   dsum;
   Mat         E, KE, KPhi;
+  MPI_Comm    comm = PetscObjectComm((PetscObject)K);
 
   PetscFunctionBegin;
-  PetscCall(MatDuplicate(B->K, MAT_COPY_VALUES, &bf->Kb[b]));
-  if (shift > 0) PetscCall(MatAXPY(bf->Kb[b], shift, B->M, DIFFERENT_NONZERO_PATTERN));
+  PetscCall(MatDuplicate(K, MAT_COPY_VALUES, &bf->Kb[b]));
+  if (shift > 0) PetscCall(MatAXPY(bf->Kb[b], shift, M, DIFFERENT_NONZERO_PATTERN));
   PetscCall(MatCreateVecs(bf->Kb[b], &d, NULL));
   PetscCall(MatGetDiagonal(bf->Kb[b], d));
   PetscCall(VecNorm(d, NORM_1, &dsum));
@@ -131,12 +147,13 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, 
   PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's (shifted) K for S_b */
   PetscCall(MatZeroRowsColumns(bf->Kb[b], nloc, loc, dsum / B->n, NULL, NULL));
   PetscCall(PetscFree(loc));
-  PetscCall(KFFactorMumps(bf->Kb[b], 0.0, PETSC_TRUE, &bf->F[b], &nnull, &nneg, &estimate_mb)); /* the user's ordering, BLR, OOC and memory check apply */
-  PetscCheck(nneg == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held is indefinite (MUMPS found %" PetscInt_FMT " negative pivots): its K is not positive semi-definite (check its export and units)", B->name, nneg);
-  PetscCheck(nnull == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held still has %" PetscInt_FMT " zero-energy mode(s): a mechanism no joint declares, in a part of the body no interface node holds (an unconnected dof, a body in pieces). Fix the model, or declare the joint", B->name, nnull);
+  /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
+     few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
+  PetscCall(KFFactorMumps(bf->Kb[b], 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
+  if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */
-  PetscCall(KFDenseCreate(s->comm, rend - rstart, B->n, ng, &E));
+  PetscCall(KFDenseCreate(comm, rend - rstart, B->n, ng, &E));
   for (PetscInt k = 0; k < ng; k++) {
     PetscInt dof = KFGammaDof(B, bf->gif[b], k);
     if (dof >= rstart && dof < rend) PetscCall(MatSetValue(E, dof, k, 1.0, INSERT_VALUES));
@@ -158,6 +175,226 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, PetscReal shift, 
   PetscCall(MatDestroy(&KE));
   PetscCall(MatDestroy(&E));
   PetscCall(MatDestroy(&KPhi));
+  PetscFunctionReturn(0);
+}
+
+/* Which rank factors which body (-kf_bodywise_spread, on by default): with at least as many bodies as ranks, each
+   body goes whole to one rank, the bodies in decreasing order of cost each to the least loaded rank (LPT). The cost
+   of a body's factorization is taken as n_b^2 (the flops of a nested-dissection factorization of a 3-D solid mesh
+   grow as n^2): what matters is the order of the bodies and the balance of the loads. More ranks than bodies, or one
+   rank: every body on all ranks (distributed MUMPS per body), as before. */
+static PetscErrorCode KFBodywiseAssign(KFScene s, KFBodyFactors bf)
+{
+  PetscMPIInt size;
+  PetscBool   spread = PETSC_TRUE;
+  PetscReal  *cost, *load;
+  PetscInt   *order;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(s->comm, &size));
+  PetscOptionsBegin(s->comm, NULL, "kryflex body-wise solve", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsBool("-kf_bodywise_spread", "Body-wise solve: factor each body on one rank, the bodies spread over the ranks (when there are at least as many bodies as ranks); false: every body on all ranks", "KFFlexSolverSetUp", spread, &spread, NULL));
+  PetscOptionsEnd();
+  bf->spread = (PetscBool)(spread && size > 1 && size <= s->nb);
+  if (!bf->spread) PetscFunctionReturn(0);
+  PetscCall(PetscCalloc2(s->nb, &bf->owner, s->nb, &bf->sf));
+  PetscCall(PetscMalloc3(s->nb, &cost, s->nb, &order, size, &load));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    cost[b]  = -(PetscReal)s->bodies[b].n * (PetscReal)s->bodies[b].n; /* sorted ascending: the largest first */
+    order[b] = b;
+  }
+  for (PetscMPIInt r = 0; r < size; r++) load[r] = 0;
+  PetscCall(PetscSortRealWithArrayInt(s->nb, cost, order));
+  for (PetscInt k = 0; k < s->nb; k++) {
+    PetscMPIInt least = 0;
+    for (PetscMPIInt r = 1; r < size; r++)
+      if (load[r] < load[least]) least = r;
+    bf->owner[order[k]] = least;
+    load[least] -= cost[k];
+  }
+  PetscCall(PetscFree3(cost, order, load));
+  PetscFunctionReturn(0);
+}
+
+/* Body b's star forest: leaf i (the body's row rstart + i on this rank) <- root rstart + i on the owner */
+static PetscErrorCode KFBodySFCreate(KFScene s, PetscInt b, KFBodyFactors bf)
+{
+  KFBodyData  *B = &s->bodies[b];
+  PetscInt     nl = B->rend - B->rstart;
+  PetscMPIInt  rank;
+  PetscSFNode *remote;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscMalloc1(nl, &remote));
+  for (PetscInt i = 0; i < nl; i++) {
+    remote[i].rank  = bf->owner[b];
+    remote[i].index = B->rstart + i;
+  }
+  PetscCall(PetscSFCreate(s->comm, &bf->sf[b]));
+  PetscCall(PetscSFSetGraph(bf->sf[b], rank == bf->owner[b] ? B->n : 0, nl, NULL, PETSC_COPY_VALUES, remote, PETSC_OWN_POINTER));
+  PetscCall(PetscSFSetUp(bf->sf[b]));
+  PetscFunctionReturn(0);
+}
+
+/* Dense block rows between body b's row layout (D, on the scene's ranks) and its owner's sequential copy (Q, n_b x p,
+   NULL on the other ranks): to_owner gathers D into Q, else Q is spread into D. Column by column through sf[b]. */
+static PetscErrorCode KFBodyMoveRows(KFBodyFactors bf, PetscInt b, Mat D, Mat Q, PetscBool to_owner)
+{
+  PetscInt     p, ldd, ldq = 0;
+  PetscScalar *d, *q = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(D, NULL, &p));
+  PetscCall(MatDenseGetLDA(D, &ldd));
+  PetscCall(MatDenseGetArray(D, &d));
+  if (Q) {
+    PetscCall(MatDenseGetLDA(Q, &ldq));
+    PetscCall(MatDenseGetArray(Q, &q));
+  }
+  for (PetscInt j = 0; j < p; j++) {
+    if (to_owner) {
+      PetscCall(PetscSFReduceBegin(bf->sf[b], MPIU_SCALAR, d + j * ldd, q ? q + j * ldq : NULL, MPI_REPLACE));
+      PetscCall(PetscSFReduceEnd(bf->sf[b], MPIU_SCALAR, d + j * ldd, q ? q + j * ldq : NULL, MPI_REPLACE));
+    } else {
+      PetscCall(PetscSFBcastBegin(bf->sf[b], MPIU_SCALAR, q ? q + j * ldq : NULL, d + j * ldd, MPI_REPLACE));
+      PetscCall(PetscSFBcastEnd(bf->sf[b], MPIU_SCALAR, q ? q + j * ldq : NULL, d + j * ldd, MPI_REPLACE));
+    }
+  }
+  if (Q) PetscCall(MatDenseRestoreArray(Q, &q));
+  PetscCall(MatDenseRestoreArray(D, &d));
+  PetscFunctionReturn(0);
+}
+
+/* Stops every rank when a body's factorization found negative or null pivots (the counts of the rank(s) that factored it) */
+static PetscErrorCode KFBodyPivotsCheck(KFScene s, PetscInt b, PetscInt nnull, PetscInt nneg)
+{
+  PetscInt in[2] = {nnull, nneg}, out[2];
+
+  PetscFunctionBegin;
+  PetscCall(MPIU_Allreduce(in, out, 2, MPIU_INT, MPI_MAX, s->comm));
+  PetscCheck(out[1] == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held is indefinite (MUMPS found %" PetscInt_FMT " negative pivots): its K is not positive semi-definite (check its export and units)", s->bodies[b].name, out[1]);
+  PetscCheck(out[0] == 0, s->comm, PETSC_ERR_ARG_WRONG, "body %s: its stiffness with the interface nodes held still has %" PetscInt_FMT " zero-energy mode(s): a mechanism no joint declares, in a part of the body no interface node holds (an unconnected dof, a body in pieces). Fix the model, or declare the joint", s->bodies[b].name, out[0]);
+  PetscFunctionReturn(0);
+}
+
+/* An error on one rank alone (a spread body's factorization on its owner: MUMPS, the memory check) would leave the
+   other ranks waiting: the owner keeps the first message, and KFBodyErrorsCheck raises it on every rank. */
+typedef struct {
+  PetscErrorCode code;
+  char           msg[1024];
+} KFBodyError;
+
+static PetscErrorCode KFBodyErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
+{
+  KFBodyError *e = (KFBodyError *)ctx;
+
+  if (!e->code && mess) {
+    e->code = n;
+    PetscStrncpy(e->msg, mess, sizeof(e->msg));
+  }
+  return n;
+}
+
+static PetscErrorCode KFBodyErrorsCheck(KFScene s, KFBodyError *e)
+{
+  PetscMPIInt rank, first, mine;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  mine = e->code ? rank : PETSC_MPI_INT_MAX;
+  PetscCall(MPIU_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, s->comm));
+  if (first == PETSC_MPI_INT_MAX) PetscFunctionReturn(0);
+  PetscCallMPI(MPI_Bcast(e, (PetscMPIInt)sizeof(*e), MPI_BYTE, first, s->comm));
+  SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread%s)", e->msg, (int)first, e->code == PETSC_ERR_MEM ? "; the ranks of a node factor their bodies at the same time, each checked against its share of the node's memory unless -kf_memory_limit_mb is given" : "");
+}
+
+/* All bodies' factors: spread, each body gathered onto its owner and factored there (the ranks at once), then S_b
+   broadcast from the owner; else each body on all ranks in turn. */
+static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, PetscReal shift, KFBodyFactors bf)
+{
+  PetscFunctionBegin;
+  if (!bf->spread) {
+    for (PetscInt b = 0; b < s->nb; b++) {
+      PetscInt nnull = 0, nneg = 0;
+      PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
+      PetscCall(KFBodyFactorSetUp(s, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
+      PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
+    }
+  } else {
+    PetscMPIInt rank;
+    PetscInt   *nnull, *nneg;
+    Mat        *Kq, *Mq;
+
+    PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+    PetscCall(PetscCalloc4(s->nb, &nnull, s->nb, &nneg, s->nb, &Kq, s->nb, &Mq));
+    for (PetscInt b = 0; b < s->nb; b++) {
+      KFBodyData *B    = &s->bodies[b];
+      PetscBool   mine = (PetscBool)(rank == bf->owner[b]);
+      IS          is;
+      Mat        *sub;
+
+      PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
+      PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
+      PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
+      if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
+      if (mine) Kq[b] = sub[0];
+      PetscCall(MatDestroySubMatrices(1, &sub));
+      if (shift > 0) {
+        PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+        if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
+        if (mine) Mq[b] = sub[0];
+        PetscCall(MatDestroySubMatrices(1, &sub));
+      }
+      PetscCall(ISDestroy(&is));
+      PetscCall(KFBodySFCreate(s, b, bf));
+    }
+    /* the ranks factor their own bodies at the same time: no communication until every rank is done */
+    {
+      KFBodyError    e = {0, ""};
+      PetscErrorCode ierr = 0;
+      PetscBool      has_limit, share = PETSC_FALSE;
+      MPI_Comm       node;
+      PetscMPIInt    nn;
+
+      /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
+         memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
+         theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
+         (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
+      PetscCall(PetscOptionsHasName(NULL, NULL, "-kf_memory_limit_mb", &has_limit));
+      PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+      PetscCallMPI(MPI_Comm_size(node, &nn));
+      if (!has_limit && nn > 1) {
+        PetscReal avail = KFNodeMemoryAvailableMB(), least;
+        char      val[32];
+
+        PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
+        if (least > 0) {
+          PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
+          PetscCall(PetscOptionsSetValue(NULL, "-kf_memory_limit_mb", val));
+          share = PETSC_TRUE;
+        }
+      }
+      PetscCallMPI(MPI_Comm_free(&node));
+      PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
+      for (PetscInt b = 0; b < s->nb && !ierr; b++)
+        if (Kq[b]) ierr = KFBodyFactorSetUp(s, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
+      PetscCall(PetscPopErrorHandler());
+      if (share) PetscCall(PetscOptionsClearValue(NULL, "-kf_memory_limit_mb"));
+      if (ierr && !e.code) e.code = ierr;
+      for (PetscInt b = 0; b < s->nb; b++) {
+        PetscCall(MatDestroy(&Kq[b]));
+        PetscCall(MatDestroy(&Mq[b]));
+      }
+      PetscCall(KFBodyErrorsCheck(s, &e));
+    }
+    for (PetscInt b = 0; b < s->nb; b++) {
+      PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
+      if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));
+      PetscCallMPI(MPI_Bcast(bf->S[b], (PetscMPIInt)(bf->ng[b] * bf->ng[b]), MPIU_REAL, bf->owner[b], s->comm));
+    }
+    PetscCall(PetscFree4(nnull, nneg, Kq, Mq));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -192,7 +429,9 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
    dofs are interface unknowns; monolithic otherwise. The choice depends on the scene only, not on which
    configurations a system visited before, so every solve of a scene takes the same path. Measured
    (scripts/bench-bodywise, solid pair): the body factorizations cost about one factorization of K_S, a body-wise
-   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs). */
+   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs), and at
+   202k dofs faster already at one configuration (1.15x on 1 rank; spread over 2 ranks 1.68x, README). On more ranks
+   than bodies (or -kf_bodywise_spread false) auto keeps the monolithic solve. */
 #define KF_AUTO_MAX_INTERFACE 3000
 static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFlexSolverType *asked)
 {
@@ -219,7 +458,14 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
     if (s->nb > 1 && all_iface && !bcs) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : (bcs ? "the body-wise solve does not take clamped dofs or joints to ground yet" : "a body without interface node")));
   } else if (type == KF_FLEX_SOLVER_AUTO) {
-    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0);
+    PetscMPIInt size;
+    PetscBool   spread = PETSC_TRUE;
+
+    /* on several ranks only when the bodies can be spread: every body distributed over all ranks paid a distributed
+       MUMPS solve per body per block and came out even with the monolithic solve (README, run 4) */
+    PetscCallMPI(MPI_Comm_size(s->comm, &size));
+    PetscCall(PetscOptionsGetBool(NULL, NULL, "-kf_bodywise_spread", &spread, NULL));
+    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && (size == 1 || (spread && size <= s->nb)));
   }
   PetscFunctionReturn(0);
 }
@@ -443,10 +689,8 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
   solver->bw = bw;
   if (!bf->factored) {
     if (asked == KF_FLEX_SOLVER_AUTO) PetscCall(KFProgress(s->comm, "flexible solve: body-wise, the bodies factored once for all configurations (-kf_flex_solver auto; monolithic or bodywise to choose)"));
-    for (PetscInt b = 0; b < s->nb; b++) {
-      PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
-      PetscCall(KFBodyFactorSetUp(s, b, solver->shift, bf));
-    }
+    PetscCall(KFBodywiseAssign(s, bf));
+    PetscCall(KFBodyFactorsSetUpAll(s, solver->shift, bf));
     bf->factored = PETSC_TRUE;
     nfact        = s->nb;
     sys->nfactor += s->nb;
@@ -485,7 +729,9 @@ static PetscErrorCode KFCopyKept(KFScene s, const KFBodyData *B, Mat Sm, Mat Bm,
   PetscFunctionReturn(0);
 }
 
-/* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute */
+/* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute.
+   Spread bodies: each body's rows of W go to its owner, which solves its interior and condenses alone; the ranks do
+   so for their bodies at the same time, and only the small condensed pieces (nG x p) are summed over the ranks. */
 PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
 {
   KFSystem      sys = solver->sys;
@@ -493,22 +739,31 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
   KFBodyFactors bf  = sys->bodyf;
   KFBodywise    bw  = solver->bw;
   PetscInt      nG = bw->nG, p, rstart, rend, lda;
-  PetscReal    *g, *c, *z;
-  Mat          *Y;
+  PetscReal    *g, *c, *z, *gl = NULL;
+  Mat          *Y, *Q;
   PetscScalar  *x;
+  PetscMPIInt   rank;
 
   PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(MatGetSize(W, NULL, &p));
   PetscCall(PetscMalloc1(nG * p + 1, &g));
-  PetscCall(PetscMalloc1(s->nb, &Y));
+  PetscCall(PetscCalloc2(s->nb, &Y, s->nb, &Q));
   PetscCall(KFGatherRows(W, nG, bw->Gidx, g)); /* f_G */
+  if (bf->spread) PetscCall(PetscCalloc1(nG * p + 1, &gl));
   for (PetscInt b = 0; b < s->nb; b++) {
-    PetscInt ng = bf->ng[b];
-    Mat      Fb;
+    PetscInt    ng = bf->ng[b];
+    Mat         Fb;
     KFBodyData *B = &s->bodies[b];
     PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &Fb));
     PetscCall(KFCopyKept(s, B, W, Fb, PETSC_TRUE)); /* interior rows: f_b,I (the interior dofs are kept) */
     PetscCall(KFZeroGammaRows(&s->bodies[b], ng, bf->gif[b], Fb));
+    if (bf->spread) { /* f_b,I to the owner; solved below, once every body's rows have moved */
+      if (rank == bf->owner[b]) PetscCall(KFDenseCreate(PETSC_COMM_SELF, B->n, B->n, p, &Q[b]));
+      PetscCall(KFBodyMoveRows(bf, b, Fb, Q[b], PETSC_TRUE));
+      PetscCall(MatDestroy(&Fb));
+      continue;
+    }
     PetscCall(MatDuplicate(Fb, MAT_DO_NOT_COPY_VALUES, &Y[b]));
     PetscCall(MatMatSolve(bf->F[b], Fb, Y[b])); /* K_II^-1 f_b,I, zero on Gamma */
     PetscCall(PetscMalloc1(ng * p + 1, &c));
@@ -516,6 +771,22 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
     PetscCall(KFSmallGemm("T", nG, p, ng, -1.0, bw->T[b], c, 1.0, g));
     PetscCall(PetscFree(c));
     PetscCall(MatDestroy(&Fb));
+  }
+  if (bf->spread) {
+    for (PetscInt b = 0; b < s->nb; b++) {
+      PetscInt ng = bf->ng[b];
+      if (!Q[b]) continue;
+      PetscCall(MatDuplicate(Q[b], MAT_DO_NOT_COPY_VALUES, &Y[b]));
+      PetscCall(MatMatSolve(bf->F[b], Q[b], Y[b]));
+      PetscCall(PetscMalloc1(ng * p + 1, &c));
+      PetscCall(KFMatTransposeMatMultGather(bf->Psi[b], Q[b], c)); /* sequential: no communication */
+      PetscCall(KFSmallGemm("T", nG, p, ng, -1.0, bw->T[b], c, 1.0, gl));
+      PetscCall(PetscFree(c));
+      PetscCall(MatDestroy(&Q[b]));
+    }
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, gl, (PetscMPIInt)(nG * p), MPIU_REAL, MPIU_SUM, s->comm));
+    for (PetscInt i = 0; i < nG * p; i++) g[i] += gl[i];
+    PetscCall(PetscFree(gl));
   }
   for (PetscInt k = 0; k < bw->nheldG; k++)
     for (PetscInt j = 0; j < p; j++) g[bw->heldG[k] + j * nG] = 0;
@@ -528,13 +799,24 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
   }
   /* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G set directly */
   PetscCall(MatZeroEntries(X));
-  for (PetscInt b = 0; b < s->nb; b++) {
+  for (PetscInt b = 0; b < s->nb; b++) { /* spread: every owner back-substitutes its bodies before any rows move */
     PetscInt ng = bf->ng[b];
+    if (!Y[b]) continue;
     PetscCall(PetscMalloc1(ng * p + 1, &z));
     PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
     PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
     PetscCall(PetscFree(z));
-    PetscCall(KFCopyKept(s, &s->bodies[b], X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    if (bf->spread) {
+      Mat D;
+      PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &D));
+      PetscCall(KFBodyMoveRows(bf, b, D, Y[b], PETSC_FALSE));
+      PetscCall(MatDestroy(&Y[b]));
+      Y[b] = D;
+    }
+    PetscCall(KFCopyKept(s, B, X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
     PetscCall(MatDestroy(&Y[b]));
   }
   PetscCall(MatGetOwnershipRange(X, &rstart, &rend));
@@ -544,7 +826,7 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
     if (bw->Gidx[k] >= rstart && bw->Gidx[k] < rend)
       for (PetscInt j = 0; j < p; j++) x[(bw->Gidx[k] - rstart) + j * lda] = g[k + j * nG];
   PetscCall(MatDenseRestoreArray(X, &x));
-  PetscCall(PetscFree(Y));
+  PetscCall(PetscFree2(Y, Q));
   PetscCall(PetscFree(g));
   PetscFunctionReturn(0);
 }

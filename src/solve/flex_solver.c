@@ -42,8 +42,8 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
   PetscFunctionReturn(0);
 }
 
-/* MemAvailable of this node (/proc/meminfo), in MB; -1 where it cannot be read */
-static PetscReal KFNodeMemoryAvailableMB(void)
+/* MemAvailable of this node (/proc/meminfo), in MB; -1 where it cannot be read (also the body-wise solve's share) */
+PETSC_INTERN PetscReal KFNodeMemoryAvailableMB(void)
 {
   FILE  *f = fopen("/proc/meminfo", "r");
   char   line[256];

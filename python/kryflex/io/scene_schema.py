@@ -68,6 +68,7 @@ REDUCTION_DEFAULTS = {
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
     "flex_solver": "monolithic", # the flexible solve: monolithic | bodywise (bodies factored once) | auto
+    "bodywise_spread": True,     # body-wise on 2+ ranks: each body factored on one rank (-kf_bodywise_spread)
 }
 VERIFY_DEFAULTS = {
     "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
@@ -745,6 +746,7 @@ def _reduction(where, given, revolute):
     red["basis"] = choice(where, p + "basis", red["basis"], BASES)
     red["method"] = choice(where, p + "method", red["method"], METHODS)
     red["flex_solver"] = choice(where, p + "flex_solver", red["flex_solver"], FLEX_SOLVERS)
+    red["bodywise_spread"] = boolean(where, p + "bodywise_spread", red["bodywise_spread"])
     red["importance"] = choice(where, p + "importance", red["importance"], IMPORTANCES)
     if red["moments"] != "auto":
         red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)

@@ -177,10 +177,17 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
    no more moments has its vectors X = V C in the parent's span (up to the parent's deflation), so its body vectors
    are T_b C in the parent's coordinates and its body basis a sub-basis (KFBodyBasisCreateSub): small dense work, no
    product of the bodies' size. The search's bisection over kept clusters makes all its candidates so. */
+/* The parent deflates at this fraction of the body tolerance: a candidate's vectors are then in its span to a
+   thousandth of the tolerance its own deflation works at. With the parent at the body tolerance itself, what the
+   parent dropped (up to ~1e-10 of a unit column) came back divided by the residual norm of a nearly dependent
+   candidate column: 7.7e-8 of the bus's reduced K on the 202k-dof solid, 4e-13 with this factor.
+   A parent is never a model itself: every candidate of its visit, the one it was made for included, is a sub-basis. */
+#define KF_PARENT_TOL_FACTOR 1e-3
+
 typedef struct {
   KFCandidate key;
   KFBodyBasis bb;
-  KFBodyBasis parent;    /* may be bb as well */
+  KFBodyBasis parent;    /* never bb (a parent is no model), but the code allows it */
   PetscInt    pvisit, pm; /* the parent's visit and Krylov columns */
   PetscInt   *nr;         /* rigid modes of the visit */
   PetscReal **Tr, **T;    /* per body: v_b x nr, v_b x pm */
@@ -364,13 +371,14 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
             PetscCall(MatDestroy(&X));
           }
       }
-      PetscCall(KFBodyBasisFinish(bb, r->body_tol));
-      if (parent) {
+      PetscCall(KFBodyBasisFinish(bb, parent ? KF_PARENT_TOL_FACTOR * r->body_tol : r->body_tol));
+      if (parent) { /* the candidate itself is then a sub-basis of it, as the later ones */
         PetscCall(KFCandidateCacheDropParent(r, cc));
         cc->parent = bb;
         cc->pvisit = cand->exp[0];
         cc->pm     = ncols;
         PetscCall(KFCandidateCacheCoordinates(r, v0, cc));
+        PetscCall(KFCandidateSubBasis(r, v0, cc, cand, &bb));
       }
       PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
     }

@@ -165,6 +165,8 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
    columns' count and the orthonormal basis in Q (nl x v). The remaining M-norms of the next step are summed in the
    sweep of the second update (the same sums in the same order as a sweep of their own), and the dot products run
    four columns at a time (KFColumnDots): the same numbers as one loop per column, with a third of the sweeps. */
+#define KF_PIVOT_TIE 1e-8
+
 static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, PetscReal *W, PetscReal *MW, PetscReal tol, PetscInt *v, PetscReal *Q)
 {
   PetscReal *res, *dots, *MQ;
@@ -190,6 +192,14 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
         jmax = j;
       }
     if (jmax < 0 || PetscSqrtReal(rmax) <= tol) break;
+    /* ties go to the first column: residuals within KF_PIVOT_TIE of the largest are equal (a single body's columns all
+       have unit norm at first), so that rounding (another rank count, or a sub-basis's coordinates) does not pick */
+    for (PetscInt j = 0; j < jmax; j++)
+      if (!used[j] && res[j] >= (1 - KF_PIVOT_TIE) * rmax) {
+        rmax = res[j];
+        jmax = j;
+        break;
+      }
     used[jmax] = PETSC_TRUE;
     nrm        = PetscSqrtReal(rmax);
     {

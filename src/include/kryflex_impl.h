@@ -146,6 +146,10 @@ PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MX, const char what[]); /* MX = M X of the result */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis, const Mat P[], Mat X); /* X: columns of unit system M-norm */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis, PetscInt body, Mat Pb, Mat X); /* to one body only */
+/* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */
+PETSC_INTERN PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis);
+PETSC_INTERN PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis, PetscInt body, Mat Pb, Mat X, PetscReal T[]);
+PETSC_INTERN PetscErrorCode KFBodyBasisCreateSub(KFBodyBasis parent, PetscReal tol, const PetscInt m[], PetscReal *const Y[], KFBodyBasis *sub);
 PETSC_INTERN PetscErrorCode KFSystemGetMPhi(KFSystem, Mat *); /* M Phi, kept on the system; NULL without rigid modes */
 PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); /* X <- (I - Phi Phi^T M) X, or (I - M Phi Phi^T) X if left */
 PETSC_INTERN PetscErrorCode KFBodyFindNode(KFBodyData *, PetscInt id, PetscInt *node);

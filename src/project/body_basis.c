@@ -15,6 +15,16 @@ struct _n_KFBodyBasis {
   Mat        *Psi;
   PetscInt   *v, *ndefl;
   PetscReal **M, **K, **G, **H, **iface, **rigid;
+  /* a basis that sub-bases are made from (KFBodyBasisKeepProducts): M Psi, and the coordinates Psi^T M X_adm of the
+     admissible rigid motions Finish added (nadm columns, 0 when none) */
+  PetscBool   keep;
+  Mat        *MPsi;
+  PetscInt   *nadm;
+  PetscReal **adm;
+  /* a sub-basis (KFBodyBasisCreateSub): Psi = Psi_parent Z, made when asked for (KFBodyBasisGetMap) */
+  Mat        *ppsi;
+  PetscInt   *vp;
+  PetscReal **Z;
 };
 
 PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
@@ -31,6 +41,8 @@ PetscErrorCode KFBodyBasisCreate(KFScene s, KFBodyBasis *bb)
   PetscCall(PetscCalloc2(s->nb, &b->v, s->nb, &b->ndefl));
   PetscCall(PetscCalloc5(s->nb, &b->M, s->nb, &b->K, s->nb, &b->G, s->nb, &b->H, s->nb, &b->iface));
   PetscCall(PetscCalloc1(s->nb, &b->rigid));
+  PetscCall(PetscCalloc3(s->nb, &b->MPsi, s->nb, &b->nadm, s->nb, &b->adm));
+  PetscCall(PetscCalloc3(s->nb, &b->ppsi, s->nb, &b->vp, s->nb, &b->Z));
   *bb = b;
   PetscFunctionReturn(0);
 }
@@ -47,7 +59,13 @@ PetscErrorCode KFBodyBasisDestroy(KFBodyBasis *bb)
     PetscCall(MatDestroy(&b->Psi[i]));
     PetscCall(PetscFree5(b->M[i], b->K[i], b->G[i], b->H[i], b->iface[i]));
     PetscCall(PetscFree(b->rigid[i]));
+    PetscCall(MatDestroy(&b->MPsi[i]));
+    PetscCall(PetscFree(b->adm[i]));
+    PetscCall(MatDestroy(&b->ppsi[i]));
+    PetscCall(PetscFree(b->Z[i]));
   }
+  PetscCall(PetscFree3(b->MPsi, b->nadm, b->adm));
+  PetscCall(PetscFree3(b->ppsi, b->vp, b->Z));
   PetscCall(PetscFree(b->rigid));
   PetscCall(PetscFree3(b->ncols, b->cols, b->Psi));
   PetscCall(PetscFree2(b->v, b->ndefl));
@@ -147,6 +165,8 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
    columns' count and the orthonormal basis in Q (nl x v). The remaining M-norms of the next step are summed in the
    sweep of the second update (the same sums in the same order as a sweep of their own), and the dot products run
    four columns at a time (KFColumnDots): the same numbers as one loop per column, with a third of the sweeps. */
+#define KF_PIVOT_TIE 1e-8
+
 static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, PetscReal *W, PetscReal *MW, PetscReal tol, PetscInt *v, PetscReal *Q)
 {
   PetscReal *res, *dots, *MQ;
@@ -172,6 +192,14 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
         jmax = j;
       }
     if (jmax < 0 || PetscSqrtReal(rmax) <= tol) break;
+    /* ties go to the first column: residuals within KF_PIVOT_TIE of the largest are equal (a single body's columns all
+       have unit norm at first), so that rounding (another rank count, or a sub-basis's coordinates) does not pick */
+    for (PetscInt j = 0; j < jmax; j++)
+      if (!used[j] && res[j] >= (1 - KF_PIVOT_TIE) * rmax) {
+        rmax = res[j];
+        jmax = j;
+        break;
+      }
     used[jmax] = PETSC_TRUE;
     nrm        = PetscSqrtReal(rmax);
     {
@@ -438,7 +466,17 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
       PetscCall(MPIU_Allreduce(MPI_IN_PLACE, bb->iface[b], (PetscMPIInt)(ni * v), MPIU_REAL, MPIU_SUM, s->comm));
     }
     PetscCall(KFBodyRigidReduced(B, bb->Psi[b], MPsi, &bb->rigid[b]));
-    PetscCall(MatDestroy(&MPsi));
+    if (bb->keep) { /* what sub-bases need: M Psi for the coordinates of vectors, those of the admissible motions */
+      if (s->nrigid >= 0 && s->nrigid < 6 + s->nrevolute) {
+        Mat X;
+        PetscCall(KFBodyAdmissibleRigidColumns(B, &X));
+        PetscCall(MatGetSize(X, NULL, &bb->nadm[b]));
+        PetscCall(PetscMalloc1(v * bb->nadm[b] + 1, &bb->adm[b]));
+        PetscCall(KFMatTransposeMatMultGather(MPsi, X, bb->adm[b]));
+        PetscCall(MatDestroy(&X));
+      }
+      bb->MPsi[b] = MPsi;
+    } else PetscCall(MatDestroy(&MPsi));
     PetscCall(PetscLogEventEnd(KF_EVENT_BODY_REDUCE, 0, 0, 0, 0));
   }
   bb->finished = PETSC_TRUE;
@@ -469,6 +507,129 @@ PetscErrorCode KFBodyBasisGetMap(KFBodyBasis bb, PetscInt b, Mat *Psi)
   PetscFunctionBegin;
   PetscCheck(bb->finished, bb->s->comm, PETSC_ERR_ORDER, "call KFBodyBasisFinish() first");
   PetscCheck(b >= 0 && b < bb->s->nb, bb->s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", b);
+  if (!bb->Psi[b] && bb->ppsi[b]) { /* a sub-basis: its map when first asked for, Psi_parent Z */
+    KFBodyData *B = &bb->s->bodies[b];
+    PetscCall(KFDenseCreate(bb->s->comm, B->rend - B->rstart, B->n, bb->v[b], &bb->Psi[b]));
+    PetscCall(MatZeroEntries(bb->Psi[b]));
+    PetscCall(KFDenseMultSmall(bb->ppsi[b], bb->vp[b], bb->v[b], bb->Z[b], 1.0, bb->Psi[b]));
+  }
   *Psi = bb->Psi[b];
+  PetscFunctionReturn(0);
+}
+
+/* Keep, at KFBodyBasisFinish, what sub-bases are made from (M Psi per body): call before Finish */
+PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis bb)
+{
+  PetscFunctionBegin;
+  PetscCheck(!bb->finished, bb->s->comm, PETSC_ERR_ORDER, "KFBodyBasisKeepProducts() after KFBodyBasisFinish()");
+  bb->keep = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
+/* T = Psi_b^T M_b (P_b X) (v x m, replicated): the coordinates of body vectors P_b X in the M-orthonormal basis, of which
+   Psi_b T is the M-orthogonal projection */
+PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X, PetscReal T[])
+{
+  Mat Y;
+
+  PetscFunctionBegin;
+  PetscCheck(bb->finished && bb->keep, bb->s->comm, PETSC_ERR_ORDER, "call KFBodyBasisKeepProducts() and KFBodyBasisFinish() first");
+  PetscCall(MatMatMult(Pb, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Y));
+  PetscCall(KFMatTransposeMatMultGather(bb->MPsi[b], Y, T));
+  PetscCall(MatDestroy(&Y));
+  PetscFunctionReturn(0);
+}
+
+/* C (r x p) = op(A) B, with op(A) = A (r x k) or A^T (A k x r); B k x p, column-major, small replicated arrays */
+static void KFSmallMult(PetscBool trans, PetscInt r, PetscInt k, PetscInt p, const PetscReal *A, PetscInt lda, const PetscReal *B, PetscReal *C)
+{
+  for (PetscInt j = 0; j < p; j++)
+    for (PetscInt i = 0; i < r; i++) {
+      PetscReal d = 0;
+      for (PetscInt l = 0; l < k; l++) d += (trans ? A[l + i * lda] : A[i + l * lda]) * B[l + j * k];
+      C[i + j * r] = d;
+    }
+}
+
+/* A finished body basis spanned by a parent's (kept with KFBodyBasisKeepProducts): body b's vectors given by their
+   coordinates Y[b] (parent v_b x m[b], column-major; KFBodyBasisCoordinates), scaled as KFBodyBasisAdd's are. In
+   these coordinates the M-inner product is the parent's reduced mass M_p (the identity to rounding), so the pivoted
+   Gram-Schmidt with deflation at tol, the one M-orthonormalization pass after it (Cholesky) and the reduced matrices
+   (Z^T M_p Z, Z^T K_p Z, Z^T G_p, H_p Z, interface rows iface_p Z, rigid rows Z^T R_p) are small dense work: nothing
+   of the bodies' size. The same basis as KFBodyBasisFinish of the vectors themselves, but for their parts outside the
+   parent's span (below the parent's deflation tolerance) and rounding. The rigid rows are the parent's, rotated:
+   those of the rigid motions' projection, exactly rigid as the parent's are. The map Psi = Psi_p Z is made only when
+   KFBodyBasisGetMap asks for it; the sub-basis holds a reference to the parent's maps, not to the parent. */
+PetscErrorCode KFBodyBasisCreateSub(KFBodyBasis parent, PetscReal tol, const PetscInt m[], PetscReal *const Y[], KFBodyBasis *sub)
+{
+  KFScene     s = parent->s;
+  KFBodyBasis bb;
+  PetscInt    a = s->ninputs, t = s->noutputs;
+
+  PetscFunctionBegin;
+  PetscCheck(parent->finished && parent->keep, s->comm, PETSC_ERR_ORDER, "the parent basis needs KFBodyBasisKeepProducts() and KFBodyBasisFinish()");
+  PetscCheck(tol > 0 && tol < 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body deflation tolerance must lie in (0, 1); got %g", (double)tol);
+  PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
+  PetscCall(PetscLogEventBegin(KF_EVENT_BODY_BASIS, 0, 0, 0, 0));
+  PetscCall(KFBodyBasisCreate(s, &bb));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData      *B  = &s->bodies[b];
+    const PetscInt   vp = parent->v[b], na = parent->nadm[b], mt = m[b] + na, ni = 6 * B->ninterfaces;
+    const PetscReal *Mp = parent->M[b];
+    PetscReal       *W, *MW, *Q, *Gm, *tmp;
+    PetscInt         v;
+
+    PetscCall(PetscMalloc5(vp * mt + 1, &W, vp * mt + 1, &MW, vp * mt + 1, &Q, vp * vp + 1, &Gm, vp * PetscMax(PetscMax(vp, a), PetscMax(t, ni)) + 6 * vp + 1, &tmp));
+    PetscCall(PetscArraycpy(W, Y[b], vp * m[b]));
+    if (na) PetscCall(PetscArraycpy(&W[vp * m[b]], parent->adm[b], vp * na)); /* as KFBodyBasisFinish appends them */
+    KFSmallMult(PETSC_FALSE, vp, vp, mt, Mp, vp, W, MW);
+    PetscCall(KFPivotedMGS(PETSC_COMM_SELF, vp, mt, W, MW, tol, &v, Q)); /* replicated: the same on every rank */
+    PetscCheck(v > 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s' gets no basis vector: the modes do not move it", B->name);
+    { /* one M_p-orthonormalization pass (Cholesky), as KFBodyBasisFinish's KFMOrthonormalizeProduct */
+      KFSmallMult(PETSC_FALSE, vp, vp, v, Mp, vp, Q, tmp);
+      KFSmallMult(PETSC_TRUE, v, vp, v, Q, vp, tmp, Gm);
+      for (PetscInt j = 0; j < v; j++) {
+        PetscReal d = Gm[j + j * v];
+        for (PetscInt k = 0; k < j; k++) d -= Gm[j + k * v] * Gm[j + k * v];
+        PetscCheck(d > 0, s->comm, PETSC_ERR_PLIB, "body '%s': the sub-basis is not M-orthonormalizable (column %" PetscInt_FMT ")", B->name, j);
+        Gm[j + j * v] = PetscSqrtReal(d);
+        for (PetscInt i = j + 1; i < v; i++) {
+          PetscReal x = Gm[i + j * v];
+          for (PetscInt k = 0; k < j; k++) x -= Gm[i + k * v] * Gm[j + k * v];
+          Gm[i + j * v] = x / Gm[j + j * v];
+        }
+      }
+      for (PetscInt i = 0; i < vp; i++) /* Q <- Q L^-T: row by row, forward substitution */
+        for (PetscInt j = 0; j < v; j++) {
+          PetscReal x = Q[i + j * vp];
+          for (PetscInt k = 0; k < j; k++) x -= Q[i + k * vp] * Gm[j + k * v];
+          Q[i + j * vp] = x / Gm[j + j * v];
+        }
+    }
+    bb->v[b]     = v;
+    bb->ndefl[b] = mt - v;
+    bb->vp[b]    = vp;
+    PetscCall(PetscMalloc1(vp * v, &bb->Z[b]));
+    PetscCall(PetscArraycpy(bb->Z[b], Q, vp * v));
+    PetscCall(PetscObjectReference((PetscObject)parent->Psi[b]));
+    bb->ppsi[b] = parent->Psi[b];
+    PetscCall(PetscLogEventBegin(KF_EVENT_BODY_REDUCE, 0, 0, 0, 0));
+    PetscCall(PetscMalloc5(v * v, &bb->M[b], v * v, &bb->K[b], v * a, &bb->G[b], t * v, &bb->H[b], ni * v + 1, &bb->iface[b]));
+    PetscCall(PetscMalloc1(v * 6, &bb->rigid[b]));
+    KFSmallMult(PETSC_FALSE, vp, vp, v, Mp, vp, Q, tmp);
+    KFSmallMult(PETSC_TRUE, v, vp, v, Q, vp, tmp, bb->M[b]);
+    KFSmallMult(PETSC_FALSE, vp, vp, v, parent->K[b], vp, Q, tmp);
+    KFSmallMult(PETSC_TRUE, v, vp, v, Q, vp, tmp, bb->K[b]);
+    KFSmallMult(PETSC_TRUE, v, vp, a, Q, vp, parent->G[b], bb->G[b]);
+    KFSmallMult(PETSC_FALSE, t, vp, v, parent->H[b], t, Q, bb->H[b]);
+    KFSmallMult(PETSC_FALSE, ni, vp, v, parent->iface[b], ni, Q, bb->iface[b]);
+    KFSmallMult(PETSC_TRUE, v, vp, 6, Q, vp, parent->rigid[b], bb->rigid[b]);
+    PetscCall(PetscLogEventEnd(KF_EVENT_BODY_REDUCE, 0, 0, 0, 0));
+    PetscCall(PetscFree5(W, MW, Q, Gm, tmp));
+  }
+  bb->finished = PETSC_TRUE;
+  *sub         = bb;
+  PetscCall(PetscLogEventEnd(KF_EVENT_BODY_BASIS, 0, 0, 0, 0));
+  PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

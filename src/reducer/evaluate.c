@@ -220,7 +220,7 @@ PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscI
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
-  PetscCall(KFCandidateModel_Private(r, visits, cand, &model));
+  PetscCall(KFCandidateModel_Private(r, visits, cand, PETSC_FALSE, &model));
   cand->size = 0;
   for (PetscInt b = 0; b < nb; b++) {
     KFReducedBody body;

@@ -59,6 +59,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->moments                 = PETSC_DECIDE;
   r->moments_max             = 24;
   r->search                  = PETSC_TRUE;
+  r->sub_bases               = PETSC_TRUE;
   r->cluster_rtol            = 1e-3;
   r->output_blocks           = 1;
   r->importance              = KF_IMPORTANCE_BAND;

@@ -155,6 +155,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsReal("-kf_body_tol", "Per-body rank deflation of the projected vectors (relative)", "KFReducerSetTolerances", btol, &btol, NULL));
   PetscCall(PetscOptionsReal("-kf_reassembly_rtol", "SVD rank tolerance of the reduced interface constraints", "KFReducerSetTolerances", rtol, &rtol, NULL));
   PetscCall(KFReducerSetTolerances(r, dtol, btol, rtol));
+  PetscCall(PetscOptionsBool("-kf_search_sub_bases", "Search candidates' body bases made in their visit's richest body basis (small dense work) rather than from their vectors", "", r->sub_bases, &r->sub_bases, NULL));
   shift = r->shift;
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of holding dofs (moments then expand about -shift)", "KFReducerSetShift", shift, &shift, &flg));
   if (flg) PetscCall(KFReducerSetShift(r, shift));

@@ -631,7 +631,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     rich.c      = nfull;
     rich.kept   = -1;
     for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
-    PetscCall(KFCandidateModel_Private(r, visits, &rich, &model));
+    PetscCall(KFCandidateModel_Private(r, visits, &rich, PETSC_FALSE, &model));
     for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
     PetscCall(PetscTime(&t1));
     times[5] += t1 - t0;
@@ -676,8 +676,8 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     single.family = KF_METHOD_SINGLE_ANGLE;
     single.nexp = 1;
   }
-  PetscCall(KFCandidateModel_Private(r, visits, &single, &r->single));
-  if (multi.nexp) PetscCall(KFCandidateModel_Private(r, visits, &multi, &r->multi_model));
+  PetscCall(KFCandidateModel_Private(r, visits, &single, PETSC_TRUE, &r->single));
+  if (multi.nexp) PetscCall(KFCandidateModel_Private(r, visits, &multi, PETSC_TRUE, &r->multi_model));
   PetscCall(PetscTime(&t1));
   times[5] += t1 - t0;
   {

@@ -94,11 +94,10 @@ static PetscErrorCode KFClusterOrder(PetscInt m, const PetscReal imp[], const Pe
 
 /* The Krylov combinations: kept modes (columns of Phi) and the static correction of the others (eq. 15-17), each
    scaled to unit M-norm (c^T Mr c = 1), as KFBodyBasisAddMapped expects; X = V C on the first m columns of the BV. */
-PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters)
+static PetscErrorCode KFVisitCombination(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, PetscInt *mout, PetscInt *ncolout, PetscReal **Cout, PetscInt *nclusters)
 {
   const PetscInt N = v->basis.size;
-  BV             V = (BV)v->basis.data;
-  PetscInt       m, nc, *clu, *order, l0, k0, a, nk = 0, nd, ncol;
+  PetscInt       m, nc, *clu, *order, a, nk = 0, nd, ncol;
   PetscReal     *lambda, *Phi, *imp, *C;
   PetscBool     *keep;
 
@@ -144,13 +143,27 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
     if (q > 0)
       for (PetscInt i = 0; i < m; i++) C[i + j * m] /= PetscSqrtReal(q);
   }
+  *mout    = m;
+  *ncolout = ncol;
+  *Cout    = C;
+  PetscCall(PetscFree2(keep, order));
+  PetscCall(PetscFree4(lambda, Phi, imp, clu));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters)
+{
+  BV         V = (BV)v->basis.data;
+  PetscInt   m, ncol, l0, k0;
+  PetscReal *C;
+
+  PetscFunctionBegin;
+  PetscCall(KFVisitCombination(r, v, c, kept, &m, &ncol, &C, nclusters));
   PetscCall(BVGetActiveColumns(V, &l0, &k0));
   PetscCall(BVSetActiveColumns(V, 0, m));
   PetscCall(KFBVCombine(V, ncol, C, X));
   PetscCall(BVSetActiveColumns(V, l0, k0));
   PetscCall(PetscFree(C));
-  PetscCall(PetscFree2(keep, order));
-  PetscCall(PetscFree4(lambda, Phi, imp, clu));
   PetscFunctionReturn(0);
 }
 
@@ -158,10 +171,26 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
    settings recorded differ, the body bases do not. The estimator's richest model (every basis whole) and the search's
    first candidate (the same at one expansion angle), and the search's last candidate and the model made of it, are
    such pairs: each is a body basis (products with M and K, Gram-Schmidt, K Psi in extended precision) not made twice.
-   One entry: a body basis holds n_b x v per body. */
+   And the parent: the body basis of one visit's whole Krylov basis at the most moments made so far (with the rigid
+   modes), kept with what sub-bases need (KFBodyBasisKeepProducts), and the coordinates in it of the visit's rigid
+   modes Tr_b = Psi_b^T M_b P_b Phir and Krylov basis T_b = Psi_b^T M_b P_b V. Every later candidate of that visit with
+   no more moments has its vectors X = V C in the parent's span (up to the parent's deflation), so its body vectors
+   are T_b C in the parent's coordinates and its body basis a sub-basis (KFBodyBasisCreateSub): small dense work, no
+   product of the bodies' size. The search's bisection over kept clusters makes all its candidates so. */
+/* The parent deflates at this fraction of the body tolerance: a candidate's vectors are then in its span to a
+   thousandth of the tolerance its own deflation works at. With the parent at the body tolerance itself, what the
+   parent dropped (up to ~1e-10 of a unit column) came back divided by the residual norm of a nearly dependent
+   candidate column: 7.7e-8 of the bus's reduced K on the 202k-dof solid, 4e-13 with this factor.
+   A parent is never a model itself: every candidate of its visit, the one it was made for included, is a sub-basis. */
+#define KF_PARENT_TOL_FACTOR 1e-3
+
 typedef struct {
   KFCandidate key;
   KFBodyBasis bb;
+  KFBodyBasis parent;    /* never bb (a parent is no model), but the code allows it */
+  PetscInt    pvisit, pm; /* the parent's visit and Krylov columns */
+  PetscInt   *nr;         /* rigid modes of the visit */
+  PetscReal **Tr, **T;    /* per body: v_b x nr, v_b x pm */
 } KFCandidateCache;
 
 /* the same vectors: the same visits, moments, kept clusters (per body when shared); not the family */
@@ -175,18 +204,125 @@ static PetscBool KFSameVectors(const KFCandidate *a, const KFCandidate *b)
   return PETSC_TRUE;
 }
 
+/* every cluster kept (kept < 0, or at least the number of clusters) */
+static PetscErrorCode KFWholeBasis(KFReducer r, KFVisit *v, const KFCandidate *cand, PetscBool *whole)
+{
+  PetscInt   n, nclusters, *clu;
+  PetscReal *lambda, *Phi, *imp;
+
+  PetscFunctionBegin;
+  *whole = (PetscBool)(cand->kept < 0);
+  if (*whole || cand->nbody) PetscFunctionReturn(0);
+  PetscCall(KFVisitModes_Private(r, v, cand->c, &n, &lambda, &Phi, &imp, &clu, &nclusters));
+  PetscCall(PetscFree4(lambda, Phi, imp, clu));
+  *whole = (PetscBool)(cand->kept >= nclusters);
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFCandidateCacheDropParent(KFReducer r, KFCandidateCache *cc)
+{
+  PetscInt nb;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  if (cc->T)
+    for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree2(cc->Tr[b], cc->T[b]));
+  PetscCall(PetscFree2(cc->Tr, cc->T));
+  if (cc->parent != cc->bb) PetscCall(KFBodyBasisDestroy(&cc->parent));
+  cc->parent = NULL;
+  PetscFunctionReturn(0);
+}
+
+/* the last model's basis replaced by bb (the parent is kept) */
+static PetscErrorCode KFCandidateCacheSetLast(KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis bb)
+{
+  PetscFunctionBegin;
+  if (cc->bb != cc->parent) PetscCall(KFBodyBasisDestroy(&cc->bb));
+  cc->key = *cand;
+  cc->bb  = bb;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFCandidateCacheReset_Private(KFReducer r)
 {
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
 
   PetscFunctionBegin;
   if (!cc) PetscFunctionReturn(0);
+  PetscCall(KFCandidateCacheDropParent(r, cc));
   PetscCall(KFBodyBasisDestroy(&cc->bb));
   PetscCall(PetscFree(r->candcache));
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFCandidate *cand, KFReducedModel *model)
+/* the coordinates of the parent's visit: Tr_b, T_b (one product P_b [Phir, V] per body with M Psi_b) */
+static PetscErrorCode KFCandidateCacheCoordinates(KFReducer r, KFVisit *v, KFCandidateCache *cc)
+{
+  BV       V = (BV)v->basis.data;
+  PetscInt nb, l0, k0, nr;
+  Mat      Vm;
+  PetscReal *Id;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(MatGetSize(v->Phir, NULL, &nr));
+  PetscCall(PetscCalloc1(cc->pm * cc->pm, &Id));
+  for (PetscInt i = 0; i < cc->pm; i++) Id[i + i * cc->pm] = 1;
+  PetscCall(BVGetActiveColumns(V, &l0, &k0));
+  PetscCall(BVSetActiveColumns(V, 0, cc->pm));
+  PetscCall(KFBVCombine(V, cc->pm, Id, &Vm));
+  PetscCall(BVSetActiveColumns(V, l0, k0));
+  PetscCall(PetscFree(Id));
+  PetscCall(PetscCalloc2(nb, &cc->Tr, nb, &cc->T));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt vb;
+
+    PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(PetscMalloc2(vb * nr + 1, &cc->Tr[b], vb * cc->pm + 1, &cc->T[b]));
+    PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], v->Phir, cc->Tr[b]));
+    PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], Vm, cc->T[b]));
+  }
+  PetscCall(MatDestroy(&Vm));
+  PetscFunctionReturn(0);
+}
+
+/* a candidate of the parent's visit as a sub-basis: body vectors [Tr_b, T_b(:, 1:m) C_b] in the parent's coordinates */
+static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit *v, KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb)
+{
+  PetscInt    nb, nr, *mb;
+  PetscReal **Y;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(MatGetSize(v->Phir, NULL, &nr));
+  PetscCall(PetscMalloc2(nb, &mb, nb, &Y));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt   vb, m, ncol;
+    PetscReal *C;
+
+    PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m, &ncol, &C, NULL));
+    PetscCheck(m <= cc->pm, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
+    mb[b] = nr + ncol;
+    PetscCall(PetscMalloc1(vb * mb[b] + 1, &Y[b]));
+    PetscCall(PetscArraycpy(Y[b], cc->Tr[b], vb * nr));
+    for (PetscInt j = 0; j < ncol; j++)
+      for (PetscInt i = 0; i < vb; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < m; k++) d += cc->T[b][i + k * vb] * C[k + j * m];
+        Y[b][i + (nr + j) * vb] = d;
+      }
+    PetscCall(PetscFree(C));
+  }
+  PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
+  for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(Y[b]));
+  PetscCall(PetscFree2(mb, Y));
+  PetscFunctionReturn(0);
+}
+
+/* maps: the model keeps the bodies' maps as the reducer's options say (the models the reducer returns); the search's
+   candidates (evaluated, then dropped) keep none */
+PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFCandidate *cand, PetscBool maps, KFReducedModel *model)
 {
   KFBodyBasis       bb;
   PetscInt          nrev, nrev1, nb, maxdofs = 0;
@@ -204,27 +340,48 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     r->candcache = cc;
   }
   if (!cc->bb || !KFSameVectors(&cc->key, cand)) { /* not the vectors of the last model: a body basis of its own */
-    PetscCall(KFBodyBasisDestroy(&cc->bb));
-    PetscCall(KFBodyBasisCreate(r->scene, &bb));
-    for (PetscInt e = 0; e < cand->nexp; e++) {
-      KFVisit *v = &visits[cand->exp[e]];
-      Mat      X;
+    KFVisit       *v0    = &visits[cand->exp[0]];
+    const PetscInt ncols = cand->nexp == 1 && v0->basis.nblocks ? KFVisitColumns(v0, cand->c) : -1;
 
-      PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
-      if (!cand->nbody) {
-        PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
-        PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
-        PetscCall(MatDestroy(&X));
-      } else
-        for (PetscInt b = 0; b < nb; b++) {
-          PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
-          PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
+    if (r->sub_bases && ncols >= 0 && cc->parent && cc->pvisit == cand->exp[0] && ncols <= cc->pm) {
+      PetscCall(PetscInfo(r, "candidate c=%" PetscInt_FMT " kept=%" PetscInt_FMT " nbody=%" PetscInt_FMT ": a sub-basis of visit %" PetscInt_FMT "\n", cand->c, cand->kept, cand->nbody, cc->pvisit));
+      PetscCall(KFCandidateSubBasis(r, v0, cc, cand, &bb));
+      PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
+    } else {
+      /* one visit's whole basis with at least the parent's moments: the new parent */
+      PetscBool parent = PETSC_FALSE;
+
+      if (r->sub_bases && ncols >= 0 && !cand->nbody && (!cc->parent || cc->pvisit != cand->exp[0] || ncols > cc->pm)) PetscCall(KFWholeBasis(r, v0, cand, &parent));
+
+      PetscCall(KFBodyBasisCreate(r->scene, &bb));
+      if (parent) PetscCall(KFBodyBasisKeepProducts(bb));
+      for (PetscInt e = 0; e < cand->nexp; e++) {
+        KFVisit *v = &visits[cand->exp[e]];
+        Mat      X;
+
+        PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
+        if (!cand->nbody) {
+          PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
+          PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
           PetscCall(MatDestroy(&X));
-        }
+        } else
+          for (PetscInt b = 0; b < nb; b++) {
+            PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
+            PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
+            PetscCall(MatDestroy(&X));
+          }
+      }
+      PetscCall(KFBodyBasisFinish(bb, parent ? KF_PARENT_TOL_FACTOR * r->body_tol : r->body_tol));
+      if (parent) { /* the candidate itself is then a sub-basis of it, as the later ones */
+        PetscCall(KFCandidateCacheDropParent(r, cc));
+        cc->parent = bb;
+        cc->pvisit = cand->exp[0];
+        cc->pm     = ncols;
+        PetscCall(KFCandidateCacheCoordinates(r, v0, cc));
+        PetscCall(KFCandidateSubBasis(r, v0, cc, cand, &bb));
+      }
+      PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
     }
-    PetscCall(KFBodyBasisFinish(bb, r->body_tol));
-    cc->key = *cand;
-    cc->bb  = bb;
   }
   bb = cc->bb;
   for (PetscInt b = 0; b < nb; b++) {
@@ -234,6 +391,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     maxdofs = PetscMax(maxdofs, nd);
   }
   keep = r->save_maps == PETSC_DECIDE ? (PetscBool)(maxdofs <= r->save_maps_max_dofs) : (PetscBool)r->save_maps;
+  keep = (PetscBool)(keep && maps);
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, cand->nexp, angles, keep, model));
   PetscCall(KFReducerRecordSettings_Private(r, *model, (KFReducerMethod)cand->family, cand->c, cand->nexp, angles));
   PetscCall(PetscFree(angles)); /* bb stays in the cache */

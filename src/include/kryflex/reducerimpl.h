@@ -80,6 +80,7 @@ struct _p_KFReducer {
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */
+  PetscBool       sub_bases;      /* search candidates' body bases in their visit's richest one (-kf_search_sub_bases) */
   PetscInt        moments_max;
   PetscReal       cluster_rtol;
   PetscBool       full_moments, full_moments_set; /* full-order moments by solves: -kf_full_moments, default -kf_verify */
@@ -154,7 +155,7 @@ typedef struct {
   PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */
   PetscBool complete;   /* every evaluation point was measured */
 } KFCandidate;
-PETSC_INTERN PetscErrorCode KFCandidateModel_Private(KFReducer, KFVisit visits[], const KFCandidate *, KFReducedModel *);
+PETSC_INTERN PetscErrorCode KFCandidateModel_Private(KFReducer, KFVisit visits[], const KFCandidate *, PetscBool maps, KFReducedModel *);
 PETSC_INTERN PetscErrorCode KFCandidateCacheReset_Private(KFReducer);
 
 /* a configuration where models are measured: an angle of interest or a midpoint, with its reference response */

@@ -7,8 +7,10 @@
 
 kryflex.reduce(scene) does the same in one call and returns the same Reduction (model, summary, both models).
 
-Importing kryflex has no side effects: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a
-command line's PETSc options (the kryflex command does that). Runs under mpirun with mpi4py.
+Importing kryflex starts nothing: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a command
+line's PETSc options (the kryflex command does that). It only loads Debian's SCOTCH build of MUMPS where installed, so
+that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (README, "Nested
+dissection"). Runs under mpirun with mpi4py.
 
 The package, in the order data flows through it:
     io/        scenes (YAML, in-memory matrices), body files, Nastran DMIG, Matrix Market, converters
@@ -21,7 +23,9 @@ The package, in the order data flows through it:
 """
 import importlib
 
-from ._runtime import init
+from ._runtime import init, load_mumps_with_orderings
+
+load_mumps_with_orderings()
 
 __version__ = "0.1.0"
 

@@ -10,11 +10,31 @@ that rank when PETSc's collective clean-up runs on the others, and the ranks wou
 """
 import atexit
 import contextlib
+import ctypes
 import gc
+import os
 import sys
 
 _started = False
 _collect_registered = False
+
+# Debian's MUMPS with SCOTCH and PT-SCOTCH orderings (package libmumps-ptscotch-5.5, installed by scripts/setup): the
+# same MUMPS 5.5.1 as the plain build PETSc links, with nested dissection compiled in. Loaded into the process's
+# global scope before PETSc, PETSc's calls to MUMPS bind to it, and MUMPS' own choice of ordering takes SCOTCH for large
+# matrices (README, "Nested dissection"). KRYFLEX_MUMPS=plain keeps the build PETSc links.
+MUMPS_WITH_ORDERINGS = "libdmumps_ptscotch-5.5.so"
+
+
+def load_mumps_with_orderings():
+    """Makes the SCOTCH build of MUMPS the one PETSc calls, if it is installed and PETSc is not loaded yet (a process
+    that imported petsc4py first keeps the plain build: the factorizations then take MUMPS' own orderings)."""
+    if os.environ.get("KRYFLEX_MUMPS") == "plain" or "petsc4py.PETSc" in sys.modules:
+        return False
+    try:
+        ctypes.CDLL(MUMPS_WITH_ORDERINGS, mode=ctypes.RTLD_GLOBAL)
+    except OSError:
+        return False
+    return True
 
 
 def init(argv=None):

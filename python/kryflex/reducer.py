@@ -80,7 +80,7 @@ class Reducer:
         red, ver = scene.reduction, scene.verify
         # the flexible solve is read by every solver the solve makes, not by the reducer: kept for reduce()
         self._flex_solver = (options.pop("flex_solver"), True) if "flex_solver" in options else \
-            (red.get("flex_solver", "monolithic"), False)
+            (red.get("flex_solver", "auto"), False)
         if self._flex_solver[0] not in ("auto", "monolithic", "bodywise"):
             raise ValueError("flex_solver: give auto, monolithic or bodywise, got %r" % (self._flex_solver[0],))
         r = _core.CReducer(scene.comm)
@@ -156,7 +156,7 @@ class Reducer:
         from petsc4py import PETSc
         value, keyword = self._flex_solver
         opts = {}
-        if keyword or (value != "monolithic" and not PETSc.Options().hasName("kf_flex_solver")):
+        if keyword or (value != "auto" and not PETSc.Options().hasName("kf_flex_solver")):
             opts["flex_solver"] = value
         # reduction.bodywise_spread: false unless the options (command line, keyword bodywise_spread) say
         if not self.scene.reduction.get("bodywise_spread", True) and "bodywise_spread" not in self._options \

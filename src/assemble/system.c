@@ -14,6 +14,7 @@ PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
   PetscCall(PetscObjectReference((PetscObject)s)); /* the scene lives as long as the system */
   y->scene = s;
   y->nb    = s->nb;
+  y->nconfig = 1;
   PetscCall(PetscCalloc1(PetscMax(s->nrevolute, 1), &y->angles));
   PetscCall(PetscCalloc3(s->nb, &y->Q, s->nb, &y->o, s->nb, &y->P));
   *sys = y;
@@ -58,6 +59,14 @@ static PetscErrorCode KFSystemSumPtX(KFSystem y, PetscBool inputs, Mat *S)
       PetscCall(MatDestroy(&T));
     }
   }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemSetConfigurationCount(KFSystem y, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscCheck(n >= 1, y->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "a system is solved at one configuration or more; got %" PetscInt_FMT, n);
+  y->nconfig = n;
   PetscFunctionReturn(0);
 }
 

@@ -96,6 +96,9 @@ PETSC_EXTERN PetscErrorCode KFSystemCreate(KFScene, KFSystem *);
 PETSC_EXTERN PetscErrorCode KFSystemDestroy(KFSystem *);
 /* angles: one per revolute joint, in the order the joints were added, radians */
 PETSC_EXTERN PetscErrorCode KFSystemSetAngles(KFSystem, const PetscReal angles[]);
+/* how many configurations this system will be solved at (default 1): -kf_flex_solver auto factors the bodies once for
+   all of them (the body-wise solve) when there are two or more; the reducer sets it */
+PETSC_EXTERN PetscErrorCode KFSystemSetConfigurationCount(KFSystem, PetscInt);
 /* Ms, Ks: e x e MPIAIJ; G: e x a MPIDENSE; Ht: e x t MPIDENSE (H^T). Borrowed references. */
 PETSC_EXTERN PetscErrorCode KFSystemGetMatrices(KFSystem, Mat *Ms, Mat *Ks, Mat *G, Mat *Ht);
 /* P_b: n_b x e MPIAIJ, x_b = P_b x_e. Borrowed. */

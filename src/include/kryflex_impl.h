@@ -110,6 +110,7 @@ struct _n_KFSystem {
   PetscBool  user_rigid;
   KFBodyFactors bodyf;       /* body-wise solve: the bodies' factorizations, valid at every angle */
   PetscInt   nfactor;        /* sparse factorizations made for this system's solves (all angles) */
+  PetscInt   nconfig;        /* configurations it will be solved at (KFSystemSetConfigurationCount) */
 };
 
 struct _n_KFFlexSolver {

@@ -222,6 +222,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
   if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &multi_bb));
   PetscCall(PetscMalloc1(nc * nrev1, &multi_angles));
   PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFSystemSetConfigurationCount(sys, nc));
 
   for (PetscInt i = 0; i < nc; i++) {
     KFConfig       *cfg = &configs[i];
@@ -553,6 +554,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
   PetscCall(PetscCalloc1(nc, &visits));
   PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFSystemSetConfigurationCount(sys, nc + (r->verify ? neval - r->nconfig : 0))); /* the midpoints' references too */
   for (PetscInt i = 0; i < nc; i++) {
     KFVisit     *v = &visits[i];
     KFFlexSolver solver;
@@ -888,6 +890,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       PetscReal seconds = 0;
 
       PetscCall(KFSystemCreate(r->scene, &sys));
+      PetscCall(KFSystemSetConfigurationCount(sys, PetscMax(neval - r->nconfig, 1)));
       PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &seconds));
       PetscCall(KFSystemDestroy(&sys));
       { /* the midpoints' references are verification too */

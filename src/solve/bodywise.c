@@ -41,6 +41,7 @@ struct _n_KFBodyFactors {
   PetscBool    spread;
   PetscMPIInt *owner;
   PetscSF     *sf;
+  PetscReal    estimate_mb; /* MUMPS' estimate of the largest body factorization's memory on a rank, MB */
 };
 
 /* per solver (one angle): the interface problem */
@@ -150,6 +151,7 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
   /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
      few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
   PetscCall(KFFactorMumps(bf->Kb[b], 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
+  bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */
@@ -424,14 +426,17 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
 }
 
 /* -kf_flex_solver: which implementation this solver uses.
-   auto: body-wise when the scene has a revolute joint (its reductions visit several configurations), two or more
-   bodies, an interface node on every body and a small dense interface problem, and when the monolithic solve's held
-   dofs are interface unknowns; monolithic otherwise. The choice depends on the scene only, not on which
-   configurations a system visited before, so every solve of a scene takes the same path. Measured
-   (scripts/bench-bodywise, solid pair): the body factorizations cost about one factorization of K_S, a body-wise
-   block solve about a monolithic one; over 6 configurations the body-wise solve was 1.27x faster (57k dofs), and at
-   202k dofs faster already at one configuration (1.15x on 1 rank; spread over 2 ranks 1.68x, README). On more ranks
-   than bodies (or -kf_bodywise_spread false) auto keeps the monolithic solve. */
+   auto (the default): body-wise when the system will be solved at two or more configurations
+   (KFSystemSetConfigurationCount: the reducer's visits), the scene has two or more bodies, a revolute joint, an
+   interface node on every body, a small dense interface problem, at least -kf_bodywise_min_dofs system dofs (default
+   20,000: from there on the monolithic solve has no null-pivot cross-check either), interface responses Psi_b that
+   take no more memory than the bodies' stiffness matrices, and when the monolithic solve's held dofs are interface
+   unknowns; monolithic otherwise. The choice depends on the scene and the configuration count only, not on which
+   configurations a system visited before. Measured (README, "Body-wise flexible solve"): the body factorizations cost
+   about one factorization of K_S, so at one configuration the monolithic solve is as fast or faster (with nested
+   dissection 13.0 s against 14.8 s at 202k dofs), and from the second configuration on every monolithic
+   factorization is saved (6 configurations: 1.27-2.68x at 57k-540k dofs). On more ranks than bodies (or
+   -kf_bodywise_spread false) auto keeps the monolithic solve. */
 #define KF_AUTO_MAX_INTERFACE 3000
 static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFlexSolverType *asked)
 {
@@ -439,12 +444,15 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
   KFScene          s   = sys->scene;
   KFFlexSolverType type = solver->type;
   PetscBool        all_iface = PETSC_TRUE, bcs = PETSC_FALSE;
-  PetscInt         nG = s->nrevolute;
+  PetscInt         nG = s->nrevolute, min_dofs = 20000;
+  PetscReal        psi_entries = 0, k_entries = 0;
 
   PetscFunctionBegin;
   PetscOptionsBegin(s->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for articulated multi-body scenes)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
+  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for large articulated multi-body scenes; the default)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
+  PetscCall(PetscOptionsInt("-kf_bodywise_min_dofs", "auto takes the body-wise solve from this many system dofs on (default 20000)", "KFFlexSolverSetType", min_dofs, &min_dofs, NULL));
   PetscOptionsEnd();
+  PetscCheck(min_dofs >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, min_dofs);
   *asked = type;
   for (PetscInt b = 0; b < s->nb; b++) {
     all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
@@ -452,6 +460,14 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
     /* the body interiors are factored as the bodies come, with no boundary condition removed: clamped dofs (and joints
        to ground, which clamp) are system dofs no longer, so a scene with them takes the monolithic solve */
     bcs = (PetscBool)(bcs || s->bodies[b].nclamp > 0);
+    if (type == KF_FLEX_SOLVER_AUTO) {
+      MatInfo info;
+
+      /* Psi_b = K_II^-1 K_IGamma is dense: n_b x |Gamma_b| entries (at most 6 per interface node) */
+      PetscCall(MatGetInfo(s->bodies[b].K, MAT_GLOBAL_SUM, &info));
+      k_entries += info.nz_used;
+      psi_entries += (PetscReal)s->bodies[b].n * 6 * s->bodies[b].ninterfaces;
+    }
   }
   *use = PETSC_FALSE;
   if (type == KF_FLEX_SOLVER_BODYWISE) {
@@ -465,7 +481,7 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
        MUMPS solve per body per block and came out even with the monolithic solve (README, run 4) */
     PetscCallMPI(MPI_Comm_size(s->comm, &size));
     PetscCall(PetscOptionsGetBool(NULL, NULL, "-kf_bodywise_spread", &spread, NULL));
-    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && (size == 1 || (spread && size <= s->nb)));
+    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && sys->nconfig > 1 && s->nsys >= min_dofs && psi_entries <= k_entries && (size == 1 || (spread && size <= s->nb)));
   }
   PetscFunctionReturn(0);
 }
@@ -658,12 +674,14 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
   KFFlexSolverType asked;
   PetscBool        use = PETSC_FALSE, same = PETSC_TRUE;
   PetscInt         nfact = 0;
+  PetscLogDouble   t0, t1;
 
   PetscFunctionBegin;
   PetscCall(KFBodywiseWanted(solver, &use, &asked));
   if (!use) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t0));
   if (sys->bodyf && sys->bodyf->shift != solver->shift) PetscCall(KFBodyFactorsDestroy(&sys->bodyf));
   if (!sys->bodyf) {
     PetscCall(PetscNew(&bf));
@@ -691,6 +709,7 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
     if (asked == KF_FLEX_SOLVER_AUTO) PetscCall(KFProgress(s->comm, "flexible solve: body-wise, the bodies factored once for all configurations (-kf_flex_solver auto; monolithic or bodywise to choose)"));
     PetscCall(KFBodywiseAssign(s, bf));
     PetscCall(KFBodyFactorsSetUpAll(s, solver->shift, bf));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bf->estimate_mb, 1, MPIU_REAL, MPIU_MAX, s->comm));
     bf->factored = PETSC_TRUE;
     nfact        = s->nb;
     sys->nfactor += s->nb;
@@ -698,6 +717,11 @@ PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
   PetscCall(KFBodywiseFactorInterface(s, bf, bw));
   PetscCall(KFProgress(s->comm, "body-wise solve of the %" PetscInt_FMT "-dof system: dense interface problem of %" PetscInt_FMT " unknowns (%" PetscInt_FMT " held), %" PetscInt_FMT " body factorizations now, %" PetscInt_FMT " sparse factorizations for this system so far", s->nsys, bw->nG, solver->nheld, nfact, sys->nfactor));
   solver->null_pivots = solver->negative_pivots = 0; /* both checked body by body and by the interface Cholesky */
+  /* the timing table's factorization: the body factorizations (with Psi_b and S_b) where this solver made them, and
+     the interface problem's */
+  PetscCall(PetscTime(&t1));
+  solver->perf.factor_seconds += t1 - t0;
+  solver->perf.memory_estimate_mb = bf->estimate_mb;
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }

@@ -1,3 +1,5 @@
+#define _GNU_SOURCE /* dladdr */
+#include <dlfcn.h>
 #include <kryflex_impl.h>
 
 PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
@@ -8,7 +10,7 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCheck(sys->assembled, sys->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFFlexSolverCreate()");
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
-  (*solver)->type   = KF_FLEX_SOLVER_MONOLITHIC; /* body-wise only when asked (-kf_flex_solver bodywise or auto) */
+  (*solver)->type   = KF_FLEX_SOLVER_AUTO; /* body-wise where it is faster (src/solve/bodywise.c) */
   (*solver)->refine      = 1;
   (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
@@ -122,9 +124,57 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscInt ooc_mode, PetscBool *o
   PetscFunctionReturn(0);
 }
 
-/* MUMPS' ordering (ICNTL(7)) by name; auto lets MUMPS choose among those it was built with */
-static const char *const KFOrderings[] = {"amd", "amf", "scotch", "pord", "metis", "qamd", "auto"};
-static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7};
+/* MUMPS' ordering (ICNTL(7)) by name; ptscotch: the parallel analysis (ICNTL(28) = 2) with PT-SCOTCH (ICNTL(29) = 1);
+   auto: MUMPS' own choice among the orderings it was built with (the SCOTCH build chose SCOTCH for the solid
+   spacecraft from 13k to 1M dofs, on 1 and 2 ranks: README, "Nested dissection") */
+static const char *const KFOrderings[] = {"amd", "amf", "scotch", "pord", "metis", "qamd", "auto", "ptscotch"};
+static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7, -1};
+#define KF_ORDERING_AUTO     6
+#define KF_ORDERING_PTSCOTCH 7
+
+/* Whether the MUMPS that PETSc calls is Debian's SCOTCH/PT-SCOTCH build (libdmumps_ptscotch: the kryflex command and
+   the C programs linked by CMakeLists.txt load it before PETSc's plain build, which has PORD, AMD, AMF and QAMD only):
+   the library that the process's global scope resolves dmumps_c to, by its file name. */
+static PetscBool KFMumpsHasScotch(void)
+{
+  void   *sym = dlsym(RTLD_DEFAULT, "dmumps_c");
+  Dl_info info;
+
+  return (PetscBool)(sym && dladdr(sym, &info) && info.dli_fname && strstr(info.dli_fname, "scotch"));
+}
+
+/* A repeatable SCOTCH ordering: with its default threads SCOTCH 7 ordered the same matrix differently from run to run
+   (flops 1.76e11..1.86e11 at 202k dofs: factors, and so reduced models, that differ by rounding between runs of the
+   same reduction); on one thread (SCOTCH_PTHREAD_NUMBER, read when SCOTCH makes its first context; the user's value is
+   kept) and with its generator at one seed it gave the same ordering every time. SCOTCH_Num may be 32 or 64 bits: a
+   long argument serves both on this ABI. */
+static void KFScotchRepeatable(void)
+{
+  void (*seed)(long)  = (void (*)(long))dlsym(RTLD_DEFAULT, "SCOTCH_randomSeed");
+  void (*reset)(void) = (void (*)(void))dlsym(RTLD_DEFAULT, "SCOTCH_randomReset");
+
+  setenv("SCOTCH_PTHREAD_NUMBER", "1", 0);
+  if (seed) seed(1);
+  if (reset) reset();
+}
+
+/* ICNTL(i) = v for the analysis through the options database: PETSc 3.18 rereads ICNTL(7), (28) and (29) from
+   -mat_mumps_icntl_i at the analysis (MatMumpsSetIcntl before it does not hold); nothing when the user gave the
+   option. *set: whether it was set here (cleared after the analysis). */
+static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscBool *set)
+{
+  char      name[32], val[8];
+  PetscBool user;
+
+  PetscFunctionBegin;
+  PetscCall(PetscSNPrintf(name, sizeof(name), "-mat_mumps_icntl_%d", (int)i));
+  PetscCall(PetscOptionsHasName(NULL, ((PetscObject)A)->prefix, name, &user));
+  *set = (PetscBool)!user;
+  if (user) PetscFunctionReturn(0);
+  PetscCall(PetscSNPrintf(val, sizeof(val), "%d", (int)v));
+  PetscCall(PetscOptionsSetValue(NULL, name, val));
+  PetscFunctionReturn(0);
+}
 
 /* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
    (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
@@ -134,14 +184,15 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   MatFactorInfo  info;
   MatFactorError err;
   PetscReal      blr = 0;
-  PetscInt       ordering = 6; /* auto */
+  PetscInt       ordering = KF_ORDERING_AUTO;
   PetscInt       ooc_mode = 0; /* 0 in core, 1 out of core, 2 auto */
-  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, user7 = PETSC_FALSE, ordering_set = PETSC_FALSE;
+  PetscMPIInt    size;
+  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
 
   PetscFunctionBegin;
   if (opts) {
     PetscOptionsBegin(PetscObjectComm((PetscObject)A), NULL, "kryflex factorization", "KFFlexSolverSetUp");
-    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7)): auto lets MUMPS choose (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 7, KFOrderings[ordering], &ordering, NULL));
+    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 8, KFOrderings[ordering], &ordering, NULL));
     PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", blr, &blr, NULL));
     {
       char      val[16] = "auto";
@@ -172,16 +223,16 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   PetscCall(MatMumpsSetIcntl(*F, 24, 1)); /* null-pivot detection */
   if (null_threshold != 0) PetscCall(MatMumpsSetCntl(*F, 3, null_threshold));
   PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
-    /* PETSc 3.18 rereads ICNTL(7) from -mat_mumps_icntl_7 at the analysis (MatMumpsSetIcntl before it does not
-       hold): the choice goes through the options database for the analysis only, unless the user gave the option */
-    PetscCall(PetscOptionsHasName(NULL, ((PetscObject)A)->prefix, "-mat_mumps_icntl_7", &user7));
-    if (!user7 && KFOrderingIcntl[ordering] != 7) {
-      char val[8];
-
-      PetscCall(PetscSNPrintf(val, sizeof(val), "%d", (int)KFOrderingIcntl[ordering]));
-      PetscCall(PetscOptionsSetValue(NULL, "-mat_mumps_icntl_7", val));
-      ordering_set = PETSC_TRUE;
+    if (ordering == KF_ORDERING_PTSCOTCH && size == 1) ordering = 2; /* a parallel analysis on one rank: SCOTCH itself */
+    if (ordering == KF_ORDERING_PTSCOTCH && scotch) {
+      PetscCall(KFMumpsAnalysisIcntl(A, 28, 2, &set28));
+      PetscCall(KFMumpsAnalysisIcntl(A, 29, 1, &set29));
+    } else {
+      /* the sequential analysis whichever MUMPS runs (the SCOTCH build's automatic choice could go parallel) */
+      PetscCall(KFMumpsAnalysisIcntl(A, 28, 1, &set28));
+      if (KFOrderingIcntl[ordering] >= 0 && KFOrderingIcntl[ordering] != 7) PetscCall(KFMumpsAnalysisIcntl(A, 7, KFOrderingIcntl[ordering], &set7));
     }
     if (blr > 0) {
       PetscCall(MatMumpsSetIcntl(*F, 35, 1)); /* BLR factorization, automatic choice of the variant */
@@ -190,15 +241,25 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
     if (ooc_mode == 1) PetscCall(MatMumpsSetIcntl(*F, 22, 1)); /* auto: decided after the analysis */
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
+  if (scotch) KFScotchRepeatable();
   PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
-  if (ordering_set) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
+  if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
+  if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
+  if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
   if (estimate_mb) {
-    PetscInt used;
+    PetscInt    used, analysis;
+    const char *name = "unknown";
 
     PetscCall(KFCheckFactorMemory(*F, ooc_mode, &ooc, estimate_mb));
-    PetscCall(MatMumpsGetInfog(*F, 7, &used)); /* the ordering MUMPS applied (auto, or a fallback) */
-    for (PetscInt k = 0; k < 7; k++)
-      if (KFOrderingIcntl[k] == used) PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", KFOrderings[k], spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+    PetscCall(MatMumpsGetInfog(*F, 32, &analysis)); /* 2: the parallel analysis ran */
+    PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* the sequential analysis' ordering (auto, or a fallback) */
+    for (PetscInt k = 0; k < KF_ORDERING_AUTO + 1; k++)
+      if (KFOrderingIcntl[k] == used) name = KFOrderings[k];
+    if (analysis == 2) name = "ptscotch (parallel analysis)";
+    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+    if (opts && !scotch && (ordering == 2 || ordering == KF_ORDERING_PTSCOTCH))
+      PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[ordering], name));
+
   }
   PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
   PetscCall(MatFactorGetError(*F, &err));

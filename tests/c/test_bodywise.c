@@ -76,6 +76,7 @@ int main(int argc, char **argv)
   KFFlexSolverType used, used2;
   char             what[256];
   PetscBool        types_ok = PETSC_TRUE, auto_ok = PETSC_TRUE;
+  Mat              X1;
 
   PetscCall(SlepcInitialize(&argc, &argv, NULL, "body-wise flexible solve"));
   PetscCall(KFInitialize());
@@ -84,6 +85,7 @@ int main(int argc, char **argv)
   PetscCall(KFSystemCreate(scene, &mono));
   PetscCall(KFSystemCreate(scene, &body));
   PetscCall(KFSystemCreate(scene, &autos));
+  PetscCall(KFSystemSetConfigurationCount(autos, 4)); /* auto: the bodies factored once for the 4 configurations */
   for (PetscInt c = 0; c < 4; c++) {
     Mat Xm, Xb;
     PetscCall(KFSystemSetAngles(mono, configs[c]));
@@ -97,7 +99,10 @@ int main(int argc, char **argv)
     PetscCall(PetscSNPrintf(what, sizeof(what), "3-body chain at (%g, %g) rad: |K+G body-wise - monolithic| / |K+G|", (double)configs[c][0], (double)configs[c][1]));
     PetscCall(Check(what, rel, SAME));
     PetscCall(MatDestroy(&Xb));
+    /* auto takes the body-wise solve from -kf_bodywise_min_dofs system dofs on: 0 for this small chain */
+    PetscCall(PetscOptionsSetValue(NULL, "-kf_bodywise_min_dofs", "0"));
     PetscCall(Solve(autos, KF_FLEX_SOLVER_AUTO, 0, &Xb, &used));
+    PetscCall(PetscOptionsClearValue(NULL, "-kf_bodywise_min_dofs"));
     auto_ok = (PetscBool)(auto_ok && used == KF_FLEX_SOLVER_BODYWISE);
     PetscCall(RelDiff(Xb, Xm, &rel));
     PetscCall(PetscSNPrintf(what, sizeof(what), "  the same with -kf_flex_solver auto (%s)", used == KF_FLEX_SOLVER_BODYWISE ? "body-wise" : "monolithic"));
@@ -109,7 +114,24 @@ int main(int argc, char **argv)
   PetscCall(KFSystemGetFactorCount(body, &nbody));
   PetscCall(KFSystemGetFactorCount(autos, &nauto));
   PetscCall(CheckTrue("each solver set up the implementation asked for", types_ok));
-  PetscCall(CheckTrue("auto: body-wise for this articulated scene", auto_ok));
+  PetscCall(CheckTrue("auto (-kf_bodywise_min_dofs 0): body-wise for this articulated scene", auto_ok));
+  {
+    /* the default solver is auto: monolithic for a system solved at one configuration (whatever its size), and for
+       this chain far below the default -kf_bodywise_min_dofs even at 4 */
+    KFSystem sys1;
+    PetscCall(KFSystemCreate(scene, &sys1));
+    PetscCall(KFSystemSetAngles(sys1, configs[1]));
+    PetscCall(PetscOptionsSetValue(NULL, "-kf_bodywise_min_dofs", "0"));
+    PetscCall(Solve(sys1, KF_FLEX_SOLVER_AUTO, 0, &X1, &used));
+    PetscCall(PetscOptionsClearValue(NULL, "-kf_bodywise_min_dofs"));
+    PetscCall(CheckTrue("auto at one configuration: monolithic", (PetscBool)(used == KF_FLEX_SOLVER_MONOLITHIC)));
+    PetscCall(MatDestroy(&X1));
+    PetscCall(KFSystemSetConfigurationCount(sys1, 4));
+    PetscCall(Solve(sys1, KF_FLEX_SOLVER_AUTO, 0, &X1, &used));
+    PetscCall(CheckTrue("auto at 4 configurations of a scene below -kf_bodywise_min_dofs (20000): monolithic", (PetscBool)(used == KF_FLEX_SOLVER_MONOLITHIC)));
+    PetscCall(MatDestroy(&X1));
+    PetscCall(KFSystemDestroy(&sys1));
+  }
   PetscCall(PetscSNPrintf(what, sizeof(what), "factorizations over 4 configurations: monolithic %" PetscInt_FMT " (4), body-wise %" PetscInt_FMT " (3 bodies), auto %" PetscInt_FMT " (3)", nmono, nbody, nauto));
   PetscCall(CheckTrue(what, (PetscBool)(nmono == 4 && nbody == 3 && nauto == 3)));
   {

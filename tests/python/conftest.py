@@ -1,6 +1,8 @@
 """Fixtures shared by the Python test modules."""
 import pytest
 
+import kryflex  # noqa: F401  (first: the tests see the MUMPS the kryflex command uses, whoever imports petsc4py)
+
 
 @pytest.fixture(scope="module")
 def quiet_library():

@@ -133,9 +133,10 @@ def test_scene_key_turns_spread_off(tmp_path):
 @pytest.mark.parametrize("ranks,opts,bodywise", [(2, (), True), (3, (), False),
                                                   (2, ("-kf_bodywise_spread", "false"), False)])
 def test_auto_spreads_or_stays_monolithic(ranks, opts, bodywise, tmp_path):
-    """-kf_flex_solver auto on Galileo (2 bodies, a revolute joint): body-wise with the bodies spread when they can be
-    (2 ranks), monolithic when they cannot (3 ranks, or the spread turned off)"""
-    out = reduce_cli(GALILEO, ranks, tmp_path / "out", "-kf_flex_solver", "auto", "-kf_search", "false", *opts)
+    """-kf_flex_solver auto on Galileo (2 bodies, a revolute joint) with the size threshold off: body-wise with the
+    bodies spread when they can be (2 ranks), monolithic when they cannot (3 ranks, or the spread turned off)"""
+    out = reduce_cli(GALILEO, ranks, tmp_path / "out", "-kf_flex_solver", "auto", "-kf_bodywise_min_dofs", "0",
+                     "-kf_search", "false", *opts)
     assert ("factored on rank 1 alone" in out) == bodywise, out
     assert ("body-wise solve" in out) == bodywise, out
 

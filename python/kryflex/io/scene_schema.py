@@ -67,7 +67,7 @@ REDUCTION_DEFAULTS = {
     "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
     "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
-    "flex_solver": "monolithic", # the flexible solve: monolithic | bodywise (bodies factored once) | auto
+    "flex_solver": "auto",       # the flexible solve: auto (body-wise for large multi-configuration solves) | monolithic | bodywise
     "bodywise_spread": True,     # body-wise on 2+ ranks: each body factored on one rank (-kf_bodywise_spread)
 }
 VERIFY_DEFAULTS = {

@@ -129,6 +129,7 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, PetscInt ooc_mode, PetscBool *o
    spacecraft from 13k to 1M dofs, on 1 and 2 ranks: README, "Nested dissection") */
 static const char *const KFOrderings[] = {"amd", "amf", "scotch", "pord", "metis", "qamd", "auto", "ptscotch"};
 static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7, -1};
+#define KF_ORDERING_SCOTCH   2
 #define KF_ORDERING_AUTO     6
 #define KF_ORDERING_PTSCOTCH 7
 
@@ -225,7 +226,7 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
-    if (ordering == KF_ORDERING_PTSCOTCH && size == 1) ordering = 2; /* a parallel analysis on one rank: SCOTCH itself */
+    if (ordering == KF_ORDERING_PTSCOTCH && size == 1) ordering = KF_ORDERING_SCOTCH; /* a parallel analysis on one rank: SCOTCH itself */
     if (ordering == KF_ORDERING_PTSCOTCH && scotch) {
       PetscCall(KFMumpsAnalysisIcntl(A, 28, 2, &set28));
       PetscCall(KFMumpsAnalysisIcntl(A, 29, 1, &set29));
@@ -257,7 +258,7 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
       if (KFOrderingIcntl[k] == used) name = KFOrderings[k];
     if (analysis == 2) name = "ptscotch (parallel analysis)";
     PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
-    if (opts && !scotch && (ordering == 2 || ordering == KF_ORDERING_PTSCOTCH))
+    if (opts && !scotch && (ordering == KF_ORDERING_SCOTCH || ordering == KF_ORDERING_PTSCOTCH))
       PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[ordering], name));
 
   }

@@ -5,6 +5,8 @@ On the 13,513-dof solid pair (meshes/solid --refine 1), one angle, verification 
   ptscotch runs PT-SCOTCH's parallel analysis on 2 ranks, and auto (MUMPS' own choice) is SCOTCH for this matrix;
 - the reduced model is the same whichever ordering factored the stiffness (PORD, SCOTCH on 1 and 2 ranks, PT-SCOTCH):
   the same sizes, reduced frequencies and FRF error to rounding; and the same to the last bit when run again;
+- -kf_ordering_tries analyses several SCOTCH seeds and keeps the factor with the fewest flops on the busiest rank,
+  and -kf_scotch_seed orders with the seed it found at once;
 - with the plain build (KRYFLEX_MUMPS=plain, or petsc4py imported before kryflex) -kf_ordering scotch says that MUMPS
   chose another ordering, and the reduction completes with the same model;
 - -kf_flex_solver auto (the default) takes the monolithic solve for one configuration and the body-wise one for a
@@ -91,6 +93,48 @@ def test_scotch_ordering_is_repeatable(runs):
 @pytest.mark.parametrize("name", ["auto1", "auto2", "ptscotch"])
 def test_same_model_whatever_the_ordering(runs, name):
     same_model(runs["pord"][1], runs[name][1])
+
+
+TRIED = re.compile(r"SCOTCH orderings of (\d+) seeds tried in [0-9.]+ s \(-kf_ordering_tries\), flops on the busiest rank "
+                   r"([0-9.e+, -]+): seed (\d+) kept \(-kf_scotch_seed (\d+) orders so at once\)")
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_ordering_tries_keep_the_fewest_flops(solid, runs, tmp_path, ranks):
+    """-kf_ordering_tries 3: SCOTCH orderings of seeds 1, 3, 5 analysed, the factor with the fewest flops on the
+    busiest rank kept; the reduced model is the same as with PORD's factor to rounding. -kf_scotch_seed with the
+    seed the line names orders so at once (no tries): the same flops, and on one rank the same model to the last bit
+    (on 2 ranks MUMPS' dynamic scheduling of a front's slaves may round differently from run to run). Without the
+    options: one ordering (seed 1), no line."""
+    log, summary = reduce_cli(solid, ranks, tmp_path / "tries", *ONE_ANGLE, "-kf_ordering_tries", "3")
+    m = TRIED.search(log)
+    assert m and m.group(1) == "3", log
+    flops = [float(x) for x in m.group(2).split(",")]
+    assert len(flops) == 3 and all(f > 0 for f in flops), log
+    best = min(range(3), key=lambda i: (flops[i], i))        # ties keep the earlier seed
+    assert int(m.group(3)) == int(m.group(4)) == [1, 3, 5][best], log
+    assert orderings(log) == ["scotch"], log
+    same_model(runs["pord"][1], summary)
+    log2, again = reduce_cli(solid, ranks, tmp_path / "again", *ONE_ANGLE, "-kf_scotch_seed", m.group(4))
+    assert not TRIED.search(log2), log2
+    if ranks == 1:
+        assert again["reduced"]["frequencies_hz"] == summary["reduced"]["frequencies_hz"]
+        assert again["error_max"] == summary["error_max"]
+    else:
+        same_model(summary, again)
+    for name in ("auto1", "auto2", "scotch1"):
+        assert not TRIED.search(runs[name][0]), runs[name][0]
+
+
+@pytest.mark.parametrize("option,value,message", [
+    ("-kf_ordering_tries", "0", "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more"),
+    ("-kf_scotch_seed", "0", "-kf_scotch_seed is a positive integer")])
+def test_ordering_options_bad_value_is_refused(solid, tmp_path, option, value, message):
+    p = subprocess.run([KRYFLEX_CMD, "reduce", solid, "-o", str(tmp_path / "bad"), *ONE_ANGLE, option, value],
+                       capture_output=True, text=True, env=ENV, timeout=600)
+    assert p.returncode == 3, p.stdout + p.stderr
+    assert "kryflex: error:" in p.stderr and message in p.stderr, p.stderr
+    assert "Traceback" not in p.stderr and not (tmp_path / "bad").exists()
 
 
 def test_plain_mumps_falls_back(solid, runs, tmp_path):

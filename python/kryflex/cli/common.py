@@ -35,7 +35,7 @@ LATER_OPTIONS = ("kf_quiet", "kf_reducer_view", "kf_reducer_view_pre", "kf_model
                  "kf_check_null_pivots", "kf_held_cond_max", "kf_rigid_tol", "kf_progress_min_dofs",
                  "kf_error_agreement_timeout", "kf_refine_rtol", "kf_ordering", "kf_blr", "kf_ooc", "kf_spd",
                  "kf_memory_check", "kf_memory_limit_mb", "kf_flex_solver", "kf_bodywise_spread",
-                 "kf_bodywise_min_dofs")
+                 "kf_bodywise_min_dofs", "kf_ordering_tries", "kf_scotch_seed")
 # option prefixes of PETSc/SLEPc objects the library configures (the verification eigensolver: -kf_verify_eps_...)
 LATER_PREFIXES = ("kf_verify_",)
 

@@ -171,12 +171,15 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
    settings recorded differ, the body bases do not. The estimator's richest model (every basis whole) and the search's
    first candidate (the same at one expansion angle), and the search's last candidate and the model made of it, are
    such pairs: each is a body basis (products with M and K, Gram-Schmidt, K Psi in extended precision) not made twice.
-   And the parent: the body basis of one visit's whole Krylov basis at the most moments made so far (with the rigid
-   modes), kept with what sub-bases need (KFBodyBasisKeepProducts), and the coordinates in it of the visit's rigid
-   modes Tr_b = Psi_b^T M_b P_b Phir and Krylov basis T_b = Psi_b^T M_b P_b V. Every later candidate of that visit with
-   no more moments has its vectors X = V C in the parent's span (up to the parent's deflation), so its body vectors
-   are T_b C in the parent's coordinates and its body basis a sub-basis (KFBodyBasisCreateSub): small dense work, no
-   product of the bodies' size. The search's bisection over kept clusters makes all its candidates so. */
+   And the parent: the body basis of the whole Krylov bases of one or more visits (with their rigid modes), at the most
+   moments made so far, kept with what sub-bases need (KFBodyBasisKeepProducts), and the coordinates in it of each of
+   its visits' rigid modes Tr_eb = Psi_b^T M_b P_eb Phir_e and Krylov basis T_eb = Psi_b^T M_b P_eb V_e. Every later
+   candidate of the parent's visits with no more moments has its vectors X_e = V_e C_e in the parent's span (up to
+   the parent's deflation), so its body vectors are T_eb C_e in the parent's coordinates and its body basis a
+   sub-basis (KFBodyBasisCreateSub): small dense work, no product of the bodies' size. The search's bisection over
+   kept clusters makes all its candidates so; without verification the estimator's richest model (every visit's whole
+   basis) is the parent of every multi-angle candidate too (at 3 angles of the 202k-dof solid, 15 body bases made the
+   full way took 9.5 s of a 31 s reduction). */
 /* The parent deflates at this fraction of the body tolerance: a candidate's vectors are then in its span to a
    thousandth of the tolerance its own deflation works at. With the parent at the body tolerance itself, what the
    parent dropped (up to ~1e-10 of a unit column) came back divided by the residual norm of a nearly dependent
@@ -187,10 +190,9 @@ PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, Petsc
 typedef struct {
   KFCandidate key;
   KFBodyBasis bb;
-  KFBodyBasis parent;    /* never bb (a parent is no model), but the code allows it */
-  PetscInt    pvisit, pm; /* the parent's visit and Krylov columns */
-  PetscInt   *nr;         /* rigid modes of the visit */
-  PetscReal **Tr, **T;    /* per body: v_b x nr, v_b x pm */
+  KFBodyBasis parent;                                   /* never bb (a parent is no model), but the code allows it */
+  PetscInt    pn, pvisit[KF_MAX_EXPANSION], pm[KF_MAX_EXPANSION]; /* the parent's visits and their Krylov columns */
+  PetscReal **Tr, **T; /* per parent visit e and body b, at e * nb + b: v_b x nr_e, v_b x pm[e] */
 } KFCandidateCache;
 
 /* the same vectors: the same visits, moments, kept clusters (per body when shared); not the family */
@@ -204,8 +206,8 @@ static PetscBool KFSameVectors(const KFCandidate *a, const KFCandidate *b)
   return PETSC_TRUE;
 }
 
-/* every cluster kept (kept < 0, or at least the number of clusters) */
-static PetscErrorCode KFWholeBasis(KFReducer r, KFVisit *v, const KFCandidate *cand, PetscBool *whole)
+/* every cluster kept (kept < 0, or at least the number of clusters) at every visit of the candidate */
+static PetscErrorCode KFWholeBasis(KFReducer r, KFVisit visits[], const KFCandidate *cand, PetscBool *whole)
 {
   PetscInt   n, nclusters, *clu;
   PetscReal *lambda, *Phi, *imp;
@@ -213,10 +215,29 @@ static PetscErrorCode KFWholeBasis(KFReducer r, KFVisit *v, const KFCandidate *c
   PetscFunctionBegin;
   *whole = (PetscBool)(cand->kept < 0);
   if (*whole || cand->nbody) PetscFunctionReturn(0);
-  PetscCall(KFVisitModes_Private(r, v, cand->c, &n, &lambda, &Phi, &imp, &clu, &nclusters));
-  PetscCall(PetscFree4(lambda, Phi, imp, clu));
-  *whole = (PetscBool)(cand->kept >= nclusters);
+  *whole = PETSC_TRUE;
+  for (PetscInt e = 0; e < cand->nexp && *whole; e++) {
+    PetscCall(KFVisitModes_Private(r, &visits[cand->exp[e]], cand->c, &n, &lambda, &Phi, &imp, &clu, &nclusters));
+    PetscCall(PetscFree4(lambda, Phi, imp, clu));
+    *whole = (PetscBool)(cand->kept >= nclusters);
+  }
   PetscFunctionReturn(0);
+}
+
+/* Whether the candidate's vectors lie in the parent's span: each of its visits is one of the parent's, with a Krylov
+   basis, and with no more columns than the parent took of it */
+static PetscBool KFInParent(const KFCandidateCache *cc, KFVisit visits[], const KFCandidate *cand)
+{
+  if (!cc->parent) return PETSC_FALSE;
+  for (PetscInt e = 0; e < cand->nexp; e++) {
+    const KFVisit *v = &visits[cand->exp[e]];
+    PetscInt       pe;
+
+    for (pe = 0; pe < cc->pn; pe++)
+      if (cc->pvisit[pe] == cand->exp[e]) break;
+    if (pe == cc->pn || !v->basis.nblocks || KFVisitColumns(v, cand->c) > cc->pm[pe]) return PETSC_FALSE;
+  }
+  return PETSC_TRUE;
 }
 
 static PetscErrorCode KFCandidateCacheDropParent(KFReducer r, KFCandidateCache *cc)
@@ -226,8 +247,9 @@ static PetscErrorCode KFCandidateCacheDropParent(KFReducer r, KFCandidateCache *
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
   if (cc->T)
-    for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree2(cc->Tr[b], cc->T[b]));
+    for (PetscInt i = 0; i < cc->pn * nb; i++) PetscCall(PetscFree2(cc->Tr[i], cc->T[i]));
   PetscCall(PetscFree2(cc->Tr, cc->T));
+  cc->pn = 0;
   if (cc->parent != cc->bb) PetscCall(KFBodyBasisDestroy(&cc->parent));
   cc->parent = NULL;
   PetscFunctionReturn(0);
@@ -255,65 +277,85 @@ PetscErrorCode KFCandidateCacheReset_Private(KFReducer r)
   PetscFunctionReturn(0);
 }
 
-/* the coordinates of the parent's visit: Tr_b, T_b (one product P_b [Phir, V] per body with M Psi_b) */
-static PetscErrorCode KFCandidateCacheCoordinates(KFReducer r, KFVisit *v, KFCandidateCache *cc)
+/* the coordinates of the parent's visits: Tr_eb, T_eb (one product P_eb [Phir_e, V_e] per visit and body with M Psi_b) */
+static PetscErrorCode KFCandidateCacheCoordinates(KFReducer r, KFVisit visits[], KFCandidateCache *cc)
 {
-  BV       V = (BV)v->basis.data;
-  PetscInt nb, l0, k0, nr;
-  Mat      Vm;
-  PetscReal *Id;
+  PetscInt nb;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
-  PetscCall(MatGetSize(v->Phir, NULL, &nr));
-  PetscCall(PetscCalloc1(cc->pm * cc->pm, &Id));
-  for (PetscInt i = 0; i < cc->pm; i++) Id[i + i * cc->pm] = 1;
-  PetscCall(BVGetActiveColumns(V, &l0, &k0));
-  PetscCall(BVSetActiveColumns(V, 0, cc->pm));
-  PetscCall(KFBVCombine(V, cc->pm, Id, &Vm));
-  PetscCall(BVSetActiveColumns(V, l0, k0));
-  PetscCall(PetscFree(Id));
-  PetscCall(PetscCalloc2(nb, &cc->Tr, nb, &cc->T));
-  for (PetscInt b = 0; b < nb; b++) {
-    PetscInt vb;
+  PetscCall(PetscCalloc2(cc->pn * nb, &cc->Tr, cc->pn * nb, &cc->T));
+  for (PetscInt e = 0; e < cc->pn; e++) {
+    KFVisit   *v = &visits[cc->pvisit[e]];
+    BV         V = (BV)v->basis.data;
+    PetscInt   l0, k0, nr, pm = cc->pm[e];
+    Mat        Vm;
+    PetscReal *Id;
 
-    PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
-    PetscCall(PetscMalloc2(vb * nr + 1, &cc->Tr[b], vb * cc->pm + 1, &cc->T[b]));
-    PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], v->Phir, cc->Tr[b]));
-    PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], Vm, cc->T[b]));
+    PetscCall(MatGetSize(v->Phir, NULL, &nr));
+    PetscCall(PetscCalloc1(pm * pm, &Id));
+    for (PetscInt i = 0; i < pm; i++) Id[i + i * pm] = 1;
+    PetscCall(BVGetActiveColumns(V, &l0, &k0));
+    PetscCall(BVSetActiveColumns(V, 0, pm));
+    PetscCall(KFBVCombine(V, pm, Id, &Vm));
+    PetscCall(BVSetActiveColumns(V, l0, k0));
+    PetscCall(PetscFree(Id));
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscInt vb;
+
+      PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+      PetscCall(PetscMalloc2(vb * nr + 1, &cc->Tr[e * nb + b], vb * pm + 1, &cc->T[e * nb + b]));
+      PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], v->Phir, cc->Tr[e * nb + b]));
+      PetscCall(KFBodyBasisCoordinates(cc->parent, b, v->P[b], Vm, cc->T[e * nb + b]));
+    }
+    PetscCall(MatDestroy(&Vm));
   }
-  PetscCall(MatDestroy(&Vm));
   PetscFunctionReturn(0);
 }
 
-/* a candidate of the parent's visit as a sub-basis: body vectors [Tr_b, T_b(:, 1:m) C_b] in the parent's coordinates */
-static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit *v, KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb)
+/* a candidate of the parent's visits as a sub-basis: body vectors [Tr_eb, T_eb(:, 1:m_e) C_eb] per visit e of the
+   candidate (the order of the full way: each visit's rigid modes, then its vectors), in the parent's coordinates */
+static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb)
 {
-  PetscInt    nb, nr, *mb;
+  PetscInt    nb, *mb;
   PetscReal **Y;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
-  PetscCall(MatGetSize(v->Phir, NULL, &nr));
-  PetscCall(PetscMalloc2(nb, &mb, nb, &Y));
-  for (PetscInt b = 0; b < nb; b++) {
-    PetscInt   vb, m, ncol;
-    PetscReal *C;
+  PetscCall(PetscCalloc2(nb, &mb, nb, &Y));
+  for (PetscInt pass = 0; pass < 2; pass++) /* the columns per body, then the vectors */
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscInt vb, col = 0;
 
-    PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
-    PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m, &ncol, &C, NULL));
-    PetscCheck(m <= cc->pm, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
-    mb[b] = nr + ncol;
-    PetscCall(PetscMalloc1(vb * mb[b] + 1, &Y[b]));
-    PetscCall(PetscArraycpy(Y[b], cc->Tr[b], vb * nr));
-    for (PetscInt j = 0; j < ncol; j++)
-      for (PetscInt i = 0; i < vb; i++) {
-        PetscReal d = 0;
-        for (PetscInt k = 0; k < m; k++) d += cc->T[b][i + k * vb] * C[k + j * m];
-        Y[b][i + (nr + j) * vb] = d;
+      PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+      if (pass) PetscCall(PetscMalloc1(vb * mb[b] + 1, &Y[b]));
+      for (PetscInt e = 0; e < cand->nexp; e++) {
+        KFVisit   *v = &visits[cand->exp[e]];
+        PetscInt   pe, nr, m, ncol;
+        PetscReal *C, *Tr, *T;
+
+        for (pe = 0; pe < cc->pn; pe++)
+          if (cc->pvisit[pe] == cand->exp[e]) break;
+        PetscCheck(pe < cc->pn, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has a visit its parent has not");
+        Tr = cc->Tr[pe * nb + b];
+        T  = cc->T[pe * nb + b];
+        PetscCall(MatGetSize(v->Phir, NULL, &nr));
+        PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m, &ncol, &C, NULL));
+        PetscCheck(m <= cc->pm[pe], PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
+        if (!pass) mb[b] += nr + ncol;
+        else {
+          PetscCall(PetscArraycpy(&Y[b][col * vb], Tr, vb * nr));
+          for (PetscInt j = 0; j < ncol; j++)
+            for (PetscInt i = 0; i < vb; i++) {
+              PetscReal d = 0;
+              for (PetscInt k = 0; k < m; k++) d += T[i + k * vb] * C[k + j * m];
+              Y[b][i + (col + nr + j) * vb] = d;
+            }
+        }
+        col += nr + ncol;
+        PetscCall(PetscFree(C));
       }
-    PetscCall(PetscFree(C));
-  }
+    }
   PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
   for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(Y[b]));
   PetscCall(PetscFree2(mb, Y));
@@ -340,18 +382,18 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     r->candcache = cc;
   }
   if (!cc->bb || !KFSameVectors(&cc->key, cand)) { /* not the vectors of the last model: a body basis of its own */
-    KFVisit       *v0    = &visits[cand->exp[0]];
-    const PetscInt ncols = cand->nexp == 1 && v0->basis.nblocks ? KFVisitColumns(v0, cand->c) : -1;
+    PetscBool krylov = PETSC_TRUE; /* every visit has a Krylov basis (block columns; an eigen basis has none) */
 
-    if (r->sub_bases && ncols >= 0 && cc->parent && cc->pvisit == cand->exp[0] && ncols <= cc->pm) {
-      PetscCall(PetscInfo(r, "candidate c=%" PetscInt_FMT " kept=%" PetscInt_FMT " nbody=%" PetscInt_FMT ": a sub-basis of visit %" PetscInt_FMT "\n", cand->c, cand->kept, cand->nbody, cc->pvisit));
-      PetscCall(KFCandidateSubBasis(r, v0, cc, cand, &bb));
+    for (PetscInt e = 0; e < cand->nexp; e++) krylov = (PetscBool)(krylov && visits[cand->exp[e]].basis.nblocks);
+    if (r->sub_bases && KFInParent(cc, visits, cand)) {
+      PetscCall(PetscInfo(r, "candidate c=%" PetscInt_FMT " kept=%" PetscInt_FMT " nbody=%" PetscInt_FMT " nexp=%" PetscInt_FMT ": a sub-basis of the parent's %" PetscInt_FMT " visits\n", cand->c, cand->kept, cand->nbody, cand->nexp, cc->pn));
+      PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb));
       PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
     } else {
-      /* one visit's whole basis with at least the parent's moments: the new parent */
+      /* the whole bases of its visits: the new parent */
       PetscBool parent = PETSC_FALSE;
 
-      if (r->sub_bases && ncols >= 0 && !cand->nbody && (!cc->parent || cc->pvisit != cand->exp[0] || ncols > cc->pm)) PetscCall(KFWholeBasis(r, v0, cand, &parent));
+      if (r->sub_bases && krylov && !cand->nbody) PetscCall(KFWholeBasis(r, visits, cand, &parent));
 
       PetscCall(KFBodyBasisCreate(r->scene, &bb));
       if (parent) PetscCall(KFBodyBasisKeepProducts(bb));
@@ -375,10 +417,13 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
       if (parent) { /* the candidate itself is then a sub-basis of it, as the later ones */
         PetscCall(KFCandidateCacheDropParent(r, cc));
         cc->parent = bb;
-        cc->pvisit = cand->exp[0];
-        cc->pm     = ncols;
-        PetscCall(KFCandidateCacheCoordinates(r, v0, cc));
-        PetscCall(KFCandidateSubBasis(r, v0, cc, cand, &bb));
+        cc->pn     = cand->nexp;
+        for (PetscInt e = 0; e < cand->nexp; e++) {
+          cc->pvisit[e] = cand->exp[e];
+          cc->pm[e]     = KFVisitColumns(&visits[cand->exp[e]], cand->c);
+        }
+        PetscCall(KFCandidateCacheCoordinates(r, visits, cc));
+        PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb));
       }
       PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
     }

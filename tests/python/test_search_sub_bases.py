@@ -6,7 +6,8 @@ sub-basis) the two ways must choose the same model, with the same sizes and erro
 chosen model (kept clusters per body: a sub-basis) must have the same reduced matrices and maps (1e-10 of each
 matrix's largest entry). Independently of kryflex, the sub-basis's maps (Psi_parent Z, made only when the model keeps
 maps) must reduce the bodies' own mass and stiffness files (dense, SciPy) to the model's M and K, and be
-M-orthonormal. On 2 MPI ranks the sub-bases choose the model 1 rank chooses, with the same matrices.
+M-orthonormal. On 2 MPI ranks the sub-bases choose the model 1 rank chooses, with the same matrices. At three angles
+the multi-angle candidates are sub-bases of a parent spanning every visit: the same search and the same model.
 """
 import os
 import subprocess
@@ -31,6 +32,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 SAME = 1e-10          # sub-basis vs full way, relative to each matrix's largest entry (measured ~4e-14)
 SAME_ERROR = 1e-8     # the search's errors, relative and as a fraction of the target (measured 7e-12 apart at most on
                       # Galileo, 1.5e-10 on the grounded arm whose failing candidates have errors ~1)
+FLOOR = 1e-5          # multi-angle: errors below this fraction of the target are at the bodies' deflation floor
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
 
@@ -120,3 +122,37 @@ def test_sub_bases_with_boundary_conditions(name):
     # one angle: every candidate is a sub-basis (a whole basis too, of the parent made for it), the chosen one as well
     assert ms.sizes == mf.sizes
     assert_same_bodies(ms, mf, name)
+
+
+@pytest.mark.parametrize("verify", [True, False])
+def test_multi_angle_candidates_are_sub_bases_of_every_visit(verify):
+    """Three angles of interest: the multi-angle candidates' vectors come from several visits, and once a candidate
+    with every visit's whole basis has been made (without verification: the estimator's richest model, first) they
+    are sub-bases of it, in its coordinates per visit. The search must try and choose the same models as the full
+    way, and the chosen model must have the same reduced matrices."""
+    out = {}
+    for sub in (True, False):
+        reducer = kryflex.Reducer(kryflex.load_scene(GALILEO), quiet=True, angles="0,45,90", verify=verify,
+                                  search_sub_bases=sub)
+        out[sub] = (reducer.reduce().model, reducer.result(-1, "search_table"))
+    (ms, ts), (mf, tf) = out[True], out[False]
+    assert (ts[0] != ts[0][0]).any(), ts[0]                 # both families were tried
+    np.testing.assert_array_equal(ts[:6], tf[:6])
+    target = ms.settings["accuracy"]
+    # errors far below the target sit at the floor the bodies' deflation leaves (vectors of nearby angles are nearly
+    # dependent, and which of them a body basis keeps follows its pivots): 2.2e-7 against 3.4e-7 was measured there
+    np.testing.assert_allclose(ts[6], tf[6], rtol=SAME_ERROR, atol=FLOOR * target)
+    assert ms.sizes == mf.sizes
+    assert_same_bodies(ms, mf, "3 angles")
+
+
+def test_two_ranks_choose_the_same_multi_angle_sub_basis_model(tmp_path):
+    reducer = kryflex.Reducer(kryflex.load_scene(GALILEO), quiet=True, angles="0,45,90", verify=False)
+    model = reducer.reduce().model
+    path = str(tmp_path / "m.h5")
+    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, GALILEO, path, str(tmp_path / "s.json"),
+                    "-kf_angles", "0,45,90", "-kf_verify", "false"], env=ENV, check=True, timeout=600,
+                   capture_output=True)
+    two = kryflex.ReducedModel.load(path)
+    assert two.sizes == model.sizes
+    assert_same_bodies(two, model, "2 ranks, 3 angles")

@@ -224,18 +224,24 @@ static PetscErrorCode KFWholeBasis(KFReducer r, KFVisit visits[], const KFCandid
   PetscFunctionReturn(0);
 }
 
+/* the index of a visit among the parent's visits, -1 when it is not one of them */
+static PetscInt KFParentVisit(const KFCandidateCache *cc, PetscInt visit)
+{
+  for (PetscInt pe = 0; pe < cc->pn; pe++)
+    if (cc->pvisit[pe] == visit) return pe;
+  return -1;
+}
+
 /* Whether the candidate's vectors lie in the parent's span: each of its visits is one of the parent's, with a Krylov
    basis, and with no more columns than the parent took of it */
 static PetscBool KFInParent(const KFCandidateCache *cc, KFVisit visits[], const KFCandidate *cand)
 {
   if (!cc->parent) return PETSC_FALSE;
   for (PetscInt e = 0; e < cand->nexp; e++) {
-    const KFVisit *v = &visits[cand->exp[e]];
-    PetscInt       pe;
+    const KFVisit *v  = &visits[cand->exp[e]];
+    const PetscInt pe = KFParentVisit(cc, cand->exp[e]);
 
-    for (pe = 0; pe < cc->pn; pe++)
-      if (cc->pvisit[pe] == cand->exp[e]) break;
-    if (pe == cc->pn || !v->basis.nblocks || KFVisitColumns(v, cand->c) > cc->pm[pe]) return PETSC_FALSE;
+    if (pe < 0 || !v->basis.nblocks || KFVisitColumns(v, cand->c) > cc->pm[pe]) return PETSC_FALSE;
   }
   return PETSC_TRUE;
 }
@@ -317,45 +323,46 @@ static PetscErrorCode KFCandidateCacheCoordinates(KFReducer r, KFVisit visits[],
    candidate (the order of the full way: each visit's rigid modes, then its vectors), in the parent's coordinates */
 static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb)
 {
-  PetscInt    nb, *mb;
-  PetscReal **Y;
+  PetscInt    nb, *mb, *m, *ncol;
+  PetscReal **Y, **C;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
   PetscCall(PetscCalloc2(nb, &mb, nb, &Y));
-  for (PetscInt pass = 0; pass < 2; pass++) /* the columns per body, then the vectors */
-    for (PetscInt b = 0; b < nb; b++) {
-      PetscInt vb, col = 0;
+  PetscCall(PetscMalloc3(cand->nexp, &m, cand->nexp, &ncol, cand->nexp, &C));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt vb, col = 0;
 
-      PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
-      if (pass) PetscCall(PetscMalloc1(vb * mb[b] + 1, &Y[b]));
-      for (PetscInt e = 0; e < cand->nexp; e++) {
-        KFVisit   *v = &visits[cand->exp[e]];
-        PetscInt   pe, nr, m, ncol;
-        PetscReal *C, *Tr, *T;
+    PetscCall(KFBodyBasisGetReduced(cc->parent, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    for (PetscInt e = 0; e < cand->nexp; e++) { /* each visit's combination C_eb (m_e x ncol_e): the body's columns */
+      KFVisit *v  = &visits[cand->exp[e]];
+      PetscInt pe = KFParentVisit(cc, cand->exp[e]), nr;
 
-        for (pe = 0; pe < cc->pn; pe++)
-          if (cc->pvisit[pe] == cand->exp[e]) break;
-        PetscCheck(pe < cc->pn, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has a visit its parent has not");
-        Tr = cc->Tr[pe * nb + b];
-        T  = cc->T[pe * nb + b];
-        PetscCall(MatGetSize(v->Phir, NULL, &nr));
-        PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m, &ncol, &C, NULL));
-        PetscCheck(m <= cc->pm[pe], PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
-        if (!pass) mb[b] += nr + ncol;
-        else {
-          PetscCall(PetscArraycpy(&Y[b][col * vb], Tr, vb * nr));
-          for (PetscInt j = 0; j < ncol; j++)
-            for (PetscInt i = 0; i < vb; i++) {
-              PetscReal d = 0;
-              for (PetscInt k = 0; k < m; k++) d += T[i + k * vb] * C[k + j * m];
-              Y[b][i + (col + nr + j) * vb] = d;
-            }
-        }
-        col += nr + ncol;
-        PetscCall(PetscFree(C));
-      }
+      PetscCheck(pe >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has a visit its parent has not");
+      PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m[e], &ncol[e], &C[e], NULL));
+      PetscCheck(m[e] <= cc->pm[pe], PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
+      PetscCall(MatGetSize(v->Phir, NULL, &nr));
+      mb[b] += nr + ncol[e];
     }
+    PetscCall(PetscMalloc1(vb * mb[b] + 1, &Y[b]));
+    for (PetscInt e = 0; e < cand->nexp; e++) {
+      const PetscInt pe = KFParentVisit(cc, cand->exp[e]);
+      PetscReal     *Tr = cc->Tr[pe * nb + b], *T = cc->T[pe * nb + b];
+      PetscInt       nr;
+
+      PetscCall(MatGetSize(visits[cand->exp[e]].Phir, NULL, &nr));
+      PetscCall(PetscArraycpy(&Y[b][col * vb], Tr, vb * nr));
+      for (PetscInt j = 0; j < ncol[e]; j++)
+        for (PetscInt i = 0; i < vb; i++) {
+          PetscReal d = 0;
+          for (PetscInt k = 0; k < m[e]; k++) d += T[i + k * vb] * C[e][k + j * m[e]];
+          Y[b][i + (col + nr + j) * vb] = d;
+        }
+      col += nr + ncol[e];
+      PetscCall(PetscFree(C[e]));
+    }
+  }
+  PetscCall(PetscFree3(m, ncol, C));
   PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
   for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(Y[b]));
   PetscCall(PetscFree2(mb, Y));

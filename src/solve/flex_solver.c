@@ -215,9 +215,9 @@ static PetscErrorCode KFMumpsTryOrderings(Mat A, PetscReal null_threshold, Petsc
   size_t         len;
 
   PetscFunctionBegin;
-  PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* 3: SCOTCH */
+  PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* the ordering MUMPS applied */
   PetscCall(MatMumpsGetInfog(*F, 32, &analysis)); /* 2: the parallel analysis (PT-SCOTCH's seeds are not tried) */
-  if (used != 3 || analysis == 2 || tries < 2) PetscFunctionReturn(0);
+  if (used != KFOrderingIcntl[KF_ORDERING_SCOTCH] || analysis == 2 || tries < 2) PetscFunctionReturn(0);
   PetscCall(KFMumpsBusiestFlops(*F, &best));
   PetscCall(PetscSNPrintf(list, sizeof(list), "%.3g", (double)best));
   PetscCall(PetscTime(&t0));

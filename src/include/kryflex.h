@@ -156,12 +156,14 @@ PETSC_EXTERN PetscErrorCode KFKrylovBasis(KFFlexSolver, PetscInt nin, PetscInt n
 /* The same, block by block, with what the basis is worth: blocks alternate input, output, input ... while both chains
    have blocks left, so the first c blocks span the basis of c moments (block_end[c-1] columns) for every c; each
    column is M-orthogonalized against the basis and the rigid modes (twice), so no rigid content creeps in with c.
-   rigid_content = max |Phi_r^T M V|, orthogonality = max |V^T M V - I|. KFKrylovInfoReset frees block_end. */
+   rigid_content = max |Phi_r^T M V|, orthogonality = max |V^T M V - I|, from gram = V^T M V (a fresh product).
+   KFKrylovInfoReset frees block_end and gram. */
 typedef struct {
   PetscInt   nblocks;       /* blocks of the basis (nin + nout) */
   PetscInt  *block_end;     /* columns of the basis after each block */
   PetscInt   ndeflated;     /* columns dropped as dependent */
   PetscReal  rigid_content, orthogonality;
+  PetscReal *gram;          /* V^T M V, size x size column-major, replicated (the reduced mass on V) */
 } KFKrylovInfo;
 PETSC_EXTERN PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, BV *V, KFKrylovInfo *info);
 PETSC_EXTERN PetscErrorCode KFKrylovInfoReset(KFKrylovInfo *);

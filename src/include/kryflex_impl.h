@@ -143,6 +143,8 @@ PETSC_INTERN PetscErrorCode KFArrayTransposeMultGather(MPI_Comm, PetscInt nl, Pe
 PETSC_INTERN PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const PetscScalar *A, PetscInt lda, const PetscReal c[], PetscReal alpha, PetscScalar *X, PetscInt ldx);
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in double-double, rounded once */
 PETSC_INTERN PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y);    /* Y = A X in double: MatMatMult's bits, faster */
+/* KFSystemProject with V^T M V given (NULL: formed) (src/project/reduced_system.c) */
+PETSC_INTERN PetscErrorCode KFSystemProjectGram_Private(KFSystem, BV V, const PetscReal gram[], PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MX, const char what[]); /* MX = M X of the result */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis, const Mat P[], Mat X); /* X: columns of unit system M-norm */

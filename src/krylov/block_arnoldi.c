@@ -262,8 +262,9 @@ static PetscErrorCode KFMBasisColumns(KFMBasis *mb, PetscInt k0, Mat *Q, Mat *MQ
   PetscFunctionReturn(0);
 }
 
-/* max |Phi^T M V| and max |V^T M V - I| of the finished basis: what the user is told about its numerical health */
-static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *rigid, PetscReal *orth)
+/* max |Phi^T M V| and max |V^T M V - I| of the finished basis: what the user is told about its numerical health; the
+   Gram matrix V^T M V (k x k, allocated here) is also the reduced mass the projection needs */
+static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *rigid, PetscReal *orth, PetscReal **gram)
 {
   Mat        A, MA;
   PetscInt   r;
@@ -271,12 +272,14 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *
 
   PetscFunctionBegin;
   *rigid = *orth = 0;
+  *gram          = NULL;
   if (!k) PetscFunctionReturn(0);
   PetscCall(MatGetSize(sys->Phi, NULL, &r));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(BVGetMat(V, &A));
   PetscCall(KFMatMultDense(sys->Ms, A, &MA));
-  PetscCall(PetscMalloc2(PetscMax(r * k, 1), &c, k * k, &g));
+  PetscCall(PetscMalloc1(PetscMax(r * k, 1), &c));
+  PetscCall(PetscMalloc1(k * k, &g));
   if (r) PetscCall(KFMatTransposeMatMultGather(sys->Phi, MA, c));
   PetscCall(KFMatTransposeMatMultGather(A, MA, g));
   PetscCall(BVRestoreMat(V, &A));
@@ -284,7 +287,8 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *
   for (PetscInt i = 0; i < r * k; i++) *rigid = PetscMax(*rigid, PetscAbsReal(c[i]));
   for (PetscInt j = 0; j < k; j++)
     for (PetscInt i = 0; i < k; i++) *orth = PetscMax(*orth, PetscAbsReal(g[i + j * k] - (i == j)));
-  PetscCall(PetscFree2(c, g));
+  PetscCall(PetscFree(c));
+  *gram = g;
   PetscFunctionReturn(0);
 }
 
@@ -293,6 +297,7 @@ PetscErrorCode KFKrylovInfoReset(KFKrylovInfo *info)
   PetscFunctionBegin;
   if (!info) PetscFunctionReturn(0);
   PetscCall(PetscFree(info->block_end));
+  PetscCall(PetscFree(info->gram));
   PetscCall(PetscMemzero(info, sizeof(*info)));
   PetscFunctionReturn(0);
 }
@@ -459,7 +464,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(PetscFree(basis.MV));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
-  PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality));
+  PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality, &info->gram));
   PetscCall(BVSetActiveColumns(V, 0, k));
   info->ndeflated = ndefl;
   *Vout           = V;

@@ -13,7 +13,7 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
   KFReducer_Krylov *kr = (KFReducer_Krylov *)r->data;
   BV                V;
   PetscInt          c, a, t, nsys, l, k, nblk = r->build_moments, nout, nin;
-  PetscReal        *Mr, *Kr;
+  PetscReal        *Mr, *Kr, *gram = NULL;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, &a, &t));
@@ -41,6 +41,7 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
     basis->block_end     = info.block_end; /* the basis owns it now */
     basis->rigid_content = info.rigid_content;
     basis->orthogonality = info.orthogonality;
+    gram                 = info.gram; /* the health check's V^T M V: the reduced mass below, no second product */
   }
   PetscCall(BVGetActiveColumns(V, &l, &k));
   c           = k - l;
@@ -48,7 +49,8 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
   basis->data = V;
   PetscCall(PetscMalloc4(c, &basis->lambda, c * c, &basis->Phi, c * a, &basis->Gr, t * c, &basis->Hr));
   PetscCall(PetscMalloc2(c * c, &Mr, c * c, &Kr));
-  PetscCall(KFSystemProject(sys, V, Mr, Kr, basis->Gr, basis->Hr));
+  PetscCall(KFSystemProjectGram_Private(sys, V, gram, Mr, Kr, basis->Gr, basis->Hr));
+  PetscCall(PetscFree(gram));
   PetscCall(KFDenseEig(c, Kr, Mr, basis->lambda, basis->Phi));
   basis->Kr = Kr;
   basis->Mr = Mr;

@@ -7,7 +7,8 @@
    So a row of S is a body row with its columns renamed (tied columns expanded into their expressions), plus, at the
    few system dofs a tied interface reads through, the tied body rows weighted by the expression's coefficients.
    This file writes that sum directly: every rank renames the rows it owns and receives the (few) tied rows of every
-   body from their owners, so no entry travels in the assembly, and the matrix is preallocated exactly.
+   body from their owners, so no entry travels in the assembly, and the matrix's CSR arrays (over ranks, those of its
+   diagonal and off-diagonal blocks) are written row by row in one pass and adopted by the matrix.
 
    MatPtAP followed by MatAXPY(DIFFERENT_NONZERO_PATTERN) did the same with a generic symbolic product per body and a
    merge that copies the whole matrix: 3.8 s of a 202,447-dof scene, against O(nnz) renaming here.
@@ -272,10 +273,52 @@ static PetscErrorCode KFTiedRowsDestroy(KFTiedRows *T)
   PetscFunctionReturn(0);
 }
 
-/* the CSR arrays of a one-rank matrix the matrix itself frees (MatCreateSeqAIJWithArrays does not take them over) */
+/* CSR arrays written row after row (entries pushed, then the row closed), grown when a row does not fit */
 typedef struct {
-  PetscInt    *i, *j;
+  PetscInt    *i, *j, n, cap;
   PetscScalar *a;
+} KFGrowCSR;
+
+static PetscErrorCode KFGrowCSRCreate(PetscInt rows, PetscInt cap, KFGrowCSR *c)
+{
+  PetscFunctionBegin;
+  c->n   = 0;
+  c->cap = PetscMax(cap, 1);
+  PetscCall(PetscMalloc1(rows + 1, &c->i));
+  PetscCall(PetscMalloc1(c->cap, &c->j));
+  PetscCall(PetscMalloc1(c->cap, &c->a));
+  c->i[0] = 0;
+  PetscFunctionReturn(0);
+}
+
+/* appends m entries to the open row, their columns less shift */
+static PetscErrorCode KFGrowCSRPush(KFGrowCSR *c, PetscInt m, const PetscInt col[], const PetscScalar val[], PetscInt shift)
+{
+  PetscFunctionBegin;
+  if (c->n + m > c->cap) {
+    c->cap = PetscMax(2 * c->cap, c->n + m);
+    PetscCall(PetscRealloc(sizeof(PetscInt) * c->cap, &c->j));
+    PetscCall(PetscRealloc(sizeof(PetscScalar) * c->cap, &c->a));
+  }
+  for (PetscInt k = 0; k < m; k++) c->j[c->n + k] = col[k] - shift;
+  PetscCall(PetscArraycpy(c->a + c->n, val, m));
+  c->n += m;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFGrowCSRFree(KFGrowCSR *c)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(c->i));
+  PetscCall(PetscFree(c->j));
+  PetscCall(PetscFree(c->a));
+  PetscFunctionReturn(0);
+}
+
+/* the CSR arrays of a matrix that the matrix itself frees (MatCreateSeqAIJWithArrays and
+   MatCreateMPIAIJWithSplitArrays do not take them over): its diagonal block and, over ranks, its off-diagonal one */
+typedef struct {
+  KFGrowCSR d, o;
 } KFAdoptedCSR;
 
 static PetscErrorCode KFAdoptedCSRDestroy(void *ctx)
@@ -283,26 +326,29 @@ static PetscErrorCode KFAdoptedCSRDestroy(void *ctx)
   KFAdoptedCSR *c = (KFAdoptedCSR *)ctx;
 
   PetscFunctionBegin;
-  PetscCall(PetscFree(c->i));
-  PetscCall(PetscFree2(c->j, c->a));
+  PetscCall(KFGrowCSRFree(&c->d));
+  PetscCall(KFGrowCSRFree(&c->o));
   PetscCall(PetscFree(c));
   PetscFunctionReturn(0);
 }
 
-/* A one-rank AIJ matrix on the given (sorted, exact) CSR arrays, which it keeps and frees: the matrix's rows are
-   written in place instead of entry by entry through MatSetValues (its search and insertion per entry were two
-   thirds of the assembly's time on the 202k-dof solid). New nonzeros are an error, as for the preallocated matrix. */
-static PetscErrorCode KFMatAdoptCSR(MPI_Comm comm, PetscInt n, PetscInt *i, PetscInt *j, PetscScalar *a, Mat *S)
+/* An AIJ matrix on the given sorted CSR arrays (the diagonal block's columns local, the off-diagonal block's global),
+   which it keeps and frees: the rows are written in place in one pass, instead of counted in a first pass and set
+   entry by entry through MatSetValues in a second (its search and insertion per entry were two thirds of the
+   assembly's time on the 202k-dof solid). New nonzeros are an error, as for a preallocated matrix. */
+static PetscErrorCode KFMatAdoptCSR(MPI_Comm comm, PetscInt n, PetscInt N, KFGrowCSR *d, KFGrowCSR *o, Mat *S)
 {
   KFAdoptedCSR  *c;
   PetscContainer ct;
+  PetscMPIInt    size;
 
   PetscFunctionBegin;
-  PetscCall(MatCreateSeqAIJWithArrays(comm, n, n, i, j, a, S));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  if (size == 1) PetscCall(MatCreateSeqAIJWithArrays(comm, n, n, d->i, d->j, d->a, S));
+  else PetscCall(MatCreateMPIAIJWithSplitArrays(comm, n, n, N, N, d->i, d->j, d->a, o->i, o->j, o->a, S));
   PetscCall(PetscNew(&c));
-  c->i = i;
-  c->j = j;
-  c->a = a;
+  c->d = *d;
+  c->o = *o;
   PetscCall(PetscContainerCreate(comm, &ct));
   PetscCall(PetscContainerSetPointer(ct, c));
   PetscCall(PetscContainerSetUserDestroy(ct, KFAdoptedCSRDestroy));
@@ -314,8 +360,8 @@ static PetscErrorCode KFMatAdoptCSR(MPI_Comm comm, PetscInt n, PetscInt *i, Pets
 }
 
 /* S = sum_b P_b^T A_b P_b (A_b = M_b with mass, else K_b), every diagonal entry present (an unconnected dof must
-   reach MUMPS as a null pivot, not as a missing entry). *S NULL: created and preallocated exactly; else the same
-   pattern (an earlier angle's) refilled. */
+   reach MUMPS as a null pivot, not as a missing entry). *S NULL: created on its CSR arrays, written in one pass; else
+   the same pattern (an earlier angle's) refilled. */
 PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S)
 {
   KFScene     s = y->scene;
@@ -323,12 +369,10 @@ PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S
   KFBodyRows *R;
   KFTiedRows  T;
   KFRowBuf    r = {0};
-  PetscInt    n = s->nsys_local, r0 = s->sys_rstart, *srcb, *srci, *cptr, *ct, ncon = 0, *dnz = NULL, *onz = NULL;
+  PetscInt    n = s->nsys_local, r0 = s->sys_rstart, *srcb, *srci, *cptr, *ct, ncon = 0;
   PetscReal  *cc;
   PetscBool   create = (PetscBool)(*S == NULL);
-  PetscMPIInt size;
-  PetscInt   *ci = NULL, *cj = NULL; /* one rank, new matrix: its CSR, written directly */
-  PetscScalar *cv = NULL;
+  KFGrowCSR   D = {0}, O = {0}; /* a new matrix: its diagonal and off-diagonal blocks' CSR, written directly */
 
   PetscFunctionBegin;
   PetscCall(KFSystemInterfaceExprs(y, &E));
@@ -380,65 +424,58 @@ PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S
     PetscCall(PetscFree(fill));
   }
 
-  if (create) PetscCall(PetscCalloc2(n, &dnz, n, &onz));
-  PetscCallMPI(MPI_Comm_size(s->comm, &size));
-  /* two passes on a new matrix (count, then fill), one on a refill */
-  for (int pass = create ? 0 : 1; pass < 2; pass++) {
-    if (pass == 1 && create && size == 1) { /* one rank: the rows go straight into CSR arrays the matrix adopts */
-      PetscCall(PetscMalloc1(n + 1, &ci));
-      ci[0] = 0;
-      for (PetscInt i = 0; i < n; i++) ci[i + 1] = ci[i] + dnz[i];
-      PetscCall(PetscMalloc2(ci[n] + 1, &cj, ci[n] + 1, &cv));
-    } else if (pass == 1) {
-      if (create) {
-        PetscCall(MatCreate(s->comm, S));
-        PetscCall(MatSetSizes(*S, n, n, s->nsys, s->nsys));
-        PetscCall(MatSetType(*S, MATAIJ));
-        PetscCall(MatXAIJSetPreallocation(*S, 1, dnz, onz, NULL, NULL)); /* exact: a miscount is an error, not a malloc */
-      } else PetscCall(MatSetOption(*S, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE)); /* the same pattern: anything new is a bug */
-      PetscCall(MatSetOption(*S, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));      /* every rank writes its own rows only */
-    }
-    for (PetscInt i = 0; i < n; i++) {
-      const PetscInt row = r0 + i;
-      PetscBool      sorted = PETSC_TRUE, diag = PETSC_FALSE;
+  if (create) { /* room for the bodies' entries, the tied rows' and a diagonal per row: enough unless tied columns expand */
+    PetscInt cap = n + 1;
 
-      r.n = 0;
-      if (srcb[i] >= 0) PetscCall(KFRowAppendBody(&R[srcb[i]], E[srcb[i]], s->bodies[srcb[i]].sysidx, srci[i], &r, &sorted));
-      for (PetscInt q = cptr[i]; q < cptr[i + 1]; q++) {
-        const PetscInt t = ct[q];
-
-        PetscCall(KFRowBufReserve(&r, T.ptr[t + 1] - T.ptr[t]));
-        for (PetscInt e = T.ptr[t]; e < T.ptr[t + 1]; e++) {
-          r.col[r.n]   = T.col[e];
-          r.val[r.n++] = cc[q] * T.val[e];
-        }
-        sorted = PETSC_FALSE;
-      }
-      if (!sorted) PetscCall(KFRowBufCompress(&r));
-      for (PetscInt k = 0; k < r.n && !diag; k++) diag = (PetscBool)(r.col[k] == row);
-      if (!diag) { /* an explicit zero on the diagonal */
-        PetscCall(KFRowBufReserve(&r, 1));
-        r.col[r.n]   = row;
-        r.val[r.n++] = 0;
-        if (r.n > 1 && r.col[r.n - 2] > row) PetscCall(KFRowBufCompress(&r));
-      }
-      if (pass == 0) {
-        for (PetscInt k = 0; k < r.n; k++) {
-          if (r.col[k] >= r0 && r.col[k] < r0 + n) dnz[i]++;
-          else onz[i]++;
-        }
-      } else if (ci) {
-        PetscCheck(r.n == ci[i + 1] - ci[i], PETSC_COMM_SELF, PETSC_ERR_PLIB, "system row %" PetscInt_FMT ": %" PetscInt_FMT " entries, counted %" PetscInt_FMT, row, r.n, ci[i + 1] - ci[i]);
-        PetscCall(PetscArraycpy(cj + ci[i], r.col, r.n)); /* sorted, no repeats: KFRowBufCompress */
-        PetscCall(PetscArraycpy(cv + ci[i], r.val, r.n));
-      } else PetscCall(MatSetValues(*S, 1, &row, r.n, r.col, r.val, INSERT_VALUES));
-    }
+    for (PetscInt b = 0; b < s->nb; b++) cap += R[b].ia[R[b].nl] + (R[b].Ao ? R[b].ib[R[b].nl] : 0);
+    for (PetscInt q = 0; q < ncon; q++) cap += T.ptr[ct[q] + 1] - T.ptr[ct[q]];
+    PetscCall(KFGrowCSRCreate(n, cap, &D));
+    PetscCall(KFGrowCSRCreate(n, 1, &O));
+  } else {
+    PetscCall(MatSetOption(*S, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE)); /* the same pattern: anything new is a bug */
+    PetscCall(MatSetOption(*S, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));      /* every rank writes its own rows only */
   }
-  if (ci) PetscCall(KFMatAdoptCSR(s->comm, n, ci, cj, cv, S));
+  for (PetscInt i = 0; i < n; i++) {
+    const PetscInt row = r0 + i;
+    PetscBool      sorted = PETSC_TRUE, diag = PETSC_FALSE;
+
+    r.n = 0;
+    if (srcb[i] >= 0) PetscCall(KFRowAppendBody(&R[srcb[i]], E[srcb[i]], s->bodies[srcb[i]].sysidx, srci[i], &r, &sorted));
+    for (PetscInt q = cptr[i]; q < cptr[i + 1]; q++) {
+      const PetscInt t = ct[q];
+
+      PetscCall(KFRowBufReserve(&r, T.ptr[t + 1] - T.ptr[t]));
+      for (PetscInt e = T.ptr[t]; e < T.ptr[t + 1]; e++) {
+        r.col[r.n]   = T.col[e];
+        r.val[r.n++] = cc[q] * T.val[e];
+      }
+      sorted = PETSC_FALSE;
+    }
+    if (!sorted) PetscCall(KFRowBufCompress(&r));
+    for (PetscInt k = 0; k < r.n && !diag; k++) diag = (PetscBool)(r.col[k] == row);
+    if (!diag) { /* an explicit zero on the diagonal */
+      PetscCall(KFRowBufReserve(&r, 1));
+      r.col[r.n]   = row;
+      r.val[r.n++] = 0;
+      if (r.n > 1 && r.col[r.n - 2] > row) PetscCall(KFRowBufCompress(&r));
+    }
+    if (create) { /* sorted, no repeats (KFRowBufCompress): the local columns are one slice, the others before and after it */
+      PetscInt lo = 0, hi;
+
+      while (lo < r.n && r.col[lo] < r0) lo++;
+      hi = lo;
+      while (hi < r.n && r.col[hi] < r0 + n) hi++;
+      PetscCall(KFGrowCSRPush(&D, hi - lo, r.col + lo, r.val + lo, r0));
+      PetscCall(KFGrowCSRPush(&O, lo, r.col, r.val, 0));
+      PetscCall(KFGrowCSRPush(&O, r.n - hi, r.col + hi, r.val + hi, 0));
+      D.i[i + 1] = D.n;
+      O.i[i + 1] = O.n;
+    } else PetscCall(MatSetValues(*S, 1, &row, r.n, r.col, r.val, INSERT_VALUES));
+  }
+  if (create) PetscCall(KFMatAdoptCSR(s->comm, n, s->nsys, &D, &O, S));
   PetscCall(MatAssemblyBegin(*S, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*S, MAT_FINAL_ASSEMBLY));
 
-  PetscCall(PetscFree2(dnz, onz));
   PetscCall(PetscFree2(ct, cc));
   PetscCall(PetscFree(cptr));
   PetscCall(PetscFree2(srcb, srci));

@@ -54,8 +54,10 @@ static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x,
 /* One classical Gram-Schmidt pass of the block w (nl x p, mw = M w) against the rigid modes and the basis columns:
    the coefficients Phi^T M w and V^T M w come from mw, then w -= Phi c_r + V c_v, and mw with it when update is set
    (from the kept products M Phi and M V: exact up to rounding of the small correction, so only worth it when the
-   coefficients are small, i.e. on the second pass). */
-static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool update)
+   coefficients are small, i.e. on the second pass). With mw NULL the coefficients come from the kept products
+   instead, (M Phi)^T w and (M V)^T w: a first pass needs no product of w with M. cnorm2, when given, receives each
+   column's |c|^2 (its M-norm squared inside the span of [Phi V], which is M-orthonormal). */
+static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool update, PetscReal cnorm2[])
 {
   const PetscInt     r = rs->r, k = mb->k, nl = mb->nl;
   MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
@@ -64,6 +66,8 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
   PetscInt           ldp = nl, ldmp = nl;
 
   PetscFunctionBegin;
+  if (cnorm2)
+    for (PetscInt j = 0; j < p; j++) cnorm2[j] = 0;
   if (!r && !k) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1((r + k) * p + 1, &c));
   PetscCall(BVGetArrayRead(mb->V, &v));
@@ -75,7 +79,10 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
   }
   /* [Phi V]^T (M w) in one reduction: r rows for the rigid modes, then k for the basis */
   {
-    PetscReal *loc;
+    PetscReal         *loc;
+    const PetscScalar *x = mw ? mw : w, *lp = mw ? phi : mphi, *lv = mw ? v : mb->MV;
+    const PetscInt     ldl = mw ? ldp : ldmp;
+
     PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
     if (nl > 0 && p > 0) {
       PetscBLASInt bn, bp, bld, bmw, bq;
@@ -87,20 +94,23 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
       if (r) {
         PetscBLASInt br;
         PetscCall(PetscBLASIntCast(r, &br));
-        PetscCall(PetscBLASIntCast(ldp, &bld));
+        PetscCall(PetscBLASIntCast(ldl, &bld));
         /* rows 0..r-1 of the (r + k) x p result */
-        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &br, &bp, &bn, &one, phi, &bld, mw, &bmw, &zero, loc, &bq));
+        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &br, &bp, &bn, &one, lp, &bld, x, &bmw, &zero, loc, &bq));
       }
       if (k) {
         PetscBLASInt bk;
         PetscCall(PetscBLASIntCast(k, &bk));
         PetscCall(PetscBLASIntCast(nl, &bld));
-        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bk, &bp, &bn, &one, v, &bld, mw, &bmw, &zero, loc + r, &bq));
+        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bk, &bp, &bn, &one, lv, &bld, x, &bmw, &zero, loc + r, &bq));
       }
     }
     PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, comm));
     PetscCall(PetscFree(loc));
   }
+  if (cnorm2)
+    for (PetscInt j = 0; j < p; j++)
+      for (PetscInt i = 0; i < r + k; i++) cnorm2[j] += PetscRealPart(c[i + j * (r + k)] * c[i + j * (r + k)]);
   /* w -= [Phi V] c, and mw -= [M Phi, M V] c: column j of c starts at c + j (r + k), rigid rows first */
   if (nl > 0 && p > 0) {
     PetscBLASInt bn, bp, bld, bw, bq;
@@ -114,7 +124,7 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
       PetscCall(PetscBLASIntCast(r, &br));
       PetscCall(PetscBLASIntCast(ldp, &bld));
       PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, phi, &bld, c, &bq, &one, w, &bw));
-      if (update) {
+      if (update && mw) {
         PetscCall(PetscBLASIntCast(ldmp, &bld));
         PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, mphi, &bld, c, &bq, &one, mw, &bw));
       }
@@ -124,7 +134,7 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
       PetscCall(PetscBLASIntCast(k, &bk));
       PetscCall(PetscBLASIntCast(nl, &bld));
       PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, v, &bld, c + r, &bq, &one, w, &bw));
-      if (update) PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, mb->MV, &bld, c + r, &bq, &one, mw, &bw));
+      if (update && mw) PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, mb->MV, &bld, c + r, &bq, &one, mw, &bw));
     }
   }
   if (r) {
@@ -153,16 +163,17 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
 
 /* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
    it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
-   is dropped (deflation). MW, when given, is M W (the caller has it); otherwise it is formed here.
+   is dropped (deflation). MW, when given, is M W (the caller has it).
 
    Block classical Gram-Schmidt, twice (DESIGN.md: rigid content creeps back through rounding, so the rigid modes are
-   projected out of every block together with the basis): pass 1 takes [Phi V]^T M W from the block's product, pass 2
+   projected out of every block together with the basis): pass 1 takes [Phi V]^T M W from the block's product MW, or
+   without one from the kept products, (M [Phi V])^T W, the same numbers up to rounding that pass 2 corrects; pass 2
    the same from a fresh product of the projected block, which is what makes it a refinement (a product updated
    through pass 1 would carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Then the block's
    own columns, in order, by Gram-Schmidt on the (pass-2) products; a column that loses more than half of its norm there
    gets a fresh product and one more pass against everything (DGKS's criterion), so that the near-dependent inputs of a
-   block stay as orthogonal as the rest. Two block products with M per append, whatever the basis size, instead of
-   several mat-vecs per column. */
+   block stay as orthogonal as the rest. One block product with M per append (pass 2's), whatever the basis size,
+   instead of several mat-vecs per column. */
 static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, Mat MW, PetscReal tol, PetscInt *ndeflated)
 {
   const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
@@ -185,11 +196,20 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     PetscCall(MatDenseGetArrayRead(MW, &src));
     for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&mw[j * nl], &src[(j0 + j) * ld], nl));
     PetscCall(MatDenseRestoreArrayRead(MW, &src));
-  } else PetscCall(KFMProduct(Ms, nl, p, w, mw));
-  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_FALSE)); /* pass 1 */
-  PetscCall(KFMProduct(Ms, nl, p, w, mw));
-  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE)); /* pass 2 */
+    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+    PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_FALSE, NULL)); /* pass 1 */
+    PetscCall(KFMProduct(Ms, nl, p, w, mw));
+  } else { /* pass 1 from the kept products; the norm before it by Pythagoras, [Phi V] being M-orthonormal */
+    PetscReal *cn2;
+
+    PetscCall(PetscMalloc1(p, &cn2));
+    PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2));
+    PetscCall(KFMProduct(Ms, nl, p, w, mw));
+    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+    for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
+    PetscCall(PetscFree(cn2));
+  }
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE, NULL)); /* pass 2 */
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
     PetscReal    nb, na;
@@ -215,7 +235,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     if (na > tol * nrm0[j] && na < PETSC_SQRT2 / 2 * nb) { /* cancellation within the block: refine with a fresh product */
       PetscCall(KFMProduct(Ms, nl, 1, wj, mwj));
-      PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE));
+      PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE, NULL));
       PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     }
     if (!(na > tol * nrm0[j])) {

@@ -6,12 +6,22 @@ with a partly clamped root node.  M_S and K_S must equal the products P_b^T A_b 
 own body maps P_b (the maps themselves are checked against the constraint equations in test_assembly.py), at a first
 angle (a new matrix) and at a later one (the same pattern refilled); AIJ and dense body matrices give the same
 system; every diagonal entry is stored (a joint's free rotation has no row of its own in any body).
+The same checks run on 2 ranks (this file under mpiexec), where each rank writes the diagonal and off-diagonal blocks
+of its rows (MatCreateMPIAIJWithSplitArrays) and a later angle refills them through MatSetValues.
+
+    mpiexec -n 2 python tests/python/test_system_sum.py aij|dense   (the 2-rank half: prints "sum ok" per rank)
 """
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
-from kryflex import _core
-from reference import petsc_matrix
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
 
 NODES = {"root": [1, 2], "child": [1, 2, 3], "grandchild": [1, 2]}
 
@@ -25,6 +35,8 @@ def spd(n, seed):
 
 
 def chain(dense):
+    from kryflex import _core
+    from reference import petsc_matrix
     s = _core.CScene()
     mats = {}
     for k, (name, ids) in enumerate(NODES.items()):
@@ -48,17 +60,18 @@ def chain(dense):
 
 
 def dense_of(A):
+    """the whole matrix on every rank (each rank's rows, summed over ranks)"""
     n, m = A.getSize()
     out = np.zeros((n, m))
     r0, r1 = A.getOwnershipRange()
     for i in range(r0, r1):
         cols, vals = A.getRow(i)
         out[i, cols] = vals
-    return out
+    return A.getComm().tompi4py().allreduce(out) if A.getComm().getSize() > 1 else out
 
 
-@pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])
-def test_sum_equals_dense_products(dense):
+def check_sum_equals_dense_products(dense):
+    from kryflex import _core
     scene, mats = chain(dense)
     system = _core.CSystem(scene)
     for angle in (0.0, 0.7, 2.9):      # 0: zero coefficients stay in the pattern; later angles refill it
@@ -70,13 +83,28 @@ def test_sum_equals_dense_products(dense):
             got = dense_of(S)
             assert np.linalg.norm(got - ref) <= 1e-14 * np.linalg.norm(ref), (angle, which)
             assert np.allclose(got, got.T, rtol=0, atol=1e-13 * np.abs(ref).max())
-            for i in range(S.getSize()[0]):                  # every diagonal entry stored
+            r0, r1 = S.getOwnershipRange()
+            for i in range(r0, r1):                          # every diagonal entry stored
                 assert i in S.getRow(i)[0], (angle, which, i)
         # the joint's free rotation (the last system dof) reads through both tied nodes
         assert np.count_nonzero(P[1][:, -1]) and np.count_nonzero(P[2][:, -1])
 
 
+@pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])
+def test_sum_equals_dense_products(dense):
+    check_sum_equals_dense_products(dense)
+
+
+@pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])
+def test_sum_equals_dense_products_two_ranks(dense):
+    out = subprocess.run(["mpiexec", "-n", "2", sys.executable, os.path.abspath(__file__), "dense" if dense else "aij"],
+                         env=MPI_ENV, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-3000:]
+    assert out.stdout.count("sum ok") == 2, out.stdout   # both ranks checked every angle
+
+
 def test_aij_and_dense_bodies_give_the_same_system():
+    from kryflex import _core
     out = []
     for dense in (False, True):
         scene, _ = chain(dense)
@@ -85,3 +113,19 @@ def test_aij_and_dense_bodies_give_the_same_system():
         out.append([dense_of(A) for A in system.matrices()[:2]])
     for a, b in zip(*out):
         assert np.array_equal(a, b)
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, os.path.join(ROOT, "python"))
+    sys.path.insert(0, HERE)
+    import petsc4py
+    petsc4py.init(sys.argv[:1])
+    from petsc4py import PETSc
+    try:
+        check_sum_equals_dense_products(sys.argv[1] == "dense")
+    except AssertionError as e:           # the other rank would wait in the next gather: stop both
+        sys.stderr.write("rank %d: %r\n" % (PETSc.COMM_WORLD.getRank(), e))
+        sys.stderr.flush()
+        PETSc.COMM_WORLD.tompi4py().Abort(1)
+    sys.stdout.write("sum ok\n")  # one write per rank: lines stay whole
+    sys.stdout.flush()

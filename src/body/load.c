@@ -615,42 +615,48 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
   PetscFunctionReturn(0);
 }
 
-/* sum over the entries of a local block of (a_ij - t_ij)^2, where t_ij is the transposed entry found by binary
-   search in the (sorted) row j of the same block, and of a_ij^2: one pass over the entries, no transpose built.
-   An entry without its transposed partner counts twice, for the two positions of A - A^T it fills. */
+/* sum over the entries of a local block of (a_ij - t_ij)^2, where t_ij is the transposed entry, and of a_ij^2: one
+   pass over the entries, no transpose built. Rows are visited in order, so the partner (j, i) of an upper entry
+   (i, j), j > i, lies in row j's strictly lower part past every partner looked up before: one cursor per row walks
+   it once (the binary search per entry this replaced cost 0.36 s of the 202k-dof solid's 4 matrices, the cursors
+   0.1 s). Lower entries the cursor steps over, or leaves behind at the end, have no upper partner. A matched pair
+   counts twice, an entry without its partner twice (a^2), for the two positions of A - A^T each fills. */
 static PetscErrorCode KFSeqAIJAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
 {
   const PetscInt    *ia, *ja;
   const PetscScalar *va;
-  PetscInt           m;
+  PetscInt           m, *cur;
   PetscBool          done;
 
   PetscFunctionBegin;
   PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
   PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "cannot get the rows of the matrix");
   PetscCall(MatSeqAIJGetArrayRead(A, &va));
+  PetscCall(PetscMalloc1(m + 1, &cur));
+  for (PetscInt i = 0; i < m; i++) cur[i] = ia[i];
   for (PetscInt i = 0; i < m; i++)
     for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
       const PetscInt j = ja[k];
       PetscReal      a = PetscRealPart(va[k]);
-      PetscInt       lo, hi;
 
       *aa += a * a;
-      if (j == i) continue;
+      if (j <= i) continue; /* the diagonal has no partner to differ from; lower entries are met from above */
       if (j >= m) { /* a rectangular block has no transposed partner here */
         *dd += 2 * a * a;
         continue;
       }
-      lo = ia[j];
-      hi = ia[j + 1];
-      while (hi - lo > 0) { /* the entry (j, i) in the sorted row j */
-        PetscInt mid = lo + (hi - lo) / 2;
-        if (ja[mid] < i) lo = mid + 1;
-        else hi = mid;
+      while (cur[j] < ia[j + 1] && ja[cur[j]] < i) { /* lower entries of row j whose partner row had none */
+        const PetscReal t = PetscRealPart(va[cur[j]++]);
+        *dd += 2 * t * t;
       }
-      if (lo < ia[j + 1] && ja[lo] == i) *dd += PetscSqr(a - PetscRealPart(va[lo]));
-      else *dd += 2 * a * a;
+      if (cur[j] < ia[j + 1] && ja[cur[j]] == i) {
+        *dd += 2 * PetscSqr(a - PetscRealPart(va[cur[j]]));
+        cur[j]++;
+      } else *dd += 2 * a * a;
     }
+  for (PetscInt j = 0; j < m; j++) /* what no upper entry reached */
+    for (PetscInt k = cur[j]; k < ia[j + 1] && ja[k] < j; k++) *dd += 2 * PetscSqr(PetscRealPart(va[k]));
+  PetscCall(PetscFree(cur));
   PetscCall(MatSeqAIJRestoreArrayRead(A, &va));
   PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
   PetscFunctionReturn(0);

@@ -1,7 +1,7 @@
 """The symmetry check of body matrices (KFMatCheckSymmetric, src/body/load.c) against NumPy.
 
 The check measures ||A - A^T||_F / ||A||_F in one pass over A's entries (no transpose built): each entry against its
-transposed partner, an entry without a partner counted for both positions it fills in A - A^T, and on several ranks
+transposed partner, an entry without a partner (above or below the diagonal) counted for both positions it fills in A - A^T, and on several ranks
 the couplings between ranks against their transpose.  Its refusal message prints the measured ratio; here that
 figure is compared with the ratio NumPy computes from the dense matrix, for an entry whose partner differs, an entry
 without a partner, and both across the ranks' boundary (2 ranks); a symmetric matrix with a rounding-level
@@ -34,10 +34,14 @@ def stiffness(case):
     K = A @ A.T
     K[3, 20] = K[20, 3] = 0.0       # structural zeros: (3, 20) is where a partnerless entry goes
     K[5, 7] = K[7, 5] = 0.0
+    K[22, 23] = K[23, 22] = 0.0
     if case == "value":             # a partner with another value, both rows on one rank
         K[2, 9] += 1e-4
     elif case == "partnerless":     # an entry whose transposed position is empty, one rank
         K[5, 7] = 3e-4
+    elif case == "partnerless_lower":  # below the diagonal: one stepped over, one in the last row left at the end
+        K[7, 5] = 3e-4
+        K[23, 22] = 2e-4
     elif case == "value_across":    # across the ranks' boundary (row 1 on rank 0, column 18 on rank 1)
         K[1, 18] += 2e-4
     elif case == "partnerless_across":
@@ -47,6 +51,8 @@ def stiffness(case):
         K[5, 7] = 3e-4
         K[1, 18] += 2e-4
         K[3, 20] = 5e-4
+        K[7, 5] = 1e-4
+        K[23, 22] = 2e-4
     elif case == "rounding":        # 1e-14 relative: symmetric as far as the check is concerned
         K[1, 18] *= 1 + 1e-14
     return K
@@ -77,7 +83,7 @@ def numpy_ratio(case):
     return np.linalg.norm(K - K.T) / np.linalg.norm(K)
 
 
-ASYMMETRIC = ["value", "partnerless", "value_across", "partnerless_across", "all"]
+ASYMMETRIC = ["value", "partnerless", "partnerless_lower", "value_across", "partnerless_across", "all"]
 
 
 @pytest.mark.parametrize("case", ASYMMETRIC)

@@ -618,9 +618,10 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
 /* sum over the entries of a local block of (a_ij - t_ij)^2, where t_ij is the transposed entry, and of a_ij^2: one
    pass over the entries, no transpose built. Rows are visited in order, so the partner (j, i) of an upper entry
    (i, j), j > i, lies in row j's strictly lower part past every partner looked up before: one cursor per row walks
-   it once (the binary search per entry this replaced cost 0.36 s of the 202k-dof solid's 4 matrices, the cursors
-   0.1 s). Lower entries the cursor steps over, or leaves behind at the end, have no upper partner. A matched pair
-   counts twice, an entry without its partner twice (a^2), for the two positions of A - A^T each fills. */
+   it once (the binary search per entry this replaced took 0.36 s on the 202k-dof solid's 4 matrices, the cursors
+   0.18 s: perf, 1 rank). Lower entries the cursor steps over, or leaves behind at the end, have no upper partner.
+   A matched pair counts twice, an entry without its partner twice (a^2), for the two positions of A - A^T each
+   fills. */
 static PetscErrorCode KFSeqAIJAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
 {
   const PetscInt    *ia, *ja;

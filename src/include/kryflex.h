@@ -124,11 +124,12 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt *nheld, PetscInt *null_pivots, PetscInt *negative_pivots);
 /* What a flexible solver's work cost: factorization seconds (analysis + numeric) and MUMPS' memory estimate per
    rank (MB, max over ranks), block solves (MatMatSolve calls, columns, seconds, refinement solves among them), and
-   the relative residuals ||P B - K_S X||_F / ||P B||_F of each block's first solve (max) and of its final X (max). */
+   the relative residuals ||P B - K_S X||_F / ||P B||_F of each block's first solve (max) and of its final X (max),
+   the blocks refined and those whose final residual stayed above -kf_refine_rtol. */
 typedef struct {
   PetscLogDouble factor_seconds, solve_seconds;
   PetscReal      memory_estimate_mb, residual_first_max, residual_final_max;
-  PetscInt       solve_calls, solve_columns, refinement_solves, blocks;
+  PetscInt       solve_calls, solve_columns, refinement_solves, blocks, blocks_refined, blocks_unconverged;
 } KFFlexSolverPerf;
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
 /* Which implementation of K+ (src/solve/bodywise.c): monolithic (one factorization of K_S per configuration),

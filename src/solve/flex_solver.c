@@ -11,14 +11,14 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
   (*solver)->type   = KF_FLEX_SOLVER_AUTO; /* body-wise where it is faster (src/solve/bodywise.c) */
-  (*solver)->refine      = 1;
+  (*solver)->refine      = PETSC_DETERMINE; /* by the factor: KFFlexSolverRefineSteps() */
   (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
-  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
+  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
   PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
   PetscOptionsEnd();
-  PetscCheck((*solver)->refine >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
+  PetscCheck((*solver)->refine >= 0 || (*solver)->refine == PETSC_DETERMINE, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
   PetscCheck((*solver)->refine_rtol >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)(*solver)->refine_rtol);
   PetscFunctionReturn(0);
 }
@@ -347,6 +347,21 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The refinement steps a block may take when -kf_refine was not given: 1 behind a full-rank factor (its first
+   residual is near rounding, ~6e-7 on the 1M-dof solid), 5 behind a block low-rank one, whose forward error is about
+   the dropping tolerance times K's condition number: 0.1 after the first solve of the 1M-dof solid at -kf_blr 1e-8,
+   each step winning a factor ~170, so 3 steps reach 1e-6. */
+static PetscErrorCode KFFlexSolverRefineSteps(KFFlexSolver solver)
+{
+  PetscReal blr = 0;
+
+  PetscFunctionBegin;
+  if (solver->refine != PETSC_DETERMINE) PetscFunctionReturn(0);
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kf_blr", &blr, NULL)); /* what KFFactorMumps factored with */
+  solver->refine = blr > 0 ? 5 : 1;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
 {
   KFSystem  sys = solver->sys;
@@ -357,6 +372,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
 
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
+  PetscCall(KFFlexSolverRefineSteps(solver));
   PetscCheck(solver->shift >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)solver->shift);
   PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
   solver->setup = (PetscBool)(solver->bw != NULL);
@@ -480,8 +496,11 @@ static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat B, Mat X, Ma
 }
 
 /* X = K+ B, refined against K_S itself when the residual says so: the residual (I - M Phi Phi^T) B - K_S X of the
-   first solve is measured, and only above -kf_refine_rtol goes through the factor again (up to -kf_refine steps).
-   The decision is a plain threshold (no adaptive rule that rounding could flip between 1 and 2 ranks).
+   first solve is measured, and only above -kf_refine_rtol goes through the factor again (up to -kf_refine steps,
+   fewer when a step does not halve the residual: the factor can do no better, more solves would be wasted). A block
+   left above the threshold is counted (perf.blocks_unconverged) and the reducer says so.
+   Whether a block is refined at all is a plain threshold (no adaptive rule that rounding could flip between 1 and 2
+   ranks); the halving rule only ends steps at the factor's floor, where one more changes X by no more than that.
    A stiff structure's solve loses about eps * cond digits; one step wins most of them back (the moments of a
    20,000-dof frame moved by 3e-10 with it). Always refining doubled the solves of every reduction; a well-conditioned
    factor's residual is near rounding, and the check costs one matrix product. */
@@ -496,19 +515,24 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
   PetscCall(KFFlexSolverSolveOnce(solver, B, X));
   solver->perf.blocks++;
   if (solver->refine > 0 && solver->shift == 0) {
+    PetscReal before = PETSC_MAX_REAL;
+
     PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
     solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
-    for (PetscInt it = 0; it < solver->refine && rel > solver->refine_rtol; it++) {
+    if (rel > solver->refine_rtol) solver->perf.blocks_refined++;
+    for (PetscInt it = 0; it < solver->refine && rel > solver->refine_rtol && rel < 0.5 * before; it++) {
       PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
       PetscCall(KFFlexSolverSolveOnce(solver, R, dX));
       solver->perf.refinement_solves++;
       PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
       PetscCall(MatDestroy(&dX));
       PetscCall(MatDestroy(&R));
+      before = rel;
       PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
     }
     PetscCall(MatDestroy(&R));
     solver->perf.residual_final_max = PetscMax(solver->perf.residual_final_max, rel);
+    if (rel > solver->refine_rtol) solver->perf.blocks_unconverged++;
   }
   PetscCall(PetscLogEventEnd(KF_EVENT_SOLVE, 0, 0, 0, 0));
   PetscFunctionReturn(0);

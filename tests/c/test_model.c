@@ -18,6 +18,9 @@
 #include <unistd.h>
 #include <sys/stat.h>
 
+/* LAPACK's condition estimate (PETSc wraps no gecon): the reference LAPACK every PETSc links has it */
+extern void dgecon_(const char *norm, const PetscBLASInt *n, const PetscReal *a, const PetscBLASInt *lda, const PetscReal *anorm, PetscReal *rcond, PetscReal *work, PetscBLASInt *iwork, PetscBLASInt *info);
+
 
 static PetscBool Same(PetscInt n, const PetscReal a[], const PetscReal b[])
 {
@@ -322,24 +325,38 @@ static PetscErrorCode TestResponses(KFReducedModel model, KFFlexSolver solver)
   PetscCall(KFReducedSystemGetFrequencies(sys, &nf, &freq));
   PetscCall(KFReducedSystemGetModes(sys, &lambda, NULL, &nrigid, NULL));
   PetscCall(CheckTrue("flexible frequencies: n - nrigid, ascending, sqrt(lambda) / 2 pi", (PetscBool)(nf == n - nrigid && nf > 1 && freq[0] <= freq[1] && RelDiff(freq[0], PetscSqrtReal(lambda[nrigid]) / (2 * PETSC_PI)) < 1e-15)));
-  /* between resonances; the rigid eigenvalues are zero only to eps lambda_max, which the direct solve feels as a
-     relative error of about eps lambda_max / w^2 (1e-8 at the first flexible mode of this stiff model) */
+  /* between resonances, against a direct solve of the same matrices. Both answers carry the rounding of a solve
+     with K - w^2 M, whose condition number at the first flexible modes of this stiff model (lambda_max / lambda_1
+     ~ 1e8) is ~1e7: the BLAS kernels alone moved the difference from 1.4e-9 (AVX2) to 1.3e-7 (AVX-512), with the
+     matrices' exact response (long double elimination) between the two. So the difference is measured in units of
+     eps cond_1(K - w^2 M) (LAPACK's estimate) and held to the textbook bound of a backward-stable solve, a small
+     multiple of n of them (4 n; measured 0.3-14 over the BLAS kernels and 1 or 2 ranks); a wrong mode or scaling
+     errs by orders of magnitude more. */
   for (PetscInt f = 0; f < nw; f++) w[f] = 2 * PETSC_PI * PetscSqrtReal(freq[f] * freq[f + 1]);
   PetscCall(KFReducedSystemFRF(sys, 0.0, nw, w, Tre, Tim));
   for (PetscInt f = 0; f < nw; f++) {
-    PetscReal   *A, *x, T = 0;
-    PetscBLASInt bn, one = 1, info, *piv;
-    PetscCall(PetscMalloc3(n * n, &A, n, &x, n, &piv));
+    PetscReal   *A, *x, *work, T = 0, anorm = 0, rcond;
+    PetscBLASInt bn, one = 1, info, *piv, *iwork;
+    PetscCall(PetscMalloc5(n * n, &A, n, &x, n, &piv, 4 * n, &work, n, &iwork));
     for (PetscInt i = 0; i < n * n; i++) A[i] = K[i] - w[f] * w[f] * M[i];
+    for (PetscInt j = 0; j < n; j++) {
+      PetscReal c = 0;
+      for (PetscInt i = 0; i < n; i++) c += PetscAbsReal(A[i + j * n]);
+      anorm = PetscMax(anorm, c);
+    }
     for (PetscInt i = 0; i < n; i++) x[i] = G[i];
     PetscCall(PetscBLASIntCast(n, &bn));
-    PetscCallBLAS("LAPACKgesv", LAPACKgesv_(&bn, &one, A, &bn, piv, x, &bn, &info));
-    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "gesv failed: %d", (int)info);
+    PetscCallBLAS("LAPACKgetrf", LAPACKgetrf_(&bn, &bn, A, &bn, piv, &info));
+    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "getrf failed: %d", (int)info);
+    PetscCallBLAS("LAPACKgecon", dgecon_("1", &bn, A, &bn, &anorm, &rcond, work, iwork, &info));
+    PetscCheck(!info && rcond > 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "gecon failed: %d", (int)info);
+    PetscCallBLAS("LAPACKgetrs", LAPACKgetrs_("N", &bn, &one, A, &bn, piv, x, &bn, &info));
+    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "getrs failed: %d", (int)info);
     for (PetscInt i = 0; i < n; i++) T += H[i] * x[i];
-    fdev = PetscMax(fdev, PetscAbsReal(Tre[f] - T) / PetscAbsReal(T) + PetscAbsReal(Tim[f]) / PetscAbsReal(T));
-    PetscCall(PetscFree3(A, x, piv));
+    fdev = PetscMax(fdev, (PetscAbsReal(Tre[f] - T) / PetscAbsReal(T) + PetscAbsReal(Tim[f]) / PetscAbsReal(T)) / (PETSC_MACHINE_EPSILON / rcond));
+    PetscCall(PetscFree5(A, x, piv, work, iwork));
   }
-  PetscCall(Check("undamped FRF between the first resonances vs H (K - w^2 M)^-1 G solved directly", fdev, 1e-7));
+  PetscCall(Check("undamped FRF between the first resonances vs H (K - w^2 M)^-1 G solved directly, in eps cond_1", fdev, 4.0 * n));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  reduced system at 0 deg:\n"));
   PetscCall(KFReducedSystemView(sys, PETSC_VIEWER_STDOUT_WORLD));
   PetscCall(KFReducedSystemDestroy(&sys));

@@ -2,7 +2,8 @@
 
 - Iterative refinement is decided by the residual of each block's first solve (-kf_refine_rtol): the model and the
   moments agree with the always-refined run (-kf_refine_rtol 0) to far below any accuracy target, and the residual
-  reported is the one the library measured.
+  reported is the one the library measured. A block stops refining when a step no longer halves its residual, and
+  blocks left above the threshold are counted and named in a warning line.
 - Without verification the full-order moments are not solved for: the accuracy search takes them from its richest
   candidate. They agree with the dense NumPy moments of tests/python/reference.py, the model is the same as with
   -kf_full_moments, and fewer columns go through the factor.
@@ -13,6 +14,7 @@
 No timed test: speed is measured by scripts/bench-scaling.
 """
 import os
+import re
 import subprocess
 import sys
 
@@ -85,6 +87,35 @@ def test_refinement_decided_by_residual_keeps_the_model(runs):
         La, Lb = r_def.moments(c, "full_moments"), r_all.moments(c, "full_moments")
         for k in range(MOMENTS_CHECKED):
             assert np.linalg.norm(La[k] - Lb[k]) <= SAME_MODEL_RTOL * np.linalg.norm(Lb[k])
+
+
+def test_refinement_stops_when_it_stalls_and_says_what_stayed_above(runs):
+    """A threshold no solve can meet (1e-30): every block is refined, each stops after the step that no longer halves
+    its residual (the factor's floor) instead of spending all 3 allowed steps, and every block is counted as left
+    above the threshold (the reducer's warning; summary.json's performance.blocks_unconverged)."""
+    scene, r0, red0 = runs["default"]
+    _, r, red = reduce(verify=False, refine=3, refine_rtol=1e-30)
+    blocks = scalar(r, "solve_blocks")
+    assert blocks > 0 and scalar(r, "solve_blocks_unconverged") == blocks
+    assert blocks <= scalar(r, "refinement_solves") < 3 * blocks
+    assert scalar(r, "solve_residual_final_max") <= scalar(r, "solve_residual_first_max")
+    assert scalar(r0, "solve_blocks_unconverged") == 0      # the default threshold is met without refinement
+    assert red.model.sizes == red0.model.sizes
+
+
+def test_unconverged_refinement_is_a_warning_and_in_the_summary(tmp_path):
+    out = tmp_path / "out"
+    p = subprocess.run([KRYFLEX, "reduce", GALILEO, "-o", str(out), "-kf_verify", "false", "-kf_refine", "2",
+                        "-kf_refine_rtol", "1e-30"], capture_output=True, text=True, env=ENV, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]   # the accuracy target is the FRF error's, which the run measures
+    import json
+    perf = json.load(open(out / "summary.json"))["performance"]
+    assert perf["blocks_unconverged"] > 0
+    found = re.search(r"warning: (\d+) of (\d+) block solves stayed above -kf_refine_rtol after refinement "
+                      r"\(largest final residual (\S+)\)", p.stdout)
+    assert found, p.stdout[-3000:]
+    assert int(found.group(1)) == perf["blocks_unconverged"] == int(found.group(2))
+    assert float(found.group(3)) == pytest.approx(perf["residual_final_max"], rel=0.06)  # printed with 2 digits
 
 
 def test_moments_without_verification_are_not_solved_for(runs):

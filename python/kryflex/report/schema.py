@@ -63,7 +63,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
                  "frf_max_rel_error": {<label>: float} (= frf_error)} (opt, every part optional),
  "timings_s": {stage: seconds} (opt), "notes": [str] (opt),
  "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
-                 solves)), "solve_calls", "solve_columns", "refinement_solves", "residual_first_max",
+                 solves)), "solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged" (block solves left
+                 above -kf_refine_rtol), "residual_first_max",
                  "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
  "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
 }

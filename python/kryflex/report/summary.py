@@ -36,7 +36,8 @@ def _none(x):
 
 PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves_s"), ("time_whole", "whole_s"),
                ("time_ratio", "ratio"), ("solve_calls", "solve_calls"), ("solve_columns", "solve_columns"),
-               ("refinement_solves", "refinement_solves"), ("solve_residual_first_max", "residual_first_max"),
+               ("refinement_solves", "refinement_solves"), ("solve_blocks_unconverged", "blocks_unconverged"),
+               ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
 
 
@@ -46,7 +47,8 @@ def _performance(reducer, whole):
     for name, key in PERFORMANCE:
         if name in whole:
             v = _none(reducer.result(-1, name).ravel()[0])
-            out[key] = int(v) if v is not None and key in ("solve_calls", "solve_columns", "refinement_solves") else v
+            counts = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged")
+            out[key] = int(v) if v is not None and key in counts else v
     return out
 
 

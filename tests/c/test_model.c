@@ -18,9 +18,8 @@
 #include <unistd.h>
 #include <sys/stat.h>
 
-/* LAPACK's condition estimate (PETSc wraps no gecon): the reference LAPACK every PETSc links has it */
+/* LAPACK's condition estimate (PETSc wraps no gecon; every LAPACK has it) */
 extern void dgecon_(const char *norm, const PetscBLASInt *n, const PetscReal *a, const PetscBLASInt *lda, const PetscReal *anorm, PetscReal *rcond, PetscReal *work, PetscBLASInt *iwork, PetscBLASInt *info);
-
 
 static PetscBool Same(PetscInt n, const PetscReal a[], const PetscReal b[])
 {

@@ -13,6 +13,7 @@
 
 No timed test: speed is measured by scripts/bench-scaling.
 """
+import json
 import os
 import re
 import subprocess
@@ -108,7 +109,6 @@ def test_unconverged_refinement_is_a_warning_and_in_the_summary(tmp_path):
     p = subprocess.run([KRYFLEX, "reduce", GALILEO, "-o", str(out), "-kf_verify", "false", "-kf_refine", "2",
                         "-kf_refine_rtol", "1e-30"], capture_output=True, text=True, env=ENV, timeout=300)
     assert p.returncode == 0, p.stderr[-2000:]   # the accuracy target is the FRF error's, which the run measures
-    import json
     perf = json.load(open(out / "summary.json"))["performance"]
     assert perf["blocks_unconverged"] > 0
     found = re.search(r"warning: (\d+) of (\d+) block solves stayed above -kf_refine_rtol after refinement "

@@ -1,11 +1,11 @@
 """The symmetry check of body matrices (KFMatCheckSymmetric, src/body/load.c) against NumPy.
 
 The check measures ||A - A^T||_F / ||A||_F in one pass over A's entries (no transpose built): each entry against its
-transposed partner, an entry without a partner (above or below the diagonal) counted for both positions it fills in A - A^T, and on several ranks
-the couplings between ranks against their transpose.  Its refusal message prints the measured ratio; here that
-figure is compared with the ratio NumPy computes from the dense matrix, for an entry whose partner differs, an entry
-without a partner, and both across the ranks' boundary (2 ranks); a symmetric matrix with a rounding-level
-difference passes.
+transposed partner, an entry without a partner (above or below the diagonal) counted for both positions it fills in
+A - A^T, and on several ranks the couplings between ranks against their transpose.  Its refusal message prints the
+measured ratio; here that figure is compared with the ratio NumPy computes from the dense matrix, for an entry whose
+partner differs, entries without a partner, and both across the ranks' boundary (2 ranks); a symmetric matrix with a
+rounding-level difference passes.
 
     mpiexec -n 2 python tests/python/test_symmetry_check.py CASE   (the 2-rank half: prints the ratio or "ok")
 """

@@ -120,6 +120,7 @@ struct _n_KFFlexSolver {
   PetscReal shift;
   PetscInt  null_pivots, negative_pivots;
   PetscInt  refine;          /* at most this many iterative refinement steps against K_S per block */
+  PetscBool refine_set;      /* -kf_refine given: no default by the factor (KFFlexSolverRefineSteps) */
   PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
   PetscBool setup;
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */

@@ -11,14 +11,14 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
   (*solver)->type   = KF_FLEX_SOLVER_AUTO; /* body-wise where it is faster (src/solve/bodywise.c) */
-  (*solver)->refine      = PETSC_DETERMINE; /* by the factor: KFFlexSolverRefineSteps() */
+  (*solver)->refine      = 1; /* 5 behind a block low-rank factor unless given: KFFlexSolverRefineSteps() */
   (*solver)->refine_rtol = 1e-6;
   PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
-  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, NULL));
+  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, &(*solver)->refine_set));
   PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
   PetscOptionsEnd();
-  PetscCheck((*solver)->refine >= 0 || (*solver)->refine == PETSC_DETERMINE, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
+  PetscCheck((*solver)->refine >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
   PetscCheck((*solver)->refine_rtol >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)(*solver)->refine_rtol);
   PetscFunctionReturn(0);
 }
@@ -356,9 +356,9 @@ static PetscErrorCode KFFlexSolverRefineSteps(KFFlexSolver solver)
   PetscReal blr = 0;
 
   PetscFunctionBegin;
-  if (solver->refine != PETSC_DETERMINE) PetscFunctionReturn(0);
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kf_blr", &blr, NULL)); /* what KFFactorMumps factored with */
-  solver->refine = blr > 0 ? 5 : 1;
+  if (solver->refine_set) PetscFunctionReturn(0);
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kf_blr", &blr, NULL)); /* what KFFactorMumps factors with */
+  if (blr > 0) solver->refine = 5;
   PetscFunctionReturn(0);
 }
 

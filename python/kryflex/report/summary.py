@@ -39,6 +39,7 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("refinement_solves", "refinement_solves"), ("solve_blocks_unconverged", "blocks_unconverged"),
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
+PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged")  # ints in the JSON
 
 
 def _performance(reducer, whole):
@@ -47,8 +48,7 @@ def _performance(reducer, whole):
     for name, key in PERFORMANCE:
         if name in whole:
             v = _none(reducer.result(-1, name).ravel()[0])
-            counts = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged")
-            out[key] = int(v) if v is not None and key in counts else v
+            out[key] = int(v) if v is not None and key in PERFORMANCE_COUNTS else v
     return out
 
 

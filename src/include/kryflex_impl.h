@@ -133,6 +133,12 @@ PETSC_INTERN PetscErrorCode KFBodywiseSetUp(KFFlexSolver); /* sets solver->bw wh
 PETSC_INTERN PetscErrorCode KFBodywiseSolve(KFFlexSolver, Mat W, Mat X);
 PETSC_INTERN PetscErrorCode KFBodywiseDestroy(KFBodywise *);
 PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm, KFFlexSolverType *, PetscInt *min_dofs, PetscBool *spread);
+PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, PetscReal *cond_max); /* src/solve/held_dofs.c */
+PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm);               /* every option of the flexible solve, before any work */
+PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm, PetscReal *tol); /* src/rigid/rigid.c */
+PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm, PetscInt *progress_min); /* src/krylov/block_arnoldi.c */
+PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, PetscReal *target, PetscBool *has_target); /* src/verify/eigen.c */
 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */

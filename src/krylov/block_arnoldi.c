@@ -345,12 +345,24 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
 }
 
 /* the same with the input chain of the damped second-order system (src/krylov/damped.c) when damp is not NULL */
+/* -kf_progress_min_dofs (also read before any work: KFReducerSetFromOptions) */
+PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm comm, PetscInt *progress_min)
+{
+  PetscFunctionBegin;
+  *progress_min = 50000;
+  PetscOptionsBegin(comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
+  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", *progress_min, progress_min, NULL));
+  PetscOptionsEnd();
+  PetscCheck(*progress_min >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_progress_min_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *progress_min);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *damp, BV *Vout, KFKrylovInfo *info)
 {
   KFDampedChain dch;
   KFSystem sys = solver->sys;
   KFScene  s   = sys->scene;
-  PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min = 50000;
+  PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min;
   PetscInt made[2] = {0, 0}, want[2] = {nin, nout}, nblocks = nin + nout;
   PetscBool done[2] = {PETSC_FALSE, PETSC_FALSE};
   Mat      Prev[2] = {NULL, NULL}; /* per chain: M times its last orthonormalized block, the next right-hand side */
@@ -361,9 +373,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscFunctionBegin;
   PetscCheck(nin >= 1 && nout >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the Krylov basis needs at least one input block (got %" PetscInt_FMT " input and %" PetscInt_FMT " output blocks)", nin, nout);
   PetscCheck(tol > 0 && tol < 1, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "deflation tolerance must lie in (0, 1); got %g", (double)tol);
-  PetscOptionsBegin(s->comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
-  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", progress_min, &progress_min, NULL));
-  PetscOptionsEnd();
+  PetscCall(KFKrylovProgressOptions(s->comm, &progress_min));
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(PetscMemzero(info, sizeof(*info)));
   PetscCall(PetscMalloc1(nblocks, &info->block_end));

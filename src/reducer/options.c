@@ -18,6 +18,23 @@ static PetscErrorCode KFReducerDegreesOption_Private(KFReducer r, const char wha
   PetscFunctionReturn(0);
 }
 
+/* The options of the objects a reduction makes later (the flexible solver and its factorization, the rigid modes, the
+   Krylov chain's progress, the verification eigensolve), read and checked by their own readers now: a bad value is
+   refused as a bad option before any work, not after the assembly as a failed reduction; -help lists them here. */
+static PetscErrorCode KFReducerCheckStageOptions_Private(MPI_Comm comm)
+{
+  PetscReal rigid_tol, target;
+  PetscInt  progress_min, dense_max;
+  PetscBool has_target;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverCheckOptions(comm));
+  PetscCall(KFRigidTolFromOptions(comm, &rigid_tol));
+  PetscCall(KFKrylovProgressOptions(comm, &progress_min));
+  PetscCall(KFVerifyEigenOptions(comm, &dense_max, &target, &has_target));
+  PetscFunctionReturn(0);
+}
+
 #define KF_MAX_OPTION_ANGLES 4096
 
 PetscErrorCode KFReducerSetFromOptions(KFReducer r)
@@ -188,6 +205,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   if (r->ops->setfromoptions) PetscCall((*r->ops->setfromoptions)(r, PetscOptionsObject));
   PetscCall(PetscObjectProcessOptionsHandlers((PetscObject)r, PetscOptionsObject));
   PetscOptionsEnd();
+  PetscCall(KFReducerCheckStageOptions_Private(PetscObjectComm((PetscObject)r)));
   PetscFunctionReturn(0);
 }
 

@@ -180,6 +180,22 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
   PetscFunctionReturn(0);
 }
 
+/* -kf_flex_solver (type: the solver's own on entry, the one asked for on return), -kf_bodywise_min_dofs and
+   -kf_bodywise_spread, read and checked (also before any work: KFFlexSolverCheckOptions) */
+PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm comm, KFFlexSolverType *type, PetscInt *min_dofs, PetscBool *spread)
+{
+  PetscFunctionBegin;
+  *min_dofs = 20000;
+  *spread   = PETSC_TRUE;
+  PetscOptionsBegin(comm, NULL, "kryflex flexible solve: monolithic or body-wise", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for large articulated multi-body scenes; the default)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)*type, (PetscEnum *)type, NULL));
+  PetscCall(PetscOptionsInt("-kf_bodywise_min_dofs", "auto takes the body-wise solve from this many system dofs on (default 20000)", "KFFlexSolverSetType", *min_dofs, min_dofs, NULL));
+  PetscCall(PetscOptionsBool("-kf_bodywise_spread", "Body-wise solve: factor each body on one rank, the bodies spread over the ranks (when there are at least as many bodies as ranks); false: every body on all ranks", "KFFlexSolverSetUp", *spread, spread, NULL));
+  PetscOptionsEnd();
+  PetscCheck(*min_dofs >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, *min_dofs);
+  PetscFunctionReturn(0);
+}
+
 /* Which rank factors which body (-kf_bodywise_spread, on by default): with at least as many bodies as ranks, each
    body goes whole to one rank, the bodies in decreasing order of cost each to the least loaded rank (LPT). The cost
    of a body's factorization is taken as n_b^2 (the flops of a nested-dissection factorization of a 3-D solid mesh
@@ -187,16 +203,15 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
    rank: every body on all ranks (distributed MUMPS per body), as before. */
 static PetscErrorCode KFBodywiseAssign(KFScene s, KFBodyFactors bf)
 {
-  PetscMPIInt size;
-  PetscBool   spread = PETSC_TRUE;
-  PetscReal  *cost, *load;
-  PetscInt   *order;
+  PetscMPIInt      size;
+  PetscBool        spread;
+  PetscReal       *cost, *load;
+  PetscInt        *order, min_dofs;
+  KFFlexSolverType type = KF_FLEX_SOLVER_AUTO;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
-  PetscOptionsBegin(s->comm, NULL, "kryflex body-wise solve", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsBool("-kf_bodywise_spread", "Body-wise solve: factor each body on one rank, the bodies spread over the ranks (when there are at least as many bodies as ranks); false: every body on all ranks", "KFFlexSolverSetUp", spread, &spread, NULL));
-  PetscOptionsEnd();
+  PetscCall(KFBodywiseOptions(s->comm, &type, &min_dofs, &spread));
   bf->spread = (PetscBool)(spread && size > 1 && size <= s->nb);
   if (!bf->spread) PetscFunctionReturn(0);
   PetscCall(PetscCalloc2(s->nb, &bf->owner, s->nb, &bf->sf));
@@ -444,15 +459,12 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
   KFScene          s   = sys->scene;
   KFFlexSolverType type = solver->type;
   PetscBool        all_iface = PETSC_TRUE, bcs = PETSC_FALSE;
-  PetscInt         nG = s->nrevolute, min_dofs = 20000;
+  PetscInt         nG = s->nrevolute, min_dofs;
   PetscReal        psi_entries = 0, k_entries = 0;
+  PetscBool        spread;
 
   PetscFunctionBegin;
-  PetscOptionsBegin(s->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for large articulated multi-body scenes; the default)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)type, (PetscEnum *)&type, NULL));
-  PetscCall(PetscOptionsInt("-kf_bodywise_min_dofs", "auto takes the body-wise solve from this many system dofs on (default 20000)", "KFFlexSolverSetType", min_dofs, &min_dofs, NULL));
-  PetscOptionsEnd();
-  PetscCheck(min_dofs >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, min_dofs);
+  PetscCall(KFBodywiseOptions(s->comm, &type, &min_dofs, &spread));
   *asked = type;
   for (PetscInt b = 0; b < s->nb; b++) {
     all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
@@ -475,12 +487,10 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : (bcs ? "the body-wise solve does not take clamped dofs or joints to ground yet" : "a body without interface node")));
   } else if (type == KF_FLEX_SOLVER_AUTO) {
     PetscMPIInt size;
-    PetscBool   spread = PETSC_TRUE;
 
     /* on several ranks only when the bodies can be spread: every body distributed over all ranks paid a distributed
        MUMPS solve per body per block and came out even with the monolithic solve (README, run 4) */
     PetscCallMPI(MPI_Comm_size(s->comm, &size));
-    PetscCall(PetscOptionsGetBool(NULL, NULL, "-kf_bodywise_spread", &spread, NULL));
     *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && sys->nconfig > 1 && s->nsys >= min_dofs && psi_entries <= k_entries && (size == 1 || (spread && size <= s->nb)));
   }
   PetscFunctionReturn(0);

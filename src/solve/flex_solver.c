@@ -4,6 +4,28 @@
 
 PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
 
+/* The flexible solver's options are each read and checked in one function below: by the solver when it is made and
+   set up, and before any of that by KFFlexSolverCheckOptions() (from KFReducerSetFromOptions), so that a bad value
+   stops the run as a bad option before the scene is assembled, not as a failed reduction after it. */
+
+/* What the solver reads when it is made: -kf_shift, -kf_refine (refine_set: whether given; the default, 1 or 5,
+   follows -kf_blr: KFFlexSolverRefineSteps()) and -kf_refine_rtol */
+static PetscErrorCode KFFlexSolverCreateOptions(MPI_Comm comm, PetscReal *shift, PetscInt *refine, PetscBool *refine_set, PetscReal *rtol)
+{
+  PetscFunctionBegin;
+  *shift = 0;
+  *refine = 1;
+  *rtol   = 1e-6;
+  PetscOptionsBegin(comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
+  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", *shift, shift, NULL));
+  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", *refine, refine, refine_set));
+  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", *rtol, rtol, NULL));
+  PetscOptionsEnd();
+  PetscCheck(*refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, *refine);
+  PetscCheck(*rtol >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)*rtol);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
 {
   PetscFunctionBegin;
@@ -11,15 +33,7 @@ PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
   PetscCall(PetscNew(solver));
   (*solver)->sys    = sys;
   (*solver)->type   = KF_FLEX_SOLVER_AUTO; /* body-wise where it is faster (src/solve/bodywise.c) */
-  (*solver)->refine      = 1; /* 5 behind a block low-rank factor unless given: KFFlexSolverRefineSteps() */
-  (*solver)->refine_rtol = 1e-6;
-  PetscOptionsBegin(sys->scene->comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
-  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", (*solver)->shift, &(*solver)->shift, NULL));
-  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", (*solver)->refine, &(*solver)->refine, &(*solver)->refine_set));
-  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", (*solver)->refine_rtol, &(*solver)->refine_rtol, NULL));
-  PetscOptionsEnd();
-  PetscCheck((*solver)->refine >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, (*solver)->refine);
-  PetscCheck((*solver)->refine_rtol >= 0, sys->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)(*solver)->refine_rtol);
+  PetscCall(KFFlexSolverCreateOptions(sys->scene->comm, &(*solver)->shift, &(*solver)->refine, &(*solver)->refine_set, &(*solver)->refine_rtol));
   PetscFunctionReturn(0);
 }
 
@@ -77,6 +91,20 @@ static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
   PetscFunctionReturn(0);
 }
 
+/* -kf_memory_check and -kf_memory_limit_mb (has_limit: whether given) */
+static PetscErrorCode KFFactorMemoryOptions(MPI_Comm comm, PetscBool *check, PetscReal *limit, PetscBool *has_limit)
+{
+  PetscFunctionBegin;
+  *check = PETSC_TRUE;
+  *limit = -1;
+  PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", *check, check, NULL));
+  PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", *limit, limit, has_limit));
+  PetscOptionsEnd();
+  PetscCheck(!*has_limit || *limit > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_memory_limit_mb is the memory per node in MB, a positive number; got %g", (double)*limit);
+  PetscFunctionReturn(0);
+}
+
 /* After MUMPS' analysis: its estimates of the factorization's memory in core and out of core, summed over the ranks
    of each node, against the node's available memory (or -kf_memory_limit_mb). ooc_mode: 0 in core, 1 out of core,
    2 auto (in core when it fits on every node, else out of core when that fits: *ooc tells which, and MUMPS is told
@@ -85,14 +113,11 @@ static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
 static PetscErrorCode KFCheckFactorMemory(Mat F, PetscInt ooc_mode, PetscBool *ooc, PetscReal *estimate_mb)
 {
   MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
-  PetscReal limit = -1, mine[2], need[2], avail, in[5], worst[5];
-  PetscBool check = PETSC_TRUE, has_limit;
+  PetscReal limit, mine[2], need[2], avail, in[5], worst[5];
+  PetscBool check, has_limit;
 
   PetscFunctionBegin;
-  PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", check, &check, NULL));
-  PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", limit, &limit, &has_limit));
-  PetscOptionsEnd();
+  PetscCall(KFFactorMemoryOptions(comm, &check, &limit, &has_limit));
   PetscCall(KFFactorEstimateMB(F, PETSC_FALSE, &mine[0]));
   PetscCall(KFFactorEstimateMB(F, PETSC_TRUE, &mine[1]));
   PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
@@ -132,6 +157,55 @@ static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7, -1};
 #define KF_ORDERING_SCOTCH   2
 #define KF_ORDERING_AUTO     6
 #define KF_ORDERING_PTSCOTCH 7
+
+/* MUMPS' controls that the options set (the factorization of the flexible solve; the null-pivot cross-check takes
+   MUMPS' defaults) */
+typedef struct {
+  PetscInt  ordering, seed, tries;
+  PetscInt  ooc_mode; /* 0 in core, 1 out of core, 2 auto */
+  PetscReal blr;      /* CNTL(7) of a block low-rank factorization; 0: full rank */
+  PetscBool spd;
+} KFMumpsControls;
+
+/* -kf_ordering, -kf_scotch_seed, -kf_ordering_tries, -kf_blr, -kf_ooc and -kf_spd */
+static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, KFMumpsControls *c)
+{
+  char      val[16] = "auto";
+  PetscBool set, on;
+
+  PetscFunctionBegin;
+  c->ordering = KF_ORDERING_AUTO;
+  c->seed     = 1;
+  c->tries    = 1;
+  c->ooc_mode = 2;
+  c->blr      = 0;
+  c->spd      = PETSC_FALSE;
+  PetscOptionsBegin(comm, NULL, "kryflex factorization", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 8, KFOrderings[c->ordering], &c->ordering, NULL));
+  PetscCall(PetscOptionsInt("-kf_scotch_seed", "Seed of SCOTCH's ordering (default 1)", "KFFlexSolverSetUp", c->seed, &c->seed, NULL));
+  PetscCall(PetscOptionsInt("-kf_ordering_tries", "SCOTCH orderings to analyse (seeds s, s + 2, s + 4, ... from -kf_scotch_seed s), the factor with the fewest flops on the busiest rank kept (default 1)", "KFFlexSolverSetUp", c->tries, &c->tries, NULL));
+  PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", c->blr, &c->blr, NULL));
+  PetscCall(PetscOptionsString("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", "KFFlexSolverSetUp", val, val, sizeof(val), &set));
+  PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", c->spd, &c->spd, NULL));
+  PetscOptionsEnd();
+  PetscCheck(c->seed >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_scotch_seed is a positive integer; got %" PetscInt_FMT, c->seed);
+  PetscCheck(c->tries >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more; got %" PetscInt_FMT, c->tries);
+  PetscCheck(c->blr >= 0 && c->blr < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)c->blr);
+  if (set && !val[0]) c->ooc_mode = 1; /* a bare -kf_ooc */
+  else if (set) {
+    PetscCall(PetscStrcasecmp(val, "auto", &on));
+    if (!on) {
+      PetscErrorCode ierr;
+
+      PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+      ierr = PetscOptionsStringToBool(val, &on);
+      PetscCall(PetscPopErrorHandler());
+      PetscCheck(!ierr, comm, PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
+      c->ooc_mode = on ? 1 : 0;
+    }
+  }
+  PetscFunctionReturn(0);
+}
 
 /* Whether the MUMPS that PETSc calls is Debian's SCOTCH/PT-SCOTCH build (libdmumps_ptscotch: the kryflex command and
    the C programs linked by CMakeLists.txt load it before PETSc's plain build, which has PORD, AMD, AMF and QAMD only):
@@ -263,47 +337,19 @@ static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscB
    options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
 PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
 {
-  MatFactorInfo  info;
-  MatFactorError err;
-  PetscReal      blr = 0;
-  PetscInt       ordering = KF_ORDERING_AUTO, tries = 1, seed = 1;
-  PetscInt       ooc_mode = 0; /* 0 in core, 1 out of core, 2 auto */
-  PetscMPIInt    size;
-  PetscBool      ooc = PETSC_FALSE, spd = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
+  MatFactorInfo   info;
+  MatFactorError  err;
+  KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE};
+  PetscMPIInt     size;
+  PetscBool       ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
+  PetscInt        ordering;
+  PetscReal       blr;
 
   PetscFunctionBegin;
-  if (opts) {
-    PetscOptionsBegin(PetscObjectComm((PetscObject)A), NULL, "kryflex factorization", "KFFlexSolverSetUp");
-    PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 8, KFOrderings[ordering], &ordering, NULL));
-    PetscCall(PetscOptionsInt("-kf_scotch_seed", "Seed of SCOTCH's ordering (default 1)", "KFFlexSolverSetUp", seed, &seed, NULL));
-    PetscCheck(seed >= 1, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_OUTOFRANGE, "-kf_scotch_seed is a positive integer; got %" PetscInt_FMT, seed);
-    PetscCall(PetscOptionsInt("-kf_ordering_tries", "SCOTCH orderings to analyse (seeds s, s + 2, s + 4, ... from -kf_scotch_seed s), the factor with the fewest flops on the busiest rank kept (default 1)", "KFFlexSolverSetUp", tries, &tries, NULL));
-    PetscCheck(tries >= 1, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_OUTOFRANGE, "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more; got %" PetscInt_FMT, tries);
-    PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", blr, &blr, NULL));
-    {
-      char      val[16] = "auto";
-      PetscBool set, on;
-
-      ooc_mode = 2;
-      PetscCall(PetscOptionsString("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", "KFFlexSolverSetUp", val, val, sizeof(val), &set));
-      if (set && !val[0]) ooc_mode = 1; /* a bare -kf_ooc */
-      else if (set) {
-        PetscCall(PetscStrcasecmp(val, "auto", &on));
-        if (!on) {
-          PetscErrorCode ierr;
-          PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-          ierr = PetscOptionsStringToBool(val, &on);
-          PetscCall(PetscPopErrorHandler());
-          PetscCheck(!ierr, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
-          ooc_mode = on ? 1 : 0;
-        }
-      }
-    }
-    PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", spd, &spd, NULL));
-    PetscOptionsEnd();
-    PetscCheck(blr >= 0 && blr < 1, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)blr);
-  }
-  if (spd) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
+  if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), &c));
+  ordering = c.ordering;
+  blr      = c.blr;
+  if (c.spd) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
   PetscCall(MatFactorInfoInitialize(&info));
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
@@ -319,8 +365,8 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   /* out of core from the analysis on when asked (auto: decided after it) */
-  PetscCall(KFMumpsAnalyse(A, null_threshold, blr, (PetscBool)(ooc_mode == 1), scotch, KFScotchTrySeed(seed, 0), F));
-  if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, blr, (PetscBool)(ooc_mode == 1), seed, tries, F));
+  PetscCall(KFMumpsAnalyse(A, null_threshold, blr, (PetscBool)(c.ooc_mode == 1), scotch, KFScotchTrySeed(c.seed, 0), F));
+  if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, blr, (PetscBool)(c.ooc_mode == 1), c.seed, c.tries, F));
   if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
   if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
   if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
@@ -328,13 +374,13 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
     PetscInt    used, analysis;
     const char *name = "unknown";
 
-    PetscCall(KFCheckFactorMemory(*F, ooc_mode, &ooc, estimate_mb));
+    PetscCall(KFCheckFactorMemory(*F, c.ooc_mode, &ooc, estimate_mb));
     PetscCall(MatMumpsGetInfog(*F, 32, &analysis)); /* 2: the parallel analysis ran */
     PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* the sequential analysis' ordering (auto, or a fallback) */
     for (PetscInt k = 0; k < KF_ORDERING_AUTO + 1; k++)
       if (KFOrderingIcntl[k] == used) name = KFOrderings[k];
     if (analysis == 2) name = "ptscotch (parallel analysis)";
-    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, c.spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
     if (opts && !scotch && (ordering == KF_ORDERING_SCOTCH || ordering == KF_ORDERING_PTSCOTCH))
       PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[ordering], name));
 
@@ -353,12 +399,48 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
    each step winning a factor ~170, so 3 steps reach 1e-6. */
 static PetscErrorCode KFFlexSolverRefineSteps(KFFlexSolver solver)
 {
-  PetscReal blr = 0;
+  KFMumpsControls c;
 
   PetscFunctionBegin;
   if (solver->refine_set) PetscFunctionReturn(0);
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-kf_blr", &blr, NULL)); /* what KFFactorMumps factors with */
-  if (blr > 0) solver->refine = 5;
+  PetscCall(KFMumpsControlsFromOptions(solver->sys->scene->comm, &c)); /* what KFFactorMumps factors with */
+  if (c.blr > 0) solver->refine = 5;
+  PetscFunctionReturn(0);
+}
+
+/* -kf_null_pivot_check_max_dofs and -kf_check_null_pivots: whether a system of nsys dofs factored with this shift
+   gets the cross-check */
+static PetscErrorCode KFNullPivotCheckOptions(MPI_Comm comm, PetscInt nsys, PetscReal shift, PetscBool *check)
+{
+  PetscInt check_max = 20000;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(comm, NULL, "kryflex null-pivot cross-check", "KFFlexSolverSetUp");
+  PetscCall(PetscOptionsInt("-kf_null_pivot_check_max_dofs", "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", "KFFlexSolverSetUp", check_max, &check_max, NULL));
+  *check = (PetscBool)(nsys <= check_max && shift == 0);
+  PetscCall(PetscOptionsBool("-kf_check_null_pivots", "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", "KFFlexSolverSetUp", *check, check, NULL));
+  PetscOptionsEnd();
+  PetscCheck(check_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_null_pivot_check_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, check_max);
+  PetscFunctionReturn(0);
+}
+
+/* Every option of the flexible solver, its factorization, its body-wise variant and its held dofs, read and checked
+   with nothing made: a bad value is refused here, before the scene is assembled (KFReducerSetFromOptions) */
+PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm comm)
+{
+  KFMumpsControls  c;
+  KFFlexSolverType type = KF_FLEX_SOLVER_AUTO;
+  PetscReal        shift, rtol, memory_limit, cond_max;
+  PetscInt         refine, min_dofs;
+  PetscBool        refine_given, memory_check, limit_given, null_check, spread;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverCreateOptions(comm, &shift, &refine, &refine_given, &rtol));
+  PetscCall(KFMumpsControlsFromOptions(comm, &c));
+  PetscCall(KFFactorMemoryOptions(comm, &memory_check, &memory_limit, &limit_given));
+  PetscCall(KFNullPivotCheckOptions(comm, 0, 0, &null_check));
+  PetscCall(KFBodywiseOptions(comm, &type, &min_dofs, &spread));
+  PetscCall(KFHeldDofsOptions(comm, &cond_max));
   PetscFunctionReturn(0);
 }
 
@@ -367,7 +449,6 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   KFSystem  sys = solver->sys;
   KFScene   s   = sys->scene;
   PetscBool check;
-  PetscInt  check_max = 20000;
   KFHeldEntries held = NULL;
 
   PetscFunctionBegin;
@@ -415,11 +496,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
 
   /* cross-check (small models by default): MUMPS' null pivots of K_S itself should number the rigid modes */
-  PetscOptionsBegin(s->comm, NULL, "kryflex null-pivot cross-check", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsInt("-kf_null_pivot_check_max_dofs", "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", "KFFlexSolverSetUp", check_max, &check_max, NULL));
-  check = (PetscBool)(s->nsys <= check_max && solver->shift == 0);
-  PetscCall(PetscOptionsBool("-kf_check_null_pivots", "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", "KFFlexSolverSetUp", check, &check, NULL));
-  PetscOptionsEnd();
+  PetscCall(KFNullPivotCheckOptions(s->comm, s->nsys, solver->shift, &check));
   if (check) {
     Mat      F0;
     PetscInt nnull, nneg;

@@ -122,16 +122,31 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* -kf_verify_dense_max_dofs and -kf_verify_target (has_target: whether given), read and checked (also before any
+   work: KFReducerSetFromOptions) */
+PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm comm, PetscInt *dense_max, PetscReal *target, PetscBool *has_target)
+{
+  PetscFunctionBegin;
+  *dense_max = 600;
+  *target    = 0;
+  PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
+  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", *dense_max, dense_max, NULL));
+  PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", *target, target, has_target));
+  PetscOptionsEnd();
+  PetscCheck(*dense_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_dense_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *dense_max);
+  PetscFunctionReturn(0);
+}
+
 /* Small systems are solved densely: every mode at once, as cheap as a few */
 PetscErrorCode KFSystemEigenIsDense(KFSystem sys, PetscBool *dense)
 {
-  KFScene  s         = sys->scene;
-  PetscInt dense_max = 600;
+  KFScene   s = sys->scene;
+  PetscInt  dense_max;
+  PetscReal target;
+  PetscBool has_target;
 
   PetscFunctionBegin;
-  PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
-  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", dense_max, &dense_max, NULL));
-  PetscOptionsEnd();
+  PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
   *dense = (PetscBool)(s->nsys <= dense_max);
   PetscFunctionReturn(0);
 }
@@ -192,7 +207,8 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
   PC        pc;
   Vec      *defl, x, y;
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
-  PetscReal target = 0;
+  PetscReal target;
+  PetscInt  dense_max;
   PetscBool dense, has_target;
 
   PetscFunctionBegin;
@@ -213,9 +229,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
       PetscFunctionReturn(0);
     }
   }
-  PetscOptionsBegin(s->comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
-  PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", target, &target, &has_target));
-  PetscOptionsEnd();
+  PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
   PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));

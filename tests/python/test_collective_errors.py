@@ -193,6 +193,56 @@ def test_later_stage_options_are_accepted(tmp_path):
     assert p.returncode == EXIT_OK, p.stderr
 
 
+# the options read by the stages the solve runs later (the flexible solver, its factorization, the rigid modes, the
+# Krylov chain, the verification eigensolve), each with a value it refuses and words of the refusal
+LATER_STAGE_BAD_VALUES = [
+    ("-kf_refine", "-1", ">= 0"),
+    ("-kf_refine", "abc", "'abc' is not an integer"),
+    ("-kf_refine_rtol", "-1", ">= 0"),
+    ("-kf_blr", "2", "[0, 1)"),
+    ("-kf_ooc", "maybe", "true, false or auto"),
+    ("-kf_ordering", "nested", "not one of amd, amf, scotch"),
+    ("-kf_scotch_seed", "0", "positive integer"),
+    ("-kf_ordering_tries", "0", "1 or more"),
+    ("-kf_spd", "maybe", "'maybe' is not true or false"),
+    ("-kf_memory_check", "perhaps", "'perhaps' is not true or false"),
+    ("-kf_memory_limit_mb", "-5", "positive number"),
+    ("-kf_null_pivot_check_max_dofs", "-1", "0 or more"),
+    ("-kf_held_cond_max", "0.5", "1 or more"),
+    ("-kf_rigid_tol", "-1", "(0, 1)"),
+    ("-kf_progress_min_dofs", "-1", "0 or more"),
+    ("-kf_flex_solver", "substructured", "not one of auto, monolithic, bodywise"),
+    ("-kf_bodywise_min_dofs", "-1", ">= 0"),
+    ("-kf_bodywise_spread", "maybe", "'maybe' is not true or false"),
+    ("-kf_verify_dense_max_dofs", "-1", "0 or more"),
+    ("-kf_verify_target", "abc", "'abc' is not a number"),
+]
+
+
+@pytest.mark.parametrize("option,value,words", LATER_STAGE_BAD_VALUES,
+                         ids=["%s %s" % (o, v) for o, v, _ in LATER_STAGE_BAD_VALUES])
+def test_bad_values_of_later_stage_options_are_refused_before_any_work(previous, option, value, words):
+    """A value the solve's stages refuse is a bad option (exit 2, the option and its value named), found while the
+    reducer reads its settings: before the scene is assembled, not as a failed reduction (exit 3) after it."""
+    out, before = previous
+    p = kryflex("reduce", GALILEO, "-o", out, "-scene.angles", "0", option, value)
+    assert p.returncode == EXIT_INPUT, p.stderr
+    assert error_lines(p.stderr) == [l for l in error_lines(p.stderr) if l.startswith("kryflex: error: %s %s: " % (option, value))], p.stderr
+    assert len(error_lines(p.stderr)) == 1 and words in p.stderr, p.stderr
+    assert "factorization" not in p.stdout + p.stderr.replace(words, ""), p.stdout   # no progress of the solve
+    assert "Traceback" not in p.stderr
+    assert snapshot(out) == before
+
+
+def test_bad_value_of_a_later_stage_option_on_two_ranks(previous):
+    out, before = previous
+    p = run("mpiexec", "-n", "2", KRYFLEX, "reduce", GALILEO, "-o", out, "-scene.angles", "0", "-kf_blr", "2", *FAST)
+    assert p.returncode == EXIT_INPUT, p.stderr
+    assert error_lines(p.stderr) == [l for l in error_lines(p.stderr) if "-kf_blr 2: -kf_blr must lie in [0, 1)" in l]
+    assert len(error_lines(p.stderr)) == 1, p.stderr
+    assert snapshot(out) == before
+
+
 # ====================================================================== one rank fails alone
 
 def _one_rank(earlier, tmp_path):

@@ -27,15 +27,11 @@ SEVERITY = (EXIT_OK, EXIT_TARGET, EXIT_INPUT, EXIT_OUTPUT, EXIT_MODEL, EXIT_NUME
 AGREEMENT_TIMEOUT = 20.0      # seconds; -kf_error_agreement_timeout
 RECORD = 4096                 # bytes per rank in an agreement: the code, then the message (cut if longer)
 
-# -kf_ options read after the reducer's own (KFReducerSetFromOptions), by the stages of the solve, the views and
-# this command: not unknown when unused before the solve. tests/python/test_collective_errors.py checks the list
-# against the C sources.
+# -kf_ options read after the reducer's own (KFReducerSetFromOptions, which also reads and checks those of the solve's
+# stages), by the views, the eigenvector baseline and this command: not unknown when unused before the solve.
+# tests/python/test_collective_errors.py checks the list against the C sources.
 LATER_OPTIONS = ("kf_quiet", "kf_reducer_view", "kf_reducer_view_pre", "kf_model_view", "kf_eigen_cover",
-                 "kf_verify_dense_max_dofs", "kf_verify_target", "kf_refine", "kf_null_pivot_check_max_dofs",
-                 "kf_check_null_pivots", "kf_held_cond_max", "kf_rigid_tol", "kf_progress_min_dofs",
-                 "kf_error_agreement_timeout", "kf_refine_rtol", "kf_ordering", "kf_blr", "kf_ooc", "kf_spd",
-                 "kf_memory_check", "kf_memory_limit_mb", "kf_flex_solver", "kf_bodywise_spread",
-                 "kf_bodywise_min_dofs", "kf_ordering_tries", "kf_scotch_seed")
+                 "kf_error_agreement_timeout")
 # option prefixes of PETSc/SLEPc objects the library configures (the verification eigensolver: -kf_verify_eps_...)
 LATER_PREFIXES = ("kf_verify_",)
 
@@ -346,11 +342,18 @@ def option_error(exc, scene_path):
     msg = str(exc).strip()
     given = {k: v for k, v in PETSc.Options().getAll().items() if k.startswith("kf_")}
     listing = "'kryflex reduce -help' lists the -kf_ options with their defaults"
-    bad_number = re.search(r"Input string (.*?) has no numeric value", msg)
-    if bad_number:
-        value = bad_number.group(1)
+    def named(value):
         names = ["-%s %s: " % (k, v) for k, v in sorted(given.items()) if v is not None and value in v.split(",")]
-        return "%s%r is not a number: give a number (%s)" % ((names or [""])[0], value, listing)
+        return (names or [""])[0]
+    bad_number = re.search(r"Input string (.*?) has no (numeric|integer) value", msg)
+    if bad_number:
+        value, kind = bad_number.group(1), bad_number.group(2)
+        return "%s%r is not %s: give %s (%s)" % (named(value), value, "a number" if kind == "numeric" else "an integer",
+                                                 "a number" if kind == "numeric" else "a whole number", listing)
+    bad_bool = re.search(r"Unknown logical value: (\S+)", msg)
+    if bad_bool:
+        value = bad_bool.group(1)
+        return "%s%r is not true or false: give true or false (%s)" % (named(value), value, listing)
     bad_choice = re.search(r"Unknown option (\S+) for -(\w+)\. Available options: (.*)", msg)
     if bad_choice:
         value, name, choices = bad_choice.group(1), bad_choice.group(2), bad_choice.group(3).split()

@@ -243,6 +243,17 @@ def test_bad_value_of_a_later_stage_option_on_two_ranks(previous):
     assert snapshot(out) == before
 
 
+@pytest.mark.parametrize("command", ["study", "slew"])
+@pytest.mark.parametrize("option,value", [("-kf_moments", "0"), ("-kf_blr", "2"), ("-kf_spd", "maybe")])
+def test_study_and_slew_refuse_bad_option_values(tmp_path, command, option, value):
+    """The other commands that reduce read the -kf_ options the same way: exit 2 naming the option (they reported an
+    internal error with a traceback), nothing written."""
+    p = kryflex(command, GALILEO, "-o", tmp_path / "out", "-quiet", option, value)
+    assert p.returncode == EXIT_INPUT, p.stderr
+    assert len(error_lines(p.stderr)) == 1 and error_lines(p.stderr)[0].startswith("kryflex: error: %s %s: " % (option, value)), p.stderr
+    assert "Traceback" not in p.stderr and not (tmp_path / "out").exists()
+
+
 # ====================================================================== one rank fails alone
 
 def _one_rank(earlier, tmp_path):

@@ -5,7 +5,8 @@ rank (under mpirun with more it refuses, exit 2)."""
 import os
 import sys
 
-from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, say, split_petsc_options
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, option_error, say,
+                     split_petsc_options)
 from .reduce import HELP_FLAGS, cannot_write, staged_output
 
 
@@ -71,7 +72,8 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
         progress("reducing %s" % scene.name)
-        reducer = Reducer(scene, quiet=True if args.quiet else None)
+        reducer = collective(lambda: Reducer(scene, quiet=True if args.quiet else None), (SceneError, EXIT_INPUT, str),
+                             (_core.Error, EXIT_INPUT, lambda e: option_error(e, args.scene)))
         reduction = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the reduction failed: %s" % e))
         frf_error = _frf_error(reducer)
         study = collective(lambda: SlewStudy(scene, reduction.model, args.profile, args.amplitude, args.periods_max,

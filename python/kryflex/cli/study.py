@@ -45,15 +45,21 @@ def run(argv):
     from ..study import estimator_output, output
     from ..study.estimator import run_check
     from ..study.sweep import Study, features
+    from ..reducer import Reducer
 
     out = os.path.abspath(args.output)
     staging, created, clean_up = staged_output(out)
     committed = False
     try:
         # what the C library offers, read from the reducer's -help listing before any reducer reads its options
-        flags = collective(features)
+        # (the listing is read with the options given, so a bad -kf_ value is refused here already)
+        flags = collective(features, (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+        # the scene's settings and the -kf_ options read and checked as the runs will read them (a reducer that is
+        # not solved): a bad value stops here, not as a failed run after the full-order reference
+        collective(lambda: Reducer(scene, quiet=True), (SceneError, EXIT_INPUT, str),
+                   (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
 
         def progress(msg):
             if not args.quiet:

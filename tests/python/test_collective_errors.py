@@ -157,6 +157,7 @@ BAD_COMMAND_LINES = [
      ["unknown option -kf_momnets (did you mean -kf_moments?)"]),
     ("bad option value", ["reduce", GALILEO, "-o", "{out}", "-kf_moments", "0"], ["-kf_moments", "give auto or a number of moments from 1"]),
     ("negative --modes", ["reassemble", "{model}", "--angle", "30", "--modes", "-3"], ["--modes", "-3", ">= 0"]),
+    ("help beside a bad option value", ["reduce", "-help", "-kf_blr", "2"], ["-kf_blr 2: -kf_blr must lie in [0, 1)"]),
 ]
 
 

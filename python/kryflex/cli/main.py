@@ -69,7 +69,11 @@ def main(argv=None):
         if any(a in ("-h", "-help", "--help") for a in rest):
             # help only prints, on rank 0; and the binding must not start before 'kryflex reduce -help' sets PETSc's
             # help option (KFInitialize lists -kf_quiet then)
-            return commands[cmd](rest)
+            try:
+                return commands[cmd](rest)
+            except Failure as f:  # an option given beside the help with a value it refuses: the same on every rank
+                say(f.text, sys.stderr)
+                return f.code
         # SIGINT and SIGTERM are noted by the C library's handlers from here on, and the work stops at its next
         # stage or phase boundary, on every rank together (before: Python's KeyboardInterrupt, or the default)
         from .. import _core

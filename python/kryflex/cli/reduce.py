@@ -32,9 +32,12 @@ def print_help(p):
     added = not opts.hasName("help")
     if added:
         opts.setValue("help", True)      # before the binding starts: KFInitialize lists -kf_quiet then
+    from .. import _core
     try:
         from ..reducer import print_options_help
         print_options_help()
+    except _core.Error as e:      # an option given beside -help with a value the reducer refuses
+        raise Failure(EXIT_INPUT, common.option_error(e, "kryflex reduce -help"))
     finally:
         if added:
             opts.delValue("help")

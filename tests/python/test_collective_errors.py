@@ -255,6 +255,14 @@ def test_study_and_slew_refuse_bad_option_values(tmp_path, command, option, valu
     assert "Traceback" not in p.stderr and not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("command", ["study", "slew"])
+def test_study_and_slew_refuse_a_misspelt_option(tmp_path, command):
+    p = kryflex(command, GALILEO, "-o", tmp_path / "out", "-quiet", "-kf_momnets", "12")
+    assert p.returncode == EXIT_INPUT, p.stderr
+    assert error_lines(p.stderr) == ["kryflex: error: unknown option -kf_momnets (did you mean -kf_moments?)"], p.stderr
+    assert not (tmp_path / "out").exists()
+
+
 # ====================================================================== one rank fails alone
 
 def _one_rank(earlier, tmp_path):

@@ -333,6 +333,20 @@ def check_kf_options(known):
     raise Failure(EXIT_INPUT, "unknown option -%s%s" % (name, hint))
 
 
+def checked_reducer(scene, quiet=None, known=None):
+    """The Reducer of a loaded scene with the scene's settings and every -kf_ option read and checked before any work,
+    as each command that reduces needs it: a value the C library refuses raises its Error (option_error() words it),
+    an option nothing read a Failure naming the closest real one. known: the reducer's option names when this process
+    has read them already (reducer_option_names() lists them once per process). Collective."""
+    from ..reducer import Reducer
+    if known is None:
+        known = reducer_option_names() if given_kf_options() else ()
+    reducer = Reducer(scene, quiet=quiet)
+    reducer.setup()
+    check_kf_options(known)
+    return reducer
+
+
 def option_error(exc, scene_path):
     """The message of a C error raised while the reducer read its settings (the scene's, then the -kf_ options). An
     error about a -kf_ option that was given names that option and its value, not the scene, and says what to do;

@@ -51,7 +51,6 @@ def run(argv):
     args = collective(lambda: p.parse_args(split_petsc_options(argv, {"-o", "--output"}, {"--npz", "-quiet", "--quiet"})))
     from .. import _core
     from ..io.scene import SceneError, load_scene
-    from ..reducer import Reducer
 
     out = os.path.abspath(args.output)
     staging, created, clean_up = staged_output(out)
@@ -60,14 +59,9 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
 
-        def set_up():
-            # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank
-            known = common.reducer_option_names() if common.given_kf_options() else ()
-            reducer = Reducer(scene, quiet=True if args.quiet else None)
-            reducer.setup()
-            common.check_kf_options(known)
-            return reducer
-        reducer = collective(set_up, (SceneError, EXIT_INPUT, str),
+        # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank
+        reducer = collective(lambda: common.checked_reducer(scene, quiet=True if args.quiet else None),
+                             (SceneError, EXIT_INPUT, str),
                              (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
 

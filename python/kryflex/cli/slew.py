@@ -5,8 +5,8 @@ rank (under mpirun with more it refuses, exit 2)."""
 import os
 import sys
 
-from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, collective, option_error, say,
-                     split_petsc_options)
+from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, Failure, Parser, checked_reducer, collective,
+                     option_error, say, split_petsc_options)
 from .reduce import HELP_FLAGS, cannot_write, staged_output
 
 
@@ -57,7 +57,6 @@ def run(argv):
     collective(_one_rank)
     from .. import _core
     from ..io.scene import SceneError, load_scene
-    from ..reducer import Reducer
     from ..slew import output
     from ..slew.study import SlewStudy
 
@@ -72,8 +71,8 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
         progress("reducing %s" % scene.name)
-        reducer = collective(lambda: Reducer(scene, quiet=True if args.quiet else None), (SceneError, EXIT_INPUT, str),
-                             (_core.Error, EXIT_INPUT, lambda e: option_error(e, args.scene)))
+        reducer = collective(lambda: checked_reducer(scene, quiet=True if args.quiet else None),
+                             (SceneError, EXIT_INPUT, str), (_core.Error, EXIT_INPUT, lambda e: option_error(e, args.scene)))
         reduction = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the reduction failed: %s" % e))
         frf_error = _frf_error(reducer)
         study = collective(lambda: SlewStudy(scene, reduction.model, args.profile, args.amplitude, args.periods_max,

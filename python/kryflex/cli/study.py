@@ -45,7 +45,6 @@ def run(argv):
     from ..study import estimator_output, output
     from ..study.estimator import run_check
     from ..study.sweep import Study, features
-    from ..reducer import Reducer
 
     out = os.path.abspath(args.output)
     staging, created, clean_up = staged_output(out)
@@ -57,9 +56,9 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
         # the scene's settings and the -kf_ options read and checked as the runs will read them (a reducer that is
-        # not solved): a bad value stops here, not as a failed run after the full-order reference
-        collective(lambda: Reducer(scene, quiet=True), (SceneError, EXIT_INPUT, str),
-                   (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
+        # not solved): a bad value or a misspelt option stops here, not as a failed run after the full-order reference
+        collective(lambda: common.checked_reducer(scene, quiet=True, known=flags["option_names"]),
+                   (SceneError, EXIT_INPUT, str), (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
 
         def progress(msg):
             if not args.quiet:

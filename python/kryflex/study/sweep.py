@@ -47,7 +47,8 @@ def features():
     from ..cli.common import reducer_option_names
     names = set(reducer_option_names())
     return {"search": "kf_search" in names, "krylov_raw": "kf_krylov_raw" in names,
-            "frf_errors": hasattr(_core, "frf_errors"), "modal_hsv": hasattr(_core, "modal_hankel_singular_values")}
+            "frf_errors": hasattr(_core, "frf_errors"), "modal_hsv": hasattr(_core, "modal_hankel_singular_values"),
+            "option_names": sorted(names)}
 
 
 class Study:

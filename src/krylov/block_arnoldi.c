@@ -312,6 +312,18 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *
   PetscFunctionReturn(0);
 }
 
+/* -kf_progress_min_dofs (also read before any work: KFReducerSetFromOptions) */
+PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm comm, PetscInt *progress_min)
+{
+  PetscFunctionBegin;
+  *progress_min = 50000;
+  PetscOptionsBegin(comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
+  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", *progress_min, progress_min, NULL));
+  PetscOptionsEnd();
+  PetscCheck(*progress_min >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_progress_min_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *progress_min);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFKrylovInfoReset(KFKrylovInfo *info)
 {
   PetscFunctionBegin;
@@ -345,18 +357,6 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
 }
 
 /* the same with the input chain of the damped second-order system (src/krylov/damped.c) when damp is not NULL */
-/* -kf_progress_min_dofs (also read before any work: KFReducerSetFromOptions) */
-PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm comm, PetscInt *progress_min)
-{
-  PetscFunctionBegin;
-  *progress_min = 50000;
-  PetscOptionsBegin(comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
-  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", *progress_min, progress_min, NULL));
-  PetscOptionsEnd();
-  PetscCheck(*progress_min >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_progress_min_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *progress_min);
-  PetscFunctionReturn(0);
-}
-
 PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *damp, BV *Vout, KFKrylovInfo *info)
 {
   KFDampedChain dch;

@@ -342,31 +342,27 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
   KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE};
   PetscMPIInt     size;
   PetscBool       ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
-  PetscInt        ordering;
-  PetscReal       blr;
 
   PetscFunctionBegin;
   if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), &c));
-  ordering = c.ordering;
-  blr      = c.blr;
   if (c.spd) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
   PetscCall(MatFactorInfoInitialize(&info));
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
-    if (ordering == KF_ORDERING_PTSCOTCH && size == 1) ordering = KF_ORDERING_SCOTCH; /* a parallel analysis on one rank: SCOTCH itself */
-    if (ordering == KF_ORDERING_PTSCOTCH && scotch) {
+    if (c.ordering == KF_ORDERING_PTSCOTCH && size == 1) c.ordering = KF_ORDERING_SCOTCH; /* a parallel analysis on one rank: SCOTCH itself */
+    if (c.ordering == KF_ORDERING_PTSCOTCH && scotch) {
       PetscCall(KFMumpsAnalysisIcntl(A, 28, 2, &set28));
       PetscCall(KFMumpsAnalysisIcntl(A, 29, 1, &set29));
     } else {
       /* the sequential analysis whichever MUMPS runs (the SCOTCH build's automatic choice could go parallel) */
       PetscCall(KFMumpsAnalysisIcntl(A, 28, 1, &set28));
-      if (KFOrderingIcntl[ordering] >= 0 && KFOrderingIcntl[ordering] != 7) PetscCall(KFMumpsAnalysisIcntl(A, 7, KFOrderingIcntl[ordering], &set7));
+      if (KFOrderingIcntl[c.ordering] >= 0 && KFOrderingIcntl[c.ordering] != 7) PetscCall(KFMumpsAnalysisIcntl(A, 7, KFOrderingIcntl[c.ordering], &set7));
     }
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
   /* out of core from the analysis on when asked (auto: decided after it) */
-  PetscCall(KFMumpsAnalyse(A, null_threshold, blr, (PetscBool)(c.ooc_mode == 1), scotch, KFScotchTrySeed(c.seed, 0), F));
-  if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, blr, (PetscBool)(c.ooc_mode == 1), c.seed, c.tries, F));
+  PetscCall(KFMumpsAnalyse(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), scotch, KFScotchTrySeed(c.seed, 0), F));
+  if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), c.seed, c.tries, F));
   if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
   if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
   if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
@@ -380,9 +376,9 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
     for (PetscInt k = 0; k < KF_ORDERING_AUTO + 1; k++)
       if (KFOrderingIcntl[k] == used) name = KFOrderings[k];
     if (analysis == 2) name = "ptscotch (parallel analysis)";
-    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, c.spd ? "SYM=1" : "SYM=2", blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
-    if (opts && !scotch && (ordering == KF_ORDERING_SCOTCH || ordering == KF_ORDERING_PTSCOTCH))
-      PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[ordering], name));
+    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, c.spd ? "SYM=1" : "SYM=2", c.blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
+    if (opts && !scotch && (c.ordering == KF_ORDERING_SCOTCH || c.ordering == KF_ORDERING_PTSCOTCH))
+      PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[c.ordering], name));
 
   }
   PetscCall(MatCholeskyFactorNumeric(*F, A, &info));

@@ -299,6 +299,10 @@ PETSC_EXTERN PetscErrorCode KFReducedSystemGetReassemblyInfo(KFReducedSystem, Pe
 PETSC_EXTERN PetscErrorCode KFReducedSystemGetFrequencies(KFReducedSystem, PetscInt *nf, const PetscReal **freq_hz);
 /* moments L^k, k = 0..nmom-1, layout as KFFlexSolverMoments (t x a per k), on the flexible subspace */
 PETSC_EXTERN PetscErrorCode KFReducedSystemMoments(KFReducedSystem, PetscInt nmom, PetscReal L[]);
+/* Trimming (src/model/trim.c): modes above fmax_hz out of the dynamics, their static share kept as a feedthrough D */
+PETSC_EXTERN PetscErrorCode KFReducedSystemTrim(KFReducedSystem, PetscReal fmax_hz);
+PETSC_EXTERN PetscErrorCode KFReducedSystemGetTrim(KFReducedSystem, PetscInt *ntrimmed, PetscReal *fmax_hz, PetscReal *ftop_untrimmed_hz, const PetscReal **D);
+PETSC_EXTERN PetscErrorCode KFParseMaxFrequency(MPI_Comm, const char text[], PetscReal *value, PetscBool *hz);
 /* modal frequency response with uniform modal damping zeta at nw frequencies w (rad/s): nw blocks of t x a */
 PETSC_EXTERN PetscErrorCode KFReducedSystemFRF(KFReducedSystem, PetscReal zeta, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
 PETSC_EXTERN PetscErrorCode KFReducedSystemView(KFReducedSystem, PetscViewer);
@@ -330,6 +334,7 @@ PETSC_EXTERN PetscErrorCode KFReducedModelGetJoint(KFReducedModel, PetscInt j, c
 PETSC_EXTERN PetscErrorCode KFReducedModelGetIOName(KFReducedModel, PetscBool input, PetscInt i, const char **name);
 /* settings: string key/value pairs recorded by the reducer (method, angles, damping, band, tolerances ...) */
 PETSC_EXTERN PetscErrorCode KFReducedModelSetSetting(KFReducedModel, const char key[], const char value[]);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetMaxFrequency(KFReducedModel, PetscReal *fmax_hz);
 PETSC_EXTERN PetscErrorCode KFReducedModelGetSettings(KFReducedModel, PetscInt *n, const char *const **keys, const char *const **values);
 /* reassembly at one configuration (angles: one per revolute joint, radians), eq. 20-24 */
 PETSC_EXTERN PetscErrorCode KFReducedModelReassemble(KFReducedModel, const PetscReal angles[], KFReducedSystem *);
@@ -428,6 +433,8 @@ PETSC_EXTERN PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal rt
 PETSC_EXTERN PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal keep_threshold);
 PETSC_EXTERN PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool);
 PETSC_EXTERN PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal deflation_tol, PetscReal body_tol, PetscReal reassembly_rtol);
+PETSC_EXTERN PetscErrorCode KFReducerSetMaxFrequency(KFReducer, PetscReal value, PetscBool hz);
+PETSC_EXTERN PetscErrorCode KFReducerGetMaxFrequency(KFReducer, PetscReal *fmax_hz);
 PETSC_EXTERN PetscErrorCode KFReducerSetShift(KFReducer, PetscReal shift);
 /* keep each reduced body's map back to its full dofs in the model: PETSC_TRUE, PETSC_FALSE, or PETSC_DECIDE (keep it
    while no body has more than -kf_save_maps_max_dofs dofs, 200000) */

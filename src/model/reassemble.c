@@ -32,7 +32,7 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   KFReducedSystem y;
   KFReducedBody  *bodies;
   PetscInt        n = 0, h, nrigid, a = m->ninputs, t = m->noutputs;
-  PetscReal       rtol;
+  PetscReal       rtol, fmax;
   PetscBool       viscous = PETSC_FALSE;
 
   PetscFunctionBegin;
@@ -80,6 +80,8 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   y->nf = PetscMax(h - y->nrigid, 0);
   PetscCall(PetscMalloc1(y->nf, &y->freq));
   for (PetscInt i = 0; i < y->nf; i++) y->freq[i] = PetscSqrtReal(PetscMax(y->lambda[y->nrigid + i], 0.0)) / (2 * PETSC_PI);
+  PetscCall(KFReducedModelGetMaxFrequency(m, &fmax));
+  PetscCall(KFReducedSystemTrim(y, fmax)); /* the model's max_frequency: modes above it out of the dynamics */
   *system = y;
   PetscFunctionReturn(0);
 }

@@ -18,6 +18,7 @@ PetscErrorCode KFReducedSystemDestroy(KFReducedSystem *system)
   PetscCall(PetscFree(y->quantity));
   PetscCall(PetscFree(y->C));
   PetscCall(PetscFree(y->Cm));
+  PetscCall(PetscFree(y->D));
   PetscCall(PetscFree(y));
   *system = NULL;
   PetscFunctionReturn(0);
@@ -83,6 +84,9 @@ PetscErrorCode KFReducedSystemMoments(KFReducedSystem y, PetscInt nmom, PetscRea
     PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
     PetscCall(KFDenseMoments(y->n, y->K, y->M, y->a, y->G, y->t, y->H, rtol, nmom, L));
   }
+  /* a trimmed system: the trimmed modes' static share (KFReducedSystemTrim) */
+  if (y->D && nmom > 0)
+    for (PetscInt e = 0; e < y->t * y->a; e++) L[e] += y->D[e];
   PetscFunctionReturn(0);
 }
 
@@ -99,6 +103,7 @@ PetscErrorCode KFReducedSystemFRF(KFReducedSystem y, PetscReal zeta, PetscInt nw
   PetscCall(KFReducedSystemModalIO(y));
   PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
   PetscCall(KFModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, zeta, rtol, nw, w, Tre, Tim));
+  PetscCall(KFReducedSystemAddFeedthrough_Private(y, NULL, nw, w, Tre, Tim));
   PetscFunctionReturn(0);
 }
 
@@ -149,6 +154,7 @@ PetscErrorCode KFReducedSystemResponse(KFReducedSystem y, PetscInt nw, const Pet
   if (y->C) d.alpha = d.beta = 0;
   PetscCall(KFRigidTolerance(y->n, y->lambda, y->nrigid, &rtol));
   PetscCall(KFDampedModalFRF(y->n, y->lambda, y->t, y->HPhi, y->a, y->PhiG, &d, y->Cm, y->n, y->quantity, rtol, nw, w, Tre, Tim));
+  PetscCall(KFReducedSystemAddFeedthrough_Private(y, y->quantity, nw, w, Tre, Tim));
   PetscFunctionReturn(0);
 }
 
@@ -168,6 +174,7 @@ PetscErrorCode KFReducedSystemView(KFReducedSystem y, PetscViewer viewer)
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
   for (PetscInt i = 0; i < y->nf; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "%s %.6g", (i && i % 8 == 0) ? "\n   " : "", (double)y->freq[i]));
   PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  if (y->ntrimmed) PetscCall(PetscViewerASCIIPrintf(viewer, "trimmed: %" PetscInt_FMT " mode(s) above %.6g Hz (up to %.6g Hz) residualized into a static feedthrough\n", y->ntrimmed, (double)y->fmax_trim, (double)y->ftop_untrimmed));
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);

@@ -319,6 +319,30 @@ PetscErrorCode KFReducerSetTolerances(KFReducer r, PetscReal deflation_tol, Pets
   PetscFunctionReturn(0);
 }
 
+/*
+  KFReducerSetMaxFrequency - reduced-system modes above the limit are taken out of the dynamics at every configuration
+  the model is reassembled at, their static share kept as a feedthrough (KFReducedSystemTrim). value: a multiple of
+  the band's top (hz false, >= 1) or a frequency in Hz (hz true); 0: no trimming.
+*/
+PetscErrorCode KFReducerSetMaxFrequency(KFReducer r, PetscReal value, PetscBool hz)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(value >= 0 && !PetscIsInfOrNanReal(value) && (hz || value == 0 || value >= 1), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "max_frequency: give 0 (off), a multiple >= 1 of the band's top, or a frequency in Hz, got %g%s (-kf_max_frequency)", (double)value, hz ? " Hz" : "");
+  r->max_frequency    = value;
+  r->max_frequency_hz = hz;
+  PetscFunctionReturn(0);
+}
+
+/* KFReducerGetMaxFrequency - the trimming limit in Hz (0: off), from a multiple of the band's top when given so */
+PetscErrorCode KFReducerGetMaxFrequency(KFReducer r, PetscReal *fmax_hz)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  *fmax_hz = r->max_frequency_hz ? r->max_frequency : r->max_frequency * r->band[1];
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSetShift(KFReducer r, PetscReal shift)
 {
   PetscFunctionBegin;

@@ -172,6 +172,20 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsReal("-kf_body_tol", "Per-body rank deflation of the projected vectors (relative)", "KFReducerSetTolerances", btol, &btol, NULL));
   PetscCall(PetscOptionsReal("-kf_reassembly_rtol", "SVD rank tolerance of the reduced interface constraints", "KFReducerSetTolerances", rtol, &rtol, NULL));
   PetscCall(KFReducerSetTolerances(r, dtol, btol, rtol));
+  {
+    char      text[64] = "none";
+    PetscBool set;
+
+    if (r->max_frequency > 0) PetscCall(PetscSNPrintf(text, sizeof(text), r->max_frequency_hz ? "%g Hz" : "%g", (double)r->max_frequency));
+    PetscCall(PetscOptionsString("-kf_max_frequency", "Reduced-system modes above this are taken out of the dynamics, their static share kept: a multiple of the band's top (3), a frequency (\"40 Hz\") or none", "KFReducerSetMaxFrequency", text, text, sizeof(text), &set));
+    if (set) {
+      PetscReal value;
+      PetscBool hz;
+
+      PetscCall(KFParseMaxFrequency(PetscObjectComm((PetscObject)r), text, &value, &hz));
+      PetscCall(KFReducerSetMaxFrequency(r, value, hz));
+    }
+  }
   PetscCall(PetscOptionsBool("-kf_search_sub_bases", "Search candidates' body bases made in their visit's richest body basis (small dense work) rather than from their vectors", "", r->sub_bases, &r->sub_bases, NULL));
   shift = r->shift;
   PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of holding dofs (moments then expand about -shift)", "KFReducerSetShift", shift, &shift, &flg));
@@ -259,6 +273,7 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
   if (r->moments == PETSC_DECIDE) PetscCall(PetscViewerASCIIPrintf(viewer, "moments auto (the accuracy search, up to %" PetscInt_FMT ")\n", r->moments_max));
   PetscCall(PetscViewerASCIIPrintf(viewer, "moments %" PetscInt_FMT " (%" PetscInt_FMT " output blocks); importance %s, keep threshold %g; static correction %s\n", r->moments, r->output_blocks, KFImportances[r->importance], (double)r->keep_threshold, r->static_correction ? "yes" : "no"));
   PetscCall(PetscViewerASCIIPrintf(viewer, "tolerances: deflation %g, body %g, reassembly %g; shift %g\n", (double)r->deflation_tol, (double)r->body_tol, (double)r->reassembly_rtol, (double)r->shift));
+  if (r->max_frequency > 0) PetscCall(PetscViewerASCIIPrintf(viewer, "trimming: modes above %g%s out of the dynamics (static share kept)\n", (double)r->max_frequency, r->max_frequency_hz ? " Hz" : " x the band's top"));
   PetscCall(PetscViewerASCIIPrintf(viewer, "verification: %s, %" PetscInt_FMT " frequency points, FRF floor %g dB\n", r->verify ? "full order" : "off", r->frequency_points, (double)r->frf_floor_db));
   if (r->ops->view) PetscCall((*r->ops->view)(r, viewer));
   if (r->solved) {

@@ -72,6 +72,16 @@ PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KF
   PetscCall(KFSetReal(m, "deflation_tol", r->deflation_tol));
   PetscCall(KFSetReal(m, "body_tol", r->body_tol));
   PetscCall(KFSetReal(m, "reassembly_rtol", r->reassembly_rtol));
+  { /* the trimming limit as given, and in Hz: KFReducedModelReassemble trims with the latter */
+    PetscReal fmax;
+
+    if (r->max_frequency > 0) {
+      PetscCall(PetscSNPrintf(num, sizeof(num), r->max_frequency_hz ? "\"%.12g Hz\"" : "%.12g", (double)r->max_frequency));
+      PetscCall(KFReducedModelSetSetting(m, "max_frequency", num));
+    } else PetscCall(KFReducedModelSetSetting(m, "max_frequency", "null"));
+    PetscCall(KFReducerGetMaxFrequency(r, &fmax));
+    PetscCall(KFSetReal(m, "max_frequency_hz", fmax));
+  }
   PetscCall(KFReducedModelSetSetting(m, "static_correction", r->static_correction ? "true" : "false"));
   PetscCall(KFSetReal(m, "shift", r->shift));
   if (r->save_maps == PETSC_DECIDE) PetscCall(KFSetString(m, "save_maps", "auto"));

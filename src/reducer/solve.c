@@ -636,6 +636,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     rich.kept   = -1;
     for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
     PetscCall(KFCandidateModel_Private(r, visits, &rich, PETSC_FALSE, &model));
+    PetscCall(KFReducedModelSetSetting(model, "max_frequency_hz", "0")); /* the reference is never trimmed */
     for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
     PetscCall(PetscTime(&t1));
     times[5] += t1 - t0;

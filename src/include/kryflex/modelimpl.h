@@ -61,7 +61,14 @@ struct _n_KFReducedSystem {
   PetscInt  *quantity;       /* t, the model's output quantities */
   PetscReal *C;              /* n x n viscous damping (bodies' C_b reassembled + alpha M + beta K), or NULL */
   PetscReal *Cm;             /* Phi^T C Phi, made by the first damped response */
+  PetscInt   ntrimmed;       /* flexible modes taken out above fmax_trim (src/model/trim.c), 0: none */
+  PetscReal  fmax_trim;      /* the trimming limit (Hz), 0: off */
+  PetscReal  ftop_untrimmed; /* the highest flexible frequency before trimming (Hz) */
+  PetscReal *D;              /* t x a quasi-static feedthrough of the trimmed modes, or NULL */
 };
+
+/* src/model/trim.c: the feedthrough's share of a frequency response */
+PETSC_INTERN PetscErrorCode KFReducedSystemAddFeedthrough_Private(KFReducedSystem, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
 
 /* an empty model on comm, with counts set and arrays allocated for nb bodies, nj joints, a inputs, t outputs */
 PETSC_INTERN PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm, PetscInt nb, PetscInt nj, PetscInt a, PetscInt t, KFReducedModel *);

@@ -70,6 +70,8 @@ struct _p_KFReducer {
   PetscReal       keep_threshold;
   PetscBool       static_correction;
   PetscReal       deflation_tol, body_tol, reassembly_rtol, shift;
+  PetscReal       max_frequency;  /* trimming limit: a multiple of the band's top, or Hz with max_frequency_hz; 0: off */
+  PetscBool       max_frequency_hz;
   PetscReal       eigen_cover;    /* eigen type's cover, kept here so that it survives a change of type */
   PetscInt        save_maps;      /* PETSC_TRUE, PETSC_FALSE or PETSC_DECIDE */
   PetscInt        save_maps_max_dofs, gram_condition_max_dofs;

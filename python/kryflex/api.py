@@ -29,6 +29,9 @@ class ReducedSystem:
     served; eigenvalues (ascending) and M-orthonormal modes of (K, M); rigid_modes: the rigid-body and mechanism
     modes from the bodies' rigid motions (n x r, or None when the model lacks them); frequencies_hz: the flexible
     ones; constraint_rank, sigma_ratio: the reassembly's SVD of the interface constraints.
+    Trimmed (reduction.max_frequency; docs/guide/trimming.md): M, K, B, C are then the kept modes' modal system (M = I,
+    K = diag of the eigenvalues) and y = C x + feedthrough u; trimmed: modes taken out, max_frequency_hz the limit,
+    untrimmed_top_hz the highest frequency before; feedthrough None when nothing was trimmed.
     damping_matrix: the viscous damping in reduced coordinates (n x n: the bodies' C_b projected and reassembled plus
     Rayleigh alpha M + beta K), None when there is none; damping_model: {modal, rayleigh, structural} as the model
     records it; output_quantities: per output displacement, velocity or acceleration."""
@@ -48,6 +51,10 @@ class ReducedSystem:
     damping_matrix: object = None
     damping_model: dict = None
     output_quantities: list = None
+    feedthrough: object = None
+    trimmed: int = 0
+    max_frequency_hz: float = 0.0
+    untrimmed_top_hz: float = 0.0
 
     @classmethod
     def from_handle(cls, handle, angles_deg, damping, output_quantities=None):
@@ -55,12 +62,25 @@ class ReducedSystem:
         lam, Phi, _, Phir = handle.modes()
         rank, ratio = handle.reassembly_info()
         Cd, model = handle.damping()
+        ntrim, fmax, ftop, D = handle.trim_info()
         return cls(tuple(angles_deg), M, K, damping, G, H, handle.frequencies_hz(), Phi, lam, Phir, int(rank),
-                   float(ratio), handle, Cd, model, output_quantities)
+                   float(ratio), handle, Cd, model, output_quantities, D, ntrim, fmax, ftop)
 
     @property
     def dofs(self):
         return self.M.shape[0]
+
+    @property
+    def top_frequency_hz(self):
+        """The highest flexible frequency the system keeps in its dynamics (Hz; 0 without flexible modes)."""
+        return float(self.frequencies_hz[-1]) if len(self.frequencies_hz) else 0.0
+
+    @property
+    def explicit_step_s(self):
+        """The largest stable step of an explicit central-difference integration of the undamped system, 2 / omega_max
+        (s; inf without flexible modes)."""
+        f = self.top_frequency_hz
+        return 2.0 / (2 * np.pi * f) if f > 0 else float("inf")
 
     def frf(self, freqs_hz, damping=None):
         """Frequency response (frequencies, outputs, inputs), complex. damping None: the model's damping (modal,

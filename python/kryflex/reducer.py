@@ -105,6 +105,7 @@ class Reducer:
         r.set_static_correction(bool(red["static_correction"]))
         r.set_tolerances(float(red["deflation_tol"]), float(red["body_tol"]), float(red["reassembly_rtol"]))
         r.set_shift(float(red["shift"]))
+        r.set_max_frequency(red.get("max_frequency"))
         r.set_save_maps(_save_maps(red["save_maps"]))
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),

@@ -35,6 +35,16 @@ cdef class CReducedSystem:
         check(KFReducedSystemGetModes(self.y, &lam, &Phi, &r, &Phir))
         return carray(lam, n, 1)[:, 0].copy(), carray(Phi, n, n), r, carray(Phir, n, r)
 
+    def trim_info(self):
+        """(modes taken out, limit in Hz (0: off), highest flexible frequency before trimming in Hz, feedthrough D
+        t x a or None): KFReducedSystemTrim."""
+        cdef PetscInt nt, a, t
+        cdef PetscReal fmax, ftop
+        cdef const PetscReal *D
+        check(KFReducedSystemGetMatrices(self.handle(), NULL, &a, &t, NULL, NULL, NULL, NULL))
+        check(KFReducedSystemGetTrim(self.y, &nt, &fmax, &ftop, &D))
+        return int(nt), float(fmax), float(ftop), (carray(D, t, a) if D != NULL else None)
+
     def reassembly_info(self):
         """(rank of the interface constraints, sigma_min(kept) / sigma_max of their SVD)."""
         cdef PetscInt rank

@@ -141,6 +141,24 @@ cdef class CReducer:
     def set_tolerances(self, PetscReal deflation_tol, PetscReal body_tol, PetscReal reassembly_rtol):
         check(KFReducerSetTolerances(self.r, deflation_tol, body_tol, reassembly_rtol))
 
+    def set_max_frequency(self, value):
+        """The trimming limit: None or "none" (off), a multiple of the band's top (3, "3x") or a frequency ("40 Hz"),
+        parsed by KFParseMaxFrequency."""
+        cdef PetscReal x
+        cdef PetscBool hz
+        cdef MPI_Comm comm
+        text = "none" if value is None else ("%.17g" % value if isinstance(value, (int, float)) and not isinstance(value, bool) else str(value))
+        b = text.encode()
+        check(PetscObjectGetComm(<PetscObject>self.r, &comm))
+        check(KFParseMaxFrequency(comm, b, &x, &hz))
+        check(KFReducerSetMaxFrequency(self.r, x, hz))
+
+    def get_max_frequency(self):
+        """The trimming limit in Hz (0: off)."""
+        cdef PetscReal f
+        check(KFReducerGetMaxFrequency(self.r, &f))
+        return float(f)
+
     def set_shift(self, PetscReal shift):
         check(KFReducerSetShift(self.r, shift))
 

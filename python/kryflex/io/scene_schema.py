@@ -69,6 +69,7 @@ REDUCTION_DEFAULTS = {
     "save_maps": "auto",         # store each reduced body's map back to its full dofs
     "flex_solver": "auto",       # the flexible solve: auto (body-wise for large multi-configuration solves) | monolithic | bodywise
     "bodywise_spread": True,     # body-wise on 2+ ranks: each body factored on one rank (-kf_bodywise_spread)
+    "max_frequency": None,       # trimming: modes above it out of the dynamics, static share kept (3: 3x the band's top; "40 Hz")
 }
 VERIFY_DEFAULTS = {
     "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
@@ -767,6 +768,7 @@ def _reduction(where, given, revolute):
     red["eigen_cover"] = real(where, p + "eigen_cover", red["eigen_cover"], "[1, inf)",
                               "give a multiple >= 1 of the band's top frequency")
     red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
+    red["max_frequency"] = _max_frequency(where, p + "max_frequency", red["max_frequency"])
     red["damped_moments"] = boolean(where, p + "damped_moments", red["damped_moments"])
     if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
         fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % short_repr(red["save_maps"]))
@@ -848,3 +850,33 @@ def validate(spec, where, default_name="scene"):
         "verify": _verify(where, spec.get("verify")),
         "paper": paper,
     }
+
+
+_MAX_FREQUENCY = re.compile(r"\s*([0-9.eE+-]+)\s*(x|X|[Hh][Zz])?\s*\Z")
+
+
+def _max_frequency(where, path, value):
+    """reduction.max_frequency: null/none (no trimming), a multiple >= 1 of the band's top (3 or "3x"), or a frequency
+    ("40 Hz"); returned as the text the C library parses (KFParseMaxFrequency)."""
+    fix = "give a multiple >= 1 of the band's top (3), a frequency (\"40 Hz\") or null"
+    if value is None or (isinstance(value, str) and value.strip().lower() in ("none", "off", "null")):
+        return None
+    if isinstance(value, (bool, np.bool_)):
+        fail(where, path, "%s is not a frequency limit; %s" % (short_repr(value), fix))
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        x, unit = float(value), None
+    else:
+        m = _MAX_FREQUENCY.match(str(value))
+        try:
+            x, unit = float(m.group(1)), m.group(2)
+        except (AttributeError, ValueError):
+            fail(where, path, "%s is not a frequency limit; %s" % (short_repr(value), fix))
+    if not math.isfinite(x) or x < 0:
+        fail(where, path, "%s is not a non-negative finite number; %s" % (short_repr(value), fix))
+    hz = unit is not None and unit.lower() == "hz"
+    if x == 0:
+        return None
+    if not hz and x < 1:
+        fail(where, path, "%s is below the band's top (the band's own modes would go); %s" % (short_repr(value), fix))
+    return "%.12g Hz" % x if hz else "%.12g" % x
+

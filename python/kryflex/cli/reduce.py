@@ -100,6 +100,11 @@ def run(argv):
             clean_up()
     say("kryflex: reduced '%s': %s" % (s["scene"], chosen_text(result)))
     say("kryflex: results in %s (reduced.h5, report.md, summary.json, plots)" % out)
+    trim = s.get("reduced", {}).get("trimming") or {}
+    if trim.get("top_frequency_hz_max"):
+        say("kryflex: highest reduced frequency %.4g Hz (%s), stable explicit step %.3g s (2 / omega_max)"
+            % (trim["top_frequency_hz_max"], "modes above %.4g Hz trimmed, static share kept" % trim["max_frequency_hz"]
+               if trim.get("max_frequency_hz") else "no trimming: reduction.max_frequency", trim["explicit_step_s_min"]))
     if met is None:
         say("kryflex: the accuracy target %g was not checked: no error was measured or estimated "
             "(verify.full_order: false and no estimate)" % s["accuracy"])

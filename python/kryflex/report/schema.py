@@ -50,7 +50,10 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
              "moments": {<label>: [same layout as full]} (opt),
              "moment_ratios": {<label>: [t x a per k]}  (full/reduced; None where the full moment is negligible),
              "static_gain_error": {<label>: float} (opt), "reassembly_rank": {<label>: int} (opt),
-             "reassembly_sigma_ratio": {<label>: float} (opt), "reassembly_seconds": float (opt)},
+             "reassembly_sigma_ratio": {<label>: float} (opt), "reassembly_seconds": float (opt),
+             "trimming": {"max_frequency": str|float|None, "max_frequency_hz": float|None,
+                          "top_frequency_hz", "untrimmed_top_frequency_hz", "explicit_step_s", "trimmed_modes":
+                          {<label>: ..}, "top_frequency_hz_max": float, "explicit_step_s_min": float|None} (opt)},
  "frf": {<label>: {"freq_hz": [nf], "full_re": [nf][t][a], "full_im", "reduced_re", "reduced_im" (the
                    single-angle model), "chosen_re", "chosen_im" (opt: the multi-angle model's, when it was chosen;
                    the plots draw the chosen model), "frf_error": float (single-angle model, relative H-inf),

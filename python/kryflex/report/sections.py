@@ -400,7 +400,28 @@ def _section_reduced(c):
     lines += _table_reduced_system(c)
     lines += _table_dominant_errors(c)
     lines += _table_reassembly(c)
+    lines += _table_trimming(c)
     return lines
+
+
+def _table_trimming(c):
+    """The highest frequency the reduced system keeps in its dynamics and the explicit step it allows, with the
+    trimming (reduction.max_frequency) that set them."""
+    trim = c.s["reduced"].get("trimming") or {}
+    tops = trim.get("top_frequency_hz") or {}
+    if not tops:
+        return []
+    rows = [[c.short_angle(l), str(trim["trimmed_modes"].get(l, 0)), fmt_freq(trim["untrimmed_top_frequency_hz"][l]),
+             fmt_freq(tops[l]), f"{trim['explicit_step_s'][l]:.3g}" if trim["explicit_step_s"].get(l) else DASH]
+            for l in c.labels if l in tops]
+    if trim.get("max_frequency_hz"):
+        head = (f"Trimming: reduced-system modes above {trim['max_frequency_hz']:.4g} Hz "
+                f"(max_frequency {trim['max_frequency']}) are taken out of the dynamics; their static share is kept "
+                "as a feedthrough, so the static moment L^0 is unchanged (docs/guide/trimming.md).")
+    else:
+        head = "No trimming (reduction.max_frequency not set): every reduced mode is in the dynamics."
+    return [head, "", table(["configuration", "modes trimmed", "highest before (Hz)", "highest kept (Hz)",
+                             "stable explicit step 2/ω_max (s)"], rows), ""]
 
 
 def _table_reduced_system(c):

@@ -241,6 +241,26 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     return out
 
 
+def _trimming(chosen, configurations, labels):
+    """The chosen model's highest flexible frequency in its dynamics and the explicit step it allows, per angle of
+    interest, with its trimming (reduction.max_frequency; docs/guide/trimming.md): the systems as the model reassembles
+    them (trimmed when the model was reduced with a limit)."""
+    limit = chosen.settings.get("max_frequency_hz")
+    out = {"max_frequency": chosen.settings.get("max_frequency"),
+           "max_frequency_hz": float(limit) if limit else None,
+           "top_frequency_hz": {}, "explicit_step_s": {}, "trimmed_modes": {}, "untrimmed_top_frequency_hz": {}}
+    for config, lab in zip(configurations, labels):
+        system = chosen.at(config)
+        out["top_frequency_hz"][lab] = system.top_frequency_hz
+        out["explicit_step_s"][lab] = system.explicit_step_s if system.top_frequency_hz > 0 else None
+        out["trimmed_modes"][lab] = int(system.trimmed)
+        out["untrimmed_top_frequency_hz"][lab] = system.untrimmed_top_hz
+    tops = list(out["top_frequency_hz"].values())
+    out["top_frequency_hz_max"] = max(tops) if tops else 0.0
+    out["explicit_step_s_min"] = 1.0 / (np.pi * max(tops)) if tops and max(tops) > 0 else None
+    return out
+
+
 def build_summary(reducer, single, multi, chosen):
     """The summary of a solved Reducer (reducer.py): its results at every angle of interest and of the whole solve,
     with the scene's names and labels. single, multi, chosen: the reducer's models (multi may be None)."""
@@ -335,6 +355,7 @@ def build_summary(reducer, single, multi, chosen):
         "notes": list(reducer.notes),
     }
     summary.update(_accuracy(reducer, scene, labels, has, whole, chosen, multi, frf))
+    summary["reduced"]["trimming"] = _trimming(chosen, configurations, labels)
     if multi is not None:
         m_ratios = {lab: _list(reducer.moments(c, "multi_moment_ratios")) for c, lab in enumerate(labels)}
         m_err = {lab: _list(reducer.result(c, "multi_moment_error")) for c, lab in enumerate(labels)}

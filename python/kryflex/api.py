@@ -112,14 +112,24 @@ class ReducedModel(_core.CReducedModel):
     """Reduced bodies + joints + names + settings (KFReducedModel): everything reassembly needs, nothing of the
     full-order model. The same on every rank."""
 
-    def at(self, angles_deg):
-        """The reduced system at one configuration (degrees, one angle per revolute joint)."""
+    def at(self, angles_deg, trimmed=True):
+        """The reduced system at one configuration (degrees, one angle per revolute joint). A model reduced with
+        reduction.max_frequency is trimmed (docs/guide/trimming.md); trimmed=False: every mode, as its bodies give."""
         angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
         if angles.ndim != 1 or angles.size != len(self.revolute):
             raise ValueError("the model has %d revolute joint(s) (%s): give %d angle(s), got %d"
                              % (len(self.revolute), ", ".join(self.revolute), len(self.revolute), angles.size))
-        return ReducedSystem.from_handle(self.reassemble(np.radians(angles)), [float(a) for a in angles],
-                                         float(self.settings.get("damping", 0.0)), self.output_quantities())
+        limit = self.setting_strings().get("max_frequency_hz")
+        if trimmed or limit is None:
+            handle = self.reassemble(np.radians(angles))
+        else:   # the reassembly reads the limit from the settings: off for this one call
+            self.set_setting("max_frequency_hz", "0")
+            try:
+                handle = self.reassemble(np.radians(angles))
+            finally:
+                self.set_setting("max_frequency_hz", limit)
+        return ReducedSystem.from_handle(handle, [float(a) for a in angles], float(self.settings.get("damping", 0.0)),
+                                         self.output_quantities())
 
     # ------------------------------------------------------------------ what the model holds (copies, cached)
 

@@ -54,7 +54,7 @@ def run(argv):
 
     def load():
         model = load_reduced_model(args.reduced, args.scene)
-        return model, from_model(model)
+        return model, from_model(model, args.angles)
     model, data = collective(load, (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
                              (ExportError, EXIT_MODEL, lambda e: "%s: cannot export: %s" % (args.reduced, e)),
                              (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
@@ -77,11 +77,18 @@ def run(argv):
                                                        "disk" % (path, e.strerror or e)))
     if args.json:
         say(json.dumps(dict(output=path, format=args.format, bodies=[b.name for b in data.bodies],
-                            flexible_modes=[b.nflex for b in data.bodies], check=results), indent=1))
+                            flexible_modes=[b.nflex for b in data.bodies], check=results,
+                            max_frequency_hz=data.max_frequency_hz, trimmed_systems=len(data.systems)), indent=1))
     else:
         say("kryflex: exported %d bod%s (%s) of '%s' to %s" % (
             len(data.bodies), "y" if len(data.bodies) == 1 else "ies",
             ", ".join("%s: 6 rigid + %d flexible" % (b.name, b.nflex) for b in data.bodies), data.scene, path))
+        if data.systems:
+            say("  trimmed model (modes above %.4g Hz out of the dynamics): its fixed-angle systems at %s deg in the file "
+                "(system<i>/M, K, B, C, D); highest frequency %.4g Hz, stable explicit step %.3g s"
+                % (data.max_frequency_hz, "; ".join(",".join("%g" % a for a in sy["angles_deg"]) for sy in data.systems),
+                   max(float(np.max(sy["frequencies_hz"], initial=0.0)) for sy in data.systems),
+                   1.0 / (np.pi * max(float(np.max(sy["frequencies_hz"], initial=1e-300)) for sy in data.systems))))
         for r in results or []:
             say("  %s deg: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
                 "Exudyn %d, kryflex %s)" % (r["angles_deg"], len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
@@ -98,7 +105,7 @@ def check_exudyn(model, data, angles_list):
     out = []
     for angles in angles_list:
         try:
-            system = model.at(angles)
+            system = model.at(angles, trimmed=False)   # the floating-frame bodies are the untrimmed ones
         except ValueError as e:
             raise Failure(EXIT_INPUT, "--angle %s: %s" % (",".join("%g" % a for a in angles), e)) from None
         _, mbs, _ = build_mbs(data, angles)

@@ -120,6 +120,9 @@ def run(argv):
     say("kryflex slew: %s" % ("adequate at every rate up to %.4g deg/s" % rows[-1]["peak_rate_deg_s"] if limit is None
                               else "not adequate from %.4g deg/s (error %.3g > %g)"
                               % (limit["peak_rate_deg_s"], limit["error"], study.accuracy)))
+    say("kryflex slew: reduced model's highest frequency %.4g Hz%s, stable explicit step %.3g s"
+        % (study.top_hz, " (trimmed above %.4g Hz; untrimmed %.4g Hz)" % (study.trim_hz, study.untrimmed_top_hz)
+           if study.trim_hz > 0 else "", study.explicit_step[0]))
     say("kryflex slew: results in %s (slew.csv, slew.md, slew.png, slew_histories.png)" % out)
     return EXIT_OK
 

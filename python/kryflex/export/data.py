@@ -12,13 +12,17 @@ class MultibodyExport:
     """bodies: FloatingBody per body, in the model's order; joints: dicts (name, type 'revolute'|'fixed', parent,
     child (body indices), parent_interface, child_interface (interface indices), axis (3, parent frame), R0 (3 x 3):
     the child frame's orientation in the parent's at angle 0); revolute joints come first, in the order of the angles.
-    inputs, outputs: names; damping: the uniform modal damping ratio the reduction served; scene: the scene's name."""
+    inputs, outputs: names; damping: the uniform modal damping ratio the reduction served; scene: the scene's name.
+    A trimmed model (reduction.max_frequency): max_frequency_hz, and systems: its trimmed reassembled systems at the
+    model's reduction angles (export/systems.py), which the floating-frame bodies cannot carry."""
     scene: str
     bodies: list
     joints: list
     inputs: list
     outputs: list
     damping: float
+    max_frequency_hz: float = 0.0       # the model's trimming limit (0: none), docs/guide/trimming.md
+    systems: list = dataclasses.field(default_factory=list)   # trimmed fixed-angle systems (export/systems.py)
 
     @property
     def revolute(self):
@@ -31,8 +35,9 @@ class MultibodyExport:
         return names.index(name)
 
 
-def from_model(model):
-    """The MultibodyExport of a kryflex ReducedModel (every body must float: ExportError names the one that cannot)."""
+def from_model(model, configurations_deg=None):
+    """The MultibodyExport of a kryflex ReducedModel (every body must float: ExportError names the one that cannot);
+    a trimmed model adds its trimmed systems at configurations_deg (default: its reduction angles)."""
     bodies = [floating_body(name, ifs, **arrays)
               for name, ifs, arrays in zip(model.body_names, model.interfaces, model.bodies)]
     joints = []
@@ -40,5 +45,13 @@ def from_model(model):
         joints.append(dict(name=j["name"], type=j["type"], parent=int(j["parent"]), child=int(j["child"]),
                            parent_interface=int(j["parent_interface"]), child_interface=int(j["child_interface"]),
                            axis=np.asarray(j["axis"], dtype=float), R0=np.asarray(j["R0"], dtype=float)))
+    limit = float(model.settings.get("max_frequency_hz") or 0.0)
+    systems = []
+    if limit > 0:
+        from .systems import trimmed_systems
+        if configurations_deg is None:
+            configurations_deg = [list(np.atleast_1d(c)) for c in model.settings.get("reduction_angles_deg") or []]
+        systems = trimmed_systems(model, configurations_deg)
     return MultibodyExport(scene=model.scene_name, bodies=bodies, joints=joints, inputs=list(model.input_names),
-                           outputs=list(model.output_names), damping=float(model.settings.get("damping", 0.0)))
+                           outputs=list(model.output_names), damping=float(model.settings.get("damping", 0.0)),
+                           max_frequency_hz=limit, systems=systems)

@@ -7,6 +7,7 @@ import numpy as np
 
 from .bodies import ExportError, FloatingBody
 from .data import MultibodyExport
+from .systems import SYSTEM_ARRAYS
 
 FORMAT = "kryflex-multibody"
 VERSION = 1
@@ -35,6 +36,12 @@ def arrays(data):
                joint_child_interface=np.array([j["child_interface"] for j in J], dtype=np.int64),
                joint_axis=np.array([j["axis"] for j in J], dtype=float).reshape(len(J), 3),
                joint_R0=np.array([j["R0"] for j in J], dtype=float).reshape(len(J), 3, 3))
+    # a trimmed model: its limit and fixed-angle trimmed systems (readers of the bodies alone may ignore them)
+    out["max_frequency_hz"] = np.array(float(data.max_frequency_hz))
+    out["nsystems"] = np.array(len(data.systems), dtype=np.int64)
+    for i, sysd in enumerate(data.systems):
+        for key in SYSTEM_ARRAYS:
+            out["system%d/%s" % (i, key)] = np.asarray(sysd[key], dtype=float)
     for i, b in enumerate(data.bodies):
         out["body%d/interface_names" % i] = _strings(b.interfaces)
         for key in BODY_ARRAYS:
@@ -84,9 +91,13 @@ def read_neutral(path):
                       for n, t, p, c, pi, ci, ax, R0 in zip(z["joint_names"], z["joint_type"], z["joint_parent"],
                                                              z["joint_child"], z["joint_parent_interface"],
                                                              z["joint_child_interface"], z["joint_axis"], z["joint_R0"])]
+            nsys = int(z["nsystems"]) if "nsystems" in z.files else 0     # files before trimming have none
+            systems = [{key: z["system%d/%s" % (i, key)] for key in SYSTEM_ARRAYS} for i in range(nsys)]
             return MultibodyExport(scene=str(z["scene"]), bodies=bodies, joints=joints,
                                    inputs=[str(s) for s in z["inputs"]], outputs=[str(s) for s in z["outputs"]],
-                                   damping=float(z["damping_ratio"]))
+                                   damping=float(z["damping_ratio"]),
+                                   max_frequency_hz=float(z["max_frequency_hz"]) if "max_frequency_hz" in z.files
+                                   else 0.0, systems=systems)
         except KeyError as e:
             raise ExportError("%s: incomplete kryflex multibody export: %s is missing; export the model again"
                               % (path, e)) from None

@@ -76,6 +76,15 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, f
              "(P1 %.4g s); stiffness-proportional damping %.3g at f1; drive on %s; accuracy %g."
              % (s.full.dofs, s.reduced.dofs, s.kind, _deg(s.alpha0_deg), _deg(s.amplitude_deg), s.f1, s.P1, s.zeta,
                 ", ".join(s.inputs), s.accuracy), ""]
+    step, step_untrimmed = s.explicit_step
+    if s.trim_hz > 0:
+        lines += ["Trimmed reduced model (reduction.max_frequency, %.4g Hz): highest frequency at %s deg %.4g Hz "
+                  "(untrimmed %.4g Hz), stable explicit step 2/omega_max %.3g s (untrimmed %.3g s); integrated with "
+                  "the trimmed modes' mass taken out at every angle (kryflex/slew/trimmed.py)."
+                  % (s.trim_hz, _deg(s.alpha0_deg), s.top_hz, s.untrimmed_top_hz, step, step_untrimmed), ""]
+    else:
+        lines += ["Reduced model untrimmed: highest frequency at %s deg %.4g Hz, stable explicit step 2/omega_max %.3g s "
+                  "(reduction.max_frequency trims it)." % (_deg(s.alpha0_deg), s.top_hz, step), ""]
     if frf_error is not None:
         lines += ["Frequency-domain error of the reduced model (the reduction's verification, max over the angles of "
                   "interest): %.3g." % frf_error, ""]

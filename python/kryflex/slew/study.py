@@ -70,6 +70,13 @@ class SlewStudy:
         self.settle_periods = float(settle_periods)
         self.full = SlewBodies.from_scene(scene)
         self.reduced = SlewBodies.from_model(model)
+        # a model reduced with reduction.max_frequency is integrated trimmed (trimmed.py): its modes above the limit
+        # out of the dynamics at every angle of the slew, as the model reassembles them
+        limit = model.settings.get("max_frequency_hz")
+        self.trim_hz = float(limit) if limit else 0.0
+        self.reassembly_rtol = float(model.settings.get("reassembly_rtol", 1e-9))
+        self.top_hz = float(system.top_frequency_hz)
+        self.untrimmed_top_hz = float(system.untrimmed_top_hz)
         self.inputs = list(scene.input_names) if inputs is None else list(inputs)
         unknown = [name for name in self.inputs if name not in scene.input_names]
         if unknown or not self.inputs:
@@ -92,7 +99,20 @@ class SlewStudy:
         h = self.step(duration) if h is None else h
         t_end = duration + self.settle_periods * self.P1
         every = max(1, int(np.ceil(t_end / h / 2000)))     # at most ~2000 recorded samples per run
-        return Integrator(bodies, h, self.damping_beta).run(self.profile(duration, still), t_end, record_every=every)
+        return self.integrator(bodies, h).run(self.profile(duration, still), t_end, record_every=every)
+
+    def integrator(self, bodies, h):
+        """The integrator of one model: the trimmed one for the reduced bodies of a trimmed model."""
+        if bodies is self.reduced and self.trim_hz > 0:
+            from .trimmed import TrimmedIntegrator
+            return TrimmedIntegrator(bodies, h, self.damping_beta, self.trim_hz, self.reassembly_rtol)
+        return Integrator(bodies, h, self.damping_beta)
+
+    @property
+    def explicit_step(self):
+        """The reduced model's stable explicit (central-difference) step at alpha0, 2 / omega_max, trimmed when the
+        model is; and the untrimmed model's."""
+        return 1.0 / (np.pi * self.top_hz), 1.0 / (np.pi * self.untrimmed_top_hz)
 
     @staticmethod
     def errors(full, reduced):

@@ -189,3 +189,61 @@ def test_bad_max_frequency(tmp_path):
                          env=ENV, capture_output=True, text=True, timeout=120)
     assert run.returncode == 2, run.stdout + run.stderr
     assert "max_frequency" in run.stderr and "Traceback" not in run.stderr
+
+
+@pytest.fixture(scope="module")
+def galileo_paper(workdir):
+    spec = acc.galileo_spec()
+    _, scene, result = reduce(spec, os.path.join(workdir, "galileo_paper_slew.yaml"), recipe(spec, "paper"))
+    return scene, result.model
+
+
+def test_bodies_with_trimmed_mass_give_the_trimmed_system(galileo_paper):
+    """The slew's trimmed bodies (slew/trimmed.py: the trimmed modes' mass taken out in body coordinates) restricted to
+    the ties by SciPy's null space: their finite frequencies are the C trimmed system's, at angles off the expansion
+    angle too."""
+    from kryflex.slew.bodies import SlewBodies
+    from kryflex.slew.trimmed import TrimmedMass
+    scene, model = galileo_paper
+    bodies = SlewBodies.from_model(model)
+    mass = TrimmedMass(bodies, float(model.settings["max_frequency_hz"]))
+    for angles in ([0.0], [37.5], [72.0]):
+        rad = np.radians(angles)
+        N = sl.null_space(bodies.ties(rad))
+        Kr, Mr = N.T @ bodies.K.toarray() @ N, N.T @ mass.at(rad) @ N
+        lam = sl.eig(Kr, Mr, right=False)
+        lam = np.sort(lam[np.isfinite(lam)].real)
+        f = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
+        expected = model.at(angles).frequencies_hz
+        flexible = f[f > 0.5 * expected[0]]
+        np.testing.assert_allclose(flexible, expected, rtol=1e-6)
+
+
+def test_slew_uses_the_trimmed_model(galileo_paper):
+    """kryflex slew's study integrates a trimmed model trimmed (its reduced bodies' trimmed mass at every angle of the
+    slew) and meets the scene's accuracy against the full order, like the untrimmed one."""
+    from kryflex.slew.study import SlewStudy
+    from kryflex.slew.trimmed import TrimmedIntegrator
+    scene, model = galileo_paper
+    study = SlewStudy(scene, model, nrates=2)
+    assert isinstance(study.integrator(study.reduced, 1e-3), TrimmedIntegrator)
+    assert study.top_hz <= LIMIT * scene.band[1] < study.untrimmed_top_hz
+    row = study.run(4.0)
+    assert row["error"] <= scene.accuracy, row["error"]
+
+
+def test_export_carries_the_trimmed_systems(galileo_paper, tmp_path):
+    """The neutral file holds the trimmed fixed-angle systems (M, K, B, C, D) beside the untrimmed floating-frame
+    bodies, and reads them back."""
+    from kryflex.export import from_model
+    from kryflex.export.neutral import read_neutral, write_neutral
+    _, model = galileo_paper
+    data = from_model(model, [[0.0], [60.0]])
+    assert data.max_frequency_hz == pytest.approx(LIMIT * 10.0)
+    back = read_neutral(write_neutral(data, str(tmp_path / "x.npz")))
+    assert len(back.systems) == 2
+    for angles, sysd in zip(([0.0], [60.0]), back.systems):
+        s = model.at(angles)
+        np.testing.assert_allclose(sysd["frequencies_hz"], s.frequencies_hz, rtol=1e-12)
+        np.testing.assert_allclose(sysd["D"], s.feedthrough, rtol=1e-12)
+        assert sysd["frequencies_hz"].max() <= back.max_frequency_hz

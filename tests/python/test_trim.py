@@ -247,3 +247,17 @@ def test_export_carries_the_trimmed_systems(galileo_paper, tmp_path):
         np.testing.assert_allclose(sysd["frequencies_hz"], s.frequencies_hz, rtol=1e-12)
         np.testing.assert_allclose(sysd["D"], s.feedthrough, rtol=1e-12)
         assert sysd["frequencies_hz"].max() <= back.max_frequency_hz
+
+
+@pytest.mark.parametrize("value, text", [(3, "3"), (3.5, "3.5"), ("3x", "3"), ("40 Hz", "40 Hz"), ("40hz", "40 Hz"),
+                                         (None, None), ("none", None), (0, None)])
+def test_scene_key_forms(value, text):
+    from kryflex.io.scene_schema import _max_frequency
+    assert _max_frequency("scene.yaml", "reduction.max_frequency", value) == text
+
+
+@pytest.mark.parametrize("value", [True, 0.5, "0.5", "3 kHz", "-2", "fast", float("nan")])
+def test_scene_key_refused(value):
+    from kryflex.io.scene_schema import SceneError, _max_frequency
+    with pytest.raises(SceneError, match="reduction.max_frequency.*40 Hz"):
+        _max_frequency("scene.yaml", "reduction.max_frequency", value)

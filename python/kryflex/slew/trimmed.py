@@ -32,10 +32,12 @@ class TrimmedMass:
         self._memo = {}
         self.top_hz = {}
 
-    def at(self, angles_rad):
+    def at(self, angles_rad, ties=None):
+        """M'(alpha); ties: D(alpha) when the caller has it (bodies.ties otherwise)."""
         key = np.asarray(angles_rad, float).tobytes()
         if key not in self._memo:
-            N, _, _ = _core.null_space(self.bodies.ties(angles_rad), self.rtol)
+            D = self.bodies.ties(angles_rad) if ties is None else ties
+            N, _, _ = _core.null_space(D, self.rtol)
             lam, Phi = _core.dense_eig(N.T @ self.K @ N, N.T @ self.M @ N)
             freq = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
             high = freq > self.limit_hz
@@ -76,21 +78,22 @@ class TrimmedIntegrator(Integrator):
         ys = np.zeros((len(keep), b.H.shape[0]))
         ye = np.zeros_like(ys)
         zs = np.zeros((len(keep), N)) if state else None
-        k, last, lu = 1, None, None
+        k, last, S, M = 1, None, None, None
+        Id = b.I.toarray()
         for n in range(1, nsteps + 1):
             key = alpha[n].tobytes()
-            M = self.mass.at(alpha[n])
-            if key != last:    # a new angle: the step's saddle-point matrix again
-                D = b.ties(alpha[n])
+            if key != last:    # a new angle: the trimmed mass and the step's saddle-point matrix again
+                D = b.tie_matrix(alpha[n]) @ Id
+                M = self.mass.at(alpha[n], D)
                 m = D.shape[0]
                 A = np.zeros((N + m, N + m))
                 A[:N, :N] = K + d0 * Cd + c0 * M
                 A[:N, N:] = D.T
                 A[N:, :N] = D
-                lu = np.linalg.inv(A)
+                S = np.linalg.inv(A)[:N, :N]      # z = S rhs meets the ties (the multipliers are not needed)
                 last = key
             rhs = G1 * u[n] + M @ (c0 * z + c1 * v + c2 * a) + Cd @ (d0 * z + d1 * v + d2 * a)
-            znew = (lu[:N, :N] @ rhs)
+            znew = S @ rhs
             anew = c0 * (znew - z) - c1 * v - c2 * a
             v = v + h * ((1 - GAMMA) * a + GAMMA * anew)
             z, a = znew, anew

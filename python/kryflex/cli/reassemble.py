@@ -51,11 +51,16 @@ def run(argv):
             results.append(dict(angles_deg=angles, dofs=system.dofs, constraint_rank=system.constraint_rank,
                                 sigma_ratio=system.sigma_ratio, seconds=dt,
                                 rigid_modes=None if system.rigid_modes is None else int(system.rigid_modes.shape[1]),
-                                frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]]))
+                                frequencies_hz=[float(x) for x in system.frequencies_hz[:args.modes]],
+                                top_frequency_hz=system.top_frequency_hz, trimmed_modes=int(system.trimmed),
+                                max_frequency_hz=system.max_frequency_hz or None,
+                                explicit_step_s=system.explicit_step_s if system.top_frequency_hz > 0 else None))
             key = "_".join("%g" % a for a in angles)
             arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
             if system.damping_matrix is not None:   # the viscous damping (bodies' C_b + Rayleigh), README "Damping"
                 arrays["D_" + key] = system.damping_matrix
+            if system.feedthrough is not None:      # a trimmed model: y = H x + feedthrough u (docs/guide/trimming.md)
+                arrays["feedthrough_" + key] = system.feedthrough
         return results, arrays
     results, arrays = collective(reassemble, (_core.Error, EXIT_NUMERIC, str))
     if args.output:
@@ -71,6 +76,10 @@ def run(argv):
             say("angles %s deg: %d dofs (constraint rank %d, %s rigid/mechanism modes), reassembled in %.2f ms"
                 % (r["angles_deg"], r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
             say("  flexible frequencies (Hz): " + " ".join("%.6g" % x for x in r["frequencies_hz"]))
+            if r["trimmed_modes"]:
+                say("  trimmed: %d mode(s) above %.4g Hz out of the dynamics (static share kept as a feedthrough); "
+                    "highest kept %.4g Hz, stable explicit step %.3g s" % (r["trimmed_modes"], r["max_frequency_hz"],
+                                                                         r["top_frequency_hz"], r["explicit_step_s"]))
     return EXIT_OK
 
 

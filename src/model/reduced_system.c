@@ -174,8 +174,8 @@ PetscErrorCode KFReducedSystemView(KFReducedSystem y, PetscViewer viewer)
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
   for (PetscInt i = 0; i < y->nf; i++) PetscCall(PetscViewerASCIIPrintf(viewer, "%s %.6g", (i && i % 8 == 0) ? "\n   " : "", (double)y->freq[i]));
   PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
-  if (y->ntrimmed) PetscCall(PetscViewerASCIIPrintf(viewer, "trimmed: %" PetscInt_FMT " mode(s) above %.6g Hz (up to %.6g Hz) residualized into a static feedthrough\n", y->ntrimmed, (double)y->fmax_trim, (double)y->ftop_untrimmed));
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  if (y->ntrimmed) PetscCall(PetscViewerASCIIPrintf(viewer, "trimmed: %" PetscInt_FMT " mode(s) above %.6g Hz (up to %.6g Hz) residualized into a static feedthrough\n", y->ntrimmed, (double)y->fmax_trim, (double)y->ftop_untrimmed));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }

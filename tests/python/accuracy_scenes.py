@@ -1,6 +1,6 @@
 """Scenes and dense yardsticks for the acceptance tests of accuracy-governed reduction (issue 11).
 
-Helpers only (no tests): test_accuracy_target.py and accuracy_sweep.py (scripts/bench-sweep) use them.
+Helpers only (no tests): test_accuracy_target.py and accuracy_sweep.py (benchmarks/sweep/bench-sweep) use them.
 
 * Scene builders write variants of three scenes into a folder: Galileo (meshes/galileo, a copy of the YAML with
   `accuracy`, angles and the reduction settings overridden), a generated 3-body beam frame of at least 5,000 dofs

@@ -3,7 +3,7 @@
 model the reducer's accuracy search chose (issue 11: "each size is within 1.5x of the smallest found by a
 brute-force sweep").
 
-    scripts/bench-sweep [--scene galileo|frame|solid] [--target 1e-3] [--moments 1-20] [--methods single,multi]
+    benchmarks/sweep/bench-sweep [--scene galileo|frame|solid] [--target 1e-3] [--moments 1-20] [--methods single,multi]
                         [--workdir DIR] [--cache DIR] [--csv out.csv]
 
 Candidates: method single-angle and multi-angle (with --full also every alpha_G of interest, and evenly spread

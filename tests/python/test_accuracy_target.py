@@ -13,7 +13,7 @@ Also: sizes (the reduced bodies' dofs summed) do not grow as the target loosens;
 10..60 is either right (target met and the dense check passes) or says it is not (target_met 0, the command exits
 6), and has no spurious mode (no Krylov or reduced frequency below half the first flexible dense one); the
 reducer's model is within 1.5x of the smallest a brute-force sweep finds (accuracy_sweep.py, c = 1..12 here;
-scripts/bench-sweep for the full sweep); 2 MPI ranks choose the same model as 1.
+benchmarks/sweep/bench-sweep for the full sweep); 2 MPI ranks choose the same model as 1.
 
 Slow cases (the 5k-dof frame: ~2 min of dense reference per configuration, 3 configurations; the solid pair) run
 only with KRYFLEX_SLOW_TESTS=1. KRYFLEX_ACCURACY_CACHE=DIR keeps the dense modal data (and generated bodies)
@@ -46,7 +46,7 @@ TARGETS = (1e-2, 1e-3, 1e-4)
 FIXED_MOMENTS = (10, 20, 30, 40, 60)
 FIXED_TARGET = 1e-3        # the target of the fixed-moment, sweep and MPI cases
 SWEEP_MOMENTS = range(1, 13)   # the fast sweep: the search picks c = 9 on Galileo and its bases deflate past 21;
-                               # scripts/bench-sweep runs c = 1..20 over band, h2 and hinf rankings (766 candidates
+                               # benchmarks/sweep/bench-sweep runs c = 1..20 over band, h2 and hinf rankings (766 candidates
                                # for band + h2 at 1e-3: smallest 24 dofs, the reducer's choice 24)
 SWEEP_IMPORTANCES = ("band",)  # the search's own ranking
 SAME = 1e-6                # 2 ranks vs 1: the dense check of either model, relative, above the rounding floor:

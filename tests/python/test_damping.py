@@ -382,7 +382,7 @@ def fixed_recipe_error(mats, damping, c, damped):
 
 def test_damped_moments_at_equal_size():
     """Damped moments (second-order Krylov) against the undamped basis at equal size, heavy non-proportional damping
-    (scripts/bench-damped-krylov, its default case): with 3 moments the damped basis is closer: 10x on the Galileo stick
+    (benchmarks/damped-krylov/bench-damped-krylov, its default case): with 3 moments the damped basis is closer: 10x on the Galileo stick
     model (1.5e-2 against 1.6e-1, 18 dofs each), 1.7x on the model refitted to the paper's Table 1 (7.8e-3 against
     1.35e-2); from 4 moments on it is not better (README "Damping"), so it stays an option."""
     mats = damping_matrices(scale=20.0)

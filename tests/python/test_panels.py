@@ -139,9 +139,9 @@ def test_generator_bad_input(tmp_path):
 
 
 def test_bench_scaling_panel_race(tmp_path):
-    """scripts/bench-scaling on a panel size: the scene generated, Krylov and the modal race against one full-order
+    """benchmarks/scaling/bench-scaling on a panel size: the scene generated, Krylov and the modal race against one full-order
     reference, the ratio printed, the CSV and charts written (figures are measured by running it, not here)."""
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "bench-scaling"), "--sizes", "p3k", "--ranks", "1",
+    r = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "scaling", "bench-scaling"), "--sizes", "p3k", "--ranks", "1",
                         "--baseline", "none", "--tradeoff", "none", "--verify", "p3k", "--race", "p3k",
                         "--variant-size", "none", "--bodywise", "none", "--moments", "100", "--out", str(tmp_path)],
                        capture_output=True, text=True, env=ENV, timeout=900)

@@ -16,7 +16,7 @@ What may differ, and by how much:
 So the slow slew is run at a small amplitude (0.01 deg: 2A/pi = 1.1e-4) where Exudyn must agree with the full model
 to the reduction's error plus that share; at 1 deg the Exudyn-vs-linear difference must be the neglected terms' share
 (it scales with A, so an error of the export or of the state mapping, which would not, is excluded).
-Measured (scripts/bench-slew-exudyn): 0.01 deg, 20 P1: Exudyn vs full 3.6e-4, reduced vs full 1.7e-4, Exudyn vs
+Measured (benchmarks/slew-exudyn/bench-slew-exudyn): 0.01 deg, 20 P1: Exudyn vs full 3.6e-4, reduced vs full 1.7e-4, Exudyn vs
 reduced 2.2e-4; 0.5 P1: reduced vs full 8.8e-4. 1 deg: Exudyn vs reduced 0.012 to 0.020 (2A/pi = 0.011)."""
 import os
 import subprocess

@@ -94,7 +94,7 @@ def test_eigenvector_baseline_runs_through_the_same_pipeline(solid, krylov_seria
 
 def test_bench_scaling_quick_writes_csv_and_charts(tmp_path):
     """The benchmark's own machinery on the smallest sizes (its figures are measured by running it, not here)."""
-    r = run([sys.executable, os.path.join(ROOT, "scripts", "bench-scaling"), "--sizes", "2k", "--ranks", "1,2",
+    r = run([sys.executable, os.path.join(ROOT, "benchmarks", "scaling", "bench-scaling"), "--sizes", "2k", "--ranks", "1,2",
              "--baseline", "2k", "--tradeoff", "none", "--out", str(tmp_path)])
     assert r.returncode == 0, r.stdout + r.stderr
     rows = list(__import__("csv").DictReader(open(tmp_path / "bench-scaling.csv")))

@@ -11,7 +11,7 @@
   1e-4: Galileo's factors take a few kB): exit code 3, one message, on 1 and 2 ranks, no hang.
 - The factorization options (-kf_ordering, -kf_blr) give the same model.
 
-No timed test: speed is measured by scripts/bench-scaling.
+No timed test: speed is measured by benchmarks/scaling/bench-scaling.
 """
 import json
 import os

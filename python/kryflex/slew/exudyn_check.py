@@ -15,7 +15,7 @@ slewing structure this way because the study's model is linear time-varying by d
 The second check (issue 15 item 2) is physical: the REDUCED bodies as Exudyn floating-frame bodies
 (kryflex.export.exudyn.build_mbs, ObjectFFRFreducedOrder: the nonlinear terms the linear time-varying study leaves
 out) slewed by the bearing torque, against integrator.py's full and reduced bodies along the angle history Exudyn
-produced (`kryflex slew --exudyn-ffrf`, scripts/bench-slew-exudyn, tests/python/test_slew_exudyn.py):
+produced (`kryflex slew --exudyn-ffrf`, benchmarks/slew-exudyn/bench-slew-exudyn, tests/python/test_slew_exudyn.py):
 
     r = ffrf_comparison(study, periods)      # r["exudyn_vs_full"], r["reduced_vs_full"], r["exudyn_vs_reduced"]
 """

@@ -240,6 +240,7 @@ def test_reduced_frequencies_are_close_to_full_order(serial, galileo_ref):
         np.testing.assert_allclose(full[:n], np.sqrt(lam[7:7 + n]) / (2 * np.pi), rtol=1e-6, err_msg=label)
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_serial_reduction(serial, two_ranks):
     import kryflex
     s1, s2 = serial.summary, two_ranks.summary
@@ -255,6 +256,7 @@ def test_two_ranks_give_the_serial_reduction(serial, two_ranks):
     np.testing.assert_allclose(m2.at([37.5]).frequencies_hz, m1.at([37.5]).frequencies_hz, rtol=1e-8)
 
 
+@pytest.mark.mpi
 def test_progress_lines_once_per_run(serial, two_ranks):
     for run in (serial, two_ranks):
         out = run.proc.stdout
@@ -263,6 +265,7 @@ def test_progress_lines_once_per_run(serial, two_ranks):
         assert out.count("kryflex: results in") == 1
 
 
+@pytest.mark.mpi
 def test_log_view_prints_the_stage_events(two_ranks):
     out = two_ranks.proc.stdout
     for event in ("KFLoad", "KFAssemble", "KFRigidModes", "KFFactor", "KFSolve", "KFOrthogonalize", "KFProject",
@@ -305,6 +308,7 @@ def test_reassemble_json_equals_the_api(serial):
                                rtol=10 * EPS * spread(model, [30.0]))
 
 
+@pytest.mark.mpi
 def test_reassemble_json_under_two_ranks_prints_once(serial):
     res = json.loads(ok(cli("reassemble", os.path.join(serial.out, "reduced.h5"), "--angle", 10, "--json",
                                 ranks=2)).stdout)
@@ -654,6 +658,7 @@ def test_reduce_output_not_writable(tmp_path, where):
         assert not os.path.exists(target)
 
 
+@pytest.mark.mpi
 def test_reduce_output_not_writable_under_two_ranks():
     """Rank 0 finds the problem: every rank must stop (not wait in the reduction's collective calls)."""
     p = cli("reduce", GALILEO, "-o", "/etc/passwd/kryflex_out", "-quiet", ranks=2, timeout=120)

@@ -235,6 +235,7 @@ def test_bad_values_of_later_stage_options_are_refused_before_any_work(previous,
     assert snapshot(out) == before
 
 
+@pytest.mark.mpi
 def test_bad_value_of_a_later_stage_option_on_two_ranks(previous):
     out, before = previous
     p = run("mpiexec", "-n", "2", KRYFLEX, "reduce", GALILEO, "-o", out, "-scene.angles", "0", "-kf_blr", "2", *FAST)
@@ -280,6 +281,7 @@ def _one_rank(earlier, tmp_path):
     }
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("kind", ["bad option value", "misspelt option", "bad command line", "numerical failure",
                                   "reassemble, bad --modes"])
 def test_one_rank_fails_alone(earlier, tmp_path, kind):
@@ -295,6 +297,7 @@ def test_one_rank_fails_alone(earlier, tmp_path, kind):
     assert not os.path.exists(tmp_path / "out")
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("kind", ["scene", "model file"])
 def test_one_rank_fails_alone_while_the_other_waits_in_a_collective_call(earlier, tmp_path, kind):
     """Rank 1 fails before a collective load that rank 0 is already in: the agreement cannot complete, rank 1 prints
@@ -315,6 +318,7 @@ def test_one_rank_fails_alone_while_the_other_waits_in_a_collective_call(earlier
     assert not os.path.exists(tmp_path / "out")
 
 
+@pytest.mark.mpi
 def test_info_with_a_bad_scene_on_one_rank(tmp_path):
     p = run("mpiexec", "-n", "1", KRYFLEX, "info", GALILEO, *FAST, ":", "-n", "1", KRYFLEX, "info",
             tmp_path / "nothere.yaml", *FAST)
@@ -408,6 +412,7 @@ SIGNAL_CASES = [
 ]
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case", SIGNAL_CASES, ids=[c[0] for c in SIGNAL_CASES])
 def test_signals_leave_the_earlier_results(previous, frames, case):
     _, ranks, signum, to, during = case
@@ -430,6 +435,7 @@ def test_signals_leave_the_earlier_results(previous, frames, case):
     assert snapshot(out) == before      # byte-identical, no staging folder, no temporary file
 
 
+@pytest.mark.mpi
 def test_stale_staging_of_a_killed_run_is_removed(previous, frames):
     out, before = previous
     code, _, _ = signalled([KRYFLEX, "reduce", frames, "-o", out, "-kf_verify", "false"], "configuration 0 deg",
@@ -442,6 +448,7 @@ def test_stale_staging_of_a_killed_run_is_removed(previous, frames):
 
 # ====================================================================== every exit code
 
+@pytest.mark.mpi
 def test_internal_error_is_exit_1_on_every_rank(tmp_path):
     """A bug (here: one planted through sitecustomize) is exit 1 with the trace, under 1 and 2 ranks."""
     (tmp_path / "sitecustomize.py").write_text(

@@ -224,6 +224,7 @@ def test_reduced_model_matches_the_independent_reference(serial, example_referen
         np.testing.assert_allclose(freqs[a], full, rtol=1e-6, err_msg="%g deg" % a)
 
 
+@pytest.mark.mpi
 def test_two_ranks_give_the_serial_model(serial, parallel):
     import kryflex
     (out1, stdout1), (out2, stdout2) = serial, parallel

@@ -404,6 +404,7 @@ def test_child_frame_turned_90_deg_about_y(oblique, rotation):
     assert ok == (rotation != "RotationRxyz")
 
 
+@pytest.mark.mpi
 def test_two_ranks_write_the_same_export(solid, neutral, tmp_path):
     out = tmp_path / "two.npz"
     r = run(["mpiexec", "-n", "2", KRYFLEX, "export", str(solid[1]), "-o", str(out), "--format", "exudyn", "--angle",
@@ -436,6 +437,7 @@ def test_bad_input_is_refused_cleanly(solid, tmp_path, args, code, words):
     assert os.listdir(tmp_path) == []          # nothing written, no temporary left
 
 
+@pytest.mark.mpi
 def test_two_ranks_refuse_together(solid, tmp_path):
     """Under mpiexec -n 2 a refusal is agreed: one message, the documented code on every rank, no hang."""
     r = run(["mpiexec", "-n", "2", KRYFLEX, "export", str(solid[1]), "-o", str(tmp_path / "x.npz"), "--format", "exudyn",

@@ -238,6 +238,7 @@ def test_eigenvalue_yardstick(galileo):
 
 # ------------------------------------------------------------------ 1 rank vs 2 ranks
 
+@pytest.mark.mpi
 def test_two_ranks_match_serial(any_scene, tmp_path):
     pair = any_scene
     which = pair.scene.name

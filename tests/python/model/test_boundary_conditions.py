@@ -16,7 +16,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
 PROBE = os.path.join(SUPPORT, "bc_probe.py")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(os.path.dirname(os.path.dirname(HERE)),
+           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))),
                                                                            "python"))
 TIMEOUT = 240
 
@@ -55,6 +55,7 @@ def runs(tmp_path_factory):
     return done
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("case", list(bc_models.CASES))
 def test_reduced_frf_meets_accuracy_against_dense_reference(runs, case, ranks):
@@ -73,6 +74,7 @@ def test_reduced_frf_meets_accuracy_against_dense_reference(runs, case, ranks):
             case, angle, err, spec["accuracy"])
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case", list(bc_models.CASES))
 def test_rigid_count_is_derived(runs, case):
     for ranks in (1, 2):
@@ -81,6 +83,7 @@ def test_rigid_count_is_derived(runs, case):
         assert (r["nrigid"] == EXPECTED_RIGID[case]).all(), r["nrigid"]
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case", list(bc_models.CASES))
 def test_two_ranks_agree_with_one(runs, case):
     T1, T2 = runs[case, 1]["T"], runs[case, 2]["T"]
@@ -103,6 +106,7 @@ BAD = {
 }
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("case", list(BAD))
 def test_bad_boundary_conditions_fail_clearly(tmp_path, case, ranks):
@@ -133,6 +137,7 @@ def test_dof_without_mass_or_stiffness_is_named():
         kryflex.scene_from_dict(spec)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_massless_dofs_sparse_verification(tmp_path, ranks):
     """The sparse verification (shift-and-invert) takes the semi-definite M as it is: the same accuracy."""

@@ -6,6 +6,8 @@ import subprocess
 
 import pytest
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 LIBRARY = os.path.join(ROOT, "build", "libkryflex.so")
 HEADER = os.path.join(ROOT, "src", "include", "kryflex.h")

@@ -112,6 +112,7 @@ def test_most_moments_raw_recurrence_does_not_overflow(small):
     assert pair_error(model.at(ANGLES).frf(freqs), dense_frf(path, system, freqs)) < 1e-3
 
 
+@pytest.mark.mpi
 def test_two_ranks_agree(small, tmp_path):
     """kryflex reduce on 1 and 2 ranks: the same reduced FRF, to 1e-6 of each pair's peak (1.8e-8 measured: 200
     Krylov vectors carry the ranks' different round-off), far below the model's own error (8e-6 against dense)."""

@@ -14,6 +14,8 @@ GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
+
 
 def load_module(name, path):
     spec = importlib.util.spec_from_file_location(name, path)

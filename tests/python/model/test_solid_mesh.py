@@ -270,6 +270,7 @@ def test_scene_refers_to_existing_six_dof_nodes(tiny_scene):
     assert scene["reduction"]["moments"] == 10
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
 def test_two_ranks_write_the_same_matrices(tiny_scene, tmp_path):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")

@@ -97,6 +97,7 @@ def test_symmetric_within_tolerance_passes():
     assert measured_ratio("rounding") is None
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case", ASYMMETRIC + ["rounding"])
 def test_ratio_matches_numpy_two_ranks(case):
     out = subprocess.run(["mpiexec", "-n", "2", sys.executable, os.path.abspath(__file__), case], env=MPI_ENV,

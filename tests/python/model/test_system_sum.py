@@ -18,6 +18,8 @@ import sys
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
@@ -96,6 +98,7 @@ def test_sum_equals_dense_products(dense):
     check_sum_equals_dense_products(dense)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])
 def test_sum_equals_dense_products_two_ranks(dense):
     out = subprocess.run(["mpiexec", "-n", "2", sys.executable, os.path.abspath(__file__), "dense" if dense else "aij"],

@@ -57,8 +57,9 @@ SAME_REPORTED = 1e-3       # 2 ranks vs 1: the reducer's own errors, absolute, a
                            # 2.6e-7 at 45 deg (1.08e-6 on 2 ranks, as the dense check; 1.34e-6 on 1): below what could
                            # flip a decision, far above rounding
 
-slow = pytest.mark.skipif(not os.environ.get("KRYFLEX_SLOW_TESTS"),
-                          reason="slow (5k-dof frame, solid: minutes of dense reference): set KRYFLEX_SLOW_TESTS=1")
+slow = [pytest.mark.slow,
+        pytest.mark.skipif(not os.environ.get("KRYFLEX_SLOW_TESTS"),
+                           reason="slow (5k-dof frame, solid: minutes of dense reference): set KRYFLEX_SLOW_TESTS=1")]
 pytestmark = [pytest.mark.usefixtures("quiet_library"),
               pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")]
 
@@ -224,6 +225,7 @@ def test_galileo_size_within_sweep(galileo):
 
 # ------------------------------------------------------------------ 2 MPI ranks choose as 1 does
 
+@pytest.mark.mpi
 def test_galileo_two_ranks_choose_as_one(galileo, tmp_path):
     serial = galileo.run(FIXED_TARGET)
     model_path, summary_path = tmp_path / "model.h5", tmp_path / "summary.json"

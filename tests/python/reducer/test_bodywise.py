@@ -87,6 +87,7 @@ def rel(a, b):
     return np.abs(a - b).max() / np.abs(b).max()
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("name", ["galileo", "frames", "solid"])
 def test_bodywise_apply_equals_monolithic(name, ranks, probes):
@@ -102,6 +103,7 @@ def test_bodywise_apply_equals_monolithic(name, ranks, probes):
             print(f"{what}: |X_bodywise - X_monolithic| / |X| = {v['rel_diff']:.1e}")
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("name", ["galileo", "frames", "solid"])
 def test_bodywise_serial_equals_parallel(name, probes):
     one, two = probes(name, 1), probes(name, 2)
@@ -111,6 +113,7 @@ def test_bodywise_serial_equals_parallel(name, probes):
             assert rel(b["HKG_bodywise"], a["HKG_bodywise"]) <= RANKS_SAME, (name, cfg, variant)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("name", ["galileo", "frames", "solid"])
 def test_one_factorization_per_body_for_all_configurations(name, ranks, probes):
@@ -237,6 +240,7 @@ def test_scene_key_and_command_line(scenes, tmp_path):
     assert p.returncode == 2 and "flex_solver" in p.stderr and "Traceback" not in p.stderr, p.stderr
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_unconnected_node_is_a_clear_collective_error(scenes, tmp_path, ranks):
     """A node of body1 that no element reaches (zero rows and columns of K, some mass): 6 zero-energy modes the joints

@@ -50,6 +50,7 @@ def reduce_cli(path, ranks, out, *opts):
     return p.stdout + p.stderr
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("name,ranks,nbodies", [("galileo", 2, 2), ("frames", 2, 3), ("galileo", 3, 2)])
 def test_which_rank_factors_which_body(name, ranks, nbodies, frame, tmp_path):
     path = GALILEO if name == "galileo" else frame
@@ -64,6 +65,7 @@ def test_which_rank_factors_which_body(name, ranks, nbodies, frame, tmp_path):
     assert "%d sparse factorizations for this system so far" % nbodies in out
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("name,ranks", [("galileo", 2), ("frames", 2), ("galileo", 3)])
 def test_spread_equals_monolithic_and_distributed(name, ranks, frame, tmp_path):
     path = GALILEO if name == "galileo" else frame
@@ -81,6 +83,7 @@ def test_spread_equals_monolithic_and_distributed(name, ranks, frame, tmp_path):
     assert spread["factor_counts"]["bodywise"] == spread["bodies"]
 
 
+@pytest.mark.mpi
 def test_two_rank_reduction_same_model(frame, tmp_path):
     """the frame's multi-angle reduction on 2 ranks, spread body-wise vs monolithic (as test_bodywise's 1-rank test)"""
     opts = ("-kf_method", "multi-angle", "-kf_search", "false")
@@ -97,6 +100,7 @@ def test_two_rank_reduction_same_model(frame, tmp_path):
         assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
 
 
+@pytest.mark.mpi
 def test_error_on_one_owner_is_collective(tmp_path):
     """A spread body's factorization fails on its owner alone (the memory check with a tiny -kf_memory_limit_mb): every
     rank stops with the owner's message and the 1-rank exit code, no traceback, no hang, no output folder."""
@@ -110,6 +114,7 @@ def test_error_on_one_owner_is_collective(tmp_path):
     assert "Traceback" not in two.stderr and not (tmp_path / "two").exists()
 
 
+@pytest.mark.mpi
 def test_scene_key_turns_spread_off(tmp_path):
     """reduction.bodywise_spread: false in the scene file: on 2 ranks every body is factored on all ranks; the command
     line's -kf_bodywise_spread wins over the key"""
@@ -131,6 +136,7 @@ def test_scene_key_turns_spread_off(tmp_path):
     assert "factored on rank 0 alone" in out and "factored on rank 1 alone" in out, out
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks,opts,bodywise", [(2, (), True), (3, (), False),
                                                   (2, ("-kf_bodywise_spread", "false"), False)])
 def test_auto_spreads_or_stays_monolithic(ranks, opts, bodywise, tmp_path):
@@ -142,6 +148,7 @@ def test_auto_spreads_or_stays_monolithic(ranks, opts, bodywise, tmp_path):
     assert ("body-wise solve" in out) == bodywise, out
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_pord_ordering_on_tiny_bodies(ranks, tmp_path):
     """-kf_ordering pord with Galileo's 12-dof stator: PORD stops the process on a graph of a few vertices, so a tiny

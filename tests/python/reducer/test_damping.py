@@ -286,6 +286,7 @@ def write_scene_files(folder, spec, matrices):
     return path
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")
 def test_cli_non_symmetric_matrix_two_ranks(tmp_path):
     """A non-symmetric damping file under 2 ranks: one clear message, exit 2, no hang, no output folder."""
@@ -317,6 +318,7 @@ if MPI.COMM_WORLD.rank == 0:
 """
 
 
+@pytest.mark.mpi
 def test_two_ranks_agree_with_one(tmp_path):
     script = tmp_path / "two.py"
     script.write_text(TWO_RANKS % {"here": HERE})

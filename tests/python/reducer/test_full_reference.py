@@ -29,7 +29,7 @@ import reference as ref  # noqa: E402
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 PAIR_FLOOR = 1e-4
 
-pytestmark = pytest.mark.usefixtures("quiet_library")
+pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
 
 
 def reference_errors(path, **options):

@@ -18,6 +18,8 @@ import scipy.linalg as sl
 
 from kryflex import _core
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
+
 TWO_PI = 2 * np.pi
 
 

@@ -289,6 +289,7 @@ def run_probe(scene_path, out, nranks):
         return json.load(f)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("which", ["galileo", "block"])
 def test_two_ranks_match_serial(which, block_scene, tmp_path):
     """The same reduction on 1 and 2 ranks: other dof distribution, other MUMPS ordering and summation order.

@@ -73,6 +73,7 @@ def same_model(a, b):
     assert abs(b["error_max"] - a["error_max"]) <= SAME_ERROR * a["error_max"]
 
 
+@pytest.mark.mpi
 def test_orderings_applied(runs):
     assert orderings(runs["pord"][0]) == ["pord"], runs["pord"][0]
     assert orderings(runs["scotch1"][0]) == ["scotch"], runs["scotch1"][0]
@@ -82,6 +83,7 @@ def test_orderings_applied(runs):
     assert orderings(runs["auto2"][0]) == ["scotch"], runs["auto2"][0]
 
 
+@pytest.mark.mpi
 def test_scotch_ordering_is_repeatable(runs):
     """SCOTCH on one thread with a fixed seed: the same reduction twice gives the same model to the last bit (its
     threads had ordered the same matrix differently from run to run)"""
@@ -90,6 +92,7 @@ def test_scotch_ordering_is_repeatable(runs):
     assert a["error_max"] == b["error_max"]
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("name", ["auto1", "auto2", "ptscotch"])
 def test_same_model_whatever_the_ordering(runs, name):
     same_model(runs["pord"][1], runs[name][1])
@@ -99,6 +102,7 @@ TRIED = re.compile(r"SCOTCH orderings of (\d+) seeds tried in [0-9.]+ s \(-kf_or
                    r"([0-9.e+, -]+): seed (\d+) kept \(-kf_scotch_seed (\d+) orders so at once\)")
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_ordering_tries_keep_the_fewest_flops(solid, runs, tmp_path, ranks):
     """-kf_ordering_tries 3: SCOTCH orderings of seeds 1, 3, 5 analysed, the factor with the fewest flops on the
@@ -137,6 +141,7 @@ def test_ordering_options_bad_value_is_refused(solid, tmp_path, option, value, m
     assert "MUMPS analysis" not in p.stdout and "Traceback" not in p.stderr and not (tmp_path / "bad").exists()
 
 
+@pytest.mark.mpi
 def test_plain_mumps_falls_back(solid, runs, tmp_path):
     env = dict(ENV, KRYFLEX_MUMPS="plain")
     log, summary = reduce_cli(solid, 1, tmp_path / "plain", *ONE_ANGLE, "-kf_ordering", "scotch", env=env)
@@ -145,6 +150,7 @@ def test_plain_mumps_falls_back(solid, runs, tmp_path):
     same_model(runs["pord"][1], summary)
 
 
+@pytest.mark.mpi
 def test_auto_flex_solver_by_configurations(solid, runs, tmp_path):
     # one angle: monolithic (the runs above); two angles of interest: the system is visited at several configurations
     assert "body-wise" not in runs["auto1"][0]

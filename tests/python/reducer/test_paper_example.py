@@ -142,6 +142,7 @@ def test_report_has_the_papers_tables_beside_kryflexs(demo, galileo):
     assert sorted(p["kept_modes"]) == kept
 
 
+@pytest.mark.mpi
 def test_paper_block_is_the_same_on_two_ranks(demo, tmp_path):
     _, s1 = demo
     s2 = run_reduce(tmp_path / "mpi", ranks=2)

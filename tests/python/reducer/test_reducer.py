@@ -126,6 +126,7 @@ def solved(scenes):
 
 # ================================================================================================ Reducer = kryflex reduce
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("name", ["galileo", "frames"])
 def test_reducer_model_equals_the_command_model(name, ranks, scenes, solved, tmp_path):
@@ -412,6 +413,7 @@ def test_reduce_help_lists_the_reducer_options(flag):
     assert proc.stderr.strip() == ""
 
 
+@pytest.mark.mpi
 def test_reduce_help_under_mpi_prints_once():
     out = run(mpi(2) + [KRYFLEX_CMD, "reduce", "-help"], timeout=60).stdout
     assert out.count("usage: kryflex reduce") == 1 and out.count("-kf_moments <") == 1

@@ -100,6 +100,7 @@ def assert_two_ranks_choose(model, tmp_path, *options):
     assert_same_bodies(two, model, "2 ranks " + " ".join(options))
 
 
+@pytest.mark.mpi
 def test_two_ranks_choose_the_same_sub_basis_model(both, tmp_path):
     assert_two_ranks_choose(both[True][0], tmp_path, "-kf_angles", "45", "-kf_search_sub_bases", "true")
 
@@ -150,6 +151,7 @@ def test_multi_angle_candidates_are_sub_bases_of_every_visit(verify):
     assert_same_bodies(ms, mf, "3 angles")
 
 
+@pytest.mark.mpi
 def test_two_ranks_choose_the_same_multi_angle_sub_basis_model(tmp_path):
     reducer = kryflex.Reducer(kryflex.load_scene(GALILEO), quiet=True, angles="0,45,90", verify=False)
     assert_two_ranks_choose(reducer.reduce().model, tmp_path, "-kf_angles", "0,45,90", "-kf_verify", "false")

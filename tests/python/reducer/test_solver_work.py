@@ -105,6 +105,7 @@ def test_refinement_stops_when_it_stalls_and_says_what_stayed_above(runs):
     assert red.model.sizes == red0.model.sizes
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_unconverged_refinement_is_a_warning_and_in_the_summary(tmp_path, ranks):
     """The same count on 1 and 2 ranks (the residuals are global), the warning printed once."""
@@ -174,6 +175,7 @@ def test_bad_factorization_option_is_named():
         reduce(verify=False, blr=2.0)
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (scripts/setup)")
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_memory_estimate_stops_before_the_factorization(tmp_path, ranks):
@@ -242,6 +244,7 @@ def _reduce_solid(scene, out, ranks, *options):
     return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (scripts/setup)")
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_out_of_core_when_only_that_fits(solid14k, tmp_path, ranks):

@@ -478,6 +478,7 @@ MPI_PROBE = textwrap.dedent("""
     """)
 
 
+@pytest.mark.mpi
 def test_two_ranks_fail_alike(tmp_path):
     """Each bad file under mpiexec -n 2: both ranks raise the same message (no rank fails alone, no hang); a good
     file gives each rank its rows of the same matrix."""
@@ -704,6 +705,7 @@ def test_flipped_bit_fails_its_checksum(model_file, tmp_path):
         kryflex.ReducedModel.load(path)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case", ["newer_format", "K_nan", "extra_body", "damping_text", "M_not_definite"])
 def test_edited_model_exit_5(model_file, tmp_path, case):
     """`kryflex reassemble` refuses an edited model with exit 5, one message, no traceback; so do 2 ranks, alike."""

@@ -20,7 +20,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 GALILEO = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))), "meshes", "galileo", "galileo.yaml")
 GALILEO_DIR = os.path.dirname(GALILEO)
 
-pytestmark = pytest.mark.usefixtures("quiet_library")   # tests/python/conftest.py
+pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]   # tests/python/conftest.py
 
 
 def spec_from_files():
@@ -126,6 +126,7 @@ if PETSc.COMM_WORLD.getRank() == 0:
 """
 
 
+@pytest.mark.mpi
 def test_arrays_on_two_ranks_match_serial():
     import json
     import subprocess

@@ -19,6 +19,8 @@ import kryflex
 from kryflex import _core
 from kryflex.io import scene_schema, yaml_load
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 GALILEO_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))), "meshes", "galileo")
 with open(os.path.join(GALILEO_DIR, "galileo.yaml")) as _f:

@@ -185,6 +185,7 @@ def test_command_refuses_bad_values(tmp_path, args, message):
     assert not out.exists() or not any(p.name.startswith("slew") for p in out.iterdir())
 
 
+@pytest.mark.mpi
 @pytestmark_cli
 def test_command_refuses_several_ranks(tmp_path):
     proc = subprocess.run(["mpiexec", "-n", "2", KRYFLEX, "slew", GALILEO, "-o", str(tmp_path / "o"), "-quiet"],

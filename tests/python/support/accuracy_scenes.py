@@ -10,8 +10,8 @@ Helpers only (no tests): test_accuracy_target.py and accuracy_sweep.py (benchmar
 * DenseReference: the full-order system of a scene at any angles from tests/python/support/reference.py alone (the scene
   file, SciPy, one dense generalized eigendecomposition per configuration), kept as modal data (eigenvalues,
   H Phi, Phi^T G) in memory and in a cache folder, so a 5k-dof frame costs its ~2 min per angle once per session.
-* The accuracy measure of the contract (shared-notes/contract11.md), implemented here in NumPy and not taken from
-  kryflex: the relative H-infinity error per input/output pair on a check grid 4x finer than the reducer's, at the
+* The accuracy measure the reducer promises (the manual's "Accuracy" page), implemented here in NumPy and not
+  taken from kryflex: the relative H-infinity error per input/output pair on a check grid 4x finer than the reducer's, at the
   angles of interest and at every midpoint between consecutive ones.
 
 Nothing here calls kryflex except evaluate_model, which asks a kryflex ReducedModel for its frequency response
@@ -49,8 +49,8 @@ SOLID_REFINE = 0.5
 SOLID_ANGLES = [[0.0], [45.0], [90.0]]
 SOLID_BAND = [0.01, 20.0]
 
-# The contract's defaults, written out: a scene variant states them rather than trusting the schema's defaults of
-# the day (the fixed recipe stays the default while the existing suite moves over).
+# kryflex's default reduction (the accuracy search), written out: a scene variant states it rather than trusting
+# whatever the schema's defaults are, so these scenes keep testing the search if a default changes.
 CONTRACT_REDUCTION = {"moments": "auto", "method": "auto", "search": True, "importance": "band"}
 
 PAIR_FLOOR = 1e-4          # a pair whose peak is below PAIR_FLOOR x the largest pair's peak is measured against that
@@ -71,7 +71,7 @@ def write_variant(base_yaml, out_path, accuracy=None, angles=None, band=None, da
                   verify=None, name=None):
     """A copy of the scene base_yaml at out_path with the keys given replaced, body files by absolute path.
 
-    reduction: None drops the base's reduction section, so the contract's defaults apply (moments auto, method
+    reduction: None drops the base's reduction section, so kryflex's defaults apply (moments auto, method
     auto, search on, importance band); a dict replaces it. verify: None keeps the base's (usually none: defaults).
     Returns out_path."""
     with open(base_yaml) as f:
@@ -247,7 +247,7 @@ class DenseReference:
         return self._responses[key]
 
 
-# ------------------------------------------------------------------ the accuracy measure (contract 11)
+# ------------------------------------------------------------------ the accuracy measure
 
 def check_grid(band_hz, n_log, resonances_hz, zeta, factor=GRID_FACTOR):
     """The check grid: factor x n_log log-spaced points over the band, plus factor x 7 + 1 points over

@@ -1,8 +1,8 @@
 """What every bad-input case shares: the Case record, editing a copy of Galileo, running the command (serial, under
-mpiexec -n 2, or MPMD) with a timeout, and the checks the issue-13 contract asks of every refusal.
+mpiexec -n 2, or MPMD) with a timeout, and the checks every refusal must pass.
 
-The contract (shared-notes/contract13.md) is what is tested, not what today's code does:
-- exit code from one table (2 input, 3 numeric, 4 output, 5 model file, 6 target missed, 130 SIGINT, 143 SIGTERM);
+What a refusal must do is tested, not what today's code does:
+- exit code from one table (the manual's "Troubleshooting and exit codes") (2 input, 3 numeric, 4 output, 5 model file, 6 target missed, 130 SIGINT, 143 SIGTERM);
 - one line `kryflex: error: <message>` on stderr, printed once whatever the number of ranks, no traceback;
 - the message names the entry/file and the offending value, and says what to do;
 - no partial output: an OUT that did not exist does not exist after; an OUT holding earlier results is
@@ -29,7 +29,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
            PYTHONPATH=os.path.join(ROOT, "python") + (":" + os.environ["PYTHONPATH"] if os.environ.get("PYTHONPATH") else ""))
 
-# the contract's exit-code table (python/kryflex/cli/common.py will hold the same constants)
+# the documented exit-code table (python/kryflex/cli/common.py holds the same constants)
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL, EXIT_TARGET = 0, 1, 2, 3, 4, 5, 6
 EXIT_SIGINT, EXIT_SIGTERM = 130, 143
 
@@ -54,7 +54,7 @@ class Case:
     cls, name   the class (scene, file, model, cli, env, mpi, target) and a readable name: the test id is cls-name-npN
     prepare     prepare(ctx): breaks the fresh copy of Galileo in ctx.dir (None: leave it as it is)
     argv        the command after 'kryflex', with {scene} {out} {dir} {model} {cache} placeholders
-    code        the contract's exit code
+    code        the documented exit code
     mentions    what the message must name (case-insensitive substrings; 're:...' is a regular expression)
     fix         a pattern saying what to do (default: any imperative opening a clause)
     out         'none' (the command writes nothing), 'absent' (OUT does not exist before: not after either),
@@ -395,7 +395,7 @@ def describe(o):
 
 
 def check_outcome(case, ctx, o):
-    """Everything the contract asks of the command's run."""
+    """Everything a refusal must do, checked on the command's run."""
     if o.hang:
         raise AssertionError("hang: no exit within %d s\n%s" % (case.timeout, describe(o)))
     assert "Traceback" not in o.stderr + o.stdout, "a traceback instead of a message\n" + describe(o)
@@ -483,7 +483,7 @@ def check_api(case, ctx):
                 assert isinstance(e, ValueError)
                 check_message(str(e), case, "kryflex.load_scene", ctx.dir)
                 return
-            except Exception as e:  # noqa: BLE001 - the contract: SceneError, nothing else
+            except Exception as e:  # noqa: BLE001 - a bad scene raises SceneError, nothing else
                 raise AssertionError("kryflex.load_scene raised %s, expected kryflex.SceneError: %s"
                                      % (type(e).__name__, str(e)[:500]))
             raise AssertionError("kryflex.load_scene accepted the bad scene")

@@ -28,7 +28,7 @@ Objective (scipy.optimize.least_squares, 'trf'), in three stages, plus a small p
 
 A stage's result is kept only when the band's frequencies at 0 deg stay within 0.5 % of Table 1. The run is
 deterministic for a given seed (and LAPACK); fit.json keeps the parameters with 17 digits, so the model is rebuilt
-from fit.json, never refitted at run time. tests/python/test_paper_example.py checks the committed model against
+from fit.json, never refitted at run time. tests/python/reducer/test_paper_example.py checks the committed model against
 Table 1 with an independent dense eigensolve.
 """
 import argparse

@@ -1,5 +1,10 @@
-"""Fixtures shared by the Python test modules."""
+"""Fixtures shared by the Python test modules, and the helpers' folder (support/) on sys.path for every module."""
+import os
+import sys
+
 import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
 
 import kryflex  # noqa: F401  (first: the tests see the MUMPS the kryflex command uses, whoever imports petsc4py)
 

@@ -29,7 +29,7 @@ RECORD = 4096                 # bytes per rank in an agreement: the code, then t
 
 # -kf_ options read after the reducer's own (KFReducerSetFromOptions, which also reads and checks those of the solve's
 # stages), by the views, the eigenvector baseline and this command: not unknown when unused before the solve.
-# tests/python/test_collective_errors.py checks the list against the C sources.
+# tests/python/commands/test_collective_errors.py checks the list against the C sources.
 LATER_OPTIONS = ("kf_quiet", "kf_reducer_view", "kf_reducer_view_pre", "kf_model_view", "kf_eigen_cover",
                  "kf_error_agreement_timeout")
 # option prefixes of PETSc/SLEPc objects the library configures (the verification eigensolver: -kf_verify_eps_...)

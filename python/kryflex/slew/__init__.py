@@ -11,5 +11,5 @@ against the slew rate.
     exudyn_check.py  Exudyn: the same linear equations (exudyn_history), and the reduced bodies as nonlinear
                    floating-frame bodies against the full model along Exudyn's angle history (ffrf_comparison)
 
-The command is `kryflex slew SCENE -o OUTDIR` (cli/slew.py); scripts/bench-slew runs it on Galileo and a frame scene.
+The command is `kryflex slew SCENE -o OUTDIR` (cli/slew.py); benchmarks/slew/bench-slew runs it on Galileo and a frame scene.
 """

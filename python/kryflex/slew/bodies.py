@@ -6,7 +6,7 @@ things: block-diagonal M, K (sparse), the stacked inputs G (N x a) and outputs H
 I (6 per interface, stacked: the rows the reassembly ties, eq. 20) and the bodies' rigid motions (N x 6 per body).
 The joint ties at angles alpha are D(alpha) = T(alpha) I, with T(alpha) the small matrix of the ties on the interface
 rows: translations u_p - R u_c, rotations across the axis (revolute) or fully (fixed), R = R(alpha) from the C
-library's KFJointRotation; the same rows C's KFReassemble builds (tests/python/test_slew.py checks that the null
+library's KFJointRotation; the same rows C's KFReassemble builds (tests/python/slew/test_slew.py checks that the null
 space of D(alpha) gives C's reassembled frequencies). Full and reduced models go through the same code.
 """
 import numpy as np

@@ -7,7 +7,7 @@ M, K, C and the drive as its force user function, an ObjectConnectorCoordinateVe
 and Jacobian user functions are D(alpha(t)) z and D(alpha(t))) and integrated by Exudyn's own solver (generalized-
 alpha, index 3, fixed step), so that the check shares the equations, not the integration, with integrator.py: with
 spectral radius 1 Exudyn's rule is the trapezoidal one, so at the same step the histories must agree to round-off
-(tests/python/test_slew.py; `kryflex slew --exudyn-check` reports it for the fastest slew). Exudyn models the
+(tests/python/slew/test_slew.py; `kryflex slew --exudyn-check` reports it for the fastest slew). Exudyn models the
 slewing structure this way because the study's model is linear time-varying by design (README: slewing).
 
     t, y = exudyn_history(bodies, profile, t_end, h, damping_beta)
@@ -15,7 +15,7 @@ slewing structure this way because the study's model is linear time-varying by d
 The second check (issue 15 item 2) is physical: the REDUCED bodies as Exudyn floating-frame bodies
 (kryflex.export.exudyn.build_mbs, ObjectFFRFreducedOrder: the nonlinear terms the linear time-varying study leaves
 out) slewed by the bearing torque, against integrator.py's full and reduced bodies along the angle history Exudyn
-produced (`kryflex slew --exudyn-ffrf`, scripts/bench-slew-exudyn, tests/python/test_slew_exudyn.py):
+produced (`kryflex slew --exudyn-ffrf`, benchmarks/slew-exudyn/bench-slew-exudyn, tests/python/slew/test_slew_exudyn.py):
 
     r = ffrf_comparison(study, periods)      # r["exudyn_vs_full"], r["reduced_vs_full"], r["exudyn_vs_reduced"]
 """

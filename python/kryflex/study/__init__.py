@@ -11,8 +11,8 @@ measured against ONE full-order reference, on the C reducer and the C error meas
 
 Orchestration only: the reductions, the reassembled responses, the errors and the Hankel singular values come from
 the C library through the binding (kryflex._core); this package chooses the runs, times them and lays the numbers
-out. `kryflex study` (cli/study.py) is the command; scripts/bench-accuracy runs it on Galileo and the stress scenes
-(meshes/stress.py) and builds the failure table (failures.py); scripts/bench-estimator runs the estimator check on
+out. `kryflex study` (cli/study.py) is the command; benchmarks/accuracy/bench-accuracy runs it on Galileo and the stress scenes
+(meshes/stress.py) and builds the failure table (failures.py); benchmarks/estimator/bench-estimator runs the estimator check on
 Galileo and a 5k-dof frame and tabulates it (estimator_table.py).
 """
 from .sweep import CSV_FIELDS, METHODS, Study  # noqa: F401

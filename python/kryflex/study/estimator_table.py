@@ -1,4 +1,4 @@
-"""The estimator's figures across scenes (scripts/bench-estimator), from the estimator.csv and study.md of each
+"""The estimator's figures across scenes (benchmarks/estimator/bench-estimator), from the estimator.csv and study.md of each
 `kryflex study` run:
 
     /usr/bin/python3 -m kryflex.study.estimator_table NAME=STUDY_DIR ... > summary.md

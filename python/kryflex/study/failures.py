@@ -1,5 +1,5 @@
 """The failure table of the stress study (issue 11, item 5), from the study.csv of each stress scene and the exit of
-`kryflex reduce` on it (scripts/bench-accuracy runs both):
+`kryflex reduce` on it (benchmarks/accuracy/bench-accuracy runs both):
 
     /usr/bin/python3 -m kryflex.study.failures NAME=STUDY_DIR:EXIT_CODE:REASON_FILE ... > failure-table.md
 

@@ -116,7 +116,8 @@ static PetscErrorCode KFShiftVisitCreate(KFReducer r, KFSystem sys, const KFVisi
 }
 
 /* The frequency (rad/s) of a candidate's largest error: over the evaluation points, the pairs (each against its own
-   peak, with a floor of 1e-4 of the largest pair's) and the points of the grid. Replicated data only: every rank
+   elastic peak, the response less its rigid part H Phir Phir^T G / (-w^2) where the full-order reference has it, with
+   a floor of 1e-4 of the largest pair's) and the points of the grid. Replicated data only: every rank
    finds the same. */
 static PetscErrorCode KFWorstFrequency(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], const KFCandidate *cand, PetscReal *wworst)
 {
@@ -138,9 +139,13 @@ static PetscErrorCode KFWorstFrequency(KFReducer r, KFVisit visits[], PetscInt n
     PetscCall(KFReducedModelReassemble(model, p->angles, &rs));
     PetscCall(KFEvalPointErrors_Private(r, p, rs, &hinf, NULL, re, im));
     PetscCall(KFReducedSystemDestroy(&rs));
-    for (PetscInt q = 0; q < t * a; q++) {
+    for (PetscInt q = 0; q < t * a; q++) { /* the pair's elastic peak: its rigid part, when the reference has it, out */
+      PetscReal rig = 0;
+
+      if (p->ref.w2 && p->ref.r)
+        for (PetscInt k = 0; k < p->ref.r; k++) rig += p->ref.HPr[q % t + k * t] * p->ref.PrG[k + (q / t) * p->ref.r];
       peak[q] = 0;
-      for (PetscInt f = 0; f < p->nw; f++) peak[q] = PetscMax(peak[q], PetscHypotReal(p->Tre[f * t * a + q], p->Tim[f * t * a + q]));
+      for (PetscInt f = 0; f < p->nw; f++) peak[q] = PetscMax(peak[q], PetscHypotReal(p->Tre[f * t * a + q] + rig / PetscSqr(p->w[f]), p->Tim[f * t * a + q]));
       pmax = PetscMax(pmax, peak[q]);
     }
     for (PetscInt q = 0; q < t * a; q++) {
@@ -286,7 +291,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
   for (PetscInt c0 = 1; c0 <= cmax; c0++) {
     PetscInt np = 0, used[KF_MAX_EXPANSION];
 
-    if (c0 == cmax && base_passes) break; /* the moment-only model at cmax already passes: no smaller with points */
+    if (c0 == cmax && base_passes && !r->shift_family_only) break; /* the moment-only model at cmax passes: no smaller with points */
     for (;;) {
       KFCandidate cand = {0};
       PetscReal   w = 0, fhz;
@@ -358,7 +363,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
     PetscCall(KFReducerResultSet_Private(r, -1, "shift_search", 2, shape, tab.rows));
   }
   PetscCall(KFReducerResultScalar_Private(r, -1, "shift_factorizations_spent", (PetscReal)spent));
-  if (best.nexp && (!base_passes || best.size < base->size)) {
+  if (best.nexp && (!base_passes || best.size < base->size || r->shift_family_only)) {
     const PetscInt shape[1] = {best_np};
 
     *base = best;

@@ -89,6 +89,7 @@ struct _p_KFReducer {
   PetscInt        max_factorizations; /* expansion points inside the band: factorizations the search may spend on them
                                          (-kf_max_factorizations, 0: moments at zero only) */
   PetscInt        shift_blocks;   /* Krylov blocks per expansion point inside the band (-kf_shift_blocks) */
+  PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
 

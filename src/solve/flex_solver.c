@@ -506,6 +506,7 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     sys->nfactor++;
   }
   PetscCheck(solver->negative_pivots == 0 || solver->shift < 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
+  PetscCheck(solver->null_pivots == 0 || solver->shift >= 0, s->comm, PETSC_ERR_ARG_WRONG, "the expansion point sigma = %g (%g Hz) is a natural frequency of the structure: K - sigma M is singular (MUMPS found %" PetscInt_FMT " null pivots). Move the point off the resonance", (double)-solver->shift, (double)(PetscSqrtReal(-solver->shift) / (2 * PETSC_PI)), solver->null_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes that geometry, joints and boundary conditions give: a mechanism nothing declares (an unconnected dof, a missing tie, a body in pieces, a support missing from the scene's constraints). Fix the model, or declare the joint or constraint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
 

@@ -15,8 +15,6 @@
 #include <kryflex/reducerimpl.h>
 #include <kryflex/krylovimpl.h>
 
-PETSC_INTERN PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver, PetscReal sigma);
-
 typedef struct {
   PetscInt   n, nalloc;
   PetscReal *rows; /* 6 per row: moments at zero, points, reduced dofs, system dofs, error, factorizations spent */

@@ -49,7 +49,7 @@ PetscErrorCode KFFlexSolverSetShift(KFFlexSolver solver, PetscReal shift)
 /* An expansion point inside the band: factor K_S - sigma M_S (sigma > 0), indefinite, by MUMPS' LDL^T with pivoting
    (SYM=2); the solve then gives the Krylov blocks of (K - sigma M)^-1 M at sigma (src/krylov/shifted.c). The
    shift is stored as -sigma: what is factored is always K + shift M. */
-PETSC_INTERN PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver solver, PetscReal sigma)
+PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver solver, PetscReal sigma)
 {
   PetscFunctionBegin;
   PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the shift before KFFlexSolverSetUp()");

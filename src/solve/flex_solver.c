@@ -21,6 +21,7 @@ static PetscErrorCode KFFlexSolverCreateOptions(MPI_Comm comm, PetscReal *shift,
   PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", *refine, refine, refine_set));
   PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", *rtol, rtol, NULL));
   PetscOptionsEnd();
+  PetscCheck(*shift >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift must be >= 0 (K + shift M must be positive definite; expansion points inside the band are -kf_max_factorizations); got %g", (double)*shift);
   PetscCheck(*refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, *refine);
   PetscCheck(*rtol >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)*rtol);
   PetscFunctionReturn(0);

@@ -67,7 +67,7 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     """A model with points (the family forced, so that it is the one measured): its points lie in the band, their
     factorizations are reported and within the cap, L^0 is exact, and its elastic error is measured independently."""
     path, dense = solid
-    red = reduce(path, accuracy=1e-5, max_factorizations=MAXF, shift_family_only=True)
+    red = reduce(path, accuracy=1e-4, max_factorizations=MAXF, shift_family_only=True)
     c = red.summary["chosen"]
     points = c["expansion_points_hz"]
     print("points %s Hz, %d factorizations, spent %d" % (points, c["expansion_point_factorizations"],
@@ -81,15 +81,16 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     err = static_error(red.model, dense, SOLID_ANGLES[0])
     el, tot = em.errors(red.model, dense, SOLID_ANGLES, SOLID_BAND, ZETA)
     L0p = red.model.at(SOLID_ANGLES[0]).moments(1)[0]
-    L0m = reduce(path, accuracy=1e-5).model.at(SOLID_ANGLES[0]).moments(1)[0]
+    L0m = reduce(path, accuracy=1e-4).model.at(SOLID_ANGLES[0]).moments(1)[0]
     same = float(np.linalg.norm(L0p - L0m) / np.linalg.norm(L0m))
     print("L0 relative error %.2e (against the moment-only model's %.2e); elastic %.2e, total %.2e, kryflex's %.2e"
           % (err, same, el, tot, c["worst_error"]))
     assert err <= STATIC_RTOL
     assert same <= STATIC_SAME
-    # the model kryflex measured is the one the dense reference measures: its own figure holds (to the grid's
-    # refinement) on the independent total measure
-    assert tot <= 1e-5 * 1.05
+    # the model kryflex measured is the one the dense reference measures: its verdict holds (to the grids' 5 %) on
+    # the independent measure of the same kind (total here; elastic where kryflex's search measures it)
+    measure = red.summary.get("accuracy_measure", "total")
+    assert (el if measure == "elastic" else tot) <= 1e-4 * 1.05
 
 
 def test_a_point_at_the_largest_error_lowers_it(solid):
@@ -179,7 +180,7 @@ def test_bad_budget_exits_2_naming_the_option(solid, tmp_path):
 TWO_RANKS = r"""
 import json, sys
 import kryflex
-red = kryflex.reduce(kryflex.load_scene(sys.argv[1]), quiet=True, accuracy=1e-5, max_factorizations=4,
+red = kryflex.reduce(kryflex.load_scene(sys.argv[1]), quiet=True, accuracy=1e-4, max_factorizations=4,
                      shift_family_only=True)
 from mpi4py import MPI
 if MPI.COMM_WORLD.rank == 0:

@@ -117,6 +117,8 @@ typedef struct _n_KFFlexSolver *KFFlexSolver;
    -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
 PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
+/* an expansion point inside the band: the solver applies (K_S - sigma M_S)^-1 (sigma > 0, indefinite, MUMPS LDL^T) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver, PetscReal sigma);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetUp(KFFlexSolver);
 /* X = K+ B for a block of right-hand sides (e x p dense) */
 PETSC_EXTERN PetscErrorCode KFFlexSolverApply(KFFlexSolver, Mat B, Mat X);

@@ -500,3 +500,47 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   *Vout           = V;
   PetscFunctionReturn(0);
 }
+
+/* One M-orthonormal basis of the leading m[i] columns of each of n bases of one system (the blocks at zero first, then
+   those of expansion points inside the band, src/reducer/shifts.c): appended in order with the rigid modes projected
+   out again, columns that depend on those before deflated. info: its health and Gram matrix (block_end NULL). */
+PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n, BV Vs[], const PetscInt m[], PetscReal tol, BV *Vout, KFKrylovInfo *info)
+{
+  KFScene      s     = sys->scene;
+  PetscInt     total = 0, ndefl = 0;
+  BV           V;
+  KFMBasis     basis;
+  KFRigidSpace rs;
+
+  PetscFunctionBegin;
+  for (PetscInt i = 0; i < n; i++) total += m[i];
+  PetscCall(PetscMemzero(info, sizeof(*info)));
+  PetscCall(BVCreate(s->comm, &V));
+  PetscCall(BVSetSizes(V, s->nsys_local, s->nsys, PetscMax(total, 1)));
+  PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
+  PetscCall(BVSetFromOptions(V));
+  PetscCall(KFMBasisCreate(V, &basis));
+  rs.sys  = sys;
+  rs.MPhi = NULL;
+  PetscCall(MatGetSize(sys->Phi, NULL, &rs.r));
+  PetscCall(KFSystemGetMPhi(sys, &rs.MPhi));
+  for (PetscInt i = 0; i < n; i++) {
+    Mat      A;
+    PetscInt l0, k0;
+
+    if (!m[i]) continue;
+    PetscCall(BVGetActiveColumns(Vs[i], &l0, &k0));
+    PetscCall(BVSetActiveColumns(Vs[i], 0, m[i]));
+    PetscCall(BVGetMat(Vs[i], &A));
+    PetscCall(KFMBasisAppend(&rs, &basis, A, 0, m[i], NULL, tol, &ndefl));
+    PetscCall(BVRestoreMat(Vs[i], &A));
+    PetscCall(BVSetActiveColumns(Vs[i], l0, k0));
+  }
+  PetscCall(PetscFree(basis.MV));
+  PetscCall(BVSetActiveColumns(V, 0, basis.k));
+  PetscCall(KFKrylovHealth(sys, V, basis.k, &info->rigid_content, &info->orthogonality, &info->gram));
+  PetscCall(BVSetActiveColumns(V, 0, basis.k));
+  info->ndeflated = ndefl;
+  *Vout           = V;
+  PetscFunctionReturn(0);
+}

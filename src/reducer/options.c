@@ -156,6 +156,11 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     PetscCall(KFReducerSetSearch(r, search, mmax));
     PetscCall(PetscOptionsReal("-kf_cluster_rtol", "Krylov modes this close in frequency (relative) are kept or dropped together", "KFReducerSetClusterTolerance", crtol, &crtol, NULL));
     PetscCall(KFReducerSetClusterTolerance(r, crtol));
+    PetscCall(PetscOptionsInt("-kf_max_factorizations", "Expansion points inside the band: the most sparse factorizations of K - sigma M the accuracy search may spend on them, one per point and expansion angle (0: moments at zero only)", "KFReducerSolve", r->max_factorizations, &r->max_factorizations, NULL));
+    PetscCheck(r->max_factorizations >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_max_factorizations is a number of factorizations, 0 or more (0: no expansion point inside the band); got %" PetscInt_FMT, r->max_factorizations);
+    PetscCall(PetscOptionsInt("-kf_shift_blocks", "Krylov blocks at each expansion point inside the band: 1 input block, 2 input and output blocks, more: further input blocks of (K - sigma M)^-1 M (default 3)", "KFReducerSolve", r->shift_blocks, &r->shift_blocks, NULL));
+    PetscCall(PetscOptionsBool("-kf_shift_family_only", "With -kf_max_factorizations: the smallest model with expansion points inside the band is chosen even when a moment-only model is as small (to compare the families: kryflex study, benchmarks)", "KFReducerSolve", r->shift_family_only, &r->shift_family_only, NULL));
+    PetscCheck(r->shift_blocks >= 1 && r->shift_blocks <= 100, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift_blocks is a number of Krylov blocks per expansion point, 1 to 100; got %" PetscInt_FMT, r->shift_blocks);
   }
   importance = (PetscInt)r->importance;
   keep       = r->keep_threshold;

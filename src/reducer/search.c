@@ -147,6 +147,17 @@ static PetscErrorCode KFShareBodies(KFReducer r, KFVisit visits[], PetscInt neva
   PetscFunctionReturn(0);
 }
 
+/* KFShareBodies for a model found elsewhere (src/reducer/shifts.c): its rows are not recorded */
+PetscErrorCode KFReducerShareBodies_Private(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *best)
+{
+  KFSearchTable tab = {0, 0, NULL};
+
+  PetscFunctionBegin;
+  PetscCall(KFShareBodies(r, visits, neval, evals, &tab, best));
+  PetscCall(PetscFree(tab.rows));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows)
 {
   KFSearchTable tab  = {0, 0, NULL};

@@ -625,7 +625,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscCall(KFFlexSolverDestroy(&solver));
   }
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &times[6]));
-  PetscCall(KFSystemDestroy(&sys));
+  if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
   if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
     KFCandidate    rich = {0};
     KFReducedModel model;
@@ -662,6 +662,8 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducerSearch_Private(r, nc, visits, neval, evals, &single, &multi, &nrows, &rows));
+  PetscCall(KFReducerSearchShifts_Private(r, sys, &nc, &visits, neval, evals, &single, &multi, &nrows, &rows));
+  PetscCall(KFSystemDestroy(&sys));
   {
     const PetscInt shape[2] = {7, nrows};
 

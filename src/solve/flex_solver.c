@@ -21,6 +21,7 @@ static PetscErrorCode KFFlexSolverCreateOptions(MPI_Comm comm, PetscReal *shift,
   PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", *refine, refine, refine_set));
   PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", *rtol, rtol, NULL));
   PetscOptionsEnd();
+  PetscCheck(*shift >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift must be >= 0 (K + shift M must be positive definite; expansion points inside the band are -kf_max_factorizations); got %g", (double)*shift);
   PetscCheck(*refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, *refine);
   PetscCheck(*rtol >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)*rtol);
   PetscFunctionReturn(0);
@@ -43,6 +44,18 @@ PetscErrorCode KFFlexSolverSetShift(KFFlexSolver solver, PetscReal shift)
   PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the shift before KFFlexSolverSetUp()");
   PetscCheck(shift >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)shift);
   solver->shift = shift;
+  PetscFunctionReturn(0);
+}
+
+/* An expansion point inside the band: factor K_S - sigma M_S (sigma > 0), indefinite, by MUMPS' LDL^T with pivoting
+   (SYM=2); the solve then gives the Krylov blocks of (K - sigma M)^-1 M at sigma (src/krylov/shifted.c). The
+   shift is stored as -sigma: what is factored is always K + shift M. */
+PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver solver, PetscReal sigma)
+{
+  PetscFunctionBegin;
+  PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the shift before KFFlexSolverSetUp()");
+  PetscCheck(sigma > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "an expansion point inside the band is a positive sigma = (2 pi f)^2; got %g", (double)sigma);
+  solver->shift = -sigma;
   PetscFunctionReturn(0);
 }
 
@@ -345,7 +358,12 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
 
   PetscFunctionBegin;
   if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), &c));
-  if (c.spd) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE));
+  {
+    PetscBool known, spd;
+
+    PetscCall(MatIsSPDKnown(A, &known, &spd));
+    if (c.spd && !(known && !spd)) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE)); /* an interior shift is known indefinite */
+  }
   PetscCall(MatFactorInfoInitialize(&info));
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
@@ -450,15 +468,16 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscFunctionBegin;
   if (solver->setup) PetscFunctionReturn(0);
   PetscCall(KFFlexSolverRefineSteps(solver));
-  PetscCheck(solver->shift >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)solver->shift);
-  PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
+  /* a negative shift is an expansion point inside the band (KFFlexSolverSetInteriorShift): monolithic, indefinite */
+  if (solver->shift >= 0) PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
   solver->setup = (PetscBool)(solver->bw != NULL);
   if (solver->setup) PetscFunctionReturn(0);
   PetscCall(KFSystemComputeRigidModes(sys));
   PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
-  if (solver->shift > 0) {
+  if (solver->shift != 0) {
     PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
     PetscCall(MatAXPY(solver->Kh, solver->shift, sys->Ms, UNKNOWN_NONZERO_PATTERN));
+    if (solver->shift < 0) PetscCall(MatSetOption(solver->Kh, MAT_SPD, PETSC_FALSE)); /* never SYM=1 (-kf_spd) */
   } else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
     Vec       d;
     PetscReal dsum;
@@ -487,7 +506,8 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
     solver->perf.factor_seconds += t1 - t0;
     sys->nfactor++;
   }
-  PetscCheck(solver->negative_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
+  PetscCheck(solver->negative_pivots == 0 || solver->shift < 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
+  PetscCheck(solver->null_pivots == 0 || solver->shift >= 0, s->comm, PETSC_ERR_ARG_WRONG, "the expansion point sigma = %g (%g Hz) is a natural frequency of the structure: K - sigma M is singular (MUMPS found %" PetscInt_FMT " null pivots). Move the point off the resonance", (double)-solver->shift, (double)(PetscSqrtReal(-solver->shift) / (2 * PETSC_PI)), solver->null_pivots);
   PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes that geometry, joints and boundary conditions give: a mechanism nothing declares (an unconnected dof, a missing tie, a body in pieces, a support missing from the scene's constraints). Fix the model, or declare the joint or constraint", solver->null_pivots, sys->nrigid);
   PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
 

@@ -32,6 +32,10 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "search": [{"family": "single-angle" | "multi-angle", "moments": c, "kept_clusters": int | "per body" | None (all),
              "expansion_angles": n, "reduced_dofs": n (sum over bodies), "max_system_dofs": n, "error": e}]
            (C search_table, one row per candidate evaluated), "search_chosen": row index of the chosen model | None,
+ "expansion_point_search": {"factorizations_spent": n (C shift_factorizations_spent),
+                            "rows": [{"moments", "points", "reduced_dofs", "system_dofs", "error",
+                                      "factorizations_spent"}] (C shift_search)} (opt; -kf_max_factorizations;
+           the chosen model's "expansion_points_hz": [f] and "expansion_point_factorizations": n are in "chosen"),
  "hankel": {<label>: {"order": r (C hankel_order: first-order states the target needs),
                       "singular_values": [descending] (C hankel_singular_values)}},
  -- the paper's study --

@@ -67,6 +67,11 @@ def _chosen_sentence(c):
     system = [v for v in (ch.get("system_dofs") or {}).values() if v is not None]
     if system:
         parts.append(f"{max(system)} system dofs at most after reassembly")
+    points = ch.get("expansion_points_hz") or []
+    if points:   # docs/guide/expansion-points.md: their blocks beside those at zero, one factorization each
+        parts.append("expansion points inside the band at " + ", ".join(f"{f:.4g}" for f in points)
+                     + f" Hz ({ch.get('expansion_point_factorizations', 0)} factorizations of K - sigma M"
+                     + " beside those at zero)")
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."
 
 

@@ -120,6 +120,18 @@ def _search_rows(table):
     return rows
 
 
+def _shift_rows(table):
+    """The rows of the shift_search result (6 x ncand): moments at zero, points, dofs, error, factorizations spent."""
+    if table is None:
+        return []
+    table = np.asarray(table, dtype=float)
+    if table.ndim != 2 or table.shape[0] != 6:       # C records it 6 x ncand: one column per candidate
+        return []
+    table = table.T
+    names = ("moments", "points", "reduced_dofs", "system_dofs", "error", "factorizations_spent")
+    return [{n: (_none(v) if n == "error" else int(v)) for n, v in zip(names, row)} for row in table]
+
+
 def _chosen_row(rows, method, moments, dofs):
     """Index of the search row of the chosen model (its family, moments and reduced dofs; the smallest error among
     equal ones), or None when no row matches (the search was off, or an older C library)."""
@@ -197,6 +209,15 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         "kept_modes": None if is_multi else _ints(reducer.result(-1, "kept_modes")),
         "frf_error": errors, "frf_pointwise_error": pointwise,
         "worst_error": worst, "worst_where": where, "worst_kind": kind}
+    # expansion points inside the band (-kf_max_factorizations): where the chosen model's shifted blocks were
+    # expanded and what they cost in factorizations of K - sigma M (one per point and expansion angle)
+    points = _optional(reducer, -1, "expansion_points_hz", whole)
+    out["chosen"]["expansion_points_hz"] = [] if points is None else [float(f) for f in np.ravel(points)]
+    out["chosen"]["expansion_point_factorizations"] = \
+        _optional_scalar(reducer, -1, "expansion_point_factorizations", whole, int) or 0
+    out["expansion_point_search"] = {
+        "factorizations_spent": _optional_scalar(reducer, -1, "shift_factorizations_spent", whole, int) or 0,
+        "rows": _shift_rows(_optional(reducer, -1, "shift_search", whole))}
     out["midpoints"] = midpoints
     out["search"] = rows
     out["search_chosen"] = row

@@ -9,7 +9,8 @@ import numpy as np
 from .sweep import CSV_FIELDS, LABELS, METHODS
 
 STYLES = {"krylov-single": ("tab:blue", "o", "-"), "krylov-multi": ("tab:green", "s", "-"),
-          "krylov-paper": ("tab:purple", "v", ":"), "eigen-static": ("tab:orange", "^", "--"),
+          "krylov-paper": ("tab:purple", "v", ":"), "krylov-search": ("tab:cyan", "D", "-"),
+          "krylov-points": ("tab:olive", "P", "-"), "eigen-static": ("tab:orange", "^", "--"),
           "eigen-plain": ("tab:brown", "D", "--"), "krylov-raw": ("tab:gray", "x", "-."),
           "kryflex": ("tab:red", "*", "")}
 FLOOR = 1e-16        # an exact (zero) error drawn on the floor of the log axis

@@ -15,6 +15,9 @@ Methods (METHODS), each a sweep of its size parameter:
   eigen-plain     the modal baseline without static correction
   krylov-raw      the raw recurrence of the paper's eq. (9) (-kf_krylov_raw), c = 1..cmax, when the C library has it
   kryflex         the reducer's own choice with the scene's accuracy (its defaults): one point, marked on the charts
+  krylov-search   the accuracy search over moments at zero alone, over the accuracy targets ACCURACY_SWEEP
+  krylov-points   the accuracy search with expansion points inside the band (-kf_max_factorizations POINT_FACTORIZATIONS,
+                  the family forced: -kf_shift_family_only), over the same targets; when the C library has them
 """
 import math
 import time
@@ -23,11 +26,16 @@ import numpy as np
 
 from .. import _core
 
-METHODS = ("krylov-single", "krylov-multi", "krylov-paper", "eigen-static", "eigen-plain", "krylov-raw", "kryflex")
+METHODS = ("krylov-single", "krylov-multi", "krylov-paper", "eigen-static", "eigen-plain", "krylov-raw", "krylov-search",
+           "krylov-points", "kryflex")
 LABELS = {"krylov-single": "Krylov single-angle, fixed c", "krylov-multi": "Krylov multi-angle, fixed c",
           "krylov-paper": "Krylov single-angle, fixed c, scene's keep_threshold",
           "eigen-static": "modal + static correction", "eigen-plain": "modal, no static correction",
-          "krylov-raw": "raw recurrence (eq. 9)", "kryflex": "kryflex's choice"}
+          "krylov-raw": "raw recurrence (eq. 9)", "krylov-search": "Krylov search, moments at zero",
+          "krylov-points": "Krylov search, expansion points in the band", "kryflex": "kryflex's choice"}
+# the accuracy targets the two search families are run at, and the factorizations the points may spend
+ACCURACY_SWEEP = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 1e-6)
+POINT_FACTORIZATIONS = 6
 EIGEN_COVERS = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0)
 CSV_FIELDS = ("method", "parameter", "size_dofs", "system_dofs", "error_hinf", "error_pointwise", "seconds", "chosen",
               "worst_angle_deg", "flexible_dofs", "min_frequency_ratio", "moment_error", "gram_condition",
@@ -47,6 +55,7 @@ def features():
     from ..cli.common import reducer_option_names
     names = set(reducer_option_names())
     return {"search": "kf_search" in names, "krylov_raw": "kf_krylov_raw" in names,
+            "points": "kf_max_factorizations" in names,
             "frf_errors": hasattr(_core, "frf_errors"), "modal_hsv": hasattr(_core, "modal_hankel_singular_values"),
             "option_names": sorted(names)}
 
@@ -122,12 +131,23 @@ class Study:
                     out.append((method, cover, dict(reducer_type="eigen", eigen_cover=cover, keep_threshold=0.0,
                                                     importance="h2",
                                                     static_correction=method == "eigen-static")))
+            elif method in ("krylov-search", "krylov-points"):
+                if not self.features["search"] or (method == "krylov-points" and not self.features.get("points")):
+                    continue
+                for acc in ACCURACY_SWEEP:   # the search measures against the full order: verification on
+                    opts = dict(search=True, accuracy=acc, verify=True)
+                    if method == "krylov-points":
+                        opts.update(max_factorizations=POINT_FACTORIZATIONS, shift_family_only=True)
+                    out.append((method, acc, opts))
             elif method == "kryflex":
                 out.append((method, "default", dict(search=True) if self.features["search"] else {}))
         return out
 
     def skipped(self):
         """Rows for the methods the C library does not offer yet (a note in the CSV instead of a curve)."""
+        if "krylov-points" in self.methods and not self.features.get("points"):
+            return [_row("krylov-points", "", note="skipped: the C library has no -kf_max_factorizations (expansion "
+                                                   "points inside the band)")]
         if "krylov-raw" in self.methods and not self.features["krylov_raw"]:
             return [_row("krylov-raw", "", note="skipped: the C library has no -kf_krylov_raw yet (the raw "
                                                 "recurrence of eq. 9 arrives with the issue-11 Krylov changes)")]
@@ -207,7 +227,7 @@ class Study:
         """(worst relative error of the c moments the basis matches exactly, Gram condition of the raw recurrence)
         at the expansion angle, from the reducer's own results; NaN for the modal baseline and where not recorded.
         The fixed-c single-angle basis matches c moments at alpha_G; the multi-angle basis c at each of its angles."""
-        if not method.startswith("krylov"):
+        if not method.startswith("krylov") or method in ("krylov-search", "krylov-points"):  # sized by the search
             return math.nan, math.nan
         whole = reducer.result_names(-1)
         if "reduction_config" not in whole:

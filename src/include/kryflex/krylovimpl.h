@@ -22,4 +22,6 @@ PETSC_INTERN PetscErrorCode KFDampedChainDestroy_Private(KFDampedChain *);
 /* KFKrylovBasisWithInfo with the damped input chain when d is not NULL */
 PETSC_INTERN PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *d, BV *V, KFKrylovInfo *info);
 
+/* one basis of the leading m[i] columns of n bases of the system, in order (src/reducer/shifts.c) */
+PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem, PetscInt n, BV Vs[], const PetscInt m[], PetscReal tol, BV *V, KFKrylovInfo *info);
 #endif

@@ -88,6 +88,10 @@ struct _p_KFReducer {
   PetscBool       full_moments, full_moments_set; /* full-order moments by solves: -kf_full_moments, default -kf_verify */
   KFFlexSolverPerf perf;          /* the flexible solvers' work during the solve, summed (KFReducerAddPerf_Private) */
   PetscInt        build_moments;  /* blocks the implementation builds for this solve (moments, or moments_max) */
+  PetscInt        max_factorizations; /* expansion points inside the band: factorizations the search may spend on them
+                                         (-kf_max_factorizations, 0: moments at zero only) */
+  PetscInt        shift_blocks;   /* Krylov blocks per expansion point inside the band (-kf_shift_blocks) */
+  PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
 
@@ -193,6 +197,11 @@ PETSC_INTERN PetscErrorCode KFDampingDescribe_Private(const KFDamping *, char bu
 PETSC_INTERN PetscErrorCode KFSystemProjectDamping_Private(KFSystem, Mat X, PetscBool *has, PetscReal Cm[]);
 /* measure a candidate: error over the points (stopping at the first point above stop, stop <= 0: all), sizes */
 PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
+/* expansion points inside the band (src/reducer/shifts.c): after the search over moments, models with the Krylov blocks
+   of points sigma = (2 pi f)^2 chosen greedily; visits of those points appended to *visits; the chosen family's
+   candidate replaced when such a model is smaller */
+PETSC_INTERN PetscErrorCode KFReducerShareBodies_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *);
+PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, PetscInt *nvisit, KFVisit **visits, PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 

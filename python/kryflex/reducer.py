@@ -98,6 +98,7 @@ class Reducer:
         else:
             r.set_damping_model(scene.damping_model)
         r.set_accuracy(scene.accuracy)
+        r.set_accuracy_measure(getattr(scene, "accuracy_measure", "elastic"))
         r.set_moments(red["moments"], int(red["output_blocks"]))
         r.set_search(bool(red["search"]), int(red["moments_max"]))
         r.set_cluster_tolerance(float(red["cluster_rtol"]))

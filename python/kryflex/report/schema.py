@@ -13,7 +13,10 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
               "search", "deflation_tol", "reduction_angles_deg": [[..]], "method"} (opt, any keys shown),
 
  -- the verdict, always on the model the reducer chose (issue 11; all (opt) for summaries written before it) --
- "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band),
+ "accuracy_measure": "elastic" | "total" (opt; the response the errors are of: the total minus its rigid-body and
+                     mechanism part, or the total),
+ "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band, of the
+                     accuracy_measure's response),
  "pointwise_definition": str (the pointwise error with a floor: information, never the verdict),
  "chosen_method": "single-angle" | "multi-angle"   (C chosen_method),
  "target_met": bool | None   (C target_met: error <= accuracy at every angle of interest AND every midpoint;

@@ -154,6 +154,12 @@ PetscErrorCode KFEvalPointSetUp_Private(KFReducer r, KFEvalPoint *p)
   if (r->accuracy_measure == KF_ACCURACY_ELASTIC) {
     PetscCall(PetscMalloc2(p->nw * t * a, &p->Tgre, p->nw * t * a, &p->Tgim));
     PetscCall(KFEvalPointRigid(r, p, p->nw, p->w, p->Tgre, p->Tgim));
+    if (p->interest >= 0) { /* beside frf_full_*: what scripts measuring the elastic response take out of it */
+      const PetscInt shape[3] = {t, a, p->nw};
+
+      PetscCall(KFReducerResultSet_Private(r, p->interest, "frf_full_rigid_re", 3, shape, p->Tgre));
+      PetscCall(KFReducerResultSet_Private(r, p->interest, "frf_full_rigid_im", 3, shape, p->Tgim));
+    }
   }
   PetscFunctionReturn(0);
 }

@@ -293,3 +293,17 @@ def test_rigid_part_with_damping_matrices():
     prefix = "multi_" if float(np.ravel(reducer.result(-1, "chosen_method"))[0]) == 1 else ""
     at_angles = max(float(np.ravel(reducer.result(c, prefix + "frf_error"))[0]) for c in range(reducer.nconfig))
     assert abs(at_angles - measured) <= REPORTED_RTOL * measured, (at_angles, measured, reported)
+
+
+def test_estimator_path_elastic(galileo, workdir):
+    """Verification off (the richest candidate is the reference, its own rigid part taken out): Galileo at 1e-2
+    chooses a model whose dense elastic error meets the target, and the estimate is within 10 % of it."""
+    scene = write_scene(acs.GALILEO, os.path.join(workdir, "galileo_estimator.yaml"), 1e-2)
+    reducer = kryflex.Reducer(kryflex.load_scene(scene), quiet=True, verify=False)
+    model = reducer.reduce().model
+    assert float(np.ravel(reducer.result(-1, "error_estimated"))[0]) == 1.0
+    estimated = float(np.ravel(reducer.result(-1, "error_max"))[0])
+    rows = measure(model, galileo.dense, scene, 400)
+    measured = max(e for _, _, e, _ in rows)
+    assert measured <= 1e-2, describe(rows)
+    assert abs(estimated - measured) <= REPORTED_RTOL * measured, (estimated, describe(rows))

@@ -287,6 +287,9 @@ def build_summary(reducer, single, multi, chosen):
                             frf_error=_scalar(reducer, c, "frf_error"),
                             frf_pointwise_error=_optional_scalar(reducer, c, "frf_pointwise_error", has[c]),
                             max_rel_error=_scalar(reducer, c, "frf_error"))
+            if "frf_full_rigid_re" in has[c]:   # the elastic measure's: the full response's rigid part
+                frf[lab]["full_rigid_re"] = _list(reducer.result(c, "frf_full_rigid_re").transpose(2, 0, 1))
+                frf[lab]["full_rigid_im"] = _list(reducer.result(c, "frf_full_rigid_im").transpose(2, 0, 1))
         if "dominant_modes" in has[c]:
             dom[lab] = _ints(reducer.result(c, "dominant_modes"))
             dom_err[lab] = _list(reducer.result(c, "dominant_frequency_error"))

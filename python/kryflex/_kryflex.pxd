@@ -191,6 +191,7 @@ cdef extern from "kryflex.h" nogil:
 
     # ------------------------------------------------------------ error measures (src/measure)
     PetscErrorCode KFFRFErrors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
+    PetscErrorCode KFFRFElasticErrors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFMomentErrors(PetscInt, PetscInt, PetscInt, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFRigidTolerance(PetscInt, const PetscReal*, PetscInt, PetscReal*)
     PetscErrorCode KFFrequencyGrid(PetscReal, PetscReal, PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*)
@@ -219,6 +220,11 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetBand(KFReducer, PetscReal, PetscReal)
     PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal)
+    ctypedef enum KFAccuracyMeasure:
+        KF_ACCURACY_ELASTIC
+        KF_ACCURACY_TOTAL
+    PetscErrorCode KFReducerSetAccuracyMeasure(KFReducer, KFAccuracyMeasure)
+    PetscErrorCode KFReducerGetAccuracyMeasure(KFReducer, KFAccuracyMeasure*)
     PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt, PetscInt)
     PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool, PetscInt)
     PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal)
@@ -266,5 +272,6 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducedModelGetBodyDamping(KFReducedModel, PetscInt, const PetscReal**)
     PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem, const PetscReal**, KFDamping*)
     PetscErrorCode KFReducedSystemResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping*)
     PetscErrorCode KFReducerGetDampingModel(KFReducer, KFDamping*)

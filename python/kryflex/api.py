@@ -92,6 +92,15 @@ class ReducedSystem:
             return self.handle.response(w)
         return self.handle.frf(float(damping), w)
 
+    def rigid_frf(self, freqs_hz):
+        """The rigid-body and mechanism part of frf(freqs_hz) (the model's damping and output quantities): its rigid
+        modes alone. frf - rigid_frf is the elastic response, the one the default accuracy measure is stated on."""
+        return self.handle.rigid_response(2 * np.pi * np.asarray(freqs_hz, dtype=float))
+
+    def elastic_frf(self, freqs_hz):
+        """The elastic response: frf(freqs_hz) minus its rigid-body and mechanism part (rigid_frf)."""
+        return self.frf(freqs_hz) - self.rigid_frf(freqs_hz)
+
     def moments(self, k):
         """The low-frequency moments L^0 .. L^(k-1) on the flexible subspace: (k, outputs, inputs)."""
         return self.handle.moments(int(k))

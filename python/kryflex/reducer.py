@@ -98,6 +98,7 @@ class Reducer:
         else:
             r.set_damping_model(scene.damping_model)
         r.set_accuracy(scene.accuracy)
+        r.set_accuracy_measure(getattr(scene, "accuracy_measure", "elastic"))
         r.set_moments(red["moments"], int(red["output_blocks"]))
         r.set_search(bool(red["search"]), int(red["moments_max"]))
         r.set_cluster_tolerance(float(red["cluster_rtol"]))
@@ -185,11 +186,25 @@ class Reducer:
         return self.result(config, name).transpose(2, 0, 1)
 
     def frf(self, config, which):
-        """The full ("full") or reduced ("reduced") frequency response of the verification at configuration config:
+        """The full ("full") or reduced ("reduced") frequency response of the verification at configuration config,
+        or the full one's rigid-body and mechanism part ("full_rigid", recorded with the elastic accuracy measure):
         complex (frequencies, outputs, inputs), at the frequencies of result frf_frequencies_hz."""
         re = self.result(config, "frf_%s_re" % which)
         im = self.result(config, "frf_%s_im" % which)
         return (re + 1j * im).transpose(2, 0, 1)
+
+    def accuracy_measure(self):
+        """elastic | total: the response the reducer's errors are of (KFReducerGetAccuracyMeasure)."""
+        return self.handle.accuracy_measure()
+
+    def full_rigid(self, config):
+        """The rigid part of frf(config, "full") when the reducer measured the elastic response, else None."""
+        if self.accuracy_measure() != "elastic":
+            return None
+        try:
+            return self.frf(config, "full_rigid")
+        except Exception:       # no verification at this configuration: no reference, no rigid part of it
+            return None
 
     @property
     def notes(self):

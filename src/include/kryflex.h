@@ -364,6 +364,11 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
    floor times the largest peak.
    T*: nw blocks of t x a, real and imaginary parts; hinf or pointwise may be NULL. */
 #define KF_FRF_PAIR_FLOOR 1e-4
+/* The same measures on the elastic response: every |Tf| above becomes |Tf - Tg|, Tg the rigid-body and mechanism part
+   of the full response (from the geometric rigid modes, exact in both models); Tg NULL: the total response
+   (KFFRFErrors). KFFRFPairScales: each pair's denominator s_ij (its peak, raised to the floor), top: the largest peak. */
+PETSC_EXTERN PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
+PETSC_EXTERN PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top);
 PETSC_EXTERN PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 /* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
    below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales
@@ -420,6 +425,15 @@ PETSC_EXTERN PetscErrorCode KFReducerSetMethod(KFReducer, KFReducerMethod);
 PETSC_EXTERN PetscErrorCode KFReducerSetBand(KFReducer, PetscReal fmin_hz, PetscReal fmax_hz);
 PETSC_EXTERN PetscErrorCode KFReducerSetDamping(KFReducer, PetscReal zeta);
 PETSC_EXTERN PetscErrorCode KFReducerSetAccuracy(KFReducer, PetscReal target);
+/* what the accuracy is stated on: the elastic response (the total minus its rigid-body and mechanism part, the
+   default) or the total response (KFFRFElasticErrors) */
+typedef enum {
+  KF_ACCURACY_ELASTIC,
+  KF_ACCURACY_TOTAL
+} KFAccuracyMeasure;
+PETSC_EXTERN const char *const KFAccuracyMeasures[];
+PETSC_EXTERN PetscErrorCode KFReducerSetAccuracyMeasure(KFReducer, KFAccuracyMeasure);
+PETSC_EXTERN PetscErrorCode KFReducerGetAccuracyMeasure(KFReducer, KFAccuracyMeasure *);
 /* moments matched (c in the paper), of which nout are blocks started from K+ H^T; moments PETSC_DECIDE: the accuracy
    search chooses (up to -kf_moments_max) */
 PETSC_EXTERN PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt moments, PetscInt output_blocks);
@@ -544,6 +558,8 @@ PETSC_EXTERN PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem, const Pet
 /* the frequency response with the model's damping (KFReducedModelGetDamping, the viscous matrix) and output
    quantities at nw frequencies w (rad/s): nw blocks of t x a. KFReducedSystemFRF is uniform modal damping only. */
 PETSC_EXTERN PetscErrorCode KFReducedSystemResponse(KFReducedSystem, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+/* the rigid-body and mechanism part of that response: its nrigid lowest modes with the same damping model */
+PETSC_EXTERN PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
 /* the reducer's damping (KFReducerSetDamping sets a uniform modal ratio); options -kf_damping zeta,
    -kf_damping_bands f1,z1,f2,z2,..., -kf_damping_rayleigh alpha,beta, -kf_damping_structural g */
 PETSC_EXTERN PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping *);

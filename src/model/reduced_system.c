@@ -158,6 +158,36 @@ PetscErrorCode KFReducedSystemResponse(KFReducedSystem y, PetscInt nw, const Pet
   PetscFunctionReturn(0);
 }
 
+/*
+  KFReducedSystemRigidResponse - the rigid-body and mechanism part of KFReducedSystemResponse: the nrigid lowest modes
+  (the bodies' geometric rigid motions when known, eigenvalue zero) with the same damping model (their block of
+  Phi^T C Phi, the modal ratios that are zero for them, structural damping that is zero on them) and quantities.
+*/
+PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem y, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  const PetscInt nr = PetscMin(y ? y->nrigid : 0, y ? y->n : 0);
+  PetscReal     *lam, *PrG, *Crr = NULL;
+  KFDamping      d;
+
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  PetscCall(KFReducedSystemResponse(y, 0, NULL, NULL, NULL)); /* H Phi, Phi^T G and Phi^T C Phi made */
+  d = y->damping;
+  if (y->C) d.alpha = d.beta = 0;
+  PetscCall(PetscCalloc2(PetscMax(nr, 1), &lam, PetscMax(nr * y->a, 1), &PrG));
+  for (PetscInt j = 0; j < y->a; j++)
+    for (PetscInt k = 0; k < nr; k++) PrG[k + j * nr] = y->PhiG[k + j * y->n];
+  if (y->Cm && nr) {
+    PetscCall(PetscMalloc1(nr * nr, &Crr));
+    for (PetscInt j = 0; j < nr; j++)
+      for (PetscInt i = 0; i < nr; i++) Crr[i + j * nr] = y->Cm[i + j * y->n];
+  }
+  PetscCall(KFDampedModalFRF(nr, lam, y->t, y->HPhi, y->a, PrG, &d, Crr, nr, y->quantity, 0, nw, w, Tre, Tim));
+  PetscCall(PetscFree(Crr));
+  PetscCall(PetscFree2(lam, PrG));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducedSystemView(KFReducedSystem y, PetscViewer viewer)
 {
   PetscBool iascii;

@@ -2,8 +2,10 @@
   Where models are measured: an evaluation point is an angle of interest or a midpoint between two, with the reference
   response on a frequency grid (the full order: SLEPc modes, rigid modes and the static residual of the modes not
   computed; or, verification off, the richest candidate model as an estimator). A reduced system's error there is
-  KFFRFErrors on the grid, with the worst pair's maximum refined between grid points (a peak of the difference can
-  fall between two points when a reduced resonance is shifted by less than the damping width).
+  KFFRFElasticErrors on the elastic response (the reference minus its rigid-body and mechanism part) or on the total
+  one (-kf_accuracy_measure), on the grid plus points across the reduced system's own resonances, with the worst
+  pair's maximum refined between points (a peak of the difference can fall between two points when a reduced
+  resonance is shifted by less than the damping width).
 */
 #include <kryflex/reducerimpl.h>
 
@@ -78,6 +80,39 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* the rigid-body and mechanism part of the full-order response: the geometric rigid modes (H Phi_r, Phi_r^T G) with
+   the damping model the full response uses (their block of the modal viscous damping, Rayleigh; modal ratios and
+   structural damping are zero on them) */
+static PetscErrorCode KFFullRigidFRF(const KFFullReference *ref, PetscInt t, PetscInt a, const KFDamping *d, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  const PetscInt nr = ref->r, m = ref->r + ref->n;
+  PetscReal     *lam, *Crr = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(PetscMax(nr, 1), &lam));
+  if (ref->Cm && ref->nc >= nr && nr) {
+    PetscCall(PetscMalloc1(nr * nr, &Crr));
+    for (PetscInt j = 0; j < nr; j++)
+      for (PetscInt i = 0; i < nr; i++) Crr[i + j * nr] = ref->Cm[i + j * m];
+  }
+  PetscCall(KFDampedModalFRF(nr, lam, t, ref->HPr, a, ref->PrG, d, Crr, nr, quantity, 0, nw, w, Tre, Tim));
+  PetscCall(PetscFree(Crr));
+  PetscCall(PetscFree(lam));
+  PetscFunctionReturn(0);
+}
+
+/* the reference's rigid-body and mechanism part at nw frequencies */
+static PetscErrorCode KFEvalPointRigid(KFReducer r, KFEvalPoint *p, PetscInt nw, const PetscReal w[], PetscReal re[], PetscReal im[])
+{
+  PetscInt a, t;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  if (p->rich) PetscCall(KFReducedSystemRigidResponse(p->rich, nw, w, re, im));
+  else PetscCall(KFFullRigidFRF(&p->ref, t, a, &r->damping, r->scene->nquantity == t ? r->scene->out_quantity : NULL, nw, w, re, im));
+  PetscFunctionReturn(0);
+}
+
 /* the reference response at nw frequencies */
 static PetscErrorCode KFEvalPointResponse(KFReducer r, KFEvalPoint *p, PetscInt nw, const PetscReal w[], PetscReal re[], PetscReal im[])
 {
@@ -90,7 +125,8 @@ static PetscErrorCode KFEvalPointResponse(KFReducer r, KFEvalPoint *p, PetscInt 
   PetscFunctionReturn(0);
 }
 
-/* the grid (the band's log-spaced points plus 7 around each reference resonance) and the reference on it */
+/* the grid (the band's log-spaced points plus 7 around each reference resonance), the reference on it and, with the
+   elastic measure, the reference's rigid-body and mechanism part there */
 PetscErrorCode KFEvalPointSetUp_Private(KFReducer r, KFEvalPoint *p)
 {
   PetscInt   a, t, nres = 0;
@@ -115,6 +151,16 @@ PetscErrorCode KFEvalPointSetUp_Private(KFReducer r, KFEvalPoint *p)
   PetscCall(PetscMalloc3(p->nw, &p->w, p->nw * t * a, &p->Tre, p->nw * t * a, &p->Tim));
   for (PetscInt f = 0; f < p->nw; f++) p->w[f] = 2 * PETSC_PI * p->fhz[f];
   PetscCall(KFEvalPointResponse(r, p, p->nw, p->w, p->Tre, p->Tim));
+  if (r->accuracy_measure == KF_ACCURACY_ELASTIC) {
+    PetscCall(PetscMalloc2(p->nw * t * a, &p->Tgre, p->nw * t * a, &p->Tgim));
+    PetscCall(KFEvalPointRigid(r, p, p->nw, p->w, p->Tgre, p->Tgim));
+    if (p->interest >= 0) { /* beside frf_full_*: what scripts measuring the elastic response take out of it */
+      const PetscInt shape[3] = {t, a, p->nw};
+
+      PetscCall(KFReducerResultSet_Private(r, p->interest, "frf_full_rigid_re", 3, shape, p->Tgre));
+      PetscCall(KFReducerResultSet_Private(r, p->interest, "frf_full_rigid_im", 3, shape, p->Tgim));
+    }
+  }
   PetscFunctionReturn(0);
 }
 
@@ -126,12 +172,13 @@ PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *p)
   PetscCall(PetscFree(p->L0));
   PetscCall(PetscFree(p->fhz));
   PetscCall(PetscFree3(p->w, p->Tre, p->Tim));
+  PetscCall(PetscFree2(p->Tgre, p->Tgim));
   PetscCall(PetscFree(p->angles));
   PetscCall(PetscMemzero(p, sizeof(*p)));
   PetscFunctionReturn(0);
 }
 
-/* |Tf_ij - Tr_ij| / peak at one frequency */
+/* |Tf_ij - Tr_ij| at one frequency */
 static PetscErrorCode KFPairError(KFReducer r, KFEvalPoint *p, KFReducedSystem rs, PetscInt ij, PetscReal w, PetscReal *e)
 {
   PetscInt   a, t;
@@ -150,43 +197,85 @@ static PetscErrorCode KFPairError(KFReducer r, KFEvalPoint *p, KFReducedSystem r
   PetscFunctionReturn(0);
 }
 
+/* the evaluation point's grid plus 7 points across each of the candidate's own resonances in the band, so that a
+   shifted or spurious reduced peak cannot fall between grid points: W (rad/s, sorted) holds the nw + ne points, from[k]
+   the index on the point's grid of W[k], or -1 for a new point */
+static PetscErrorCode KFMergedGrid(KFReducer r, KFEvalPoint *p, KFReducedSystem rs, PetscInt *n, PetscReal **W, PetscInt **from)
+{
+  PetscInt         nf, ne = 0, i = 0, j = 0, k = 0;
+  const PetscReal *fr;
+  PetscReal       *extra;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducedSystemGetFrequencies(rs, &nf, &fr));
+  PetscCall(PetscMalloc1(PetscMax(7 * nf, 1), &extra));
+  if (nf) PetscCall(KFFrequencyGrid(r->band[0], r->band[1], 0, nf, fr, r->zeta, &ne, extra));
+  PetscCall(PetscMalloc2(p->nw + ne, W, p->nw + ne, from));
+  while (i < p->nw || j < ne) { /* both sorted: merge, points of the grid first at ties */
+    if (j >= ne || (i < p->nw && p->fhz[i] <= extra[j])) {
+      (*W)[k]      = p->w[i];
+      (*from)[k++] = i++;
+    } else {
+      (*W)[k]      = 2 * PETSC_PI * extra[j++];
+      (*from)[k++] = -1;
+    }
+  }
+  *n = k;
+  PetscCall(PetscFree(extra));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedSystem rs, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[])
 {
-  const PetscReal gr = 0.5 * (PetscSqrtReal(5.0) - 1);
-  PetscInt        a, t, ta, worst = -1, fw = 0;
-  PetscReal      *re = Trre, *im = Trim, best = -1, peak = 0;
+  const PetscReal gr      = 0.5 * (PetscSqrtReal(5.0) - 1);
+  const PetscBool elastic = (PetscBool)(p->Tgre != NULL);
+  PetscInt        a, t, ta, worst = -1, fw = 0, n = 0, nnew = 0, *from;
+  PetscReal      *W, *fre, *fim, *gre = NULL, *gim = NULL, *re, *im, *nw_, *nre, *nim, *scale, best = -1;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   ta = t * a;
-  if (!re) PetscCall(PetscMalloc2(p->nw * ta, &re, p->nw * ta, &im));
-  PetscCall(KFReducedSystemResponse(rs, p->nw, p->w, re, im));
-  PetscCall(KFFRFErrors(p->nw, t, a, p->Tre, p->Tim, re, im, r->frf_floor_db, hinf, pointwise));
-  /* the pair and frequency that make hinf, and its peak */
-  {
-    PetscReal top = 0, *pk;
-
-    PetscCall(PetscCalloc1(PetscMax(ta, 1), &pk));
-    for (PetscInt f = 0; f < p->nw; f++)
-      for (PetscInt k = 0; k < ta; k++) pk[k] = PetscMax(pk[k], PetscSqrtReal(p->Tre[f * ta + k] * p->Tre[f * ta + k] + p->Tim[f * ta + k] * p->Tim[f * ta + k]));
-    for (PetscInt k = 0; k < ta; k++) top = PetscMax(top, pk[k]);
-    for (PetscInt f = 0; f < p->nw; f++)
-      for (PetscInt k = 0; k < ta; k++) {
-        const PetscReal dre = p->Tre[f * ta + k] - re[f * ta + k], dim = p->Tim[f * ta + k] - im[f * ta + k];
-        const PetscReal ref = PetscMax(PetscMax(pk[k], KF_FRF_PAIR_FLOOR * top), 1e-300), e = PetscSqrtReal(dre * dre + dim * dim) / ref;
-
-        if (e > best) {
-          best  = e;
-          worst = k;
-          fw    = f;
-          peak  = ref;
-        }
-      }
-    PetscCall(PetscFree(pk));
+  PetscCall(KFMergedGrid(r, p, rs, &n, &W, &from));
+  PetscCall(PetscMalloc4(n * ta, &fre, n * ta, &fim, n * ta, &re, n * ta, &im));
+  if (elastic) PetscCall(PetscMalloc2(n * ta, &gre, n * ta, &gim));
+  /* the reference (and its rigid part) at the new points only: the grid's are stored */
+  for (PetscInt k = 0; k < n; k++) nnew += from[k] < 0;
+  PetscCall(PetscMalloc4(PetscMax(nnew, 1), &nw_, PetscMax(2 * nnew * ta, 1), &nre, PetscMax(2 * nnew * ta, 1), &nim, PetscMax(ta, 1), &scale));
+  nnew = 0;
+  for (PetscInt k = 0; k < n; k++)
+    if (from[k] < 0) nw_[nnew++] = W[k];
+  if (nnew) {
+    PetscCall(KFEvalPointResponse(r, p, nnew, nw_, nre, nim));
+    if (elastic) PetscCall(KFEvalPointRigid(r, p, nnew, nw_, nre + nnew * ta, nim + nnew * ta));
   }
-  /* golden-section search for the largest difference between the neighbours of the worst grid point */
-  if (worst >= 0 && p->nw > 2 && !PetscIsInfOrNanReal(*hinf)) {
-    PetscReal lo = p->w[PetscMax(fw - 1, 0)], hi = p->w[PetscMin(fw + 1, p->nw - 1)], x1, x2, e1, e2;
+  for (PetscInt k = 0, q = 0; k < n; k++) {
+    const PetscInt i = from[k];
+
+    PetscCall(PetscArraycpy(fre + k * ta, i >= 0 ? p->Tre + i * ta : nre + q * ta, ta));
+    PetscCall(PetscArraycpy(fim + k * ta, i >= 0 ? p->Tim + i * ta : nim + q * ta, ta));
+    if (elastic) {
+      PetscCall(PetscArraycpy(gre + k * ta, i >= 0 ? p->Tgre + i * ta : nre + (nnew + q) * ta, ta));
+      PetscCall(PetscArraycpy(gim + k * ta, i >= 0 ? p->Tgim + i * ta : nim + (nnew + q) * ta, ta));
+    }
+    if (i < 0) q++;
+  }
+  PetscCall(KFReducedSystemResponse(rs, n, W, re, im));
+  PetscCall(KFFRFElasticErrors(n, t, a, fre, fim, re, im, gre, gim, r->frf_floor_db, hinf, pointwise));
+  /* the pair and frequency that make hinf */
+  PetscCall(KFFRFPairScales(n, t, a, fre, fim, gre, gim, scale, NULL));
+  for (PetscInt f = 0; f < n; f++)
+    for (PetscInt k = 0; k < ta; k++) {
+      const PetscReal dre = fre[f * ta + k] - re[f * ta + k], dim = fim[f * ta + k] - im[f * ta + k], e = PetscSqrtReal(dre * dre + dim * dim) / scale[k];
+
+      if (e > best) {
+        best  = e;
+        worst = k;
+        fw    = f;
+      }
+    }
+  /* golden-section search for the largest difference between the neighbours of the worst point */
+  if (worst >= 0 && n > 2 && !PetscIsInfOrNanReal(*hinf)) {
+    PetscReal lo = W[PetscMax(fw - 1, 0)], hi = W[PetscMin(fw + 1, n - 1)], x1, x2, e1, e2;
 
     x1 = hi - gr * (hi - lo);
     x2 = lo + gr * (hi - lo);
@@ -207,9 +296,18 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
         PetscCall(KFPairError(r, p, rs, worst, x2, &e2));
       }
     }
-    *hinf = PetscMax(*hinf, PetscMax(e1, e2) / peak);
+    *hinf = PetscMax(*hinf, PetscMax(e1, e2) / scale[worst]);
   }
-  if (!Trre) PetscCall(PetscFree2(re, im));
+  if (Trre) /* the reduced response on the point's own grid */
+    for (PetscInt k = 0; k < n; k++)
+      if (from[k] >= 0) {
+        PetscCall(PetscArraycpy(Trre + from[k] * ta, re + k * ta, ta));
+        PetscCall(PetscArraycpy(Trim + from[k] * ta, im + k * ta, ta));
+      }
+  PetscCall(PetscFree4(nw_, nre, nim, scale));
+  PetscCall(PetscFree2(gre, gim));
+  PetscCall(PetscFree4(fre, fim, re, im));
+  PetscCall(PetscFree2(W, from));
   PetscFunctionReturn(0);
 }
 

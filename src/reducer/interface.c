@@ -8,6 +8,7 @@ static PetscBool  KFReducerPackageInitialized = PETSC_FALSE;
 
 const char *const KFReducerMethods[] = {"single-angle", "multi-angle", "auto", "KFReducerMethod", "KF_METHOD_", NULL};
 const char *const KFImportances[]    = {"h2", "hinf", "static", "band", "KFImportance", "KF_IMPORTANCE_", NULL};
+const char *const KFAccuracyMeasures[] = {"elastic", "total", "KFAccuracyMeasure", "KF_ACCURACY_", NULL};
 
 static PetscErrorCode KFReducerFinalizePackage(void)
 {
@@ -56,6 +57,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->zeta                    = 0.0025;
   PetscCall(KFDampingSetUniform(&r->damping, 0.0025));
   r->accuracy                = 0.05;
+  r->accuracy_measure        = KF_ACCURACY_ELASTIC;
   r->moments                 = PETSC_DECIDE;
   r->moments_max             = 24;
   r->search                  = PETSC_TRUE;
@@ -258,6 +260,24 @@ PetscErrorCode KFReducerSetAccuracy(KFReducer r, PetscReal target)
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCheck(target > 0 && PetscIsNormalReal(target), PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "accuracy: give a positive relative error, got %g (-kf_accuracy)", (double)target);
   r->accuracy = target;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSetAccuracyMeasure(KFReducer r, KFAccuracyMeasure measure)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(measure == KF_ACCURACY_ELASTIC || measure == KF_ACCURACY_TOTAL, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "accuracy measure: give elastic or total (-kf_accuracy_measure), got %d", (int)measure);
+  r->accuracy_measure = measure;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerGetAccuracyMeasure(KFReducer r, KFAccuracyMeasure *measure)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscValidPointer(measure, 2);
+  *measure = r->accuracy_measure;
   PetscFunctionReturn(0);
 }
 

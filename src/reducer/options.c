@@ -120,8 +120,14 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     if (fb || fr || fs) PetscCall(KFReducerSetDampingModel(r, &d));
   }
   accuracy = r->accuracy;
-  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative H-infinity error of the frequency response over the band, per input/output pair (KFFRFErrors)", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
+  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative H-infinity error of the frequency response over the band, per input/output pair, on the response -kf_accuracy_measure names (KFFRFElasticErrors)", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
   if (flg) PetscCall(KFReducerSetAccuracy(r, accuracy));
+  {
+    PetscInt measure = (PetscInt)r->accuracy_measure;
+
+    PetscCall(PetscOptionsEList("-kf_accuracy_measure", "What the accuracy is stated on: elastic (the response minus its rigid-body and mechanism part) or total", "KFReducerSetAccuracyMeasure", KFAccuracyMeasures, 2, KFAccuracyMeasures[r->accuracy_measure], &measure, &flg));
+    if (flg) PetscCall(KFReducerSetAccuracyMeasure(r, (KFAccuracyMeasure)measure));
+  }
 
   moments = r->moments;
   oblocks = r->output_blocks;
@@ -266,7 +272,7 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "scene '%s': %" PetscInt_FMT " bodies, %" PetscInt_FMT " system dofs, %" PetscInt_FMT " revolute joints, %" PetscInt_FMT " inputs, %" PetscInt_FMT " outputs\n", name, nb, nsys, nrev, a, t));
   } else PetscCall(PetscViewerASCIIPrintf(viewer, "no scene set\n"));
   if (r->nconfig) PetscCall(KFReducerViewAngles_Private(viewer, "angles of interest", r->nconfig, nrev, r->angles));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "method %s; band %g-%g Hz; damping %g; accuracy %g\n", KFReducerMethods[r->method], (double)r->band[0], (double)r->band[1], (double)r->zeta, (double)r->accuracy));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "method %s; band %g-%g Hz; damping %g; accuracy %g on the %s response\n", KFReducerMethods[r->method], (double)r->band[0], (double)r->band[1], (double)r->zeta, (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure]));
   {
     char buf[1024];
     PetscCall(KFDampingDescribe_Private(&r->damping, buf, sizeof(buf)));
@@ -298,7 +304,7 @@ PetscErrorCode KFReducerView(KFReducer r, PetscViewer viewer)
       if (has) PetscCall(KFReducerGetResult(r, c, "frf_error", NULL, NULL, &err));
       PetscCall(KFReducerViewAngles_Private(viewer, "configuration", 1, nrev, &r->angles[c * PetscMax(nrev, 1)]));
       PetscCall(PetscViewerASCIIPushTab(viewer));
-      if (err) PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, FRF max relative error %.3g (target %g)\n", (int)dofs[0], (double)err[0], (double)r->accuracy));
+      if (err) PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, FRF max relative %s error %.3g (target %g)\n", (int)dofs[0], KFAccuracyMeasures[r->accuracy_measure], (double)err[0], (double)r->accuracy));
       else PetscCall(PetscViewerASCIIPrintf(viewer, "single-angle model: %d system dofs, not verified\n", (int)dofs[0]));
       PetscCall(PetscViewerASCIIPopTab(viewer));
     }

@@ -1,6 +1,7 @@
 /*
-  The accuracy search: the smallest reduced model whose error (KFFRFErrors' relative H-infinity measure) meets the
-  scene's accuracy at every evaluation point (angles of interest and the midpoints between them).
+  The accuracy search: the smallest reduced model whose error (KFFRFElasticErrors: relative H-infinity, on the
+  response -kf_accuracy_measure names) meets the scene's accuracy at every evaluation point (angles of interest and
+  the midpoints between them).
 
   Single-angle family, for each candidate alpha_G (the named one, or every angle of interest):
     1. the fewest moments c whose whole Krylov basis meets the target;

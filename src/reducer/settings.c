@@ -95,5 +95,6 @@ PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KF
   PetscCall(PetscSNPrintf(buf, sizeof(buf), "[%.17g, %.17g]", (double)r->band[0], (double)r->band[1]));
   PetscCall(KFReducedModelSetSetting(m, "band_hz", buf));
   PetscCall(KFSetReal(m, "accuracy", r->accuracy));
+  PetscCall(KFSetString(m, "accuracy_measure", KFAccuracyMeasures[r->accuracy_measure]));
   PetscFunctionReturn(0);
 }

@@ -659,7 +659,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
 
-  PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
+  PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducerSearch_Private(r, nc, visits, neval, evals, &single, &multi, &nrows, &rows));
   PetscCall(KFReducerSearchShifts_Private(r, sys, &nc, &visits, neval, evals, &single, &multi, &nrows, &rows));
@@ -764,7 +764,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", (PetscReal)multi.c));
       PetscCall(PetscFree(ma));
     }
-    PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
+    PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
                            r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction")), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
     PetscCall(KFProgress(comm, "%s", r->rule));
     PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));

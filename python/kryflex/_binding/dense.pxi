@@ -15,6 +15,7 @@ def dense_eig(K, M):
 
 IMPORTANCE = {"h2": KF_IMPORTANCE_H2, "hinf": KF_IMPORTANCE_HINF, "static": KF_IMPORTANCE_STATIC,
               "band": KF_IMPORTANCE_BAND}
+ACCURACY_MEASURES = {"elastic": KF_ACCURACY_ELASTIC, "total": KF_ACCURACY_TOTAL}
 
 
 def mode_importance(lam, Phi, G, H, PetscReal zeta, measure="h2", PetscReal rigid_tol=1e-8):

@@ -10,11 +10,12 @@ cdef cnp.ndarray blocks_ta(X, name):
     return np.ascontiguousarray(arr.transpose(0, 2, 1))
 
 
-def frf_errors(Tf, Tr, PetscReal floor_db=-60.0):
-    """(hinf, pointwise) of a reduced response against the full one (KFFRFErrors), per input/output pair:
-    hinf = max over pairs of max_w |Tf - Tr| / max_w |Tf| (the relative H-infinity error the accuracy target applies
-    to); pointwise = max over pairs and frequencies of |Tf - Tr| / max(|Tf|, 10^(floor_db/20) x the pair's peak).
-    Tf, Tr: complex (frequencies, outputs, inputs)."""
+def frf_errors(Tf, Tr, PetscReal floor_db=-60.0, rigid=None):
+    """(hinf, pointwise) of a reduced response against the full one, per input/output pair (KFFRFElasticErrors):
+    hinf = max over pairs of max_w |Tf - Tr| / max_w |Tf - rigid| (the relative H-infinity error the accuracy target
+    applies to); pointwise = max over pairs and frequencies of |Tf - Tr| / max(|Tf - rigid|, 10^(floor_db/20) x the
+    pair's peak). rigid: the rigid-body and mechanism part of Tf (the elastic measure), or None (the total response).
+    Tf, Tr, rigid: complex (frequencies, outputs, inputs)."""
     full = np.asarray(Tf)
     red = np.asarray(Tr)
     if full.shape != red.shape or full.ndim != 3:
@@ -24,9 +25,20 @@ def frf_errors(Tf, Tr, PetscReal floor_db=-60.0):
     cdef cnp.ndarray fim = blocks_ta(np.imag(full), "the full response")
     cdef cnp.ndarray rre = blocks_ta(red.real, "the reduced response")
     cdef cnp.ndarray rim = blocks_ta(np.imag(red), "the reduced response")
+    cdef cnp.ndarray gre, gim
     cdef PetscReal hinf = 0, pointwise = 0
-    check(KFFRFErrors(<PetscInt>full.shape[0], <PetscInt>full.shape[1], <PetscInt>full.shape[2], real_ptr(fre),
-                      real_ptr(fim), real_ptr(rre), real_ptr(rim), floor_db, &hinf, &pointwise))
+    if rigid is None:
+        check(KFFRFErrors(<PetscInt>full.shape[0], <PetscInt>full.shape[1], <PetscInt>full.shape[2], real_ptr(fre),
+                          real_ptr(fim), real_ptr(rre), real_ptr(rim), floor_db, &hinf, &pointwise))
+    else:
+        g = np.asarray(rigid)
+        if g.shape != full.shape:
+            raise ValueError("the rigid part must have the full response's shape %s, got %s" % (full.shape, g.shape))
+        gre = blocks_ta(g.real, "the rigid part")
+        gim = blocks_ta(np.imag(g), "the rigid part")
+        check(KFFRFElasticErrors(<PetscInt>full.shape[0], <PetscInt>full.shape[1], <PetscInt>full.shape[2],
+                                 real_ptr(fre), real_ptr(fim), real_ptr(rre), real_ptr(rim), real_ptr(gre),
+                                 real_ptr(gim), floor_db, &hinf, &pointwise))
     return float(hinf), float(pointwise)
 
 

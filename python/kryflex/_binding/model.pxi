@@ -93,6 +93,18 @@ cdef class CReducedSystem:
         check(KFReducedSystemResponse(self.y, nw, real_ptr(w), real_ptr(re), real_ptr(im)))
         return (re + 1j * im).reshape(nw, a, t).transpose(0, 2, 1).copy()
 
+    def rigid_response(self, omegas):
+        """The rigid-body and mechanism part of response(omegas): the system's rigid modes with the same damping model
+        (KFReducedSystemRigidResponse); response - rigid_response is the elastic response. Complex (nw, t, a)."""
+        cdef PetscInt a, t
+        cdef cnp.ndarray w = fortran(omegas, 1, "frequencies")
+        check(KFReducedSystemGetMatrices(self.handle(), NULL, &a, &t, NULL, NULL, NULL, NULL))
+        nw = w.shape[0]
+        cdef cnp.ndarray re = np.zeros(nw * t * a)
+        cdef cnp.ndarray im = np.zeros(nw * t * a)
+        check(KFReducedSystemRigidResponse(self.y, nw, real_ptr(w), real_ptr(re), real_ptr(im)))
+        return (re + 1j * im).reshape(nw, a, t).transpose(0, 2, 1).copy()
+
     def damping(self):
         """(viscous damping matrix n x n: the bodies' C_b reassembled + alpha M + beta K, or None; the damping dict)"""
         cdef PetscInt n

@@ -119,6 +119,17 @@ cdef class CReducer:
     def set_accuracy(self, PetscReal target):
         check(KFReducerSetAccuracy(self.r, target))
 
+    def set_accuracy_measure(self, measure):
+        """elastic (the response minus its rigid-body and mechanism part) or total: what the accuracy is stated on"""
+        if measure not in ACCURACY_MEASURES:
+            raise ValueError("accuracy_measure: give %s, got %r" % (" or ".join(ACCURACY_MEASURES), measure))
+        check(KFReducerSetAccuracyMeasure(self.r, ACCURACY_MEASURES[measure]))
+
+    def accuracy_measure(self):
+        cdef KFAccuracyMeasure m
+        check(KFReducerGetAccuracyMeasure(self.r, &m))
+        return "elastic" if m == KF_ACCURACY_ELASTIC else "total"
+
     def set_moments(self, moments, PetscInt output_blocks=1):
         """moments: an integer, or "auto" (None): the accuracy search chooses"""
         cdef PetscInt c = -1 if moments in (None, "auto") else int(moments)   # -1: PETSC_DECIDE

@@ -51,8 +51,9 @@ def describe(scene, residual):
     else:
         most = int(moments)
         moments_text = "%d moments" % most
-    say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error per input/output pair), %s"
-         % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, moments_text))
+    say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error of the %s response per input/output "
+        "pair), %s" % (scene.band[0], scene.band[1], scene.damping, scene.accuracy,
+                       getattr(scene, "accuracy_measure", "elastic"), moments_text))
     if not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None):
         from ..report.sections import damping_text
         say("  damping: %s%s" % (damping_text(scene.damping_model),

@@ -106,10 +106,12 @@ def run(argv):
             title = "%s: %s, full %d vs reduced %d dofs" % (scene.name, args.profile, study.full.dofs,
                                                             study.reduced.dofs)
             output.write_csv(rows, staging.file("slew.csv"), names)
-            output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error, baseline)
+            output.write_chart(rows, staging.file("slew.png"), title, study.accuracy, limit, frf_error, baseline,
+                               reducer.accuracy_measure())
             output.write_histories(rows, staging.file("slew_histories.png"), title, names)
             with open(staging.file("slew.md"), "w") as f:
-                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline, ffrf))
+                f.write(output.markdown(rows, study, limit, check, frf_error, exudyn, baseline, ffrf,
+                                        reducer.accuracy_measure()))
         collective(write, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)))
         collective(staging.commit, (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created)),
                    interruptible=False)

@@ -411,6 +411,7 @@ class Scene:
                                                             min(z for _, z in modal))
         self.damping_matrices = [b["name"] for b in bodies if b.get("damping") is not None]
         self.accuracy = valid["accuracy"]
+        self.accuracy_measure = valid["accuracy_measure"]   # elastic | total: the response the accuracy is stated on
         self.reduction = valid["reduction"]
         self.verify = valid["verify"]
         self.paper = valid["paper"]            # "lee": the report compares with the paper (report/paper.py)

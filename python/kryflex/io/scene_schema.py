@@ -29,13 +29,14 @@ MAX_MOMENTS = 200
 MAX_FREQUENCY_POINTS = 100000
 ORIENTATION_TOL = 1e-6                # orthonormality of a joint orientation as written (7 digits are enough)
 IMPORTANCES = ("band", "h2", "hinf", "static")
+ACCURACY_MEASURES = ("elastic", "total")   # -kf_accuracy_measure: the response the accuracy is stated on
 BASES = ("krylov", "eigen")
 METHODS = ("auto", "single-angle", "multi-angle")
 FLEX_SOLVERS = ("auto", "monolithic", "bodywise")   # -kf_flex_solver, src/solve/bodywise.c
 JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",
-            "accuracy", "reduction", "verify", "paper"}
+            "accuracy", "accuracy_measure", "reduction", "verify", "paper"}
 PAPERS = ("lee",)                     # paper: lee adds the report's side-by-side section (report/paper.py)
 BODY_KEYS = {"mass", "stiffness", "nodes", "interfaces", "description", "constraints", "springs",
              "damping"}
@@ -77,7 +78,7 @@ VERIFY_DEFAULTS = {
     "full_order": True,          # run the full-order verification at all
     "frf_floor_db": -60.0,       # FRF error: notches deeper than this below the band's peak count against this level
 }
-DEFAULTS = {"band": [0.01, 10.0], "damping": 0.0025, "accuracy": 0.05}
+DEFAULTS = {"band": [0.01, 10.0], "damping": 0.0025, "accuracy": 0.05, "accuracy_measure": "elastic"}
 # the keys under each section, for -scene.<path> options and did-you-mean hints
 SECTION_KEYS = {"reduction": set(REDUCTION_DEFAULTS), "verify": set(VERIFY_DEFAULTS), "bodies": BODY_KEYS,
                 "joints": JOINT_KEYS}
@@ -846,6 +847,8 @@ def validate(spec, where, default_name="scene"):
         "damping": damping_spec(where, spec.get("damping", DEFAULTS["damping"])),
         "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
                          "give the target relative error in (0, 1), e.g. 0.05"),
+        "accuracy_measure": choice(where, "accuracy_measure", spec.get("accuracy_measure", DEFAULTS["accuracy_measure"]),
+                                   ACCURACY_MEASURES),
         "reduction": _reduction(where, spec.get("reduction"), revolute),
         "verify": _verify(where, spec.get("verify")),
         "paper": paper,

@@ -1,4 +1,6 @@
 """The report's figures: their file names and their PNG bytes."""
+import numpy as np
+
 from . import plots
 from .context import _Context
 from .formatting import RATIO_EXACT_TOL, safe_name
@@ -52,8 +54,14 @@ def _render_plots(summary, plot_names):
     multi = (summary.get("multi_angle") or {}).get("moment_ratios") or {}
     series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
     yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
-    curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2]))
+    def rigid(label):       # the elastic measure's rigid part of the full response, when the summary has it
+        f = summary["frf"][label]
+        if "full_rigid_re" not in f:
+            return None
+        return np.asarray(f["full_rigid_re"], float) + 1j * np.asarray(f["full_rigid_im"], float)
+
+    curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2], rigid(l)))
               for l in c.labels]
     yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
-        curves, summary.get("accuracy"), f"Relative frequency-response error of the chosen model ({c.model_name})"))
+        curves, summary.get("accuracy"), f"Relative {summary.get('accuracy_measure') or 'total'}-response error of the chosen model ({c.model_name})"))
     yield from paper_figures(summary)

@@ -48,16 +48,18 @@ def frf_arrays(frf_entry):
 PAIR_PEAK_FLOOR = 1e-6
 
 
-def frf_hinf_error_curve(full, reduced):
-    """The integrand of the relative H-infinity error per input/output pair (the one accuracy measure, issue 11,
+def frf_hinf_error_curve(full, reduced, rigid=None):
+    """The integrand of the relative H-infinity error per input/output pair (the one accuracy measure,
     src/measure/frf_error.c): at each frequency, max over pairs of |Tf_ij(w) - Tr_ij(w)| / peak_ij, with
-    peak_ij = max_w |Tf_ij| (at least PAIR_PEAK_FLOOR x the largest pair's peak). Its maximum over the band is
-    the error the verdict is on. full, reduced: [nf, t, a] (or [nf])."""
+    peak_ij = max_w |Tf_ij - rigid_ij| (the elastic response's peak; the total's when rigid is None; at least
+    PAIR_PEAK_FLOOR x the largest pair's peak). Its maximum over the band is the error the verdict is on.
+    full, reduced, rigid: [nf, t, a] (or [nf])."""
     full = np.asarray(full)
     reduced = np.asarray(reduced)
+    part = full if rigid is None else full - np.asarray(rigid).reshape(full.shape)
     if full.ndim == 1:
-        full, reduced = full[:, None, None], reduced[:, None, None]
-    peak = np.max(np.abs(full), axis=0) if full.shape[0] else np.zeros(full.shape[1:])
+        full, reduced, part = full[:, None, None], reduced[:, None, None], part[:, None, None]
+    peak = np.max(np.abs(part), axis=0) if full.shape[0] else np.zeros(full.shape[1:])
     largest = float(np.max(peak)) if peak.size else 0.0
     peak = np.maximum(peak, PAIR_PEAK_FLOOR * largest)
     diff = np.abs(full - reduced)

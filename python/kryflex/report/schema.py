@@ -13,7 +13,10 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
               "search", "deflation_tol", "reduction_angles_deg": [[..]], "method"} (opt, any keys shown),
 
  -- the verdict, always on the model the reducer chose (issue 11; all (opt) for summaries written before it) --
- "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band),
+ "accuracy_measure": "elastic" | "total" (opt; the response the errors are of: the total minus its rigid-body and
+                     mechanism part, or the total),
+ "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band, of the
+                     accuracy_measure's response),
  "pointwise_definition": str (the pointwise error with a floor: information, never the verdict),
  "chosen_method": "single-angle" | "multi-angle"   (C chosen_method),
  "target_met": bool | None   (C target_met: error <= accuracy at every angle of interest AND every midpoint;
@@ -62,7 +65,9 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
                    single-angle model), "chosen_re", "chosen_im" (opt: the multi-angle model's, when it was chosen;
                    the plots draw the chosen model), "frf_error": float (single-angle model, relative H-inf),
                    "frf_pointwise_error": float | None (single-angle model, information),
-                   "max_rel_error": float (= frf_error, the name scripts before issue 11 read)}},
+                   "max_rel_error": float (= frf_error, the name scripts before issue 11 read),
+                   "full_rigid_re", "full_rigid_im": [nf][t][a] (opt: the full response's rigid-body and
+                   mechanism part, with the elastic accuracy measure)}},
  "dominant_modes": {<label>: [0-based indices into full["frequencies_hz"][<label>]]} (opt),
  "dominant_freq_error": {<label>: [relative error of the matched reduced frequency, same order]} (opt),
  "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},

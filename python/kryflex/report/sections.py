@@ -14,6 +14,12 @@ from .paper import section_paper
 from .schema import _get
 
 ERROR_TEXT = "relative H∞ error per input/output pair over the band"
+
+
+def _error_text(s):
+    """the verdict's measure in words, naming the response it is of (summary "accuracy_measure")"""
+    measure = s.get("accuracy_measure")
+    return f"relative H∞ error of the {measure} response per input/output pair over the band" if measure else ERROR_TEXT
 INFO_TEXT = "information only, not the verdict"
 
 
@@ -90,7 +96,8 @@ def _section_accuracy(c):
                  "`verify.full_order: false`), not measured." if estimated else
                  "It is **measured** against the full-order model at every angle of interest"
                  + (" and at every midpoint between consecutive ones." if s.get("midpoints") else ".")), ""]
-    measure = "relative H∞ error" + (" (estimated)" if estimated else "")
+    measure = f"relative H∞ error ({s['accuracy_measure']})" if s.get("accuracy_measure") else "relative H∞ error"
+    measure += " (estimated)" if estimated else ""
     rows, judged, passed = [], 0, 0
     for label in c.labels:
         err = c.chosen_error(label)
@@ -104,7 +111,7 @@ def _section_accuracy(c):
         judged += verdict != DASH
         passed += verdict == "PASS"
         rows.append([f"{m['label']}°", "midpoint", _fmt_error(m.get("frf_error")), _fmt_error(accuracy), verdict])
-    lines += [f"Table 7. The {c.model_name}'s {ERROR_TEXT} against the accuracy target, at the angles of interest "
+    lines += [f"Table 7. The {c.model_name}'s {_error_text(s)} against the accuracy target, at the angles of interest "
               "and the midpoints between them.", "",
               table(["configuration", "where", measure, "target", "result"], rows, "llrrl"), ""]
     met, worst = s.get("target_met"), s.get("error_max")
@@ -161,7 +168,7 @@ def _section_choice(c):
         chosen_row = s.get("search_chosen")
         lines += [f"The reducer evaluated {len(rows_in)} candidate model(s), smallest first within each family, and "
                   "kept the smallest that meets the target (`reduction.method: auto`: the smaller of the two "
-                  "families; otherwise the family asked for). Error: the " + ERROR_TEXT
+                  "families; otherwise the family asked for). Error: the " + _error_text(s)
                   + (" (estimated)" if s.get("error_estimated") else "") + "."
                   + (" No candidate met the target: the one written is marked." if s.get("target_met") is False
                      else ""), ""]
@@ -246,7 +253,7 @@ def _section_scene(c):
     if any(q != "displacement" for q in quantities):
         text.append("Output quantities: " + ", ".join(f"{o} {q}" for o, q in zip(c.outputs, quantities)) + ".")
     if s.get("accuracy") is not None:
-        text.append(f"Accuracy target: {s['accuracy']:g} of the {ERROR_TEXT} (defined in the next section).")
+        text.append(f"Accuracy target: {s['accuracy']:g} of the {_error_text(s)} (defined in the next section).")
     lines += [" ".join(text), ""]
     settings = s.get("settings") or {}
     if settings:
@@ -589,7 +596,7 @@ def _section_multi(c):
         rows.append([c.short_angle(label), str(single_sys.get(label, DASH)), str(multi_sys.get(label, DASH)),
                      _fmt_error(single_err), _fmt_error(multi_err.get(label))])
     lines += [f"Both models, the {c.model_name} being the one chosen (its errors are the verdict of Table 7); "
-              f"errors: the {ERROR_TEXT}.", "",
+              f"errors: the {_error_text(c.s)}.", "",
               table(["configuration", "single: system dofs", "multi: system dofs", "single: relative H∞ error",
                      "multi: relative H∞ error"], rows), ""]
     if multi.get("moment_ratios"):

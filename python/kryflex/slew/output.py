@@ -17,7 +17,7 @@ def write_csv(rows, path, output_names):
             w.writerow(["%.6g" % r[c] for c in COLUMNS] + ["%.6g" % e for e in r["errors"]])
 
 
-def write_chart(rows, path, title, accuracy, limit, frf_error=None, baseline=None):
+def write_chart(rows, path, title, accuracy, limit, frf_error=None, baseline=None, measure="elastic"):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -29,7 +29,7 @@ def write_chart(rows, path, title, accuracy, limit, frf_error=None, baseline=Non
     ax.loglog(rate, tot, "s--", alpha=0.6, label="total output")
     ax.axhline(accuracy, color="r", lw=1, label="scene accuracy %g" % accuracy)
     if frf_error is not None and frf_error > 0:
-        ax.axhline(frf_error, color="g", lw=1, ls=":", label="frequency-domain error %.3g" % frf_error)
+        ax.axhline(frf_error, color="g", lw=1, ls=":", label="frequency-domain %s error %.3g" % (measure, frf_error))
     if baseline is not None:
         ax.axhline(baseline["error"], color="m", lw=1, ls="-.",
                    label="no slew (angle held), same torque: %.3g" % baseline["error"])
@@ -69,7 +69,7 @@ def write_histories(rows, path, title, output_names):
     plt.close(fig)
 
 
-def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, ffrf=None):
+def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, ffrf=None, measure="elastic"):
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
@@ -86,8 +86,9 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, f
         lines += ["Reduced model untrimmed: highest frequency at %s deg %.4g Hz, stable explicit step 2/omega_max %.3g s "
                   "(reduction.max_frequency trims it)." % (_deg(s.alpha0_deg), s.top_hz, step), ""]
     if frf_error is not None:
-        lines += ["Frequency-domain error of the reduced model (the reduction's verification, max over the angles of "
-                  "interest): %.3g." % frf_error, ""]
+        lines += ["Frequency-domain error of the reduced model (the reduction's verification: relative H-inf error "
+                  "of the %s response per input/output pair, max over the angles of interest): %.3g."
+                  % (measure, frf_error), ""]
     if baseline is not None:
         lines += ["No slew (the slowest slew's torque with the angle held at %s deg): error %.3g (elastic %.3g, total "
                   "%.3g): the reduced model's time-domain error at a fixed angle." % (

@@ -244,7 +244,8 @@ class EstimatorCheck:
 
     def truth_at_angles(self, reducer):
         """The true error of a search's chosen model at the angles of interest (no midpoints): its response on the
-        full-order search's grid against the full-order response there, by the C error measure (KFFRFErrors), worst
+        full-order search's grid against the full-order response there, by the C error measure (KFFRFElasticErrors,
+        on the response the reducer's accuracy_measure names), worst
         over the angles. The truth of the estimator's choice even when the full-order search never tried it. None
         when the binding has no frf_errors."""
         if not hasattr(_core, "frf_errors"):
@@ -255,7 +256,8 @@ class EstimatorCheck:
         for c, angles in enumerate(ref.configurations):
             grid = ref.result(c, "frf_frequencies_hz").ravel()
             Tr = model.at(angles).frf(grid)
-            hinf, _ = _core.frf_errors(ref.frf(c, "full"), Tr, float(self.scene.verify["frf_floor_db"]))
+            hinf, _ = _core.frf_errors(ref.frf(c, "full"), Tr, float(self.scene.verify["frf_floor_db"]),
+                                       rigid=ref.full_rigid(c))
             worst = max(worst, float(hinf)) if not math.isnan(hinf) else math.inf
         return worst
 

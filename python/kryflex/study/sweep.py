@@ -77,7 +77,8 @@ class Study:
         # the kryflex run's (reducer, seconds): the estimator check (estimator.py) reuses its accuracy search
         self.default_run = None
         self.notes = []
-        self.error_measure = ("KFFRFErrors" if self.features["frf_errors"] else
+        self.error_measure = ("KFFRFElasticErrors (%s response)" % getattr(scene, "accuracy_measure", "elastic")
+                              if self.features["frf_errors"] else
                               "KFFRFError fallback: Frobenius norm over pairs, floor 0 dB (= the relative H-inf "
                               "error for one input and one output)")
 
@@ -100,6 +101,8 @@ class Study:
         self.angles = ref.configurations
         self.grids = [ref.result(c, "frf_frequencies_hz").ravel() for c in range(ref.nconfig)]
         self.full = [ref.frf(c, "full") for c in range(ref.nconfig)]
+        # the elastic measure (the scene's accuracy_measure) takes the reference's rigid part out; None: total
+        self.full_rigid = [ref.full_rigid(c) for c in range(ref.nconfig)]
         self.full_min_hz = [float(np.nanmin(ref.result(c, "full_frequencies_hz"))) for c in range(ref.nconfig)]
         self.nrigid = int(ref.result(-1, "rigid_modes").ravel()[0])
         self.full_dofs = int(ref.result(-1, "full_system_dofs").ravel()[0])
@@ -196,7 +199,7 @@ class Study:
             if len(system.frequencies_hz):
                 ratios.append(float(np.min(system.frequencies_hz)) / self.full_min_hz[c])
             Tr = system.frf(self.grids[c])
-            hinf, pw = self.errors(self.full[c], Tr)
+            hinf, pw = self.errors(self.full[c], Tr, self.full_rigid[c])
             pointwise.append(pw)
             if not hinf <= worst[0]:        # NaN counts as the worst
                 worst = (hinf, angle)
@@ -216,10 +219,11 @@ class Study:
         row["failure"] = "; ".join(failures)
         return row
 
-    def errors(self, Tf, Tr):
-        """(relative H-inf error per pair, pointwise error with the floor), both from C."""
+    def errors(self, Tf, Tr, rigid=None):
+        """(relative H-inf error per pair, pointwise error with the floor), both from C, on the elastic response when
+        the reference's rigid part is given."""
         if self.features["frf_errors"]:
-            hinf, pw = _core.frf_errors(Tf, Tr, self.floor_db)
+            hinf, pw = _core.frf_errors(Tf, Tr, self.floor_db, rigid=rigid)
             return float(hinf), float(pw)
         return _core.frf_error(Tf, Tr, 0.0), _core.frf_error(Tf, Tr, self.floor_db)
 

@@ -65,6 +65,7 @@ struct _p_KFReducer {
   PetscReal      *multi;
   KFReducerMethod method;
   PetscReal       band[2], zeta, accuracy;
+  KFAccuracyMeasure accuracy_measure; /* what the accuracy is stated on (KFFRFElasticErrors) */
   PetscInt        moments, output_blocks;
   KFImportance    importance;
   PetscReal       keep_threshold;
@@ -174,6 +175,7 @@ typedef struct _KFEvalPoint {
   KFReducedSystem rich;        /* the estimator's reference, NULL with the full order */
   PetscInt        nw;
   PetscReal      *fhz, *w, *Tre, *Tim; /* grid (Hz, rad/s) and the reference response, nw blocks of t x a */
+  PetscReal      *Tgre, *Tgim; /* its rigid-body and mechanism part on the grid (elastic measure), else NULL */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, PetscInt nmom, const PetscReal L[], KFEvalPoint *);

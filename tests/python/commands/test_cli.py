@@ -206,8 +206,8 @@ def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
     assert errors[0] < 1e-8
     if all(s["krylov"][g]["kept"]):
         assert errors.max() < 1e-8
-    else:
-        assert errors.max() > 1e-8            # truncated: the higher moments are not exact, and are not claimed
+    # truncated, the higher moments are not claimed exact; they need not be far off either: under the elastic
+    # measure the search drops only modes of little content, and Galileo's were measured at 1.4e-9 (45 deg)
     # independently: dense reference with exact rigid modes, against the model file and the full-order moments
     model = kryflex.ReducedModel.load(os.path.join(serial.out, "reduced.h5"))
     for label, config in zip(s["angle_labels"], s["angles_deg"]):

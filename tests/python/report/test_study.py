@@ -91,11 +91,16 @@ def test_errors_match_dense_reference(serial, quiet_library, method, parameter, 
     errors, sizes = [], []
     for c, angles in enumerate(grid.configurations):
         w = 2 * np.pi * grid.result(c, "frf_frequencies_hz").ravel()
-        Tf = ref.modal_frf(*ref.assemble(dense, angles), w, scene.damping)
+        Ms, Ks, Gs, Hs = ref.assemble(dense, angles)
+        Tf = ref.modal_frf(Ms, Ks, Gs, Hs, w, scene.damping)
+        # the scene's measure (elastic by default): the rigid part, from the dense zero-eigenvalue modes, taken out
+        _, phi, rigid = ref._modes(Ms, Ks, ref.RIGID_RTOL)
+        Tg = -((Hs @ phi[:, rigid]) @ (phi[:, rigid].T @ Gs))[None] / (w**2)[:, None, None]
         s = model.at(angles)
         sizes.append(s.dofs)
         Tr = ref.modal_frf(s.M, s.K, s.B, s.C, w, scene.damping)
-        pair = np.abs(Tf - Tr).max(axis=0) / np.abs(Tf).max(axis=0)
+        peak = np.abs(Tf - Tg).max(axis=0)
+        pair = np.abs(Tf - Tr).max(axis=0) / np.maximum(peak, 1e-4 * peak.max())
         errors.append(pair.max())
     assert int(r["system_dofs"]) == max(sizes)
     assert int(r["size_dofs"]) == sum(model.sizes)
@@ -171,7 +176,10 @@ def test_unknown_method_refused(tmp_path):
 def estimator_study(tmp_path_factory):
     """`kryflex study` on Galileo with only the kryflex run swept: the estimator check is part of the study."""
     out = tmp_path_factory.mktemp("estimator")
-    proc = subprocess.run([KRYFLEX, "study", GALILEO, "-o", str(out), "--methods", "kryflex", "-quiet"], env=ENV,
+    # the total measure: under the elastic one Galileo's search has no candidate in the decision band (its errors
+    # jump from 0.0035 to 0.057 around the 0.05 target, measured 2026-11-29), where the estimator's figures are made
+    proc = subprocess.run([KRYFLEX, "study", GALILEO, "-o", str(out), "--methods", "kryflex", "-quiet",
+                           "-kf_accuracy_measure", "total"], env=ENV,
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, "exit %d\n%s\n%s" % (proc.returncode, proc.stdout, proc.stderr)
     from kryflex.study.estimator_output import read_csv
@@ -182,7 +190,8 @@ def estimator_study(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def galileo_searches(quiet_library):
-    """Galileo's accuracy search made here, apart from the study: verify.full_order on and off, with alpha_G auto
+    """Galileo's accuracy search made here (the total measure, as estimator_study), apart from the study:
+    verify.full_order on and off, with alpha_G auto
     (the scene's) and named at each angle of interest in turn (a named alpha_G gives that angle's single-angle rows
     alone: which rows of the auto search belong to which alpha_G, told without the study's reading of the table)."""
     import kryflex
@@ -190,11 +199,12 @@ def galileo_searches(quiet_library):
     scene = load_scene(GALILEO)
     runs = {}
     for verify in (True, False):
-        r = kryflex.Reducer(scene, quiet=True, search=True, verify=verify)
+        r = kryflex.Reducer(scene, quiet=True, search=True, verify=verify, accuracy_measure="total")
         reduction = r.reduce()
         runs[verify, "auto"] = (r, reduction)
         for angles in scene.configurations:
-            named = kryflex.Reducer(scene, quiet=True, search=True, verify=verify, reduction_angle=angles[0])
+            named = kryflex.Reducer(scene, quiet=True, search=True, verify=verify, reduction_angle=angles[0],
+                                    accuracy_measure="total")
             named.reduce()
             runs[verify, angles[0]] = (named, None)
     return scene, runs

@@ -14,13 +14,14 @@ def run(argv):
     def rigid_modes():
         system = _core.CSystem(scene.cscene)
         system.set_angles(scene.angles_rad(scene.configurations[0]))
-        return system.rigid_modes()[1]
-    residual = collective(rigid_modes, (_core.Error, EXIT_NUMERIC, str))
-    collective(lambda: describe(scene, residual))
+        Phi, residual = system.rigid_modes()[:2]
+        return (Phi.getSize()[1] if Phi is not None else 0), residual
+    nr, residual = collective(rigid_modes, (_core.Error, EXIT_NUMERIC, str))
+    collective(lambda: describe(scene, nr, residual))
     return EXIT_OK
 
 
-def describe(scene, residual):
+def describe(scene, nr, residual):
     """The description, on rank 0 (the matrices' nonzero counts are summed over the ranks)."""
     info = scene.info
     nnz = 0
@@ -37,12 +38,15 @@ def describe(scene, residual):
                                                    scene.body_names[j["child"]],
                                                    scene.interfaces[j["child"]][j["child_interface"]],
                                                    "  axis %s" % j["axis"] if j["type"] == "revolute" else ""))
-    nr = 6 + len(scene.revolute)
-    say("  system: %d dofs; %d rigid-body and mechanism modes (6 + %d revolute); rigid-mode residual %.1e at %s deg"
-         % (info["system_dofs"], nr, len(scene.revolute), residual, scene.label(scene.configurations[0])))
+    where = " at %s deg" % scene.label(scene.configurations[0]) if scene.revolute else ""
+    say("  system: %d dofs; %d rigid-body and mechanism modes (of 6 + %d revolute, before boundary conditions and "
+        "dof layouts); rigid-mode residual %.1e%s" % (info["system_dofs"], nr, len(scene.revolute), residual, where))
     say("  inputs: %s" % ", ".join(scene.input_names))
     say("  outputs: %s" % ", ".join(scene.output_names))
-    say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
+    if scene.revolute:
+        say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
+    else:
+        say("  a single configuration (no revolute joint)")
     moments = scene.reduction["moments"]
     if moments in (None, "auto"):
         # the search tries up to moments_max: the memory estimate is for the largest basis it may build

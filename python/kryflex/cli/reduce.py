@@ -106,13 +106,22 @@ def run(argv):
         return EXIT_OK
     how = "estimated, verify.full_order: false" if s.get("error_estimated") else "measured against the full order"
     say("kryflex: max relative frequency-response error (relative H-inf per input/output pair, %s model, %s): "
-        "%.3g at %s deg (target %.3g)%s" % (s.get("chosen_method") or result.model.settings["method"], how, worst,
-                                            where, s["accuracy"], where_text(s)))
+        "%.3g%s (target %.3g)%s" % (s.get("chosen_method") or result.model.settings["method"], how, worst,
+                                    at_text(where), s["accuracy"], where_text(s)))
     if not met:
-        say("kryflex: target missed: max relative FRF error %.3g at %s deg > accuracy %.3g"
-            % (worst, where, s["accuracy"]), sys.stderr)
+        say("kryflex: target missed: max relative FRF error %.3g%s > accuracy %.3g"
+            % (worst, at_text(where), s["accuracy"]), sys.stderr)
         return EXIT_TARGET
     return EXIT_OK
+
+
+# the label of the one configuration of a scene without revolute joints (io/scene.py Scene.label)
+NO_JOINT_LABEL = "fixed"
+
+
+def at_text(label):
+    """' at 30 deg' for a configuration's label; nothing for the one configuration of a scene without revolute joints."""
+    return "" if label == NO_JOINT_LABEL else " at %s deg" % label
 
 
 def chosen_text(result):
@@ -126,6 +135,8 @@ def chosen_text(result):
     if method == "multi-angle" and ch.get("expansion_angles_deg"):
         parts.append("expansion angles %s deg" % ", ".join(
             "/".join("%g" % a for a in (c if isinstance(c, list) else [c])) for c in ch["expansion_angles_deg"]))
+    elif s["reduction_label"] == NO_JOINT_LABEL:
+        parts.append("one configuration (no revolute joint)")
     else:
         parts.append("alpha_G = %s deg" % s["reduction_label"])
     if ch.get("kept_modes") is not None or not ch:

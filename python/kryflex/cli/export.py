@@ -83,7 +83,7 @@ def run(argv):
             len(data.bodies), "y" if len(data.bodies) == 1 else "ies",
             ", ".join("%s: 6 rigid + %d flexible" % (b.name, b.nflex) for b in data.bodies), data.scene, path))
         for r in results or []:
-            say("  %s deg: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
+            say("  %s: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
                 "Exudyn %d, kryflex %s)" % (r["angles_deg"], len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
                                             r["kryflex_rigid"]))
             say("    kryflex (Hz): " + " ".join("%.6g" % x for x in r["kryflex_hz"][:8]))

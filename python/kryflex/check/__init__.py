@@ -19,8 +19,11 @@ import numpy as np
 
 DENSE_MAX = 3000          # dofs: dense spectra (rank of M, null pivots, condition, verification modes) up to this
 SYMMETRY_WARN = 1e-10     # relative Frobenius asymmetry reported above this
-RIGID_ENERGY_WARN = 1e-3  # a rigid mode's Rayleigh frequency above this x the band's top is reported
-NULL_RTOL = 1e-10         # eigenvalues of K below this x the largest count as zero (null pivots)
+RIGID_ENERGY_WARN = 1e-4  # a rigid mode's Rayleigh frequency above this x the first flexible frequency is reported
+                          # (x the band's top / 10 when that frequency is not computed: a large model)
+INDEFINITE_RTOL = 1e-6    # a negative eigenvalue of K beyond this x the largest, or more of them than rigid modes
+NULL_RTOL = 1e-6          # eigenvalues of K below this x the largest count as zero (null pivots; a rounded export
+                          # leaves its rigid modes ~1e-8 of the largest)
 
 
 @dataclasses.dataclass
@@ -98,12 +101,12 @@ def _columns(Phi):
     return [Phi.getColumnVector(j) for j in range(Phi.getSize()[1])] if Phi is not None else []
 
 
-def _rigid_findings(where, f_hz, band, findings):
+def _rigid_findings(where, f_hz, f_ref, findings):
     worst = float(np.max(np.abs(f_hz))) if len(f_hz) else 0.0
-    if worst > RIGID_ENERGY_WARN * band[1]:
+    if worst > RIGID_ENERGY_WARN * f_ref:
         findings.append(Finding(
-            where, "the stiffness carries energy in its geometric rigid-body modes: Rayleigh frequencies %s Hz (the "
-            "band's top is %g Hz)" % (", ".join("%.3g" % x for x in f_hz), band[1]),
+            where, "the stiffness carries energy in its geometric rigid-body modes: Rayleigh frequencies %s Hz (%.1e of "
+            "%.4g Hz)" % (", ".join("%.3g" % x for x in f_hz), worst / f_ref, f_ref),
             "the flexible frequencies then shift by about that much and the block solves stay above the refinement "
             "threshold (a stiffness rounded when exported, e.g. to 8 digits in a Nastran punch, or a support the "
             "scene does not declare)",
@@ -123,7 +126,7 @@ def check_scene(scene, system=None):
     Phi, residual = system.rigid_modes()[:2]
     cols = _columns(Phi)
     Ms, Ks = system.matrices()[:2]
-    findings, bodies = [], []
+    findings, bodies, rigid_b = [], [], []
     n_sys = Ks.getSize()[0]
     for b, name in enumerate(scene.body_names):
         where = "body '%s'" % name
@@ -139,7 +142,7 @@ def check_scene(scene, system=None):
         asym = {"K": _asymmetry(K), "M": _asymmetry(M)}
         zeros = _diagonal_zeros(M)
         fact = dict(name=name, dofs=K.getSize()[0], rigid_hz=f_b.tolist(), asymmetry=asym, massless_dofs=len(zeros))
-        _rigid_findings(where, f_b, band, findings)
+        rigid_b.append((where, f_b))
         for key, val in asym.items():
             if val > SYMMETRY_WARN:
                 findings.append(Finding(where, "%s is not symmetric: ||%s - %s^T||_F / ||%s||_F = %.2e" % (key, key, key, key, val),
@@ -156,13 +159,17 @@ def check_scene(scene, system=None):
     f_sys = rigid_hz(kr, mr)
     facts = dict(system_dofs=n_sys, rigid_modes=len(cols), rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
                  bodies=bodies, band_hz=band, dense=n_sys <= DENSE_MAX)
-    _rigid_findings("system", f_sys, band, findings)
+    dense = []
     if n_sys <= DENSE_MAX:
-        _dense_findings(_dense(Ms), _dense(Ks), len(cols), band, facts, findings)
+        _dense_findings(_dense(Ms), _dense(Ks), len(cols), band, facts, dense)
     else:
         facts["dense_skipped"] = "the system has %d dofs > %d: M's rank, K's null pivots, its condition and the " \
                                  "verification's mode count were not computed" % (n_sys, DENSE_MAX)
-    return facts, findings
+    f_ref = facts.get("first_flexible_hz") or band[1] / 10
+    _rigid_findings("system", f_sys, f_ref, findings)
+    for where, f_b in (rigid_b if len(rigid_b) > 1 else []):   # one body: the system's finding says it
+        _rigid_findings(where, f_b, f_ref, findings)
+    return facts, findings + dense
 
 
 def _dense_findings(M, K, nrigid, band, facts, findings):
@@ -173,8 +180,11 @@ def _dense_findings(M, K, nrigid, band, facts, findings):
     zero_diag = int(np.sum(np.diag(M) <= 0))
     wk = np.linalg.eigvalsh(0.5 * (K + K.T))
     ktop = max(abs(wk).max(), 1e-300)
-    nnull = int(np.sum(wk <= NULL_RTOL * ktop))
-    negative = float(wk[0]) if wk[0] < -NULL_RTOL * ktop else None
+    nnull = int(np.sum(np.abs(wk) <= NULL_RTOL * ktop))
+    # a rounded stiffness gives its rigid modes small eigenvalues of either sign: that is rigid-body energy (reported
+    # from the Rayleigh quotients); indefinite is a larger negative one, or more of them than rigid modes
+    nneg = int(np.sum(wk < -NULL_RTOL * ktop))
+    negative = float(wk[0]) if (wk[0] < -INDEFINITE_RTOL * ktop or nneg > nrigid) else None
     flex = wk[nrigid:] if nrigid < len(wk) else np.zeros(0)
     cond = float(ktop / flex[0]) if len(flex) and flex[0] > 0 else float("inf")
     facts.update(mass_rank=len(wm) - null_m, mass_null=null_m, mass_zero_diagonal=zero_diag, stiffness_null=nnull,

@@ -21,9 +21,8 @@ DENSE_MAX = 3000          # dofs: dense spectra (rank of M, null pivots, conditi
 SYMMETRY_WARN = 1e-10     # relative Frobenius asymmetry reported above this
 RIGID_ENERGY_WARN = 1e-4  # a rigid mode's Rayleigh frequency above this x the first flexible frequency is reported
                           # (x the band's top / 10 when that frequency is not computed: a large model)
-INDEFINITE_RTOL = 1e-6    # a negative eigenvalue of K beyond this x the largest, or more of them than rigid modes
-NULL_RTOL = 1e-6          # eigenvalues of K below this x the largest count as zero (null pivots; a rounded export
-                          # leaves its rigid modes ~1e-8 of the largest)
+NULL_RTOL = 1e-12         # eigenvalues of K below this x the largest count as zero (null pivots), or below
+RIGID_MARGIN = 100.0      # this x the largest rigid-mode Rayleigh quotient (a rounded export's rigid energy)
 
 
 @dataclasses.dataclass
@@ -161,7 +160,8 @@ def check_scene(scene, system=None):
                  bodies=bodies, band_hz=band, dense=n_sys <= DENSE_MAX)
     dense = []
     if n_sys <= DENSE_MAX:
-        _dense_findings(_dense(Ms), _dense(Ks), len(cols), band, facts, dense)
+        lam_r = float(np.max(np.abs(2 * np.pi * f_sys) ** 2)) if len(f_sys) else 0.0
+        _dense_findings(_dense(Ms), _dense(Ks), len(cols), lam_r, band, facts, dense)
     else:
         facts["dense_skipped"] = "the system has %d dofs > %d: M's rank, K's null pivots, its condition and the " \
                                  "verification's mode count were not computed" % (n_sys, DENSE_MAX)
@@ -172,7 +172,7 @@ def check_scene(scene, system=None):
     return facts, findings + dense
 
 
-def _dense_findings(M, K, nrigid, band, facts, findings):
+def _dense_findings(M, K, nrigid, lam_r, band, facts, findings):
     import scipy.linalg as sl
     wm = np.linalg.eigvalsh(0.5 * (M + M.T))
     mtop = max(abs(wm).max(), 1e-300)
@@ -180,11 +180,11 @@ def _dense_findings(M, K, nrigid, band, facts, findings):
     zero_diag = int(np.sum(np.diag(M) <= 0))
     wk = np.linalg.eigvalsh(0.5 * (K + K.T))
     ktop = max(abs(wk).max(), 1e-300)
-    nnull = int(np.sum(np.abs(wk) <= NULL_RTOL * ktop))
+    zero = max(NULL_RTOL * ktop, RIGID_MARGIN * lam_r)
+    nnull = int(np.sum(np.abs(wk) <= zero))
     # a rounded stiffness gives its rigid modes small eigenvalues of either sign: that is rigid-body energy (reported
     # from the Rayleigh quotients); indefinite is a larger negative one, or more of them than rigid modes
-    nneg = int(np.sum(wk < -NULL_RTOL * ktop))
-    negative = float(wk[0]) if (wk[0] < -INDEFINITE_RTOL * ktop or nneg > nrigid) else None
+    negative = float(wk[0]) if wk[0] < -zero else None
     flex = wk[nrigid:] if nrigid < len(wk) else np.zeros(0)
     cond = float(ktop / flex[0]) if len(flex) and flex[0] > 0 else float("inf")
     facts.update(mass_rank=len(wm) - null_m, mass_null=null_m, mass_zero_diagonal=zero_diag, stiffness_null=nnull,
@@ -209,8 +209,9 @@ def _dense_findings(M, K, nrigid, band, facts, findings):
     try:
         mu = sl.eigh(M, K + s * M, eigvals_only=True)
         lam = 1.0 / mu[mu > 1e-14 * max(mu.max(), 1e-300)] - s
-        need = int(np.sum((lam > NULL_RTOL * ktop) & (lam <= (2 * np.pi * 3 * band[1]) ** 2)))
-        first = lam[lam > NULL_RTOL * ktop]
+        # the geometric rigid modes are the nrigid lowest (their computed values carry the shift's round-off)
+        first = np.sort(lam)[nrigid:]
+        need = int(np.sum(first <= (2 * np.pi * 3 * band[1]) ** 2))
         facts.update(verification_modes=need, first_flexible_hz=float(np.sqrt(first.min()) / (2 * np.pi))
                      if len(first) else None)
     except (np.linalg.LinAlgError, ValueError):

@@ -186,7 +186,7 @@ def _dense_findings(M, K, nrigid, lam_r, band, facts, findings):
     # from the Rayleigh quotients); indefinite is a larger negative one, or more of them than rigid modes
     negative = float(wk[0]) if wk[0] < -zero else None
     flex = wk[nrigid:] if nrigid < len(wk) else np.zeros(0)
-    cond = float(ktop / flex[0]) if len(flex) and flex[0] > 0 else float("inf")
+    cond = float(ktop / flex[0]) if len(flex) and flex[0] > 0 else None    # None: K singular on its flexible part
     facts.update(mass_rank=len(wm) - null_m, mass_null=null_m, mass_zero_diagonal=zero_diag, stiffness_null=nnull,
                  stiffness_condition=cond)
     if null_m > zero_diag:
@@ -216,4 +216,3 @@ def _dense_findings(M, K, nrigid, lam_r, band, facts, findings):
                      if len(first) else None)
     except (np.linalg.LinAlgError, ValueError):
         facts.update(verification_modes=None, first_flexible_hz=None)
-    facts["findings_note"] = "condition of K on its flexible part: %.2e" % cond

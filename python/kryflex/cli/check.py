@@ -29,9 +29,10 @@ def run(argv):
             b["name"], b["dofs"], b["asymmetry"]["K"], b["asymmetry"]["M"], b["massless_dofs"],
             " ".join("%.3g" % x for x in b["rigid_hz"]) or "-"))
     if facts["dense"]:
+        cond = facts["stiffness_condition"]
         say("  M rank %d of %d (%d zero-diagonal dofs); K: %d near-zero eigenvalues (null pivots), condition on its "
-            "flexible part %.2e" % (facts["mass_rank"], facts["system_dofs"], facts["mass_zero_diagonal"],
-                                    facts["stiffness_null"], facts["stiffness_condition"]))
+            "flexible part %s" % (facts["mass_rank"], facts["system_dofs"], facts["mass_zero_diagonal"],
+                                  facts["stiffness_null"], "%.2e" % cond if cond else "infinite"))
         if facts.get("verification_modes") is not None:
             say("  verification: %d full-order modes below 3 x the band's top (%g Hz); first flexible frequency %.6g Hz"
                 % (facts["verification_modes"], 3 * facts["band_hz"][1], facts["first_flexible_hz"] or float("nan")))

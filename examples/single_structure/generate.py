@@ -1,9 +1,15 @@
 #!/usr/bin/python3
-"""A single structure without joints: a free-free plate-like grillage of beams in the xy plane, written with only its
-out-of-plane dofs (uz, rx, ry per node: nodes 'c345', as a plate model exports them), 3 rigid-body modes.
+"""Single structures without joints, the models of docs/guide/real-models.md:
 
-Writes plate_M.mtx, plate_K.mtx, plate_C.mtx (a small Rayleigh-like damping matrix) and plate_nodes.txt beside this
-file; plate.yaml (committed) reads them. Run: /usr/bin/python3 examples/single_structure/generate.py
+- a free-free plate-like grillage of beams in the xy plane (irregular spacing), written with only its out-of-plane
+  dofs (uz, rx, ry per node: nodes 'c345', as a plate model exports them), 3 rigid-body modes:
+  plate_M.mtx, plate_K.mtx (17 digits), plate_C.mtx (a stiffness-proportional damping matrix), plate_nodes.txt
+  (read by plate.yaml), and plate.pch: the same plate as a Nastran DMIG punch (KAAX, MAAX, 8 significant digits as a
+  punch writes them, with its GRID cards);
+- a cantilever beam (6 dofs per node, clamped end removed) as MORwiki-style MATLAB files: beam.mat (M, D, K, B, C)
+  and damped.mat (M, E, K, B, Cp, Cv: a displacement and a velocity output).
+
+Run: /usr/bin/python3 examples/single_structure/generate.py
 """
 import os
 
@@ -41,7 +47,7 @@ def beam_element(xa, xb, E=70e9, G=27e9, A=1e-3, Iy=4e-7, Iz=4e-7, rho=2700.0):
     return T.T @ k @ T, T.T @ m @ T
 
 
-def plate(nx=5, ny=4, hx=0.5, hy=0.5):
+def plate(nx=5, ny=4, hx=0.37, hy=0.43):
     """K, M on (uz, rx, ry) per node and the node rows (id, x, y, z, 'c345')."""
     pts = [(i * hx, j * hy, 0.0) for j in range(ny) for i in range(nx)]
     n = len(pts)
@@ -60,6 +66,33 @@ def plate(nx=5, ny=4, hx=0.5, hy=0.5):
     return K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], nodes
 
 
+def beam(n=11, length=2.0):
+    """K, M of a beam along x with 6 dofs per node, node 1 clamped (its dofs removed)."""
+    pts = [(x, 0.0, 0.0) for x in np.linspace(0, length, n)]
+    K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
+    for e in range(n - 1):
+        k, m = beam_element(pts[e], pts[e + 1], Iy=2e-7, Iz=3e-7)
+        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += k
+        M[6 * e:6 * e + 12, 6 * e:6 * e + 12] += m
+    return K[6:, 6:], M[6:, 6:]
+
+
+def dmig_star(name, A, dofs):
+    """Long-field DMIG* cards (upper triangle, IFO 6, 8 significant digits), as Nastran punches them."""
+    lines = ["%-8s%-16s%16s%16s%16s" % ("DMIG*", name, "0", "6", "2"),
+             "%-8s%16s%16s%16s%16s" % ("*", "0", "", "", len(dofs))]
+    for j, (gj, cj) in enumerate(dofs):
+        rows = [i for i in range(j + 1) if A[i, j] != 0]
+        fields = [name, str(gj), str(cj), ""]
+        for i in rows:
+            fields += [str(dofs[i][0]), str(dofs[i][1]), "%.7E" % A[i, j], ""]
+        for k in range(0, len(fields), 4):
+            chunk = fields[k:k + 4]
+            head = "DMIG*" if k == 0 else "*"
+            lines.append("%-8s" % head + "".join(("%-16s" if f[:1].isalpha() else "%16s") % f for f in chunk))
+    return lines
+
+
 def main():
     K, M, nodes = plate()
     C = 1e-5 * K      # a stiffness-proportional damping matrix (leaves the rigid motions undamped)
@@ -70,7 +103,26 @@ def main():
     with open(os.path.join(HERE, "plate_nodes.txt"), "w") as f:
         f.write("# id x y z dofs: a 5 x 4 grillage in the xy plane, uz rx ry per node\n")
         for r in nodes:
-            f.write("%d %g %g %g %s\n" % r)
+            f.write("%d %r %r %r %s\n" % r)
+    dofs = [(r[0], c) for r in nodes for c in (3, 4, 5)]
+    with open(os.path.join(HERE, "plate.pch"), "w") as f:
+        f.write("$ the single_structure plate as a DMIG punch (PARAM,EXTOUT,DMIGPCH style), generate.py\n")
+        for r in nodes:
+            f.write("%-8s%8d%8s%8s%8s%8s\n" % ("GRID", r[0], "", *("%.4f" % x for x in r[1:4])))
+        f.write("\n".join(dmig_star("KAAX", K, dofs) + dmig_star("MAAX", M, dofs)) + "\n")
+    # MORwiki-style second-order models: M q'' + D q' + K q = B u, y = C q (or Cp q + Cv q')
+    Kb, Mb = beam()
+    n = len(Kb)
+    B = np.zeros((n, 1))
+    B[n - 4, 0] = 1.0                     # a force along z at the tip (node 11: dofs n-6 .. n-1, uz is n-4)
+    C = np.zeros((2, n))
+    C[0, n - 4] = 1.0                     # tip uz
+    C[1, n - 6 * 5 - 4] = 1.0             # uz at node 6
+    scipy.io.savemat(os.path.join(HERE, "beam.mat"), dict(M=sp.csc_matrix(Mb), K=sp.csc_matrix(Kb),
+                                                          D=sp.csc_matrix(2e-5 * Kb), B=B, C=C))
+    scipy.io.savemat(os.path.join(HERE, "damped.mat"), dict(M=sp.csc_matrix(Mb), K=sp.csc_matrix(Kb),
+                                                            E=sp.csc_matrix(1e-5 * Kb + 0.5 * Mb), B=B, Cp=C[:1],
+                                                            Cv=C[1:]))
 
 
 if __name__ == "__main__":

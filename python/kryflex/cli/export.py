@@ -84,7 +84,7 @@ def run(argv):
             ", ".join("%s: 6 rigid + %d flexible" % (b.name, b.nflex) for b in data.bodies), data.scene, path))
         for r in results or []:
             say("  %s: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
-                "Exudyn %d, kryflex %s)" % (r["angles_deg"], len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
+                "Exudyn %d, kryflex %s)" % ("%s deg" % r["angles_deg"] if r["angles_deg"] else "no revolute joint", len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
                                             r["kryflex_rigid"]))
             say("    kryflex (Hz): " + " ".join("%.6g" % x for x in r["kryflex_hz"][:8]))
             say("    Exudyn  (Hz): " + " ".join("%.6g" % x for x in r["exudyn_hz"][:8]))

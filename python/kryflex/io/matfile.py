@@ -32,7 +32,7 @@ def _load(path):
     except NotImplementedError:
         raise ConversionError(f"{path} is a MATLAB v7.3 (HDF5) file, which scipy.io.loadmat cannot read: save it "
                               "again in MATLAB with save(..., '-v7')") from None
-    except (ValueError, OSError, TypeError) as exc:
+    except Exception as exc:  # noqa: BLE001 - loadmat raises ValueError, IndexError, TypeError, ... on a foreign file
         raise ConversionError(f"{path}: not a MATLAB .mat file scipy can read ({exc})") from None
     return {k: v for k, v in data.items() if not k.startswith("__")}
 

@@ -19,8 +19,8 @@ import numpy as np
 
 DENSE_MAX = 3000          # dofs: dense spectra (rank of M, null pivots, condition, verification modes) up to this
 SYMMETRY_WARN = 1e-10     # relative Frobenius asymmetry reported above this
-RIGID_ENERGY_WARN = 1e-4  # a rigid mode's Rayleigh frequency above this x the first flexible frequency is reported
-                          # (x the band's top / 10 when that frequency is not computed: a large model)
+RIGID_ENERGY_RTOL = 1e-11 # a rigid mode's Rayleigh quotient above this x ||K||_F / ||M||_F is reported: round-off
+                          # leaves ~1e-16 of it, a stiffness rounded to 8 digits ~1e-9
 NULL_RTOL = 1e-12         # eigenvalues of K below this x the largest count as zero (null pivots), or below
 RIGID_MARGIN = 100.0      # this x the largest rigid-mode Rayleigh quotient (a rounded export's rigid energy)
 
@@ -32,6 +32,8 @@ class Finding:
     effect: str           # what it does to a reduction
     fix: str              # the option or the fix that applies
     severity: str = "warning"   # 'warning' or 'note'
+    refused: bool = False       # the reduction refuses this model itself, with its own message (kryflex reduce
+                                # then leaves the warning out: one error line)
 
     def text(self):
         return "%s: %s; %s; %s" % (self.where, self.what, self.effect, self.fix)
@@ -100,9 +102,15 @@ def _columns(Phi):
     return [Phi.getColumnVector(j) for j in range(Phi.getSize()[1])] if Phi is not None else []
 
 
-def _rigid_findings(where, f_hz, f_ref, findings):
+def _scale(K, M):
+    from petsc4py import PETSc
+    nm = M.norm(PETSc.NormType.FROBENIUS)
+    return float(K.norm(PETSc.NormType.FROBENIUS) / nm) if nm > 0 else 0.0
+
+
+def _rigid_findings(where, f_hz, scale, f_ref, findings):
     worst = float(np.max(np.abs(f_hz))) if len(f_hz) else 0.0
-    if worst > RIGID_ENERGY_WARN * f_ref:
+    if (2 * np.pi * worst) ** 2 > RIGID_ENERGY_RTOL * scale:
         findings.append(Finding(
             where, "the stiffness carries energy in its geometric rigid-body modes: Rayleigh frequencies %s Hz (%.1e of "
             "%.4g Hz)" % (", ".join("%.3g" % x for x in f_hz), worst / f_ref, f_ref),
@@ -141,7 +149,7 @@ def check_scene(scene, system=None):
         asym = {"K": _asymmetry(K), "M": _asymmetry(M)}
         zeros = _diagonal_zeros(M)
         fact = dict(name=name, dofs=K.getSize()[0], rigid_hz=f_b.tolist(), asymmetry=asym, massless_dofs=len(zeros))
-        rigid_b.append((where, f_b))
+        rigid_b.append((where, f_b, _scale(K, M)))
         for key, val in asym.items():
             if val > SYMMETRY_WARN:
                 findings.append(Finding(where, "%s is not symmetric: ||%s - %s^T||_F / ||%s||_F = %.2e" % (key, key, key, key, val),
@@ -165,10 +173,10 @@ def check_scene(scene, system=None):
     else:
         facts["dense_skipped"] = "the system has %d dofs > %d: M's rank, K's null pivots, its condition and the " \
                                  "verification's mode count were not computed" % (n_sys, DENSE_MAX)
-    f_ref = facts.get("first_flexible_hz") or band[1] / 10
-    _rigid_findings("system", f_sys, f_ref, findings)
-    for where, f_b in (rigid_b if len(rigid_b) > 1 else []):   # one body: the system's finding says it
-        _rigid_findings(where, f_b, f_ref, findings)
+    f_ref = max(facts.get("first_flexible_hz") or band[1] / 10, band[0])
+    _rigid_findings("system", f_sys, _scale(Ks, Ms), f_ref, findings)
+    for where, f_b, scale in (rigid_b if len(rigid_b) > 1 else []):   # one body: the system's finding says it
+        _rigid_findings(where, f_b, scale, f_ref, findings)
     return facts, findings + dense
 
 
@@ -197,20 +205,22 @@ def _dense_findings(M, K, nrigid, lam_r, band, facts, findings):
     if negative is not None:
         findings.append(Finding("system", "K is indefinite: smallest eigenvalue %.3e (%.1e of the largest)"
                                 % (negative, negative / ktop), "a reduction fails at the factorization (negative pivot)",
-                                "check the export: signs, units, a constraint eliminated wrongly"))
+                                "check the export: signs, units, a constraint eliminated wrongly", refused=True))
     elif nnull != nrigid:
         findings.append(Finding("system", "K has %d near-zero eigenvalues (null pivots of a factorization) but the "
                                 "geometry gives %d rigid-body and mechanism modes" % (nnull, nrigid),
                                 "more: an undeclared mechanism, refused by the held-dof factorization; fewer: a support "
                                 "K holds that the scene does not declare, refused by the rigid check",
-                                "declare the supports (constraints, springs, a joint to ground) or fix the model"))
+                                "declare the supports (constraints, springs, a joint to ground) or fix the model",
+                                refused=True))
     # the verification's modes: below 3 x the band's top, from K + s M (s > 0 keeps it definite on the rigid modes)
     s = (2 * np.pi * band[1]) ** 2 * 1e-3
     try:
         mu = sl.eigh(M, K + s * M, eigvals_only=True)
         lam = 1.0 / mu[mu > 1e-14 * max(mu.max(), 1e-300)] - s
-        # the geometric rigid modes are the nrigid lowest (their computed values carry the shift's round-off)
-        first = np.sort(lam)[nrigid:]
+        # the geometric rigid modes are the nrigid lowest (their computed values carry the shift's round-off), and
+        # any further null pivot is an undeclared mechanism, not a flexible mode
+        first = np.sort(lam)[max(nrigid, nnull):]
         need = int(np.sum(first <= (2 * np.pi * 3 * band[1]) ** 2))
         facts.update(verification_modes=need, first_flexible_hz=float(np.sqrt(first.min()) / (2 * np.pi))
                      if len(first) else None)

@@ -62,7 +62,7 @@ def run(argv):
         # the model check (kryflex check): its warnings before any work, also under -quiet
         health = collective(lambda: model_check(scene))
         for f in (health[1] if health else []):
-            if f.severity == "warning":
+            if f.severity == "warning" and not f.refused:
                 say("kryflex: warning: %s" % f.text(), sys.stderr)
 
         # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank

@@ -5,7 +5,8 @@
   dofs (uz, rx, ry per node: nodes 'c345', as a plate model exports them), 3 rigid-body modes:
   plate_M.mtx, plate_K.mtx (17 digits), plate_C.mtx (a stiffness-proportional damping matrix), plate_nodes.txt
   (read by plate.yaml), and plate.pch: the same plate as a Nastran DMIG punch (KAAX, MAAX, 8 significant digits as a
-  punch writes them, with its GRID cards);
+  punch writes them, with its GRID cards), also split as plate_dmig.pch + plate_grids.bdf and with a run's plate.f06
+  (its bulk-data echo); a free beam with 6-dof nodes and a damping matrix (beam_free_*, read by beam_free.yaml);
 - a cantilever beam (6 dofs per node, clamped end removed) as MORwiki-style MATLAB files: beam.mat (M, D, K, B, C)
   and damped.mat (M, E, K, B, Cp, Cv: a displacement and a velocity output).
 
@@ -128,6 +129,21 @@ def main():
         f.write("SOL 103\nCEND\nBEGIN BULK\n" + "\n".join(x for x in lines if x.startswith("GRID")) + "\nENDDATA\n")
     with open(os.path.join(HERE, "plate_dmig.pch"), "w") as f:
         f.write("\n".join(x for x in lines if not x.startswith("GRID")) + "\n")
+    # a run's .f06: its sorted bulk-data echo holds the GRID cards (a page break inside it, as Nastran prints it)
+    grids = [x for x in lines if x.startswith("GRID")]
+    page = "1    SINGLE STRUCTURE PLATE                                        NOVEMBER  29, 2026  MSC Nastran   PAGE %5d\n"
+    head = ("0                                                 S O R T E D   B U L K   D A T A   E C H O\n"
+            "                 ENTRY\n                 COUNT        .   1  ..   2  ..   3  ..   4  ..   5  ..   6  ..   "
+            "7  ..   8  ..   9  ..  10  .\n")
+    with open(os.path.join(HERE, "plate.f06"), "w") as f:
+        f.write(page % 1 + "0        N A S T R A N    E X E C U T I V E    C O N T R O L    E C H O\n     SOL 103\n"
+                "     CEND\n" + page % 2 + head)
+        for k, card in enumerate(grids + ["ENDDATA"], start=1):
+            if k == 11:
+                f.write(page % 3 + head)
+            f.write("%20d-        %s\n" % (k, card))
+        f.write("                        TOTAL COUNT=       %d\n" % (len(grids) + 1))
+        f.write(page % 4 + "0                                           R E A L   E I G E N V A L U E S\n")
     # a free beam with 6 dofs per node and a damping matrix: beam_free.yaml
     Kf, Mf, nf = free_beam()
     for key, A in (("K", Kf), ("M", Mf), ("C", 2e-5 * Kf)):

@@ -313,6 +313,26 @@ def test_reassemble_angles(reduced):
 
 @needs_cli
 @pytest.mark.slow
+@pytest.mark.mpi
+def test_reassemble_and_export_on_two_ranks(reduced, tmp_path):
+    """The same reassembled matrices and neutral file on 2 ranks as on 1."""
+    for name in ("plate", "beam"):
+        path = str(reduced / name / "reduced.h5")
+        for n in (1, 2):
+            assert run(["reassemble", path, "-o", str(tmp_path / ("%s%d.npz" % (name, n)))], ranks=n).returncode == 0
+        a, b = np.load(tmp_path / ("%s1.npz" % name)), np.load(tmp_path / ("%s2.npz" % name))
+        assert sorted(a.files) == sorted(b.files) and all(np.array_equal(a[k], b[k]) for k in a.files)
+    beam = str(reduced / "beam" / "reduced.h5")
+    for n in (1, 2):
+        assert run(["export", beam, "-o", str(tmp_path / ("e%d.npz" % n))], ranks=n).returncode == 0
+    a, b = np.load(tmp_path / "e1.npz"), np.load(tmp_path / "e2.npz")
+    assert all(np.array_equal(a[k], b[k]) for k in a.files)
+    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")], ranks=2)
+    assert p.returncode == 5 and "ux uy rz" in one_error(p)
+
+
+@needs_cli
+@pytest.mark.slow
 def test_export_single_structures(reduced, tmp_path):
     beam = str(reduced / "beam" / "reduced.h5")
     p = run(["export", beam, "-o", str(tmp_path / "b.npz"), "--format", "exudyn", "--json"])

@@ -162,6 +162,15 @@ def test_rounded_punch_reports_rigid_energy(guide_run):
     assert "## Model check" in open(os.path.join(work, "out", "nastran", "report.md")).read()
 
 
+def test_three_nastran_routes_write_one_body(guide_run):
+    """The punch with its GRIDs, the punch with a .bdf, the punch with an .f06: the same nodes and matrices."""
+    work, _ = guide_run
+    files = ["plate_nodes.txt", "plate_K.petsc", "plate_M.petsc"]
+    first = [open(os.path.join(work, "nastran", f), "rb").read() for f in files]
+    for folder in ("nastran_bdf", "nastran_f06"):
+        assert [open(os.path.join(work, folder, f), "rb").read() for f in files] == first, folder
+
+
 def test_matlab_models_against_a_dense_direct_solve(guide_run):
     """The .mat models reduced through the written scene: the reduced FRF against (K - w^2 M + i w D)^-1 B computed
     here from the .mat file; serial and 2-rank runs agree."""

@@ -455,18 +455,18 @@ def main(argv=None):
             return EXIT_BAD_INPUT
     _print_warnings(caught)
     if "mat" not in call and "keys" in call:
-        print(f"kryflex convert: model '{args.name}': {done['dofs']} dofs (scalar points), {done['inputs']} input(s), "
+        say(f"kryflex convert: model '{args.name}': {done['dofs']} dofs (scalar points), {done['inputs']} input(s), "
               f"{done['outputs']} output(s), damping matrix {done['damping'] or 'none'}; first flexible frequency "
               + (f"{done['first_hz']:.6g} Hz" if done["first_hz"] else "not computed (large model)"))
-        print(f"  scene     {done['scene']}  (band and accuracy are guesses: edit them)")
-        print(f"Run: kryflex reduce {done['scene']} -o OUTDIR")
+        say(f"  scene     {done['scene']}  (band and accuracy are guesses: edit them)")
+        say(f"Run: kryflex reduce {done['scene']} -o OUTDIR")
         return 0
     interfaces = ", ".join(f"{k}={v}" for k, v in body.interfaces.items()) or "none"
-    print(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
+    say(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
           f"interfaces {interfaces}")
     for key in ("mass", "stiffness", "nodes", "snippet"):
-        print(f"  {key:9s} {body.files[key]}")
-    print(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
+        say(f"  {key:9s} {body.files[key]}")
+    say(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
     return 0
 
 

@@ -1,4 +1,4 @@
-"""The kryflex command: reduce, reassemble, info, study, slew, export, convert. Runs alone or under mpirun.
+"""The kryflex command: reduce, reassemble, info, check, study, slew, export, convert. Runs alone or under mpirun.
 
 Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)

@@ -55,9 +55,11 @@ def describe(scene, nr, residual):
     else:
         most = int(moments)
         moments_text = "%d moments" % most
-    say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error per input/output pair), %s"
-         % (scene.band[0], scene.band[1], scene.damping, scene.accuracy, moments_text))
-    if not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None):
+    detailed = not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None)
+    say("  band %g-%g Hz, %saccuracy target %g (relative H-inf error per input/output pair), %s"
+        % (scene.band[0], scene.band[1], "" if detailed else "damping %g, " % scene.damping, scene.accuracy,
+           moments_text))
+    if detailed:
         from ..report.sections import damping_text
         say("  damping: %s%s" % (damping_text(scene.damping_model),
                                  "; viscous damping matrices on " + ", ".join(scene.damping_matrices)

@@ -28,6 +28,9 @@ def run(argv):
         say("  body %-16s %8d dofs  asymmetry K %.1e M %.1e  massless dofs %d  rigid energy (Hz) %s" % (
             b["name"], b["dofs"], b["asymmetry"]["K"], b["asymmetry"]["M"], b["massless_dofs"],
             " ".join("%.3g" % x for x in b["rigid_hz"]) or "-"))
+    if "factor_null_pivots" in facts:
+        say("  MUMPS factorization of K: %d null pivots, %d negative pivots (ICNTL(24) null-pivot detection: a cross-check, threshold-dependent)"
+            % (facts["factor_null_pivots"], facts["factor_negative_pivots"]))
     if facts["dense"]:
         cond = facts["stiffness_condition"]
         say("  M rank %d of %d (%d zero-diagonal dofs); K: %d near-zero eigenvalues (null pivots), condition on its "

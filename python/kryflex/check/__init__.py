@@ -150,8 +150,9 @@ def _rigid_findings(where, f_hz, scale, f_ref, findings):
     return worst
 
 
-def check_scene(scene, system=None):
-    """The health report of a loaded Scene: (facts: dict for JSON, findings: [Finding]). Collective."""
+def check_scene(scene, system=None, factor=True):
+    """The health report of a loaded Scene: (facts: dict for JSON, findings: [Finding]). Collective. factor=False
+    leaves out the MUMPS factorization of K (kryflex reduce: its own factorizations follow)."""
     from .. import _core
     band = list(scene.band)
     if system is None:
@@ -194,7 +195,7 @@ def check_scene(scene, system=None):
     facts = dict(system_dofs=n_sys, rigid_modes=len(cols), rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
                  bodies=bodies, band_hz=band, dense=n_sys <= DENSE_MAX)
     dense = []
-    pivots = factor_pivots(Ks)
+    pivots = factor_pivots(Ks) if factor else None
     if pivots is not None:
         facts.update(factor_null_pivots=pivots[0], factor_negative_pivots=pivots[1])
     if n_sys <= DENSE_MAX:

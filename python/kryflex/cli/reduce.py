@@ -140,7 +140,7 @@ def model_check(scene):
     from .. import _core
     from ..check import check_scene
     try:
-        return check_scene(scene)
+        return check_scene(scene, factor=False)
     except _core.Error:
         return None
 

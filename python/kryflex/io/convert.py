@@ -314,9 +314,10 @@ def build_parser():
         prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Convert an exported FE model (Nastran DMIG punch file with GRIDs from bulk data or an "
                     ".f06, Nastran OP4 + nodes file, NumPy .npz, or Matrix Market / PETSc matrices + nodes file) "
-                    "into a kryflex body.",
+                    "into a kryflex body; or a MATLAB .mat second-order model (M, K, D/E, B, C or Cp/Cv) into a "
+                    "body, its input/output vectors and a scene that runs as is.",
         epilog=USAGE_EXAMPLES)
-    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), or a .npz")
+    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), a .npz, or a MATLAB .mat")
     parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
     parser.add_argument("--stiffness", metavar="FILE", help="stiffness matrix (.mtx or .petsc)")
     parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z dofs per line: 6, 3, c<components> or s)")

@@ -455,19 +455,22 @@ def main(argv=None):
             error(str(exc))
             return EXIT_BAD_INPUT
     _print_warnings(caught)
+
+    def out(text):   # the standard output of now (a test's capture), a closed pipe silenced (cli.common.say)
+        say(text, sys.stdout)
     if "mat" not in call and "keys" in call:
-        say(f"kryflex convert: model '{args.name}': {done['dofs']} dofs (scalar points), {done['inputs']} input(s), "
+        out(f"kryflex convert: model '{args.name}': {done['dofs']} dofs (scalar points), {done['inputs']} input(s), "
               f"{done['outputs']} output(s), damping matrix {done['damping'] or 'none'}; first flexible frequency "
               + (f"{done['first_hz']:.6g} Hz" if done["first_hz"] else "not computed (large model)"))
-        say(f"  scene     {done['scene']}  (band and accuracy are guesses: edit them)")
-        say(f"Run: kryflex reduce {done['scene']} -o OUTDIR")
+        out(f"  scene     {done['scene']}  (band and accuracy are guesses: edit them)")
+        out(f"Run: kryflex reduce {done['scene']} -o OUTDIR")
         return 0
     interfaces = ", ".join(f"{k}={v}" for k, v in body.interfaces.items()) or "none"
-    say(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
+    out(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
           f"interfaces {interfaces}")
     for key in ("mass", "stiffness", "nodes", "snippet"):
-        say(f"  {key:9s} {body.files[key]}")
-    say(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
+        out(f"  {key:9s} {body.files[key]}")
+    out(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
     return 0
 
 

@@ -373,3 +373,24 @@ def test_damping_zero_and_defaults():
     spec["bodies"]["plate"]["damping"] = 1e-5 * K
     s = kryflex.scene_from_dict(spec, quiet=True)
     assert s.damping_model["modal"] == 0.0
+
+
+@pytest.mark.slow
+def test_model_file_damping_round_off(reduced, tmp_path):
+    """A reduced C = Psi^T (beta K) Psi has round-off on its rigid coordinates' diagonal: a model file with -1e-14 of
+    the largest entry there loads; one with a real negative entry (-1e-3 of it) is refused, naming the dataset."""
+    import shutil
+
+    import h5py
+    for value, ok in ((-1e-14, True), (-1e-3, False)):
+        path = str(tmp_path / ("m%g.h5" % value))
+        shutil.copy(reduced / "beam" / "reduced.h5", path)
+        with h5py.File(path, "r+") as h5:
+            C = h5["bodies/beam/C"]
+            top = np.abs(C[...]).max()
+            C[0, 0] = value * top
+        if ok:
+            assert kryflex.ReducedModel.load(path).bodies[0]["C"][0, 0] < 0
+        else:
+            with pytest.raises(kryflex.ModelFileError, match="dataset 'C' is not a damping matrix"):
+                kryflex.ReducedModel.load(path)

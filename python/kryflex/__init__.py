@@ -42,6 +42,7 @@ _PUBLIC = {
     "Scene": ".io.scene",
     "SceneError": ".io.scene",
     "load_scene": ".io.scene",
+    "check_scene": ".check",
     "scene_from_dict": ".io.scene",
 }
 __all__ = ["init", "__version__"] + list(_PUBLIC)

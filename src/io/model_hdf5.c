@@ -931,7 +931,8 @@ static PetscErrorCode ReadBodies(KFReader *r, hid_t f, KFReducedModel m)
               asym = PetscMax(asym, PetscAbsReal(R->C[i + j * v] - R->C[j + i * v]));
             }
           }
-          if (asym > 1e-8 * top || dmin < 0) PetscCall(Inconsistent(r, "%sdataset 'C' is not a damping matrix (asymmetry %g of its largest entry, smallest diagonal entry %g): write the model again with 'kryflex reduce'", where, (double)(top > 0 ? asym / top : asym), (double)dmin));
+          /* a projected C that leaves rigid motions undamped (C = beta K) has round-off on their diagonal: -1e-14 */
+          if (asym > 1e-8 * top || dmin < -1e-10 * top) PetscCall(Inconsistent(r, "%sdataset 'C' is not a damping matrix (asymmetry %g of its largest entry, smallest diagonal entry %g): write the model again with 'kryflex reduce'", where, (double)(top > 0 ? asym / top : asym), (double)dmin));
         }
       }
       if (!r->st->code && v > R->full_dofs) PetscCall(Inconsistent(r, "%shas %" PetscInt_FMT " reduced dofs (the rows of M) but attribute 'full_dofs' is %" PetscInt_FMT ": a reduced body is never larger than the full one", where, v, R->full_dofs));

@@ -90,8 +90,8 @@ def run(argv):
                    max(float(np.max(sy["frequencies_hz"], initial=0.0)) for sy in data.systems),
                    1.0 / (np.pi * max(float(np.max(sy["frequencies_hz"], initial=1e-300)) for sy in data.systems))))
         for r in results or []:
-            say("  %s deg: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
-                "Exudyn %d, kryflex %s)" % (r["angles_deg"], len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
+            say("  %s: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
+                "Exudyn %d, kryflex %s)" % ("%s deg" % r["angles_deg"] if r["angles_deg"] else "no revolute joint", len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
                                             r["kryflex_rigid"]))
             say("    kryflex (Hz): " + " ".join("%.6g" % x for x in r["kryflex_hz"][:8]))
             say("    Exudyn  (Hz): " + " ".join("%.6g" % x for x in r["exudyn_hz"][:8]))

@@ -14,13 +14,14 @@ def run(argv):
     def rigid_modes():
         system = _core.CSystem(scene.cscene)
         system.set_angles(scene.angles_rad(scene.configurations[0]))
-        return system.rigid_modes()[1]
-    residual = collective(rigid_modes, (_core.Error, EXIT_NUMERIC, str))
-    collective(lambda: describe(scene, residual))
+        Phi, residual = system.rigid_modes()[:2]
+        return (Phi.getSize()[1] if Phi is not None else 0), residual
+    nr, residual = collective(rigid_modes, (_core.Error, EXIT_NUMERIC, str))
+    collective(lambda: describe(scene, nr, residual))
     return EXIT_OK
 
 
-def describe(scene, residual):
+def describe(scene, nr, residual):
     """The description, on rank 0 (the matrices' nonzero counts are summed over the ranks)."""
     info = scene.info
     nnz = 0
@@ -37,12 +38,15 @@ def describe(scene, residual):
                                                    scene.body_names[j["child"]],
                                                    scene.interfaces[j["child"]][j["child_interface"]],
                                                    "  axis %s" % j["axis"] if j["type"] == "revolute" else ""))
-    nr = 6 + len(scene.revolute)
-    say("  system: %d dofs; %d rigid-body and mechanism modes (6 + %d revolute); rigid-mode residual %.1e at %s deg"
-         % (info["system_dofs"], nr, len(scene.revolute), residual, scene.label(scene.configurations[0])))
+    where = " at %s deg" % scene.label(scene.configurations[0]) if scene.revolute else ""
+    say("  system: %d dofs; %d rigid-body and mechanism modes (of 6 + %d revolute, before boundary conditions and "
+        "dof layouts); rigid-mode residual %.1e%s" % (info["system_dofs"], nr, len(scene.revolute), residual, where))
     say("  inputs: %s" % ", ".join(scene.input_names))
     say("  outputs: %s" % ", ".join(scene.output_names))
-    say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
+    if scene.revolute:
+        say("  angles of interest (deg): %s" % ", ".join(scene.label(c) for c in scene.configurations))
+    else:
+        say("  a single configuration (no revolute joint)")
     moments = scene.reduction["moments"]
     if moments in (None, "auto"):
         # the search tries up to moments_max: the memory estimate is for the largest basis it may build
@@ -51,10 +55,11 @@ def describe(scene, residual):
     else:
         most = int(moments)
         moments_text = "%d moments" % most
-    say("  band %g-%g Hz, damping %g, accuracy target %g (relative H-inf error of the %s response per input/output "
-        "pair), %s" % (scene.band[0], scene.band[1], scene.damping, scene.accuracy,
-                       getattr(scene, "accuracy_measure", "elastic"), moments_text))
-    if not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None):
+    detailed = not getattr(scene, "damping_uniform", True) or getattr(scene, "damping_matrices", None)
+    say("  band %g-%g Hz, %saccuracy target %g (relative H-inf error of the %s response per input/output pair), %s"
+        % (scene.band[0], scene.band[1], "" if detailed else "damping %g, " % scene.damping, scene.accuracy,
+           getattr(scene, "accuracy_measure", "elastic"), moments_text))
+    if detailed:
         from ..report.sections import damping_text
         say("  damping: %s%s" % (damping_text(scene.damping_model),
                                  "; viscous damping matrices on " + ", ".join(scene.damping_matrices)

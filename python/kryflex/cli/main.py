@@ -1,4 +1,4 @@
-"""The kryflex command: reduce, reassemble, info, study, slew, export, convert. Runs alone or under mpirun.
+"""The kryflex command: reduce, reassemble, info, check, study, slew, export, convert. Runs alone or under mpirun.
 
 Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)
@@ -15,6 +15,7 @@ after -kf_error_agreement_timeout seconds (cli/common.py).
 import sys
 
 from .common import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_SIGINT, Failure, agree, error, internal, say, start_agreement
+from .check import run as check
 from .export import run as export
 from .info import run as info
 from .reassemble import run as reassemble
@@ -27,6 +28,7 @@ USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structur
   kryflex reduce SCENE -o OUTDIR        reduce a scene, verify it, write the reduced bodies and a report
   kryflex reassemble REDUCED --angle A  the reduced system at any angles, from the reduced-model file alone
   kryflex info SCENE                    bodies, dofs, joints, rigid and mechanism modes, inputs, outputs, memory
+  kryflex check SCENE                   model health before a reduction: rigid-body energy, symmetry, massless dofs
   kryflex study SCENE -o OUTDIR         every method swept on one full-order reference: error vs size and time
   kryflex slew SCENE -o OUTDIR          time simulations under slewing: full vs reduced output error against slew rate
   kryflex convert INPUT --name NAME     import Matrix Market, NumPy .npz or Nastran DMIG (.pch) body matrices
@@ -51,16 +53,16 @@ def main(argv=None):
     if not argv:
         # the usage, and the one error line every refusal has (on stderr: standard output stays empty)
         say(USAGE.rstrip(), sys.stderr)
-        error("no command given: use reduce, reassemble, info, study, slew, export or convert (kryflex -h)")
+        error("no command given: use reduce, reassemble, info, check, study, slew, export or convert (kryflex -h)")
         return EXIT_INPUT
     cmd, rest = argv[0], argv[1:]
     if cmd == "convert":
         from ..io.convert import main as convert_main
         return convert_main(rest)
     commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study, "slew": slew,
-                "export": export}
+                "export": export, "check": check}
     if cmd not in commands:
-        error("unknown command '%s': use reduce, reassemble, info, study, slew, export or convert (kryflex -h)" % cmd)
+        error("unknown command '%s': use reduce, reassemble, info, check, study, slew, export or convert (kryflex -h)" % cmd)
         return EXIT_INPUT
     if "-quiet" in rest or "--quiet" in rest:
         from petsc4py import PETSc

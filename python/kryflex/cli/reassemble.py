@@ -14,8 +14,9 @@ def run(argv):
     p = Parser(prog="kryflex reassemble",
                 description="The reduced system at any angles from a reduced-model file alone (paper eq. 20-24).")
     p.add_argument("reduced", help="reduced-model file (.h5) written by 'kryflex reduce'")
-    p.add_argument("--angle", action="append", required=True,
-                   help="angle(s) in degrees, comma-separated for several revolute joints; repeat for more configurations")
+    p.add_argument("--angle", action="append",
+                   help="angle(s) in degrees, comma-separated for several revolute joints; repeat for more "
+                        "configurations; 'none' (or no --angle) for a model without revolute joints")
     p.add_argument("--scene", help="check that the reduced model comes from this scene")
     p.add_argument("-o", "--output", help="write the reassembled matrices (Mh, Kh, Gh, Hh per angle, and the viscous damping Dh when the model has one) to this .npz")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -27,7 +28,7 @@ def run(argv):
         kept = [a + "=" + kept[i + 1] if a == "--angle" and i + 1 < len(kept) else a for i, a in enumerate(kept)
                 if not (i > 0 and kept[i - 1] == "--angle")]
         args = p.parse_args(kept)
-        args.angles = [_angles(text) for text in args.angle]
+        args.angles = [_angles(text) for text in args.angle] if args.angle else None
         return args
     args = collective(parse)
     import time
@@ -38,6 +39,11 @@ def run(argv):
 
     model = collective(lambda: load_reduced_model(args.reduced, args.scene), (ModelFileError, EXIT_MODEL, str), (SceneError, EXIT_INPUT, str),
                        (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+
+    if args.angles is None:
+        args.angle, args.angles = ["none"], [[]]
+        if model.revolute:
+            collective(lambda: _no_angle(model))
 
     def reassemble():
         results, arrays = [], {}
@@ -55,7 +61,7 @@ def run(argv):
                                 top_frequency_hz=system.top_frequency_hz, trimmed_modes=int(system.trimmed),
                                 max_frequency_hz=system.max_frequency_hz or None,
                                 explicit_step_s=system.explicit_step_s if system.top_frequency_hz > 0 else None))
-            key = "_".join("%g" % a for a in angles)
+            key = "_".join("%g" % a for a in angles) if angles else "none"
             arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
             if system.damping_matrix is not None:   # the viscous damping (bodies' C_b + Rayleigh), README "Damping"
                 arrays["D_" + key] = system.damping_matrix
@@ -73,8 +79,9 @@ def run(argv):
         say(json.dumps(results, indent=1))
     else:
         for r in results:
-            say("angles %s deg: %d dofs (constraint rank %d, %s rigid/mechanism modes), reassembled in %.2f ms"
-                % (r["angles_deg"], r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
+            where = "angles %s deg" % r["angles_deg"] if r["angles_deg"] else "no revolute joint"
+            say("%s: %d dofs (constraint rank %d, %s rigid/mechanism modes), reassembled in %.2f ms"
+                % (where, r["dofs"], r["constraint_rank"], r["rigid_modes"], 1e3 * r["seconds"]))
             say("  flexible frequencies (Hz): " + " ".join("%.6g" % x for x in r["frequencies_hz"]))
             if r["trimmed_modes"]:
                 say("  trimmed: %d mode(s) above %.4g Hz out of the dynamics (static share kept as a feedthrough); "
@@ -83,8 +90,16 @@ def run(argv):
     return EXIT_OK
 
 
+def _no_angle(model):
+    raise Failure(EXIT_INPUT, "the model has %d revolute joint(s) (%s): give --angle with %d angle(s) in degrees, "
+                  "comma-separated" % (len(model.revolute), ", ".join(model.revolute), len(model.revolute)))
+
+
 def _angles(text):
-    fix = "give finite angles in degrees, comma-separated for several revolute joints"
+    """The angles of one --angle value; 'none' (a model without revolute joints) is the empty configuration."""
+    fix = "give finite angles in degrees, comma-separated for several revolute joints ('none' without any)"
+    if text.strip().lower() in ("none", ""):
+        return []
     try:
         angles = [float(x) for x in text.split(",")]
     except ValueError as e:

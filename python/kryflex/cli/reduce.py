@@ -59,6 +59,12 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
 
+        # the model check (kryflex check): its warnings before any work, also under -quiet
+        health = collective(lambda: model_check(scene))
+        for f in (health[1] if health else []):
+            if f.severity == "warning" and not f.refused:
+                say("kryflex: warning: %s" % f.text(), sys.stderr)
+
         # the scene's settings, then the -kf_ options; checked here, before the solve, on every rank
         reducer = collective(lambda: common.checked_reducer(scene, quiet=True if args.quiet else None),
                              (SceneError, EXIT_INPUT, str),
@@ -66,6 +72,8 @@ def run(argv):
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
 
         s = result.summary
+        if health:
+            s["model_check"] = dict(facts=health[0], findings=[f.as_dict() for f in health[1]])
         if getattr(scene, "paper", None) and scene.verify["full_order"]:
             # the paper's example (paper: lee): its tables beside kryflex's, computed in the paper's fixed recipe
             # (compared with the full order: without it, verify.full_order false, the short report has no section)
@@ -88,6 +96,8 @@ def run(argv):
                     write_report(s, staging.path, between=common.raise_if_interrupted)
                 else:
                     write_unverified(s, staging.path)
+                if health:
+                    append_check_section(staging.file("report.md"), health[1])
                 if args.npz:
                     result.model.export_npz(staging.file("reduced.npz"))
         collective(write_report_files, cannot)
@@ -112,13 +122,44 @@ def run(argv):
     how = "estimated, verify.full_order: false" if s.get("error_estimated") else "measured against the full order"
     measure = s.get("accuracy_measure", "total")
     say("kryflex: max relative %s-response error (relative H-inf per input/output pair, %s model, %s): "
-        "%.3g at %s deg (target %.3g)%s" % (measure, s.get("chosen_method") or result.model.settings["method"], how,
-                                            worst, where, s["accuracy"], where_text(s)))
+        "%.3g%s (target %.3g)%s" % (measure, s.get("chosen_method") or result.model.settings["method"], how,
+                                    worst, at_text(where), s["accuracy"], where_text(s)))
     if not met:
-        say("kryflex: target missed: max relative %s-response error %.3g at %s deg > accuracy %.3g"
-            % (measure, worst, where, s["accuracy"]), sys.stderr)
+        say("kryflex: target missed: max relative %s-response error %.3g%s > accuracy %.3g"
+            % (measure, worst, at_text(where), s["accuracy"]), sys.stderr)
         return EXIT_TARGET
     return EXIT_OK
+
+
+# the label of the one configuration of a scene without revolute joints (io/scene.py Scene.label)
+NO_JOINT_LABEL = "fixed"
+
+
+def at_text(label):
+    """' at 30 deg' for a configuration's label; nothing for the one configuration of a scene without revolute joints."""
+    return "" if label == NO_JOINT_LABEL else " at %s deg" % label
+
+
+def model_check(scene):
+    """(facts, findings) of kryflex check on the loaded scene, or None when the check itself cannot run (a model the
+    reducer will refuse with its own message: the rigid modes or the assembly fail)."""
+    from .. import _core
+    from ..check import check_scene
+    try:
+        return check_scene(scene, factor=False)
+    except _core.Error:
+        return None
+
+
+def append_check_section(path, findings):
+    """The model check's findings as the report's last section."""
+    lines = ["", "## Model check", ""]
+    if not findings:
+        lines.append("No findings: rigid-body energy, symmetry, massless dofs and null pivots as expected.")
+    for f in findings:
+        lines.append("- **%s** (%s): %s. *Effect:* %s. *Fix:* %s." % (f.where, f.severity, f.what, f.effect, f.fix))
+    with open(path, "a", encoding="utf-8") as fh:
+        fh.write("\n".join(lines) + "\n")
 
 
 def chosen_text(result):
@@ -132,6 +173,8 @@ def chosen_text(result):
     if method == "multi-angle" and ch.get("expansion_angles_deg"):
         parts.append("expansion angles %s deg" % ", ".join(
             "/".join("%g" % a for a in (c if isinstance(c, list) else [c])) for c in ch["expansion_angles_deg"]))
+    elif s["reduction_label"] == NO_JOINT_LABEL:
+        parts.append("one configuration (no revolute joint)")
     else:
         parts.append("alpha_G = %s deg" % s["reduction_label"])
     if ch.get("kept_modes") is not None or not ch:

@@ -75,6 +75,16 @@ class FloatingBody:
     input_flex: np.ndarray
     output_rigid: np.ndarray
     output_flex: np.ndarray
+    # the viscous damping matrix of the reduced body (v x v; zeros when the body has none) and F^T C F (f x f)
+    C: np.ndarray = None
+    damping_flex: np.ndarray = None
+
+    def __post_init__(self):
+        v, f = self.M.shape[0], self.modes.shape[1]
+        if self.C is None:
+            self.C = np.zeros((v, v))
+        if self.damping_flex is None:
+            self.damping_flex = self.modes.T @ self.C @ self.modes if f else np.zeros((0, 0))
 
     @property
     def nflex(self):
@@ -86,14 +96,26 @@ class FloatingBody:
         return np.sqrt(np.maximum(np.diag(self.stiffness_flex), 0)) / (2 * np.pi)
 
 
-def floating_body(name, interfaces, M, K, G, H, iface, rigid):
-    """The FloatingBody of one reduced body (the arrays of ReducedModel.bodies); ExportError when the body lacks its
-    rigid motions or its basis does not reproduce them."""
+RIGID_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
+
+
+def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
+    """The FloatingBody of one reduced body (the arrays of ReducedModel.bodies: iface absent for a body without
+    interfaces, C for a body with a viscous damping matrix); ExportError when the body lacks any of its 6 rigid
+    motions (clamped, on springs, or a dof layout such as a plate's uz rx ry) or its basis does not reproduce them."""
     v = M.shape[0]
+    if iface is None:
+        iface = np.zeros((0, v))
     if rigid is None or rigid.shape != (v, 6):
-        raise ExportError("body '%s': the reduced model holds no rigid-body rows for it (a model of an older kryflex, or a "
-                          "clamped body): a floating-frame export needs them; reduce the scene again with this kryflex"
-                          % name)
+        raise ExportError("body '%s': the reduced model holds no rigid-body rows for it (a clamped body, or a model of an "
+                          "older kryflex): a floating-frame body needs its 6 rigid motions; take its matrices with "
+                          "'kryflex reassemble -o' instead" % name)
+    scale = max(np.abs(rigid).max(), 1e-300)
+    absent = [RIGID_NAMES[k] for k in range(6) if np.abs(rigid[:, k]).max() <= 1e-12 * scale]
+    if absent:
+        raise ExportError("body '%s' cannot move rigidly along %s (its supports or its dof layout remove them): a "
+                          "floating-frame body needs all 6 rigid motions; give its nodes all six components, or take "
+                          "its matrices with 'kryflex reassemble -o' instead" % (name, " ".join(absent)))
     if v < 6:
         raise ExportError("body '%s' has %d reduced dofs, fewer than its 6 rigid motions: it cannot float" % (name, v))
     M = 0.5 * (M + M.T)
@@ -139,4 +161,5 @@ def floating_body(name, interfaces, M, K, G, H, iface, rigid):
     return FloatingBody(name=name, interfaces=list(interfaces), M=M, K=K, G=G, H=H, iface=iface, rigid_coords=R,
                         modes=F, mass_flex=0.5 * (Mf + Mf.T), stiffness_flex=0.5 * (Kf + Kf.T), mass=mass,
                         center_of_mass=com, inertia=inertia, interface_positions=positions, interface_modes=imodes,
-                        input_rigid=R.T @ G, input_flex=F.T @ G, output_rigid=H @ R, output_flex=H @ F)
+                        input_rigid=R.T @ G, input_flex=F.T @ G, output_rigid=H @ R, output_flex=H @ F,
+                        C=None if C is None else 0.5 * (C + C.T))

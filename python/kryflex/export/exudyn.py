@@ -228,9 +228,11 @@ def _add_ffrf(exu, eii, mbs, body, nRigid, xref, Psi, zeta, show_nodes):
     Mmc.SetWithDenseMatrix(body.mass_flex, useDenseMatrix=True)
     Kmc.SetWithDenseMatrix(body.stiffness_flex, useDenseMatrix=True)
     Dmc = []
-    if zeta > 0:
+    # modal damping on the body's flexible modes plus its own viscous damping matrix in flexible coordinates
+    D = np.diag(2 * zeta * 2 * np.pi * body.frequencies_hz) + body.damping_flex
+    if np.any(D):
         Dmc = exu.MatrixContainer()
-        Dmc.SetWithDenseMatrix(np.diag(2 * zeta * 2 * np.pi * body.frequencies_hz), useDenseMatrix=True)
+        Dmc.SetWithDenseMatrix(D, useDenseMatrix=True)
     z3ff, R = np.zeros((3, 3 * f)), body.rigid_coords
     obj = mbs.AddObject(eii.ObjectFFRFreducedOrder(
         name=body.name, nodeNumbers=[nRigid, nModal], massMatrixReduced=Mmc, stiffnessMatrixReduced=Kmc,

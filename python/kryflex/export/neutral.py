@@ -17,6 +17,8 @@ NEUTRAL_SUFFIX = ".npz"
 BODY_ARRAYS = ("M", "K", "G", "H", "iface", "rigid_coords", "modes", "mass_flex", "stiffness_flex", "mass",
                "center_of_mass", "inertia", "interface_positions", "interface_modes", "input_rigid", "input_flex",
                "output_rigid", "output_flex")
+# per-body arrays a file of an earlier kryflex may lack (read as zeros): the viscous damping matrix and F^T C F
+OPTIONAL_BODY_ARRAYS = ("C", "damping_flex")
 
 
 def _strings(values):
@@ -44,7 +46,7 @@ def arrays(data):
             out["system%d/%s" % (i, key)] = np.asarray(sysd[key], dtype=float)
     for i, b in enumerate(data.bodies):
         out["body%d/interface_names" % i] = _strings(b.interfaces)
-        for key in BODY_ARRAYS:
+        for key in BODY_ARRAYS + OPTIONAL_BODY_ARRAYS:
             out["body%d/%s" % (i, key)] = np.asarray(getattr(b, key), dtype=float)
     return out
 
@@ -83,6 +85,8 @@ def read_neutral(path):
             bodies = []
             for i, name in enumerate(z["body_names"]):
                 kw = {key: z["body%d/%s" % (i, key)] for key in BODY_ARRAYS}
+                kw.update({key: z["body%d/%s" % (i, key)] for key in OPTIONAL_BODY_ARRAYS
+                           if "body%d/%s" % (i, key) in z.files})
                 kw["mass"] = float(kw["mass"])
                 bodies.append(FloatingBody(name=str(name), interfaces=[str(s) for s in z["body%d/interface_names" % i]],
                                            **kw))

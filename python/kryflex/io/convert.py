@@ -8,7 +8,9 @@ Inputs:
       'M_indptr', 'M_shape' [, 'M_format' = csr|csc], or 'M_row', 'M_col', 'M_data', 'M_shape')
       and optionally 'nodes' (n x 5: id x y z ndof);
   a Nastran OUTPUT4 file (.op4, ASCII or binary) with the two matrices, plus a nodes file naming the rows;
-  Matrix Market (.mtx) or PETSc binary (.petsc) mass and stiffness files plus a nodes file.
+  Matrix Market (.mtx) or PETSc binary (.petsc) mass and stiffness files plus a nodes file;
+  a MATLAB .mat second-order model (M, K, D/E, B, C or Cp/Cv: MORwiki conventions), see io/matfile.py: written
+      with its input/output vectors and a scene file that runs as is.
 Output: see bodyfiles.write_body.
 """
 
@@ -296,6 +298,7 @@ USAGE_EXAMPLES = """examples:
   kryflex convert model.op4 --nodes nodes.txt --stiffness-name KAA --mass-name MAA --name rotor -o bodies
   kryflex convert boom.npz --name boom --interface root=1 --format mtx -o bodies
   kryflex convert --mass M.mtx --stiffness K.mtx --nodes nodes.txt --name x --interface a=7 -o bodies
+  kryflex convert beam.mat --name beam -o beam    (M, K, D or E, B, C or Cp/Cv: writes beam/beam.yaml too)
 
 Writes <name>_M.<fmt>, <name>_K.<fmt>, <name>_nodes.txt and <name>.body.yaml (the scene entry).
 Exit codes: 0 done, 2 bad command line or input (nothing written), 4 output folder not writable."""
@@ -311,9 +314,10 @@ def build_parser():
         prog="kryflex convert", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Convert an exported FE model (Nastran DMIG punch file with GRIDs from bulk data or an "
                     ".f06, Nastran OP4 + nodes file, NumPy .npz, or Matrix Market / PETSc matrices + nodes file) "
-                    "into a kryflex body.",
+                    "into a kryflex body; or a MATLAB .mat second-order model (M, K, D/E, B, C or Cp/Cv) into a "
+                    "body, its input/output vectors and a scene that runs as is.",
         epilog=USAGE_EXAMPLES)
-    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), or a .npz")
+    parser.add_argument("input", nargs="?", help="Nastran punch/bulk file with DMIG matrices, an OP4 file (with --nodes), a .npz, or a MATLAB .mat")
     parser.add_argument("--mass", metavar="FILE", help="mass matrix (.mtx or .petsc), with --stiffness and --nodes")
     parser.add_argument("--stiffness", metavar="FILE", help="stiffness matrix (.mtx or .petsc)")
     parser.add_argument("--nodes", metavar="FILE", help="nodes file (id x y z dofs per line: 6, 3, c<components> or s)")
@@ -331,7 +335,15 @@ def build_parser():
     parser.add_argument("--mass-scale", metavar="FACTOR|wtmass",
                         help="multiply the DMIG mass by FACTOR, or by the model's PARAM,WTMASS (only for a mass "
                              "written in weight units: a punched MAAX already holds WTMASS)")
+    for part, default in (("mass", "M"), ("stiffness", "K"), ("damping", "D, E, or C beside Cp/Cv"),
+                          ("input", "B"), ("output", "Cp or C"), ("velocity-output", "Cv")):
+        parser.add_argument("--%s-key" % part, metavar="KEY",
+                            help="MATLAB .mat input: the variable holding the %s matrix (default %s)"
+                                 % (part.replace("-", " "), default))
     return parser
+
+
+MAT_KEYS = ("mass_key", "stiffness_key", "damping_key", "input_key", "output_key", "velocity_output_key")
 
 
 def _parse_interfaces(items):
@@ -368,6 +380,15 @@ def _arguments_to_call(args):
         call["inputs"] = {"mass": args.mass, "stiffness": args.stiffness, "nodes": args.nodes}
         return call
     call["inputs"] = args.input
+    given_keys = [k for k in MAT_KEYS if getattr(args, k)]
+    if args.input.lower().endswith(".mat"):
+        if args.grids or args.nodes or args.stiffness_name or args.mass_name or args.mass_scale or interfaces:
+            raise _UsageError("--grids/--nodes/--stiffness-name/--mass-name/--mass-scale/--interface do not apply to "
+                              "a MATLAB .mat input (name its variables with --mass-key, --stiffness-key, ...)")
+        return dict(mat=args.input, out_dir=args.output_dir, name=args.name, fmt=args.format,
+                    keys={k[:-4]: getattr(args, k) for k in MAT_KEYS})
+    if given_keys:
+        raise _UsageError("--%s applies to MATLAB .mat input only" % given_keys[0].replace("_", "-"))
     if args.input.lower().endswith(".op4"):
         if args.grids or args.mass_scale:
             raise _UsageError("--grids/--mass-scale apply to Nastran bulk-data (DMIG) input only; an OP4 input "
@@ -423,18 +444,33 @@ def main(argv=None):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConversionWarning)
         try:
-            body = convert(**call)
+            if "mat" in call:
+                _require_file(call["mat"], "input")
+                from .matfile import convert_mat
+                done = convert_mat(call.pop("mat"), **call)
+            else:
+                body = convert(**call)
         except ConversionError as exc:
             _print_warnings(caught)
             error(str(exc))
             return EXIT_BAD_INPUT
     _print_warnings(caught)
+
+    def out(text):   # the standard output of now (a test's capture), a closed pipe silenced (cli.common.say)
+        say(text, sys.stdout)
+    if "mat" not in call and "keys" in call:
+        out(f"kryflex convert: model '{args.name}': {done['dofs']} dofs (scalar points), {done['inputs']} input(s), "
+              f"{done['outputs']} output(s), damping matrix {done['damping'] or 'none'}; first flexible frequency "
+              + (f"{done['first_hz']:.6g} Hz" if done["first_hz"] else "not computed (large model)"))
+        out(f"  scene     {done['scene']}  (band and accuracy are guesses: edit them)")
+        out(f"Run: kryflex reduce {done['scene']} -o OUTDIR")
+        return 0
     interfaces = ", ".join(f"{k}={v}" for k, v in body.interfaces.items()) or "none"
-    print(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
+    out(f"kryflex convert: body '{args.name}': {body.size} dofs, {body.node_count} nodes, "
           f"interfaces {interfaces}")
     for key in ("mass", "stiffness", "nodes", "snippet"):
-        print(f"  {key:9s} {body.files[key]}")
-    print(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
+        out(f"  {key:9s} {body.files[key]}")
+    out(f"Paste the entry of {body.files['snippet']} under `bodies:` in your scene file.")
     return 0
 
 

@@ -705,8 +705,10 @@ def damping_spec(where, value):
     [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (the uniform ratio for a number, None
     for a mapping; the mapping normalized: absent parts zero)."""
     if not isinstance(value, dict):
-        z = real(where, "damping", value, "(0, 1)", "give the modal damping ratio in (0, 1), e.g. 0.0025, or a mapping "
+        z = real(where, "damping", value, "[0, 1)", "give the modal damping ratio in [0, 1), e.g. 0.0025, or a mapping "
                  "{modal, rayleigh, structural}")
+        if z == 0.0:   # no modal damping: the same as {modal: 0} (the damping matrices, if any, alone)
+            return damping_spec(where, {"modal": 0.0})
         return z, {"modal": z, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
     mapping(where, "damping", value, DAMPING_KEYS)
     out = {"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
@@ -844,7 +846,10 @@ def validate(spec, where, default_name="scene"):
         "outputs": _io(where, "outputs", spec, bodies),
         "configurations": _angles_of_interest(where, spec, revolute),
         "band": band,
-        "damping": damping_spec(where, spec.get("damping", DEFAULTS["damping"])),
+        # bodies with their own damping matrices and no `damping:` key: those matrices are the whole damping (no
+        # default modal ratio is added on top of them)
+        "damping": damping_spec(where, spec["damping"] if "damping" in spec else
+                                {"modal": 0.0} if any("damping" in b for b in bodies) else DEFAULTS["damping"]),
         "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
                          "give the target relative error in (0, 1), e.g. 0.05"),
         "accuracy_measure": choice(where, "accuracy_measure", spec.get("accuracy_measure", DEFAULTS["accuracy_measure"]),

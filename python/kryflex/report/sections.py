@@ -56,6 +56,8 @@ def _chosen_sentence(c):
         parts.append(f"c = {ch['moments']} moments")
     if ch.get("method") == "multi-angle" and ch.get("expansion_angles_deg"):
         parts.append("expansion angles " + ", ".join(_angles_text(a) for a in ch["expansion_angles_deg"]))
+    elif s.get("reduction_label") == "fixed" and not s.get("joints"):   # the label of a scene without revolute joints
+        parts.append("one configuration (no revolute joint)")
     elif s.get("reduction_label") is not None:
         parts.append(f"α_G = {s['reduction_label']}°")
     if ch.get("kept_modes") is not None:

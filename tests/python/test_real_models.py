@@ -1,0 +1,396 @@
+"""Real models, one item at a time: the model check's findings (each one provoked, its numbers recomputed here with
+dense NumPy/SciPy), kryflex check serial against 2 ranks, convert MODEL.mat (what it writes, checked against the .mat
+file; what it refuses, in one line, nothing written), reassemble/export/info on single structures and their refusals,
+the damping defaults. The end-to-end path of docs/guide/real-models.md is test_real_models_guide.py."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.io
+import scipy.linalg as sl
+import scipy.sparse as sp
+
+import kryflex
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
+KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
+           PYTHONPATH=os.path.join(ROOT, "python"))
+sys.path.insert(0, EXAMPLE)
+import generate  # noqa: E402  (the example's own model builders)
+
+needs_cli = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")
+
+
+def run(args, cwd=None, ranks=1):
+    cmd = (["mpiexec", "-n", str(ranks)] if ranks > 1 else []) + [KRYFLEX] + args
+    p = subprocess.run(cmd, cwd=cwd, env=ENV, capture_output=True, text=True, timeout=240)
+    assert "Traceback" not in p.stdout + p.stderr, p.stderr
+    return p
+
+
+def one_error(p):
+    lines = [line for line in p.stderr.splitlines() if line.startswith("kryflex: error:")]
+    assert len(lines) == 1, p.stderr
+    return lines[0]
+
+
+# ------------------------------------------------------------------ the model check, in process
+
+def plate_spec(K=None, M=None, **extra):
+    K0, M0, nodes = generate.plate()
+    spec = {"name": "plate", "bodies": {"plate": {"mass": M0 if M is None else M, "stiffness": K0 if K is None else K,
+                                                  "nodes": [list(r) for r in nodes]}},
+            "inputs": {"f": [{"body": "plate", "node": 20, "dof": "uz"}]},
+            "outputs": {"z": [{"body": "plate", "node": 1, "dof": "uz"}]}, "band": [0.5, 100.0], "accuracy": 0.01}
+    spec.update(extra)
+    return spec
+
+
+def plate_rigid(nodes):
+    """The plate's rigid modes on (uz, rx, ry) per node: uz = 1; rotation about x (uz = y, rx = 1); about y
+    (uz = -x, ry = 1)."""
+    Phi = np.zeros((3 * len(nodes), 3))
+    for i, r in enumerate(nodes):
+        x, y = r[1], r[2]
+        Phi[3 * i] = [1.0, y, -x]
+        Phi[3 * i + 1, 1] = 1.0
+        Phi[3 * i + 2, 2] = 1.0
+    return Phi
+
+
+def check(spec):
+    return kryflex.check_scene(kryflex.scene_from_dict(spec, quiet=True))
+
+
+def rayleigh_hz(K, M, Phi):
+    lam = sl.eigh(Phi.T @ K @ Phi, Phi.T @ M @ Phi, eigvals_only=True)
+    return np.sort(np.sign(lam) * np.sqrt(np.abs(lam)) / (2 * np.pi))
+
+
+def test_check_exact_plate_has_no_findings():
+    K, M, nodes = generate.plate()
+    facts, findings = check(plate_spec())
+    assert findings == []
+    assert facts["rigid_modes"] == 3 and facts["stiffness_null"] == 3 and facts["mass_rank"] == len(K)
+    w = sl.eigh(K, M, eigvals_only=True)
+    f = np.sqrt(w[3:]) / (2 * np.pi)
+    assert abs(facts["first_flexible_hz"] / f[0] - 1) < 1e-8
+    assert facts["verification_modes"] == int(np.sum(f <= 300.0))
+    ws = np.linalg.eigvalsh(K)          # the condition of K itself on its flexible part
+    assert abs(facts["stiffness_condition"] / (ws[-1] / ws[3]) - 1) < 1e-6
+
+
+def test_check_rounded_stiffness_reports_rigid_energy_in_hz():
+    """K rounded to 8 significant digits (as a Nastran punch writes it): the Rayleigh frequencies of the geometric
+    rigid modes, computed here, are reported, with the fix."""
+    K, M, nodes = generate.plate()
+    K8 = np.vectorize(lambda x: float("%.7e" % x))(K)
+    facts, findings = check(plate_spec(K=K8))
+    ref = rayleigh_hz(K8, M, plate_rigid(nodes))
+    np.testing.assert_allclose(sorted(facts["rigid_hz"]), ref, rtol=1e-3, atol=1e-9)
+    assert np.abs(ref).max() > 1e-4 * facts["first_flexible_hz"]
+    texts = [f.text() for f in findings]
+    assert len(texts) == 1 and "Rayleigh frequencies" in texts[0] and "Hz" in texts[0]
+    assert "P^T K P" in texts[0] and "full precision" in texts[0]
+    assert facts["stiffness_null"] == 3           # the rounded rigid modes still count as null pivots
+
+
+def test_check_massless_dofs_and_singular_mass():
+    K, M, nodes = generate.plate()
+    Mz = M.copy()
+    rot = [3 * i + c for i in range(len(nodes)) for c in (1, 2)]      # no rotary inertia
+    Mz[rot, :] = 0.0
+    Mz[:, rot] = 0.0
+    facts, findings = check(plate_spec(M=Mz))
+    note = [f for f in findings if "massless dofs" in f.what]
+    assert len(note) == 1 and note[0].severity == "note" and "%d massless" % len(rot) in note[0].what
+    assert facts["mass_zero_diagonal"] == len(rot)
+    assert facts["mass_rank"] == np.linalg.matrix_rank(Mz)
+    # singular beyond the zero diagonal: a lumped mass matrix where two uz dofs share one mass (a rank-one block)
+    Ms = np.diag(np.diag(M))
+    Ms[np.ix_([0, 3], [0, 3])] = M[0, 0]
+    facts, findings = check(plate_spec(M=Ms))
+    assert facts["mass_rank"] == np.linalg.matrix_rank(Ms) == len(M) - 1
+    assert any("M is singular beyond its zero diagonal" in f.what for f in findings)
+
+
+def flexible_mode(K, M, k=3):
+    w, V = sl.eigh(K, M)
+    return w[k], V[:, k]
+
+
+def test_check_mechanism_and_indefinite_stiffness():
+    """A flexible mode's energy removed (a mechanism the geometry does not know) or reversed (indefinite): the rigid
+    modes still satisfy K Phi = 0, so only the check's spectrum sees them."""
+    K, M, nodes = generate.plate()
+    lam, v = flexible_mode(K, M)
+    Mv = M @ v
+    facts, findings = check(plate_spec(K=K - lam * np.outer(Mv, Mv)))
+    assert facts["stiffness_null"] == 4
+    assert any("4 near-zero eigenvalues" in f.what and "3 rigid" in f.what for f in findings)
+    K2 = K - 2 * lam * np.outer(Mv, Mv)
+    facts, findings = check(plate_spec(K=K2))
+    hit = [f for f in findings if "indefinite" in f.what]
+    assert len(hit) == 1 and "%.3e" % np.linalg.eigvalsh(K2)[0] in hit[0].what
+
+
+def test_check_per_body_on_two_bodies():
+    """Galileo (two bodies, a revolute joint): 7 rigid and mechanism modes; each body's rigid energy is at round-off."""
+    facts, findings = kryflex.check_scene(kryflex.load_scene(os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")))
+    assert facts["rigid_modes"] == 7 and findings == []
+    assert [b["name"] for b in facts["bodies"]] == ["stator", "rotor"]
+    for b in facts["bodies"]:
+        assert b["asymmetry"] == {"K": 0.0, "M": 0.0} and np.abs(b["rigid_hz"]).max() < 1e-3
+
+
+@needs_cli
+@pytest.mark.mpi
+def test_check_command_serial_and_two_ranks(tmp_path):
+    """kryflex check --json gives the same facts and findings on 1 and 2 ranks; the refusal of a missing scene is one
+    line, exit 2."""
+    K, M, nodes = generate.plate()
+    K8 = np.vectorize(lambda x: float("%.7e" % x))(K)
+    scipy.io.mmwrite(str(tmp_path / "K.mtx"), sp.coo_matrix(K8), symmetry="symmetric", precision=17)
+    scipy.io.mmwrite(str(tmp_path / "M.mtx"), sp.coo_matrix(M), symmetry="symmetric", precision=17)
+    with open(tmp_path / "nodes.txt", "w") as f:
+        f.writelines("%d %r %r %r %s\n" % r for r in nodes)
+    with open(tmp_path / "s.yaml", "w") as f:
+        f.write("name: p\nbodies: {p: {mass: M.mtx, stiffness: K.mtx, nodes: nodes.txt}}\n"
+                "inputs: {f: [{body: p, node: 20, dof: uz}]}\noutputs: {z: [{body: p, node: 1, dof: uz}]}\n"
+                "band: [0.5, 100]\n")
+    out = [json.loads(run(["check", str(tmp_path / "s.yaml"), "--json", "-quiet"], ranks=n).stdout) for n in (1, 2)]
+    for key in ("rigid_modes", "stiffness_null", "mass_rank", "verification_modes"):
+        assert out[0]["facts"][key] == out[1]["facts"][key]
+    np.testing.assert_allclose(out[0]["facts"]["rigid_hz"], out[1]["facts"]["rigid_hz"], rtol=1e-6)
+    assert [f["what"][:40] for f in out[0]["findings"]] == [f["what"][:40] for f in out[1]["findings"]]
+    assert len(out[0]["findings"]) == 1
+    p = run(["check", str(tmp_path / "missing.yaml")], ranks=2)
+    assert p.returncode == 2 and "not found" in one_error(p)
+
+
+# ------------------------------------------------------------------ convert MODEL.mat
+
+def beam_mat(path, **parts):
+    K, M = generate.beam()
+    n = len(K)
+    B = np.zeros((n, 2))
+    B[n - 4, 0] = 1.0
+    B[n - 5, 1] = 1.0
+    C = np.zeros((2, n))
+    C[0, n - 4] = 1.0
+    C[1, 26] = 0.5
+    data = dict(M=sp.csc_matrix(M), K=sp.csc_matrix(K), D=sp.csc_matrix(1e-5 * K), B=B, C=C)
+    data.update(parts)
+    data = {k: v for k, v in data.items() if v is not None}
+    scipy.io.savemat(str(path), data)
+    return data
+
+
+@needs_cli
+def test_convert_mat_writes_what_the_file_holds(tmp_path):
+    d = beam_mat(tmp_path / "m.mat")
+    p = run(["convert", str(tmp_path / "m.mat"), "--name", "m", "-o", str(tmp_path / "out"), "--format", "mtx"])
+    assert p.returncode == 0, p.stderr
+    out = tmp_path / "out"
+    import yaml
+    scene = yaml.safe_load(open(out / "m.yaml"))
+    text = open(out / "m.yaml").read()
+    assert "GUESS" in text and "damping:" not in text.split("# no damping key")[0].split("outputs:")[1]
+    body = scene["bodies"]["m"]
+    np.testing.assert_array_equal(scipy.io.mmread(str(out / body["mass"])).toarray(), d["M"].toarray())
+    np.testing.assert_array_equal(scipy.io.mmread(str(out / body["damping"])).toarray(), d["D"].toarray())
+    for j in range(2):
+        np.testing.assert_array_equal(np.loadtxt(out / ("m_u%d.txt" % (j + 1))), d["B"][:, j])
+        np.testing.assert_array_equal(np.loadtxt(out / ("m_y%d.txt" % (j + 1))), d["C"][j])
+    K, M = d["K"].toarray(), d["M"].toarray()
+    f1 = np.sqrt(sl.eigh(K, M, eigvals_only=True)[0]) / (2 * np.pi)
+    np.testing.assert_allclose(scene["band"], [f1 / 100, 5 * f1], rtol=1e-5)
+    assert all(line.split()[4] == "s" for line in open(out / "m_nodes.txt") if not line.startswith("#"))
+
+
+@needs_cli
+def test_convert_mat_velocity_outputs_and_key_overrides(tmp_path):
+    K, M = generate.beam()
+    n = len(K)
+    B = np.zeros((n, 1))
+    B[n - 4] = 1.0
+    scipy.io.savemat(str(tmp_path / "v.mat"), dict(Mass=M, Stiff=K, Damp=1e-5 * K, In=B, Out=np.eye(n)[[n - 4]],
+                                                  Vel=np.eye(n)[[26]]))
+    args = ["convert", str(tmp_path / "v.mat"), "--name", "v", "-o", str(tmp_path / "o"), "--mass-key", "Mass",
+            "--stiffness-key", "Stiff", "--damping-key", "Damp", "--input-key", "In", "--output-key", "Out",
+            "--velocity-output-key", "Vel"]
+    p = run(args)
+    assert p.returncode == 0, p.stderr
+    import yaml
+    scene = yaml.safe_load(open(tmp_path / "o" / "v.yaml"))
+    assert scene["outputs"]["v1"][0]["quantity"] == "velocity" and "quantity" not in scene["outputs"]["y1"][0]
+    assert scene["bodies"]["v"]["damping"] == "v_D.petsc"
+    # the MORwiki names: damping E, outputs Cp and Cv, and C as the damping beside Cp
+    scipy.io.savemat(str(tmp_path / "e.mat"), dict(M=M, K=K, C=1e-5 * K, B=B, Cp=np.eye(n)[[n - 4]]))
+    p = run(["convert", str(tmp_path / "e.mat"), "--name", "e", "-o", str(tmp_path / "e")])
+    assert p.returncode == 0 and "damping matrix C" in p.stdout
+
+
+@needs_cli
+@pytest.mark.parametrize("case", ["first_order", "indefinite", "asymmetric", "ambiguous_c", "missing_key",
+                                  "no_outputs", "wrong_b", "not_mat"])
+def test_convert_mat_refusals(tmp_path, case):
+    K, M = generate.beam()
+    n = len(K)
+    path = tmp_path / "x.mat"
+    extra = []
+    if case == "first_order":
+        scipy.io.savemat(str(path), dict(A=-np.eye(3), B=np.ones((3, 1)), C=np.ones((1, 3))))
+        want = "first-order model"
+    elif case == "indefinite":
+        lam, v = flexible_mode(K, M, 0)
+        Mv = M @ v
+        beam_mat(path, K=sp.csc_matrix(K - 2 * lam * np.outer(Mv, Mv)))
+        want = "smallest eigenvalue is %.3e" % np.linalg.eigvalsh(K - 2 * lam * np.outer(Mv, Mv))[0]
+    elif case == "asymmetric":
+        K2 = K.copy()
+        K2[2, 8] += 1e-3 * np.abs(K).max()
+        beam_mat(path, K=sp.csc_matrix(K2))
+        want = "not symmetric"
+    elif case == "ambiguous_c":
+        beam_mat(path, D=None, C=np.eye(n))
+        want = "--damping-key C"
+    elif case == "missing_key":
+        beam_mat(path)
+        extra = ["--damping-key", "Q"]
+        want = "no key Q"
+    elif case == "no_outputs":
+        beam_mat(path, C=np.zeros((1, n)))
+        want = "every output row is zero"
+    elif case == "wrong_b":
+        beam_mat(path, B=np.ones((n + 1, 1)))
+        want = "input matrix B"
+    else:
+        path.write_text("not a MATLAB file")
+        want = "not a MATLAB .mat file"
+    p = run(["convert", str(path), "--name", "x", "-o", str(tmp_path / "out")] + extra)
+    assert p.returncode == 2
+    assert want in one_error(p), p.stderr
+    assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------ single structures on the command line
+
+@pytest.fixture(scope="module")
+def reduced(tmp_path_factory):
+    """The example plate, the free beam with a damping matrix, and Galileo, reduced once (-quiet)."""
+    out = tmp_path_factory.mktemp("reduced")
+    for name, scene in (("plate", os.path.join(EXAMPLE, "plate.yaml")), ("beam", os.path.join(EXAMPLE, "beam_free.yaml")),
+                        ("galileo", os.path.join(ROOT, "meshes", "galileo", "galileo.yaml"))):
+        extra = ["-kf_moments", "6", "-scene.reduction.search", "false"] if name == "galileo" else []
+        p = run(["reduce", scene, "-o", str(out / name), "-quiet"] + extra)
+        assert p.returncode in (0, 6), p.stderr
+    return out
+
+
+@needs_cli
+@pytest.mark.slow
+def test_reassemble_angles(reduced):
+    plate = str(reduced / "plate" / "reduced.h5")
+    a, b = run(["reassemble", plate, "--json"]), run(["reassemble", plate, "--angle", "none", "--json"])
+    assert a.returncode == b.returncode == 0 and json.loads(a.stdout) == [
+        dict(r, seconds=json.loads(a.stdout)[0]["seconds"]) for r in json.loads(b.stdout)]
+    assert json.loads(a.stdout)[0]["rigid_modes"] == 3
+    p = run(["reassemble", plate, "--angle", "30"])
+    assert p.returncode == 2 and "0 revolute joint(s)" in one_error(p)
+    gal = str(reduced / "galileo" / "reduced.h5")
+    p = run(["reassemble", gal])
+    assert p.returncode == 2 and "1 revolute joint(s) (spin_bearing)" in one_error(p) and "--angle" in one_error(p)
+    p = run(["reassemble", gal, "--angle", "none"])
+    assert p.returncode == 2 and "give 1 angle(s)" in one_error(p)
+
+
+@needs_cli
+@pytest.mark.slow
+@pytest.mark.mpi
+def test_reassemble_and_export_on_two_ranks(reduced, tmp_path):
+    """The same reassembled matrices and neutral file on 2 ranks as on 1."""
+    for name in ("plate", "beam"):
+        path = str(reduced / name / "reduced.h5")
+        for n in (1, 2):
+            assert run(["reassemble", path, "-o", str(tmp_path / ("%s%d.npz" % (name, n)))], ranks=n).returncode == 0
+        a, b = np.load(tmp_path / ("%s1.npz" % name)), np.load(tmp_path / ("%s2.npz" % name))
+        assert sorted(a.files) == sorted(b.files) and all(np.array_equal(a[k], b[k]) for k in a.files)
+    beam = str(reduced / "beam" / "reduced.h5")
+    for n in (1, 2):
+        assert run(["export", beam, "-o", str(tmp_path / ("e%d.npz" % n))], ranks=n).returncode == 0
+    a, b = np.load(tmp_path / "e1.npz"), np.load(tmp_path / "e2.npz")
+    assert all(np.array_equal(a[k], b[k]) for k in a.files)
+    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")], ranks=2)
+    assert p.returncode == 5 and "ux uy rz" in one_error(p)
+
+
+@needs_cli
+@pytest.mark.slow
+def test_export_single_structures(reduced, tmp_path):
+    beam = str(reduced / "beam" / "reduced.h5")
+    p = run(["export", beam, "-o", str(tmp_path / "b.npz"), "--format", "exudyn", "--json"])
+    assert p.returncode == 0, p.stderr
+    check = json.loads(p.stdout)["check"][0]
+    assert check["angles_deg"] == [] and check["max_rel_diff"] <= 1e-6 and check["exudyn_zero"] == 6
+    model = kryflex.ReducedModel.load(beam)
+    z = np.load(tmp_path / "b.npz")
+    C = model.bodies[0]["C"]
+    np.testing.assert_allclose(z["body0/C"], 0.5 * (C + C.T), atol=1e-14 * np.abs(C).max())
+    assert z["body0/interface_names"].size == 0 and z["body0/iface"].shape == (0, C.shape[0])
+    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")])
+    assert p.returncode == 5 and "cannot move rigidly along ux uy rz" in one_error(p)
+    assert not (tmp_path / "p.npz").exists()
+
+
+@needs_cli
+@pytest.mark.slow
+def test_reduce_texts_and_damping_defaults(reduced):
+    plate = json.load(open(reduced / "plate" / "summary.json"))
+    beam = json.load(open(reduced / "beam" / "summary.json"))
+    assert plate["damping_model"]["modal"] == 0.01                # given
+    assert beam["damping_model"]["modal"] == 0.0                  # a damping matrix, no damping key: nothing added
+    assert beam["model_check"]["findings"] == []
+    p = run(["info", os.path.join(EXAMPLE, "plate.yaml"), "-quiet"])
+    assert "3 rigid-body and mechanism modes" in p.stdout and "fixed" not in p.stdout
+
+
+def test_damping_zero_and_defaults():
+    from kryflex.io.scene_schema import damping_spec
+    assert damping_spec("s", 0)[1]["modal"] == 0.0 and damping_spec("s", 0)[0] is None
+    assert damping_spec("s", 0.02) == (0.02, {"modal": 0.02, "rayleigh": {"alpha": 0.0, "beta": 0.0},
+                                              "structural": 0.0})
+    K, M, nodes = generate.plate()
+    s = kryflex.scene_from_dict(plate_spec(), quiet=True)
+    assert s.damping == 0.0025                      # no matrix, no key: the default modal ratio
+    spec = plate_spec()
+    spec["bodies"]["plate"]["damping"] = 1e-5 * K
+    s = kryflex.scene_from_dict(spec, quiet=True)
+    assert s.damping_model["modal"] == 0.0
+
+
+@pytest.mark.slow
+def test_model_file_damping_round_off(reduced, tmp_path):
+    """A reduced C = Psi^T (beta K) Psi has round-off on its rigid coordinates' diagonal: a model file with -1e-14 of
+    the largest entry there loads; one with a real negative entry (-1e-3 of it) is refused, naming the dataset."""
+    import shutil
+
+    import h5py
+    for value, ok in ((-1e-14, True), (-1e-3, False)):
+        path = str(tmp_path / ("m%g.h5" % value))
+        shutil.copy(reduced / "beam" / "reduced.h5", path)
+        with h5py.File(path, "r+") as h5:
+            C = h5["bodies/beam/C"]
+            top = np.abs(C[...]).max()
+            C[0, 0] = value * top
+        if ok:
+            assert kryflex.ReducedModel.load(path).bodies[0]["C"][0, 0] < 0
+        else:
+            with pytest.raises(kryflex.ModelFileError, match="dataset 'C' is not a damping matrix"):
+                kryflex.ReducedModel.load(path)

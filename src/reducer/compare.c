@@ -6,7 +6,7 @@
 */
 #include <kryflex/reducerimpl.h>
 
-PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
+PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
@@ -20,13 +20,13 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   for (PetscInt b = 0; b < nb; b++)
     if (r->scene->bodies[b].C) viscous = PETSC_TRUE;
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
+  PetscCall(KFSystemEigenIsDense(sys, &dense));
   {
-    PetscInt n0; /* massless dofs carry infinite eigenvalues: no flexible modes of theirs to compute */
-    PetscCall(KFSystemMasslessCount(sys, &n0));
-    nflex = nsys - nrigid - n0;
+    PetscInt nnull, n0; /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own */
+    PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
+    nflex = nsys - nrigid - nnull;
   }
   PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nrigid);
-  PetscCall(KFSystemEigenIsDense(sys, &dense));
   /* dense: every mode (no residual to approximate); sparse: start at 20 */
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */

@@ -115,6 +115,7 @@ PetscErrorCode KFEvalPointSetUp_Private(KFReducer r, KFEvalPoint *p)
   PetscCall(PetscMalloc3(p->nw, &p->w, p->nw * t * a, &p->Tre, p->nw * t * a, &p->Tim));
   for (PetscInt f = 0; f < p->nw; f++) p->w[f] = 2 * PETSC_PI * p->fhz[f];
   PetscCall(KFEvalPointResponse(r, p, p->nw, p->w, p->Tre, p->Tim));
+  if (!p->rich) PetscCall(KFEvalPointCheckReference_Private(r, p));
   PetscFunctionReturn(0);
 }
 
@@ -126,6 +127,7 @@ PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *p)
   PetscCall(PetscFree(p->L0));
   PetscCall(PetscFree(p->fhz));
   PetscCall(PetscFree3(p->w, p->Tre, p->Tim));
+  PetscCall(PetscFree2(p->chk_w, p->chk_T));
   PetscCall(PetscFree(p->angles));
   PetscCall(PetscMemzero(p, sizeof(*p)));
   PetscFunctionReturn(0);

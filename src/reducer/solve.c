@@ -470,6 +470,7 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, PetscInt nm
     PetscCall(KFReducerAddPerf_Private(r, solver));
     PetscCall(KFFlexSolverDestroy(&solver));
   }
+  PetscCall(KFEvalPointDirectSolves_Private(r, sys, p)); /* the truth the reference is checked against */
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -873,6 +874,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
   PetscCall(KFReducerResultsReset_Private(r));
+  r->verify_check_worst    = -1;
+  r->verify_check_worst_hz = 0;
   PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
   PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
   PetscCall(PetscTime(&tstart));

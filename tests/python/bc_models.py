@@ -363,3 +363,30 @@ def plate_supported():
 
 CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm, "lumped": lumped_frame}
 CASES.update(plate=plate_c345, spoints=scalar_points, plate_supported=plate_supported)
+
+
+def lumped_plate(nx=5, ny=3, hx=0.5, hy=0.5, band=BAND):
+    """A free-free plate as a commercial code exports it: the grillage's out-of-plane part (uz rx ry per node, nodes
+    'c345') and lumped translational masses only, some at the node (every 7th node) and two or three
+    offset from it at the others (a CONM2 with an offset
+    puts m v v^T on the node, v = (1, dy, -dx): out-of-plane motion of the mass point is uz + rx dy - ry dx). One mass
+    at the node leaves rx, ry with a zero diagonal; one offset mass gives a rank-1 block with a full diagonal; two
+    offset masses a rank-2 block, three a rank-3 one. M is then singular far beyond its zero diagonal: rank = masses placed."""
+    K6, _, pts = grillage(nx, ny, hx, hy)
+    n = len(pts)
+    keep = np.array([6 * i + c for i in range(n) for c in (2, 3, 4)])
+    K = K6[np.ix_(keep, keep)]
+    M = np.zeros_like(K)
+    rng = np.random.default_rng(7)
+    for i in range(n):
+        offsets = [(0.0, 0.0)] if i % 7 == 0 else [tuple(rng.uniform(-0.2, 0.2, 2)) for _ in range(2 + i % 2)]
+        for dx, dy in offsets:
+            v = np.array([1.0, dy, -dx])
+            M[3 * i:3 * i + 3, 3 * i:3 * i + 3] += rng.uniform(1.0, 3.0) * np.outer(v, v)
+    nodes = [[i + 1, *p, "c345"] for i, p in enumerate(pts)]
+    return {"name": "lumped_plate", "bodies": {"plate": {"mass": M, "stiffness": K, "nodes": nodes}},
+            "inputs": {"fz": [{"body": "plate", "node": n, "dof": "uz"}],
+                       "mx": [{"body": "plate", "node": nx + 2, "dof": "rx"}]},
+            "outputs": {"z": [{"body": "plate", "node": 1, "dof": "uz"}],
+                        "ry": [{"body": "plate", "node": n - 1, "dof": "ry"}]},
+            "band": list(band), "damping": ZETA, "accuracy": 0.01}

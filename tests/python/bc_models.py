@@ -326,7 +326,7 @@ def scalar_points():
 
 def layout_reference(spec):
     """Dense (M, K, G, H) of a one-body spec with any layout: dofs node by node, components ascending."""
-    b = spec["bodies"]["beam"]
+    b = next(iter(spec["bodies"].values()))   # the one body
     first, comps, d = {}, {}, 0
     for r in b["nodes"]:
         c = r[4]

@@ -20,3 +20,8 @@ def reassembled(model, angles_deg):
     """model.at(angles_deg) as the tuple the tests compare: (M, K, B, C, constraint rank, sigma ratio, rigid modes)."""
     s = model.at(angles_deg)
     return s.M, s.K, s.B, s.C, s.constraint_rank, s.sigma_ratio, s.rigid_modes
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: a test that takes more than 30 s")
+    config.addinivalue_line("markers", "mpi: a test that runs on 2 MPI ranks")

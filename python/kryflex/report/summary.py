@@ -37,9 +37,10 @@ def _none(x):
 PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves_s"), ("time_whole", "whole_s"),
                ("time_ratio", "ratio"), ("solve_calls", "solve_calls"), ("solve_columns", "solve_columns"),
                ("refinement_solves", "refinement_solves"), ("solve_blocks_unconverged", "blocks_unconverged"),
+               ("solve_blocks_escalated", "blocks_escalated"),
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
-PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged")  # ints in the JSON
+PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
 
 def _performance(reducer, whole):

@@ -878,6 +878,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(KFReducerResultsReset_Private(r));
   r->verify_check_worst    = -1;
   r->verify_check_worst_hz = 0;
+  r->verify_check_seconds  = 0;
   PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
   PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
   PetscCall(PetscTime(&tstart));

@@ -47,13 +47,14 @@ static PetscErrorCode KFCheckFrequencies(KFReducer r, const KFFullReference *ref
 /* the direct solves at the evaluation point's configuration (sys), kept in p until the reference's grid exists */
 PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEvalPoint *p)
 {
-  PetscInt a, t, npts = r->verify_check_points;
-  Mat      Ms, Ks, G, Ht;
-  MPI_Comm comm = PetscObjectComm((PetscObject)r);
+  PetscInt       a, t, npts = r->verify_check_points;
+  Mat            Ms, Ks, G, Ht;
+  PetscLogDouble t0, t1;
 
   PetscFunctionBegin;
   p->nchk = 0;
   if (!npts || !p->ref.w2) PetscFunctionReturn(0);
+  PetscCall(PetscTime(&t0));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, &Ht));
   PetscCall(PetscMalloc2(npts, &p->chk_w, npts * t * a, &p->chk_T));
@@ -87,7 +88,8 @@ PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEval
     PetscCall(MatDestroy(&A));
   }
   p->nchk = npts;
-  (void)comm;
+  PetscCall(PetscTime(&t1));
+  r->verify_check_seconds += t1 - t0;
   PetscFunctionReturn(0);
 }
 
@@ -144,6 +146,7 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
   }
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_error", r->verify_check_worst));
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_rtol", r->verify_check_rtol));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_check", (PetscReal)r->verify_check_seconds));
   PetscCall(KFProgress(comm, "reference check at %s deg: %" PetscInt_FMT " direct solves of the full order, worst disagreement %.2e of the pair's peak at %.4g Hz (allowed %.0e)", label, p->nchk, (double)worst, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)r->verify_check_rtol));
   PetscCheck(worst <= r->verify_check_rtol, comm, PETSC_ERR_NOT_CONVERGED, "the full-order reference at %s deg disagrees with a direct solve of the full system at %.6g Hz by %.3e of the peak of output %" PetscInt_FMT " <- input %" PetscInt_FMT " (allowed %.1e): the verification's modes are wrong or incomplete there, so no verdict is given; raise -kf_verify_modes or -kf_verify_cover, or take the dense reference (-kf_verify_dense_max_dofs above the system size)",
              label, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)worst, pw % t, pw / t, (double)r->verify_check_rtol);

@@ -10,7 +10,7 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *,
 
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
-  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid;
+  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid, nnull, n0;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
   PetscBool  dense, viscous = PETSC_FALSE;
   Mat        modes = NULL;
@@ -21,11 +21,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
     if (r->scene->bodies[b].C) viscous = PETSC_TRUE;
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
   PetscCall(KFSystemEigenIsDense(sys, &dense));
-  {
-    PetscInt nnull, n0; /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own */
-    PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
-    nflex = nsys - nrigid - nnull;
-  }
+  /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own */
+  PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
+  nflex = nsys - nrigid - nnull;
   PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nrigid);
   /* dense: every mode (no residual to approximate); sparse: start at 20 */
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
@@ -41,7 +39,10 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
     nev = PetscMin(nflex, 2 * nev);
   }
   ref->n        = nconv;
-  ref->complete = (PetscBool)(nconv == nflex);
+  /* with M singular the modes are not the whole response: a load on M's null space moves it statically,
+     H Z K_zz^-1 Z^T G at every frequency, which no mode carries; the static residual R^0 = L^0 - sum over the modes
+     is exactly that term, so it is kept (R^1, which M annihilates there, falls below its noise and is dropped) */
+  ref->complete = (PetscBool)(nconv == nflex && nnull == 0);
   PetscCall(PetscMalloc3(PetscMax(nconv, 1), &ref->w2, PetscMax(t * nconv, 1), &ref->HPhi, PetscMax(nconv * a, 1), &ref->PhiG));
   PetscCall(PetscArraycpy(ref->w2, w2, nconv));
   PetscCall(KFSystemRigidIO(sys, &ref->r, NULL, NULL));

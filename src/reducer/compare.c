@@ -7,6 +7,7 @@
 #include <kryflex/reducerimpl.h>
 
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
@@ -40,9 +41,14 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   }
   ref->n        = nconv;
   /* with M singular the modes are not the whole response: a load on M's null space moves it statically,
-     H Z K_zz^-1 Z^T G at every frequency, which no mode carries; the static residual R^0 = L^0 - sum over the modes
-     is exactly that term, so it is kept (R^1, which M annihilates there, falls below its noise and is dropped) */
-  ref->complete = (PetscBool)(nconv == nflex && nnull == 0);
+     H Z K_zz^-1 Z^T G at every frequency, which no mode carries. The dense path computes that term exactly (ref->D);
+     the sparse path's static residual R^0 = L^0 - sum over the modes holds it, so it is kept there even when every
+     finite mode was computed (R^1, which M annihilates on Z, falls below its noise and is dropped) */
+  ref->complete = (PetscBool)(nconv == nflex && (dense || nnull == 0));
+  if (dense && nnull) {
+    PetscCall(PetscMalloc1(t * a, &ref->D));
+    PetscCall(KFSystemMassNullStatic(sys, ref->D));
+  }
   PetscCall(PetscMalloc3(PetscMax(nconv, 1), &ref->w2, PetscMax(t * nconv, 1), &ref->HPhi, PetscMax(nconv * a, 1), &ref->PhiG));
   PetscCall(PetscArraycpy(ref->w2, w2, nconv));
   PetscCall(KFSystemRigidIO(sys, &ref->r, NULL, NULL));
@@ -104,6 +110,7 @@ PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *ref)
   PetscCall(PetscFree3(ref->w2, ref->HPhi, ref->PhiG));
   PetscCall(PetscFree2(ref->HPr, ref->PrG));
   PetscCall(PetscFree(ref->Cm));
+  PetscCall(PetscFree(ref->D));
   PetscCall(PetscMemzero(ref, sizeof(*ref)));
   PetscFunctionReturn(0);
 }

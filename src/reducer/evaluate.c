@@ -58,6 +58,7 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
     for (PetscInt e = 0; e < t * a; e++) {
       if (!keep0) resid[e] = 0;
       if (!keep1) resid[t * a + e] = 0;
+      if (ref->D) resid[e] += ref->D[e]; /* the static response of M's null space (dense path) */
     }
   }
   /* the residual is quasi-static: structural damping divides it by 1 + i g; then the output's quantity */

@@ -102,6 +102,70 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem sys, PetscBool dense, P
   PetscFunctionReturn(0);
 }
 
+/* The static response of M_S's null space Z: D = H Z K_zz^-1 Z^T G (t x a, column-major), replicated. A load on the
+   null space moves it at every frequency without inertia; no mode carries that, so the modal reference adds it. */
+PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem sys, PetscReal D[])
+{
+  KFScene      s = sys->scene;
+  PetscInt     n = s->nsys, a = s->ninputs, t = s->noutputs, nz;
+  PetscReal   *K, *M, *G, *Ht, *U, *mu, *Kzz, *Zg, *Zh;
+  PetscBLASInt bz, ba, info;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc4(n * n, &K, n * n, &M, n * a, &G, n * t, &Ht));
+  PetscCall(PetscMalloc2(n * n, &U, n, &mu));
+  PetscCall(KFGatherAny(sys->Ks, K));
+  PetscCall(KFGatherAny(sys->Ms, M));
+  PetscCall(KFDenseGather(sys->G, G));
+  PetscCall(KFDenseGather(sys->Ht, Ht));
+  PetscCall(KFMassEig(n, M, U, mu, &nz));
+  PetscCall(PetscArrayzero(D, t * a));
+  if (nz) {
+    PetscReal *KZ;
+
+    PetscCall(PetscMalloc4(nz * nz, &Kzz, nz * a, &Zg, nz * t, &Zh, n * nz, &KZ));
+    for (PetscInt j = 0; j < nz; j++) /* K Z, then K_zz = Z^T (K Z) */
+      for (PetscInt k = 0; k < n; k++) {
+        PetscReal d = 0;
+        for (PetscInt l = 0; l < n; l++) d += K[k + l * n] * U[l + j * n];
+        KZ[k + j * n] = d;
+      }
+    for (PetscInt j = 0; j < nz; j++)
+      for (PetscInt i = 0; i <= j; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KZ[k + j * n];
+        Kzz[i + j * nz] = Kzz[j + i * nz] = d;
+      }
+    for (PetscInt q = 0; q < a; q++)
+      for (PetscInt i = 0; i < nz; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * G[k + q * n];
+        Zg[i + q * nz] = d;
+      }
+    for (PetscInt q = 0; q < t; q++)
+      for (PetscInt i = 0; i < nz; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * Ht[k + q * n];
+        Zh[i + q * nz] = d;
+      }
+    PetscCall(PetscBLASIntCast(nz, &bz));
+    PetscCall(PetscBLASIntCast(a, &ba));
+    PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
+    PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
+    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &ba, Kzz, &bz, Zg, &bz, &info)); /* K_zz^-1 Z^T G */
+    for (PetscInt q = 0; q < a; q++)
+      for (PetscInt p = 0; p < t; p++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < nz; i++) d += Zh[i + p * nz] * Zg[i + q * nz];
+        D[p + q * t] = d;
+      }
+    PetscCall(PetscFree4(Kzz, Zg, Zh, KZ));
+  }
+  PetscCall(PetscFree4(K, M, G, Ht));
+  PetscCall(PetscFree2(U, mu));
+  PetscFunctionReturn(0);
+}
+
 /* The dense verification of a system whose mass is singular: M = U diag(mu) U^T splits the dofs into M's range Y
    (mu > 0) and null space Z, x = Y y + Z z. The null coordinates carry no inertia, so their rows of K x = lambda M x
    say K_zy y + K_zz z = 0: they are condensed statically (K_c = K_yy - K_yz K_zz^-1 K_zy, M_c = diag(mu) positive

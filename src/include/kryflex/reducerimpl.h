@@ -117,6 +117,7 @@ typedef struct {
   PetscReal *HPr, *PrG;      /* t x r, r x a */
   PetscInt   nc;             /* modes coupled by the viscous damping (rigid first, then flexible), 0: none */
   PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
+  PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
 } KFFullReference;
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);

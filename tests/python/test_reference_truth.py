@@ -168,3 +168,51 @@ def test_incomplete_reference_is_caught(tmp_path, ranks):
     assert " Hz by " in p.stdout and "fixed deg" in p.stdout
     assert "Traceback" not in p.stderr
     assert not out.exists()
+
+
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+KRYFLEX = [sys.executable, "-m", "kryflex"]
+
+
+def test_inexact_block_solves_are_said_under_quiet(tmp_path):
+    """A refinement threshold no solve can reach (-kf_refine_rtol 1e-14): every block is escalated and stays above;
+    summary.json counts them, the report's notes and the verdict line say so under -quiet, and the verdict is the
+    checked reference's (exit 0: the model is measured against a reference the direct solves confirm)."""
+    import json
+    out = tmp_path / "out"
+    p = subprocess.run(KRYFLEX + ["reduce", GALILEO, "-o", str(out), "-quiet", "-kf_refine_rtol", "1e-14"], env=ENV,
+                       capture_output=True, text=True, timeout=TIMEOUT)
+    assert p.returncode == 0, p.stdout + p.stderr[-2000:]
+    s = json.loads((out / "summary.json").read_text())
+    perf = s["performance"]
+    assert perf["blocks_unconverged"] > 0 and perf["blocks_escalated"] >= perf["blocks_unconverged"]
+    assert perf["residual_final_max"] > 1e-14
+    assert any("block solves stayed above -kf_refine_rtol" in n for n in s["notes"])
+    assert "block solves stayed above -kf_refine_rtol after refinement and escalation" in p.stderr
+    last = p.stdout.strip().splitlines()[-1]
+    assert "block solves inexact" in last and "measured against the full order" in last
+    assert s["reference_check"]["error"] <= 1e-6
+    assert "direct solves" in (out / "report.md").read_text()
+
+
+def test_reference_check_in_summary_and_report(tmp_path):
+    import json
+    out = tmp_path / "out"
+    p = subprocess.run(KRYFLEX + ["reduce", GALILEO, "-o", str(out), "-quiet"], env=ENV, capture_output=True,
+                       text=True, timeout=TIMEOUT)
+    assert p.returncode == 0, p.stdout + p.stderr[-2000:]
+    s = json.loads((out / "summary.json").read_text())
+    check = s["reference_check"]
+    assert 0 <= check["error"] <= check["rtol"] == 1e-6
+    assert set(check["per_angle"]) == set(s["angle_labels"])
+    assert max(v["error"] for v in check["per_angle"].values()) == check["error"]
+    assert "block solves inexact" not in p.stdout
+
+
+@pytest.mark.parametrize("option, value", [("-kf_verify_check_rtol", "2"), ("-kf_verify_check_points", "-1")])
+def test_bad_check_options_are_named(tmp_path, option, value):
+    p = subprocess.run(KRYFLEX + ["reduce", GALILEO, "-o", str(tmp_path / "out"), "-quiet", option, value], env=ENV,
+                       capture_output=True, text=True, timeout=TIMEOUT)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert option in p.stdout + p.stderr and "Traceback" not in p.stderr
+    assert not (tmp_path / "out").exists()

@@ -87,46 +87,50 @@ PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEval
   PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, &Ht));
   PetscCall(PetscMalloc2(npts, &p->chk_w, npts * t * a, &p->chk_T));
   PetscCall(KFCheckFrequencies(r, &p->ref, npts, p->chk_w));
-  for (PetscInt s = 0; s < npts; s++) {
-    Mat           A, F, X, Gd;
+  {
+    Mat           A, F, Gd;
     MatFactorInfo info;
     IS            rp, cp;
-    PetscInt      nl, N;
 
+    /* one analysis for every frequency (K_S - w^2 M_S has one pattern), one numerical factorization each */
     PetscCall(MatDuplicate(Ks, MAT_COPY_VALUES, &A));
-    PetscCall(MatAXPY(A, -p->chk_w[s] * p->chk_w[s], Ms, DIFFERENT_NONZERO_PATTERN));
+    PetscCall(MatAXPY(A, -1.0, Ms, DIFFERENT_NONZERO_PATTERN));
     PetscCall(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
     PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F)); /* LDL^T (MUMPS SYM=2): A is indefinite */
     PetscCall(MatGetOrdering(A, MATORDERINGNATURAL, &rp, &cp));
     PetscCall(MatFactorInfoInitialize(&info));
     PetscCall(MatCholeskyFactorSymbolic(F, A, rp, &info));
-    PetscCall(MatCholeskyFactorNumeric(F, A, &info));
-    PetscCall(MatGetLocalSize(Ks, &nl, NULL));
-    PetscCall(MatGetSize(Ks, &N, NULL));
-    /* MUMPS wants a dense right-hand side of its own (G may be a sub-matrix view) */
+    /* MUMPS wants a dense right-hand side of its own (G may be a sub-matrix view); the loads self-equilibrated */
     PetscCall(MatConvert(G, MATDENSE, MAT_INITIAL_MATRIX, &Gd));
     if (p->ref.r) PetscCall(KFProjectFlexible(sys, Gd, PETSC_TRUE)); /* P^T G */
-    PetscCall(MatDuplicate(Gd, MAT_DO_NOT_COPY_VALUES, &X));
-    PetscCall(MatMatSolve(F, Gd, X));
-    /* two steps of refinement against A itself: near the band's bottom A is nearly singular on the rigid modes
-       (eigenvalues -w^2 m), and the truth must not carry eps cond(A) */
-    for (PetscInt it = 0; it < 2; it++) {
-      Mat Rr, dX;
+    for (PetscInt s = 0; s < npts; s++) {
+      Mat X;
 
-      PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Rr));
-      PetscCall(MatAYPX(Rr, -1.0, Gd, SAME_NONZERO_PATTERN)); /* R = G - A X */
-      PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
-      PetscCall(MatMatSolve(F, Rr, dX));
-      PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
-      PetscCall(MatDestroy(&dX));
-      PetscCall(MatDestroy(&Rr));
+      PetscCall(MatCopy(Ks, A, SUBSET_NONZERO_PATTERN));
+      PetscCall(MatAXPY(A, -p->chk_w[s] * p->chk_w[s], Ms, SUBSET_NONZERO_PATTERN));
+      PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+      PetscCall(MatDuplicate(Gd, MAT_DO_NOT_COPY_VALUES, &X));
+      PetscCall(MatMatSolve(F, Gd, X));
+      /* two steps of refinement against A itself: near the band's bottom A is nearly singular on the rigid modes
+         (eigenvalues -w^2 m), and the truth must not carry eps cond(A) */
+      for (PetscInt it = 0; it < 2; it++) {
+        Mat Rr, dX;
+
+        PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Rr));
+        PetscCall(MatAYPX(Rr, -1.0, Gd, SAME_NONZERO_PATTERN)); /* R = G - A X */
+        PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
+        PetscCall(MatMatSolve(F, Rr, dX));
+        PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
+        PetscCall(MatDestroy(&dX));
+        PetscCall(MatDestroy(&Rr));
+      }
+      if (p->ref.r) PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE)); /* P X */
+      PetscCall(KFMatTransposeMatMultGather(Ht, X, &p->chk_T[s * t * a])); /* t x a, column-major */
+      for (PetscInt j = 0; j < a; j++) /* the rigid part, exact: -H Phi_r Phi_r^T G / w^2 */
+        for (PetscInt q = 0; q < t; q++)
+          for (PetscInt k = 0; k < p->ref.r; k++) p->chk_T[s * t * a + q + j * t] -= p->ref.HPr[q + k * t] * p->ref.PrG[k + j * p->ref.r] / (p->chk_w[s] * p->chk_w[s]);
+      PetscCall(MatDestroy(&X));
     }
-    if (p->ref.r) PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE)); /* P X */
-    PetscCall(KFMatTransposeMatMultGather(Ht, X, &p->chk_T[s * t * a])); /* t x a, column-major */
-    for (PetscInt j = 0; j < a; j++) /* the rigid part, exact: -H Phi_r Phi_r^T G / w^2 */
-      for (PetscInt q = 0; q < t; q++)
-        for (PetscInt k = 0; k < p->ref.r; k++) p->chk_T[s * t * a + q + j * t] -= p->ref.HPr[q + k * t] * p->ref.PrG[k + j * p->ref.r] / (p->chk_w[s] * p->chk_w[s]);
-    PetscCall(MatDestroy(&X));
     PetscCall(MatDestroy(&Gd));
     PetscCall(ISDestroy(&rp));
     PetscCall(ISDestroy(&cp));

@@ -652,7 +652,7 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
     solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
     if (rel > solver->refine_rtol) solver->perf.blocks_refined++;
     PetscCall(KFFlexSolverRefine(solver, B, X, &R, &rel, solver->refine, 0.5));
-    if (rel > solver->refine_rtol) { /* escalation */
+    if (rel > solver->refine_rtol && solver->refine_rtol > 0) { /* escalation (-kf_refine_rtol 0 asks for the steps, not a residual) */
       PetscBool refactored;
 
       solver->perf.blocks_escalated++;

@@ -132,6 +132,7 @@ typedef struct {
   PetscLogDouble factor_seconds, solve_seconds;
   PetscReal      memory_estimate_mb, residual_first_max, residual_final_max;
   PetscInt       solve_calls, solve_columns, refinement_solves, blocks, blocks_refined, blocks_unconverged;
+  PetscInt       blocks_escalated; /* blocks still above -kf_refine_rtol after the refinement steps: escalated */
 } KFFlexSolverPerf;
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
 /* Which implementation of K+ (src/solve/bodywise.c): monolithic (one factorization of K_S per configuration),

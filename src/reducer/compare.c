@@ -6,11 +6,12 @@
 */
 #include <kryflex/reducerimpl.h>
 
-PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
+PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 
 PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullReference *ref)
 {
-  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid;
+  PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid, nnull, n0;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
   PetscBool  dense, viscous = PETSC_FALSE;
   Mat        modes = NULL;
@@ -20,13 +21,11 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
   for (PetscInt b = 0; b < nb; b++)
     if (r->scene->bodies[b].C) viscous = PETSC_TRUE;
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
-  {
-    PetscInt n0; /* massless dofs carry infinite eigenvalues: no flexible modes of theirs to compute */
-    PetscCall(KFSystemMasslessCount(sys, &n0));
-    nflex = nsys - nrigid - n0;
-  }
-  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nrigid);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
+  /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own */
+  PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
+  nflex = nsys - nrigid - nnull;
+  PetscCheck(nflex >= 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the scene has no flexible modes to verify (%" PetscInt_FMT " system dofs, %" PetscInt_FMT " rigid-body and mechanism modes): switch verification off (-kf_verify 0)", nsys, nrigid);
   /* dense: every mode (no residual to approximate); sparse: start at 20 */
   nev = PetscMin(nflex, r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes);
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
@@ -41,7 +40,15 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFullR
     nev = PetscMin(nflex, 2 * nev);
   }
   ref->n        = nconv;
-  ref->complete = (PetscBool)(nconv == nflex);
+  /* with M singular the modes are not the whole response: a load on M's null space moves it statically,
+     H Z K_zz^-1 Z^T G at every frequency, which no mode carries. The dense path computes that term exactly (ref->D);
+     the sparse path's static residual R^0 = L^0 - sum over the modes holds it, so it is kept there even when every
+     finite mode was computed (R^1, which M annihilates on Z, falls below its noise and is dropped) */
+  ref->complete = (PetscBool)(nconv == nflex && (dense || nnull == 0));
+  if (dense && nnull) {
+    PetscCall(PetscMalloc1(t * a, &ref->D));
+    PetscCall(KFSystemMassNullStatic(sys, ref->D));
+  }
   PetscCall(PetscMalloc3(PetscMax(nconv, 1), &ref->w2, PetscMax(t * nconv, 1), &ref->HPhi, PetscMax(nconv * a, 1), &ref->PhiG));
   PetscCall(PetscArraycpy(ref->w2, w2, nconv));
   PetscCall(KFSystemRigidIO(sys, &ref->r, NULL, NULL));
@@ -103,6 +110,7 @@ PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *ref)
   PetscCall(PetscFree3(ref->w2, ref->HPhi, ref->PhiG));
   PetscCall(PetscFree2(ref->HPr, ref->PrG));
   PetscCall(PetscFree(ref->Cm));
+  PetscCall(PetscFree(ref->D));
   PetscCall(PetscMemzero(ref, sizeof(*ref)));
   PetscFunctionReturn(0);
 }

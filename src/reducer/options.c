@@ -215,6 +215,10 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(PetscOptionsBool("-kf_verify", "Verify the reduced model against the full order (SLEPc eigensolve) at every angle of interest", "KFReducerSetVerification", verify, &verify, NULL));
   PetscCall(PetscOptionsInt("-kf_verify_modes", "Full-order modes for verification (-1: cover -kf_verify_cover x the band's top)", "KFReducerSetVerification", vmodes, &vmodes, NULL));
   PetscCall(PetscOptionsReal("-kf_verify_cover", "Automatic verification modes cover this multiple of the band's top frequency", "KFReducerSetVerification", r->verify_cover, &r->verify_cover, NULL));
+  PetscCall(PetscOptionsInt("-kf_verify_check_points", "Direct solves of the full-order system per angle checking the verification's reference, off resonance (0: no check)", "KFReducerSolve", r->verify_check_points, &r->verify_check_points, NULL));
+  PetscCall(PetscOptionsReal("-kf_verify_check_rtol", "Largest disagreement allowed between the reference and a direct solve, a fraction of the pair's peak (beyond it the run fails, exit 3)", "KFReducerSolve", r->verify_check_rtol, &r->verify_check_rtol, NULL));
+  PetscCheck(r->verify_check_points >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_check_points is a number of direct solves per angle, 0 (no check) or more; got %" PetscInt_FMT, r->verify_check_points);
+  PetscCheck(r->verify_check_rtol > 0 && r->verify_check_rtol < 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_check_rtol is a fraction of the peak in (0, 1), for example 1e-6; got %g", (double)r->verify_check_rtol);
   PetscCall(PetscOptionsInt("-kf_frequency_points", "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "KFReducerSetVerification", npoints, &npoints, NULL));
   PetscCall(PetscOptionsReal("-kf_frf_floor_db", "FRF error: notches deeper than this below the band's peak count against this level", "KFFRFError", floor_db, &floor_db, NULL));
   PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));

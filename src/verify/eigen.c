@@ -35,16 +35,149 @@ static PetscErrorCode KFGatherAny(Mat A, PetscReal out[])
   PetscFunctionReturn(0);
 }
 
-/* The dense verification of a system with massless dofs: they are condensed statically (K_cc = K_mm - K_m0 K_00^-1
-   K_0m on the dofs with mass, whose M_mm is then positive definite), the pencil solved with the rigid modes known
-   (KFDenseEigRigid), and each mode expanded to the massless dofs by x_0 = -K_00^-1 K_0m x_m. Exact: the massless
-   rows of K x = lambda M x say K_0m x_m + K_00 x_0 = 0. */
+/* M's null space below this fraction of its largest eigenvalue: exported mass matrices are rounded (8 to 12 digits in
+   a punch), so a direction whose mass is 1e-8 of the largest would resonate 1e4 times above the model's frequencies;
+   its static part is kept exactly by the condensation */
+#define KF_MASS_NULL_RTOL 1e-8
+
+/* The eigendecomposition M = U diag(mu) U^T of a replicated n x n M (U overwrites a copy of M): the null directions
+   (mu <= KF_MASS_NULL_RTOL max mu) are the nz first columns of U, LAPACK ordering the eigenvalues ascending */
+static PetscErrorCode KFMassEig(PetscInt n, const PetscReal M[], PetscReal U[], PetscReal mu[], PetscInt *nz)
+{
+  PetscBLASInt bn, lwork, info;
+  PetscReal   *work, top;
+
+  PetscFunctionBegin;
+  PetscCall(PetscBLASIntCast(n, &bn));
+  PetscCall(PetscArraycpy(U, M, n * n));
+  PetscCall(KFDenseSymmetrize_Private(n, U));
+  lwork = PetscMax(3 * bn, 1) * 8;
+  PetscCall(PetscMalloc1(lwork, &work));
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bn, U, &bn, mu, work, &lwork, &info));
+  PetscCall(PetscFree(work));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "the full-order system's mass matrix M_S: the symmetric eigensolver did not converge (LAPACK syev info %d); check M for huge or tiny entries", (int)info);
+  top = n ? PetscMax(PetscAbsReal(mu[n - 1]), PetscAbsReal(mu[0])) : 0;
+  PetscCheck(!n || mu[0] >= -1e-6 * top, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S is indefinite (eigenvalue %g against a largest %g): a mass matrix must be positive semi-definite; check the bodies' mass matrices (signs, units, a stiffness given as mass)", (double)mu[0], (double)top);
+  *nz = 0;
+  while (*nz < n && mu[*nz] <= KF_MASS_NULL_RTOL * top) (*nz)++;
+  PetscFunctionReturn(0);
+}
+
+/* The dimension of the null space of the full-order mass M_S (dense: its eigenvalues; sparse: MUMPS null pivots of M_S
+   with a relative threshold) and how many of its dofs have a zero row (massless dofs) */
+PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem sys, PetscBool dense, PetscInt *nnull, PetscInt *nzero)
+{
+  KFScene s = sys->scene;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemMasslessCount(sys, nzero));
+  if (dense) {
+    PetscInt   n = s->nsys;
+    PetscReal *M, *U, *mu;
+
+    PetscCall(PetscMalloc3(n * n, &M, n * n, &U, n, &mu));
+    PetscCall(KFGatherAny(sys->Ms, M));
+    PetscCall(KFMassEig(n, M, U, mu, nnull));
+    PetscCall(PetscFree3(M, U, mu));
+  } else {
+    Mat           F;
+    MatFactorInfo info;
+    IS            rp, cp;
+    PetscInt      nullp;
+
+    /* LDL^T with null-pivot detection: a pivot below 1e-8 ||M_S|| counts as a null direction */
+    PetscCall(MatGetFactor(sys->Ms, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+    PetscCall(MatMumpsSetIcntl(F, 24, 1));
+    PetscCall(MatMumpsSetCntl(F, 3, KF_MASS_NULL_RTOL));
+    PetscCall(MatGetOrdering(sys->Ms, MATORDERINGNATURAL, &rp, &cp));
+    PetscCall(MatFactorInfoInitialize(&info));
+    PetscCall(MatCholeskyFactorSymbolic(F, sys->Ms, rp, &info));
+    PetscCall(MatCholeskyFactorNumeric(F, sys->Ms, &info));
+    PetscCall(MatMumpsGetInfog(F, 28, &nullp));
+    *nnull = nullp;
+    PetscCall(ISDestroy(&rp));
+    PetscCall(ISDestroy(&cp));
+    PetscCall(MatDestroy(&F));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The static response of M_S's null space Z: D = H Z K_zz^-1 Z^T G (t x a, column-major), replicated. A load on the
+   null space moves it at every frequency without inertia; no mode carries that, so the modal reference adds it. */
+PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem sys, PetscReal D[])
+{
+  KFScene      s = sys->scene;
+  PetscInt     n = s->nsys, a = s->ninputs, t = s->noutputs, nz;
+  PetscReal   *K, *M, *G, *Ht, *U, *mu, *Kzz, *Zg, *Zh;
+  PetscBLASInt bz, ba, info;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc4(n * n, &K, n * n, &M, n * a, &G, n * t, &Ht));
+  PetscCall(PetscMalloc2(n * n, &U, n, &mu));
+  PetscCall(KFGatherAny(sys->Ks, K));
+  PetscCall(KFGatherAny(sys->Ms, M));
+  PetscCall(KFDenseGather(sys->G, G));
+  PetscCall(KFDenseGather(sys->Ht, Ht));
+  PetscCall(KFMassEig(n, M, U, mu, &nz));
+  PetscCall(PetscArrayzero(D, t * a));
+  if (nz) {
+    PetscReal *KZ;
+
+    PetscCall(PetscMalloc4(nz * nz, &Kzz, nz * a, &Zg, nz * t, &Zh, n * nz, &KZ));
+    for (PetscInt j = 0; j < nz; j++) /* K Z, then K_zz = Z^T (K Z) */
+      for (PetscInt k = 0; k < n; k++) {
+        PetscReal d = 0;
+        for (PetscInt l = 0; l < n; l++) d += K[k + l * n] * U[l + j * n];
+        KZ[k + j * n] = d;
+      }
+    for (PetscInt j = 0; j < nz; j++)
+      for (PetscInt i = 0; i <= j; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KZ[k + j * n];
+        Kzz[i + j * nz] = Kzz[j + i * nz] = d;
+      }
+    for (PetscInt q = 0; q < a; q++)
+      for (PetscInt i = 0; i < nz; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * G[k + q * n];
+        Zg[i + q * nz] = d;
+      }
+    for (PetscInt q = 0; q < t; q++)
+      for (PetscInt i = 0; i < nz; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * Ht[k + q * n];
+        Zh[i + q * nz] = d;
+      }
+    PetscCall(PetscBLASIntCast(nz, &bz));
+    PetscCall(PetscBLASIntCast(a, &ba));
+    PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
+    PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
+    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &ba, Kzz, &bz, Zg, &bz, &info)); /* K_zz^-1 Z^T G */
+    for (PetscInt q = 0; q < a; q++)
+      for (PetscInt p = 0; p < t; p++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < nz; i++) d += Zh[i + p * nz] * Zg[i + q * nz];
+        D[p + q * t] = d;
+      }
+    PetscCall(PetscFree4(Kzz, Zg, Zh, KZ));
+  }
+  PetscCall(PetscFree4(K, M, G, Ht));
+  PetscCall(PetscFree2(U, mu));
+  PetscFunctionReturn(0);
+}
+
+/* The dense verification of a system whose mass is singular: M = U diag(mu) U^T splits the dofs into M's range Y
+   (mu > 0) and null space Z, x = Y y + Z z. The null coordinates carry no inertia, so their rows of K x = lambda M x
+   say K_zy y + K_zz z = 0: they are condensed statically (K_c = K_yy - K_yz K_zz^-1 K_zy, M_c = diag(mu) positive
+   definite), the pencil solved with the rigid modes known (KFDenseEigRigid; y = Y^T phi_r), and each mode expanded
+   by z = -K_zz^-1 K_zy y. This takes M's whole null space, not only its zero rows: a lumped mass offset from its node
+   gives a rank-1 block with a full diagonal, singular beyond any zero diagonal. */
 static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene      s = sys->scene;
-  PetscInt     n = s->nsys, a = s->ninputs, t = s->noutputs, r = sys->nrigid, n0 = 0, nm = 0, *im, *iz, got;
-  PetscReal   *K, *M, *G, *Ht, *Phr, *K00, *X, *Kc, *Mc, *Pm, *lam, *V, *x;
-  PetscBLASInt b0, bm, info;
+  PetscInt     n = s->nsys, a = s->ninputs, t = s->noutputs, r = sys->nrigid, nz, ny, got;
+  PetscReal   *K, *M, *G, *Ht, *Phr, *U, *mu, *KU, *Kt, *Kzz, *X, *Kc, *Mc, *Pm, *lam, *V, *x, *zc;
+  PetscBLASInt bz, by, info;
 
   PetscFunctionBegin;
   PetscCall(PetscMalloc4(n * n, &K, n * n, &M, n * a, &G, n * t, &Ht));
@@ -54,43 +187,62 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
   PetscCall(KFDenseGather(sys->G, G));
   PetscCall(KFDenseGather(sys->Ht, Ht));
   if (r) PetscCall(KFDenseGather(sys->Phi, Phr));
-  PetscCall(PetscMalloc2(n, &im, n, &iz));
-  for (PetscInt i = 0; i < n; i++) {
-    PetscBool zero = PETSC_TRUE;
-    for (PetscInt j = 0; j < n && zero; j++) zero = (PetscBool)(M[i + j * n] == 0);
-    if (zero) iz[n0++] = i;
-    else im[nm++] = i;
-  }
-  PetscCall(PetscMalloc5(n0 * n0 + 1, &K00, n0 * nm + 1, &X, nm * nm, &Kc, nm * nm, &Mc, nm * PetscMax(r, 1), &Pm));
-  PetscCall(PetscMalloc3(nm, &lam, nm * nm, &V, n, &x));
-  for (PetscInt j = 0; j < n0; j++)
-    for (PetscInt i = 0; i < n0; i++) K00[i + j * n0] = K[iz[i] + iz[j] * n];
-  for (PetscInt j = 0; j < nm; j++)
-    for (PetscInt i = 0; i < n0; i++) X[i + j * n0] = K[iz[i] + im[j] * n];
-  PetscCall(PetscBLASIntCast(n0, &b0));
-  PetscCall(PetscBLASIntCast(nm, &bm));
-  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &b0, K00, &b0, &info));
-  PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the %" PetscInt_FMT " massless dofs of the system are not held by stiffness (their stiffness block is singular at its leading minor %d): a massless dof or group of them can move freely, a mechanism without inertia; clamp it or connect it", n0, (int)info);
-  PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &b0, &bm, K00, &b0, X, &b0, &info)); /* X = K00^-1 K0m */
-  for (PetscInt j = 0; j < nm; j++)
-    for (PetscInt i = 0; i < nm; i++) {
-      Kc[i + j * nm] = K[im[i] + im[j] * n];
-      Mc[i + j * nm] = M[im[i] + im[j] * n];
-      for (PetscInt k = 0; k < n0; k++) Kc[i + j * nm] -= K[im[i] + iz[k] * n] * X[k + j * n0];
+  PetscCall(PetscMalloc4(n * n, &U, n, &mu, n * n, &KU, n * n, &Kt));
+  PetscCall(KFMassEig(n, M, U, mu, &nz));
+  ny = n - nz;
+  /* Kt = U^T K U: the stiffness in (z, y) coordinates, z first */
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < n; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < n; k++) d += K[i + k * n] * U[k + j * n];
+      KU[i + j * n] = d;
     }
-  PetscCall(KFDenseSymmetrize_Private(nm, Kc));
-  for (PetscInt j = 0; j < r; j++)
-    for (PetscInt i = 0; i < nm; i++) Pm[i + j * nm] = Phr[im[i] + j * n];
-  PetscCall(KFDenseEigRigid(nm, Kc, Mc, r, Pm, lam, V));
-  got = PetscMax(PetscMin(nev, nm - r), 0);
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < n; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KU[k + j * n];
+      Kt[i + j * n] = d;
+    }
+  PetscCall(KFDenseSymmetrize_Private(n, Kt));
+  PetscCall(PetscMalloc5(nz * nz + 1, &Kzz, nz * ny + 1, &X, ny * ny, &Kc, ny * ny, &Mc, ny * PetscMax(r, 1), &Pm));
+  PetscCall(PetscMalloc4(ny, &lam, ny * ny, &V, n, &x, nz + 1, &zc));
+  for (PetscInt j = 0; j < nz; j++)
+    for (PetscInt i = 0; i < nz; i++) Kzz[i + j * nz] = Kt[i + j * n];
+  for (PetscInt j = 0; j < ny; j++)
+    for (PetscInt i = 0; i < nz; i++) X[i + j * nz] = Kt[i + (nz + j) * n];
+  PetscCall(PetscBLASIntCast(nz, &bz));
+  PetscCall(PetscBLASIntCast(ny, &by));
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
+  PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
+  PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &by, Kzz, &bz, X, &bz, &info)); /* X = K_zz^-1 K_zy */
+  for (PetscInt j = 0; j < ny; j++)
+    for (PetscInt i = 0; i < ny; i++) {
+      Kc[i + j * ny] = Kt[nz + i + (nz + j) * n];
+      Mc[i + j * ny] = i == j ? mu[nz + i] : 0;
+      for (PetscInt k = 0; k < nz; k++) Kc[i + j * ny] -= Kt[nz + i + k * n] * X[k + j * nz];
+    }
+  PetscCall(KFDenseSymmetrize_Private(ny, Kc));
+  for (PetscInt j = 0; j < r; j++) /* y = Y^T phi_r */
+    for (PetscInt i = 0; i < ny; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < n; k++) d += U[k + (nz + i) * n] * Phr[k + j * n];
+      Pm[i + j * ny] = d;
+    }
+  PetscCall(KFDenseEigRigid(ny, Kc, Mc, r, Pm, lam, V));
+  got = PetscMax(PetscMin(nev, ny - r), 0);
   if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));
   for (PetscInt k = 0; k < got; k++) {
-    const PetscReal *v = V + (r + k) * nm;
+    const PetscReal *v = V + (r + k) * ny;
     omega2[k] = lam[r + k];
-    for (PetscInt i = 0; i < nm; i++) x[im[i]] = v[i];
-    for (PetscInt i = 0; i < n0; i++) {
-      x[iz[i]] = 0;
-      for (PetscInt j = 0; j < nm; j++) x[iz[i]] -= X[i + j * n0] * v[j];
+    for (PetscInt i = 0; i < nz; i++) {
+      zc[i] = 0;
+      for (PetscInt j = 0; j < ny; j++) zc[i] -= X[i + j * nz] * v[j];
+    }
+    for (PetscInt i = 0; i < n; i++) { /* x = Y y + Z z */
+      PetscReal d = 0;
+      for (PetscInt j = 0; j < ny; j++) d += U[i + (nz + j) * n] * v[j];
+      for (PetscInt j = 0; j < nz; j++) d += U[i + j * n] * zc[j];
+      x[i] = d;
     }
     if (HPhi)
       for (PetscInt q = 0; q < t; q++) {
@@ -116,9 +268,9 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
   *nconv = got;
   PetscCall(PetscFree4(K, M, G, Ht));
   PetscCall(PetscFree(Phr));
-  PetscCall(PetscFree2(im, iz));
-  PetscCall(PetscFree5(K00, X, Kc, Mc, Pm));
-  PetscCall(PetscFree3(lam, V, x));
+  PetscCall(PetscFree4(U, mu, KU, Kt));
+  PetscCall(PetscFree5(Kzz, X, Kc, Mc, Pm));
+  PetscCall(PetscFree4(lam, V, x, zc));
   PetscFunctionReturn(0);
 }
 
@@ -220,10 +372,10 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
   nev   = PetscMin(nev, nflex);
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   if (dense) {
-    PetscInt n0;
-    PetscCall(KFSystemMasslessCount(sys, &n0));
-    if (n0) {
-      PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, %" PetscInt_FMT " massless dofs condensed)", PetscMin(nev, nflex - n0), s->nsys, n0));
+    PetscInt nnull, n0;
+    PetscCall(KFSystemMassNullity(sys, PETSC_TRUE, &nnull, &n0));
+    if (nnull) {
+      PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, %" PetscInt_FMT " massless dofs condensed with the rest of the mass matrix's null space: %" PetscInt_FMT " directions)", PetscMin(nev, nflex - nnull), s->nsys, n0, nnull));
       PetscCall(KFSystemEigenCondensed(sys, nev, nconv, omega2, HPhi, PhiG, modes));
       PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
       PetscFunctionReturn(0);

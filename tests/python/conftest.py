@@ -26,7 +26,3 @@ def reassembled(model, angles_deg):
     s = model.at(angles_deg)
     return s.M, s.K, s.B, s.C, s.constraint_rank, s.sigma_ratio, s.rigid_modes
 
-
-def pytest_configure(config):
-    config.addinivalue_line("markers", "slow: takes more than 30 s")
-    config.addinivalue_line("markers", "mpi: runs on 2 MPI ranks")

@@ -119,11 +119,12 @@ def run(argv):
         say("kryflex: the accuracy target %g was not checked: no error was measured or estimated "
             "(verify.full_order: false and no estimate)" % s["accuracy"])
         return EXIT_OK
+    solves_inexact(s)
     how = "estimated, verify.full_order: false" if s.get("error_estimated") else "measured against the full order"
     measure = s.get("accuracy_measure", "total")
     say("kryflex: max relative %s-response error (relative H-inf per input/output pair, %s model, %s): "
         "%.3g%s (target %.3g)%s" % (measure, s.get("chosen_method") or result.model.settings["method"], how,
-                                    worst, at_text(where), s["accuracy"], where_text(s)))
+                                    worst, at_text(where), s["accuracy"], where_text(s) + inexact_text(s)))
     if not met:
         say("kryflex: target missed: max relative %s-response error %.3g%s > accuracy %.3g"
             % (measure, worst, at_text(where), s["accuracy"]), sys.stderr)
@@ -189,6 +190,27 @@ def chosen_text(result):
     parts.append("%s reduced dofs per body%s" % (" + ".join(str(v) for v in result.model.sizes),
                                                   ", %d system dofs at most" % max(system) if system else ""))
     return ", ".join(parts)
+
+
+def solves_inexact(s):
+    """Block solves left above -kf_refine_rtol after refinement and escalation are never silent: one line (printed
+    under -quiet too) saying how many, and what the verdict then rests on."""
+    perf = s.get("performance") or {}
+    bad = perf.get("blocks_unconverged")
+    if not bad:
+        return
+    check = s.get("reference_check") or {}
+    rests = ("the full-order reference, checked against direct solves (worst disagreement %.1e), measures the "
+             "model" % check["error"]) if check.get("error") is not None else (
+             "the error is estimated from inexact vectors: verify against the full order (verify.full_order: true)")
+    say("kryflex: warning: %d block solves stayed above -kf_refine_rtol after refinement and escalation (largest "
+        "final residual %.1e); %s" % (bad, perf.get("residual_final_max") or float("nan"), rests), sys.stderr)
+
+
+def inexact_text(s):
+    """'; N block solves inexact (...)' on the verdict's line when block solves stayed above -kf_refine_rtol."""
+    bad = (s.get("performance") or {}).get("blocks_unconverged")
+    return "; %d block solves inexact (warning above)" % bad if bad else ""
 
 
 def where_text(s):

@@ -24,6 +24,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
                               verdict gets the same rule applied to the errors it recorded),
  "error_max": float | None   (C error_max: the chosen model's worst error over angles and midpoints),
  "error_estimated": bool     (C error_estimated: true when the reference was the a-posteriori estimator),
+ "reference_check": {"error", "rtol", "per_angle": {<label>: {"error", "frequency_hz"}}} | None (opt; the full-order
+                    reference against direct solves of the full system, C reference_check_*),
  "moments_matched": c | None, "multi_moments_matched": c | None   (moments of each family's model),
  "chosen": {"method", "moments": c, "dofs_per_body": {body: v}, "dofs": sum of v, "system_dofs": {<label>: h},
             "expansion_angles_deg": [[..]], "kept_modes": [1-based Krylov modes] | None (multi-angle),
@@ -76,7 +78,7 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "timings_s": {stage: seconds} (opt), "notes": [str] (opt),
  "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
                  solves)), "solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged" (block solves left
-                 above -kf_refine_rtol), "residual_first_max",
+                 above -kf_refine_rtol after escalation), "blocks_escalated" (escalated), "residual_first_max",
                  "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
  "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
 }

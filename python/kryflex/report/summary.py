@@ -43,9 +43,10 @@ def _none(x):
 PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves_s"), ("time_whole", "whole_s"),
                ("time_ratio", "ratio"), ("solve_calls", "solve_calls"), ("solve_columns", "solve_columns"),
                ("refinement_solves", "refinement_solves"), ("solve_blocks_unconverged", "blocks_unconverged"),
+               ("solve_blocks_escalated", "blocks_escalated"),
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
-PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged")  # ints in the JSON
+PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
 
 def _performance(reducer, whole):
@@ -182,6 +183,13 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     out["error_estimated"] = bool(estimated) if estimated is not None else False
     out["moments_matched"] = _optional_scalar(reducer, -1, "moments_matched", whole, int)
     out["multi_moments_matched"] = _optional_scalar(reducer, -1, "multi_moments_matched", whole, int)
+    # the full-order reference checked against direct solves of the full system (src/verify/direct_check.c)
+    out["reference_check"] = None if "reference_check_error" not in whole else {
+        "error": _optional_scalar(reducer, -1, "reference_check_error", whole),
+        "rtol": _optional_scalar(reducer, -1, "reference_check_rtol", whole),
+        "per_angle": {lab: {"error": _optional_scalar(reducer, c, "reference_check_error", has[c]),
+                            "frequency_hz": _optional_scalar(reducer, c, "reference_check_frequency_hz", has[c])}
+                      for c, lab in enumerate(labels)}}
 
     # the chosen model's errors at the angles of interest: THE measure, and the pointwise one for information
     errors, pointwise = {}, {}

@@ -80,6 +80,10 @@ struct _p_KFReducer {
   PetscBool       verify;
   PetscInt        verify_modes;   /* PETSC_DECIDE: cover verify_cover x the band's top */
   PetscReal       verify_cover;
+  PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
+  PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
+  PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
+  PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */
@@ -120,6 +124,7 @@ typedef struct {
   PetscReal *HPr, *PrG;      /* t x r, r x a */
   PetscInt   nc;             /* modes coupled by the viscous damping (rigid first, then flexible), 0: none */
   PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
+  PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
 } KFFullReference;
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
@@ -176,10 +181,14 @@ typedef struct _KFEvalPoint {
   PetscInt        nw;
   PetscReal      *fhz, *w, *Tre, *Tim; /* grid (Hz, rad/s) and the reference response, nw blocks of t x a */
   PetscReal      *Tgre, *Tgim; /* its rigid-body and mechanism part on the grid (elastic measure), else NULL */
+  PetscInt        nchk;        /* direct solves of the full order (src/verify/direct_check.c) */
+  PetscReal      *chk_w, *chk_T; /* their frequencies (rad/s) and undamped responses H (K - w^2 M)^-1 G, nchk x t x a */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer, KFSystem, KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
    angle of interest in Lfull */
 PETSC_INTERN PetscErrorCode KFReducerAddPerf_Private(KFReducer, KFFlexSolver);

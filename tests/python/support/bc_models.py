@@ -326,7 +326,7 @@ def scalar_points():
 
 def layout_reference(spec):
     """Dense (M, K, G, H) of a one-body spec with any layout: dofs node by node, components ascending."""
-    b = spec["bodies"]["beam"]
+    b = next(iter(spec["bodies"].values()))   # the one body
     first, comps, d = {}, {}, 0
     for r in b["nodes"]:
         c = r[4]
@@ -363,3 +363,71 @@ def plate_supported():
 
 CASES = {"clamped": clamped_beam, "sprung": sprung_beam, "grounded": grounded_arm, "lumped": lumped_frame}
 CASES.update(plate=plate_c345, spoints=scalar_points, plate_supported=plate_supported)
+
+
+def lumped_plate(nx=5, ny=3, hx=0.5, hy=0.5, band=BAND):
+    """A free-free plate as a commercial code exports it: the grillage's out-of-plane part (uz rx ry per node, nodes
+    'c345') and lumped translational masses only, some at the node (every 7th node) and two or three
+    offset from it at the others (a CONM2 with an offset
+    puts m v v^T on the node, v = (1, dy, -dx): out-of-plane motion of the mass point is uz + rx dy - ry dx). One mass
+    at the node leaves rx, ry with a zero diagonal; one offset mass gives a rank-1 block with a full diagonal; two
+    offset masses a rank-2 block, three a rank-3 one. M is then singular far beyond its zero diagonal: rank = masses placed."""
+    K6, _, pts = grillage(nx, ny, hx, hy)
+    n = len(pts)
+    keep = np.array([6 * i + c for i in range(n) for c in (2, 3, 4)])
+    K = K6[np.ix_(keep, keep)]
+    M = np.zeros_like(K)
+    rng = np.random.default_rng(7)
+    for i in range(n):
+        offsets = [(0.0, 0.0)] if i % 7 == 0 else [tuple(rng.uniform(-0.2, 0.2, 2)) for _ in range(2 + i % 2)]
+        for dx, dy in offsets:
+            v = np.array([1.0, dy, -dx])
+            M[3 * i:3 * i + 3, 3 * i:3 * i + 3] += rng.uniform(1.0, 3.0) * np.outer(v, v)
+    nodes = [[i + 1, *p, "c345"] for i, p in enumerate(pts)]
+    return {"name": "lumped_plate", "bodies": {"plate": {"mass": M, "stiffness": K, "nodes": nodes}},
+            "inputs": {"fz": [{"body": "plate", "node": n, "dof": "uz"}],
+                       "mx": [{"body": "plate", "node": nx + 2, "dof": "rx"}]},
+            "outputs": {"z": [{"body": "plate", "node": 1, "dof": "uz"}],
+                        "ry": [{"body": "plate", "node": n - 1, "dof": "ry"}]},
+            "band": list(band), "damping": ZETA, "accuracy": 0.01}
+
+
+def lumped_aircraft(band=(0.5, 60.0)):
+    """A free-free aircraft-like stick model as exported from a commercial code: a fuselage along x, two wings along
+    y and a fin along z (6-dof beam nodes, stiffness only), with lumped masses only. Most masses sit off their node
+    (a CONM2 offset r: m T^T T on the node with T = [I, -[r]x], rank 3 with a full diagonal); the fin's nodes and the
+    wing tips carry none (zero-mass dofs). M is then singular far beyond its zero diagonal."""
+    fus = [(x, 0.0, 0.0) for x in np.linspace(0.0, 12.0, 13)]
+    wing_r = [(5.0, y, 0.0) for y in np.linspace(1.0, 8.0, 8)]
+    wing_l = [(5.0, -y, 0.0) for y in np.linspace(1.0, 8.0, 8)]
+    fin = [(12.0, 0.0, z) for z in np.linspace(0.8, 2.4, 3)]
+    pts = fus + wing_r + wing_l + fin
+    n = len(pts)
+    links = [(i, i + 1) for i in range(12)]
+    for chain, root in ((range(13, 21), 5), (range(21, 29), 5), (range(29, 32), 12)):
+        prev = root
+        for k in chain:
+            links.append((prev, k))
+            prev = k
+    K = np.zeros((6 * n, 6 * n))
+    for a, b in links:
+        k, _ = beam_element(pts[a], pts[b], A=4e-3, Iy=4e-6, Iz=6e-6)
+        idx = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
+        K[np.ix_(idx, idx)] += k
+    M = np.zeros_like(K)
+    rng = np.random.default_rng(11)
+    massless = {20, 28, 29, 30, 31}                     # wing tips and the fin: no mass at all
+    for i in range(n):
+        if i in massless:
+            continue
+        r = rng.uniform(-0.3, 0.3, 3) if i % 4 else np.zeros(3)
+        T = np.hstack([np.eye(3), -np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])])
+        M[6 * i:6 * i + 6, 6 * i:6 * i + 6] += rng.uniform(20.0, 60.0) * T.T @ T
+    nodes = [[i + 1, *p, 6] for i, p in enumerate(pts)]
+    return {"name": "lumped_aircraft", "bodies": {"aircraft": {"mass": M, "stiffness": K, "nodes": nodes}},
+            "inputs": {"fz_tip": [{"body": "aircraft", "node": 20, "dof": "uz"}],
+                       "my_fus": [{"body": "aircraft", "node": 9, "dof": "ry"}]},
+            "outputs": {"z_nose": [{"body": "aircraft", "node": 1, "dof": "uz"}],
+                        "rx_wing": [{"body": "aircraft", "node": 17, "dof": "rx"}],
+                        "y_fin": [{"body": "aircraft", "node": 32, "dof": "uy"}]},
+            "band": list(band), "damping": ZETA, "accuracy": 0.01}

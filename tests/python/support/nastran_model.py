@@ -320,3 +320,21 @@ def f06_echo(bulk):
     out.append("                        TOTAL COUNT=       %d\n" % (len(bulk) + 1))
     out.append(page % 4 + "0                                           R E A L   E I G E N V A L U E S\n")
     return "".join(out)
+
+
+def write_punch(folder, K, M, nodes, name="plate"):
+    """A body exported as a commercial code writes it: KAAX and MAAX as long-field DMIG* cards (11-12 digits) over the
+    nodes' components (nodes: rows id, x, y, z, 'c345' or 6) and the GRIDs in basic coordinates in a .bdf. Returns the
+    two paths (punch, bulk)."""
+    import os
+    dofs = []
+    for row in nodes:
+        comps = [int(c) for c in row[4][1:]] if isinstance(row[4], str) else list(range(1, int(row[4]) + 1))
+        dofs += [(int(row[0]), c) for c in comps]
+    pch, bdf = os.path.join(folder, name + ".pch"), os.path.join(folder, name + ".bdf")
+    with open(pch, "w") as f:
+        f.write("\n".join(dmig_star("KAAX", np.asarray(K), dofs) + dmig_star("MAAX", np.asarray(M), dofs)) + "\n")
+    with open(bdf, "w") as f:
+        f.write("BEGIN BULK\n" + "\n".join(f"{'GRID*':<8}{int(r[0]):>16}{0:>16}{large(r[1])}{large(r[2])}\n"
+                                            f"{'*':<8}{large(r[3])}" for r in nodes) + "\nENDDATA\n")
+    return pch, bdf

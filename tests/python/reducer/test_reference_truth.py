@@ -19,8 +19,9 @@ import pytest
 import scipy.linalg as sl
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-PROBE = os.path.join(HERE, "reference_truth_probe.py")
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+PROBE = os.path.join(SUPPORT, "reference_truth_probe.py")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
 TIMEOUT = 240
@@ -58,7 +59,7 @@ def scipy_modes(M, K, static=False):
 
 def io_matrices(size):
     """G (n x a) and H (t x n) of the model's scene over the dofs as read back (node by node, components ascending)."""
-    sys.path.insert(0, HERE)
+    sys.path.insert(0, SUPPORT)
     import bc_models
     import reference_truth_probe as probe
     _, _, G, H = bc_models.layout_reference(probe.model_spec(size))
@@ -134,7 +135,7 @@ def test_reference_agrees_with_dense_scipy_and_target_met(runs, case, ranks):
 def test_scipy_response_is_the_direct_solve():
     """The test's own reference: the condensed modal sum, undamped, equals a direct dense solve of (K - w^2 M) x = G
     off resonance (so the modal route above is not checked against itself)."""
-    sys.path.insert(0, HERE)
+    sys.path.insert(0, SUPPORT)
     import bc_models
     spec = bc_models.lumped_plate()
     M, K, G, H = bc_models.layout_reference(spec)

@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, HERE)
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
 

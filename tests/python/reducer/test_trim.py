@@ -26,8 +26,9 @@ import scipy.linalg as sl
 import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, HERE)
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
 import accuracy_scenes as acc  # noqa: E402
 
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")

@@ -15,7 +15,7 @@ import pytest
 import scipy.io
 import scipy.linalg as sl
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 GUIDE = os.path.join(ROOT, "docs", "guide", "real-models.md")
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")

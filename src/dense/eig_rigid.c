@@ -5,32 +5,32 @@
 #include "dense_impl.h"
 #include <petscblaslapack.h>
 
-/* Reals of workspace KFDenseEigRigid_Private needs at n dofs and r rigid modes */
-PetscErrorCode KFDenseEigRigidWorkSize_Private(PetscInt n, PetscInt r, PetscInt *size)
+/* Reals of workspace KFDenseEigRigid_Private needs at n dofs and r rigid modes, and the LAPACK workspaces it is to be
+   given: lsvd of the r x n SVD, leig of the (n - r)-dof eigensolve (n when r = 0) */
+PetscErrorCode KFDenseEigRigidWorkSize_Private(PetscInt n, PetscInt r, PetscInt *size, PetscBLASInt *lsvd_out, PetscBLASInt *leig_out)
 {
   PetscBLASInt lsvd, leig;
 
   PetscFunctionBegin;
   PetscCall(KFDenseNullSpaceWorkSize_Private(r, n, &lsvd));
-  PetscCall(KFDenseEigWorkSize_Private(n, &leig));
+  PetscCall(KFDenseEigWorkSize_Private(r ? n - r : n, &leig));
+  if (lsvd_out) *lsvd_out = lsvd;
+  if (leig_out) *leig_out = leig;
   /* Pr, MP, Gm, C, Q, W, Kq, Mq, V; the SVD's A, s, VT, work; the eigensolver's B, work */
   *size = 2 * n * r + r * r + r * n + 5 * n * n + (r * n + PetscMin(r, n) + n * n + lsvd) + (n * n + leig);
   PetscFunctionReturn(0);
 }
 
-/* KFDenseEigRigid in the caller's workspace (work: size of at least KFDenseEigRigidWorkSize_Private): no allocation */
-PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[], PetscReal work[], PetscInt size)
+/* KFDenseEigRigid in the caller's workspace (work: at least the size KFDenseEigRigidWorkSize_Private gives, with the
+   lsvd and leig it gives at these n and r): no allocation */
+PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[], PetscReal work[], PetscBLASInt lsvd, PetscBLASInt leig)
 {
   PetscReal   *Pr, *MP, *Gm, *C, *Q, *W, *Kq, *Mq, *V, *A, *s, *VT, *wsvd, *B, *weig;
-  PetscInt     nq = 0, need;
-  PetscBLASInt bp, info, lsvd, leig;
+  PetscInt     nq = 0;
+  PetscBLASInt bp, info;
 
   PetscFunctionBegin;
   PetscCheck(n >= 1 && r >= 0 && r <= n, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDenseEigRigid: bad sizes (n %" PetscInt_FMT ", r %" PetscInt_FMT ")", n, r);
-  PetscCall(KFDenseEigRigidWorkSize_Private(n, r, &need));
-  PetscCheck(need <= size, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFDenseEigRigid: workspace of %" PetscInt_FMT " reals, %" PetscInt_FMT " needed", size, need);
-  PetscCall(KFDenseNullSpaceWorkSize_Private(r, n, &lsvd));
-  PetscCall(KFDenseEigWorkSize_Private(n, &leig));
   Pr   = work;
   MP   = Pr + n * r;
   Gm   = MP + n * r;
@@ -88,14 +88,15 @@ PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal K[], const Pe
 
 PetscErrorCode KFDenseEigRigid(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[])
 {
-  PetscReal *work;
-  PetscInt   size;
+  PetscReal   *work;
+  PetscInt     size;
+  PetscBLASInt lsvd, leig;
 
   PetscFunctionBegin;
   PetscCheck(n >= 1 && r >= 0 && r <= n, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDenseEigRigid: bad sizes (n %" PetscInt_FMT ", r %" PetscInt_FMT ")", n, r);
-  PetscCall(KFDenseEigRigidWorkSize_Private(n, r, &size));
+  PetscCall(KFDenseEigRigidWorkSize_Private(n, r, &size, &lsvd, &leig));
   PetscCall(PetscMalloc1(size, &work));
-  PetscCall(KFDenseEigRigid_Private(n, K, M, r, Phir, lambda, Phi, work, size));
+  PetscCall(KFDenseEigRigid_Private(n, K, M, r, Phir, lambda, Phi, work, lsvd, leig));
   PetscCall(PetscFree(work));
   PetscFunctionReturn(0);
 }

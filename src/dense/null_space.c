@@ -21,11 +21,12 @@ PetscErrorCode KFDenseNullSpaceWorkSize_Private(PetscInt m, PetscInt n, PetscBLA
   PetscFunctionReturn(0);
 }
 
-/* KFDenseNullSpace in the caller's workspace (A: m n, s: min(m, n), VT: n n, work: lwork of at least
-   KFDenseNullSpaceWorkSize_Private): no allocation, for reassembly inside a time integration */
+/* KFDenseNullSpace in the caller's workspace (A: m n, s: min(m, n), VT: n n, work: lwork reals, lwork exactly what
+   KFDenseNullSpaceWorkSize_Private gives at m x n: the same blocking, the same digits; the caller queries once):
+   no allocation, for reassembly inside a time integration */
 PetscErrorCode KFDenseNullSpace_Private(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio, PetscReal A[], PetscReal s[], PetscReal VT[], PetscReal work[], PetscBLASInt lwork)
 {
-  PetscBLASInt bm, bn, one = 1, need, info = 0;
+  PetscBLASInt bm, bn, one = 1, info = 0;
   PetscReal    udummy = 0, smax;
   PetscInt     ns = PetscMin(m, n), r = 0;
 
@@ -42,12 +43,9 @@ PetscErrorCode KFDenseNullSpace_Private(PetscInt m, PetscInt n, const PetscReal 
   }
   PetscCall(PetscBLASIntCast(m, &bm));
   PetscCall(PetscBLASIntCast(n, &bn));
-  /* the workspace LAPACK asks for at this size, not all the caller has: the same blocking, the same digits */
-  PetscCall(KFDenseNullSpaceWorkSize_Private(m, n, &need));
-  PetscCheck(need <= lwork, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFDenseNullSpace: workspace of %d for a %" PetscInt_FMT " x %" PetscInt_FMT " SVD, which needs %d", (int)lwork, m, n, (int)need);
   PetscCall(PetscArraycpy(A, D, m * n));
   PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
-  PetscCallBLAS("LAPACKgesvd", LAPACKgesvd_("N", "A", &bm, &bn, A, &bm, s, &udummy, &one, VT, &bn, work, &need, &info));
+  PetscCallBLAS("LAPACKgesvd", LAPACKgesvd_("N", "A", &bm, &bn, A, &bm, s, &udummy, &one, VT, &bn, work, &lwork, &info));
   PetscCall(PetscFPTrapPop());
   PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "KFDenseNullSpace: the SVD of the %" PetscInt_FMT " x %" PetscInt_FMT " constraint matrix did not converge (LAPACK gesvd info %d)", m, n, (int)info);
   smax = s[0];

@@ -106,12 +106,14 @@ struct _n_KFReassembly {
   PetscInt      *off;
   PetscReal     *data;
   PetscReal     *D, *N, *A, *s, *VT, *svdwork, *W;
-  PetscBLASInt   lsvd;
+  PetscBLASInt   lsvd, lsvd_D, lsvd_E; /* allocated; LAPACK's query at D's size and at D R's */
   long double   *WL;
   PetscInt       nr; /* -1: some body's rigid motions unknown */
   PetscReal     *R, *E, *Z, *Y;
   PetscReal     *eigwork;
   PetscInt       leig;
+  PetscInt       eig_h, eig_r;             /* the sizes of the last KFReassemblyEig, and LAPACK's queries there */
+  PetscBLASInt   eig_lsvd, eig_leig;
 };
 
 /* The system's rigid motions R = blkdiag(R_b) (n x nr), without the columns a body does not have and with dependent
@@ -182,7 +184,6 @@ PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[]
 {
   KFReassembly r;
   PetscInt     n = 0, m = 0, total = 0, ldm, nrc;
-  PetscBLASInt lw;
   PetscReal   *p, *R;
 
   PetscFunctionBegin;
@@ -246,19 +247,20 @@ PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[]
   nrc  = PetscMax(r->nr, 0);
   ldm  = PetscMax(m, 1);
   /* the SVDs: D (m x n) and D R (m x nr) */
-  PetscCall(KFDenseNullSpaceWorkSize_Private(m, n, &r->lsvd));
-  PetscCall(KFDenseNullSpaceWorkSize_Private(m, nrc, &lw));
-  r->lsvd = PetscMax(r->lsvd, lw);
+  PetscCall(KFDenseNullSpaceWorkSize_Private(m, n, &r->lsvd_D));
+  PetscCall(KFDenseNullSpaceWorkSize_Private(m, nrc, &r->lsvd_E));
+  r->lsvd = PetscMax(r->lsvd_D, r->lsvd_E);
   PetscCall(PetscMalloc4(m * n + 1, &r->D, n * n + 1, &r->N, ldm * PetscMax(n, nrc) + 1, &r->A, PetscMin(m, PetscMax(n, nrc)) + 1, &r->s));
   PetscCall(PetscMalloc3(PetscMax(n, nrc) * PetscMax(n, nrc) + 1, &r->VT, r->lsvd, &r->svdwork, r->vmax * n + 1, &r->W));
   PetscCall(PetscMalloc1(r->vmax * n + 1, &r->WL));
   PetscCall(PetscMalloc3(ldm * nrc + 1, &r->E, nrc * nrc + 1, &r->Z, n * nrc + 1, &r->Y));
   /* the eigensolver at every size it can meet: h <= n dofs, r <= min(nr, h) rigid modes */
-  r->leig = 1;
+  r->leig  = 1;
+  r->eig_h = -1;
   for (PetscInt h = 1; h <= n; h++)
     for (PetscInt q = 0; q <= PetscMin(nrc, h); q++) {
       PetscInt size;
-      PetscCall(KFDenseEigRigidWorkSize_Private(h, q, &size));
+      PetscCall(KFDenseEigRigidWorkSize_Private(h, q, &size, NULL, NULL));
       r->leig = PetscMax(r->leig, size);
     }
   PetscCall(PetscMalloc1(r->leig, &r->eigwork));
@@ -351,7 +353,7 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
   }
 
   /* eq. (21-22): the reduced coordinates that satisfy the ties, phi = N phi_h */
-  PetscCall(KFDenseNullSpace_Private(m, n, D, r->rtol, &hh, N, &rk, &ratio, r->A, r->s, r->VT, r->svdwork, r->lsvd));
+  PetscCall(KFDenseNullSpace_Private(m, n, D, r->rtol, &hh, N, &rk, &ratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_D));
   *h = hh;
   if (rank) *rank = rk;
   if (sratio) *sratio = ratio;
@@ -367,7 +369,7 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
     if (!nr) *nrigid = 0; /* clamped: no rigid motion at all */
     else {
       PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, r->R, n, 0.0, r->E, PetscMax(m, 1)));
-      PetscCall(KFDenseNullSpace_Private(m, nr, r->E, r->rtol, &q, r->Z, &qrank, &qratio, r->A, r->s, r->VT, r->svdwork, r->lsvd));
+      PetscCall(KFDenseNullSpace_Private(m, nr, r->E, r->rtol, &q, r->Z, &qrank, &qratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_E));
       PetscCall(KFDenseGemm_Private('N', 'N', n, q, nr, 1.0, r->R, n, r->Z, nr, 0.0, r->Y, n));
       PetscCall(KFDenseGemm_Private('T', 'N', hh, q, n, 1.0, N, n, r->Y, n, 0.0, Phir, hh));
       *nrigid = q;
@@ -419,13 +421,20 @@ PetscErrorCode KFReassemblyEig(KFReassembly r, PetscInt h, const PetscReal Mh[],
   PetscCheck(h >= 1 && h <= r->n, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyEig: size %" PetscInt_FMT " is outside 1..%" PetscInt_FMT ", the sizes this reassembly makes", h, r->n);
   if (Phir && nrigid >= 0) {
     PetscCheck(nrigid <= h && nrigid <= PetscMax(r->nr, 0), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyEig: %" PetscInt_FMT " rigid modes at %" PetscInt_FMT " dofs: give the count KFReassemblyApply returned", nrigid, h);
-    PetscCall(KFDenseEigRigid_Private(h, Kh, Mh, nrigid, Phir, lambda, Phi, r->eigwork, r->leig));
-  } else {
-    PetscBLASInt lw;
-    PetscCall(KFDenseEigWorkSize_Private(h, &lw));
-    PetscCheck(h * h + lw <= r->leig, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFReassemblyEig: workspace too small");
-    PetscCall(KFDenseEig_Private(h, Kh, Mh, lambda, Phi, r->eigwork, r->eigwork + h * h, lw));
+  } else nrigid = -1;
+  if (h != r->eig_h || nrigid != r->eig_r) { /* LAPACK's workspace queries, once per size */
+    PetscInt size = 0;
+    if (nrigid >= 0) PetscCall(KFDenseEigRigidWorkSize_Private(h, nrigid, &size, &r->eig_lsvd, &r->eig_leig));
+    else {
+      PetscCall(KFDenseEigWorkSize_Private(h, &r->eig_leig));
+      size = h * h + r->eig_leig;
+    }
+    PetscCheck(size <= r->leig, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFReassemblyEig: workspace of %" PetscInt_FMT " reals, %" PetscInt_FMT " needed", r->leig, size);
+    r->eig_h = h;
+    r->eig_r = nrigid;
   }
+  if (nrigid >= 0) PetscCall(KFDenseEigRigid_Private(h, Kh, Mh, nrigid, Phir, lambda, Phi, r->eigwork, r->eig_lsvd, r->eig_leig));
+  else PetscCall(KFDenseEig_Private(h, Kh, Mh, lambda, Phi, r->eigwork, r->eigwork + h * h, r->eig_leig));
   PetscFunctionReturn(0);
 }
 

@@ -180,7 +180,7 @@ static PetscErrorCode KFReassemblyRigidMotions(KFReassembly r, PetscReal **Rout,
   eigen-decomposition need is allocated here, and KFReassemblyApply / KFReassemblyEig then allocate nothing.
   alpha, beta: Rayleigh damping added to the reassembled viscous damping (0, 0: none).
 */
-PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *reassembly)
+static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, PetscBool witheig, KFReassembly *reassembly)
 {
   KFReassembly r;
   PetscInt     n = 0, m = 0, total = 0, ldm, nrc;
@@ -254,17 +254,26 @@ PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[]
   PetscCall(PetscMalloc3(PetscMax(n, nrc) * PetscMax(n, nrc) + 1, &r->VT, r->lsvd, &r->svdwork, r->vmax * n + 1, &r->W));
   PetscCall(PetscMalloc1(r->vmax * n + 1, &r->WL));
   PetscCall(PetscMalloc3(ldm * nrc + 1, &r->E, nrc * nrc + 1, &r->Z, n * nrc + 1, &r->Y));
-  /* the eigensolver at every size it can meet: h <= n dofs, r <= min(nr, h) rigid modes */
+  /* the eigensolver at the largest size, n dofs, with any rigid count r <= min(nr, n) (a smaller pencil needs less;
+     KFReassemblyEig checks) */
   r->leig  = 1;
   r->eig_h = -1;
-  for (PetscInt h = 1; h <= n; h++)
-    for (PetscInt q = 0; q <= PetscMin(nrc, h); q++) {
+  if (witheig) {
+    for (PetscInt q = 0; q <= PetscMin(nrc, n); q++) {
       PetscInt size;
-      PetscCall(KFDenseEigRigidWorkSize_Private(h, q, &size, NULL, NULL));
+      PetscCall(KFDenseEigRigidWorkSize_Private(n, q, &size, NULL, NULL));
       r->leig = PetscMax(r->leig, size);
     }
-  PetscCall(PetscMalloc1(r->leig, &r->eigwork));
+    PetscCall(PetscMalloc1(r->leig, &r->eigwork));
+  }
   *reassembly = r;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *reassembly)
+{
+  PetscFunctionBegin;
+  PetscCall(KFReassemblyCreate_Private(nbodies, bodies, njoints, joints, a, t, rtol, alpha, beta, PETSC_TRUE, reassembly));
   PetscFunctionReturn(0);
 }
 
@@ -429,7 +438,7 @@ PetscErrorCode KFReassemblyEig(KFReassembly r, PetscInt h, const PetscReal Mh[],
       PetscCall(KFDenseEigWorkSize_Private(h, &r->eig_leig));
       size = h * h + r->eig_leig;
     }
-    PetscCheck(size <= r->leig, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFReassemblyEig: workspace of %" PetscInt_FMT " reals, %" PetscInt_FMT " needed", r->leig, size);
+    PetscCheck(r->eigwork && size <= r->leig, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFReassemblyEig: workspace of %" PetscInt_FMT " reals, %" PetscInt_FMT " needed", r->eigwork ? r->leig : 0, size);
     r->eig_h = h;
     r->eig_r = nrigid;
   }
@@ -461,7 +470,7 @@ PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[]
     if (!Ch) used[b].C = NULL;
     if (!nrigid || !Phir) used[b].rigid = NULL;
   }
-  PetscCall(KFReassemblyCreate(nbodies, used, njoints, joints, a, t, rtol, 0, 0, &r));
+  PetscCall(KFReassemblyCreate_Private(nbodies, used, njoints, joints, a, t, rtol, 0, 0, PETSC_FALSE, &r)); /* one reassembly, no modes */
   PetscCall(PetscFree(used));
   PetscCall(KFReassemblyApply(r, angles, h, Mh, Kh, Ch, Gh, Hh, rank, sratio, nrigid, Phir));
   PetscCall(KFReassemblyDestroy(&r));

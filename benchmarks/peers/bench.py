@@ -152,7 +152,7 @@ def pymor_methods(so, band, with_bt):
 
     def sobhi(r):
         npts = max(r // 2, 1)
-        w = 2 * np.pi * np.geomspace(band[0] * 10, band[1], npts)
+        w = 2 * np.pi * np.linspace(band[1] / npts, band[1], npts)    # evenly over the band: across its resonances
         sigma = np.concatenate([1j * w, -1j * w])
         b = np.ones((2 * npts, so.dim_input))      # tangential directions
         cc = np.ones((2 * npts, so.dim_output))

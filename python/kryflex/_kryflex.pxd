@@ -181,6 +181,13 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducedModelSetSetting(KFReducedModel, const char*, const char*)
     PetscErrorCode KFReducedModelGetSettings(KFReducedModel, PetscInt*, const char * const **, const char * const **)
     PetscErrorCode KFReducedModelReassemble(KFReducedModel, const PetscReal*, KFReducedSystem*)
+    ctypedef struct _n_KFReassembly
+    ctypedef _n_KFReassembly* KFReassembly
+    PetscErrorCode KFReducedModelCreateReassembly(KFReducedModel, KFReassembly*)
+    PetscErrorCode KFReassemblyGetSizes(KFReassembly, PetscInt*, PetscInt*, PetscInt*, PetscBool*, PetscBool*)
+    PetscErrorCode KFReassemblyApply(KFReassembly, const PetscReal*, PetscInt*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
+    PetscErrorCode KFReassemblyEig(KFReassembly, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
+    PetscErrorCode KFReassemblyDestroy(KFReassembly*)
     PetscErrorCode KFSceneGetFingerprint(KFScene, char*)
     PetscErrorCode KFSceneSetName(KFScene, const char*)
     PetscErrorCode KFSceneGetName(KFScene, const char**)

@@ -7,7 +7,6 @@
 Every number comes from C (src/model, src/measure); this module only names and shapes them. The Reducer that makes
 the models (on KFReducer) is in reducer.py.
 """
-import dataclasses
 import functools
 import json
 import os
@@ -21,7 +20,6 @@ class ModelFileError(ValueError):
     """A reduced-model file that cannot be used: the message names the file and the fix."""
 
 
-@dataclasses.dataclass(eq=False)
 class ReducedSystem:
     """A reduced model reassembled at one configuration (paper eq. 20-24): small, dense, the same on every rank.
 
@@ -34,37 +32,40 @@ class ReducedSystem:
     untrimmed_top_hz the highest frequency before; feedthrough None when nothing was trimmed.
     damping_matrix: the viscous damping in reduced coordinates (n x n: the bodies' C_b projected and reassembled plus
     Rayleigh alpha M + beta K), None when there is none; damping_model: {modal, rayleigh, structural} as the model
-    records it; output_quantities: per output displacement, velocity or acceleration."""
-    angles_deg: tuple
-    M: np.ndarray
-    K: np.ndarray
-    damping: float
-    B: np.ndarray
-    C: np.ndarray
-    frequencies_hz: np.ndarray
-    modes: np.ndarray
-    eigenvalues: np.ndarray
-    rigid_modes: object
-    constraint_rank: int
-    sigma_ratio: float
-    handle: _core.CReducedSystem = dataclasses.field(repr=False)
-    damping_matrix: object = None
-    damping_model: dict = None
-    output_quantities: list = None
-    feedthrough: object = None
-    trimmed: int = 0
-    max_frequency_hz: float = 0.0
-    untrimmed_top_hz: float = 0.0
+    records it; output_quantities: per output displacement, velocity or acceleration.
+
+    The matrices come from the allocation-free reassembly (KFReassemblyApply); the eigen-decomposition
+    (eigenvalues, modes, frequencies_hz) is computed on first use (KFReassemblyEig), and the C system that frf,
+    response and moments run on (handle, a KFReducedSystem) is made on first use too. A simulation that only needs
+    M, K, B, C and the damping matrix at each step pays for neither."""
+
+    def __init__(self, angles_deg, M, K, damping, B, C, rigid_modes, constraint_rank, sigma_ratio, damping_matrix=None,
+                 damping_model=None, output_quantities=None, *, nrigid=None, reassembly=None, model=None,
+                 handle=None, eigen=None, feedthrough=None, trimmed=0, max_frequency_hz=0.0, untrimmed_top_hz=0.0):
+        self.feedthrough, self.trimmed = feedthrough, trimmed
+        self.max_frequency_hz, self.untrimmed_top_hz = max_frequency_hz, untrimmed_top_hz
+        self.angles_deg, self.M, self.K, self.damping, self.B, self.C = tuple(angles_deg), M, K, damping, B, C
+        self.rigid_modes, self.constraint_rank, self.sigma_ratio = rigid_modes, constraint_rank, sigma_ratio
+        self.damping_matrix, self.damping_model, self.output_quantities = damping_matrix, damping_model, \
+            output_quantities
+        self._nrigid, self._reassembly, self._model, self._handle, self._eigen = nrigid, reassembly, model, handle, \
+            eigen
+
+    def __repr__(self):
+        return "ReducedSystem(angles_deg=%s, dofs=%d, inputs=%d, outputs=%d)" % (
+            self.angles_deg, self.dofs, self.B.shape[1], self.C.shape[0])
 
     @classmethod
     def from_handle(cls, handle, angles_deg, damping, output_quantities=None):
+        """From a C system (CReducedSystem) made by CReducedModel.reassemble: every array copied from it."""
         M, K, G, H = handle.matrices()
-        lam, Phi, _, Phir = handle.modes()
+        lam, Phi, nrigid, Phir = handle.modes()
         rank, ratio = handle.reassembly_info()
         Cd, model = handle.damping()
         ntrim, fmax, ftop, D = handle.trim_info()
-        return cls(tuple(angles_deg), M, K, damping, G, H, handle.frequencies_hz(), Phi, lam, Phir, int(rank),
-                   float(ratio), handle, Cd, model, output_quantities, D, ntrim, fmax, ftop)
+        return cls(angles_deg, M, K, damping, G, H, Phir, int(rank), float(ratio), Cd, model, output_quantities,
+                   nrigid=int(nrigid), handle=handle, eigen=(lam, Phi, handle.frequencies_hz()), feedthrough=D,
+                   trimmed=ntrim, max_frequency_hz=fmax, untrimmed_top_hz=ftop)
 
     @property
     def dofs(self):
@@ -81,6 +82,36 @@ class ReducedSystem:
         (s; inf without flexible modes)."""
         f = self.top_frequency_hz
         return 2.0 / (2 * np.pi * f) if f > 0 else float("inf")
+
+    def _eig(self):
+        """(eigenvalues, modes, flexible frequencies): the rigid modes from the bodies' rigid motions when known and no
+        more than the dofs, else the whole pencil with the model's rigid count (as KFReducedModelReassemble)."""
+        if self._eigen is None:
+            known = self.rigid_modes is not None and self.rigid_modes.shape[1] <= self.dofs
+            lam, Phi = self._reassembly.eig(self.M, self.K, self.rigid_modes if known else None)
+            nrigid = self._nrigid
+            freqs = np.sqrt(np.maximum(lam[nrigid:], 0.0)) / (2 * np.pi)
+            self._eigen = (lam, Phi, freqs)
+        return self._eigen
+
+    @property
+    def eigenvalues(self):
+        return self._eig()[0]
+
+    @property
+    def modes(self):
+        return self._eig()[1]
+
+    @property
+    def frequencies_hz(self):
+        return self._eig()[2]
+
+    @property
+    def handle(self):
+        """The C system (CReducedSystem) at this configuration, made on first use."""
+        if self._handle is None:
+            self._handle = self._model.reassemble(np.radians(np.asarray(self.angles_deg, dtype=float)))
+        return self._handle
 
     def frf(self, freqs_hz, damping=None):
         """Frequency response (frequencies, outputs, inputs), complex. damping None: the model's damping (modal,
@@ -122,23 +153,57 @@ class ReducedModel(_core.CReducedModel):
     full-order model. The same on every rank."""
 
     def at(self, angles_deg, trimmed=True):
-        """The reduced system at one configuration (degrees, one angle per revolute joint). A model reduced with
-        reduction.max_frequency is trimmed (docs/guide/trimming.md); trimmed=False: every mode, as its bodies give."""
-        angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
-        if angles.ndim != 1 or angles.size != len(self.revolute):
+        """The reduced system at one configuration (degrees, one angle per revolute joint): the matrices now, through
+        the model's allocation-free reassembly (KFReassemblyApply, made once per model), the modes on first use.
+        A model reduced with reduction.max_frequency is trimmed (docs/guide/trimming.md) by the C reassembly, which
+        needs the modes anyway; trimmed=False: every mode, as its bodies give."""
+        fast = self._fast
+        angles = np.asarray(angles_deg, dtype=float)
+        if angles.ndim == 0:
+            angles = angles.reshape(1)
+        if angles.ndim != 1 or angles.shape[0] != fast["nrevolute"]:
+            names = self.revolute
             raise ValueError("the model has %d revolute joint(s) (%s): give %d angle(s), got %d"
-                             % (len(self.revolute), ", ".join(self.revolute), len(self.revolute), angles.size))
+                             % (len(names), ", ".join(names), len(names), angles.size))
+        if not np.isfinite(angles).all():
+            raise ValueError("the angles must be finite numbers (degrees), got %s" % angles)
         limit = self.setting_strings().get("max_frequency_hz")
-        if trimmed or limit is None:
-            handle = self.reassemble(np.radians(angles))
-        else:   # the reassembly reads the limit from the settings: off for this one call
-            self.set_setting("max_frequency_hz", "0")
-            try:
+        if limit is not None and float(limit) > 0:
+            if trimmed:
                 handle = self.reassemble(np.radians(angles))
-            finally:
-                self.set_setting("max_frequency_hz", limit)
-        return ReducedSystem.from_handle(handle, [float(a) for a in angles], float(self.settings.get("damping", 0.0)),
-                                         self.output_quantities())
+            else:   # the reassembly reads the limit from the settings: off for this one call
+                self.set_setting("max_frequency_hz", "0")
+                try:
+                    handle = self.reassemble(np.radians(angles))
+                finally:
+                    self.set_setting("max_frequency_hz", limit)
+            return ReducedSystem.from_handle(handle, angles.tolist(), float(self.settings.get("damping", 0.0)),
+                                             self.output_quantities())
+        M, K, Cd, G, H, Phir, rank, ratio = fast["reassembly"].apply(angles * (np.pi / 180.0))
+        nrigid = Phir.shape[1] if Phir is not None else fast["nrigid"]
+        return ReducedSystem(angles.tolist(), M, K, fast["damping"], G, H, Phir, rank, ratio, Cd,
+                             fast["damping_model"], fast["quantities"], nrigid=nrigid, reassembly=fast["reassembly"],
+                             model=self)
+
+    @property
+    def _fast(self):
+        """What at() needs that does not change with the angles: the reassembly workspace and the model's settings,
+        made on first use and dropped when the damping or a setting changes."""
+        fast = self.__dict__.get("_fast_cache")
+        if fast is None:
+            fast = dict(reassembly=_core.CReassembly(self), nrevolute=self.info()["revolute"],
+                        nrigid=self.info()["rigid"], damping=float(self.settings.get("damping", 0.0)),
+                        damping_model=self.damping(), quantities=self.output_quantities())
+            self.__dict__["_fast_cache"] = fast
+        return fast
+
+    def set_damping(self, d):
+        self.__dict__.pop("_fast_cache", None)
+        return super().set_damping(d)
+
+    def set_setting(self, key, value):
+        self.__dict__.pop("_fast_cache", None)
+        return super().set_setting(key, value)
 
     # ------------------------------------------------------------------ what the model holds (copies, cached)
 

@@ -18,6 +18,16 @@ PETSC_INTERN PetscBool KFDenseIsFlexible_Private(PetscReal lambda, PetscReal lma
    function in the error message. In hankel.c, its main user. */
 PETSC_INTERN PetscErrorCode KFDenseSingularValues_Private(PetscInt m, PetscInt n, PetscReal A[], PetscReal s[], const char caller[]);
 
+/* Workspace variants of KFDenseNullSpace, KFDenseEig and KFDenseEigRigid (the public ones allocate and call them):
+   no allocation, for reassembly inside a time integration (KFReassembly). Each is given exactly the LAPACK workspace
+   queried at its size (the caller queries once, not per call), so the results are those of the allocating versions. */
+PETSC_INTERN PetscErrorCode KFDenseNullSpaceWorkSize_Private(PetscInt m, PetscInt n, PetscBLASInt *lwork);
+PETSC_INTERN PetscErrorCode KFDenseNullSpace_Private(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio, PetscReal A[], PetscReal s[], PetscReal VT[], PetscReal work[], PetscBLASInt lwork);
+PETSC_INTERN PetscErrorCode KFDenseEigWorkSize_Private(PetscInt n, PetscBLASInt *lwork);
+PETSC_INTERN PetscErrorCode KFDenseEig_Private(PetscInt n, const PetscReal K[], const PetscReal M[], PetscReal lambda[], PetscReal Phi[], PetscReal B[], PetscReal work[], PetscBLASInt lwork);
+PETSC_INTERN PetscErrorCode KFDenseEigRigidWorkSize_Private(PetscInt n, PetscInt r, PetscInt *size, PetscBLASInt *lsvd, PetscBLASInt *leig);
+PETSC_INTERN PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[], PetscReal work[], PetscBLASInt lsvd, PetscBLASInt leig);
+
 /* Tolerance of KFDenseCheckSymmetric_Private for input pencils */
 #define KF_DENSE_SYMMETRY_RTOL 1e-6
 

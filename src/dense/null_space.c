@@ -2,10 +2,32 @@
 #include "dense_impl.h"
 #include <petscblaslapack.h> /* after the PETSc headers it relies on */
 
-PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio)
+/* The LAPACK workspace gesvd asks for at m x n (with the documented minimum), queried without allocation */
+PetscErrorCode KFDenseNullSpaceWorkSize_Private(PetscInt m, PetscInt n, PetscBLASInt *lwork)
 {
-  PetscBLASInt bm, bn, one = 1, lwork = -1, info = 0;
-  PetscReal   *A, *s, *VT, *work, wquery = 0, udummy = 0, smax;
+  PetscBLASInt bm, bn, one = 1, query = -1, info = 0;
+  PetscReal    wquery = 0, udummy = 0, adummy = 0, sdummy = 0, vdummy = 0;
+
+  PetscFunctionBegin;
+  *lwork = 1;
+  if (!m || !n) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(m, &bm));
+  PetscCall(PetscBLASIntCast(n, &bn));
+  PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
+  PetscCallBLAS("LAPACKgesvd", LAPACKgesvd_("N", "A", &bm, &bn, &adummy, &bm, &sdummy, &udummy, &one, &vdummy, &bn, &wquery, &query, &info));
+  PetscCall(PetscFPTrapPop());
+  *lwork = (PetscBLASInt)wquery;
+  *lwork = PetscMax(*lwork, PetscMax(3 * PetscMin(bm, bn) + PetscMax(bm, bn), 5 * PetscMin(bm, bn)));
+  PetscFunctionReturn(0);
+}
+
+/* KFDenseNullSpace in the caller's workspace (A: m n, s: min(m, n), VT: n n, work: lwork reals, lwork exactly what
+   KFDenseNullSpaceWorkSize_Private gives at m x n: the same blocking, the same digits; the caller queries once):
+   no allocation, for reassembly inside a time integration */
+PetscErrorCode KFDenseNullSpace_Private(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio, PetscReal A[], PetscReal s[], PetscReal VT[], PetscReal work[], PetscBLASInt lwork)
+{
+  PetscBLASInt bm, bn, one = 1, info = 0;
+  PetscReal    udummy = 0, smax;
   PetscInt     ns = PetscMin(m, n), r = 0;
 
   PetscFunctionBegin;
@@ -21,16 +43,10 @@ PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], Pet
   }
   PetscCall(PetscBLASIntCast(m, &bm));
   PetscCall(PetscBLASIntCast(n, &bn));
-  PetscCall(PetscMalloc3(m * n, &A, ns, &s, n * n, &VT));
   PetscCall(PetscArraycpy(A, D, m * n));
   PetscCall(PetscFPTrapPush(PETSC_FP_TRAP_OFF));
-  PetscCallBLAS("LAPACKgesvd", LAPACKgesvd_("N", "A", &bm, &bn, A, &bm, s, &udummy, &one, VT, &bn, &wquery, &lwork, &info));
-  lwork = (PetscBLASInt)wquery;
-  lwork = PetscMax(lwork, PetscMax(3 * PetscMin(bm, bn) + PetscMax(bm, bn), 5 * PetscMin(bm, bn)));
-  PetscCall(PetscMalloc1(lwork, &work));
   PetscCallBLAS("LAPACKgesvd", LAPACKgesvd_("N", "A", &bm, &bn, A, &bm, s, &udummy, &one, VT, &bn, work, &lwork, &info));
   PetscCall(PetscFPTrapPop());
-  PetscCall(PetscFree(work));
   PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "KFDenseNullSpace: the SVD of the %" PetscInt_FMT " x %" PetscInt_FMT " constraint matrix did not converge (LAPACK gesvd info %d)", m, n, (int)info);
   smax = s[0];
   PetscCheck(!PetscIsInfOrNanReal(smax), PETSC_COMM_SELF, PETSC_ERR_FP, "KFDenseNullSpace: the %" PetscInt_FMT " x %" PetscInt_FMT " constraint matrix has Inf or NaN entries: check the interface rows of the reduced bodies", m, n);
@@ -42,6 +58,19 @@ PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], Pet
   *h = n - r;
   if (rank) *rank = r;
   if (sratio) *sratio = r ? s[r - 1] / smax : 1;
-  PetscCall(PetscFree3(A, s, VT));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFDenseNullSpace(PetscInt m, PetscInt n, const PetscReal D[], PetscReal rtol, PetscInt *h, PetscReal N[], PetscInt *rank, PetscReal *sratio)
+{
+  PetscBLASInt lwork;
+  PetscReal   *A, *s, *VT, *work;
+
+  PetscFunctionBegin;
+  PetscCheck(m >= 0 && n >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDenseNullSpace: negative size %" PetscInt_FMT " x %" PetscInt_FMT, m, n);
+  PetscCall(KFDenseNullSpaceWorkSize_Private(m, n, &lwork));
+  PetscCall(PetscMalloc4(m * n, &A, PetscMin(m, n), &s, n * n, &VT, lwork, &work));
+  PetscCall(KFDenseNullSpace_Private(m, n, D, rtol, h, N, rank, sratio, A, s, VT, work, lwork));
+  PetscCall(PetscFree4(A, s, VT, work));
   PetscFunctionReturn(0);
 }

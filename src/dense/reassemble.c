@@ -76,14 +76,11 @@ static PetscErrorCode CheckInputs(PetscInt nbodies, const KFReducedBody bodies[]
   PetscFunctionReturn(0);
 }
 
-/* Kh += Nb^T K Nb accumulated in long double: a reduced body keeps its stiff modes, and the soft system modes'
-   stiffness is a small difference of their large terms (the same reason the body stiffness is formed that way). */
-static PetscErrorCode KFDenseCongruenceExtended(PetscInt v, PetscInt hh, const PetscReal K[], const PetscReal Nb[], PetscInt ldn, PetscReal Kh[])
+/* Kh += Nb^T K Nb accumulated in long double (W: v hh of workspace): a reduced body keeps its stiff modes, and the soft
+   system modes' stiffness is a small difference of their large terms (the same reason the body stiffness is formed
+   that way). */
+static void CongruenceExtended(PetscInt v, PetscInt hh, const PetscReal K[], const PetscReal Nb[], PetscInt ldn, PetscReal Kh[], long double W[])
 {
-  long double *W;
-
-  PetscFunctionBegin;
-  PetscCall(PetscMalloc1(v * hh + 1, &W));
   for (PetscInt j = 0; j < hh; j++)
     for (PetscInt i = 0; i < v; i++) {
       long double s = 0;
@@ -96,52 +93,67 @@ static PetscErrorCode KFDenseCongruenceExtended(PetscInt v, PetscInt hh, const P
       for (PetscInt k = 0; k < v; k++) s += (long double)Nb[k + i * ldn] * W[k + j * v];
       Kh[i + j * hh] += (PetscReal)s;
     }
-  PetscCall(PetscFree(W));
-  PetscFunctionReturn(0);
 }
 
-/* The system's rigid and mechanism modes: combinations of the bodies' rigid motions R = blkdiag(R_b) that satisfy
-   the ties, Z = null(D R), in reassembled coordinates N^T R Z. They come from geometry, not from an eigensolve. */
-static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bodies[], const PetscInt off[], PetscInt m, PetscInt n, const PetscReal D[], const PetscReal N[], PetscInt hh, PetscReal rtol, PetscInt *nrigid, PetscReal Phir[])
+/* Everything a reassembly at one more angle needs, sized once: copies of the bodies and joints, the constraint matrix,
+   its SVD, the products, the system's rigid motions R (angle-independent) and the eigensolver's workspace. */
+struct _n_KFReassembly {
+  PetscInt       nb, nj, nrev, n, m, a, t, vmax;
+  PetscReal      rtol, alpha, beta; /* Rayleigh alpha M + beta K added to the damping */
+  PetscBool      viscous;           /* some body has a viscous damping matrix */
+  KFReducedBody *bodies;            /* pointers into data */
+  KFJointDef    *joints;
+  PetscInt      *off;
+  PetscReal     *data;
+  PetscReal     *D, *N, *A, *s, *VT, *svdwork, *W;
+  PetscBLASInt   lsvd, lsvd_D, lsvd_E; /* allocated; LAPACK's query at D's size and at D R's */
+  long double   *WL;
+  PetscInt       nr; /* -1: some body's rigid motions unknown */
+  PetscReal     *R, *E, *Z, *Y;
+  PetscReal     *eigwork;
+  PetscInt       leig;
+  PetscInt       eig_h, eig_r;             /* the sizes of the last KFReassemblyEig, and LAPACK's queries there */
+  PetscBLASInt   eig_lsvd, eig_leig;
+};
+
+/* The system's rigid motions R = blkdiag(R_b) (n x nr), without the columns a body does not have and with dependent
+   motions combined: depends on the bodies only, not on the angles. */
+static PetscErrorCode KFReassemblyRigidMotions(KFReassembly r, PetscReal **Rout, PetscInt *nrout)
 {
-  PetscInt   nr = 6 * nbodies, r, rk;
-  PetscReal *R, *E, *Z, *Y, ratio;
+  const KFReducedBody *bodies = r->bodies;
+  PetscInt             nb = r->nb, n = r->n, nr = 6 * nb;
+  PetscReal           *R, ratio;
 
   PetscFunctionBegin;
-  if (nrigid) *nrigid = -1;
-  if (!nrigid || !Phir) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < nbodies; b++)
+  *Rout  = NULL;
+  *nrout = -1;
+  for (PetscInt b = 0; b < nb; b++)
     if (!bodies[b].rigid) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc4(n * nr, &R, PetscMax(m, 1) * nr, &E, nr * nr, &Z, n * nr, &Y));
+  PetscCall(PetscCalloc1(n * nr + 1, &R));
   /* a body with boundary conditions (or a layout that does not see some motions) stores only the motions it has,
      the other columns zero, or of rounding size after a restriction: skip those below 1e-10 of the largest */
   {
     PetscReal cmax = 0;
-    for (PetscInt b = 0; b < nbodies; b++)
+    for (PetscInt b = 0; b < nb; b++)
       for (PetscInt k = 0; k < 6; k++) {
         PetscReal c = 0;
         for (PetscInt i = 0; i < bodies[b].v; i++) c += PetscSqr(bodies[b].rigid[i + k * bodies[b].v]);
         cmax = PetscMax(cmax, c);
       }
-    ratio = cmax; /* reused below as the squared threshold's scale */
+    ratio = cmax; /* the squared threshold's scale */
   }
   nr = 0;
-  for (PetscInt b = 0; b < nbodies; b++)
+  for (PetscInt b = 0; b < nb; b++)
     for (PetscInt k = 0; k < 6; k++) {
       PetscReal c = 0;
       for (PetscInt i = 0; i < bodies[b].v; i++) c += PetscSqr(bodies[b].rigid[i + k * bodies[b].v]);
       if (!(c > 1e-20 * ratio)) continue;
-      for (PetscInt i = 0; i < bodies[b].v; i++) R[off[b] + i + nr * n] = bodies[b].rigid[i + k * bodies[b].v];
+      for (PetscInt i = 0; i < bodies[b].v; i++) R[r->off[b] + i + nr * n] = bodies[b].rigid[i + k * bodies[b].v];
       nr++;
     }
-  if (!nr) { /* clamped: no rigid motion at all */
-    *nrigid = 0;
-    PetscCall(PetscFree4(R, E, Z, Y));
-    PetscFunctionReturn(0);
-  }
-  { /* dependent motions (a body whose conditions leave combinations that mix motions its layout does not see):
-       R <- R V_k on the eigenvectors of R^T R above 1e-12 of the largest (singular values 1e-6: the bodies' bases hold
-       their rigid motions to about 1e-8); independent columns are kept as they are */
+  if (nr) { /* dependent motions (a body whose conditions leave combinations that mix motions its layout does not see):
+               R <- R V_k on the eigenvectors of R^T R above 1e-12 of the largest (singular values 1e-6: the bodies'
+               bases hold their rigid motions to about 1e-8); independent columns are kept as they are */
     PetscReal *Gm, *Id, *lam, *V, *R2;
     PetscInt   k = 0;
     PetscCall(PetscMalloc5(nr * nr, &Gm, nr * nr, &Id, nr, &lam, nr * nr, &V, n * nr, &R2));
@@ -157,47 +169,172 @@ static PetscErrorCode KFReassembleRigid(PetscInt nbodies, const KFReducedBody bo
     }
     PetscCall(PetscFree5(Gm, Id, lam, V, R2));
   }
-  PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, R, n, 0.0, E, PetscMax(m, 1)));
-  PetscCall(KFDenseNullSpace(m, nr, E, rtol, &r, Z, &rk, &ratio));
-  PetscCall(KFDenseGemm_Private('N', 'N', n, r, nr, 1.0, R, n, Z, nr, 0.0, Y, n));
-  PetscCall(KFDenseGemm_Private('T', 'N', hh, r, n, 1.0, N, n, Y, n, 0.0, Phir, hh));
-  *nrigid = r;
-  PetscCall(PetscFree4(R, E, Z, Y));
+  *Rout  = R;
+  *nrout = nr;
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+/*
+  KFReassemblyCreate - the workspace of repeated reassembly of the same bodies and joints at changing angles (a time
+  integration under moving joints): the bodies' arrays are copied, every array the reassembly and its
+  eigen-decomposition need is allocated here, and KFReassemblyApply / KFReassemblyEig then allocate nothing.
+  alpha, beta: Rayleigh damping added to the reassembled viscous damping (0, 0: none).
+*/
+static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, PetscBool witheig, KFReassembly *reassembly)
 {
-  PetscFunctionBegin;
-  PetscCall(KFReassembleDamped(nbodies, bodies, njoints, joints, angles, a, t, rtol, h, Mh, Kh, NULL, Gh, Hh, rank, sratio, nrigid, Phir));
-  PetscFunctionReturn(0);
-}
-
-/* KFReassemble, and with Ch the bodies' viscous damping N^T blkdiag(C_b) N (bodies without C_b add nothing) */
-PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
-{
-  PetscInt  *off, n = 0, m = 0, row = 0, irev = 0, nrev = 0, hh, vmax = 0;
-  PetscReal *D, *N, *W;
+  KFReassembly r;
+  PetscInt     n = 0, m = 0, total = 0, ldm, nrc;
+  PetscReal   *p, *R;
 
   PetscFunctionBegin;
+  PetscCheck(reassembly, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemblyCreate: give the address of a KFReassembly");
+  *reassembly = NULL;
   PetscCall(CheckInputs(nbodies, bodies, njoints, joints, a, t));
-  PetscCall(PetscMalloc1(nbodies + 1, &off));
+  PetscCheck(rtol >= 0 && rtol < 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyCreate: relative rank tolerance %g is outside [0, 1): use a small positive value such as 1e-9", (double)rtol);
+  PetscCheck(alpha >= 0 && beta >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyCreate: Rayleigh coefficients alpha %g, beta %g must not be negative", (double)alpha, (double)beta);
+  PetscCall(PetscNew(&r));
+  r->nb = nbodies;
+  r->nj = njoints;
+  r->a = a;
+  r->t = t;
+  r->rtol = rtol;
+  r->alpha = alpha;
+  r->beta = beta;
+  PetscCall(PetscMalloc3(nbodies, &r->bodies, PetscMax(njoints, 1), &r->joints, nbodies + 1, &r->off));
+  if (njoints) PetscCall(PetscArraycpy(r->joints, joints, njoints));
   for (PetscInt b = 0; b < nbodies; b++) {
-    off[b] = n;
-    n += bodies[b].v;
-    vmax = PetscMax(vmax, bodies[b].v);
+    const KFReducedBody *B = &bodies[b];
+    const PetscInt       v = B->v;
+    r->off[b] = n;
+    n += v;
+    r->vmax = PetscMax(r->vmax, v);
+    total += 2 * v * v + v * a + t * v + 6 * B->ninterfaces * v + (B->rigid ? 6 * v : 0) + (B->C ? v * v : 0);
   }
-  off[nbodies] = n;
+  r->off[nbodies] = n;
+  r->n            = n;
   for (PetscInt j = 0; j < njoints; j++) {
     m += joints[j].type == KF_JOINT_REVOLUTE ? 5 : 6;
-    nrev += joints[j].type == KF_JOINT_REVOLUTE;
+    r->nrev += joints[j].type == KF_JOINT_REVOLUTE;
   }
-  PetscCheck(angles || !nrev, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemble: the scene has %" PetscInt_FMT " revolute joints but no angles were given: pass one angle (radians) per revolute joint, in joint order", nrev);
+  r->m = m;
+  /* the bodies' arrays, copied: the workspace does not depend on the lifetime of the caller's */
+  PetscCall(PetscMalloc1(total + 1, &r->data));
+  p = r->data;
+#define KF_COPY(field, size) \
+  do { \
+    if (B->field) { \
+      PetscCall(PetscArraycpy(p, B->field, size)); \
+      r->bodies[b].field = p; \
+      p += size; \
+    } else r->bodies[b].field = NULL; \
+  } while (0)
+  for (PetscInt b = 0; b < nbodies; b++) {
+    const KFReducedBody *B = &bodies[b];
+    const PetscInt       v = B->v;
+    r->bodies[b]           = *B;
+    KF_COPY(M, v * v);
+    KF_COPY(K, v * v);
+    KF_COPY(G, v * a);
+    KF_COPY(H, t * v);
+    KF_COPY(iface, 6 * B->ninterfaces * v);
+    KF_COPY(rigid, 6 * v);
+    KF_COPY(C, v * v);
+    if (B->C) r->viscous = PETSC_TRUE;
+  }
+#undef KF_COPY
+  PetscCall(KFReassemblyRigidMotions(r, &R, &r->nr));
+  r->R = R;
+  nrc  = PetscMax(r->nr, 0);
+  ldm  = PetscMax(m, 1);
+  /* the SVDs: D (m x n) and D R (m x nr) */
+  PetscCall(KFDenseNullSpaceWorkSize_Private(m, n, &r->lsvd_D));
+  PetscCall(KFDenseNullSpaceWorkSize_Private(m, nrc, &r->lsvd_E));
+  r->lsvd = PetscMax(r->lsvd_D, r->lsvd_E);
+  PetscCall(PetscMalloc4(m * n + 1, &r->D, n * n + 1, &r->N, ldm * PetscMax(n, nrc) + 1, &r->A, PetscMin(m, PetscMax(n, nrc)) + 1, &r->s));
+  PetscCall(PetscMalloc3(PetscMax(n, nrc) * PetscMax(n, nrc) + 1, &r->VT, r->lsvd, &r->svdwork, r->vmax * n + 1, &r->W));
+  PetscCall(PetscMalloc1(r->vmax * n + 1, &r->WL));
+  PetscCall(PetscMalloc3(ldm * nrc + 1, &r->E, nrc * nrc + 1, &r->Z, n * nrc + 1, &r->Y));
+  /* the eigensolver at the largest size, n dofs, with any rigid count r <= min(nr, n) (a smaller pencil needs less;
+     KFReassemblyEig checks) */
+  r->leig  = 1;
+  r->eig_h = -1;
+  if (witheig) {
+    for (PetscInt q = 0; q <= PetscMin(nrc, n); q++) {
+      PetscInt size;
+      PetscCall(KFDenseEigRigidWorkSize_Private(n, q, &size, NULL, NULL));
+      r->leig = PetscMax(r->leig, size);
+    }
+    PetscCall(PetscMalloc1(r->leig, &r->eigwork));
+  }
+  *reassembly = r;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *reassembly)
+{
+  PetscFunctionBegin;
+  PetscCall(KFReassemblyCreate_Private(nbodies, bodies, njoints, joints, a, t, rtol, alpha, beta, PETSC_TRUE, reassembly));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemblyDestroy(KFReassembly *reassembly)
+{
+  KFReassembly r;
+
+  PetscFunctionBegin;
+  if (!reassembly || !*reassembly) PetscFunctionReturn(0);
+  r = *reassembly;
+  PetscCall(PetscFree3(r->bodies, r->joints, r->off));
+  PetscCall(PetscFree(r->data));
+  PetscCall(PetscFree(r->R));
+  PetscCall(PetscFree4(r->D, r->N, r->A, r->s));
+  PetscCall(PetscFree3(r->VT, r->svdwork, r->W));
+  PetscCall(PetscFree(r->WL));
+  PetscCall(PetscFree3(r->E, r->Z, r->Y));
+  PetscCall(PetscFree(r->eigwork));
+  PetscCall(PetscFree(r));
+  *reassembly = NULL;
+  PetscFunctionReturn(0);
+}
+
+/* n: the largest reassembled size (sum of the bodies' v: size the n x n outputs for it); a, t: inputs, outputs;
+   viscous: whether the damping output is more than Rayleigh (some body has a viscous matrix); rigid: the rigid
+   motions of the bodies are known (Phir will be given) */
+PetscErrorCode KFReassemblyGetSizes(KFReassembly r, PetscInt *n, PetscInt *a, PetscInt *t, PetscBool *viscous, PetscBool *rigid)
+{
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  if (n) *n = r->n;
+  if (a) *a = r->a;
+  if (t) *t = r->t;
+  if (viscous) *viscous = r->viscous;
+  if (rigid) *rigid = r->nr >= 0 ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReassemblyApply - KFReassembleDamped of the workspace's bodies and joints at these angles (one per revolute joint,
+  radians) into the caller's arrays, with no allocation: h x h Mh, Kh (and Ch: the bodies' viscous damping plus
+  Rayleigh, if Ch is not NULL), h x a Gh, t x h Hh, the constraints' rank and sigma ratio (either may be NULL), the
+  rigid-body and mechanism modes Phir (h x nrigid; nrigid -1 when unknown; Phir may be NULL). Arrays sized for n
+  (KFReassemblyGetSizes): n n, n a, t n.
+*/
+PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
+  const KFReducedBody *bodies = r->bodies;
+  const PetscInt       n = r->n, m = r->m, a = r->a, t = r->t, *off = r->off;
+  PetscInt             row = 0, irev = 0, hh, rk;
+  PetscReal           *D = r->D, *N = r->N, ratio;
+
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  PetscCheck(angles || !r->nrev, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemble: the scene has %" PetscInt_FMT " revolute joints but no angles were given: pass one angle (radians) per revolute joint, in joint order", r->nrev);
+  PetscCheck(h && Mh && Kh && (Gh || !a) && (Hh || !t), PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemblyApply: give the output arrays h, M, K, G, H (sized n n, n n, n a, t n)");
 
   /* D: the interface ties (eq. 20) on the stacked reduced coordinates, body blocks in body order */
-  PetscCall(PetscCalloc1(m * n, &D));
-  for (PetscInt j = 0; j < njoints; j++) {
-    const KFJointDef    *J = &joints[j];
+  PetscCall(PetscArrayzero(D, m * n));
+  for (PetscInt j = 0; j < r->nj; j++) {
+    const KFJointDef    *J = &r->joints[j];
     const KFReducedBody *P = &bodies[J->parent], *C = &bodies[J->child];
     const PetscReal      I3[3][3] = {
       {1, 0, 0},
@@ -225,11 +362,28 @@ PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[]
   }
 
   /* eq. (21-22): the reduced coordinates that satisfy the ties, phi = N phi_h */
-  PetscCall(PetscMalloc1(n * n, &N));
-  PetscCall(KFDenseNullSpace(m, n, D, rtol, &hh, N, rank, sratio));
+  PetscCall(KFDenseNullSpace_Private(m, n, D, r->rtol, &hh, N, &rk, &ratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_D));
   *h = hh;
-  PetscCall(KFReassembleRigid(nbodies, bodies, off, m, n, D, N, hh, rtol, nrigid, Phir));
-  PetscCall(PetscFree(D));
+  if (rank) *rank = rk;
+  if (sratio) *sratio = ratio;
+
+  /* the system's rigid and mechanism modes: combinations of the bodies' rigid motions R that satisfy the ties,
+     Z = null(D R), in reassembled coordinates N^T R Z. They come from geometry, not from an eigensolve. */
+  if (nrigid) *nrigid = -1;
+  if (nrigid && Phir && r->nr >= 0) {
+    const PetscInt nr = r->nr;
+    PetscInt       q, qrank;
+    PetscReal      qratio;
+
+    if (!nr) *nrigid = 0; /* clamped: no rigid motion at all */
+    else {
+      PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, r->R, n, 0.0, r->E, PetscMax(m, 1)));
+      PetscCall(KFDenseNullSpace_Private(m, nr, r->E, r->rtol, &q, r->Z, &qrank, &qratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_E));
+      PetscCall(KFDenseGemm_Private('N', 'N', n, q, nr, 1.0, r->R, n, r->Z, nr, 0.0, r->Y, n));
+      PetscCall(KFDenseGemm_Private('T', 'N', hh, q, n, 1.0, N, n, r->Y, n, 0.0, Phir, hh));
+      *nrigid = q;
+    }
+  }
 
   /* eq. (23-24), body by body: blkdiag(M_b) is never formed */
   PetscCall(PetscArrayzero(Mh, hh * hh));
@@ -237,28 +391,88 @@ PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[]
   PetscCall(PetscArrayzero(Gh, hh * a));
   PetscCall(PetscArrayzero(Hh, t * hh));
   if (Ch) PetscCall(PetscArrayzero(Ch, hh * hh));
-  PetscCall(PetscMalloc1(vmax * hh, &W));
-  for (PetscInt b = 0; b < nbodies; b++) {
+  for (PetscInt b = 0; b < r->nb; b++) {
     const KFReducedBody *B  = &bodies[b];
     const PetscInt       v  = B->v;
     const PetscReal     *Nb = N + off[b]; /* v x hh block of N, leading dimension n */
 
     if (!v) continue;
-    PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->M, v, Nb, n, 0.0, W, v));
-    PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Mh, hh));
-    PetscCall(KFDenseCongruenceExtended(v, hh, B->K, Nb, n, Kh));
+    PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->M, v, Nb, n, 0.0, r->W, v));
+    PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, r->W, v, 1.0, Mh, hh));
+    CongruenceExtended(v, hh, B->K, Nb, n, Kh, r->WL);
     if (Ch && B->C) {
-      PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->C, v, Nb, n, 0.0, W, v));
-      PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, W, v, 1.0, Ch, hh));
+      PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->C, v, Nb, n, 0.0, r->W, v));
+      PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, r->W, v, 1.0, Ch, hh));
     }
     PetscCall(KFDenseGemm_Private('T', 'N', hh, a, v, 1.0, Nb, n, B->G, v, 1.0, Gh, hh));
     PetscCall(KFDenseGemm_Private('N', 'N', t, hh, v, 1.0, B->H, t, Nb, n, 1.0, Hh, t));
   }
   PetscCall(KFDenseSymmetrize_Private(hh, Mh));
   PetscCall(KFDenseSymmetrize_Private(hh, Kh));
-  if (Ch) PetscCall(KFDenseSymmetrize_Private(hh, Ch));
-  PetscCall(PetscFree(W));
-  PetscCall(PetscFree(N));
-  PetscCall(PetscFree(off));
+  if (Ch) {
+    PetscCall(KFDenseSymmetrize_Private(hh, Ch));
+    /* Rayleigh: alpha M + beta K, exact under projection */
+    if (r->alpha > 0 || r->beta > 0)
+      for (PetscInt e = 0; e < hh * hh; e++) Ch[e] += r->alpha * Mh[e] + r->beta * Kh[e];
+  }
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReassemblyEig - eigenvalues (ascending) and M-orthonormal modes of a reassembled pencil (h x h Kh, Mh) with no
+  allocation: the nrigid modes Phir (h x nrigid) as given with eigenvalue 0 and the flexible ones on their
+  M-complement (KFDenseEigRigid); Phir NULL or nrigid < 0: the whole pencil (KFDenseEig). lambda: h, Phi: h h.
+*/
+PetscErrorCode KFReassemblyEig(KFReassembly r, PetscInt h, const PetscReal Mh[], const PetscReal Kh[], PetscInt nrigid, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[])
+{
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  PetscCheck(h >= 1 && h <= r->n, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyEig: size %" PetscInt_FMT " is outside 1..%" PetscInt_FMT ", the sizes this reassembly makes", h, r->n);
+  if (Phir && nrigid >= 0) {
+    PetscCheck(nrigid <= h && nrigid <= PetscMax(r->nr, 0), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemblyEig: %" PetscInt_FMT " rigid modes at %" PetscInt_FMT " dofs: give the count KFReassemblyApply returned", nrigid, h);
+  } else nrigid = -1;
+  if (h != r->eig_h || nrigid != r->eig_r) { /* LAPACK's workspace queries, once per size */
+    PetscInt size = 0;
+    if (nrigid >= 0) PetscCall(KFDenseEigRigidWorkSize_Private(h, nrigid, &size, &r->eig_lsvd, &r->eig_leig));
+    else {
+      PetscCall(KFDenseEigWorkSize_Private(h, &r->eig_leig));
+      size = h * h + r->eig_leig;
+    }
+    PetscCheck(r->eigwork && size <= r->leig, PETSC_COMM_SELF, PETSC_ERR_PLIB, "KFReassemblyEig: workspace of %" PetscInt_FMT " reals, %" PetscInt_FMT " needed", r->eigwork ? r->leig : 0, size);
+    r->eig_h = h;
+    r->eig_r = nrigid;
+  }
+  if (nrigid >= 0) PetscCall(KFDenseEigRigid_Private(h, Kh, Mh, nrigid, Phir, lambda, Phi, r->eigwork, r->eig_lsvd, r->eig_leig));
+  else PetscCall(KFDenseEig_Private(h, Kh, Mh, lambda, Phi, r->eigwork, r->eigwork + h * h, r->eig_leig));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
+  PetscFunctionBegin;
+  PetscCall(KFReassembleDamped(nbodies, bodies, njoints, joints, angles, a, t, rtol, h, Mh, Kh, NULL, Gh, Hh, rank, sratio, nrigid, Phir));
+  PetscFunctionReturn(0);
+}
+
+/* KFReassemble, and with Ch the bodies' viscous damping N^T blkdiag(C_b) N (bodies without C_b add nothing): one
+   reassembly through a KFReassembly made for it */
+PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
+  KFReassembly   r;
+  KFReducedBody *used;
+
+  PetscFunctionBegin;
+  PetscCheck(nbodies >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFReassemble: no bodies to reassemble");
+  /* only what this call reads: C with Ch, the rigid motions with Phir (callers may leave the others unset) */
+  PetscCall(PetscMalloc1(nbodies, &used));
+  for (PetscInt b = 0; b < nbodies; b++) {
+    used[b] = bodies[b];
+    if (!Ch) used[b].C = NULL;
+    if (!nrigid || !Phir) used[b].rigid = NULL;
+  }
+  PetscCall(KFReassemblyCreate_Private(nbodies, used, njoints, joints, a, t, rtol, 0, 0, PETSC_FALSE, &r)); /* one reassembly, no modes */
+  PetscCall(PetscFree(used));
+  PetscCall(KFReassemblyApply(r, angles, h, Mh, Kh, Ch, Gh, Hh, rank, sratio, nrigid, Phir));
+  PetscCall(KFReassemblyDestroy(&r));
   PetscFunctionReturn(0);
 }

@@ -547,6 +547,23 @@ PETSC_EXTERN PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[
 /* KFReassemble that also reassembles the bodies' viscous damping (KFReducedBody.C, NULL for none) into Ch (h x h,
    sized n*n); Ch NULL: KFReassemble */
 PETSC_EXTERN PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
+/* Reassembly at changing angles without allocation (a simulation reassembles at every time step): a workspace made
+   once for the bodies and joints (their arrays are copied), then KFReassemblyApply at each angle into the caller's
+   arrays (exactly KFReassembleDamped's results, plus Rayleigh alpha M + beta K in Ch), and KFReassemblyEig for the
+   eigen-decomposition when it is wanted. Plain data, not a PETSc object; one per thread. */
+typedef struct _n_KFReassembly *KFReassembly;
+PETSC_EXTERN PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *);
+/* n: the largest reassembled size (outputs sized n n, n a, t n); viscous: some body has a damping matrix; rigid: the
+   bodies' rigid motions are known (Apply returns Phir) */
+PETSC_EXTERN PetscErrorCode KFReassemblyGetSizes(KFReassembly, PetscInt *n, PetscInt *a, PetscInt *t, PetscBool *viscous, PetscBool *rigid);
+PETSC_EXTERN PetscErrorCode KFReassemblyApply(KFReassembly, const PetscReal angles[], PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
+/* eigenvalues (h, ascending) and M-orthonormal modes (h x h) of the pencil Apply returned; with Phir (nrigid >= 0) the
+   rigid modes as given (KFDenseEigRigid), otherwise the whole pencil (KFDenseEig) */
+PETSC_EXTERN PetscErrorCode KFReassemblyEig(KFReassembly, PetscInt h, const PetscReal Mh[], const PetscReal Kh[], PetscInt nrigid, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[]);
+PETSC_EXTERN PetscErrorCode KFReassemblyDestroy(KFReassembly *);
+/* the workspace of KFReassemblyApply for this model: its bodies, joints, reassembly_rtol and Rayleigh damping (the
+   rigid count when the bodies' rigid motions are unknown: KFReducedModelGetInfo's nrigid) */
+PETSC_EXTERN PetscErrorCode KFReducedModelCreateReassembly(KFReducedModel, KFReassembly *);
 /* the model's damping (what its frequency responses use) and its outputs' quantities (t values) */
 PETSC_EXTERN PetscErrorCode KFReducedModelSetDamping(KFReducedModel, const KFDamping *);
 PETSC_EXTERN PetscErrorCode KFReducedModelGetDamping(KFReducedModel, KFDamping *);

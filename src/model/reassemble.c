@@ -21,6 +21,26 @@ static PetscErrorCode KFReducedModelGetReassemblyRtol(KFReducedModel m, PetscRea
 }
 
 /*
+  KFReducedModelCreateReassembly - a KFReassembly of the model's bodies and joints with its reassembly_rtol and its
+  Rayleigh damping: the allocation-free path of KFReducedModelReassemble's matrices (a simulation's path).
+*/
+PetscErrorCode KFReducedModelCreateReassembly(KFReducedModel m, KFReassembly *reassembly)
+{
+  KFReducedBody *bodies;
+  PetscReal      rtol;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  PetscValidPointer(reassembly, 2);
+  PetscCall(KFReducedModelGetReassemblyRtol(m, &rtol));
+  PetscCall(PetscMalloc1(m->nb, &bodies));
+  for (PetscInt b = 0; b < m->nb; b++) PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
+  PetscCall(KFReassemblyCreate(m->nb, bodies, m->nj, m->joints, m->ninputs, m->noutputs, rtol, m->damping.alpha, m->damping.beta, reassembly));
+  PetscCall(PetscFree(bodies));
+  PetscFunctionReturn(0);
+}
+
+/*
   KFReducedModelReassemble - the reduced system at one configuration (angles: one per revolute joint, radians):
   KFReassemble of the model's bodies and joints with the model's reassembly_rtol, then the eigenpairs of the
   reassembled pencil. The rigid-body and mechanism modes come from the bodies' stored rigid motions (Phir); only a

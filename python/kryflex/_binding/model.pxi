@@ -1,5 +1,6 @@
-# CReducedModel (the C KFReducedModel, a reference-counted PETSc object) and CReducedSystem (a KFReducedSystem: the
-# model reassembled at one configuration, plain data with its modes). NumPy arrays returned here are copies.
+# CReducedModel (the C KFReducedModel, a reference-counted PETSc object), CReducedSystem (a KFReducedSystem: the
+# model reassembled at one configuration, plain data with its modes) and CReassembly (a KFReassembly: the model's
+# reassembly workspace, for reassembling at many angles). NumPy arrays returned here are copies or new arrays.
 
 cdef class CReducedSystem:
     """The reduced system at one configuration: matrices, modes, frequencies, moments and frequency responses."""
@@ -270,3 +271,71 @@ cdef class CReducedModel:
         check(KFReducedModelLoad(c.comm, cstr(path, "file name"), &m))
         out.adopt(m, False)
         return out
+
+
+cdef class CReassembly:
+    """The allocation-free reassembly of one reduced model (KFReducedModelCreateReassembly): apply() at each angle
+    vector, eig() on what apply() returned when the modes are wanted. Holds copies of the model's arrays and settings
+    as they were when it was made."""
+    cdef KFReassembly r
+    cdef readonly PetscInt n, a, t, nrevolute
+    cdef readonly bint damped, rigid
+
+    def __cinit__(self, CReducedModel model not None):
+        cdef PetscBool viscous, rigid
+        cdef KFDamping d
+        cdef PetscInt nb, nj
+        check(KFReducedModelCreateReassembly(model.m, &self.r))
+        check(KFReassemblyGetSizes(self.r, &self.n, &self.a, &self.t, &viscous, &rigid))
+        check(KFReducedModelGetInfo(model.m, &nb, &nj, &self.nrevolute, NULL, NULL, NULL))
+        check(KFReducedModelGetDamping(model.m, &d))
+        self.damped = viscous or d.alpha > 0 or d.beta > 0
+        self.rigid = rigid
+
+    def __dealloc__(self):
+        if self.r != NULL:
+            KFReassemblyDestroy(&self.r)
+
+    def apply(self, angles_rad):
+        """The reassembled system at angles_rad (one per revolute joint, radians): (M, K, C or None, G, H, Phir or None,
+        rank, sigma ratio), C the viscous damping (bodies' C_b + Rayleigh), Phir the rigid-body and mechanism modes."""
+        cdef cnp.ndarray ang = np.ascontiguousarray(angles_rad, dtype=np.float64)
+        cdef PetscInt n = self.n, h = 0, rank = 0, nrigid = -1
+        cdef PetscReal ratio = 0
+        if ang.ndim != 1 or ang.shape[0] != self.nrevolute:
+            raise ValueError("the model has %d revolute joint(s): give %d angle(s), got %d"
+                             % (self.nrevolute, self.nrevolute, ang.size))
+        if not np.isfinite(ang).all():
+            raise ValueError("the angles must be finite numbers, got %s" % ang)
+        cdef cnp.ndarray M = np.empty(n * n)
+        cdef cnp.ndarray K = np.empty(n * n)
+        cdef cnp.ndarray G = np.empty(n * self.a + 1)
+        cdef cnp.ndarray H = np.empty(self.t * n + 1)
+        cdef cnp.ndarray C = np.empty(n * n) if self.damped else None
+        cdef cnp.ndarray R = np.empty(n * n) if self.rigid else None
+        check(KFReassemblyApply(self.r, real_ptr(ang) if self.nrevolute else NULL, &h, real_ptr(M), real_ptr(K),
+                                real_ptr(C) if self.damped else NULL, real_ptr(G), real_ptr(H), &rank, &ratio,
+                                &nrigid, real_ptr(R) if self.rigid else NULL))
+        if h < 1:
+            raise ValueError("the joints' interface ties leave no free coordinate in the reduced model: reduce again "
+                             "with a larger body basis")
+        hh = h * h
+        return (M[:hh].reshape(h, h, order="F"), K[:hh].reshape(h, h, order="F"),
+                C[:hh].reshape(h, h, order="F") if self.damped else None,
+                G[:h * self.a].reshape(h, self.a, order="F"), H[:self.t * h].reshape(self.t, h, order="F"),
+                R[:h * nrigid].reshape(h, nrigid, order="F") if nrigid >= 0 else None, rank, ratio)
+
+    def eig(self, M, K, Phir=None):
+        """(eigenvalues ascending, M-orthonormal modes) of what apply() returned; with Phir the rigid modes as given."""
+        cdef cnp.ndarray Mf = np.asfortranarray(M, dtype=np.float64)
+        cdef cnp.ndarray Kf = np.asfortranarray(K, dtype=np.float64)
+        cdef cnp.ndarray Rf = None if Phir is None else np.asfortranarray(Phir, dtype=np.float64)
+        cdef PetscInt h = Mf.shape[0], nr = -1 if Phir is None else Rf.shape[1]
+        if Mf.ndim != 2 or Kf.ndim != 2 or Mf.shape[1] != h or Kf.shape[0] != h or Kf.shape[1] != h or \
+                (Rf is not None and Rf.shape[0] != h):
+            raise ValueError("eig takes M and K of one square size (and Phir with as many rows) as apply() returned")
+        cdef cnp.ndarray lam = np.empty(h)
+        cdef cnp.ndarray Phi = np.empty((h, h), order="F")
+        check(KFReassemblyEig(self.r, h, real_ptr(Mf), real_ptr(Kf), nr, real_ptr(Rf) if Rf is not None else NULL,
+                              real_ptr(lam), real_ptr(Phi)))
+        return lam, Phi

@@ -35,11 +35,11 @@ def _render_plots(summary, plot_names):
     arrays = {label: plots.frf_arrays(summary["frf"][label]) for label in c.labels}
     for label in c.labels:
         freq, full, red = arrays[label]
-        for (o, i) in c.entries:
-            title = (f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}, "
-                     f"{c.model_name}")
-            yield plot_names["bode"][(label, (o, i))], plots.figure_png_bytes(
-                plots.bode_figure(freq, full[:, o, i], red[:, o, i], title))
+        titles = [f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}, {c.model_name}"
+                  for (o, i) in c.entries]
+        pngs = plots.bode_pngs(freq, [(full[:, o, i], red[:, o, i], t) for (o, i), t in zip(c.entries, titles)])
+        for (o, i), png in zip(c.entries, pngs):
+            yield plot_names["bode"][(label, (o, i))], png
     o, i = c.dominant_entry
     panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
     yield "bode_overview.png", plots.figure_png_bytes(

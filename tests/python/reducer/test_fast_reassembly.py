@@ -21,9 +21,10 @@ import kryflex
 from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-sys.path.insert(0, HERE)
+sys.path.insert(0, SUPPORT)
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 import reference as ref  # noqa: E402

@@ -43,7 +43,7 @@ class ReducedSystem:
                  damping_model=None, output_quantities=None, *, nrigid=None, reassembly=None, model=None,
                  handle=None, eigen=None, feedthrough=None, trimmed=0, max_frequency_hz=0.0, untrimmed_top_hz=0.0):
         self.feedthrough, self.trimmed = feedthrough, trimmed
-        self.max_frequency_hz, self.untrimmed_top_hz = max_frequency_hz, untrimmed_top_hz
+        self.max_frequency_hz, self._untrimmed_top_hz = max_frequency_hz, untrimmed_top_hz
         self.angles_deg, self.M, self.K, self.damping, self.B, self.C = tuple(angles_deg), M, K, damping, B, C
         self.rigid_modes, self.constraint_rank, self.sigma_ratio = rigid_modes, constraint_rank, sigma_ratio
         self.damping_matrix, self.damping_model, self.output_quantities = damping_matrix, damping_model, \
@@ -75,6 +75,11 @@ class ReducedSystem:
     def top_frequency_hz(self):
         """The highest flexible frequency the system keeps in its dynamics (Hz; 0 without flexible modes)."""
         return float(self.frequencies_hz[-1]) if len(self.frequencies_hz) else 0.0
+
+    @property
+    def untrimmed_top_hz(self):
+        """The highest flexible frequency before trimming (Hz): top_frequency_hz when nothing was trimmed."""
+        return self._untrimmed_top_hz if self.trimmed else self.top_frequency_hz
 
     @property
     def explicit_step_s(self):

@@ -21,6 +21,7 @@ import json
 import os
 
 from ..io.files import Staging
+from ..io.scene_schema import NO_JOINT_LABEL
 from .figures import _render_plots, plot_file_names
 from .schema import _check_json_types, validate_summary
 from .context import _Context
@@ -75,7 +76,9 @@ def write_unverified(summary, out_dir):
              "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
              "frequency comparison against the full order; errors below are estimated. Single-angle model: body sizes "
              + ", ".join(f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ",",
-             f"reduction angle α_G {summary.get('reduction_label')} deg, kept Krylov modes {summary.get('kept_modes')}.", ""]
+             ("one configuration (no revolute joint)" if summary.get("reduction_label") == NO_JOINT_LABEL
+              else f"reduction angle α_G {summary.get('reduction_label')} deg")
+             + f", kept Krylov modes {summary.get('kept_modes')}.", ""]
     try:
         c = _Context(summary)
     except (KeyError, TypeError, ValueError, IndexError):      # a summary too sparse for the sections below

@@ -4,6 +4,7 @@ file; what it refuses, in one line, nothing written), reassemble/export/info on 
 the damping defaults. The end-to-end path of docs/guide/real-models.md is test_real_models_guide.py."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -359,6 +360,63 @@ def test_reduce_texts_and_damping_defaults(reduced):
     assert beam["model_check"]["findings"] == []
     p = run(["info", os.path.join(EXAMPLE, "plate.yaml"), "-quiet"])
     assert "3 rigid-body and mechanism modes" in p.stdout and "fixed" not in p.stdout
+
+
+def json_strings(value):
+    """Every string of a JSON document, keys and values."""
+    if isinstance(value, dict):
+        return [t for k, v in value.items() for t in [k] + json_strings(v)]
+    if isinstance(value, list):
+        return [t for v in value for t in json_strings(v)]
+    return [value] if isinstance(value, str) else []
+
+
+NO_ANGLE = ("fixed", "alpha = ()", "α = ()", "α_G = (", "alpha_G =", "[[]]", "angle of interest", "angles of interest")
+
+
+@needs_cli
+@pytest.mark.slow
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+def test_single_structure_is_never_an_angle(tmp_path, ranks):
+    """A reduce of a scene without revolute joints speaks of the structure: no 'fixed deg', 'alpha = ()' nor a 'deg'
+    of an angle that does not exist, in the progress and last lines, report.md, summary.json's texts and file names."""
+    out = tmp_path / "plate"
+    p = run(["reduce", os.path.join(EXAMPLE, "plate.yaml"), "-o", str(out)], ranks=ranks)
+    assert p.returncode == 0, p.stderr
+    assert "the structure (no revolute joint)" in p.stdout and "reference check of the structure:" in p.stdout
+    assert "the single-angle model: max relative H-inf error" in p.stdout
+    report = (out / "report.md").read_text(encoding="utf-8")
+    summary = json.load(open(out / "summary.json"))
+    texts = [line for line in (p.stdout + p.stderr).splitlines() if "timings" not in line]
+    # report.md: "deg" stays legal as a phase unit of a plot axis only, which the markdown does not name
+    texts += report.splitlines()
+    texts += [t for t in json_strings(summary) if not t.endswith("_deg")]   # key names such as angles_deg are fields
+    texts += os.listdir(out)
+    for bad in NO_ANGLE:
+        hits = [t for t in texts if bad in t]
+        assert not hits, (bad, hits[:3])
+    # "degrees of freedom" is no angle, nor the phase plots' "within 180°"
+    hits = [t for t in texts if re.search(r"\bdeg\b|\ddeg|(?<!180)°", t)]
+    assert not hits, hits[:3]
+    assert summary["angle_labels"] == ["structure"] and summary["angles_deg"] == [[]]
+    assert {"bode_structure_corner_uz_tip_force.png", "importance_structure.png"} <= set(os.listdir(out))
+    assert "Configurations: the structure." in report
+
+
+@needs_cli
+@pytest.mark.slow
+def test_jointed_scene_keeps_its_angle_texts(reduced):
+    """With a revolute joint the texts are today's: angles in degrees, alpha_G, file names per angle."""
+    out = reduced / "galileo"
+    summary = json.load(open(out / "summary.json"))
+    labels = summary["angle_labels"]
+    assert "structure" not in labels
+    assert summary["reduction_rule"].startswith("alpha_G = %s deg" % summary["reduction_label"])
+    names = os.listdir(out)
+    assert all(("importance_%sdeg.png" % label) in names for label in labels)
+    assert any(n.startswith("bode_%sdeg_" % labels[0]) for n in names)
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "Configurations: α = " in report and "The reduction basis is built at α_G: α = " in report
 
 
 def test_damping_zero_and_defaults():

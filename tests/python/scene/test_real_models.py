@@ -328,8 +328,12 @@ def test_reassemble_and_export_on_two_ranks(reduced, tmp_path):
         assert run(["export", beam, "-o", str(tmp_path / ("e%d.npz" % n))], ranks=n).returncode == 0
     a, b = np.load(tmp_path / "e1.npz"), np.load(tmp_path / "e2.npz")
     assert all(np.array_equal(a[k], b[k]) for k in a.files)
-    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")], ranks=2)
-    assert p.returncode == 5 and "ux uy rz" in one_error(p)
+    plate = str(reduced / "plate" / "reduced.h5")     # no floating frame: the body as reduced, the system for Exudyn
+    for n in (1, 2):
+        p = run(["export", plate, "-o", str(tmp_path / ("p%d.npz" % n)), "--format", "exudyn", "--json"], ranks=n)
+        assert p.returncode == 0, p.stderr
+    a, b = np.load(tmp_path / "p1.npz"), np.load(tmp_path / "p2.npz")
+    assert sorted(a.files) == sorted(b.files) and all(np.array_equal(a[k], b[k]) for k in a.files)
 
 
 @needs_cli
@@ -345,9 +349,84 @@ def test_export_single_structures(reduced, tmp_path):
     C = model.bodies[0]["C"]
     np.testing.assert_allclose(z["body0/C"], 0.5 * (C + C.T), atol=1e-14 * np.abs(C).max())
     assert z["body0/interface_names"].size == 0 and z["body0/iface"].shape == (0, C.shape[0])
-    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")])
-    assert p.returncode == 5 and "cannot move rigidly along ux uy rz" in one_error(p)
-    assert not (tmp_path / "p.npz").exists()
+    assert int(z["body0/floating"]) == 1 and z["body0/missing_rigid"].size == 0
+
+
+@needs_cli
+@pytest.mark.slow
+def test_export_body_without_rigid_motions(reduced, tmp_path):
+    """The (uz, rx, ry) plate: the neutral file holds its reduced M, K, G, H, C as the model has them (no floating-
+    frame fields, the missing motions named) and its reassembled system; --format exudyn builds that system as one
+    ObjectGenericODE2 whose linearized frequencies are the dense eigenvalues of the reduced (K, M) computed here."""
+    from kryflex.export import read_neutral
+    path = str(reduced / "plate" / "reduced.h5")
+    model = kryflex.ReducedModel.load(path)
+    p = run(["export", path, "-o", str(tmp_path / "p.npz")])
+    assert p.returncode == 0, p.stderr
+    assert "plate: %d reduced dofs, no floating frame (no rigid ux uy rz)" % model.bodies[0]["M"].shape[0] in p.stdout
+    z = np.load(tmp_path / "p.npz")
+    body = model.bodies[0]
+    for key in ("M", "K", "G", "H"):
+        A = body[key]
+        np.testing.assert_allclose(z["body0/" + key], 0.5 * (A + A.T) if key in "MK" else A, rtol=0,
+                                   atol=1e-15 * np.abs(A).max())
+    assert int(z["body0/floating"]) == 0 and list(z["body0/missing_rigid"]) == ["ux", "uy", "rz"]
+    assert "body0/rigid_coords" not in z.files and "body0/modes" not in z.files
+    s = model.at([])
+    assert int(z["nsystems"]) == 1 and z["system0/angles_deg"].size == 0
+    for key in ("M", "K", "B", "C"):
+        np.testing.assert_array_equal(z["system0/" + key], getattr(s, key))
+    back = read_neutral(str(tmp_path / "p.npz"))
+    assert not back.floating and back.bodies[0].missing_rigid == ("ux", "uy", "rz")
+    np.testing.assert_array_equal(back.bodies[0].K, z["body0/K"])
+    # Exudyn: the reassembled system, its frequencies against a dense eigensolve of the file's system
+    p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn", "--json"])
+    assert p.returncode == 0, p.stderr
+    check = json.loads(p.stdout)["check"][0]
+    lam = sl.eigh(z["system0/K"], z["system0/M"], eigvals_only=True)
+    top = np.abs(lam).max()
+    dense = np.sqrt(lam[lam > 1e-10 * top]) / (2 * np.pi)
+    assert check["exudyn_zero"] == 3 == int(np.sum(np.abs(lam) <= 1e-10 * top))
+    np.testing.assert_allclose(check["exudyn_hz"], dense, rtol=1e-8)
+    assert check["max_rel_diff"] <= 1e-6
+
+
+def jointed_clamped_spec():
+    """The grounded arm of bc_models with its post clamped at the base instead of its pivot: a scene with a revolute
+    joint (the elbow) and a body without rigid motions."""
+    from bc_models import grounded_arm
+    spec = grounded_arm()
+    spec["name"] = "clamped_arm"
+    del spec["joints"]["pivot"]
+    spec["bodies"]["post"]["constraints"] = [{"node": 1, "dofs": "123456"}]
+    spec["angles"] = [0.0, 40.0]
+    spec["accuracy"] = 0.05
+    return spec
+
+
+@pytest.mark.slow
+def test_export_jointed_scene_with_a_clamped_body(tmp_path):
+    """Neutral: the clamped post as reduced, the arm as a floating-frame body, the joint; Exudyn (floating-frame bodies
+    and joints) refuses in one line naming the body, exit 5, nothing written."""
+    from kryflex.export import from_model, read_neutral, write_neutral
+    model = kryflex.Reducer(kryflex.scene_from_dict(jointed_clamped_spec(), quiet=True), quiet=True).reduce().model
+    path = str(tmp_path / "m.h5")
+    model.save(path)
+    data = from_model(model)
+    post, arm = data.bodies
+    assert not post.floating and post.missing_rigid == ("ux", "uy", "uz", "rx", "ry", "rz") and arm.floating
+    assert data.systems == []          # a jointed scene: no fixed-angle system added
+    write_neutral(data, str(tmp_path / "n.npz"))
+    back = read_neutral(str(tmp_path / "n.npz"))
+    assert [b.floating for b in back.bodies] == [False, True] and back.revolute == ["elbow"]
+    np.testing.assert_allclose(back.bodies[1].modes, arm.modes)
+    if os.path.exists(KRYFLEX):
+        p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn"])
+        assert p.returncode == 5
+        line = one_error(p)
+        assert "body 'post' cannot move rigidly along ux uy uz rx ry rz" in line and "drop --format exudyn" in line
+        assert not (tmp_path / "x.npz").exists()
+        assert run(["export", path, "-o", str(tmp_path / "y.npz")]).returncode == 0
 
 
 @needs_cli

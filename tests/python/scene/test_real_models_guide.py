@@ -116,6 +116,15 @@ def test_single_structure(guide_run):
     assert "the structure (ObjectGenericODE2): %d flexible modes" % (len(red) - 3) in out and "Exudyn 3, kryflex 3" in out
 
 
+def test_single_structure_study_speaks_of_the_structure(guide_run):
+    """kryflex study on the plate (no revolute joint): its study.md names the structure, never an angle."""
+    work, _ = guide_run
+    text = open(os.path.join(work, "out", "study", "study.md"), encoding="utf-8").read()
+    assert "of the structure (no revolute joint)" in text and "the structure" in text
+    # (the join's key list names "alpha_G or first expansion angle" as a column: a definition, no angle)
+    assert not re.search(r"\bdeg\b|alpha_G [^o]|angles of interest", text), re.findall(r".{60}\bdeg\b.{20}", text)[:3]
+
+
 def test_matlab_beam_exports_its_system(guide_run):
     """The clamped scalar-point beam of beam.mat: no rigid motion, its reassembled system in the file; the lowest
     frequency of that system against a dense eigensolve of the .mat file's own M and K."""

@@ -460,13 +460,16 @@ def test_single_structure_is_never_an_angle(tmp_path, ranks):
     """A reduce of a scene without revolute joints speaks of the structure: no 'fixed deg', 'alpha = ()' nor a 'deg'
     of an angle that does not exist, in the progress and last lines, report.md, summary.json's texts and file names."""
     out = tmp_path / "plate"
-    p = run(["reduce", os.path.join(EXAMPLE, "plate.yaml"), "-o", str(out)], ranks=ranks)
+    p = run(["reduce", os.path.join(EXAMPLE, "plate.yaml"), "-o", str(out), "-kf_reducer_view", "-kf_model_view"],
+            ranks=ranks)
     assert p.returncode == 0, p.stderr
     assert "the structure (no revolute joint)" in p.stdout and "reference check of the structure:" in p.stdout
+    assert "configuration: the structure" in p.stdout and "reduction configuration: the structure" in p.stdout
     assert "the single-angle model: max relative H-inf error" in p.stdout
     report = (out / "report.md").read_text(encoding="utf-8")
     summary = json.load(open(out / "summary.json"))
-    texts = [line for line in (p.stdout + p.stderr).splitlines() if "timings" not in line]
+    # (the model view's settings dump 'reduction_angles_deg = [[]]' is a stored field, as in summary.json)
+    texts = [line for line in (p.stdout + p.stderr).splitlines() if "timings" not in line and "_deg = " not in line]
     # report.md: "deg" stays legal as a phase unit of a plot axis only, which the markdown does not name
     texts += report.splitlines()
     texts += [t for t in json_strings(summary) if not t.endswith("_deg")]   # key names such as angles_deg are fields

@@ -6,8 +6,10 @@ writes into out_dir (created if needed):
   summary.json                                   every number, exactly as given
   report.md                                      tables in the order of the paper's Tables 1-6 and Fig. 3
   bode_<angle>deg_<output>_<input>.png           full vs reduced, one per configuration and I/O pair
+                                                 (bode_structure_... without revolute joints)
   bode_overview.png                              magnitudes at every configuration (dominant I/O pair)
   importance_<angle>deg.png                      normalized importance of the Krylov modes, kept ones marked
+                                                 (importance_structure.png without revolute joints)
   moment_ratios.png                              |L_full/L_reduced - 1| against k
   frf_error.png                                  pointwise relative FRF error against frequency
 and returns the written paths. Everything is validated first, then rendered into a hidden staging folder inside

@@ -379,6 +379,10 @@ def test_export_body_without_rigid_motions(reduced, tmp_path):
     back = read_neutral(str(tmp_path / "p.npz"))
     assert not back.floating and back.bodies[0].missing_rigid == ("ux", "uy", "rz")
     np.testing.assert_array_equal(back.bodies[0].K, z["body0/K"])
+    from kryflex.export import ExportError
+    from kryflex.export.exudyn import build_mbs
+    with pytest.raises(ExportError, match="body 'plate' cannot move rigidly along ux uy rz.*system_mbs"):
+        build_mbs(back, [])                  # floating-frame bodies only: the system path is named
     # Exudyn: the reassembled system, its frequencies against a dense eigensolve of the file's system
     p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn", "--json"])
     assert p.returncode == 0, p.stderr
@@ -405,6 +409,7 @@ def jointed_clamped_spec():
 
 
 @pytest.mark.slow
+@pytest.mark.mpi
 def test_export_jointed_scene_with_a_clamped_body(tmp_path):
     """Neutral: the clamped post as reduced, the arm as a floating-frame body, the joint; Exudyn (floating-frame bodies
     and joints) refuses in one line naming the body, exit 5, nothing written."""
@@ -421,11 +426,12 @@ def test_export_jointed_scene_with_a_clamped_body(tmp_path):
     assert [b.floating for b in back.bodies] == [False, True] and back.revolute == ["elbow"]
     np.testing.assert_allclose(back.bodies[1].modes, arm.modes)
     if os.path.exists(KRYFLEX):
-        p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn"])
-        assert p.returncode == 5
-        line = one_error(p)
-        assert "body 'post' cannot move rigidly along ux uy uz rx ry rz" in line and "drop --format exudyn" in line
-        assert not (tmp_path / "x.npz").exists()
+        for ranks in (1, 2):          # every rank exits 5, one error line
+            p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn"], ranks=ranks)
+            assert p.returncode == 5
+            line = one_error(p)
+            assert "body 'post' cannot move rigidly along ux uy uz rx ry rz" in line and "drop --format exudyn" in line
+            assert not (tmp_path / "x.npz").exists()
         assert run(["export", path, "-o", str(tmp_path / "y.npz")]).returncode == 0
 
 

@@ -48,6 +48,12 @@ def _angles_text(config):
     return text if len(values) == 1 else f"({text})"
 
 
+def _no_angles(value):
+    """True for the configurations of a scene without revolute joints: a list of empty angle lists ([[]])."""
+    return isinstance(value, (list, tuple)) and len(value) > 0 and all(
+        isinstance(a, (list, tuple)) and len(a) == 0 for a in value)
+
+
 def _chosen_sentence(c):
     """The chosen model in one sentence: method, moments, kept set, sizes."""
     s, ch = c.s, c.chosen
@@ -267,7 +273,7 @@ def _section_scene(c):
     if settings:
         # angles of a scene without revolute joints are empty lists: no row ("[[]]" would read as an angle)
         lines += [table(["setting", "value"], [(k, fmt_general(v)) for k, v in settings.items()
-                                               if not (k.endswith("_deg") and not any(v or []))], "ll"), ""]
+                                               if not (k.endswith("_deg") and _no_angles(v))], "ll"), ""]
     return lines
 
 
@@ -362,7 +368,7 @@ def _section_alpha_g(c):
     settings = s.get("settings") or {}
     if settings.get("method"):
         text += f" Method: {settings['method']}."
-    if settings.get("reduction_angles_deg") and any(settings["reduction_angles_deg"]):
+    if settings.get("reduction_angles_deg") and not _no_angles(settings["reduction_angles_deg"]):
         text += f" Reduction angles: {fmt_general(settings['reduction_angles_deg'])} deg."
     lines += [text, ""]
     return lines

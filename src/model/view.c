@@ -38,7 +38,8 @@ PetscErrorCode KFReducedModelView(KFReducedModel m, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
     PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
   }
-  if (m->nangles) {
+  if (m->nangles && !m->nrevolute) PetscCall(PetscViewerASCIIPrintf(viewer, "reduction configuration: the structure (no revolute joint)\n"));
+  else if (m->nangles) {
     PetscCall(PetscViewerASCIIPrintf(viewer, "reduction configurations (deg):"));
     PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
     for (PetscInt c = 0; c < m->nangles; c++) {

@@ -178,7 +178,7 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, &t));
   ta       = t * a;
   PetscCall(KFReducedModelGetInfo(model, NULL, NULL, NULL, NULL, NULL, &expected));
-  PetscCall(KFReducerConfigLabel_Private(nrev, p->angles, label, sizeof(label)));
+  PetscCall(KFReducerConfigPlace_Private(nrev, p->angles, label, sizeof(label)));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducedModelReassemble(model, p->angles, &rs));
   PetscCall(PetscTime(&t1));
@@ -186,8 +186,8 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
   PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
   *ndofs = n;
   PetscCall(KFReducedSystemGetModes(rs, &lambda, &Phi, &nrigid, &Phir));
-  if (single && !Phir) PetscCall(KFReducerNote_Private(r, "reassembled model at %s deg: no rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, expected));
-  else if (single && nrigid != expected) PetscCall(KFReducerNote_Private(r, "reassembled model at %s deg: %" PetscInt_FMT " rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, nrigid, expected));
+  if (single && !Phir) PetscCall(KFReducerNote_Private(r, "reassembled model %s: no rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, expected));
+  else if (single && nrigid != expected) PetscCall(KFReducerNote_Private(r, "reassembled model %s: %" PetscInt_FMT " rigid-body and mechanism modes from the bodies' rigid motions, expected %" PetscInt_FMT, label, nrigid, expected));
   PetscCall(PetscMalloc3(nmom * ta, &Lr, nmom, &errors, nmom * ta, &ratios));
   PetscCall(KFReducedSystemMoments(rs, nmom, Lr));
   PetscCall(KFMomentErrors(nmom, t, a, r->nconfig, L, c, Lr, r->negligible, errors, ratios));
@@ -202,7 +202,7 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
     if (dev > 1e-8) {
       for (PetscInt e = 0; e < nmom * ta; e++)
         if (!PetscIsNanReal(ratios[e])) rdev = PetscMax(rdev, PetscAbsReal(ratios[e] - 1));
-      PetscCall(KFReducerNote_Private(r, "single-angle model at %s deg: moments not matched exactly, max ||L_full - L_red|| / ||L_full|| = %.3e (max entrywise |L_full/L_red - 1| = %.3e)%s", label, (double)dev, (double)rdev, (PetscInt)rg[0] == c ? " (alpha_G)" : ""));
+      PetscCall(KFReducerNote_Private(r, "single-angle model %s: moments not matched exactly, max ||L_full - L_red|| / ||L_full|| = %.3e (max entrywise |L_full/L_red - 1| = %.3e)%s", label, (double)dev, (double)rdev, (nrev && (PetscInt)rg[0] == c) ? " (alpha_G)" : ""));
     }
   }
   PetscCall(PetscArraycpy(shape, mshape, 3));
@@ -300,7 +300,7 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, PetscInt nfull, const Petsc
   const PetscReal *v;
   KFReducedModel   chosen;
   PetscBool        measured = PETSC_FALSE, estimated = PETSC_FALSE;
-  char             label[128], where[128] = "";
+  char             label[128], place[160], where[160] = "";
 
   PetscFunctionBegin;
   PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
@@ -322,6 +322,9 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, PetscInt nfull, const Petsc
     char      frfpart[96] = "";
 
     PetscCall(KFReducerConfigLabel_Private(nrev, evals[c].angles, label, sizeof(label)));
+    PetscCall(KFReducerConfigPlace_Private(nrev, evals[c].angles, place, sizeof(place)));
+    if (!nrev) PetscCall(PetscStrncpy(label, "the structure", sizeof(label)));
+    else PetscCall(PetscStrlcat(label, " deg", sizeof(label)));
     PetscCall(KFCompareOne(r, r->single, "", c, msingle, Ls, &evals[c], &hinf, &ndofs, &dev));
     if (r->multi_model) PetscCall(KFCompareOne(r, r->multi_model, "multi_", c, mmulti, Lm, &evals[c], &mh, &nm, &dev));
     if (evals[c].w) {
@@ -331,12 +334,12 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, PetscInt nfull, const Petsc
       estimated = (PetscBool)(estimated || evals[c].rich);
       if (!(e <= worst)) {
         worst = e;
-        PetscCall(PetscStrncpy(where, label, sizeof(where)));
+        PetscCall(PetscStrncpy(where, place, sizeof(where)));
       }
       PetscCall(PetscSNPrintf(frfpart, sizeof(frfpart), ", FRF rel. H-inf error %.3g%s", (double)hinf, evals[c].rich ? " (estimated)" : ""));
     }
-    PetscCall(KFProgress(comm, "  %s deg: single-angle model %" PetscInt_FMT " system dofs%s%s", label, ndofs, frfpart, r->multi_model ? "" : ""));
-    if (r->multi_model && evals[c].w) PetscCall(KFProgress(comm, "  %s deg: multi-angle model %" PetscInt_FMT " system dofs, FRF rel. H-inf error %.3g", label, nm, (double)mh));
+    PetscCall(KFProgress(comm, "  %s: single-angle model %" PetscInt_FMT " system dofs%s%s", label, ndofs, frfpart, r->multi_model ? "" : ""));
+    if (r->multi_model && evals[c].w) PetscCall(KFProgress(comm, "  %s: multi-angle model %" PetscInt_FMT " system dofs, FRF rel. H-inf error %.3g", label, nm, (double)mh));
   }
   if (nmid) { /* the chosen model between the angles of interest */
     PetscReal     *ang, *err;
@@ -355,7 +358,7 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, PetscInt nfull, const Petsc
       PetscCall(KFReducedSystemDestroy(&rs));
       if (!(err[m] <= worst)) {
         worst = err[m];
-        PetscCall(KFReducerConfigLabel_Private(nrev, p->angles, where, sizeof(where)));
+        PetscCall(KFReducerConfigPlace_Private(nrev, p->angles, where, sizeof(where)));
         PetscCall(PetscStrlcat(where, " (midpoint)", sizeof(where)));
       }
     }
@@ -368,8 +371,8 @@ PetscErrorCode KFReducerCompare_Private(KFReducer r, PetscInt nfull, const Petsc
     PetscCall(KFReducerResultScalar_Private(r, -1, "error_max", worst));
     PetscCall(KFReducerResultScalar_Private(r, -1, "error_estimated", estimated ? 1.0 : 0.0));
     PetscCall(KFReducerResultScalar_Private(r, -1, "target_met", worst <= r->accuracy ? 1.0 : 0.0));
-    PetscCall(KFProgress(comm, "the %s model: max relative H-inf error %.3g at %s deg (target %g)%s", r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? "multi-angle" : "single-angle", (double)worst, where, (double)r->accuracy, estimated ? ", estimated" : ""));
-    if (!(worst <= r->accuracy)) PetscCall(KFReducerNote_Private(r, "the accuracy target %g is not met: the best model found has relative H-inf error %.3g at %s deg; raise -kf_moments_max, loosen the accuracy or narrow the band", (double)r->accuracy, (double)worst, where));
+    PetscCall(KFProgress(comm, "the %s model: max relative H-inf error %.3g %s (target %g)%s", r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? "multi-angle" : "single-angle", (double)worst, where, (double)r->accuracy, estimated ? ", estimated" : ""));
+    if (!(worst <= r->accuracy)) PetscCall(KFReducerNote_Private(r, "the accuracy target %g is not met: the best model found has relative H-inf error %.3g %s; raise -kf_moments_max, loosen the accuracy or narrow the band", (double)r->accuracy, (double)worst, where));
   }
   PetscCall(PetscFree(Ls));
   PetscCall(PetscFree(Lm));

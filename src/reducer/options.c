@@ -243,6 +243,10 @@ static PetscErrorCode KFReducerViewAngles_Private(PetscViewer v, const char what
   char label[128];
 
   PetscFunctionBegin;
+  if (!nrev) { /* a single structure: one configuration, no angle, whichever list this is */
+    PetscCall(PetscViewerASCIIPrintf(v, "configuration: the structure (no revolute joint)\n"));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscViewerASCIIPrintf(v, "%s (deg):", what));
   PetscCall(PetscViewerASCIIUseTabs(v, PETSC_FALSE));
   for (PetscInt c = 0; c < n; c++) {

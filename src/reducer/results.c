@@ -135,16 +135,29 @@ PetscErrorCode KFReducerGetResult(KFReducer r, PetscInt config, const char name[
   SETERRQ(PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "no result '%s' for configuration %" PetscInt_FMT ": KFReducerGetResultNames lists what the solve recorded (see README.md, Results of a reduction)", name, config);
 }
 
-/* "15", "15_30" or "fixed": the configuration's label in progress lines, notes and the Python summary (C's %g,
-   not PETSc's, which would write "15.") */
+/* "15", "15_30" or "structure": the configuration's label in progress lines, notes and the Python summary (C's %g,
+   not PETSc's, which would write "15."); a scene without revolute joints has one configuration, the structure, and
+   no angle */
 PetscErrorCode KFReducerConfigLabel_Private(PetscInt nrev, const PetscReal angles[], char buf[], size_t len)
 {
   size_t used = 0;
 
   PetscFunctionBegin;
   buf[0] = 0;
-  if (!nrev) PetscCall(PetscStrncpy(buf, "fixed", len));
+  if (!nrev) PetscCall(PetscStrncpy(buf, "structure", len));
   for (PetscInt j = 0; j < nrev && used < len; j++) used += (size_t)snprintf(buf + used, len - used, "%s%g", j ? "_" : "", (double)(angles[j] * 180.0 / PETSC_PI));
+  PetscFunctionReturn(0);
+}
+
+/* "at 15 deg" or, without revolute joints, "of the structure": where a sentence places a configuration */
+PetscErrorCode KFReducerConfigPlace_Private(PetscInt nrev, const PetscReal angles[], char buf[], size_t len)
+{
+  char label[128];
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerConfigLabel_Private(nrev, angles, label, sizeof(label)));
+  if (nrev) PetscCall(PetscSNPrintf(buf, len, "at %s deg", label));
+  else PetscCall(PetscStrncpy(buf, "of the structure", len));
   PetscFunctionReturn(0);
 }
 

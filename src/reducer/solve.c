@@ -240,7 +240,8 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
     PetscCall(KFInterruptCheck(comm));
     PetscCall(KFReducerConfigLabel_Private(nrev, cfg->angles, label, sizeof(label)));
-    PetscCall(KFProgress(comm, "configuration %s deg", label));
+    if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
+    else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
     PetscCall(PetscTime(&t0));
     PetscCall(KFSystemSetAngles(sys, cfg->angles));
     PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
@@ -368,7 +369,8 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     char           label[128];
 
     PetscCall(KFReducerConfigLabel_Private(nrev, configs[g].angles, label, sizeof(label)));
-    if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, nkept_g));
+    if (!nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the structure's Krylov model (no revolute joint: one configuration), %" PetscInt_FMT " modes above the importance threshold %g", nkept_g, (double)r->keep_threshold));
+    else if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, nkept_g));
     else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg, named in the scene", label));
     PetscCall(KFProgress(comm, "%s", r->rule));
     PetscCall(PetscTime(&t0));
@@ -565,11 +567,13 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     Mat          Phir;
     PetscReal    rigid_res;
     PetscInt     nheld;
-    char         label[128];
+    char         label[128], place[160];
 
     PetscCall(KFInterruptCheck(comm));
     PetscCall(KFReducerConfigLabel_Private(nrev, configs[i].angles, label, sizeof(label)));
-    PetscCall(KFProgress(comm, "configuration %s deg", label));
+    PetscCall(KFReducerConfigPlace_Private(nrev, configs[i].angles, place, sizeof(place)));
+    if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
+    else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
     PetscCall(PetscTime(&t0));
     PetscCall(KFSystemSetAngles(sys, configs[i].angles));
     PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
@@ -621,7 +625,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
         times[6] += t1 - t0;
       }
     }
-    if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis at %s deg: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", label, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
+    if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis %s: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", place, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
     PetscCall(KFProgress(comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
     PetscCall(KFReducerAddPerf_Private(r, solver));
     PetscCall(KFFlexSolverDestroy(&solver));
@@ -661,7 +665,8 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
 
-  PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
+  if (!nrev) PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g of the structure", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy));
+  else PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
   PetscCall(PetscTime(&t0));
   PetscCall(KFReducerSearch_Private(r, nc, visits, neval, evals, &single, &multi, &nrows, &rows));
   PetscCall(KFReducerSearchShifts_Private(r, sys, &nc, &visits, neval, evals, &single, &multi, &nrows, &rows));
@@ -766,7 +771,9 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", (PetscReal)multi.c));
       PetscCall(PetscFree(ma));
     }
-    PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
+    if (!nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response of the structure is %" PetscInt_FMT " moments%s (%" PetscInt_FMT " reduced dofs)%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], single.c,
+                                       single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction"), single.size, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
+    else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
                            r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction")), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
     PetscCall(KFProgress(comm, "%s", r->rule));
     PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));

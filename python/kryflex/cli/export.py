@@ -15,15 +15,18 @@ MATCH_TOL = 1e-6
 
 def run(argv):
     p = Parser(prog="kryflex export",
-               description="The reduced bodies as floating-frame flexible bodies for multibody codes: the neutral file "
-                           "(NumPy .npz, README 'Multibody export'), and with --format exudyn the Exudyn system built "
-                           "from it and checked against kryflex's reassembly.")
+               description="The reduced bodies for multibody codes: the neutral file (NumPy .npz; each body's reduced "
+                           "matrices, and its floating frame when it has its 6 rigid motions), and with --format exudyn "
+                           "the Exudyn system built from it and checked against kryflex's reassembly: floating-frame "
+                           "bodies and their joints, or, for a structure without joints whose bodies do not all "
+                           "float, its reassembled reduced system as one ObjectGenericODE2.")
     p.add_argument("reduced", help="reduced-model file (.h5) written by 'kryflex reduce'")
     p.add_argument("-o", "--output", required=True, help="the neutral export file to write (.npz)")
     p.add_argument("--format", default="neutral",
                    help="neutral (default): the file only; exudyn: also build the Exudyn system (one "
-                        "ObjectFFRFreducedOrder per body, its joints) and compare its linearized frequencies with "
-                        "kryflex's at each --angle")
+                        "ObjectFFRFreducedOrder per body, its joints; without joints and with a body lacking rigid "
+                        "motions, one ObjectGenericODE2 of the reassembled system) and compare its linearized "
+                        "frequencies with kryflex's at each --angle")
     p.add_argument("--angle", action="append",
                    help="with --format exudyn: angle(s) in degrees, comma-separated for several revolute joints; "
                         "repeat for more configurations (default: 0 for every joint)")
@@ -59,7 +62,15 @@ def run(argv):
                              (ExportError, EXIT_MODEL, lambda e: "%s: cannot export: %s" % (args.reduced, e)),
                              (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
     results = None
-    if args.format == "exudyn":
+    if args.format == "exudyn" and not data.floating and data.joints:
+        body = next(b for b in data.bodies if not b.floating)
+        collective(lambda: _refuse(EXIT_MODEL, "%s: cannot export to Exudyn: %s, and a scene with joints goes to Exudyn "
+                                               "as floating-frame bodies, which need all 6; the neutral file holds it as "
+                                               "reduced (drop --format exudyn)" % (args.reduced, body.why_not_floating())))
+    if args.format == "exudyn" and not data.floating:
+        results = collective(lambda: check_exudyn_system(data),
+                             (ExportError, EXIT_NUMERIC, lambda e: "the Exudyn system: %s" % e))
+    elif args.format == "exudyn":
         angles = args.angles or [[0.0] * len(data.revolute)]
         results = collective(lambda: check_exudyn(model, data, angles),
                              (ExportError, EXIT_NUMERIC, lambda e: "the Exudyn system: %s" % e))
@@ -82,8 +93,15 @@ def run(argv):
     else:
         say("kryflex: exported %d bod%s (%s) of '%s' to %s" % (
             len(data.bodies), "y" if len(data.bodies) == 1 else "ies",
-            ", ".join("%s: 6 rigid + %d flexible" % (b.name, b.nflex) for b in data.bodies), data.scene, path))
-        if data.systems:
+            ", ".join(("%s: 6 rigid + %d flexible" % (b.name, b.nflex)) if b.floating else
+                      ("%s: %d reduced dofs, no floating frame (no rigid %s)" % (b.name, b.M.shape[0],
+                                                                                " ".join(b.missing_rigid)))
+                      for b in data.bodies), data.scene, path))
+        if data.systems and not data.max_frequency_hz:
+            say("  the structure's reassembled reduced system in the file (system0/M, K, B, C, D): %d dofs, highest "
+                "frequency %.4g Hz" % (data.systems[0]["M"].shape[0],
+                                       float(np.max(data.systems[0]["frequencies_hz"], initial=0.0))))
+        elif data.systems:
             say("  trimmed model (modes above %.4g Hz out of the dynamics): its fixed-angle systems at %s deg in the file "
                 "(system<i>/M, K, B, C, D); highest frequency %.4g Hz, stable explicit step %.3g s"
                 % (data.max_frequency_hz, "; ".join(",".join("%g" % a for a in sy["angles_deg"]) for sy in data.systems),
@@ -91,11 +109,38 @@ def run(argv):
                    1.0 / (np.pi * max(float(np.max(sy["frequencies_hz"], initial=1e-300)) for sy in data.systems))))
         for r in results or []:
             say("  %s: %d flexible modes, max relative difference Exudyn vs kryflex %.2g (rigid/mechanism modes: "
-                "Exudyn %d, kryflex %s)" % ("%s deg" % r["angles_deg"] if r["angles_deg"] else "no revolute joint", len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
+                "Exudyn %d, kryflex %s)" % ("%s deg" % r["angles_deg"] if r["angles_deg"] else
+                                            "the structure (ObjectGenericODE2)" if r.get("generic") else
+                                            "no revolute joint", len(r["kryflex_hz"]), r["max_rel_diff"], r["exudyn_zero"],
                                             r["kryflex_rigid"]))
             say("    kryflex (Hz): " + " ".join("%.6g" % x for x in r["kryflex_hz"][:8]))
             say("    Exudyn  (Hz): " + " ".join("%.6g" % x for x in r["exudyn_hz"][:8]))
     return EXIT_OK
+
+
+def _refuse(code, text):
+    raise Failure(code, text)
+
+
+def check_exudyn_system(data):
+    """A structure without joints whose bodies do not all float: its reassembled system (data.systems[0]) as one Exudyn
+    ObjectGenericODE2, whose linearized frequencies must be kryflex's (a one-item list like check_exudyn's)."""
+    from ..export.exudyn import linearized_frequencies
+    from ..export.systems import system_mbs
+    system = data.systems[0]
+    _, mbs, _ = system_mbs(system, lambda t: 0.0)
+    fx, nzero = linearized_frequencies(mbs)
+    fk = np.asarray(system["frequencies_hz"], float)
+    if len(fx) != len(fk):
+        raise Failure(EXIT_NUMERIC, "the Exudyn system has %d flexible modes, kryflex's reassembled one %d: the export "
+                      "does not reproduce the reduced model" % (len(fx), len(fk)))
+    diff = float(np.max(np.abs(fx - fk) / fk)) if len(fk) else 0.0
+    if diff > MATCH_TOL:
+        raise Failure(EXIT_NUMERIC, "Exudyn's linearized frequencies differ from kryflex's by %.2g (relative; at most "
+                      "%g expected)" % (diff, MATCH_TOL))
+    rigid = system.get("rigid_modes")
+    return [dict(angles_deg=[], generic=True, kryflex_hz=fk.tolist(), exudyn_hz=fx.tolist(), max_rel_diff=diff,
+                 exudyn_zero=nzero, kryflex_rigid=rigid)]
 
 
 def check_exudyn(model, data, angles_list):

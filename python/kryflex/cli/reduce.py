@@ -5,6 +5,7 @@ import shutil
 import sys
 
 from . import common
+from ..io.scene_schema import NO_JOINT_LABEL
 from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, EXIT_TARGET, Failure, Parser, collective,
                      from_rank0, rank, say, split_petsc_options)
 
@@ -130,10 +131,6 @@ def run(argv):
             % (measure, worst, at_text(where), s["accuracy"]), sys.stderr)
         return EXIT_TARGET
     return EXIT_OK
-
-
-# the label of the one configuration of a scene without revolute joints (io/scene.py Scene.label)
-NO_JOINT_LABEL = "fixed"
 
 
 def at_text(label):

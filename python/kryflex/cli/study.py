@@ -65,7 +65,8 @@ def run(argv):
                 say("[kryflex study] %s" % msg, sys.stderr)
         study = collective(lambda: Study(scene, args.cmax, args.methods, flags, progress),
                            (ValueError, EXIT_INPUT, str))
-        progress("reference: the full-order verification at %d angle(s)" % len(scene.configurations))
+        progress("reference: the full-order verification at %d angle(s)" % len(scene.configurations)
+                 if scene.revolute else "reference: the full-order verification of the structure (no revolute joint)")
         collective(study.run_reference,
                    (_core.Error, EXIT_NUMERIC, lambda e: "the full-order reference cannot be computed: %s" % e))
         rows = collective(lambda: list(study.sweep()),

@@ -54,6 +54,10 @@ class FloatingBody:
     interface_positions (n x 3); interface_modes (n, 6, f): interface translations and rotations per flexible mode
     input_rigid (6 x a) = R^T G: force and moment about the origin per unit input; input_flex (f x a) = F^T G
     output_rigid (t x 6) = H R, output_flex (t x f) = H F
+
+    A body that lacks some of its 6 rigid motions (clamped, on springs, a plate's uz rx ry nodes, scalar points) has
+    no floating frame: floating is False, missing_rigid names the absent motions, and only the reduced M, K, G, H,
+    iface and C are set (the floating-frame fields are None).
     """
     name: str
     interfaces: list
@@ -62,41 +66,78 @@ class FloatingBody:
     G: np.ndarray
     H: np.ndarray
     iface: np.ndarray
-    rigid_coords: np.ndarray
-    modes: np.ndarray
-    mass_flex: np.ndarray
-    stiffness_flex: np.ndarray
-    mass: float
-    center_of_mass: np.ndarray
-    inertia: np.ndarray
-    interface_positions: np.ndarray
-    interface_modes: np.ndarray
-    input_rigid: np.ndarray
-    input_flex: np.ndarray
-    output_rigid: np.ndarray
-    output_flex: np.ndarray
+    rigid_coords: np.ndarray = None
+    modes: np.ndarray = None
+    mass_flex: np.ndarray = None
+    stiffness_flex: np.ndarray = None
+    mass: float = None
+    center_of_mass: np.ndarray = None
+    inertia: np.ndarray = None
+    interface_positions: np.ndarray = None
+    interface_modes: np.ndarray = None
+    input_rigid: np.ndarray = None
+    input_flex: np.ndarray = None
+    output_rigid: np.ndarray = None
+    output_flex: np.ndarray = None
     # the viscous damping matrix of the reduced body (v x v; zeros when the body has none) and F^T C F (f x f)
     C: np.ndarray = None
     damping_flex: np.ndarray = None
+    floating: bool = True
+    missing_rigid: tuple = ()
 
     def __post_init__(self):
-        v, f = self.M.shape[0], self.modes.shape[1]
+        v = self.M.shape[0]
         if self.C is None:
             self.C = np.zeros((v, v))
+        if not self.floating:
+            return
+        f = self.modes.shape[1]
         if self.damping_flex is None:
             self.damping_flex = self.modes.T @ self.C @ self.modes if f else np.zeros((0, 0))
 
     @property
     def nflex(self):
-        return self.modes.shape[1]
+        """Flexible coordinates of a floating body (0 for a body without a floating frame)."""
+        return self.modes.shape[1] if self.floating else 0
 
     @property
     def frequencies_hz(self):
-        """The body's free-free flexible frequencies (Hz)."""
+        """The body's free-free flexible frequencies (Hz); without a floating frame, those of its reduced (K, M)."""
+        if not self.floating:
+            lam = np.linalg.eigvals(np.linalg.solve(self.M, self.K)).real
+            return np.sqrt(np.maximum(np.sort(lam), 0)) / (2 * np.pi)
         return np.sqrt(np.maximum(np.diag(self.stiffness_flex), 0)) / (2 * np.pi)
+
+    def why_not_floating(self):
+        """Why the body has no floating frame, with the fix (empty for a floating body)."""
+        if self.floating:
+            return ""
+        return ("body '%s' cannot move rigidly along %s (its supports or its dof layout remove them)"
+                % (self.name, " ".join(self.missing_rigid)))
 
 
 RIGID_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
+
+
+def missing_rigid_motions(v, rigid):
+    """The rigid motions (names) a reduced body of v coordinates lacks: all 6 without rigid-body rows (a clamped body,
+    or a model of an older kryflex), else those whose rows are zero (supports, or a dof layout such as uz rx ry)."""
+    if rigid is None or rigid.shape != (v, 6):
+        return RIGID_NAMES
+    scale = max(np.abs(rigid).max(), 1e-300)
+    return tuple(RIGID_NAMES[k] for k in range(6) if np.abs(rigid[:, k]).max() <= 1e-12 * scale)
+
+
+def reduced_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
+    """The export's body: a floating-frame body (floating_body) when the body has its 6 rigid motions, else the reduced
+    body as it is (M, K, G, H, iface, C; floating False, the missing motions named)."""
+    v = M.shape[0]
+    missing = missing_rigid_motions(v, rigid)
+    if not missing:
+        return floating_body(name, interfaces, M, K, G, H, iface=iface, rigid=rigid, C=C)
+    return FloatingBody(name=name, interfaces=list(interfaces), M=0.5 * (M + M.T), K=0.5 * (K + K.T), G=G, H=H,
+                        iface=np.zeros((0, v)) if iface is None else iface,
+                        C=None if C is None else 0.5 * (C + C.T), floating=False, missing_rigid=tuple(missing))
 
 
 def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
@@ -110,8 +151,7 @@ def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
         raise ExportError("body '%s': the reduced model holds no rigid-body rows for it (a clamped body, or a model of an "
                           "older kryflex): a floating-frame body needs its 6 rigid motions; take its matrices with "
                           "'kryflex reassemble -o' instead" % name)
-    scale = max(np.abs(rigid).max(), 1e-300)
-    absent = [RIGID_NAMES[k] for k in range(6) if np.abs(rigid[:, k]).max() <= 1e-12 * scale]
+    absent = missing_rigid_motions(v, rigid)
     if absent:
         raise ExportError("body '%s' cannot move rigidly along %s (its supports or its dof layout remove them): a "
                           "floating-frame body needs all 6 rigid motions; give its nodes all six components, or take "

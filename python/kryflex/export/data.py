@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from .bodies import ExportError, floating_body
+from .bodies import ExportError, reduced_body
 
 
 @dataclasses.dataclass(eq=False)
@@ -14,7 +14,8 @@ class MultibodyExport:
     the child frame's orientation in the parent's at angle 0); revolute joints come first, in the order of the angles.
     inputs, outputs: names; damping: the uniform modal damping ratio the reduction served; scene: the scene's name.
     A trimmed model (reduction.max_frequency): max_frequency_hz, and systems: its trimmed reassembled systems at the
-    model's reduction angles (export/systems.py), which the floating-frame bodies cannot carry."""
+    model's reduction angles (export/systems.py), which the floating-frame bodies cannot carry; a model without joints
+    whose bodies do not all float: systems holds its one reassembled system."""
     scene: str
     bodies: list
     joints: list
@@ -22,7 +23,12 @@ class MultibodyExport:
     outputs: list
     damping: float
     max_frequency_hz: float = 0.0       # the model's trimming limit (0: none), docs/guide/trimming.md
-    systems: list = dataclasses.field(default_factory=list)   # trimmed fixed-angle systems (export/systems.py)
+    systems: list = dataclasses.field(default_factory=list)   # fixed-angle systems (export/systems.py)
+
+    @property
+    def floating(self):
+        """True when every body has a floating frame (its 6 rigid motions)."""
+        return all(b.floating for b in self.bodies)
 
     @property
     def revolute(self):
@@ -36,9 +42,11 @@ class MultibodyExport:
 
 
 def from_model(model, configurations_deg=None):
-    """The MultibodyExport of a kryflex ReducedModel (every body must float: ExportError names the one that cannot);
-    a trimmed model adds its trimmed systems at configurations_deg (default: its reduction angles)."""
-    bodies = [floating_body(name, ifs, **arrays)
+    """The MultibodyExport of a kryflex ReducedModel: each body a floating-frame body when it has its 6 rigid motions,
+    else as reduced (FloatingBody.floating False); a trimmed model adds its trimmed systems at configurations_deg
+    (default: its reduction angles), and a model without joints whose bodies do not all float adds its reassembled
+    system (no angle), which Exudyn takes as one ObjectGenericODE2."""
+    bodies = [reduced_body(name, ifs, **arrays)
               for name, ifs, arrays in zip(model.body_names, model.interfaces, model.bodies)]
     joints = []
     for j in model.joints:
@@ -52,6 +60,9 @@ def from_model(model, configurations_deg=None):
         if configurations_deg is None:
             configurations_deg = [list(np.atleast_1d(c)) for c in model.settings.get("reduction_angles_deg") or []]
         systems = trimmed_systems(model, configurations_deg)
+    elif not joints and not all(b.floating for b in bodies):
+        from .systems import trimmed_systems
+        systems = trimmed_systems(model, [[]])
     return MultibodyExport(scene=model.scene_name, bodies=bodies, joints=joints, inputs=list(model.input_names),
                            outputs=list(model.output_names), damping=float(model.settings.get("damping", 0.0)),
                            max_frequency_hz=limit, systems=systems)

@@ -153,6 +153,11 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
 
     from . import load
     data = load(source)
+    if not data.floating:
+        body = next(b for b in data.bodies if not b.floating)
+        raise ExportError("%s: Exudyn's floating-frame bodies need all 6 rigid motions; a structure without joints goes "
+                          "to Exudyn as its reassembled system (kryflex.export.systems.system_mbs of the export's "
+                          "systems[0], as 'kryflex export --format exudyn' does)" % body.why_not_floating())
     zeta = float(modal_damping)
     if not (np.isfinite(zeta) and zeta >= 0):
         raise ExportError("modal_damping %r: give a damping ratio >= 0" % (modal_damping,))

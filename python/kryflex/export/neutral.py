@@ -13,10 +13,12 @@ FORMAT = "kryflex-multibody"
 VERSION = 1
 NEUTRAL_SUFFIX = ".npz"
 
-# per-body arrays, in the order the README lists them
-BODY_ARRAYS = ("M", "K", "G", "H", "iface", "rigid_coords", "modes", "mass_flex", "stiffness_flex", "mass",
-               "center_of_mass", "inertia", "interface_positions", "interface_modes", "input_rigid", "input_flex",
-               "output_rigid", "output_flex")
+# per-body arrays, in the order the manual lists them: the reduced body's own, then its floating-frame fields (only
+# for a body with its 6 rigid motions: body<i>/floating 1; a body without them has floating 0 and missing_rigid)
+REDUCED_ARRAYS = ("M", "K", "G", "H", "iface")
+FRAME_ARRAYS = ("rigid_coords", "modes", "mass_flex", "stiffness_flex", "mass", "center_of_mass", "inertia",
+                "interface_positions", "interface_modes", "input_rigid", "input_flex", "output_rigid", "output_flex")
+BODY_ARRAYS = REDUCED_ARRAYS + FRAME_ARRAYS
 # per-body arrays a file of an earlier kryflex may lack (read as zeros): the viscous damping matrix and F^T C F
 OPTIONAL_BODY_ARRAYS = ("C", "damping_flex")
 
@@ -46,7 +48,10 @@ def arrays(data):
             out["system%d/%s" % (i, key)] = np.asarray(sysd[key], dtype=float)
     for i, b in enumerate(data.bodies):
         out["body%d/interface_names" % i] = _strings(b.interfaces)
-        for key in BODY_ARRAYS + OPTIONAL_BODY_ARRAYS:
+        out["body%d/floating" % i] = np.array(int(b.floating), dtype=np.int64)
+        out["body%d/missing_rigid" % i] = _strings(b.missing_rigid)
+        keys = BODY_ARRAYS + OPTIONAL_BODY_ARRAYS if b.floating else REDUCED_ARRAYS + ("C",)
+        for key in keys:
             out["body%d/%s" % (i, key)] = np.asarray(getattr(b, key), dtype=float)
     return out
 
@@ -84,10 +89,16 @@ def read_neutral(path):
         try:
             bodies = []
             for i, name in enumerate(z["body_names"]):
-                kw = {key: z["body%d/%s" % (i, key)] for key in BODY_ARRAYS}
+                # files before bodies without a floating frame have no 'floating': every body floats there
+                floating = bool(int(z["body%d/floating" % i])) if "body%d/floating" % i in z.files else True
+                kw = {key: z["body%d/%s" % (i, key)] for key in (BODY_ARRAYS if floating else REDUCED_ARRAYS)}
                 kw.update({key: z["body%d/%s" % (i, key)] for key in OPTIONAL_BODY_ARRAYS
                            if "body%d/%s" % (i, key) in z.files})
-                kw["mass"] = float(kw["mass"])
+                if floating:
+                    kw["mass"] = float(kw["mass"])
+                else:
+                    kw.pop("damping_flex", None)
+                    kw.update(floating=False, missing_rigid=tuple(str(s) for s in z["body%d/missing_rigid" % i]))
                 bodies.append(FloatingBody(name=str(name), interfaces=[str(s) for s in z["body%d/interface_names" % i]],
                                            **kw))
             joints = [dict(name=str(n), type=str(t), parent=int(p), child=int(c), parent_interface=int(pi),

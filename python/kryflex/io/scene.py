@@ -15,6 +15,7 @@ from petsc4py import PETSc
 from .. import _core
 from .._runtime import quiet_progress
 from . import scene_schema as schema
+from .scene_schema import NO_JOINT_LABEL
 from . import yaml_load
 from .scene_schema import (DOF_NAMES, TOP_KEYS, BODY_KEYS, JOINT_KEYS, TERM_KEYS,  # noqa: F401 - the scene's keys
                            REDUCTION_DEFAULTS, VERIFY_DEFAULTS, SceneError)
@@ -443,7 +444,7 @@ class Scene:
 
     @staticmethod
     def label(config):
-        return "_".join("%g" % a for a in config) if config else "fixed"
+        return "_".join("%g" % a for a in config) if config else NO_JOINT_LABEL
 
 
 def scene_from_dict(spec, comm=None, base=None, quiet=None):

@@ -33,6 +33,8 @@ ACCURACY_MEASURES = ("elastic", "total")   # -kf_accuracy_measure: the response 
 BASES = ("krylov", "eigen")
 METHODS = ("auto", "single-angle", "multi-angle")
 FLEX_SOLVERS = ("auto", "monolithic", "bodywise")   # -kf_flex_solver, src/solve/bodywise.c
+# the label of the one configuration of a scene without revolute joints: the structure itself, which has no angle
+NO_JOINT_LABEL = "structure"
 JOINT_TYPES = ("revolute", "fixed")
 
 TOP_KEYS = {"name", "description", "units", "bodies", "joints", "inputs", "outputs", "angles", "band", "damping",

@@ -1,4 +1,5 @@
 """Facts derived from a summary that several report sections and figures share."""
+from ..io.scene_schema import NO_JOINT_LABEL
 from .formatting import MAX_MOMENT_ENTRIES_SHOWN
 from .schema import _get
 
@@ -40,8 +41,19 @@ class _Context:
                     weight[(o, i)] += abs(moments[0][o][i])
         return max(self.entries, key=lambda e: weight[e])
 
+    def no_joint(self, label):
+        """True for the one configuration of a scene without revolute joints: the structure, which has no angle."""
+        angles = self.s.get("angles_deg")
+        if angles is not None and label in self.labels:
+            values = angles[self.labels.index(label)]
+            return isinstance(values, (list, tuple)) and len(values) == 0
+        return label == NO_JOINT_LABEL
+
     def angle(self, label):
-        """'α = 15°' from angles_deg when available (several joints: 'α = (0°, 30°)'), else from the label."""
+        """'α = 15°' from angles_deg when available (several joints: 'α = (0°, 30°)'), else from the label; 'the
+        structure' without revolute joints."""
+        if self.no_joint(label):
+            return "the structure"
         angles = self.s.get("angles_deg")
         if angles is not None:
             values = angles[self.labels.index(label)]
@@ -52,6 +64,8 @@ class _Context:
         return f"α = {label}°"
 
     def short_angle(self, label):
+        if self.no_joint(label):
+            return "the structure"
         text = self.angle(label)[4:]
         return text + " (α_G)" if label == self.label_g else text
 

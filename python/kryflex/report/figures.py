@@ -21,10 +21,11 @@ def plot_file_names(summary):
 
     names = {"bode": {}, "importance": {}}
     for label in c.labels:
+        unit = "" if c.no_joint(label) else "deg"   # bode_15deg_..., bode_structure_... without revolute joints
         for (o, i) in c.entries:
             names["bode"][(label, (o, i))] = unique(
-                f"bode_{safe_name(label)}deg_{safe_name(c.outputs[o])}_{safe_name(c.inputs[i])}.png")
-        names["importance"][label] = unique(f"importance_{safe_name(label)}deg.png")
+                f"bode_{safe_name(label)}{unit}_{safe_name(c.outputs[o])}_{safe_name(c.inputs[i])}.png")
+        names["importance"][label] = unique(f"importance_{safe_name(label)}{unit}.png")
     return names
 
 

@@ -7,7 +7,8 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "kryflex_version": str (opt), "scene": str, "scene_file": str (opt),
  "inputs": [names], "outputs": [names], "joints": [revolute joint names] (opt),
  "angles_deg": [[a1, a2, ..] per configuration, one entry per revolute joint] (opt),
- "angle_labels": ["0", "15", ...]  (file names and table headers; e.g. "0_30" for several joints),
+ "angle_labels": ["0", "15", ...]  (file names and table headers; e.g. "0_30" for several joints; ["structure"]
+                                  for a scene without revolute joints, whose angles_deg is [[]]),
  "band_hz": [f0, f1] (opt), "damping": z (opt), "accuracy": target (opt), "frf_floor_db": dB (opt),
  "settings": {"moments": c, "moments_max", "output_blocks", "importance", "keep_threshold", "cluster_rtol",
               "search", "deflation_tol", "reduction_angles_deg": [[..]], "method"} (opt, any keys shown),

@@ -48,6 +48,12 @@ def _angles_text(config):
     return text if len(values) == 1 else f"({text})"
 
 
+def _no_angles(value):
+    """True for the configurations of a scene without revolute joints: a list of empty angle lists ([[]])."""
+    return isinstance(value, (list, tuple)) and len(value) > 0 and all(
+        isinstance(a, (list, tuple)) and len(a) == 0 for a in value)
+
+
 def _chosen_sentence(c):
     """The chosen model in one sentence: method, moments, kept set, sizes."""
     s, ch = c.s, c.chosen
@@ -56,7 +62,7 @@ def _chosen_sentence(c):
         parts.append(f"c = {ch['moments']} moments")
     if ch.get("method") == "multi-angle" and ch.get("expansion_angles_deg"):
         parts.append("expansion angles " + ", ".join(_angles_text(a) for a in ch["expansion_angles_deg"]))
-    elif s.get("reduction_label") == "fixed" and not s.get("joints"):   # the label of a scene without revolute joints
+    elif c.no_joint(s.get("reduction_label")):
         parts.append("one configuration (no revolute joint)")
     elif s.get("reduction_label") is not None:
         parts.append(f"α_G = {s['reduction_label']}°")
@@ -96,7 +102,8 @@ def _section_accuracy(c):
     lines += [f"Error measure (the verdict): the {s.get('error_definition') or ERROR_TEXT}. "
               + ("It is **estimated** by the a-posteriori estimator (the full-order verification was off: "
                  "`verify.full_order: false`), not measured." if estimated else
-                 "It is **measured** against the full-order model at every angle of interest"
+                 "It is **measured** against the full-order model "
+                 + ("of the structure" if c.no_joint(c.label_g) else "at every angle of interest")
                  + (" and at every midpoint between consecutive ones." if s.get("midpoints") else ".")), ""]
     measure = f"relative H∞ error ({s['accuracy_measure']})" if s.get("accuracy_measure") else "relative H∞ error"
     measure += " (estimated)" if estimated else ""
@@ -106,15 +113,15 @@ def _section_accuracy(c):
         verdict = _verdict(err, accuracy)
         judged += verdict != DASH
         passed += verdict == "PASS"
-        rows.append([_row_name(c, label), "angle of interest", _fmt_error(err),
+        rows.append([_row_name(c, label), "one configuration" if c.no_joint(label) else "angle of interest", _fmt_error(err),
                      _fmt_error(accuracy), verdict])
     for m in s.get("midpoints") or []:
         verdict = _verdict(m.get("frf_error"), accuracy)
         judged += verdict != DASH
         passed += verdict == "PASS"
         rows.append([f"{m['label']}°", "midpoint", _fmt_error(m.get("frf_error")), _fmt_error(accuracy), verdict])
-    lines += [f"Table 7. The {c.model_name}'s {_error_text(s)} against the accuracy target, at the angles of interest "
-              "and the midpoints between them.", "",
+    lines += [f"Table 7. The {c.model_name}'s {_error_text(s)} against the accuracy target, "
+              + ("of the structure." if c.no_joint(c.label_g) else "at the angles of interest and the midpoints between them."), "",
               table(["configuration", "where", measure, "target", "result"], rows, "llrrl"), ""]
     check = s.get("reference_check")
     if check and check.get("error") is not None:
@@ -264,7 +271,9 @@ def _section_scene(c):
     lines += [" ".join(text), ""]
     settings = s.get("settings") or {}
     if settings:
-        lines += [table(["setting", "value"], [(k, fmt_general(v)) for k, v in settings.items()], "ll"), ""]
+        # angles of a scene without revolute joints are empty lists: no row ("[[]]" would read as an angle)
+        lines += [table(["setting", "value"], [(k, fmt_general(v)) for k, v in settings.items()
+                                               if not (k.endswith("_deg") and _no_angles(v))], "ll"), ""]
     return lines
 
 
@@ -351,14 +360,15 @@ def _section_alpha_g(c):
         kept = _kept_numbers(s["krylov"][label])
         rows.append([c.short_angle(label), str(len(kept)), mode_ranges(kept)])
     lines += [table(["configuration", "important modes", "mode numbers"], rows, "lrl"), ""]
-    text = f"The reduction basis is built at α_G: {c.angle(c.label_g)}."
+    text = (f"The reduction basis is built on the structure (no revolute joint: one configuration)."
+            if c.no_joint(c.label_g) else f"The reduction basis is built at α_G: {c.angle(c.label_g)}.")
     if s.get("reduction_rule"):
         text += f" Reason: {s['reduction_rule']}"
         text += "" if text.endswith(".") else "."
     settings = s.get("settings") or {}
     if settings.get("method"):
         text += f" Method: {settings['method']}."
-    if settings.get("reduction_angles_deg"):
+    if settings.get("reduction_angles_deg") and not _no_angles(settings["reduction_angles_deg"]):
         text += f" Reduction angles: {fmt_general(settings['reduction_angles_deg'])} deg."
     lines += [text, ""]
     return lines
@@ -408,7 +418,7 @@ def _section_reduced(c):
         full_sys = _get(s, ("full", "system_dofs"))
         sentence = "Projected body models, degrees of freedom: " + "; ".join(parts) + "."
         if sys_dofs is not None:
-            sentence += f" Reduced system at α_G: {sys_dofs} dofs" + (f" (full {full_sys})." if full_sys else ".")
+            sentence += (" Reduced system" if c.no_joint(c.label_g) else " Reduced system at α_G") + f": {sys_dofs} dofs" + (f" (full {full_sys})." if full_sys else ".")
         lines += [sentence, ""]
     bodies = red.get("body_frequencies_hz") or {}
     if bodies:
@@ -550,7 +560,7 @@ def _mismatch_sentence(c, found, model):
     several = len(c.entries) > 1
     groups = {}          # one group per configuration and I/O entry: "α = 0°, out ← in: k = 0 ratio .., k = 1 .."
     for label, k, entry, r in found[:MAX_MISMATCHES_LISTED]:
-        where = f"α = {c.short_angle(label)}" + (f", {c.entry_name(entry)}" if several else "")
+        where = (c.short_angle(label) if c.no_joint(label) else f"α = {c.short_angle(label)}") + (f", {c.entry_name(entry)}" if several else "")
         groups.setdefault(where, []).append(f"k = {k} ratio {fmt_ratio(r)}")
     text = (f"**The {model} does NOT match the full-order moments exactly** (|ratio − 1| > {RATIO_EXACT_TOL:g}) "
             f"in {len(found)} place(s): "
@@ -613,9 +623,11 @@ def _section_multi(c):
 
 def _section_frf(c, plot_names):
     lines = ["## Frequency responses (cf. Fig. 3)", ""]
-    lines += [f"Full order against the {c.model_name} at every angle of interest. The error plot draws, at each "
+    lines += [f"Full order against the {c.model_name} "
+              + ("of the structure" if c.no_joint(c.label_g) else "at every angle of interest")
+              + ". The error plot draws, at each "
               "frequency, |T_full − T_red| / max_w |T_full| for the worst input/output pair: the peak of each curve "
-              "is that angle's relative H∞ error of Table 7. Phases are unwrapped, the reduced curve drawn within "
+              "is that configuration's relative H∞ error of Table 7. Phases are unwrapped, the reduced curve drawn within "
               "180° of the full one at every frequency.", ""]
     lines += ["![Bode overview](bode_overview.png)", "", "Bode plots, full vs reduced:", ""]
     for label in c.labels:

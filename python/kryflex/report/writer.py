@@ -6,8 +6,10 @@ writes into out_dir (created if needed):
   summary.json                                   every number, exactly as given
   report.md                                      tables in the order of the paper's Tables 1-6 and Fig. 3
   bode_<angle>deg_<output>_<input>.png           full vs reduced, one per configuration and I/O pair
+                                                 (bode_structure_... without revolute joints)
   bode_overview.png                              magnitudes at every configuration (dominant I/O pair)
   importance_<angle>deg.png                      normalized importance of the Krylov modes, kept ones marked
+                                                 (importance_structure.png without revolute joints)
   moment_ratios.png                              |L_full/L_reduced - 1| against k
   frf_error.png                                  pointwise relative FRF error against frequency
 and returns the written paths. Everything is validated first, then rendered into a hidden staging folder inside
@@ -21,6 +23,7 @@ import json
 import os
 
 from ..io.files import Staging
+from ..io.scene_schema import NO_JOINT_LABEL
 from .figures import _render_plots, plot_file_names
 from .schema import _check_json_types, validate_summary
 from .context import _Context
@@ -75,7 +78,9 @@ def write_unverified(summary, out_dir):
              "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
              "frequency comparison against the full order; errors below are estimated. Single-angle model: body sizes "
              + ", ".join(f"{b} {v}" for b, v in (summary.get("reduced", {}).get("dofs_per_body") or {}).items()) + ",",
-             f"reduction angle α_G {summary.get('reduction_label')} deg, kept Krylov modes {summary.get('kept_modes')}.", ""]
+             ("one configuration (no revolute joint)" if summary.get("reduction_label") == NO_JOINT_LABEL
+              else f"reduction angle α_G {summary.get('reduction_label')} deg")
+             + f", kept Krylov modes {summary.get('kept_modes')}.", ""]
     try:
         c = _Context(summary)
     except (KeyError, TypeError, ValueError, IndexError):      # a summary too sparse for the sections below

@@ -315,11 +315,12 @@ def start_label(cand, reducer, scene):
 
 
 def describe(family, c, kept, nexp, start_deg):
-    """'single-angle c = 5, 3 clusters, alpha_G 30 deg' / 'multi-angle c = 2, every mode, 2 angles from 0 deg'."""
+    """'single-angle c = 5, 3 clusters, alpha_G 30 deg' / 'multi-angle c = 2, every mode, 2 angles from 0 deg';
+    'single-angle c = 5, 3 clusters, the structure' without revolute joints (start_deg empty)."""
     what = ("every mode" if kept == -1 else "each body its share" if kept == -2
             else "%d cluster%s" % (kept, "" if kept == 1 else "s"))
     if family in (SINGLE, FAMILIES[SINGLE]):
-        where = "alpha_G %s deg" % start_deg
+        where = "alpha_G %s deg" % start_deg if start_deg else "the structure"   # no revolute joint: no angle
     else:
         where = "%d angles %s" % (nexp, "named" if start_deg == "named" else "from %s deg" % start_deg)
     return "%s c = %d, %s, %s" % (FAMILIES.get(family, family), c, what, where)

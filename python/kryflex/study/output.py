@@ -124,10 +124,13 @@ def markdown(rows, scene_name, accuracy, study, limit=None, sections=()):
     and the whole table."""
     lines = ["# Speed-accuracy study: %s" % scene_name, "",
              "Reference: the full-order verification of the C reducer (%d system dofs, %d rigid/mechanism modes), "
-             "at the angles of interest %s deg, on its frequency grid (%d points at the first angle). Error: %s; "
-             "a run's error is the worst over the angles of interest. Scene accuracy: %g."
-             % (study.full_dofs, study.nrigid, ", ".join(" ".join("%g" % a for a in ang) for ang in study.angles),
-                len(study.grids[0]), study.error_measure, accuracy), ""]
+             "%s, on its frequency grid (%d points%s). Error: %s; %s. Scene accuracy: %g."
+             % (study.full_dofs, study.nrigid,
+                "at the angles of interest %s deg" % ", ".join(" ".join("%g" % a for a in ang) for ang in study.angles)
+                if any(len(ang) for ang in study.angles) else "of the structure (no revolute joint)",
+                len(study.grids[0]), " at the first angle" if any(len(ang) for ang in study.angles) else "",
+                study.error_measure, "a run's error is the worst over the angles of interest"
+                if any(len(ang) for ang in study.angles) else "a run's error is the structure's", accuracy), ""]
     lines += ["| method | best error | at system dofs | smallest meeting %g | its error | its time (s) |" % accuracy,
               "|---|---|---|---|---|---|"]
     for method, (best, small) in best_rows(rows, accuracy).items():

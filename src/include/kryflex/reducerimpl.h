@@ -113,6 +113,7 @@ PETSC_INTERN PetscErrorCode KFReducerResultSet_Private(KFReducer, PetscInt confi
 PETSC_INTERN PetscErrorCode KFReducerResultScalar_Private(KFReducer, PetscInt config, const char name[], PetscReal value);
 PETSC_INTERN PetscErrorCode KFReducerResultsReset_Private(KFReducer);
 PETSC_INTERN PetscErrorCode KFReducerConfigLabel_Private(PetscInt nrev, const PetscReal angles[], char buf[], size_t len);
+PETSC_INTERN PetscErrorCode KFReducerConfigPlace_Private(PetscInt nrev, const PetscReal angles[], char buf[], size_t len);
 PETSC_INTERN PetscErrorCode KFReducerModelSizes_Private(KFReducedModel, char buf[], size_t len);
 PETSC_INTERN PetscErrorCode KFReducerNote_Private(KFReducer, const char fmt[], ...);
 /* the full-order reference of one configuration of interest, for verification */

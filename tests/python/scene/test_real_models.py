@@ -4,6 +4,7 @@ file; what it refuses, in one line, nothing written), reassemble/export/info on 
 the damping defaults. The end-to-end path of docs/guide/real-models.md is test_real_models_guide.py."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -327,8 +328,12 @@ def test_reassemble_and_export_on_two_ranks(reduced, tmp_path):
         assert run(["export", beam, "-o", str(tmp_path / ("e%d.npz" % n))], ranks=n).returncode == 0
     a, b = np.load(tmp_path / "e1.npz"), np.load(tmp_path / "e2.npz")
     assert all(np.array_equal(a[k], b[k]) for k in a.files)
-    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")], ranks=2)
-    assert p.returncode == 5 and "ux uy rz" in one_error(p)
+    plate = str(reduced / "plate" / "reduced.h5")     # no floating frame: the body as reduced, the system for Exudyn
+    for n in (1, 2):
+        p = run(["export", plate, "-o", str(tmp_path / ("p%d.npz" % n)), "--format", "exudyn", "--json"], ranks=n)
+        assert p.returncode == 0, p.stderr
+    a, b = np.load(tmp_path / "p1.npz"), np.load(tmp_path / "p2.npz")
+    assert sorted(a.files) == sorted(b.files) and all(np.array_equal(a[k], b[k]) for k in a.files)
 
 
 @needs_cli
@@ -344,9 +349,90 @@ def test_export_single_structures(reduced, tmp_path):
     C = model.bodies[0]["C"]
     np.testing.assert_allclose(z["body0/C"], 0.5 * (C + C.T), atol=1e-14 * np.abs(C).max())
     assert z["body0/interface_names"].size == 0 and z["body0/iface"].shape == (0, C.shape[0])
-    p = run(["export", str(reduced / "plate" / "reduced.h5"), "-o", str(tmp_path / "p.npz")])
-    assert p.returncode == 5 and "cannot move rigidly along ux uy rz" in one_error(p)
-    assert not (tmp_path / "p.npz").exists()
+    assert int(z["body0/floating"]) == 1 and z["body0/missing_rigid"].size == 0
+
+
+@needs_cli
+@pytest.mark.slow
+def test_export_body_without_rigid_motions(reduced, tmp_path):
+    """The (uz, rx, ry) plate: the neutral file holds its reduced M, K, G, H, C as the model has them (no floating-
+    frame fields, the missing motions named) and its reassembled system; --format exudyn builds that system as one
+    ObjectGenericODE2 whose linearized frequencies are the dense eigenvalues of the reduced (K, M) computed here."""
+    from kryflex.export import read_neutral
+    path = str(reduced / "plate" / "reduced.h5")
+    model = kryflex.ReducedModel.load(path)
+    p = run(["export", path, "-o", str(tmp_path / "p.npz")])
+    assert p.returncode == 0, p.stderr
+    assert "plate: %d reduced dofs, no floating frame (no rigid ux uy rz)" % model.bodies[0]["M"].shape[0] in p.stdout
+    z = np.load(tmp_path / "p.npz")
+    body = model.bodies[0]
+    for key in ("M", "K", "G", "H"):
+        A = body[key]
+        np.testing.assert_allclose(z["body0/" + key], 0.5 * (A + A.T) if key in "MK" else A, rtol=0,
+                                   atol=1e-15 * np.abs(A).max())
+    assert int(z["body0/floating"]) == 0 and list(z["body0/missing_rigid"]) == ["ux", "uy", "rz"]
+    assert "body0/rigid_coords" not in z.files and "body0/modes" not in z.files
+    s = model.at([])
+    assert int(z["nsystems"]) == 1 and z["system0/angles_deg"].size == 0
+    for key in ("M", "K", "B", "C"):
+        np.testing.assert_array_equal(z["system0/" + key], getattr(s, key))
+    back = read_neutral(str(tmp_path / "p.npz"))
+    assert not back.floating and back.bodies[0].missing_rigid == ("ux", "uy", "rz")
+    np.testing.assert_array_equal(back.bodies[0].K, z["body0/K"])
+    from kryflex.export import ExportError
+    from kryflex.export.exudyn import build_mbs
+    with pytest.raises(ExportError, match="body 'plate' cannot move rigidly along ux uy rz.*system_mbs"):
+        build_mbs(back, [])                  # floating-frame bodies only: the system path is named
+    # Exudyn: the reassembled system, its frequencies against a dense eigensolve of the file's system
+    p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn", "--json"])
+    assert p.returncode == 0, p.stderr
+    check = json.loads(p.stdout)["check"][0]
+    lam = sl.eigh(z["system0/K"], z["system0/M"], eigvals_only=True)
+    top = np.abs(lam).max()
+    dense = np.sqrt(lam[lam > 1e-10 * top]) / (2 * np.pi)
+    assert check["exudyn_zero"] == 3 == int(np.sum(np.abs(lam) <= 1e-10 * top))
+    np.testing.assert_allclose(check["exudyn_hz"], dense, rtol=1e-8)
+    assert check["max_rel_diff"] <= 1e-6
+
+
+def jointed_clamped_spec():
+    """The grounded arm of bc_models with its post clamped at the base instead of its pivot: a scene with a revolute
+    joint (the elbow) and a body without rigid motions."""
+    from bc_models import grounded_arm
+    spec = grounded_arm()
+    spec["name"] = "clamped_arm"
+    del spec["joints"]["pivot"]
+    spec["bodies"]["post"]["constraints"] = [{"node": 1, "dofs": "123456"}]
+    spec["angles"] = [0.0, 40.0]
+    spec["accuracy"] = 0.05
+    return spec
+
+
+@pytest.mark.slow
+@pytest.mark.mpi
+def test_export_jointed_scene_with_a_clamped_body(tmp_path):
+    """Neutral: the clamped post as reduced, the arm as a floating-frame body, the joint; Exudyn (floating-frame bodies
+    and joints) refuses in one line naming the body, exit 5, nothing written."""
+    from kryflex.export import from_model, read_neutral, write_neutral
+    model = kryflex.Reducer(kryflex.scene_from_dict(jointed_clamped_spec(), quiet=True), quiet=True).reduce().model
+    path = str(tmp_path / "m.h5")
+    model.save(path)
+    data = from_model(model)
+    post, arm = data.bodies
+    assert not post.floating and post.missing_rigid == ("ux", "uy", "uz", "rx", "ry", "rz") and arm.floating
+    assert data.systems == []          # a jointed scene: no fixed-angle system added
+    write_neutral(data, str(tmp_path / "n.npz"))
+    back = read_neutral(str(tmp_path / "n.npz"))
+    assert [b.floating for b in back.bodies] == [False, True] and back.revolute == ["elbow"]
+    np.testing.assert_allclose(back.bodies[1].modes, arm.modes)
+    if os.path.exists(KRYFLEX):
+        for ranks in (1, 2):          # every rank exits 5, one error line
+            p = run(["export", path, "-o", str(tmp_path / "x.npz"), "--format", "exudyn"], ranks=ranks)
+            assert p.returncode == 5
+            line = one_error(p)
+            assert "body 'post' cannot move rigidly along ux uy uz rx ry rz" in line and "drop --format exudyn" in line
+            assert not (tmp_path / "x.npz").exists()
+        assert run(["export", path, "-o", str(tmp_path / "y.npz")]).returncode == 0
 
 
 @needs_cli
@@ -359,6 +445,66 @@ def test_reduce_texts_and_damping_defaults(reduced):
     assert beam["model_check"]["findings"] == []
     p = run(["info", os.path.join(EXAMPLE, "plate.yaml"), "-quiet"])
     assert "3 rigid-body and mechanism modes" in p.stdout and "fixed" not in p.stdout
+
+
+def json_strings(value):
+    """Every string of a JSON document, keys and values."""
+    if isinstance(value, dict):
+        return [t for k, v in value.items() for t in [k] + json_strings(v)]
+    if isinstance(value, list):
+        return [t for v in value for t in json_strings(v)]
+    return [value] if isinstance(value, str) else []
+
+
+NO_ANGLE = ("fixed", "alpha = ()", "α = ()", "α_G = (", "alpha_G =", "[[]]", "angle of interest", "angles of interest")
+
+
+@needs_cli
+@pytest.mark.slow
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+def test_single_structure_is_never_an_angle(tmp_path, ranks):
+    """A reduce of a scene without revolute joints speaks of the structure: no 'fixed deg', 'alpha = ()' nor a 'deg'
+    of an angle that does not exist, in the progress and last lines, report.md, summary.json's texts and file names."""
+    out = tmp_path / "plate"
+    p = run(["reduce", os.path.join(EXAMPLE, "plate.yaml"), "-o", str(out), "-kf_reducer_view", "-kf_model_view"],
+            ranks=ranks)
+    assert p.returncode == 0, p.stderr
+    assert "the structure (no revolute joint)" in p.stdout and "reference check of the structure:" in p.stdout
+    assert "configuration: the structure" in p.stdout and "reduction configuration: the structure" in p.stdout
+    assert "the single-angle model: max relative H-inf error" in p.stdout
+    report = (out / "report.md").read_text(encoding="utf-8")
+    summary = json.load(open(out / "summary.json"))
+    # (the model view's settings dump 'reduction_angles_deg = [[]]' is a stored field, as in summary.json)
+    texts = [line for line in (p.stdout + p.stderr).splitlines() if "timings" not in line and "_deg = " not in line]
+    # report.md: "deg" stays legal as a phase unit of a plot axis only, which the markdown does not name
+    texts += report.splitlines()
+    texts += [t for t in json_strings(summary) if not t.endswith("_deg")]   # key names such as angles_deg are fields
+    texts += os.listdir(out)
+    for bad in NO_ANGLE:
+        hits = [t for t in texts if bad in t]
+        assert not hits, (bad, hits[:3])
+    # "degrees of freedom" is no angle, nor the phase plots' "within 180°"
+    hits = [t for t in texts if re.search(r"\bdeg\b|\ddeg|(?<!180)°", t)]
+    assert not hits, hits[:3]
+    assert summary["angle_labels"] == ["structure"] and summary["angles_deg"] == [[]]
+    assert {"bode_structure_corner_uz_tip_force.png", "importance_structure.png"} <= set(os.listdir(out))
+    assert "Configurations: the structure." in report
+
+
+@needs_cli
+@pytest.mark.slow
+def test_jointed_scene_keeps_its_angle_texts(reduced):
+    """With a revolute joint the texts are today's: angles in degrees, alpha_G, file names per angle."""
+    out = reduced / "galileo"
+    summary = json.load(open(out / "summary.json"))
+    labels = summary["angle_labels"]
+    assert "structure" not in labels
+    assert summary["reduction_rule"].startswith("alpha_G = %s deg" % summary["reduction_label"])
+    names = os.listdir(out)
+    assert all(("importance_%sdeg.png" % label) in names for label in labels)
+    assert any(n.startswith("bode_%sdeg_" % labels[0]) for n in names)
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "Configurations: α = " in report and "The reduction basis is built at α_G: α = " in report
 
 
 def test_damping_zero_and_defaults():

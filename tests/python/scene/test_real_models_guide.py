@@ -95,7 +95,7 @@ def test_single_structure(guide_run):
     info = run_of(runs, "kryflex info plate.yaml")["out"]
     assert "3 rigid-body and mechanism modes" in info and "fixed" not in info
     last = run_of(runs, "kryflex reduce plate.yaml")["out"]
-    assert "alpha_G" not in last and "fixed deg" not in last
+    assert "alpha_G" not in last and "fixed deg" not in last and " deg" not in last
     # the reassembled matrices against the dense full model: the reduced frequencies are Ritz values of (K, M) above
     # the exact ones, and the lowest flexible one is matched closely
     K, M, _ = plate_matrices(work)
@@ -106,8 +106,38 @@ def test_single_structure(guide_run):
     assert np.sum(red < 1e-2) == 3 and np.sum(exact < 1e-2) == 3
     assert abs(red[3] / exact[3] - 1) < 1e-6
     assert np.all(red[3:] >= exact[3:len(red)] * (1 - 1e-9))
-    refused = run_of(runs, "kryflex export out/plate/reduced.h5")["err"]
-    assert "ux uy rz" in refused and "reassemble -o" in refused
+    # export: the plate (no ux, uy, rz) as reduced, with the reassembled system that reassemble -o wrote too
+    e = np.load(os.path.join(work, "out", "plate.npz"))
+    assert int(e["body0/floating"]) == 0 and list(e["body0/missing_rigid"]) == ["ux", "uy", "rz"]
+    for key in ("M", "K", "G", "H"):
+        np.testing.assert_allclose(e["system0/" + key.replace("G", "B").replace("H", "C")], z[key + "_none"],
+                                   rtol=0, atol=1e-14 * np.abs(z[key + "_none"]).max())
+    out = run_of(runs, "kryflex export out/plate/reduced.h5 -o out/plate_exudyn.npz --format exudyn")["out"]
+    assert "the structure (ObjectGenericODE2): %d flexible modes" % (len(red) - 3) in out and "Exudyn 3, kryflex 3" in out
+
+
+def test_single_structure_study_speaks_of_the_structure(guide_run):
+    """kryflex study on the plate (no revolute joint): its study.md names the structure, never an angle."""
+    work, _ = guide_run
+    text = open(os.path.join(work, "out", "study", "study.md"), encoding="utf-8").read()
+    assert "of the structure (no revolute joint)" in text and "the structure" in text
+    # (the join's key list names "alpha_G or first expansion angle" as a column: a definition, no angle)
+    assert not re.search(r"\bdeg\b|alpha_G [^o]|angles of interest", text), re.findall(r".{60}\bdeg\b.{20}", text)[:3]
+
+
+def test_matlab_beam_exports_its_system(guide_run):
+    """The clamped scalar-point beam of beam.mat: no rigid motion, its reassembled system in the file; the lowest
+    frequency of that system against a dense eigensolve of the .mat file's own M and K."""
+    work, runs = guide_run
+    out = run_of(runs, "kryflex export out/beam_mat/reduced.h5")["out"]
+    assert "no floating frame (no rigid ux uy uz rx ry rz)" in out and "max relative difference Exudyn vs kryflex" in out
+    e = np.load(os.path.join(work, "out", "beam_mat.npz"))
+    assert int(e["body0/floating"]) == 0 and e["body0/missing_rigid"].size == 6 and int(e["nsystems"]) == 1
+    mat = scipy.io.loadmat(os.path.join(work, "beam.mat"))
+    K, M = (mat[k].toarray() if hasattr(mat[k], "toarray") else mat[k] for k in ("K", "M"))
+    exact = sl.eigh(K, M, eigvals_only=True)
+    red = sl.eigh(e["system0/K"], e["system0/M"], eigvals_only=True)
+    assert abs(red[0] / exact[0] - 1) < 1e-8 and np.all(red >= exact[:len(red)] * (1 - 1e-9))
 
 
 def test_export_keeps_the_damping_matrix(guide_run):

@@ -233,7 +233,9 @@ def test_constraint_rank_and_numpy_reassembly(case):
         cond = np.linalg.cond(Kn - w ** 2 * Mn)
         scale = np.linalg.norm(Hn, 2) * np.linalg.norm(np.linalg.solve(Kn - w ** 2 * Mn, Gn), 2)
         assert np.linalg.norm(T - Tn) <= 1e3 * np.finfo(float).eps * cond * scale, a
-        assert np.linalg.norm(T - Tn) <= 1e-6 * np.linalg.norm(Tn), a      # and far below what a wrong map gives
+        # and far below what a wrong map gives (O(1)); the rounding itself is bounded just above: Galileo's elastic-
+        # measure model at 60 deg (kHz static-correction modes beside a 0.11 Hz mode) measured 2.3e-6 of |T|
+        assert np.linalg.norm(T - Tn) <= 1e-4 * np.linalg.norm(Tn), a
     print("%s: constraint rank %d, sigma ratio %.3g" % (case.name, rank, ratio))
 
 

@@ -183,7 +183,7 @@ def test_multi_angle_reduction_same_model(scenes):
     """The frame reduced by the multi-angle recipe (its configurations and midpoints, full verification) with each
     solve: the same kept modes and reduced size, the same lowest frequencies at any angle, the same full-order
     references, and FRF errors equal to the rounding floor at which both models match the full one (error_max of
-    either is ~1e-10: their difference is measured absolutely). The reduced model's highest frequencies (beyond the
+    either is ~1e-7 on the elastic measure: their difference is measured absolutely). The reduced model's highest frequencies (beyond the
     band, ~1 kHz for a 10 Hz band) are set by the last Krylov directions and move by ~1e-5 with rounding in any
     solve: they are not compared."""
     mono, body = reduce_with(scenes["frames"], "monolithic"), reduce_with(scenes["frames"], "bodywise")
@@ -202,7 +202,9 @@ def test_multi_angle_reduction_same_model(scenes):
         a, b = numbers(sm[key]), numbers(sb[key])
         assert len(a) == len(b) > 0, key
         assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
-    assert sm["error_max"] <= 1e-8 and sb["error_max"] <= 1e-8
+    # both at the rounding floor: on the elastic measure (the elastic peak, ~1e-2 of the total here, divides it)
+    # measured 9.2e-8
+    assert sm["error_max"] <= 1e-6 and sb["error_max"] <= 1e-6
     print("error_max monolithic %.2e, body-wise %.2e" % (sm["error_max"], sb["error_max"]))
 
 

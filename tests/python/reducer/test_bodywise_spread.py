@@ -46,7 +46,9 @@ def probe(path, angles, ranks, out, spread=True):
 def reduce_cli(path, ranks, out, *opts):
     p = subprocess.run(["mpiexec", "-n", str(ranks), KRYFLEX_CMD, "reduce", path, "-o", str(out), *opts],
                        capture_output=True, text=True, env=ENV, timeout=600)
-    assert p.returncode == 0, p.stdout + p.stderr
+    # 6: the paper's fixed recipe (-kf_search false) may miss the elastic accuracy target; its model is written all
+    # the same, and what these tests check is where the bodies were factored, not the verdict
+    assert p.returncode in (0, 6), p.stdout + p.stderr
     return p.stdout + p.stderr
 
 

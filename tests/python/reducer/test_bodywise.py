@@ -202,7 +202,7 @@ def test_multi_angle_reduction_same_model(scenes):
         a, b = numbers(sm[key]), numbers(sb[key])
         assert len(a) == len(b) > 0, key
         assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
-    # both at the rounding floor: on the elastic measure (the elastic peak, ~1e-2 of the total here, divides it)
+    # both at the rounding floor: on the elastic measure (the elastic peak, below the total one, divides it)
     # measured 9.2e-8
     assert sm["error_max"] <= 1e-6 and sb["error_max"] <= 1e-6
     print("error_max monolithic %.2e, body-wise %.2e" % (sm["error_max"], sb["error_max"]))

@@ -59,6 +59,41 @@ static PetscErrorCode KFSearchTableAppend(PetscInt *nrows, PetscReal **rows, con
   PetscFunctionReturn(0);
 }
 
+/* The rest of a visit at v0's angles once its basis V is made: the basis' size and health, its projected pencil and
+   eigenpairs (the Gram matrix info->gram, freed here), and copies of the configuration's rigid modes and body maps.
+   The caller sets the basis' blocks. */
+static PetscErrorCode KFShiftVisitProject(KFReducer r, KFSystem sys, const KFVisit *v0, BV V, KFKrylovInfo *info, Mat Phir, Mat P[], KFVisit *v)
+{
+  PetscInt   nb, nrev, nrev1, a, t, l, k, n;
+  PetscReal *Mr, *Kr;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, &t));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(BVGetActiveColumns(V, &l, &k));
+  n                       = k - l;
+  v->basis.size           = n;
+  v->basis.data           = V;
+  v->basis.ndeflated      = info->ndeflated;
+  v->basis.rigid_content  = info->rigid_content;
+  v->basis.orthogonality  = info->orthogonality;
+  v->basis.gram_condition = (PetscReal)NAN;
+  PetscCall(PetscMalloc4(n, &v->basis.lambda, n * n, &v->basis.Phi, n * a, &v->basis.Gr, t * n, &v->basis.Hr));
+  PetscCall(PetscMalloc2(n * n, &Mr, n * n, &Kr));
+  PetscCall(KFSystemProjectGram_Private(sys, V, info->gram, Mr, Kr, v->basis.Gr, v->basis.Hr));
+  PetscCall(PetscFree(info->gram));
+  PetscCall(KFDenseEig(n, Kr, Mr, v->basis.lambda, v->basis.Phi));
+  v->basis.Kr = Kr;
+  v->basis.Mr = Mr;
+  PetscCall(PetscMalloc1(nrev1, &v->angles));
+  PetscCall(PetscArraycpy(v->angles, v0->angles, nrev1));
+  v->interest = -1; /* not an angle the search expands at by itself */
+  PetscCall(MatDuplicate(Phir, MAT_COPY_VALUES, &v->Phir));
+  PetscCall(PetscMalloc1(nb, &v->P));
+  for (PetscInt b = 0; b < nb; b++) PetscCall(MatDuplicate(P[b], MAT_COPY_VALUES, &v->P[b]));
+  PetscFunctionReturn(0);
+}
+
 /* The visit of the point sigma at the angles of visit v0: its factorization, its Krylov blocks (input and output
    chains interleaved as at zero), their projected pencil. The system is reassembled at v0's angles. */
 static PetscErrorCode KFShiftVisitCreate(KFReducer r, KFSystem sys, const KFVisit *v0, PetscReal sigma, KFVisit *v)
@@ -66,14 +101,11 @@ static PetscErrorCode KFShiftVisitCreate(KFReducer r, KFSystem sys, const KFVisi
   KFFlexSolver solver;
   KFKrylovInfo info;
   BV           V;
-  PetscInt     nb, nrev, nrev1, a, t, l, k, c, nout, nin;
-  PetscReal   *Mr, *Kr;
+  PetscInt     nout, nin;
   Mat          Phir;
   PetscReal    rigid_res;
 
   PetscFunctionBegin;
-  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, &t));
-  nrev1 = PetscMax(nrev, 1);
   PetscCall(PetscMemzero(v, sizeof(*v)));
   PetscCall(KFSystemSetAngles(sys, v0->angles));
   PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
@@ -84,29 +116,9 @@ static PetscErrorCode KFShiftVisitCreate(KFReducer r, KFSystem sys, const KFVisi
   nin  = r->shift_blocks - nout;
   PetscCall(PetscMemzero(&info, sizeof(info)));
   PetscCall(KFKrylovBasisWithInfo(solver, nin, nout, r->deflation_tol, &V, &info));
-  v->basis.ndeflated      = info.ndeflated;
-  v->basis.nblocks        = info.nblocks;
-  v->basis.block_end      = info.block_end; /* the visit owns it now */
-  v->basis.rigid_content  = info.rigid_content;
-  v->basis.orthogonality  = info.orthogonality;
-  v->basis.gram_condition = (PetscReal)NAN;
-  PetscCall(BVGetActiveColumns(V, &l, &k));
-  c               = k - l;
-  v->basis.size = c;
-  v->basis.data = V;
-  PetscCall(PetscMalloc4(c, &v->basis.lambda, c * c, &v->basis.Phi, c * a, &v->basis.Gr, t * c, &v->basis.Hr));
-  PetscCall(PetscMalloc2(c * c, &Mr, c * c, &Kr));
-  PetscCall(KFSystemProjectGram_Private(sys, V, info.gram, Mr, Kr, v->basis.Gr, v->basis.Hr));
-  PetscCall(PetscFree(info.gram));
-  PetscCall(KFDenseEig(c, Kr, Mr, v->basis.lambda, v->basis.Phi));
-  v->basis.Kr = Kr;
-  v->basis.Mr = Mr;
-  PetscCall(PetscMalloc1(nrev1, &v->angles));
-  PetscCall(PetscArraycpy(v->angles, v0->angles, nrev1));
-  v->interest = -1; /* not an angle the search expands at by itself */
-  PetscCall(MatDuplicate(Phir, MAT_COPY_VALUES, &v->Phir));
-  PetscCall(PetscMalloc1(nb, &v->P));
-  for (PetscInt b = 0; b < nb; b++) PetscCall(MatDuplicate(sys->P[b], MAT_COPY_VALUES, &v->P[b]));
+  v->basis.nblocks   = info.nblocks;
+  v->basis.block_end = info.block_end; /* the visit owns it now */
+  PetscCall(KFShiftVisitProject(r, sys, v0, V, &info, Phir, sys->P, v));
   if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov blocks at the expansion point %.6g Hz: rigid content %.2e, loss of M-orthogonality %.2e", (double)(PetscSqrtReal(sigma) / (2 * PETSC_PI)), (double)v->basis.rigid_content, (double)v->basis.orthogonality));
   PetscCall(KFReducerAddPerf_Private(r, solver));
   PetscCall(KFFlexSolverDestroy(&solver));
@@ -180,13 +192,11 @@ static PetscErrorCode KFMergedVisitCreate(KFReducer r, KFSystem sys, KFVisit vis
   const KFVisit *v0 = &visits[i0];
   KFKrylovInfo   info;
   BV             Vs[KF_MAX_EXPANSION + 1], V;
-  PetscInt       m[KF_MAX_EXPANSION + 1], nb, nrev, nrev1, a, t, l, k, n;
-  PetscReal     *Mr, *Kr, rigid_res;
+  PetscInt       m[KF_MAX_EXPANSION + 1];
+  PetscReal      rigid_res;
   Mat            Phir;
 
   PetscFunctionBegin;
-  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, &t));
-  nrev1 = PetscMax(nrev, 1);
   PetscCall(PetscMemzero(v, sizeof(*v)));
   PetscCall(KFSystemSetAngles(sys, v0->angles));
   PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
@@ -197,30 +207,10 @@ static PetscErrorCode KFMergedVisitCreate(KFReducer r, KFSystem sys, KFVisit vis
     m[i + 1]  = visits[pts[i]].basis.size;
   }
   PetscCall(KFKrylovBasisMerge_Private(sys, npts + 1, Vs, m, r->deflation_tol, &V, &info));
-  PetscCall(BVGetActiveColumns(V, &l, &k));
-  n                       = k - l;
-  v->basis.size           = n;
-  v->basis.data           = V;
-  v->basis.ndeflated      = info.ndeflated;
-  v->basis.rigid_content  = info.rigid_content;
-  v->basis.orthogonality  = info.orthogonality;
-  v->basis.gram_condition = (PetscReal)NAN;
-  v->basis.nblocks        = PetscMax(c, 1);
+  PetscCall(KFShiftVisitProject(r, sys, v0, V, &info, v0->Phir, v0->P, v));
+  v->basis.nblocks = PetscMax(c, 1);
   PetscCall(PetscMalloc1(v->basis.nblocks, &v->basis.block_end));
-  for (PetscInt b = 0; b < v->basis.nblocks; b++) v->basis.block_end[b] = n;
-  PetscCall(PetscMalloc4(n, &v->basis.lambda, n * n, &v->basis.Phi, n * a, &v->basis.Gr, t * n, &v->basis.Hr));
-  PetscCall(PetscMalloc2(n * n, &Mr, n * n, &Kr));
-  PetscCall(KFSystemProjectGram_Private(sys, V, info.gram, Mr, Kr, v->basis.Gr, v->basis.Hr));
-  PetscCall(PetscFree(info.gram));
-  PetscCall(KFDenseEig(n, Kr, Mr, v->basis.lambda, v->basis.Phi));
-  v->basis.Kr = Kr;
-  v->basis.Mr = Mr;
-  PetscCall(PetscMalloc1(nrev1, &v->angles));
-  PetscCall(PetscArraycpy(v->angles, v0->angles, nrev1));
-  v->interest = -1;
-  PetscCall(MatDuplicate(v0->Phir, MAT_COPY_VALUES, &v->Phir));
-  PetscCall(PetscMalloc1(nb, &v->P));
-  for (PetscInt b = 0; b < nb; b++) PetscCall(MatDuplicate(v0->P[b], MAT_COPY_VALUES, &v->P[b]));
+  for (PetscInt b = 0; b < v->basis.nblocks; b++) v->basis.block_end[b] = v->basis.size;
   PetscFunctionReturn(0);
 }
 

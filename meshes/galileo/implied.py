@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""What Lee's tables imply for any 28-dof model of the paper's topology, independently of a fit.
+
+    /usr/bin/python3 meshes/galileo/implied.py            # both analyses, as Markdown (README.md quotes them)
+
+1. How many system modes a mass layout allows below a frequency (Table 1's system column needs ten flexible
+   modes at or below 9.2953 Hz, from components with six). Holding both bodies' bearing nodes still is 7 more
+   constraints on the 28-dof system (the 5 shared dofs, and rz of each side); what is left is the stator with its
+   bearing clamped beside the rotor with its hub clamped. By Cauchy interlacing, lambda_k(system) <= lambda_k(clamped)
+   <= lambda_(k+7)(system), so the system has at most N_c(f) flexible modes below f, N_c(f) the clamped bodies'
+   count. Each body is an interface node (bearing or hub) and the rest (point A; the five tips): its stiffness
+   depends only on the rest's motion relative to the interface's rigid motion, d = u_rest - X u_interface, so the
+   free-free flexible eigenvalues are those of (k, S) with S = (M_rest^-1 + X M_interface^-1 X^T)^-1 (the interface's
+   motion eliminated), the clamped ones those of (k, M_rest). By Courant-Fischer the j-th clamped eigenvalue is at
+   least mu lambda_j(free), mu = min eig(S, M_rest) = 1 / (1 + max eig(M_rest X M_interface^-1 X^T)). So Table 1's
+   component frequencies and the masses alone bound the count: whatever the mode shapes (the fit's other 120
+   unknowns). mu falls as the rest gets heavier and the interface lighter, so over a band of factors on every mass
+   and inertia the lowest mu is at the corner (interface masses / band, the rest's x band).
+2. What Table 5 says about the lowest mode the input and output see: for large k, L^k ~ r1 / lambda1^(k+1), so
+   lambda1 = L^8 / L^9 and r1 = L^9 lambda1^10 at each angle.
+"""
+import os
+import sys
+
+import numpy as np
+import scipy.linalg as sl
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import generate as g  # noqa: E402
+import fit  # noqa: E402
+
+BAND_TOP = max(g.PAPER_SYSTEM_HZ[:fit.LOW])   # 9.2953 Hz: Table 1's tenth flexible system mode
+
+
+def clamped_ratio(M, table, band):
+    """mu = min eig(S, M_rest) for the body (M, table) with every lumped mass and inertia at the corner of the band
+    that makes it smallest (interface node / band, the rest x band)."""
+    R = g.rigid_modes(table)
+    X = R[6:] @ np.linalg.inv(R[:6])          # the rest's rigid motion when the interface node moves
+    Mi, Mo = M[:6, :6] / band, M[6:, 6:] * band
+    top = sl.eigh(X @ np.linalg.solve(Mi, X.T), np.linalg.inv(Mo), eigvals_only=True).max()
+    return 1.0 / (1.0 + top)
+
+
+def mode_count_bound(band, top=BAND_TOP):
+    """(bound on the system's flexible modes at or below top, stator floors Hz, rotor floors Hz): the clamped
+    floors f_j sqrt(mu) of Table 1's component frequencies at the band's worst corner."""
+    Ms, _, ts = g.build_stator()
+    Mr, _, tr = g.build_rotor()
+    fs = np.asarray(g.PAPER_STATOR_HZ) * np.sqrt(clamped_ratio(Ms, ts, band))
+    fr = np.asarray(g.PAPER_ROTOR_HZ) * np.sqrt(clamped_ratio(Mr, tr, band))
+    return int((fs <= top).sum() + (fr <= top).sum()), fs, fr
+
+
+def least_band(need=fit.LOW, top=BAND_TOP):
+    """The smallest band (factor on every mass and inertia of the layout) whose bound allows need modes at or
+    below top (bisection on log band; the bound's count rises with the band)."""
+    lo, hi = 1.0, 1e3
+    for _ in range(60):
+        mid = np.sqrt(lo * hi)
+        lo, hi = (lo, mid) if mode_count_bound(mid, top)[0] >= need else (mid, hi)
+    return hi
+
+
+def table5_lowest_mode():
+    """Rows (angle, lambda1, f1 Hz, r1, r1/lambda1 over L^0, r1/lambda1^2 over L^1) from Table 5's L^8, L^9."""
+    rows = []
+    for j, a in enumerate(fit.ANGLES):
+        L = fit.MOMENTS[:, j]
+        if abs(L[9]) <= fit.MOMENT_FLOOR[9, j]:
+            rows.append((a, None, None, None, None, None))
+            continue
+        lam = L[8] / L[9]
+        r = L[9] * lam ** 10
+        rows.append((a, lam, np.sqrt(lam) / (2 * np.pi), r, r / lam / L[0], r / lam ** 2 / L[1]))
+    return rows
+
+
+def main():
+    print(f"Modes at or below {BAND_TOP} Hz that a layout allows (Table 1 needs {fit.LOW}):\n")
+    print("| band | bound | stator's clamped floors (Hz) | rotor's, above its sixth (Hz) |")
+    print("|---|---|---|---|")
+    for band in (1, 1.5, 2, 3, 4, 5, 10):
+        n, fs, fr = mode_count_bound(band)
+        print(f"| {band:g} | {n} | " + ", ".join(f"{v:.3g}" for v in fs) + " | "
+              + ", ".join(f"{v:.3g}" for v in fr[6:9]) + ", ... |")
+    print(f"\nleast band that allows {fit.LOW}: {least_band():.3f}\n")
+    print("| α | λ₁ = L⁸/L⁹ (rad²/s²) | f₁ (Hz) | r₁ = L⁹ λ₁¹⁰ | mode 1's share of L⁰ | of L¹ |")
+    print("|---|---|---|---|---|---|")
+    for a, lam, f, r, s0, s1 in table5_lowest_mode():
+        if lam is None:
+            lam1 = (2 * np.pi * g.PAPER_SYSTEM_HZ[0]) ** 2      # Table 1's first mode at 0 deg
+            print(f"| {a:g}° | - | ({g.PAPER_SYSTEM_HZ[0]}, Table 1) | below {fit.MOMENT_FLOOR[9, 0] * lam1 ** 10:.2g} "
+                  "| - | - |")
+        else:
+            print(f"| {a:g}° | {lam:.5f} | {f:.5f} | {r:.4e} | {s0:+.3f} | {s1:+.4f} |")
+
+
+if __name__ == "__main__":
+    main()

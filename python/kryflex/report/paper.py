@@ -61,11 +61,10 @@ def _table1(p):
     outside = [(k, a, b) for k, a, b in pairs if abs(a / b - 1) > MATCH]
     if outside:
         text += (" **Differs:** modes " + ", ".join(str(k + rigid + 1) for k, _, _ in outside)
-                 + ". Why: the paper gives its model's frequencies and moments, not its matrices; kryflex's model "
-                 "was fitted (meshes/galileo/fit.py) to Table 1, Table 4's 60° column and Table 5 together, with "
-                 "the component frequencies held exactly and physical body masses; the fit's least-squares "
-                 "optimum leaves these modes outside "
-                 f"{100 * MATCH:g} % (its residuals, entry by entry: meshes/galileo/README.md).")
+                 + ". Why: the paper gives its model's frequencies, not its matrices; kryflex's model was fitted "
+                 "(meshes/galileo/fit.py) to Table 1's system column with the component frequencies held exactly; "
+                 "the fit's least-squares optimum leaves these modes outside "
+                 f"{100 * MATCH:g} % (meshes/galileo/README.md).")
     lines += [text, ""]
     return lines
 
@@ -101,10 +100,10 @@ def _krylov_table(p, label, number):
         if not same:
             text += (" **Differs:** the paper keeps the modes at " + ", ".join(fmt_freq(f) for f in f_lee)
                      + " Hz, kryflex those at " + ", ".join(fmt_freq(f) for f in f_ours) + " Hz. Why: a mode's "
-                     "importance depends on how it moves the bearing (input) and point A (output); the fit "
-                     "(meshes/galileo/fit.py) weighs Tables 2-3's importances below the frequencies and moments, "
-                     "and the paper's MIC is defined in its ref. 7 (not reproduced in the paper), kryflex ranks "
-                     "with the "
+                     "importance depends on how it moves the bearing (input) and point A (output), which the "
+                     "frequencies do not determine; the paper's MIC is defined in its ref. 7 (not reproduced in "
+                     "the paper), and its Tables 3 and 5 agree only if it is not h2 (meshes/galileo/README.md); "
+                     "kryflex ranks with the "
                      + str(p["recipe"].get("importance")) + " measure (README, Mode importance).")
         else:
             text += " The kept modes' frequencies agree within 5 %."
@@ -173,9 +172,11 @@ def _table4(p):
         text = (f"Full-order system at {label}°: {len(pairs) - len(off)} of {len(pairs)} flexible modes within "
                 f"{100 * MATCH:g} % of the paper's Table 4.")
         if off:
-            text += (" **Differs:** modes " + ", ".join(str(m + rigid + 1) for m in off) + ". Why: the fit "
-                     "(meshes/galileo/fit.py) weighs these against Table 1 and Table 5 on a 28-dof model with "
-                     "physical masses; its optimum leaves them there (meshes/galileo/README.md: residuals).")
+            text += (" **Differs:** modes " + ", ".join(str(m + rigid + 1) for m in off) + ". Why: kryflex's "
+                     "model was fitted to Table 1 (0°) alone. Table 1's ten system modes below 9.3 Hz, from "
+                     "components with six, need a mass spread no spacecraft has (a bound on any model of this "
+                     "topology: meshes/galileo/implied.py); fits that add Table 4 move the 0° modes, and with "
+                     "physical masses Table 1 itself cannot be met (meshes/galileo/README.md).")
         lines += [text, ""]
     bodies = p.get("reduced_body_hz") or {}
     if bodies:
@@ -254,9 +255,9 @@ def _table5(p):
     if len(met) < len(verdicts):
         lines += ["**Differs** where marked. Why: the moments L^k = H (K⁺M)^k K⁺ G depend on the mode shapes at "
                   "the bearing and at point A and on the masses, which the paper does not give; kryflex's model "
-                  "was fitted to Table 5 together with Tables 1 and 4 (meshes/galileo/fit.py) and the entries "
-                  "marked are its least-squares residuals (meshes/galileo/README.md: what the tables imply and "
-                  "where they pull against each other).", ""]
+                  "was fitted to Table 1 alone. Fitting Table 5 with Tables 1 and 4 (meshes/galileo/fit.py) "
+                  "reaches the paper's signs only with node masses no spacecraft has, and with physical masses "
+                  "Table 1 cannot be met at all (meshes/galileo/README.md: what the tables imply).", ""]
     return lines
 
 
@@ -299,7 +300,8 @@ def section_paper(summary):
     r = p["recipe"]
     lines = ["## The paper's example, side by side", "",
              f"The paper: {p['citation']}. Its example is a 28-dof Galileo model; kryflex's model of it "
-             "(meshes/galileo) was fitted to the paper's Tables 1, 4 and 5 (meshes/galileo/fit.py, README there). The paper's "
+             "(meshes/galileo) was fitted to the paper's Table 1 (meshes/galileo/fit.py; its README says why Tables "
+             "1, 4 and 5 cannot all be met with physical masses). The paper's "
              "numbers are quoted as published. kryflex's columns are computed by the library in the paper's fixed "
              f"recipe: single-angle model, c = {r.get('moments')} moments, importance `{r.get('importance')}`, "
              f"keep threshold {r.get('keep_threshold')}, α_G by the paper's rule, no accuracy search (the model "

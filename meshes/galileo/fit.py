@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Fits the Galileo-like model to Lee's example (Tables 1, 4 and 5) and writes the result to fit.json (then run
-generate.py).
+"""Fits the Galileo-like model to Lee's example (Tables 1, 4 and 5) with physical masses and writes the result to
+fit_physical.json; or, with --band 50 --no-stage-w, the committed model's fit to Table 1 (fit.json). Then run
+generate.py.
 
     /usr/bin/python3 meshes/galileo/fit.py                      # physical masses: stages 1-2, then W -> fit_physical.json
     /usr/bin/python3 meshes/galileo/fit.py --band 50 --starts 4 --no-stage-w --out meshes/galileo/fit.json
@@ -20,13 +21,16 @@ exactly, whatever the parameters:
     rotated by expm(S), S skew (15 parameters for the stator, 105 for the rotor); K = M Phi Lambda Phi^T M with
     Lambda from Table 1's rotor and stator columns.
 
+Every mass and inertia factor is bounded to [1/band, band] (--band, default PHYS_BAND = 2: a Galileo-class layout,
+README.md "Mass layout"). Stages 1-2 (fit, --start scratch) are the seeded fit of Table 1's system column alone.
 Stage W (class Whole, fit_whole): scipy.optimize.least_squares ('trf') on the 42 system frequencies at 0 and 60
 deg, the 60 moments and the bodies' masses, each residual divided by its tolerance (0.5 %, 5 % or half the last
-printed digit, a mass band of 1.5x around a Galileo-class split), in the steps WHOLE_STEPS (the moments joining
-gradually). Stages 1-2 (fit, --start scratch) are the seeded fit of Table 1's system column alone that gave the
-previous model. The run is deterministic for a given start (and LAPACK); fit.json keeps the parameters with 17
-digits and what they reach entry by entry ("achieved"), so the model is rebuilt from fit.json, never refitted at
-run time. tests/python/test_galileo_fit.py measures the committed model against the paper independently.
+printed digit; each body's total within 1.5x of the layout's), in the steps WHOLE_STEPS (the moments joining
+gradually); --targets frequencies or moments runs the sub-fits that show what each part implies alone. With
+physical masses Table 1 cannot be met whatever the mode shapes (implied.py), so the committed model stays the fit
+to Table 1. The run is deterministic for a given start (and LAPACK); the output keeps the parameters with 17
+digits and what they reach entry by entry ("achieved"), so a model is rebuilt from its file, never refitted at
+run time. tests/python/model/test_galileo_fit.py measures the physical fits' accounts independently.
 """
 import argparse
 import json
@@ -52,6 +56,21 @@ REG_MASS = 1e-2             # pull toward the stick model's masses
 # the price of node masses no spacecraft has (an earlier fit with [1/50, 50] put 26 t at point A).
 PHYS_BAND = 2.0
 MASS_BOUND = np.log(PHYS_BAND)
+# The layouts the band is taken around, as log factors on generate.py's stick masses (by MASS_PARAMETERS name):
+# "stick" is generate.py's tables; "bearing-ring" puts only the spin bearing assembly at the stator's bearing node
+# (60 kg, a ring of about 1 m: 15, 15, 30 kg m^2) and the rest of the despun section (probe, scan platform, despun
+# bus: 1000 kg) at point A, the stator's total unchanged (README.md "Mass layout").
+LAYOUTS = {
+    "stick": {},
+    "bearing-ring": {"bearing node mass": np.log(60.0 / 420.0), "bearing node Jxx": np.log(15.0 / 600.0),
+                     "bearing node Jyy": np.log(15.0 / 1500.0), "bearing node Jzz": np.log(30.0 / 260.0),
+                     "point A mass": np.log(1000.0 / 640.0)},
+}
+CENTER = np.zeros(len(g.MASS_PARAMETERS))     # the chosen layout's log factors (main sets it from --layout)
+
+
+def layout_center(name):
+    return np.array([LAYOUTS[name].get(label, 0.0) for _, _, label in g.MASS_PARAMETERS])
 TOL = 0.005                 # every stage keeps the band's frequencies at 0 deg within 0.5 %
 PHYSICAL_FILE = os.path.join(HERE, "fit_physical.json")
 
@@ -115,7 +134,7 @@ class Problem:
         return rows[:LOW] if weight_high == 0 else rows
 
     def _regularization(self, p):
-        return np.r_[REG_MASS * p[:self.nm], REG_ROTATION * p[self.nm:]]
+        return np.r_[REG_MASS * (p[:self.nm] - CENTER), REG_ROTATION * p[self.nm:]]
 
     def residual(self, p, weight_high):
         """Stages 1-2: the system frequencies at 0 deg."""
@@ -161,7 +180,7 @@ class Problem:
     def bounds(self):
         lb = np.full(self.n, -np.inf)
         ub = np.full(self.n, np.inf)
-        lb[:self.nm], ub[:self.nm] = -MASS_BOUND, MASS_BOUND
+        lb[:self.nm], ub[:self.nm] = CENTER - MASS_BOUND, CENTER + MASS_BOUND
         return lb, ub
 
 
@@ -184,10 +203,11 @@ def fit(starts, seed, max_nfev, log=lambda text: print(text, flush=True)):
     best = None
     for s in range(starts):
         p0 = np.zeros(prob.n)
+        p0[:prob.nm] = CENTER
         if s:
-            p0[:prob.nm] = rng.normal(0.0, 0.5, prob.nm)
+            p0[:prob.nm] = CENTER + rng.normal(0.0, 0.5, prob.nm)
             p0[prob.nm:] = rng.normal(0.0, 0.3, prob.n - prob.nm)
-            p0[:prob.nm] = np.clip(p0[:prob.nm], 0.9 * lb[:prob.nm], 0.9 * ub[:prob.nm])
+            p0[:prob.nm] = np.clip(p0[:prob.nm], CENTER - 0.9 * MASS_BOUND, CENTER + 0.9 * MASS_BOUND)
         t = time.time()
         r = least_squares(prob.residual, p0, bounds=(lb, ub), args=(0.0,), method="trf", max_nfev=max_nfev,
                           jac=prob.jacobian)
@@ -292,7 +312,7 @@ class Whole(Problem):
         r0[:LOW] *= BAND_WEIGHT
         return np.r_[self.freq_weight * r0, self.freq_weight * np.log(freqs[60.0] / self.target60) / FREQ_TOL,
                      self.moment_weight * ((L - MOMENTS) / self.den).ravel(),
-                     MASS_WEIGHT * over, REG_WHOLE * p]
+                     MASS_WEIGHT * over, REG_WHOLE * np.r_[p[:self.nm] - CENTER, p[self.nm:]]]
 
     def jacobian(self, p):
         """Forward differences, step 1e-6 (the eigenvalues are known to ~1e-14 relative). Called at every
@@ -338,7 +358,7 @@ def fit_whole(x, max_nfev, checkpoint=None, targets="all", log=lambda text: prin
     prob.checkpoint = checkpoint
     prob.freq_weight = 0.0 if targets == "moments" else 1.0
     lb, ub = np.full(prob.n, -np.inf), np.full(prob.n, np.inf)
-    lb[:prob.nm], ub[:prob.nm] = -MASS_BOUND, MASS_BOUND
+    lb[:prob.nm], ub[:prob.nm] = CENTER - MASS_BOUND, CENTER + MASS_BOUND
     x = np.clip(x, lb + 1e-12, ub - 1e-12)
     entry = prob.den.copy()
     row = np.repeat(MOMENT_TOL * np.abs(MOMENTS).max(axis=1, keepdims=True), len(ANGLES), axis=1)
@@ -394,6 +414,8 @@ def main():
     ap.add_argument("--band", type=float, default=PHYS_BAND,
                     help=f"every lumped mass and inertia within this factor of generate.py's layout (default "
                          f"{PHYS_BAND:g}); a wider band shows what the tables need")
+    ap.add_argument("--layout", choices=sorted(LAYOUTS), default="stick",
+                    help="the mass layout the band is taken around (default stick: generate.py's tables)")
     ap.add_argument("--targets", choices=sorted(TARGET_STEPS), default="all",
                     help="what stage W fits: all (default), or a sub-fit to the frequencies (Tables 1 and 4) or "
                          "the moments (Table 5) alone, to show what each implies")
@@ -402,12 +424,14 @@ def main():
                          "fit.json is written only when named)")
     args = ap.parse_args()
     PHYS_BAND, MASS_BOUND = args.band, np.log(args.band)
+    CENTER[:] = layout_center(args.layout)
     if args.resume:
         x = np.load(args.resume)
     elif args.start == "scratch":
         x = fit(args.starts, args.seed, args.max_nfev)[1]
     elif args.start == "layout":
-        x = np.zeros(Whole().n)       # generate.py's layout and the bodies' basis shapes
+        x = np.zeros(Whole().n)       # the layout and the bodies' basis shapes
+        x[:len(CENTER)] = CENTER
     else:
         x = g.load_fit(args.start)
     if args.no_stage_w:
@@ -422,6 +446,8 @@ def main():
                  "the bodies from these parameters",
         "targets": "none (no stage W)" if args.no_stage_w else args.targets,
         "mass_band": PHYS_BAND,
+        "layout": args.layout,
+        "layout_log_factors": {name: float(q) for (_, _, name), q in zip(g.MASS_PARAMETERS, CENTER)},
         "command": " ".join(["meshes/galileo/fit.py"] + sys.argv[1:]),
         "mass_log_factors": {name: float(q) for (_, _, name), q in zip(g.MASS_PARAMETERS, x[:nm])},
         "stator_rotation": [float(v) for v in x[nm:nm + ns]],

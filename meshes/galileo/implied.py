@@ -43,23 +43,35 @@ def clamped_ratio(M, table, band):
     return 1.0 / (1.0 + top)
 
 
-def mode_count_bound(band, top=BAND_TOP):
+def mode_count_bound(band, top=BAND_TOP, layout="stick"):
     """(bound on the system's flexible modes at or below top, stator floors Hz, rotor floors Hz): the clamped
-    floors f_j sqrt(mu) of Table 1's component frequencies at the band's worst corner."""
-    Ms, _, ts = g.build_stator()
-    Mr, _, tr = g.build_rotor()
+    floors f_j sqrt(mu) of Table 1's component frequencies at the band's worst corner around the layout
+    (fit.LAYOUTS)."""
+    Ms, ts, Mr, tr = g.fitted_masses(fit.layout_center(layout))
     fs = np.asarray(g.PAPER_STATOR_HZ) * np.sqrt(clamped_ratio(Ms, ts, band))
     fr = np.asarray(g.PAPER_ROTOR_HZ) * np.sqrt(clamped_ratio(Mr, tr, band))
     return int((fs <= top).sum() + (fr <= top).sum()), fs, fr
 
 
-def least_band(need=fit.LOW, top=BAND_TOP):
+def frequency_floors(band, layout="stick"):
+    """Sorted lower bounds (Hz) on the system's flexible frequencies 1..21 (modes 8-28) at any angle, for every
+    mass and inertia within the band around the layout: the j-th lowest of both bodies' clamped floors."""
+    _, fs, fr = mode_count_bound(band, layout=layout)
+    return np.sort(np.r_[fs, fr])
+
+
+def least_deviation(band, paper_hz, layout="stick"):
+    """Per mode, the least relative deviation below (negative: none) that the floors force: floor / paper - 1."""
+    return frequency_floors(band, layout) / np.asarray(paper_hz) - 1
+
+
+def least_band(need=fit.LOW, top=BAND_TOP, layout="stick"):
     """The smallest band (factor on every mass and inertia of the layout) whose bound allows need modes at or
     below top (bisection on log band; the bound's count rises with the band)."""
     lo, hi = 1.0, 1e3
     for _ in range(60):
         mid = np.sqrt(lo * hi)
-        lo, hi = (lo, mid) if mode_count_bound(mid, top)[0] >= need else (mid, hi)
+        lo, hi = (lo, mid) if mode_count_bound(mid, top, layout)[0] >= need else (mid, hi)
     return hi
 
 
@@ -79,13 +91,31 @@ def table5_lowest_mode():
 
 def main():
     print(f"Modes at or below {BAND_TOP} Hz that a layout allows (Table 1 needs {fit.LOW}):\n")
-    print("| band | bound | stator's clamped floors (Hz) | rotor's, above its sixth (Hz) |")
-    print("|---|---|---|---|")
-    for band in (1, 1.5, 2, 3, 4, 5, 10):
-        n, fs, fr = mode_count_bound(band)
-        print(f"| {band:g} | {n} | " + ", ".join(f"{v:.3g}" for v in fs) + " | "
-              + ", ".join(f"{v:.3g}" for v in fr[6:9]) + ", ... |")
-    print(f"\nleast band that allows {fit.LOW}: {least_band():.3f}\n")
+    print("| layout | band | bound | stator's clamped floors (Hz) | rotor's, above its sixth (Hz) |")
+    print("|---|---|---|---|---|")
+    for layout in sorted(fit.LAYOUTS, reverse=True):
+        for band in (1, 1.5, 2, 3, 4, 5, 10):
+            n, fs, fr = mode_count_bound(band, layout=layout)
+            print(f"| {layout} | {band:g} | {n} | " + ", ".join(f"{v:.3g}" for v in fs) + " | "
+                  + ", ".join(f"{v:.3g}" for v in fr[6:9]) + ", ... |")
+    print()
+    for layout in sorted(fit.LAYOUTS, reverse=True):
+        print(f"least band that allows {fit.LOW}, layout {layout}: {least_band(layout=layout):.3f}")
+    print()
+    print("Least deviation any mode shapes reach, per mode (modes whose floor is below the paper's: none):\n")
+    print(f"| layout | mode | Table 1, 0° (Hz) | Table 4, 60° (Hz) | floor, band {fit.PHYS_BAND:g} (Hz) | "
+          "least deviation 0° / 60° |")
+    print("|---|---|---|---|---|---|")
+    for layout in sorted(fit.LAYOUTS, reverse=True):
+        fl = frequency_floors(fit.PHYS_BAND, layout)
+        rows = [j for j, (a, b) in enumerate(zip(g.PAPER_SYSTEM_HZ, fit.SYSTEM_60_HZ)) if fl[j] > min(a, b)]
+        for j in rows:
+            a, b = g.PAPER_SYSTEM_HZ[j], fit.SYSTEM_60_HZ[j]
+            print(f"| {layout} | {j + 8} | {a:g} | {b:g} | {fl[j]:.4g} | {100 * max(fl[j] / a - 1, 0):+.1f} % / "
+                  f"{100 * max(fl[j] / b - 1, 0):+.1f} % |")
+        if not rows:
+            print(f"| {layout} | none | | | | |")
+    print()
     print("| α | λ₁ = L⁸/L⁹ (rad²/s²) | f₁ (Hz) | r₁ = L⁹ λ₁¹⁰ | mode 1's share of L⁰ | of L¹ |")
     print("|---|---|---|---|---|---|")
     for a, lam, f, r, s0, s1 in table5_lowest_mode():

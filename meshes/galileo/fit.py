@@ -59,12 +59,16 @@ MASS_BOUND = np.log(PHYS_BAND)
 # The layouts the band is taken around, as log factors on generate.py's stick masses (by MASS_PARAMETERS name):
 # "stick" is generate.py's tables; "bearing-ring" puts only the spin bearing assembly at the stator's bearing node
 # (60 kg, a ring of about 1 m: 15, 15, 30 kg m^2) and the rest of the despun section (probe, scan platform, despun
-# bus: 1000 kg) at point A, the stator's total unchanged (README.md "Mass layout").
+# bus: 1000 kg) at point A, the stator's total unchanged; "light-bearing" keeps only the bearing's despun race and
+# housing there (10 kg; 2.5, 2.5, 5 kg m^2) and 1050 kg at point A (README.md "Mass layout").
 LAYOUTS = {
     "stick": {},
     "bearing-ring": {"bearing node mass": np.log(60.0 / 420.0), "bearing node Jxx": np.log(15.0 / 600.0),
                      "bearing node Jyy": np.log(15.0 / 1500.0), "bearing node Jzz": np.log(30.0 / 260.0),
                      "point A mass": np.log(1000.0 / 640.0)},
+    "light-bearing": {"bearing node mass": np.log(10.0 / 420.0), "bearing node Jxx": np.log(2.5 / 600.0),
+                      "bearing node Jyy": np.log(2.5 / 1500.0), "bearing node Jzz": np.log(5.0 / 260.0),
+                      "point A mass": np.log(1050.0 / 640.0)},
 }
 CENTER = np.zeros(len(g.MASS_PARAMETERS))     # the chosen layout's log factors (main sets it from --layout)
 

@@ -11,11 +11,13 @@
    count. Each body is an interface node (bearing or hub) and the rest (point A; the five tips): its stiffness
    depends only on the rest's motion relative to the interface's rigid motion, d = u_rest - X u_interface, so the
    free-free flexible eigenvalues are those of (k, S) with S = (M_rest^-1 + X M_interface^-1 X^T)^-1 (the interface's
-   motion eliminated), the clamped ones those of (k, M_rest). By Courant-Fischer the j-th clamped eigenvalue is at
-   least mu lambda_j(free), mu = min eig(S, M_rest) = 1 / (1 + max eig(M_rest X M_interface^-1 X^T)). So Table 1's
-   component frequencies and the masses alone bound the count: whatever the mode shapes (the fit's other 120
-   unknowns). mu falls as the rest gets heavier and the interface lighter, so over a band of factors on every mass
-   and inertia the lowest mu is at the corner (interface masses / band, the rest's x band).
+   motion eliminated), the clamped ones those of (k, M_rest): the eigenvalues of a product of two positive
+   semi-definite matrices, one with the free-free eigenvalues, one with mu_k = eig(S, M_rest) =
+   1 / (1 + eig(M_rest X M_interface^-1 X^T)). By the multiplicative Weyl inequality the j-th clamped eigenvalue is
+   at least lambda_i(free) mu_k whenever i + k - 1 = j. So Table 1's component frequencies and the masses alone
+   bound the count: whatever the mode shapes (the fit's other 120 unknowns). Each mu_k falls as the rest gets
+   heavier and the interface lighter, so over a band of factors on every mass and inertia the lowest are at the
+   corner (interface masses / band, the rest's x band).
 2. What Table 5 says about the lowest mode the input and output see: for large k, L^k ~ r1 / lambda1^(k+1), so
    lambda1 = L^8 / L^9 and r1 = L^9 lambda1^10 at each angle.
 """
@@ -33,23 +35,33 @@ import fit  # noqa: E402
 BAND_TOP = max(g.PAPER_SYSTEM_HZ[:fit.LOW])   # 9.2953 Hz: Table 1's tenth flexible system mode
 
 
-def clamped_ratio(M, table, band):
-    """mu = min eig(S, M_rest) for the body (M, table) with every lumped mass and inertia at the corner of the band
-    that makes it smallest (interface node / band, the rest x band)."""
+def clamped_ratios(M, table, band):
+    """mu_1 <= mu_2 <= ...: the eigenvalues of (S, M_rest) for the body (M, table) with every lumped mass and inertia
+    at the corner of the band that makes each smallest (interface node / band, the rest x band: each eigenvalue of
+    M_rest X M_interface^-1 X^T grows with M_rest and falls with M_interface)."""
     R = g.rigid_modes(table)
     X = R[6:] @ np.linalg.inv(R[:6])          # the rest's rigid motion when the interface node moves
     Mi, Mo = M[:6, :6] / band, M[6:, 6:] * band
-    top = sl.eigh(X @ np.linalg.solve(Mi, X.T), np.linalg.inv(Mo), eigvals_only=True).max()
-    return 1.0 / (1.0 + top)
+    nu = sl.eigh(X @ np.linalg.solve(Mi, X.T), np.linalg.inv(Mo), eigvals_only=True)
+    return np.sort(1.0 / (1.0 + np.maximum(nu, 0.0)))
+
+
+def clamped_floors(freqs_hz, mu):
+    """Lower bounds on the clamped body's frequencies, ascending: f_j >= max over i + k - 1 = j of f_i sqrt(mu_k)
+    (the clamped eigenvalues are those of a product of two positive semi-definite matrices with the free-free
+    eigenvalues and the mu; for such a product lambda_(i+k-1) >= lambda_i mu_k, the multiplicative Weyl
+    inequality)."""
+    f = np.asarray(freqs_hz, float)
+    n = len(f)
+    return np.array([max(f[i] * np.sqrt(mu[j - i]) for i in range(j + 1)) for j in range(n)])
 
 
 def mode_count_bound(band, top=BAND_TOP, layout="stick"):
     """(bound on the system's flexible modes at or below top, stator floors Hz, rotor floors Hz): the clamped
-    floors f_j sqrt(mu) of Table 1's component frequencies at the band's worst corner around the layout
-    (fit.LAYOUTS)."""
+    floors of Table 1's component frequencies at the band's worst corner around the layout (fit.LAYOUTS)."""
     Ms, ts, Mr, tr = g.fitted_masses(fit.layout_center(layout))
-    fs = np.asarray(g.PAPER_STATOR_HZ) * np.sqrt(clamped_ratio(Ms, ts, band))
-    fr = np.asarray(g.PAPER_ROTOR_HZ) * np.sqrt(clamped_ratio(Mr, tr, band))
+    fs = clamped_floors(g.PAPER_STATOR_HZ, clamped_ratios(Ms, ts, band))
+    fr = clamped_floors(g.PAPER_ROTOR_HZ, clamped_ratios(Mr, tr, band))
     return int((fs <= top).sum() + (fr <= top).sum()), fs, fr
 
 

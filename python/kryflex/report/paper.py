@@ -174,9 +174,9 @@ def _table4(p):
         if off:
             text += (" **Differs:** modes " + ", ".join(str(m + rigid + 1) for m in off) + ". Why: kryflex's "
                      "model was fitted to Table 1 (0°) alone. Table 1's ten system modes below 9.3 Hz, from "
-                     "components with six, need a mass spread no spacecraft has (a bound on any model of this "
-                     "topology: meshes/galileo/implied.py); fits that add Table 4 move the 0° modes, and with "
-                     "physical masses Table 1 itself cannot be met (meshes/galileo/README.md).")
+                     "components with six, need the stator's mass at point A and almost none at its bearing node "
+                     "(a bound on any model of this topology: meshes/galileo/implied.py); fits that add Table 4 "
+                     "move the 0° modes (meshes/galileo/README.md).")
         lines += [text, ""]
     bodies = p.get("reduced_body_hz") or {}
     if bodies:
@@ -255,9 +255,9 @@ def _table5(p):
     if len(met) < len(verdicts):
         lines += ["**Differs** where marked. Why: the moments L^k = H (K⁺M)^k K⁺ G depend on the mode shapes at "
                   "the bearing and at point A and on the masses, which the paper does not give; kryflex's model "
-                  "was fitted to Table 1 alone. Fitting Table 5 with Tables 1 and 4 (meshes/galileo/fit.py) "
-                  "reaches the paper's signs only with node masses no spacecraft has, and with physical masses "
-                  "Table 1 cannot be met at all (meshes/galileo/README.md: what the tables imply).", ""]
+                  "was fitted to Table 1 alone, with node masses no spacecraft has (Table 5 scales with 1/mass). "
+                  "The fits of Tables 1, 4 and 5 together with physical masses and what the tables imply are in "
+                  "meshes/galileo/README.md.", ""]
     return lines
 
 
@@ -300,8 +300,8 @@ def section_paper(summary):
     r = p["recipe"]
     lines = ["## The paper's example, side by side", "",
              f"The paper: {p['citation']}. Its example is a 28-dof Galileo model; kryflex's model of it "
-             "(meshes/galileo) was fitted to the paper's Table 1 (meshes/galileo/fit.py; its README says why Tables "
-             "1, 4 and 5 cannot all be met with physical masses). The paper's "
+             "(meshes/galileo) was fitted to the paper's Table 1 (meshes/galileo/fit.py; its README gives the fits "
+             "of Tables 1, 4 and 5 with physical masses and what the tables imply). The paper's "
              "numbers are quoted as published. kryflex's columns are computed by the library in the paper's fixed "
              f"recipe: single-angle model, c = {r.get('moments')} moments, importance `{r.get('importance')}`, "
              f"keep threshold {r.get('keep_threshold')}, α_G by the paper's rule, no accuracy search (the model "

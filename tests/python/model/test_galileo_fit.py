@@ -106,7 +106,16 @@ def measured(galileo):
         Ms, Ks, Gs, Hs = ref.assemble(galileo, a)
         lam = sl.eigh(Ks, Ms, eigvals_only=True)
         assert np.all(np.abs(lam[:7]) <= 1e-9 * lam[-1]) and lam[7] > 1e6 * np.abs(lam[:7]).max()
-        out[a] = (np.sqrt(lam[7:]) / (2 * np.pi), ref.moments(Ms, Ks, Gs, Hs, 10)[:, 0, 0], (Ms, Ks, Gs, Hs))
+        # the modes from the flexibility form (M, K + s M), mu = 1 / (lambda + s): the lowest flexible modes to
+        # machine precision relative to themselves (eigh(K, M) knows them only relative to the highest, and a
+        # bearing node of a few kg under a tonne spreads the spectrum over 1e9)
+        shift = 0.5 * lam[7]
+        mu, X = sl.eigh(Ms, Ks + shift * Ms)
+        mu, X = mu[::-1][7:], X[:, ::-1][:, 7:]
+        lf, phi = 1.0 / mu - shift, X / np.sqrt(mu)
+        r = (Hs[0] @ phi) * (phi.T @ Gs[:, 0])
+        L = np.array([np.sum(r / lf ** (k + 1)) for k in range(10)])
+        out[a] = (np.sqrt(lf) / (2 * np.pi), L, (Ms, Ks, Gs, Hs))
     return out
 
 
@@ -119,17 +128,30 @@ def moment_scale(Ms, Ks, Gs, Hs):
     return np.array([np.sum(r / lam ** (k + 1)) for k in range(10)])
 
 
-def moment_met(model, paper, floor):
-    """Within MOMENT_TOL and of the paper's sign; for a printed 0, within half its last digit."""
+def moment_met(model, paper, floor, noise=0.0):
+    """Within MOMENT_TOL and of the paper's sign; for a printed 0, within half its last digit. None when the model's
+    round-off (noise) straddles the threshold: double precision cannot decide it."""
     if abs(paper) <= floor:
-        return abs(model) <= floor
+        return None if abs(abs(model) - floor) <= noise else abs(model) <= floor
+    if abs(abs(model - paper) - MOMENT_TOL * abs(paper)) <= noise:
+        return None
     return np.sign(model) == np.sign(paper) and abs(model / paper - 1) <= MOMENT_TOL
+
+
+# round-off of the moments relative to each L^k's size over the angles: the routes below agree to 1e-7 of it on
+# the stick-layout fits; a bearing node of a few kg under 2 t spreads the mass matrix over 1e3 and the spectrum
+# over 1e9, and two flexibility-form solves (different shifts) then differ by up to 7e-6 of it (L^4 at 0 deg,
+# where it cancels to 1e-5 of its size)
+ROUNDOFF = 1e-5
 
 
 def test_moments_two_ways_agree(measured):
     """The modal sum (reference.moments) against H (K+ M)^k K+ G with K+ the pseudo-inverse on the flexible
     subspace (rigid modes from the eigensolve removed by an M-orthogonal projector): the moment the fit targets is
     the one the paper defines (eq. 5)."""
+    # each L^k against its size over the angles: at 0 deg L^3..L^9 cancel to 1e-5 of it, below the round-off of
+    # either route
+    scale = np.max([moment_scale(*measured[a][2]) for a in ANGLES], axis=0)
     for a in (0, 60):
         f, L, (Ms, Ks, Gs, Hs) = measured[a]
         lam, phi = sl.eigh(Ks, Ms)
@@ -143,7 +165,7 @@ def test_moments_two_ways_agree(measured):
             x = Pr @ Kp @ (Pr.T @ (Ms @ x))
         # both routes lose digits on the lowest mode (eigenvalues over 1e9; L^9 goes as its lambda^-10): measured
         # up to 6e-5 of the cancellation-free scale, far inside the fit's 5 % targets
-        assert np.all(np.abs(np.array(direct) - L) <= 1e-4 * moment_scale(Ms, Ks, Gs, Hs)), (a, direct, L)
+        assert np.all(np.abs(np.array(direct) - L) <= 1e-4 * scale), (a, direct, L)
 
 
 @pytest.mark.parametrize("angle, paper", [(0, SYSTEM_0), (60, SYSTEM_60)])
@@ -160,13 +182,16 @@ def test_frequencies_where_the_fit_says_met(measured, achieved, angle, paper):
 def test_moments_where_the_fit_says_met(measured, achieved):
     L = np.array([measured[a][1] for a in ANGLES]).T
     met = np.array(achieved["moments_met"])
-    ours = np.array([[moment_met(L[k, j], PAPER_L[k, j], HALF_DIGIT[k, j]) for j in range(len(ANGLES))]
-                     for k in range(10)])
-    np.testing.assert_array_equal(ours, met)
-    scale = np.array([moment_scale(*measured[a][2]) for a in ANGLES]).T
-    # fit.py solves the flexibility form (M, K + s M), exact on the lowest mode; the dense eigh(K, M) here knows it to
-    # ~1e-5 (measured: up to 1e-3 of the cancellation-free scale at 0 deg, 9e-5 elsewhere), far inside 5 %
-    assert np.all(np.abs(L - np.array(achieved["moments"])) <= 2e-3 * scale)
+    scale = np.max([moment_scale(*measured[a][2]) for a in ANGLES], axis=0)
+    ours = np.array([[moment_met(L[k, j], PAPER_L[k, j], HALF_DIGIT[k, j], ROUNDOFF * scale[k])
+                      for j in range(len(ANGLES))] for k in range(10)], dtype=object)
+    decided = np.array([[v is not None for v in row] for row in ours])
+    assert decided.sum() >= 55                   # the undecidable ones are few (round-off at a threshold)
+    off = np.argwhere(decided & (ours != met))
+    assert not len(off), [(k, ANGLES[j], L[k, j], np.array(achieved["moments"])[k, j], PAPER_L[k, j]) for k, j in off]
+    # both solve a flexibility form (fit.py with its own shift): they agree to round-off of each L^k's size over
+    # the angles
+    assert np.all(np.abs(L - np.array(achieved["moments"])) <= ROUNDOFF * scale[:, None])
 
 
 def test_moments_sign_where_the_paper_prints_a_nonzero(measured, achieved):
@@ -290,7 +315,7 @@ def test_table1_needs_a_light_bearing_node(implied):
 def test_physical_fits_stay_above_the_floors(measured, implied, fit_file):
     """The physical fits' system frequencies, at both angles, at or above implied.py's floors for their band."""
     with open(fit_file) as f:
-        band = json.load(f)["mass_band"]
-    floors = implied.frequency_floors(band)
+        fit = json.load(f)
+    floors = implied.frequency_floors(fit["mass_band"], fit.get("layout", "stick"))
     for a in (0, 60):
         assert np.all(measured[a][0] >= floors * (1 - 1e-9)), (a, measured[a][0], floors)

@@ -31,6 +31,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "support"))   # the helpers (tests/python/support)
 import reference as ref  # noqa: E402
 
+pytestmark = pytest.mark.fast   # the fast tier (tests/README.md): dense 28-dof solves, seconds
+
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 FITS = [os.path.join(ROOT, "meshes", "galileo", name) for name in ("fit_physical.json", "fit_physical_table5.json")]
 

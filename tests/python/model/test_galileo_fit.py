@@ -250,8 +250,18 @@ def test_report_table5_says_row_by_row_where_it_matches():
 
 @pytest.fixture(scope="module")
 def implied(generate):
-    sys.path.insert(0, os.path.join(ROOT, "meshes", "galileo"))
-    return load_module("galileo_implied", os.path.join(ROOT, "meshes", "galileo", "implied.py"))
+    """meshes/galileo/implied.py, with the `generate` and `fit` it imports by name bound to meshes/galileo's (another
+    test may have imported meshes/generate.py as `generate`); sys.modules restored after."""
+    here = os.path.join(ROOT, "meshes", "galileo")
+    saved = {name: sys.modules.pop(name) for name in ("generate", "fit") if name in sys.modules}
+    try:
+        sys.modules["generate"] = generate
+        sys.modules["fit"] = load_module("fit", os.path.join(here, "fit.py"))
+        return load_module("galileo_implied", os.path.join(here, "implied.py"))
+    finally:
+        for name in ("generate", "fit"):
+            sys.modules.pop(name, None)
+        sys.modules.update(saved)
 
 
 def _system_at_0(Ms, Ks, Mr, Kr):

@@ -107,10 +107,24 @@ class SlewBodies:
                    scene.body_dofs)
 
     @classmethod
+    def from_system(cls, scene, angles_rad=()):
+        """The full-order model of a scene without joints: the assembled system as the reduction's verification
+        builds it (constraints, springs and the dof layouts applied; its rigid-body modes from the C library), one
+        block, no ties."""
+        system = _core.CSystem(scene.cscene)
+        system.set_angles(np.asarray(angles_rad, float))
+        M, K, G, Ht = system.matrices()
+        Phi, _ = system.rigid_modes()
+        n = M.getSize()[0]
+        rigid = _csr(Phi).toarray() if Phi is not None and Phi.getSize()[1] else np.zeros((n, 0))
+        return cls("full", _csr(M), _csr(K), _csr(G).toarray(), _csr(Ht).toarray().T, [np.zeros((0, n))], [rigid],
+                   [], [n])
+
+    @classmethod
     def from_model(cls, model):
         """A reduced model: each reduced body's coordinates (the C reduced bodies, eq. 18-19)."""
         bodies = model.bodies
-        if any(b["rigid"] is None for b in bodies):
+        if any(b.get("rigid") is None for b in bodies):
             raise ValueError("the reduced model lacks its bodies' rigid motions (a model from an older kryflex): "
                              "reduce the scene again")
         revolute = model.revolute
@@ -118,7 +132,8 @@ class SlewBodies:
                   for j in model.joints]
         return cls("reduced", sp.block_diag([b["M"] for b in bodies]), sp.block_diag([b["K"] for b in bodies]),
                    np.vstack([b["G"] for b in bodies]), np.hstack([b["H"] for b in bodies]),
-                   [b["iface"] for b in bodies], [b["rigid"] for b in bodies], joints, model.sizes)
+                   [b["iface"] if b.get("iface") is not None else np.zeros((0, v)) for b, v in zip(bodies, model.sizes)],
+                   [b["rigid"] for b in bodies], joints, model.sizes)
 
     # ------------------------------------------------------------------ the joint ties
 

@@ -54,7 +54,7 @@ class Integrator:
         key = np.asarray(angles_rad, float).tobytes()
         if key not in self._rigid:
             Phi = b.rigid_modes(angles_rad)
-            Phi = Phi.toarray() if sp_issparse(Phi) else np.asarray(Phi)
+            Phi = _range(Phi.toarray() if sp_issparse(Phi) else np.asarray(Phi))
             MPhi = np.asarray(b.M @ Phi)
             if len(self._rigid) > 4:          # a slew visits each angle once: keep only the last few
                 self._rigid.clear()
@@ -112,3 +112,12 @@ class Integrator:
                     zs[k] = z
                 k += 1
         return (t[keep], ys, ye, zs) if state else (t[keep], ys, ye)
+
+
+def _range(Phi, rtol=1e-10):
+    """An orthonormal basis of the columns' span: the zero columns of motions a boundary condition does not admit
+    (and any dependent ones) dropped, so that Phi^T M Phi is invertible."""
+    if not Phi.shape[1]:
+        return Phi
+    U, s, _ = np.linalg.svd(Phi, full_matrices=False)
+    return U[:, s > rtol * s.max()] if s.max() > 0 else Phi[:, :0]

@@ -92,8 +92,7 @@ def run(argv):
                                              force=args.force),
                            (ValueError, EXIT_INPUT, str))
         if study.held and args.exudyn_ffrf:
-            raise Failure(EXIT_INPUT, "--exudyn-ffrf slews the reduced bodies: --profile %s holds the angles (drop "
-                                      "--exudyn-ffrf)" % study.kind)
+            collective(lambda: _no_ffrf(study.kind))
         rows = study.sweep()
         baseline = study.baseline()
         if baseline is not None:
@@ -143,11 +142,17 @@ def run(argv):
     return EXIT_OK
 
 
+def _no_ffrf(kind):
+    raise Failure(EXIT_INPUT, "--exudyn-ffrf slews the reduced bodies: --profile %s holds the angles (drop "
+                              "--exudyn-ffrf)" % kind)
+
+
 def _verdict(study, rows, limit):
     if study.held:
-        return ("the structure's %s response adequate for every input down to %.3g P1" % (study.kind, rows[-1]["periods"])
-                if limit is None else "not adequate from an input of %.3g P1 (error %.3g > %g)"
-                % (limit["periods"], limit["error"], study.accuracy))
+        who = "the structure's" if study.jointfree else "the held configuration's"
+        return ("%s %s response: adequate for every input down to %.3g P1" % (who, study.kind, rows[-1]["periods"])
+                if limit is None else "%s %s response: not adequate from an input of %.3g P1 (error %.3g > %g)"
+                % (who, study.kind, limit["periods"], limit["error"], study.accuracy))
     return ("adequate at every rate up to %.4g deg/s" % rows[-1]["peak_rate_deg_s"] if limit is None
             else "not adequate from %.4g deg/s (error %.3g > %g)" % (limit["peak_rate_deg_s"], limit["error"],
                                                                      study.accuracy))

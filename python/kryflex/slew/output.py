@@ -117,12 +117,12 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, f
                   "stiffness-proportional damping above." % ", ".join(s.damping_matrices), ""]
     step, step_untrimmed = s.explicit_step
     if s.trim_hz > 0:
-        lines += ["Trimmed reduced model (reduction.max_frequency, %.4g Hz): highest frequency at %s %.4g Hz "
+        lines += ["Trimmed reduced model (reduction.max_frequency, %.4g Hz): highest frequency %s %.4g Hz "
                   "(untrimmed %.4g Hz), stable explicit step 2/omega_max %.3g s (untrimmed %.3g s); integrated with "
                   "the trimmed modes' mass taken out at every angle (kryflex/slew/trimmed.py)."
                   % (s.trim_hz, _where(s), s.top_hz, s.untrimmed_top_hz, step, step_untrimmed), ""]
     else:
-        lines += ["Reduced model untrimmed: highest frequency at %s %.4g Hz, stable explicit step 2/omega_max %.3g s "
+        lines += ["Reduced model untrimmed: highest frequency %s %.4g Hz, stable explicit step 2/omega_max %.3g s "
                   "(reduction.max_frequency trims it)." % (_where(s), s.top_hz, step), ""]
     if frf_error is not None:
         lines += ["Frequency-domain error of the reduced model (the reduction's verification: relative H-inf error "
@@ -150,7 +150,7 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, f
                   "elastic output changes by %.2g of its peak." % (check["step_s"], check["error"],
                                                                    check["error_half_step"], check["output_change"])]
     if exudyn is not None:
-        lines += ["", "Exudyn check (the full model's fastest slew by Exudyn's generalized-alpha solver on the same "
+        lines += ["", "Exudyn check (the full model's fastest run by Exudyn's generalized-alpha solver on the same "
                   "equations, step %.3g s): relative difference from this integrator %.2g." % (exudyn["step_s"],
                                                                                                exudyn["difference"])]
     if ffrf:

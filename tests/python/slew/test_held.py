@@ -131,6 +131,7 @@ def test_held_error_small_when_slow_and_growing_when_fast(studies):
     assert slow["peak_rate_deg_s"] == 0.0 and study.baseline() is None
 
 
+@pytest.mark.fast
 def test_held_profiles():
     from kryflex.slew.profiles import Profile
     t = np.linspace(0, 3, 30001)

@@ -62,6 +62,18 @@ class Integrator:
         HPhi, Q = self._rigid[key]
         return b.H @ z - HPhi @ (Q @ z)
 
+    def record(self, z, v, a, angles_rad):
+        """The outputs and their elastic parts at one step: H z, or H v, H a for the outputs that read a velocity or
+        an acceleration (bodies.quantities; the rigid part taken out of the state they read)."""
+        q = self.bodies.quantities
+        y, ye = self.bodies.H @ z, self.elastic_outputs(z, angles_rad)
+        for name, x in (("velocity", v), ("acceleration", a)):
+            rows = [i for i, qi in enumerate(q) if qi == name]
+            if rows:
+                y[rows] = (self.bodies.H[rows] @ x)
+                ye[rows] = self.elastic_outputs(x, angles_rad)[rows]
+        return y, ye
+
     def run(self, profile, t_end, record_every=1, state=False):
         """Integrates from rest at t = 0 to t_end along profile (profiles.Profile: angles and torque); returns the
         sample times, the outputs (samples, outputs) and their elastic parts (elastic_outputs), and with state=True
@@ -106,8 +118,7 @@ class Integrator:
             v = v + h * ((1 - GAMMA) * a + GAMMA * anew)
             z, a = znew, anew
             if k < len(keep) and keep[k] == n:
-                ys[k] = b.H @ z
-                ye[k] = self.elastic_outputs(z, alpha[n])
+                ys[k], ye[k] = self.record(z, v, a, alpha[n])
                 if state:
                     zs[k] = z
                 k += 1

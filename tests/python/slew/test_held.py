@@ -1,7 +1,8 @@
 """`kryflex slew` on a structure without revolute joints (python/kryflex/slew, profiles step and pulse): the
 full-order and the reduced time responses to a force history at rest against an independent modal solution (SciPy
 eigh of the matrices read from the example's files, the flexible modes' state space integrated by scipy.signal.lsim),
-on the free plate (uz, rx, ry nodes), the free beam (6-dof nodes) and the plate clamped at one node; the error
+on the free plate (uz, rx, ry nodes), the free beam (6-dof nodes), the plate clamped at one node and the plate with a
+velocity output; the error
 measure against the one of the independent solutions; the command's files and refusals."""
 import json
 import os
@@ -23,14 +24,19 @@ PNG = b"\x89PNG\r\n\x1a\n"
 DOFS = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
 
 
-def _clamped_plate(tmp_path):
-    """plate.yaml with its commented clamp of node 1 switched on (the output on node 1 moved to node 2)."""
-    text = open(os.path.join(EXAMPLES, "plate.yaml")).read()
-    text = text.replace("    # constraints:", "    constraints:").replace("name: plate", "name: plate_clamped")
-    text = text.replace("{body: plate, node: 1, dof: uz}", "{body: plate, node: 2, dof: uz}")
+def _plate_variant(tmp_path, name):
+    """plate.yaml with its commented clamp of node 1 switched on (the output on node 1 moved to node 2), or with its
+    second output reading a velocity."""
+    text = open(os.path.join(EXAMPLES, "plate.yaml")).read().replace("name: plate", "name: " + name)
+    if name == "plate_clamped":
+        text = text.replace("    # constraints:", "    constraints:")
+        text = text.replace("{body: plate, node: 1, dof: uz}", "{body: plate, node: 2, dof: uz}")
+    else:
+        text = text.replace("{body: plate, node: 19, dof: ry}", "{body: plate, node: 19, dof: ry, quantity: velocity}")
     for f in ("plate_M.mtx", "plate_K.mtx", "plate_nodes.txt"):
-        os.symlink(os.path.join(EXAMPLES, f), tmp_path / f)
-    path = tmp_path / "plate_clamped.yaml"
+        if not os.path.exists(tmp_path / f):
+            os.symlink(os.path.join(EXAMPLES, f), tmp_path / f)
+    path = tmp_path / (name + ".yaml")
     path.write_text(text)
     return str(path)
 
@@ -58,26 +64,29 @@ def _dense_model(scene_path):
         for t in terms:
             G[where[t["node"], DOFS[t["dof"]]], j] += 1.0
     H = np.zeros((len(spec["outputs"]), first))
+    velocity = np.zeros(len(spec["outputs"]), bool)
     for i, terms in enumerate(spec["outputs"].values()):
         for t in terms:
             H[i, where[t["node"], DOFS[t["dof"]]]] += 1.0
+            velocity[i] = t.get("quantity") == "velocity"
     held = sorted(where[c["node"], int(d) - 1] for c in body.get("constraints", []) for d in c["dofs"]
                   if (c["node"], int(d) - 1) in where)
     keep = np.setdiff1d(np.arange(first), held)
     nrigid = 0 if held else (3 if len(where) < 6 * len(set(n for n, _ in where)) else 6)
-    return M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], G[keep], H[:, keep], nrigid
+    return M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], G[keep], H[:, keep], nrigid, velocity
 
 
-def _modal_elastic(M, K, G, H, nrigid, beta, u, t):
-    """The elastic outputs H Phi_f q_f(t) of M z'' + beta K z' + K z = G u(t) from rest: the flexible modes' state
-    space (each mode q'' + beta w^2 q' + w^2 q = phi^T G u) by scipy.signal.lsim, exact for the piecewise-linear
-    input on the fine grid t."""
+def _modal_elastic(M, K, G, H, nrigid, beta, u, t, velocity):
+    """The elastic outputs H Phi_f q_f(t) (H Phi_f q_f'(t) for the velocity rows) of M z'' + beta K z' + K z = G u(t)
+    from rest: the flexible modes' state space (each mode q'' + beta w^2 q' + w^2 q = phi^T G u) by
+    scipy.signal.lsim, exact for the piecewise-linear input on the fine grid t."""
     lam, Phi = sl.eigh(K, M)
     lam, Phi = lam[nrigid:], Phi[:, nrigid:]
     n = len(lam)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(lam), -beta * np.diag(lam)]])
     B = np.vstack([np.zeros((n, G.shape[1])), Phi.T @ G]).sum(axis=1, keepdims=True)
     C = np.hstack([H @ Phi, np.zeros((H.shape[0], n))])
+    C[velocity] = np.roll(C[velocity], n, axis=1)
     _, y, _ = ss.lsim((A, B, C, np.zeros((H.shape[0], 1))), u, t, interp=True)
     return y.reshape(len(t), -1)
 
@@ -89,14 +98,15 @@ def studies(quiet_library, tmp_path_factory):
     out = {}
     for name, path in (("plate", os.path.join(EXAMPLES, "plate.yaml")),
                        ("beam_free", os.path.join(EXAMPLES, "beam_free.yaml")),
-                       ("plate_clamped", _clamped_plate(tmp_path_factory.mktemp("clamped")))):
+                       ("plate_clamped", _plate_variant(tmp_path_factory.mktemp("clamped"), "plate_clamped")),
+                       ("plate_velocity", _plate_variant(tmp_path_factory.mktemp("velocity"), "plate_velocity"))):
         scene = kryflex.load_scene(path)
         model = kryflex.Reducer(scene, quiet=True).reduce().model
         out[name] = path, SlewStudy(scene, model, steps_per_period=200, settle_periods=2.0)
     return out
 
 
-@pytest.mark.parametrize("name", ["plate", "beam_free", "plate_clamped"])
+@pytest.mark.parametrize("name", ["plate", "beam_free", "plate_clamped", "plate_velocity"])
 @pytest.mark.parametrize("kind, periods", [("step", 1.0), ("pulse", 0.5)])
 def test_held_response_matches_modal_solution(studies, name, kind, periods):
     """Both models' elastic output histories against the modal solution of their own matrices, and the error the
@@ -107,16 +117,19 @@ def test_held_response_matches_modal_solution(studies, name, kind, periods):
     t = row["full"][0]
     fine = np.linspace(0, t[-1], 40 * len(t) + 1)
     u = study.profile(row["duration_s"]).torque(fine)
-    M, K, G, H, nrigid = _dense_model(path)
-    assert study.full.dofs == M.shape[0]
-    ref_full = _modal_elastic(M, K, G, H, nrigid, study.damping_beta, u, fine)
+    M, K, G, H, nrigid, velocity = _dense_model(path)
+    assert study.full.dofs == M.shape[0] and velocity.any() == (name == "plate_velocity")
+    ref_full = _modal_elastic(M, K, G, H, nrigid, study.damping_beta, u, fine, velocity)
     b = study.model.bodies[0]
-    ref_red = _modal_elastic(b["M"], b["K"], b["G"], b["H"], nrigid, study.damping_beta, u, fine)
+    ref_red = _modal_elastic(b["M"], b["K"], b["G"], b["H"], nrigid, study.damping_beta, u, fine, velocity)
     for ref, run in ((ref_full, row["full"]), (ref_red, row["reduced"])):
         at_t = np.stack([np.interp(t, fine, ref[:, o]) for o in range(ref.shape[1])], axis=1)
         scale = np.abs(at_t).max(axis=0)
         assert np.all(scale > 0)
-        assert np.all(np.abs(run[2] - at_t).max(axis=0) < 2e-3 * scale), (name, kind)
+        # Newmark's phase error at h = 1/(200 f_top): measured up to 1.4e-3 of the peak on displacements and 2.5e-3
+        # on the velocity (which weighs the higher modes by their frequency)
+        tol = np.where(velocity, 4e-3, 2e-3)
+        assert np.all(np.abs(run[2] - at_t).max(axis=0) < tol * scale), (name, kind)
     err_ref = (np.abs(ref_full - ref_red).max(axis=0) / np.abs(ref_full).max(axis=0)).max()
     assert abs(row["elastic_error"] - err_ref) < 0.05 * err_ref + 1e-5, (row["elastic_error"], err_ref)
 

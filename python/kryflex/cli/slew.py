@@ -1,8 +1,8 @@
 """kryflex slew SCENE -o OUTDIR: the slewing study: the scene reduced as `kryflex reduce` does, then the full-order
 and the reduced model integrated in time along the same slews at increasing rates (python/kryflex/slew/); a scene
 without revolute joints (a single structure) instead gets a step or pulse of force on its inputs, at rest, of
-decreasing duration. Writes slew.csv, slew.md, slew.json, slew.png and slew_histories.png. The time integration is serial: the command runs on one
-rank (under mpirun with more it refuses, exit 2)."""
+decreasing duration. Writes slew.csv, slew.md, slew.json, slew.png and slew_histories.png. The time integration is
+serial: the command runs on one rank (under mpirun with more it refuses, exit 2)."""
 import os
 import sys
 
@@ -22,18 +22,20 @@ def parser():
     p.add_argument("scene", help="scene file (YAML)")
     p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
     p.add_argument("--profile", default=None, choices=("slew", "spinup", "step", "pulse"),
-                   help="slew: rest to rest (cycloidal); spinup: up to a constant rate, then spinning; step: the angles "
-                        "held and a force ramped up on the inputs in the rise time T (cycloidal), then held; pulse: the "
-                        "same with a Hann pulse of length T (default: slew, or step for a scene without revolute "
-                        "joints, which takes only step and pulse)")
+                   help="slew: rest to rest (cycloidal); spinup: up to a constant rate, then spinning; step: the "
+                        "angles held and a force ramped up on the inputs in the rise time T (cycloidal), then held; "
+                        "pulse: the same with a Hann pulse of length T (default: slew, or step for a scene without "
+                        "revolute joints, which takes only step and pulse)")
     p.add_argument("--amplitude", type=float, default=None,
                    help="angle change of every revolute joint, deg (default: the span of the scene's angles)")
     p.add_argument("--force", type=float, default=1.0,
                    help="peak of the step or pulse on each driven input, in the inputs' units (default 1; the models "
                         "are linear: the relative errors do not depend on it)")
     p.add_argument("--input", default=None,
-                   help="comma list of the inputs the drive torque acts on (default: every input of the scene)")
-    p.add_argument("--rates", type=int, default=10, help="number of slew durations (default 10)")
+                   help="comma list of the inputs the drive torque (or the step or pulse) acts on (default: every "
+                        "input of the scene)")
+    p.add_argument("--rates", type=int, default=10,
+                   help="number of slew durations, or step and pulse lengths (default 10)")
     p.add_argument("--periods-max", type=float, default=20.0,
                    help="slowest slew duration (longest input) in first flexible periods P1 (default 20)")
     p.add_argument("--periods-min", type=float, default=0.02,
@@ -61,9 +63,9 @@ def run(argv):
         say(p.format_help())
         return EXIT_OK
     args = collective(lambda: p.parse_args(split_petsc_options(
-        argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--force", "--rates", "--periods-max", "--periods-min",
-               "--steps-per-period", "--settle-periods"}, {"-quiet", "--quiet", "--no-step-check", "--exudyn-check",
-                                                             "--exudyn-ffrf"})))
+        argv, {"-o", "--output", "--input", "--profile", "--amplitude", "--force", "--rates", "--periods-max",
+               "--periods-min", "--steps-per-period", "--settle-periods"},
+        {"-quiet", "--quiet", "--no-step-check", "--exudyn-check", "--exudyn-ffrf"})))
     collective(_one_rank)
     from .. import _core
     from ..io.scene import SceneError, load_scene

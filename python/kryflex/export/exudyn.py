@@ -343,7 +343,8 @@ def linearized_frequencies(mbs, zero_tol=ZERO_TOL, rigid=0.0):
     """The assembled system's linearized undamped frequencies (Hz) at its initial state, through Exudyn's
     ComputeODE2Eigenvalues (constraints by the null space of their Jacobian): (flexible frequencies ascending, number
     of rigid-body and mechanism modes: |lambda| <= zero_tol * max |lambda| or <= rigid (rigid_level), and the lowest
-    of those eigenvalues when below -zero_tol * max |lambda|, as a stiffness rounded when exported gives them, else 0)."""
+    of those eigenvalues when below -zero_tol * max |lambda|, as a stiffness rounded when exported gives them,
+    else 0)."""
     lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False)
     lam = np.sort(np.real(np.asarray(lam)))
     top = np.abs(lam).max() if lam.size else 0.0

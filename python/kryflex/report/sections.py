@@ -382,8 +382,8 @@ def _section_kept(c):
     kept = sorted(s["kept_modes"])
     discarded = [m for m in range(1, count + 1) if m not in kept]
     lines = ["## Kept Krylov modes and static correction", ""]
-    text = (f"{'For the structure' if c.single else 'At α_G (' + c.angle(c.label_g) + ')'} the projection mode set keeps "
-            f"{len(kept)} of the {count} Krylov modes: "
+    where = "For the structure" if c.single else f"At α_G ({c.angle(c.label_g)})"
+    text = (f"{where} the projection mode set keeps {len(kept)} of the {count} Krylov modes: "
             f"modes {mode_ranges(kept)} (numbers of Table 3.{c.labels.index(c.label_g) + 1}).")
     if discarded:
         best = max(discarded, key=lambda m: kr["importance"][m - 1])
@@ -497,8 +497,8 @@ def _table_dominant_errors(c):
         overall = max(worst.values())
         text = ""
         if at_g is not None:
-            text = (f"{'For the structure' if c.single else 'At α_G'} the {len(dominant.get(c.label_g) or [])} dominant "
-                    "full-order modes are captured to "
+            text = (f"{'For the structure' if c.single else 'At α_G'} the "
+                    f"{len(dominant.get(c.label_g) or [])} dominant full-order modes are captured to "
                     f"within {fmt_percent(at_g, 3)}; ")
         text += f"over all configurations the worst dominant-mode frequency error is {fmt_percent(overall, 3)}."
         lines += [text, ""]

@@ -134,7 +134,8 @@ class SlewBodies:
                   for j in model.joints]
         return cls("reduced", sp.block_diag([b["M"] for b in bodies]), sp.block_diag([b["K"] for b in bodies]),
                    np.vstack([b["G"] for b in bodies]), np.hstack([b["H"] for b in bodies]),
-                   [b["iface"] if b.get("iface") is not None else np.zeros((0, v)) for b, v in zip(bodies, model.sizes)],
+                   [b["iface"] if b.get("iface") is not None else np.zeros((0, v))
+                    for b, v in zip(bodies, model.sizes)],
                    [b["rigid"] for b in bodies], joints, model.sizes, model.output_quantities())
 
     # ------------------------------------------------------------------ the joint ties

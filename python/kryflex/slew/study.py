@@ -41,26 +41,8 @@ class SlewStudy:
     def __init__(self, scene, model, profile=None, amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
                  steps_per_period=20, settle_periods=2.0, progress=None, inputs=None, force=1.0):
         jointfree = scene.info["revolute"] < 1
-        if profile is None:
-            profile = "step" if jointfree else "slew"
-        if jointfree and profile not in HELD:
-            raise ValueError("scene '%s' has no revolute joint: there is no angle to slew with --profile %s; use "
-                             "--profile step or pulse (a force history on the structure at rest; step is the default)"
-                             % (scene.name, profile))
-        if profile in HELD and amplitude_deg is not None:
-            raise ValueError("--amplitude is the slew's angle change: --profile %s holds the angles; give the input "
-                             "history's peak with --force" % profile)
-        if not (np.isfinite(force) and force != 0):
-            raise ValueError("--force must be a finite, non-zero number (got %g)" % force)
-        if not (periods_max > periods_min > 0) or nrates < 2:
-            raise ValueError("give 0 < --periods-min < --periods-max and --rates of at least 2 (got %g, %g, %d)"
-                             % (periods_min, periods_max, nrates))
-        if steps_per_period < 4:
-            raise ValueError("--steps-per-period must be at least 4 (got %d)" % steps_per_period)
-        if not settle_periods >= 0:
-            raise ValueError("--settle-periods must be >= 0 (got %g)" % settle_periods)
-        if amplitude_deg is not None and not np.all(np.isfinite(amplitude_deg)):
-            raise ValueError("--amplitude must be a finite angle in degrees (got %s)" % amplitude_deg)
+        profile = _checked_settings(scene.name, jointfree, profile, amplitude_deg, force, periods_max, periods_min,
+                                    nrates, steps_per_period, settle_periods)
         self.scene, self.model, self.kind, self.force = scene, model, profile, float(force)
         self.held, self.jointfree = profile in HELD, jointfree
         self.damping_matrices = list(getattr(scene, "damping_matrices", []))
@@ -215,6 +197,33 @@ class SlewStudy:
             if row["error"] > self.accuracy:
                 return row
         return None
+
+
+def _checked_settings(name, jointfree, profile, amplitude_deg, force, periods_max, periods_min, nrates,
+                      steps_per_period, settle_periods):
+    """The profile to run (the default: slew, or step without revolute joints), after checking the settings: a
+    ValueError naming the option otherwise."""
+    if profile is None:
+        profile = "step" if jointfree else "slew"
+    if jointfree and profile not in HELD:
+        raise ValueError("scene '%s' has no revolute joint: there is no angle to slew with --profile %s; use "
+                         "--profile step or pulse (a force history on the structure at rest; step is the default)"
+                         % (name, profile))
+    if profile in HELD and amplitude_deg is not None:
+        raise ValueError("--amplitude is the slew's angle change: --profile %s holds the angles; give the input "
+                         "history's peak with --force" % profile)
+    if not (np.isfinite(force) and force != 0):
+        raise ValueError("--force must be a finite, non-zero number (got %g)" % force)
+    if not (periods_max > periods_min > 0) or nrates < 2:
+        raise ValueError("give 0 < --periods-min < --periods-max and --rates of at least 2 (got %g, %g, %d)"
+                         % (periods_min, periods_max, nrates))
+    if steps_per_period < 4:
+        raise ValueError("--steps-per-period must be at least 4 (got %d)" % steps_per_period)
+    if not settle_periods >= 0:
+        raise ValueError("--settle-periods must be >= 0 (got %g)" % settle_periods)
+    if amplitude_deg is not None and not np.all(np.isfinite(amplitude_deg)):
+        raise ValueError("--amplitude must be a finite angle in degrees (got %s)" % amplitude_deg)
+    return profile
 
 
 def _resample(run, t):

@@ -515,8 +515,10 @@ def test_single_structure_is_never_an_angle(tmp_path, ranks):
     assert {"bode_structure_corner_uz_tip_force.png", "importance_structure.png"} <= set(os.listdir(out))
     assert "Configurations: the structure." in report
     # no reduction configuration to choose: the report's headings, captions and tables name the structure
-    assert "α_G" not in report and "at every angle" not in report, re.findall(r".{40}(?:α_G|at every angle).{20}", report)
-    assert "## The reduction configuration" in report and "Table 4b. System natural frequencies of the structure" in report
+    assert "α_G" not in report and "at every angle" not in report, \
+        re.findall(r".{40}(?:α_G|at every angle).{20}", report)
+    assert "## The reduction configuration" in report
+    assert "Table 4b. System natural frequencies of the structure" in report
 
 
 @needs_cli

@@ -256,6 +256,12 @@ def test_rounded_punch_model_loads_and_exports(guide_run):
     assert "kryflex: warning:" not in run_of(runs, "kryflex export out/plate/reduced.h5 -o out/plate_exudyn.npz")["err"]
     e = np.load(os.path.join(work, "out", "nastran.npz"))
     assert int(e["nsystems"]) == 1 and int(e["body0/floating"]) == 0
+    # on 2 ranks: the same frequencies, one warning
+    two = run_of(runs, "mpiexec -n 2 kryflex reassemble out/nastran/reduced.h5")["out"]
+    one = run_of(runs, "kryflex reassemble out/nastran/reduced.h5")["out"]
+    assert two.splitlines()[-1] == one.splitlines()[-1] and "flexible frequencies" in one.splitlines()[-1]
+    exu2 = run_of(runs, "mpiexec -n 2 kryflex export out/nastran/reduced.h5")
+    assert "Exudyn 3, kryflex 3" in exu2["out"] and exu2["err"].count("kryflex: warning:") == 1
 
 
 def test_damped_velocity_output_in_slew(guide_run):

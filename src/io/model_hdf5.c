@@ -791,6 +791,31 @@ static PetscErrorCode CheckNames(KFReader *r, const char where[], const char nam
   PetscFunctionReturn(0);
 }
 
+/* The largest |r^T K r| / r^T r over the body's stored rigid motions r (the columns of dataset 'rigid'; M = I): the
+   energy a stiffness exported with rounding (8 digits in a Nastran punch) leaves in its rigid-body modes. The
+   projection keeps it, so the reduced K is indefinite by about that much; the reader allows RIGID_ENERGY_MARGIN
+   times it (the margin kryflex check's null-pivot count takes), not more. 0 without stored rigid motions. */
+#define RIGID_ENERGY_MARGIN 100.0
+static PetscReal RigidEnergy(const KFModelBody *R)
+{
+  const PetscInt v = R->v;
+  PetscReal      worst = 0;
+
+  if (!R->rigid) return 0;
+  for (PetscInt m = 0; m < 6; m++) {
+    const PetscReal *x = R->rigid + m * v;
+    PetscReal        xx = 0, xkx = 0;
+    for (PetscInt i = 0; i < v; i++) {
+      PetscReal kx = 0;
+      for (PetscInt j = 0; j < v; j++) kx += R->K[i + j * v] * x[j];
+      xx += x[i] * x[i];
+      xkx += x[i] * kx;
+    }
+    if (xx > 0) worst = PetscMax(worst, PetscAbsReal(xkx) / xx);
+  }
+  return worst;
+}
+
 /* The reduced mass is the identity and the reduced stiffness symmetric positive semi-definite
    (projections of the full ones on a mass-orthonormal basis): an edit that breaks this would make reassembly fail or give a wrong model. The
    tolerances are far above the rounding of the projection (about 1e-16 for symmetry and 1e-12 for the smallest
@@ -799,7 +824,7 @@ static PetscErrorCode CheckBodyMatrices(KFReader *r, const char where[], KFModel
 {
   const PetscInt v = R->v;
   PetscBLASInt   bn, info, lwork;
-  PetscReal     *A, *w, *work, wq, amax, asym;
+  PetscReal     *A, *w, *work, wq, amax, asym, rigid;
 
   PetscFunctionBegin;
   if (r->st->code || v < 1) PetscFunctionReturn(0);
@@ -828,8 +853,9 @@ static PetscErrorCode CheckBodyMatrices(KFReader *r, const char where[], KFModel
     PetscCallBLAS("LAPACKsyev", LAPACKsyev_("N", "L", &bn, A, &bn, w, work, &lwork, &info));
     PetscCall(PetscFree(work));
     amax = PetscMax(PetscAbsReal(w[0]), PetscAbsReal(w[v - 1]));
+    rigid = RigidEnergy(R);
     if (info) PetscCall(Inconsistent(r, "%sdataset 'K': its eigenvalues cannot be computed (LAPACK syev info %d)", where, (int)info));
-    else if (w[0] < -1e-8 * amax) PetscCall(Inconsistent(r, "%sdataset 'K' has the negative eigenvalue %g (largest %g): a reduced stiffness matrix is positive semi-definite", where, (double)w[0], (double)w[v - 1]));
+    else if (w[0] < -PetscMax(1e-8 * amax, RIGID_ENERGY_MARGIN * rigid)) PetscCall(Inconsistent(r, "%sdataset 'K' has the negative eigenvalue %g (largest %g; the energy K carries in the body's rigid motions, dataset 'rigid', is %g): a reduced stiffness matrix is positive semi-definite up to the energy of its rigid motions", where, (double)w[0], (double)w[v - 1], (double)rigid));
   }
   /* the body basis is M-orthonormal (KFMOrthonormalize before the projection), so the reduced mass is the identity
      to rounding; reassembly and the rigid modes take it as it is, so an edited M would give another model silently */

@@ -1,6 +1,7 @@
 """kryflex export REDUCED -o OUT.npz [--format neutral|exudyn]: the reduced bodies for multibody codes."""
 import json
 import os
+import sys
 
 import numpy as np
 
@@ -122,6 +123,14 @@ def _refuse(code, text):
     raise Failure(code, text)
 
 
+def _warn_rigid_energy(lowest):
+    """A rigid mode with negative energy (a stiffness rounded when exported) drifts away in a simulation: said once."""
+    if lowest < 0:
+        say("kryflex: warning: the Exudyn system's rigid-body modes carry the stiffness's rounding: lowest eigenvalue "
+            "%.3g rad^2/s^2 (%.3g Hz imaginary), they drift in a simulation; `kryflex check SCENE` says what to do"
+            % (lowest, np.sqrt(-lowest) / (2 * np.pi)), sys.stderr)
+
+
 def check_exudyn_system(data):
     """A structure without joints whose bodies do not all float: its reassembled system (data.systems[0]) as one Exudyn
     ObjectGenericODE2, whose linearized frequencies must be kryflex's (a one-item list like check_exudyn's)."""
@@ -129,7 +138,8 @@ def check_exudyn_system(data):
     from ..export.systems import system_mbs
     system = data.systems[0]
     _, mbs, _ = system_mbs(system, lambda t: 0.0)
-    fx, nzero = linearized_frequencies(mbs)
+    fx, nzero, low = linearized_frequencies(mbs, rigid=system.get("rigid_level", 0.0))
+    _warn_rigid_energy(low)
     fk = np.asarray(system["frequencies_hz"], float)
     if len(fx) != len(fk):
         raise Failure(EXIT_NUMERIC, "the Exudyn system has %d flexible modes, kryflex's reassembled one %d: the export "
@@ -146,7 +156,7 @@ def check_exudyn_system(data):
 def check_exudyn(model, data, angles_list):
     """Per configuration: kryflex's reassembled flexible frequencies, the Exudyn system's linearized ones, and their
     largest relative difference; a Failure when they differ by more than MATCH_TOL."""
-    from ..export.exudyn import build_mbs, linearized_frequencies
+    from ..export.exudyn import build_mbs, linearized_frequencies, rigid_level
     out = []
     for angles in angles_list:
         try:
@@ -154,7 +164,8 @@ def check_exudyn(model, data, angles_list):
         except ValueError as e:
             raise Failure(EXIT_INPUT, "--angle %s: %s" % (",".join("%g" % a for a in angles), e)) from None
         _, mbs, _ = build_mbs(data, angles)
-        fx, nzero = linearized_frequencies(mbs)
+        fx, nzero, low = linearized_frequencies(mbs, rigid=rigid_level(system.M, system.K, system.rigid_modes))
+        _warn_rigid_energy(low)
         fk = np.asarray(system.frequencies_hz)
         if len(fx) != len(fk):
             raise Failure(EXIT_NUMERIC, "at %s deg the Exudyn system has %d flexible modes, kryflex's %d: the export "

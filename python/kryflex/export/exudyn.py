@@ -324,21 +324,37 @@ def output_values(mbs, handles):
 
 # eigenvalues at or below this fraction of the largest are rigid-body or mechanism modes
 ZERO_TOL = 1e-12
+# or at or below this many times the energy K carries in kryflex's rigid modes (a stiffness rounded when exported
+# leaves them a little, of either sign: kryflex check reports it; the same margin as its null-pivot count)
+RIGID_MARGIN = 100.0
 
 
-def linearized_frequencies(mbs, zero_tol=ZERO_TOL):
+def rigid_level(M, K, Phir):
+    """RIGID_MARGIN x the largest |Rayleigh quotient| of K on the rigid modes Phir (rad^2/s^2), 0 without them."""
+    if Phir is None or not np.asarray(Phir).shape[1]:
+        return 0.0
+    Phir = np.asarray(Phir)
+    import scipy.linalg as sl
+    lam = sl.eigh(Phir.T @ K @ Phir, Phir.T @ M @ Phir, eigvals_only=True)
+    return RIGID_MARGIN * float(np.abs(lam).max())
+
+
+def linearized_frequencies(mbs, zero_tol=ZERO_TOL, rigid=0.0):
     """The assembled system's linearized undamped frequencies (Hz) at its initial state, through Exudyn's
     ComputeODE2Eigenvalues (constraints by the null space of their Jacobian): (flexible frequencies ascending, number
-    of rigid-body and mechanism modes, |lambda| <= zero_tol * max |lambda|)."""
+    of rigid-body and mechanism modes: |lambda| <= zero_tol * max |lambda| or <= rigid (rigid_level), and the lowest
+    of those eigenvalues when below -zero_tol * max |lambda|, as a stiffness rounded when exported gives them,
+    else 0)."""
     lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False)
     lam = np.sort(np.real(np.asarray(lam)))
     top = np.abs(lam).max() if lam.size else 0.0
-    zero = np.abs(lam) <= zero_tol * top
+    zero = np.abs(lam) <= max(zero_tol * top, rigid)
     flex = lam[~zero]
     if np.any(flex < 0):
         raise ExportError("the Exudyn system has %d negative eigenvalue(s) (lowest %.3g): its linearization is unstable"
                           % (int(np.sum(flex < 0)), flex.min()))
-    return np.sqrt(flex) / (2 * np.pi), int(zero.sum())
+    low = float(lam[zero].min()) if zero.any() else 0.0
+    return np.sqrt(flex) / (2 * np.pi), int(zero.sum()), low if low < -zero_tol * top else 0.0
 
 
 def joint_angles(mbs, handles):

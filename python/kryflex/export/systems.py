@@ -16,14 +16,16 @@ SYSTEM_ARRAYS = ("angles_deg", "M", "K", "B", "C", "D", "frequencies_hz")
 def trimmed_systems(model, configurations_deg):
     """Per configuration (degrees, one angle per revolute joint; [] without revolute joints) the model's reassembled
     system as it trims it: a dict of SYSTEM_ARRAYS (D zero when nothing was trimmed there), damping_matrix (or None)
-    and rigid_modes (their count)."""
+    rigid_modes (their count) and rigid_level (exudyn.rigid_level: the energy of the rigid modes, with its margin)."""
+    from .exudyn import rigid_level
     out = []
     for angles in configurations_deg:
         s = model.at(angles)
         D = s.feedthrough if s.feedthrough is not None else np.zeros((s.C.shape[0], s.B.shape[1]))
         out.append(dict(angles_deg=np.asarray(s.angles_deg, float), M=s.M, K=s.K, B=s.B, C=s.C, D=np.asarray(D),
                         frequencies_hz=np.asarray(s.frequencies_hz, float), damping_matrix=s.damping_matrix,
-                        trimmed=int(s.trimmed), rigid_modes=0 if s.rigid_modes is None else int(s.rigid_modes.shape[1])))
+                        trimmed=int(s.trimmed), rigid_modes=0 if s.rigid_modes is None else int(s.rigid_modes.shape[1]),
+                        rigid_level=rigid_level(s.M, s.K, s.rigid_modes)))
     return out
 
 

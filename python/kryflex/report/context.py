@@ -63,6 +63,19 @@ class _Context:
             return "α = (" + ", ".join(f"{v:g}°" for v in values) + ")"
         return f"α = {label}°"
 
+    @property
+    def single(self):
+        """True for a scene without revolute joints: its one configuration is the structure, there is no α_G."""
+        return self.no_joint(self.label_g)
+
+    def g_mark(self, label):
+        """' (α_G)' after the reduction configuration's angle, '' for any other and for a structure without joints."""
+        return " (α_G)" if label == self.label_g and not self.single else ""
+
+    def at_g(self):
+        """'at α_G (α = 30°)', or 'of the structure' without revolute joints."""
+        return "of the structure" if self.single else f"at α_G ({self.angle(self.label_g)})"
+
     def short_angle(self, label):
         if self.no_joint(label):
             return "the structure"

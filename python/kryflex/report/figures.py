@@ -36,7 +36,7 @@ def _render_plots(summary, plot_names):
     arrays = {label: plots.frf_arrays(summary["frf"][label]) for label in c.labels}
     for label in c.labels:
         freq, full, red = arrays[label]
-        titles = [f"{c.angle(label)}{' (α_G)' if label == c.label_g else ''}: {c.entry_name((o, i))}, {c.model_name}"
+        titles = [f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"
                   for (o, i) in c.entries]
         pngs = plots.bode_pngs(freq, [(full[:, o, i], red[:, o, i], t) for (o, i), t in zip(c.entries, titles)])
         for (o, i), png in zip(c.entries, pngs):
@@ -47,7 +47,7 @@ def _render_plots(summary, plot_names):
         plots.bode_overview_figure(panels, f"{summary['scene']}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
     for label in c.labels:
         kr = summary["krylov"][label]
-        title = f"Krylov mode importance, {c.angle(label)}{' (α_G)' if label == c.label_g else ''}"
+        title = f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}"
         yield plot_names["importance"][label], plots.figure_png_bytes(plots.importance_figure(
             kr["frequency_hz"], kr["importance"], kr["kept"], title,
             threshold=settings.get("keep_threshold"), band_hz=summary.get("band_hz")))

@@ -126,7 +126,8 @@ def _section_accuracy(c):
     check = s.get("reference_check")
     if check and check.get("error") is not None:
         lines += [f"The full-order reference was checked against direct solves of the full system (K − ω²M) x = G "
-                  f"off resonance at every angle: worst disagreement {check['error']:.2e} of the pair's peak "
+                  f"off resonance {'of the structure' if c.single else 'at every angle'}: worst disagreement "
+                  f"{check['error']:.2e} of the pair's peak "
                   f"(allowed {check.get('rtol') or 1e-6:.0e}).", ""]
     met, worst = s.get("target_met"), s.get("error_max")
     where, kind = c.chosen.get("worst_where"), c.chosen.get("worst_kind")
@@ -198,7 +199,7 @@ def _section_choice(c):
                          "max system dofs", "error", "target", ""], rows, "lrrrrrrll"), ""]
     elif s.get("settings", {}).get("search") is False:
         lines += ["The search was off (`reduction.search: false`): the paper's fixed recipe (fixed moments, "
-                  "keep threshold, α_G rule).", ""]
+                  "keep threshold%s)." % ("" if c.single else ", α_G rule"), ""]
     if hankel:
         rows = []
         for label in c.labels:
@@ -343,7 +344,7 @@ def _section_krylov(c):
         if kr.get("gram_condition_raw") is not None:
             extra.append(f"condition of the raw-recurrence Gram matrix {kr['gram_condition_raw']:.3g}")
         caption = f"Table 3.{number}. Normalized importance of the Krylov modes ({c.angle(label)}, c = {count})"
-        if label == c.label_g:
+        if label == c.label_g and not c.single:
             caption += ", the reduction configuration α_G"
         lines += [caption + "." + (" " + "; ".join(extra) + "." if extra else ""), ""]
         rows = [[f"{m + 1}*" if kept else str(m + 1), fmt_freq(f), f"{imp:.4f}"]
@@ -354,7 +355,7 @@ def _section_krylov(c):
 
 def _section_alpha_g(c):
     s = c.s
-    lines = ["## Choice of the reduction configuration α_G", ""]
+    lines = ["## The reduction configuration" if c.single else "## Choice of the reduction configuration α_G", ""]
     rows = []
     for label in c.labels:
         kept = _kept_numbers(s["krylov"][label])
@@ -381,7 +382,8 @@ def _section_kept(c):
     kept = sorted(s["kept_modes"])
     discarded = [m for m in range(1, count + 1) if m not in kept]
     lines = ["## Kept Krylov modes and static correction", ""]
-    text = (f"At α_G ({c.angle(c.label_g)}) the projection mode set keeps {len(kept)} of the {count} Krylov modes: "
+    where = "For the structure" if c.single else f"At α_G ({c.angle(c.label_g)})"
+    text = (f"{where} the projection mode set keeps {len(kept)} of the {count} Krylov modes: "
             f"modes {mode_ranges(kept)} (numbers of Table 3.{c.labels.index(c.label_g) + 1}).")
     if discarded:
         best = max(discarded, key=lambda m: kr["importance"][m - 1])
@@ -467,7 +469,7 @@ def _table_reduced_system(c):
         f_full = fmt_freq(full[m]) + (" †" if m in dominant else "") if m < len(full) else ""
         f_red = fmt_freq(reduced[m]) + (" ‡" if m in captured else "") if m < len(reduced) else ""
         rows.append([str(c.mode_number(m)), f_full, f_red])
-    return [f"Table 4b. System natural frequencies at α_G ({c.angle(c.label_g)}): full order Ω and reduced ω.", "",
+    return [f"Table 4b. System natural frequencies {c.at_g()}: full order Ω and reduced ω.", "",
             table(["Mode", "Ω_system full (Hz)", "ω_system reduced (Hz)"], rows), "",
             "† dominant full-order system modes; ‡ the reduced mode nearest to each of them.", ""]
 
@@ -495,7 +497,8 @@ def _table_dominant_errors(c):
         overall = max(worst.values())
         text = ""
         if at_g is not None:
-            text = (f"At α_G the {len(dominant.get(c.label_g) or [])} dominant full-order modes are captured to "
+            text = (f"{'For the structure' if c.single else 'At α_G'} the "
+                    f"{len(dominant.get(c.label_g) or [])} dominant full-order modes are captured to "
                     f"within {fmt_percent(at_g, 3)}; ")
         text += f"over all configurations the worst dominant-mode frequency error is {fmt_percent(overall, 3)}."
         lines += [text, ""]
@@ -569,7 +572,8 @@ def _mismatch_sentence(c, found, model):
         text += f"; and {len(found) - MAX_MISMATCHES_LISTED} more (see summary.json)"
     text += "."
     if any(label == c.label_g for label, _, _, _ in found) and model.startswith("single"):
-        text += (" This includes α_G itself, where the match is exact by construction: "
+        text += (" This includes " + ("the structure's own expansion point" if c.single else "α_G itself") +
+                 ", where the match is exact by construction: "
                  "treat it as a defect of the reduction, not an approximation.")
     return text
 
@@ -583,7 +587,8 @@ def _section_ratios(c):
         o, i = entry
         rows = [[str(k)] + [fmt_ratio(ratios[l][k][o][i]) if k < len(ratios[l]) else DASH for l in c.labels]
                 for k in range(count)]
-        lines += [f"Table 6 ({c.entry_name(entry)}). L_full^k / L_reduced^k, single-angle model built at α_G.", "",
+        lines += [f"Table 6 ({c.entry_name(entry)}). L_full^k / L_reduced^k, single-angle model built "
+                  f"{'on the structure' if c.single else 'at α_G'}.", "",
                   table(["k"] + [c.short_angle(l) for l in c.labels], rows), ""]
     lines += [f"{DASH} : the full-order moment is negligible, so the ratio is undefined.", ""]
     lines += [_mismatch_sentence(c, _mismatches(ratios, c), "single-angle model"), ""]
@@ -601,7 +606,7 @@ def _section_multi(c):
     multi_body = multi.get("dofs_per_body") or {}
     bodies = list(dict.fromkeys(list(single_body) + list(multi_body)))
     if bodies:
-        rows = [["single-angle (α_G)"] + [str(single_body.get(b, DASH)) for b in bodies],
+        rows = [["single-angle" + c.g_mark(c.label_g)] + [str(single_body.get(b, DASH)) for b in bodies],
                 ["multi-angle"] + [str(multi_body.get(b, DASH)) for b in bodies]]
         lines += [table(["model"] + [f"{b} dofs" for b in bodies], rows), ""]
     single_sys = red.get("system_dofs") or {}
@@ -636,7 +641,7 @@ def _section_frf(c, plot_names):
     lines += ["", "![Relative FRF error](frf_error.png)", "", "![Moment ratios](moment_ratios.png)", "",
               "Importance of the Krylov modes: " + ", ".join(
                   f"[{c.short_angle(l)}]({plot_names['importance'][l]})" for l in c.labels), "",
-              f"![Importance at α_G]({plot_names['importance'][c.label_g]})", ""]
+              f"![Importance {c.at_g()}]({plot_names['importance'][c.label_g]})", ""]
     return lines
 
 

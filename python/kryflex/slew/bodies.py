@@ -56,8 +56,10 @@ class SlewBodies:
     parent_interface, child_interface (interface indices), type, axis, R0 (3x3 or None), angle (index into the
     angle vector, or None for a fixed joint)."""
 
-    def __init__(self, label, M, K, G, H, iface, rigid, joints, sizes):
+    def __init__(self, label, M, K, G, H, iface, rigid, joints, sizes, quantities=None):
         self.label = label
+        # what each output reads: displacement (H z), velocity (H z') or acceleration (H z'')
+        self.quantities = list(quantities) if quantities is not None else ["displacement"] * np.shape(H)[0]
         self.M, self.K = sp.csr_matrix(M), sp.csr_matrix(K)
         self.G, self.H = np.asarray(G, float), np.asarray(H, float)
         self.sizes = list(sizes)
@@ -104,13 +106,27 @@ class SlewBodies:
         for j in scene.joints:
             joints.append(dict(j, angle=scene.revolute.index(j["name"]) if j["type"] == "revolute" else None))
         return cls("full", sp.block_diag(Ms), sp.block_diag(Ks), np.vstack(Gs), np.hstack(Hs), iface, rigid, joints,
-                   scene.body_dofs)
+                   scene.body_dofs, scene.output_quantities)
+
+    @classmethod
+    def from_system(cls, scene, angles_rad=()):
+        """The full-order model of a scene without joints: the assembled system as the reduction's verification
+        builds it (constraints, springs and the dof layouts applied; its rigid-body modes from the C library), one
+        block, no ties."""
+        system = _core.CSystem(scene.cscene)
+        system.set_angles(np.asarray(angles_rad, float))
+        M, K, G, Ht = system.matrices()
+        Phi, _ = system.rigid_modes()
+        n = M.getSize()[0]
+        rigid = _csr(Phi).toarray() if Phi is not None and Phi.getSize()[1] else np.zeros((n, 0))
+        return cls("full", _csr(M), _csr(K), _csr(G).toarray(), _csr(Ht).toarray().T, [np.zeros((0, n))], [rigid],
+                   [], [n], scene.output_quantities)
 
     @classmethod
     def from_model(cls, model):
         """A reduced model: each reduced body's coordinates (the C reduced bodies, eq. 18-19)."""
         bodies = model.bodies
-        if any(b["rigid"] is None for b in bodies):
+        if any(b.get("rigid") is None for b in bodies):
             raise ValueError("the reduced model lacks its bodies' rigid motions (a model from an older kryflex): "
                              "reduce the scene again")
         revolute = model.revolute
@@ -118,7 +134,9 @@ class SlewBodies:
                   for j in model.joints]
         return cls("reduced", sp.block_diag([b["M"] for b in bodies]), sp.block_diag([b["K"] for b in bodies]),
                    np.vstack([b["G"] for b in bodies]), np.hstack([b["H"] for b in bodies]),
-                   [b["iface"] for b in bodies], [b["rigid"] for b in bodies], joints, model.sizes)
+                   [b["iface"] if b.get("iface") is not None else np.zeros((0, v))
+                    for b, v in zip(bodies, model.sizes)],
+                   [b["rigid"] for b in bodies], joints, model.sizes, model.output_quantities())
 
     # ------------------------------------------------------------------ the joint ties
 

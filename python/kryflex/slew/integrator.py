@@ -54,13 +54,25 @@ class Integrator:
         key = np.asarray(angles_rad, float).tobytes()
         if key not in self._rigid:
             Phi = b.rigid_modes(angles_rad)
-            Phi = Phi.toarray() if sp_issparse(Phi) else np.asarray(Phi)
+            Phi = _range(Phi.toarray() if sp_issparse(Phi) else np.asarray(Phi))
             MPhi = np.asarray(b.M @ Phi)
             if len(self._rigid) > 4:          # a slew visits each angle once: keep only the last few
                 self._rigid.clear()
             self._rigid[key] = (b.H @ Phi, np.linalg.solve(Phi.T @ MPhi, MPhi.T))
         HPhi, Q = self._rigid[key]
         return b.H @ z - HPhi @ (Q @ z)
+
+    def record(self, z, v, a, angles_rad):
+        """The outputs and their elastic parts at one step: H z, or H v, H a for the outputs that read a velocity or
+        an acceleration (bodies.quantities; the rigid part taken out of the state they read)."""
+        q = self.bodies.quantities
+        y, ye = self.bodies.H @ z, self.elastic_outputs(z, angles_rad)
+        for name, x in (("velocity", v), ("acceleration", a)):
+            rows = [i for i, qi in enumerate(q) if qi == name]
+            if rows:
+                y[rows] = (self.bodies.H[rows] @ x)
+                ye[rows] = self.elastic_outputs(x, angles_rad)[rows]
+        return y, ye
 
     def run(self, profile, t_end, record_every=1, state=False):
         """Integrates from rest at t = 0 to t_end along profile (profiles.Profile: angles and torque); returns the
@@ -106,9 +118,17 @@ class Integrator:
             v = v + h * ((1 - GAMMA) * a + GAMMA * anew)
             z, a = znew, anew
             if k < len(keep) and keep[k] == n:
-                ys[k] = b.H @ z
-                ye[k] = self.elastic_outputs(z, alpha[n])
+                ys[k], ye[k] = self.record(z, v, a, alpha[n])
                 if state:
                     zs[k] = z
                 k += 1
         return (t[keep], ys, ye, zs) if state else (t[keep], ys, ye)
+
+
+def _range(Phi, rtol=1e-10):
+    """An orthonormal basis of the columns' span: the zero columns of motions a boundary condition does not admit
+    (and any dependent ones) dropped, so that Phi^T M Phi is invertible."""
+    if not Phi.shape[1]:
+        return Phi
+    U, s, _ = np.linalg.svd(Phi, full_matrices=False)
+    return U[:, s > rtol * s.max()] if s.max() > 0 else Phi[:, :0]

@@ -8,28 +8,42 @@ scale; u is the torque J alpha'' that gives the slew to a rigid mechanism of ine
   slew    rest to rest in duration T, cycloidal: s = t/T - sin(2 pi t/T) / (2 pi); peak rate 2 A / T
   spinup  rest to the constant rate A / T in T (s' a cycloidal ramp), then spinning on at that rate (alpha keeps
           growing: the ties turn through every angle)
+
+The held profiles keep every angle at alpha0 (the only configuration of a structure without revolute joints) and
+drive the inputs with a force history of peak `force` instead (the response of the structure at rest to a load):
+
+  step    u = force * s(t): the cycloidal ramp from 0 to force in the rise time T, then held
+  pulse   u = force * (1 - cos(2 pi t/T)) / 2 on [0, T], then 0 (a Hann pulse of length T)
+
+Both start from zero with zero slope, so the start at rest is consistent.
 """
 import numpy as np
 
-PROFILES = ("slew", "spinup")
+SLEWS = ("slew", "spinup")
+HELD = ("step", "pulse")
+PROFILES = SLEWS + HELD
 
 
 class Profile:
-    """kind: slew or spinup; duration T (s); amplitude (radians, one per revolute joint); alpha0 (radians)."""
+    """kind: slew, spinup, step or pulse; duration T (s); amplitude (radians, one per revolute joint; not used by the
+    held profiles); alpha0 (radians); force: the peak of a held profile's input history."""
 
-    def __init__(self, kind, duration, amplitude, alpha0):
+    def __init__(self, kind, duration, amplitude, alpha0, force=1.0):
         if kind not in PROFILES:
             raise ValueError("unknown slew profile %r: use one of %s" % (kind, ", ".join(PROFILES)))
         if not duration > 0:
             raise ValueError("the slew duration must be positive, got %g s" % duration)
-        self.kind, self.T = kind, float(duration)
+        self.kind, self.T, self.force = kind, float(duration), float(force)
+        self.held = kind in HELD
         self.amplitude = np.atleast_1d(np.asarray(amplitude, float))
+        if self.held:
+            self.amplitude = 0.0 * self.amplitude
         self.alpha0 = np.atleast_1d(np.asarray(alpha0, float))
 
     def s(self, t):
         t = np.asarray(t, float)
         T, w = self.T, 2 * np.pi / self.T
-        if self.kind == "slew":
+        if self.kind in ("slew", "step"):
             tc = np.clip(t, 0, T)
             return tc / T - np.sin(w * tc) / (2 * np.pi)
         # spinup: s' = (t/T - sin(w t) / (2 pi)) / T on [0, T] (a cycloidal ramp to the rate 1/T), then 1/T
@@ -50,12 +64,20 @@ class Profile:
         return self.alpha0[None, :] + np.asarray(self.s(t))[..., None] * self.amplitude[None, :]
 
     def torque(self, t):
-        """u(t) = s''(t) / max|s''|: unit peak."""
+        """u(t) = s''(t) / max|s''|: unit peak; a held profile's force history (see the module doc)."""
+        if self.kind == "step":
+            return self.force * self.s(t)
+        if self.kind == "pulse":
+            t = np.asarray(t, float)
+            inside = (t >= 0) & (t <= self.T)
+            return np.where(inside, self.force * 0.5 * (1 - np.cos(2 * np.pi * t / self.T)), 0.0)
         peak = 2 * np.pi / self.T ** 2 if self.kind == "slew" else 2 / self.T ** 2
         return self.s2(t) / peak
 
     @property
     def peak_rate(self):
-        """The peak angular rate of the largest joint amplitude (rad/s)."""
+        """The peak angular rate of the largest joint amplitude (rad/s); 0 for a held profile."""
+        if self.held:
+            return 0.0
         a = float(np.max(np.abs(self.amplitude))) if self.amplitude.size else 0.0
         return (2 * a / self.T) if self.kind == "slew" else a / self.T

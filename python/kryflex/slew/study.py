@@ -13,6 +13,11 @@ largest over outputs (elastic_error), and the same of the total outputs (total_e
 adequacy is the larger of the two: the elastic one alone is blind to an error of the rigid-body motion (in the
 time-varying model the rigid and elastic motions exchange momentum as the ties turn), the total one alone is made
 small by a large rigid motion.
+
+A structure without revolute joints has no angle to slew: its study is the response at rest to a force history on
+its inputs (profiles.HELD: a step of rise time T or a pulse of length T, swept over the same durations), full order
+(the assembled system, SlewBodies.from_system) against reduced, with the same error measure and files. A jointed
+scene takes the held profiles too (the angles held at the first configuration).
 """
 import time
 
@@ -20,7 +25,7 @@ import numpy as np
 
 from .bodies import SlewBodies
 from .integrator import Integrator
-from .profiles import Profile
+from .profiles import HELD, Profile
 
 
 class SlewStudy:
@@ -33,20 +38,14 @@ class SlewStudy:
     most T/100); settle_periods: first flexible periods simulated after the slew; damping: stiffness-proportional,
     the scene's damping ratio at the first flexible frequency."""
 
-    def __init__(self, scene, model, profile="slew", amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
-                 steps_per_period=20, settle_periods=2.0, progress=None, inputs=None):
-        if scene.info["revolute"] < 1:
-            raise ValueError("scene '%s' has no revolute joint: there is no angle to slew" % scene.name)
-        if not (periods_max > periods_min > 0) or nrates < 2:
-            raise ValueError("give 0 < --periods-min < --periods-max and --rates of at least 2 (got %g, %g, %d)"
-                             % (periods_min, periods_max, nrates))
-        if steps_per_period < 4:
-            raise ValueError("--steps-per-period must be at least 4 (got %d)" % steps_per_period)
-        if not settle_periods >= 0:
-            raise ValueError("--settle-periods must be >= 0 (got %g)" % settle_periods)
-        if amplitude_deg is not None and not np.all(np.isfinite(amplitude_deg)):
-            raise ValueError("--amplitude must be a finite angle in degrees (got %s)" % amplitude_deg)
-        self.scene, self.model, self.kind = scene, model, profile
+    def __init__(self, scene, model, profile=None, amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
+                 steps_per_period=20, settle_periods=2.0, progress=None, inputs=None, force=1.0):
+        jointfree = scene.info["revolute"] < 1
+        profile = _checked_settings(scene.name, jointfree, profile, amplitude_deg, force, periods_max, periods_min,
+                                    nrates, steps_per_period, settle_periods)
+        self.scene, self.model, self.kind, self.force = scene, model, profile, float(force)
+        self.held, self.jointfree = profile in HELD, jointfree
+        self.damping_matrices = list(getattr(scene, "damping_matrices", []))
         self.progress = progress or (lambda msg: None)
         configs = np.array(scene.configurations, float).reshape(len(scene.configurations), -1)
         self.alpha0_deg = configs.min(axis=0)
@@ -68,7 +67,7 @@ class SlewStudy:
         self.periods = np.geomspace(periods_max, periods_min, int(nrates))
         self.steps_per_period = int(steps_per_period)
         self.settle_periods = float(settle_periods)
-        self.full = SlewBodies.from_scene(scene)
+        self.full = SlewBodies.from_system(scene) if jointfree else SlewBodies.from_scene(scene)
         self.reduced = SlewBodies.from_model(model)
         # a model reduced with reduction.max_frequency is integrated trimmed (trimmed.py): its modes above the limit
         # out of the dynamics at every angle of the slew, as the model reassembles them
@@ -89,7 +88,7 @@ class SlewStudy:
     def profile(self, duration, still=False):
         """The angle history of the given duration; still=True: the same drive torque with the angle held at alpha0."""
         amplitude = 0.0 * self.amplitude_deg if still else self.amplitude_deg
-        return Profile(self.kind, duration, np.radians(amplitude), np.radians(self.alpha0_deg))
+        return Profile(self.kind, duration, np.radians(amplitude), np.radians(self.alpha0_deg), self.force)
 
     def step(self, duration):
         return min(1.0 / (self.steps_per_period * self.f_top), duration / 100.0)
@@ -140,19 +139,22 @@ class SlewStudy:
                     reduced_seconds=t2 - t1, full=full, reduced=red)
 
     def sweep(self):
-        """One row per slew duration, slowest first."""
+        """One row per slew duration (rise time or pulse length for the held profiles), slowest first."""
         rows = []
         for p in self.periods:
             row = self.run(p)
-            self.progress("slew of %.4g s (%.3g P1, peak %.4g deg/s): error %.3g (full %.1f s, reduced %.1f s)"
-                          % (row["duration_s"], p, row["peak_rate_deg_s"], row["error"], row["full_seconds"],
-                             row["reduced_seconds"]))
+            what = ("%s of %.4g s (%.3g P1)" % (self.kind, row["duration_s"], p) if self.held else
+                    "slew of %.4g s (%.3g P1, peak %.4g deg/s)" % (row["duration_s"], p, row["peak_rate_deg_s"]))
+            self.progress("%s: error %.3g (full %.1f s, reduced %.1f s)"
+                          % (what, row["error"], row["full_seconds"], row["reduced_seconds"]))
             rows.append(row)
         return rows
 
     def baseline(self, periods=None):
         """The slowest slew's drive torque with the angle held at alpha0: the reduced model's time-domain error at a
-        fixed angle, which the slewing errors are to be read against."""
+        fixed angle, which the slewing errors are to be read against (None for a held profile: every run is one)."""
+        if self.held:
+            return None
         return self.run(self.periods[0] if periods is None else periods, still=True)
 
     def convergence(self, periods=None):
@@ -189,11 +191,39 @@ class SlewStudy:
         return [ffrf_comparison(self, p) for p in periods]
 
     def limit(self, rows):
-        """The first row (slowest to fastest) whose error exceeds the scene's accuracy, or None."""
-        for row in sorted(rows, key=lambda r: r["peak_rate_deg_s"]):
+        """The first row (slowest to fastest: longest to shortest duration) whose error exceeds the scene's accuracy,
+        or None."""
+        for row in sorted(rows, key=lambda r: -r["duration_s"]):
             if row["error"] > self.accuracy:
                 return row
         return None
+
+
+def _checked_settings(name, jointfree, profile, amplitude_deg, force, periods_max, periods_min, nrates,
+                      steps_per_period, settle_periods):
+    """The profile to run (the default: slew, or step without revolute joints), after checking the settings: a
+    ValueError naming the option otherwise."""
+    if profile is None:
+        profile = "step" if jointfree else "slew"
+    if jointfree and profile not in HELD:
+        raise ValueError("scene '%s' has no revolute joint: there is no angle to slew with --profile %s; use "
+                         "--profile step or pulse (a force history on the structure at rest; step is the default)"
+                         % (name, profile))
+    if profile in HELD and amplitude_deg is not None:
+        raise ValueError("--amplitude is the slew's angle change: --profile %s holds the angles; give the input "
+                         "history's peak with --force" % profile)
+    if not (np.isfinite(force) and force != 0):
+        raise ValueError("--force must be a finite, non-zero number (got %g)" % force)
+    if not (periods_max > periods_min > 0) or nrates < 2:
+        raise ValueError("give 0 < --periods-min < --periods-max and --rates of at least 2 (got %g, %g, %d)"
+                         % (periods_min, periods_max, nrates))
+    if steps_per_period < 4:
+        raise ValueError("--steps-per-period must be at least 4 (got %d)" % steps_per_period)
+    if not settle_periods >= 0:
+        raise ValueError("--settle-periods must be >= 0 (got %g)" % settle_periods)
+    if amplitude_deg is not None and not np.all(np.isfinite(amplitude_deg)):
+        raise ValueError("--amplitude must be a finite angle in degrees (got %s)" % amplitude_deg)
+    return profile
 
 
 def _resample(run, t):

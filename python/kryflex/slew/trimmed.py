@@ -98,8 +98,7 @@ class TrimmedIntegrator(Integrator):
             v = v + h * ((1 - GAMMA) * a + GAMMA * anew)
             z, a = znew, anew
             if k < len(keep) and keep[k] == n:
-                ys[k] = b.H @ z
-                ye[k] = self.elastic_outputs(z, alpha[n])
+                ys[k], ye[k] = self.record(z, v, a, alpha[n])
                 if state:
                     zs[k] = z
                 k += 1

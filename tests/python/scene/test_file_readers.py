@@ -669,6 +669,41 @@ def test_edited_model_refused(model_file, tmp_path, case):
     assert re.search(r"kryflex reduce", msg), msg
 
 
+def _rigid_basis(f, body):
+    """An orthonormal basis of a body's stored rigid motions (dataset 'rigid', v x 6; M = I) and its K."""
+    R, K = f["bodies/%s/rigid" % body][()], f["bodies/%s/K" % body][()]
+    R = R if R.shape[0] == K.shape[0] else R.T
+    U, s, _ = np.linalg.svd(R, full_matrices=False)
+    return U[:, s > 1e-10 * s.max()], K
+
+
+@pytest.mark.parametrize("where, loads", [("rigid", True), ("flexible", False)])
+def test_negative_stiffness_energy_only_in_the_rigid_motions(model_file, tmp_path, where, loads):
+    """A stiffness rounded when exported gives the rigid motions a little energy of either sign and the reduced K a
+    negative eigenvalue of that size: such a file loads. The same negative eigenvalue on a flexible direction (an
+    edit) is refused. Both at -1e-6 of K's largest eigenvalue, 100 x the reader's round-off allowance."""
+    path = os.path.join(str(tmp_path), where + ".h5")
+    shutil.copy(model_file, path)
+    with h5py.File(path, "r+") as f:
+        Q, K = _rigid_basis(f, "rotor")
+        lam, X = np.linalg.eigh(K)
+        eps = 1e-6 * lam[-1]
+        if where == "rigid":
+            Knew = K - Q @ (Q.T @ K @ Q + eps * np.eye(Q.shape[1])) @ Q.T
+        else:
+            x = X[:, np.flatnonzero(lam > 1e-8 * lam[-1])[0]]
+            assert np.abs(Q.T @ x).max() < 1e-6
+            Knew = K - (x @ K @ x + eps) * np.outer(x, x)
+        assert np.isclose(np.linalg.eigvalsh(Knew)[0], -eps, rtol=1e-6)
+        rewrite(f, "bodies/rotor/K", 0.5 * (Knew + Knew.T))
+    if loads:
+        model = kryflex.ReducedModel.load(path)
+        assert len(model.at([30]).frequencies_hz) > 0
+    else:
+        with pytest.raises(kryflex.ModelFileError, match="dataset 'K' has the negative eigenvalue"):
+            kryflex.ReducedModel.load(path)
+
+
 def test_unedited_copy_loads(model_file, tmp_path):
     """The helpers themselves change nothing: a dataset rewritten with its own values loads and reassembles alike."""
     path = os.path.join(str(tmp_path), "same.h5")

@@ -106,6 +106,27 @@ def test_check_rounded_stiffness_reports_rigid_energy_in_hz():
     assert facts["stiffness_null"] == 3           # the rounded rigid modes still count as null pivots
 
 
+def test_check_symmetry_defect_and_factorization_pivots():
+    """The symmetry defect ||K - K^T||_F / ||K||_F, computed here, of a stiffness whose two triangles differ: at 1e-12
+    (round-off of an export) check reports it among the body's facts and finds nothing; at 1e-9 the scene reader
+    refuses the matrix itself, naming the measured defect and the fix (so a defect check would report never reaches
+    a reduction). The MUMPS pivot counts of the free plate are its 3 rigid modes (null pivots) and no negative one
+    (a fact, no finding)."""
+    K, M, nodes = generate.plate()
+    E = np.triu(np.random.default_rng(1).standard_normal(K.shape), 1) * (K != 0)
+    for level in (1e-12, 1e-9):
+        Ka = K + level * np.abs(K).max() * E
+        want = np.linalg.norm(Ka - Ka.T) / np.linalg.norm(Ka)
+        if level < 1e-10:
+            facts, findings = check(plate_spec(K=Ka))
+            assert np.isclose(facts["bodies"][0]["asymmetry"]["K"], want, rtol=1e-6) and findings == []
+        else:
+            with pytest.raises(kryflex.SceneError, match="not symmetric: .* = %.5e" % want):
+                check(plate_spec(K=Ka))
+    facts, findings = check(plate_spec())
+    assert facts["factor_null_pivots"] == 3 and facts["factor_negative_pivots"] == 0 and findings == []
+
+
 def test_check_massless_dofs_and_singular_mass():
     K, M, nodes = generate.plate()
     Mz = M.copy()
@@ -493,6 +514,11 @@ def test_single_structure_is_never_an_angle(tmp_path, ranks):
     assert summary["angle_labels"] == ["structure"] and summary["angles_deg"] == [[]]
     assert {"bode_structure_corner_uz_tip_force.png", "importance_structure.png"} <= set(os.listdir(out))
     assert "Configurations: the structure." in report
+    # no reduction configuration to choose: the report's headings, captions and tables name the structure
+    assert "α_G" not in report and "at every angle" not in report, \
+        re.findall(r".{40}(?:α_G|at every angle).{20}", report)
+    assert re.search(r"^## (\d+\. )?The reduction configuration$", report, re.M)
+    assert "Table 4b. System natural frequencies of the structure" in report
 
 
 @needs_cli

@@ -18,6 +18,7 @@ import scipy.linalg as sl
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 GUIDE = os.path.join(ROOT, "docs", "guide", "real-models.md")
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
+GALILEO = os.path.join(ROOT, "meshes", "galileo")
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
@@ -37,6 +38,7 @@ def blocks():
 def guide_run(tmp_path_factory):
     work = str(tmp_path_factory.mktemp("guide") / "single_structure")
     shutil.copytree(EXAMPLE, work)
+    shutil.copytree(GALILEO, os.path.join(work, "meshes", "galileo"))   # the two-body section's "repository root"
     bindir = os.path.join(os.path.dirname(work), "bin")
     os.makedirs(bindir)
     with open(os.path.join(bindir, "kryflex"), "w") as f:
@@ -129,7 +131,7 @@ def test_matlab_beam_exports_its_system(guide_run):
     """The clamped scalar-point beam of beam.mat: no rigid motion, its reassembled system in the file; the lowest
     frequency of that system against a dense eigensolve of the .mat file's own M and K."""
     work, runs = guide_run
-    out = run_of(runs, "kryflex export out/beam_mat/reduced.h5")["out"]
+    out = run_of(runs, "kryflex export out/beam_mat/reduced.h5 -o out/beam_mat.npz")["out"]
     assert "no floating frame (no rigid ux uy uz rx ry rz)" in out and "max relative difference Exudyn vs kryflex" in out
     e = np.load(os.path.join(work, "out", "beam_mat.npz"))
     assert int(e["body0/floating"]) == 0 and e["body0/missing_rigid"].size == 6 and int(e["nsystems"]) == 1
@@ -227,3 +229,57 @@ def test_matlab_models_against_a_dense_direct_solve(guide_run):
     s2 = json.load(open(os.path.join(work, "out", "beam_mat_2", "summary.json")))
     assert s1["chosen"]["dofs"] == s2["chosen"]["dofs"]
     assert abs(s1["error_max"] - s2["error_max"]) <= 1e-6 * max(s1["error_max"], 1e-12) + 1e-12
+
+
+def test_single_structure_slew(guide_run):
+    """slew on the plate (no revolute joint): the step and pulse responses at rest, every file written, the rows from
+    the longest input to the shortest, nothing about an angle."""
+    work, runs = guide_run
+    for folder, profile in (("slew", "step"), ("slew_pulse", "pulse")):
+        data = json.load(open(os.path.join(work, "out", folder, "slew.json")))
+        assert data["held"] and data["profile"] == profile and data["angles_deg"] is None
+        periods = [r["periods"] for r in data["rows"]]
+        assert periods == sorted(periods, reverse=True) and len(periods) == 4
+        for name in ("slew.csv", "slew.md", "slew.png", "slew_histories.png"):
+            assert os.path.getsize(os.path.join(work, "out", folder, name)) > 0
+        assert " deg" not in open(os.path.join(work, "out", folder, "slew.md")).read()
+    assert "the structure's step response" in run_of(runs, "kryflex slew plate.yaml -o out/slew ")["out"]
+
+
+def test_rounded_punch_model_loads_and_exports(guide_run):
+    """The 8-digit punch's reduced model (its K indefinite by the rigid-body energy the rounding left): reassemble and
+    both exports take it; Exudyn counts 3 rigid modes as kryflex does and the export warns that they drift."""
+    work, runs = guide_run
+    assert "3 rigid/mechanism modes" in run_of(runs, "kryflex reassemble out/nastran/reduced.h5")["out"]
+    exu = run_of(runs, "kryflex export out/nastran/reduced.h5 -o out/nastran_exudyn.npz --format exudyn")
+    assert "Exudyn 3, kryflex 3" in exu["out"] and "kryflex: warning:" in exu["err"] and "drift" in exu["err"]
+    assert "kryflex: warning:" not in run_of(runs, "kryflex export out/plate/reduced.h5 -o out/plate_exudyn.npz")["err"]
+    e = np.load(os.path.join(work, "out", "nastran.npz"))
+    assert int(e["nsystems"]) == 1 and int(e["body0/floating"]) == 0
+    # on 2 ranks: the same frequencies, one warning
+    two = run_of(runs, "mpiexec -n 2 kryflex reassemble out/nastran/reduced.h5")["out"]
+    one = run_of(runs, "kryflex reassemble out/nastran/reduced.h5")["out"]
+    assert two.splitlines()[-1] == one.splitlines()[-1] and "flexible frequencies" in one.splitlines()[-1]
+    exu2 = run_of(runs, "mpiexec -n 2 kryflex export out/nastran/reduced.h5")
+    assert "Exudyn 3, kryflex 3" in exu2["out"] and exu2["err"].count("kryflex: warning:") == 1
+
+
+def test_damped_velocity_output_in_slew(guide_run):
+    """The damped .mat model's velocity output v1 goes through slew as a velocity: its error is finite and its
+    column is written."""
+    work, _ = guide_run
+    data = json.load(open(os.path.join(work, "out", "damped_slew", "slew.json")))
+    assert len(data["rows"][0]["errors"]) == 2 and np.all(np.isfinite([r["error"] for r in data["rows"]]))
+    assert "error_v1" in open(os.path.join(work, "out", "damped_slew", "slew.csv")).readline()
+
+
+def test_two_body_scene(guide_run):
+    """The two-body section: the reassembled system at 37.5 deg and the Exudyn check at 30 deg count the 7 rigid and
+    mechanism modes; the slew turns the joint."""
+    work, runs = guide_run
+    assert "7 rigid/mechanism modes" in run_of(runs, "kryflex reassemble out/galileo/reduced.h5 --angle 37.5")["out"]
+    exu = run_of(runs, "kryflex export out/galileo/reduced.h5 -o out/galileo_exudyn.npz")
+    assert "Exudyn 7, kryflex 7" in exu["out"]
+    data = json.load(open(os.path.join(work, "out", "galileo_slew", "slew.json")))
+    assert not data["held"] and data["profile"] == "slew" and all(r["peak_rate_deg_s"] > 0 for r in data["rows"])
+    assert os.path.exists(os.path.join(work, "out", "galileo_study", "study.md"))

@@ -542,7 +542,10 @@ class Summary(Record):
         except ValueError as e:
             raise SummaryError("%s: not JSON (%s): a summary.json written by 'kryflex reduce' expected" % (path, e)) \
                 from None
-        return cls.from_json(data)
+        try:
+            return cls.from_json(data)
+        except SummaryError as e:
+            raise SummaryError("%s: %s" % (path, e)) from None
 
     def dumps(self):
         """summary.json's text."""

@@ -9,7 +9,7 @@ kryflex.reduce(scene) does the same in one call and returns the same Reduction (
 
 Importing kryflex starts nothing: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a command
 line's PETSc options (the kryflex command does that). It only loads Debian's SCOTCH build of MUMPS where installed, so
-that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (README, "Nested
+that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (docs/guide/large-models.md, "Nested
 dissection"). Runs under mpirun with mpi4py.
 
 The package, in the order data flows through it:

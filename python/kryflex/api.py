@@ -298,7 +298,7 @@ class ReducedModel(_core.CReducedModel):
     # ------------------------------------------------------------------ files and scenes
 
     def save(self, path):
-        """Writes the model as HDF5 (README.md: reduced.h5 layout) through the C writer, atomically."""
+        """Writes the model as HDF5 (docs/guide/results.md: the reduced.h5 layout) through the C writer, atomically."""
         if os.path.splitext(str(path))[1].lower() not in (".h5", ".hdf5"):
             raise ModelFileError("%s: reduced models are written as .h5 (HDF5); export_npz writes the arrays for NumPy"
                                  % path)

@@ -113,7 +113,7 @@ class Reducer:
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]))
         if red.get("damped_moments") and "krylov_damped" not in options:
-            options = dict(options, krylov_damped=True)   # the Krylov implementation's option (README "Damping")
+            options = dict(options, krylov_damped=True)   # the Krylov implementation's option (docs/guide/damping.md)
         with quiet_progress(quiet), kf_options(options):
             r.set_from_options()
         self.handle = r

@@ -259,7 +259,7 @@ cdef class CReducedModel:
         check(KFReducedModelView(self.m, NULL if viewer is None else viewer.vwr))
 
     def save(self, path):
-        """HDF5, written under a temporary name and renamed into place (README.md: reduced.h5 layout)."""
+        """HDF5, written under a temporary name and renamed into place (docs/guide/results.md: the reduced.h5 layout)."""
         check(KFReducedModelSave(self.m, cstr(path, "file name")))
         return path
 

@@ -1,6 +1,6 @@
 """The kryflex command: reduce, reassemble, info, check, study, slew, export, convert. Runs alone or under mpirun.
 
-Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
+Exit codes (cli/common.py; docs/guide/troubleshooting.md), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)
   1    internal error (a bug: please report it)
   2    bad command line, scene, option value or input file

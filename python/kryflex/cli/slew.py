@@ -1,4 +1,4 @@
-"""kryflex slew SCENE -o OUTDIR: the slewing study (issue 15): the scene reduced as `kryflex reduce` does, then the
+"""kryflex slew SCENE -o OUTDIR: the slewing study (docs/guide/slewing.md): the scene reduced as `kryflex reduce` does, then the
 full-order and the reduced model integrated in time along the same slews at increasing rates (python/kryflex/slew/);
 writes slew.csv, slew.md, slew.png and slew_histories.png. The time integration is serial: the command runs on one
 rank (under mpirun with more it refuses, exit 2)."""

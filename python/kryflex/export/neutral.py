@@ -1,4 +1,4 @@
-"""The neutral multibody file (README.md, "Multibody export"): one NumPy .npz archive, every array named, read with
+"""The neutral multibody file (docs/guide/export.md): one NumPy .npz archive, every array named, read with
 numpy.load alone. Written atomically (a temporary file beside the target, renamed when complete)."""
 import io
 import os

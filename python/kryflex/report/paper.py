@@ -106,7 +106,7 @@ def _krylov_table(p, label, number):
                      "frequencies do not determine (meshes/galileo/fit.py also tried to match Tables 2-3's "
                      "importances: not while keeping Table 1 within 0.5 %); and the paper's MIC is defined in its "
                      "ref. 7 (not reproduced in the paper), kryflex ranks with the "
-                     + str(p["recipe"].get("importance")) + " measure (README, Mode importance).")
+                     + str(p["recipe"].get("importance")) + " measure (docs/guide/scenes.md, reduction.importance).")
         else:
             text += " The kept modes' frequencies agree within 5 %."
         lines += [text, ""]
@@ -277,7 +277,7 @@ def section_paper(summary):
     r = p["recipe"]
     lines = ["## The paper's example, side by side", "",
              f"The paper: {p['citation']}. Its example is a 28-dof Galileo model; kryflex's model of it "
-             "(meshes/galileo) was fitted to the paper's Table 1 (meshes/galileo/fit.py, README there). The paper's "
+             "(meshes/galileo) was fitted to the paper's Table 1 (meshes/galileo/fit.py; docs/guide/paper-example.md). The paper's "
              "numbers are quoted as published. kryflex's columns are computed by the library in the paper's fixed "
              f"recipe: single-angle model, c = {r.get('moments')} moments, importance `{r.get('importance')}`, "
              f"keep threshold {r.get('keep_threshold')}, α_G by the paper's rule, no accuracy search (the model "

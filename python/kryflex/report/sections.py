@@ -674,7 +674,7 @@ def render_markdown(summary, plot_names):
 
 
 def damping_text(d):
-    """One line for a damping description {modal, rayleigh: {alpha, beta}, structural} (README "Damping")."""
+    """One line for a damping description {modal, rayleigh: {alpha, beta}, structural} (docs/guide/damping.md)."""
     parts = []
     modal = d.get("modal") or 0.0
     if isinstance(modal, list):

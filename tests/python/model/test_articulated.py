@@ -50,7 +50,7 @@ STATIC_GAIN_RTOL_GALILEO = 3e-10
 MOMENT_RTOL = 1e-8           # "exact" moment match, relative
 SIGNIFICANT = 1e-2           # entries at least this fraction of their moment's largest entry are checked one by one
 DOMINANT_FREQ_RTOL = 5e-3    # dominant full-order modes captured to 0.5 % ...
-# ... except by the search's model of Galileo fitted to the paper (issue 15): it meets its accuracy target (0.05,
+# ... except by the search's model of Galileo fitted to the paper (meshes/galileo/fit.py): it meets its accuracy target (0.05,
 # relative H-inf) with two of the four dominant modes at 60 deg off by 0.6 % and 1.5 %; the frequencies are not
 # the target, the response is
 GALILEO_DOMINANT_FREQ_RTOL = 2e-2
@@ -481,7 +481,7 @@ def test_report_flags_inexact_moments_with_the_ratio(galileo, galileo_report):
         for kk in range(Lf.shape[0]):
             assert float(rows[kk][col]) == pytest.approx(float(Lf[kk, 0, 0] / Lr[kk, 0, 0]), abs=5e-9), (label, kk)
         if label == label_g:
-            # the static moment is exact at alpha_G whatever was kept (README, What is exact); the higher ones too
+            # the static moment is exact at alpha_G whatever was kept (docs/guide/accuracy.md, What is exact); the higher ones too
             # only when no Krylov mode was dropped, else they are flagged like any other angle's
             assert abs(Lf[0, 0, 0] / Lr[0, 0, 0] - 1) <= MOMENT_RTOL
             if all(summary["krylov"][label]["kept"]):

@@ -1,4 +1,4 @@
-"""Acceptance of accuracy-governed reduction (issue 11, "Done when"), against independent dense references.
+"""Acceptance of accuracy-governed reduction (docs/guide/accuracy.md), against independent dense references.
 
 For each scene (Galileo; a generated 3-body frame of 5,202 dofs; the smallest 3-D solid pair, 2,760 dofs) and each
 target in TARGETS, kryflex.Reducer runs with the contract's defaults (moments auto, method auto, search on) and the

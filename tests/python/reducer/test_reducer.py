@@ -35,7 +35,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 FRAMES_ANGLES = [[0.0, 0.0], [45.0, 120.0], [210.0, 330.0]]
 OTHER_ANGLES = {"galileo": [[7.5], [100.0]], "frames": [[10.0, 250.0], [-30.0, 95.0]]}
 
-# what every configuration of interest records, and what the whole solve records (README.md, Results of a reduction)
+# what every configuration of interest records, and what the whole solve records (docs/guide/results.md, Results of a reduction)
 PER_CONFIG = {"full_moments", "krylov_frequencies_hz", "krylov_importance", "krylov_kept", "krylov_deflations",
               "gram_condition_raw", "held_dofs", "rigid_residual", "reduced_dofs", "reduced_frequencies_hz",
               "reduced_moments", "moment_ratios", "moment_error", "static_gain_error", "reassembly_rank",

@@ -243,13 +243,13 @@ def main(argv):
 
     # 2. the reduction by the C reducer (collective: every rank calls it and gets the same small dense model back)
     result = kryflex.Reducer(scene, quiet=quiet).reduce()
-    model, summary = result.model, result.summary
+    model, summary = result.model, result.summary   # summary: a kryflex.results.Summary (typed; summary.json)
     say("reduced bodies: %s dofs (%s model, Krylov vectors of %s deg)"
         % (" + ".join(map(str, model.sizes)), model.settings["method"],
            ", ".join(kryflex.Scene.label(c) for c in model.settings["reduction_angles_deg"])))
     other = result.single_angle_model         # the model of the other method: the paper's single-angle one
     say("  (the paper's single-angle model, at alpha_G = %s deg with Krylov modes %s kept: %s dofs)"
-        % (summary["reduction_label"], summary["kept_modes"], " + ".join(map(str, other.sizes))))
+        % (summary.reduction_label, summary.kept_modes, " + ".join(map(str, other.sizes))))
 
     # 3. the reduced bodies are plain NumPy arrays: M (identity), K, G, H, interface rows, rigid motions
     for name, body in zip(model.body_names, model.bodies):
@@ -265,15 +265,16 @@ def main(argv):
 
     # 5. how close the reduced model is to the full order at the angles of interest: the reduction's
     #    verification (summary) holds the full-order frequencies, dominant modes and moments at each of them
-    for label, config in zip(summary["angle_labels"], summary["angles_deg"]):
-        full = np.array(summary["full"]["frequencies_hz"][label])
-        reduced = model.at(config).frequencies_hz
-        freq_errors = [np.min(np.abs(reduced - full[i])) / full[i] for i in summary["dominant_modes"][label]]
-        L_full = np.array(summary["full"]["moments"][label])          # (moments, outputs, inputs)
-        L_red = model.at(config).moments(L_full.shape[0])
+    for config in summary.configurations:
+        label, dominant = config.label, summary.dominant_modes[config.label]
+        full = np.array(config.full_frequencies_hz)
+        reduced = model.at(config.angles_deg).frequencies_hz
+        freq_errors = [np.min(np.abs(reduced - full[i])) / full[i] for i in dominant]
+        L_full = np.array(summary.full.moments[label])          # (moments, outputs, inputs)
+        L_red = model.at(config.angles_deg).moments(L_full.shape[0])
         moment_error = max(np.linalg.norm(L_full[k] - L_red[k]) / np.linalg.norm(L_full[k]) for k in range(len(L_full)))
         say("at %s deg: dominant modes %s Hz reproduced to %s; %d moments to %.1e"
-            % (label, fmt(full[summary["dominant_modes"][label]]), " ".join("%.1e" % e for e in freq_errors),
+            % (label, fmt(full[dominant]), " ".join("%.1e" % e for e in freq_errors),
                len(L_full), moment_error))
 
     # 6. low-frequency moments L^k = H (K+ M)^k K+ G of the reduced model, e.g. at an angle it was not built at

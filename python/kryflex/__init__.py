@@ -9,7 +9,7 @@ kryflex.reduce(scene) does the same in one call and returns the same Reduction (
 
 Importing kryflex starts nothing: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a command
 line's PETSc options (the kryflex command does that). It only loads Debian's SCOTCH build of MUMPS where installed, so
-that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (README, "Nested
+that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (docs/guide/large-models.md, "Nested
 dissection"). Runs under mpirun with mpi4py.
 
 The package, in the order data flows through it:
@@ -17,7 +17,8 @@ The package, in the order data flows through it:
     _core      the binding of the C library (src/include/kryflex.h) on petsc4py and slepc4py
     reducer    Reducer (the C KFReducer: the whole reduction policy and its verification), Reduction, reduce
     api        ReducedModel, ReducedSystem: the results of a reduction, computed in C
-    report/    the summary dict of a reduction, report.md, summary.json and plots
+    results    Summary: the results of a reduction as typed objects, what summary.json holds
+    report/    the summary of a reduction from the C results, report.md, summary.json and plots
     export/    the reduced bodies for multibody codes: the neutral file, the Exudyn system
     cli/       the kryflex command: reduce, reassemble, info, study, export, convert
 """
@@ -44,6 +45,7 @@ _PUBLIC = {
     "load_scene": ".io.scene",
     "check_scene": ".check",
     "scene_from_dict": ".io.scene",
+    "Summary": ".results",
 }
 __all__ = ["init", "__version__"] + list(_PUBLIC)
 

@@ -21,7 +21,7 @@ _collect_registered = False
 # Debian's MUMPS with SCOTCH and PT-SCOTCH orderings (package libmumps-ptscotch-5.5, installed by scripts/setup): the
 # same MUMPS 5.5.1 as the plain build PETSc links, with nested dissection compiled in. Loaded into the process's
 # global scope before PETSc, PETSc's calls to MUMPS bind to it, and MUMPS' own choice of ordering takes SCOTCH for large
-# matrices (README, "Nested dissection"). KRYFLEX_MUMPS=plain keeps the build PETSc links.
+# matrices (docs/guide/large-models.md, "Nested dissection"). KRYFLEX_MUMPS=plain keeps the build PETSc links.
 MUMPS_WITH_ORDERINGS = "libdmumps_ptscotch-5.5.so"
 
 

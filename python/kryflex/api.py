@@ -145,6 +145,32 @@ class ReducedSystem:
         self.handle.view()
 
 
+BODY_KEYS = ("M", "K", "G", "H", "iface", "rigid", "damping_matrix")
+
+
+class BodyArrays(dict):
+    """A reduced body's arrays by name (ReducedModel.bodies). The damping matrix's former key "C" reads it with a
+    DeprecationWarning, so that C names one thing in the API: a ReducedSystem's output matrix."""
+
+    @staticmethod
+    def _key(key):
+        if key == "C":
+            import warnings
+            warnings.warn('the reduced body\'s damping matrix is body["damping_matrix"]; body["C"] is deprecated '
+                          "(C is a ReducedSystem's output matrix)", DeprecationWarning, stacklevel=3)
+            return "damping_matrix"
+        return key
+
+    def __getitem__(self, key):
+        return super().__getitem__(self._key(key))
+
+    def get(self, key, default=None):
+        return super().get(self._key(key), default)
+
+    def __contains__(self, key):
+        return super().__contains__(self._key(key))
+
+
 def _setting_value(text):
     """Settings are strings in C; numbers, lists and booleans are stored as JSON (-kf_ option values as text)."""
     try:
@@ -219,9 +245,9 @@ class ReducedModel(_core.CReducedModel):
     @property
     def bodies(self):
         """Per body a dict of NumPy arrays: M, K (v x v), G (v x a), H (t x v), iface (6 n_if x v), rigid (v x 6), and
-        C (v x v reduced viscous damping) for a body that has one."""
-        return [{k: b[k] for k in ("M", "K", "G", "H", "iface", "rigid", "C") if b[k] is not None}
-                for b in self._bodies]
+        damping_matrix (v x v reduced viscous damping) for a body that has one. (Its old key "C" still reads, with a
+        DeprecationWarning: C is the output matrix of a ReducedSystem.)"""
+        return [BodyArrays((k, b[k]) for k in BODY_KEYS if b[k] is not None) for b in self._bodies]
 
     @property
     def maps(self):
@@ -272,7 +298,7 @@ class ReducedModel(_core.CReducedModel):
     # ------------------------------------------------------------------ files and scenes
 
     def save(self, path):
-        """Writes the model as HDF5 (README.md: reduced.h5 layout) through the C writer, atomically."""
+        """Writes the model as HDF5 (docs/guide/results.md: the reduced.h5 layout) through the C writer, atomically."""
         if os.path.splitext(str(path))[1].lower() not in (".h5", ".hdf5"):
             raise ModelFileError("%s: reduced models are written as .h5 (HDF5); export_npz writes the arrays for NumPy"
                                  % path)
@@ -296,8 +322,9 @@ class ReducedModel(_core.CReducedModel):
             raise ModelFileError("%s: not a readable kryflex reduced model: %s" % (path, detail)) from None
 
     def export_npz(self, path):
-        """A plain NumPy export of the reduced bodies (<body>__M, __K, __G, __H, __iface, __rigid) and the names, for
-        tools without HDF5; kryflex itself reads only the HDF5 file."""
+        """A plain NumPy export of the reduced bodies (<body>__M, __K, __G, __H, __iface, __rigid, and
+        __damping_matrix for a body that has one) and the names, for tools without HDF5; kryflex itself reads only the
+        HDF5 file."""
         from .io.files import atomic_path
         arrays = {"%s__%s" % (name, key): body[key] for name, body in zip(self.body_names, self.bodies) for key in body}
         arrays.update(inputs=np.array(self.input_names), outputs=np.array(self.output_names),

@@ -9,7 +9,7 @@ as published (Tables 1-6): they are inputs to compare with, never results. kryfl
 the library, in the paper's fixed recipe: the scene's Reducer with the accuracy search off (reduction.search:
 false: c = the scene's moments, its importance measure and keep_threshold, the paper's alpha_G rule) and the
 single-angle method; the component frequencies by the library's dense eigensolver (KFDenseEig) on the body files.
-The block goes into summary["paper"]; report/paper.py renders it.
+The block goes into the summary's paper (summary.json's "paper" key); report/paper.py renders it.
 """
 import numpy as np
 
@@ -111,11 +111,12 @@ def paper_block(scene, summary=None):
     Krylov tables, alpha_G, kept set, reduced sizes and frequencies, moments, ratios and frequency responses.
     summary: the scene's own reduction; when it already is the fixed recipe (search off, single-angle) it is used
     as it is, else the fixed recipe is run."""
-    settings = (summary or {}).get("settings") or {}
-    if summary is not None and settings.get("search") is False and settings.get("method") == "single-angle":
+    settings = summary.settings if summary is not None else None
+    if settings is not None and settings.search is False and settings.method == "single-angle":
         s, model = summary, None
     else:
         s, model = fixed_recipe(scene)
+    s = s.to_json()     # the block is plain JSON, its parts the summary's own
     label_g = s["reduction_label"]
     block = {
         "paper": "lee",

@@ -20,7 +20,8 @@ from ._runtime import quiet_progress
 
 class Reduction:
     """What a reduction made: the model of the scene's method (model), both models by name (multi_angle_model is
-    None when no multi-angle model was built) and the summary dict the report is written from."""
+    None when no multi-angle model was built) and the summary (a kryflex.results.Summary: the typed results the
+    report and summary.json are written from)."""
 
     def __init__(self, model, summary, single_angle_model, multi_angle_model=None):
         self.model = model
@@ -112,7 +113,7 @@ class Reducer:
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]))
         if red.get("damped_moments") and "krylov_damped" not in options:
-            options = dict(options, krylov_damped=True)   # the Krylov implementation's option (README "Damping")
+            options = dict(options, krylov_damped=True)   # the Krylov implementation's option (docs/guide/damping.md)
         with quiet_progress(quiet), kf_options(options):
             r.set_from_options()
         self.handle = r
@@ -149,7 +150,9 @@ class Reducer:
                 self.handle.solve()
             chosen, single, multi = self.handle.models(ReducedModel)
             from .report.summary import build_summary
-            self._reduction = Reduction(chosen, build_summary(self, single, multi, chosen), single, multi)
+            from .results import Summary
+            summary = Summary.from_json(build_summary(self, single, multi, chosen))
+            self._reduction = Reduction(chosen, summary, single, multi)
         return self._reduction
 
     def _flex_solver_option(self):

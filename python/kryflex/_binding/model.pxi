@@ -184,7 +184,7 @@ cdef class CReducedModel:
         cdef const PetscReal *Cb
         check(KFReducedModelGetBodyDamping(self.m, b, &Cb))
         return dict(name=name.decode(), full_dofs=n, interfaces=interfaces, M=carray(B.M, B.v, B.v),
-                    C=carray(Cb, B.v, B.v),
+                    damping_matrix=carray(Cb, B.v, B.v),
                     K=carray(B.K, B.v, B.v), G=carray(B.G, B.v, a), H=carray(B.H, t, B.v),
                     iface=carray(B.iface, 6 * B.ninterfaces, B.v), rigid=carray(B.rigid, B.v, 6),
                     map=carray(Psi, n, B.v))
@@ -218,7 +218,8 @@ cdef class CReducedModel:
         return carray(ang, nr, n).T.copy() if nr else np.zeros((n, 0))
 
     def damping(self):
-        """The model's damping: {modal, rayleigh: {alpha, beta}, structural} (the bodies' C are in body(b)["C"])"""
+        """The model's damping: {modal, rayleigh: {alpha, beta}, structural} (the bodies' viscous damping matrices are
+        body(b)["damping_matrix"])"""
         cdef KFDamping d
         check(KFReducedModelGetDamping(self.m, &d))
         return damping_to_dict(&d)
@@ -258,7 +259,7 @@ cdef class CReducedModel:
         check(KFReducedModelView(self.m, NULL if viewer is None else viewer.vwr))
 
     def save(self, path):
-        """HDF5, written under a temporary name and renamed into place (README.md: reduced.h5 layout)."""
+        """HDF5, written under a temporary name and renamed into place (docs/guide/results.md: the reduced.h5 layout)."""
         check(KFReducedModelSave(self.m, cstr(path, "file name")))
         return path
 

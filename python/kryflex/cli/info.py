@@ -1,11 +1,20 @@
-"""kryflex info SCENE: what a scene holds and what reducing it will take."""
+"""kryflex info SCENE: what a scene holds and what reducing it will take; kryflex info OUT (a results folder or its
+summary.json): what a reduction found."""
+import os
+
 from .common import EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, Parser, collective, say, split_petsc_options
 
 
 def run(argv):
-    p = Parser(prog="kryflex info", description="What a scene holds and what reducing it will take.")
-    p.add_argument("scene")
+    p = Parser(prog="kryflex info", description="What a scene holds and what reducing it will take; given a results "
+               "folder (or its summary.json), what the reduction found.")
+    p.add_argument("scene", help="a scene file, or the folder 'kryflex reduce -o' wrote (or its summary.json)")
     args = collective(lambda: p.parse_args(split_petsc_options(argv, set(), {"-h", "--help"})))
+    if os.path.isdir(args.scene) or args.scene.endswith(".json"):
+        from ..results import Summary, SummaryError
+        summary = collective(lambda: Summary.load(args.scene), (SummaryError, EXIT_INPUT, str))
+        collective(lambda: describe_results(summary))
+        return EXIT_OK
     from .. import _core
     from ..io.scene import SceneError, load_scene
     scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
@@ -73,3 +82,38 @@ def describe(scene, nr, residual):
     base = 12 * 2 * nnz + 8 * e * (c + nr) * 3
     say("  memory estimate: %.2g GiB for matrices and Krylov vectors, plus the MUMPS factor (typically 10-50 x the "
          "stiffness nonzeros for 3-D solids: %.2g-%.2g GiB)" % (base / 2**30, 10 * 12 * nnz / 2 / 2**30, 50 * 12 * nnz / 2 / 2**30))
+
+
+def describe_results(s):
+    """A reduction's results from its summary (any summary version): the chosen model, its verdict and where the
+    time went, on rank 0."""
+    v, ch = s.verdict, s.chosen
+    say("results of scene '%s'%s (summary version %d%s)" % (
+        s.scene, " (%s)" % s.scene_file if s.scene_file else "", s.summary_version,
+        ", kryflex %s" % s.kryflex_version if s.kryflex_version else ""))
+    say("  angles of interest (deg): %s" % ", ".join(s.angle_labels))
+    if ch is not None:
+        say("  chosen: %s model, %s moments, %s reduced dofs (%s), %s system dofs at most" % (
+            ch.method or v.chosen_method or "?", ch.moments if ch.moments is not None else "?", ch.dofs,
+            ", ".join("%s %s" % kv for kv in (ch.dofs_per_body or {}).items()),
+            max((d for d in (ch.system_dofs or {}).values() if d is not None), default="?")))
+    if v.target_met is None:
+        say("  accuracy target %s: not checked (no error measured or estimated)" % s.accuracy)
+    else:
+        where = ch.worst_where if ch is not None else None
+        say("  accuracy target %g: %s; worst %s error %.3g%s (%s)" % (
+            s.accuracy, "met" if v.target_met else "MISSED", v.accuracy_measure or "total", v.error_max,
+            " at %s" % where if where is not None else "", "estimated" if v.error_estimated else "measured"))
+    for c in s.configurations:
+        if c.frf_error is not None:
+            say("    %-12s error %.3g, %s system dofs" % (c.label, c.frf_error, c.system_dofs))
+    for m in s.midpoints:
+        if m.frf_error is not None:
+            say("    %-12s error %.3g (midpoint)" % (m.label, m.frf_error))
+    if s.search:
+        say("  search: %d candidates evaluated%s" % (len(s.search), "" if s.search_chosen is None
+                                                      else ", the chosen one row %d" % s.search_chosen))
+    perf = s.performance
+    if perf is not None and perf.whole_s is not None:
+        say("  time: %.3g s in all, factorization %.3g s, solves %.3g s (%s solve calls)" % (
+            perf.whole_s, perf.factorization_s or 0.0, perf.solves_s or 0.0, perf.solve_calls))

@@ -1,6 +1,6 @@
 """The kryflex command: reduce, reassemble, info, check, study, slew, export, convert. Runs alone or under mpirun.
 
-Exit codes (cli/common.py; README "Troubleshooting and exit codes"), the same on every rank:
+Exit codes (cli/common.py; docs/guide/troubleshooting.md), the same on every rank:
   0    done (verification passed, or verification was off and the run says so)
   1    internal error (a bug: please report it)
   2    bad command line, scene, option value or input file
@@ -28,6 +28,7 @@ USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structur
   kryflex reduce SCENE -o OUTDIR        reduce a scene, verify it, write the reduced bodies and a report
   kryflex reassemble REDUCED --angle A  the reduced system at any angles, from the reduced-model file alone
   kryflex info SCENE                    bodies, dofs, joints, rigid and mechanism modes, inputs, outputs, memory
+  kryflex info OUT                      a reduction's results (OUT/summary.json): chosen model, verdict, errors, time
   kryflex check SCENE                   model health before a reduction: rigid-body energy, symmetry, massless dofs
   kryflex study SCENE -o OUTDIR         every method swept on one full-order reference: error vs size and time
   kryflex slew SCENE -o OUTDIR          time simulations under slewing: full vs reduced output error against slew rate

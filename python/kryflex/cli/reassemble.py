@@ -63,7 +63,7 @@ def run(argv):
                                 explicit_step_s=system.explicit_step_s if system.top_frequency_hz > 0 else None))
             key = "_".join("%g" % a for a in angles) if angles else "none"
             arrays.update({"M_" + key: system.M, "K_" + key: system.K, "G_" + key: system.B, "H_" + key: system.C})
-            if system.damping_matrix is not None:   # the viscous damping (bodies' C_b + Rayleigh), README "Damping"
+            if system.damping_matrix is not None:   # the viscous damping (bodies' C_b + Rayleigh), docs/guide/damping.md
                 arrays["D_" + key] = system.damping_matrix
             if system.feedthrough is not None:      # a trimmed model: y = H x + feedthrough u (docs/guide/trimming.md)
                 arrays["feedthrough_" + key] = system.feedthrough

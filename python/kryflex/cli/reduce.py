@@ -6,6 +6,7 @@ import sys
 
 from . import common
 from ..io.scene_schema import NO_JOINT_LABEL
+from ..results import ModelCheck
 from .common import (EXIT_INPUT, EXIT_NUMERIC, EXIT_OK, EXIT_OUTPUT, EXIT_TARGET, Failure, Parser, collective,
                      from_rank0, rank, say, split_petsc_options)
 
@@ -74,15 +75,15 @@ def run(argv):
 
         s = result.summary
         if health:
-            s["model_check"] = dict(facts=health[0], findings=[f.as_dict() for f in health[1]])
+            s.model_check = ModelCheck(facts=health[0], findings=[f.as_dict() for f in health[1]])
         if getattr(scene, "paper", None) and scene.verify["full_order"]:
             # the paper's example (paper: lee): its tables beside kryflex's, computed in the paper's fixed recipe
             # (compared with the full order: without it, verify.full_order false, the short report has no section)
             from ..paper import paper_block
-            s["paper"] = collective(lambda: paper_block(scene, s),
+            s.paper = collective(lambda: paper_block(scene, s),
                                     (_core.Error, EXIT_NUMERIC, lambda e: "the paper's recipe failed: %s" % e))
         met, worst, where = target(result)
-        s["target_met"] = met
+        s.verdict.target_met = met
         _core.progress("writing the results to %s" % out)
         cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
         cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: cannot_write(out, e, created))
@@ -93,7 +94,7 @@ def run(argv):
                 from ..report import write_report, write_unverified
                 # the full report compares with the full order; without it (verify.full_order: false, errors
                 # estimated against the richest candidate) the short report with the estimated verdict
-                if s["frf"] and not s.get("error_estimated"):
+                if s.frf and not s.verdict.error_estimated:
                     write_report(s, staging.path, between=common.raise_if_interrupted)
                 else:
                     write_unverified(s, staging.path)
@@ -109,26 +110,26 @@ def run(argv):
     finally:
         if not committed and rank() == 0:
             clean_up()
-    say("kryflex: reduced '%s': %s" % (s["scene"], chosen_text(result)))
+    say("kryflex: reduced '%s': %s" % (s.scene, chosen_text(result)))
     say("kryflex: results in %s (reduced.h5, report.md, summary.json, plots)" % out)
-    trim = s.get("reduced", {}).get("trimming") or {}
-    if trim.get("top_frequency_hz_max"):
+    trim = s.reduced.trimming if s.reduced else None
+    if trim is not None and trim.top_frequency_hz_max:
         say("kryflex: highest reduced frequency %.4g Hz (%s), stable explicit step %.3g s (2 / omega_max)"
-            % (trim["top_frequency_hz_max"], "modes above %.4g Hz trimmed, static share kept" % trim["max_frequency_hz"]
-               if trim.get("max_frequency_hz") else "no trimming: reduction.max_frequency", trim["explicit_step_s_min"]))
+            % (trim.top_frequency_hz_max, "modes above %.4g Hz trimmed, static share kept" % trim.max_frequency_hz
+               if trim.max_frequency_hz else "no trimming: reduction.max_frequency", trim.explicit_step_s_min))
     if met is None:
         say("kryflex: the accuracy target %g was not checked: no error was measured or estimated "
-            "(verify.full_order: false and no estimate)" % s["accuracy"])
+            "(verify.full_order: false and no estimate)" % s.accuracy)
         return EXIT_OK
     solves_inexact(s)
-    how = "estimated, verify.full_order: false" if s.get("error_estimated") else "measured against the full order"
-    measure = s.get("accuracy_measure", "total")
+    how = "estimated, verify.full_order: false" if s.verdict.error_estimated else "measured against the full order"
+    measure = s.verdict.accuracy_measure or "total"
     say("kryflex: max relative %s-response error (relative H-inf per input/output pair, %s model, %s): "
-        "%.3g%s (target %.3g)%s" % (measure, s.get("chosen_method") or result.model.settings["method"], how,
-                                    worst, at_text(where), s["accuracy"], where_text(s) + inexact_text(s)))
+        "%.3g%s (target %.3g)%s" % (measure, s.verdict.chosen_method or result.model.settings["method"], how,
+                                    worst, at_text(where), s.accuracy, where_text(s) + inexact_text(s)))
     if not met:
         say("kryflex: target missed: max relative %s-response error %.3g%s > accuracy %.3g"
-            % (measure, worst, at_text(where), s["accuracy"]), sys.stderr)
+            % (measure, worst, at_text(where), s.accuracy), sys.stderr)
         return EXIT_TARGET
     return EXIT_OK
 
@@ -163,56 +164,60 @@ def append_check_section(path, findings):
 def chosen_text(result):
     """The chosen model in words: method, moments, kept set, sizes."""
     s = result.summary
-    ch = s.get("chosen") or {}
-    method = s.get("chosen_method") or result.model.settings["method"]
+    ch = s.chosen
+    method = s.verdict.chosen_method or result.model.settings["method"]
     parts = ["%s model" % method]
-    if ch.get("moments") is not None:
-        parts.append("%d moments" % ch["moments"])
-    if method == "multi-angle" and ch.get("expansion_angles_deg"):
+    if ch is not None and ch.moments is not None:
+        parts.append("%d moments" % ch.moments)
+    if method == "multi-angle" and ch is not None and ch.expansion_angles_deg:
         parts.append("expansion angles %s deg" % ", ".join(
-            "/".join("%g" % a for a in (c if isinstance(c, list) else [c])) for c in ch["expansion_angles_deg"]))
-    elif s["reduction_label"] == NO_JOINT_LABEL:
+            "/".join("%g" % a for a in (c if isinstance(c, list) else [c])) for c in ch.expansion_angles_deg))
+    elif s.reduction_label == NO_JOINT_LABEL:
         parts.append("one configuration (no revolute joint)")
     else:
-        parts.append("alpha_G = %s deg" % s["reduction_label"])
-    if ch.get("kept_modes") is not None or not ch:
-        parts.append("kept Krylov modes %s" % (ch.get("kept_modes") if ch else s["kept_modes"]))
-    elif ch.get("kept_clusters") == "per body":
+        parts.append("alpha_G = %s deg" % s.reduction_label)
+    if ch is None or ch.kept_modes is not None:
+        parts.append("kept Krylov modes %s" % (ch.kept_modes if ch is not None else s.kept_modes))
+    elif ch.kept_clusters == "per body":
         parts.append("each body its share of the mode clusters")
-    elif ch.get("kept_clusters") is not None:
-        parts.append("%d kept mode clusters" % ch["kept_clusters"])
+    elif ch.kept_clusters is not None:
+        parts.append("%d kept mode clusters" % ch.kept_clusters)
     else:
         parts.append("every mode kept")
-    system = [v for v in (ch.get("system_dofs") or {}).values() if v is not None]
+    system = [v for v in (ch.system_dofs if ch is not None else {}).values() if v is not None]
     parts.append("%s reduced dofs per body%s" % (" + ".join(str(v) for v in result.model.sizes),
                                                   ", %d system dofs at most" % max(system) if system else ""))
     return ", ".join(parts)
 
 
+def _unconverged(s):
+    """Block solves left above -kf_refine_rtol after refinement and escalation (0 when not recorded)."""
+    return (s.performance.blocks_unconverged if s.performance is not None else None) or 0
+
+
 def solves_inexact(s):
     """Block solves left above -kf_refine_rtol after refinement and escalation are never silent: one line (printed
     under -quiet too) saying how many, and what the verdict then rests on."""
-    perf = s.get("performance") or {}
-    bad = perf.get("blocks_unconverged")
+    bad = _unconverged(s)
     if not bad:
         return
-    check = s.get("reference_check") or {}
+    check = s.verdict.reference_check
     rests = ("the full-order reference, checked against direct solves (worst disagreement %.1e), measures the "
-             "model" % check["error"]) if check.get("error") is not None else (
+             "model" % check.error) if check is not None and check.error is not None else (
              "the error is estimated from inexact vectors: verify against the full order (verify.full_order: true)")
     say("kryflex: warning: %d block solves stayed above -kf_refine_rtol after refinement and escalation (largest "
-        "final residual %.1e); %s" % (bad, perf.get("residual_final_max") or float("nan"), rests), sys.stderr)
+        "final residual %.1e); %s" % (bad, s.performance.residual_final_max or float("nan"), rests), sys.stderr)
 
 
 def inexact_text(s):
     """'; N block solves inexact (...)' on the verdict's line when block solves stayed above -kf_refine_rtol."""
-    bad = (s.get("performance") or {}).get("blocks_unconverged")
+    bad = _unconverged(s)
     return "; %d block solves inexact (warning above)" % bad if bad else ""
 
 
 def where_text(s):
     """', a midpoint between angles of interest' when the worst error is at a midpoint."""
-    if (s.get("chosen") or {}).get("worst_kind") == "midpoint":
+    if s.chosen is not None and s.chosen.worst_kind == "midpoint":
         return ", a midpoint between two angles of interest"
     return ""
 
@@ -223,10 +228,10 @@ def target(result):
     interest and every midpoint, measured or estimated), worst is error_max; met is None when the reducer recorded
     no verdict (no error measured or estimated)."""
     s = result.summary
-    met, worst = s.get("target_met"), s.get("error_max")
+    met, worst = s.verdict.target_met, s.verdict.error_max
     if met is None or worst is None:
         return None, None, None
-    where = (s.get("chosen") or {}).get("worst_where")
+    where = s.chosen.worst_where if s.chosen is not None else None
     return bool(met), worst, where if where is not None else "?"
 
 

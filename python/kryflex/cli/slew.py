@@ -1,4 +1,4 @@
-"""kryflex slew SCENE -o OUTDIR: the slewing study: the scene reduced as `kryflex reduce` does, then the full-order
+"""kryflex slew SCENE -o OUTDIR: the slewing study (docs/guide/slewing.md): the scene reduced as `kryflex reduce` does, then the full-order
 and the reduced model integrated in time along the same slews at increasing rates (python/kryflex/slew/); a scene
 without revolute joints (a single structure) instead gets a step or pulse of force on its inputs, at rest, of
 decreasing duration. Writes slew.csv, slew.md, slew.json, slew.png and slew_histories.png. The time integration is

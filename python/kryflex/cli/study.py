@@ -1,4 +1,4 @@
-"""kryflex study SCENE -o OUTDIR: the speed-accuracy study of a scene (issue 11): every method swept over its size
+"""kryflex study SCENE -o OUTDIR: the speed-accuracy study of a scene (docs/guide/accuracy.md): every method swept over its size
 parameter on one full-order reference; writes study.csv, accuracy_vs_size.png, accuracy_vs_time.png and study.md.
 Unless --no-estimator, also the check of the search's error estimator against the truth (study/estimator.py):
 estimator.csv, estimate_vs_truth.png and a section of study.md; it reuses the kryflex run's search, so it costs one

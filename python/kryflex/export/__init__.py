@@ -3,7 +3,7 @@
     from kryflex import export
     data = export.load("out/reduced.h5")                   # a MultibodyExport (from a model file, a neutral file or
                                                            # a ReducedModel)
-    export.write_neutral(data, "spacecraft.kfmb.npz")      # the documented neutral format (README), NumPy only
+    export.write_neutral(data, "spacecraft.kfmb.npz")      # the documented neutral format (docs/guide/export.md), NumPy only
     SC, mbs, handles = export.exudyn.build_mbs(data, [30.0])   # an Exudyn system at 30 deg, assembled
 
 Modules, one job each:

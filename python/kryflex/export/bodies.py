@@ -57,7 +57,7 @@ class FloatingBody:
 
     A body that lacks some of its 6 rigid motions (clamped, on springs, a plate's uz rx ry nodes, scalar points) has
     no floating frame: floating is False, missing_rigid names the absent motions, and only the reduced M, K, G, H,
-    iface and C are set (the floating-frame fields are None).
+    iface and damping_matrix are set (the floating-frame fields are None).
     """
     name: str
     interfaces: list
@@ -79,21 +79,30 @@ class FloatingBody:
     input_flex: np.ndarray = None
     output_rigid: np.ndarray = None
     output_flex: np.ndarray = None
-    # the viscous damping matrix of the reduced body (v x v; zeros when the body has none) and F^T C F (f x f)
-    C: np.ndarray = None
+    # the viscous damping matrix of the reduced body (v x v; zeros when the body has none) and F^T C F (f x f); the
+    # neutral file names it body<i>/C
+    damping_matrix: np.ndarray = None
     damping_flex: np.ndarray = None
     floating: bool = True
     missing_rigid: tuple = ()
 
     def __post_init__(self):
         v = self.M.shape[0]
-        if self.C is None:
-            self.C = np.zeros((v, v))
+        if self.damping_matrix is None:
+            self.damping_matrix = np.zeros((v, v))
         if not self.floating:
             return
         f = self.modes.shape[1]
         if self.damping_flex is None:
-            self.damping_flex = self.modes.T @ self.C @ self.modes if f else np.zeros((0, 0))
+            self.damping_flex = self.modes.T @ self.damping_matrix @ self.modes if f else np.zeros((0, 0))
+
+    @property
+    def C(self):
+        """Deprecated name of damping_matrix (C is a ReducedSystem's output matrix)."""
+        import warnings
+        warnings.warn("FloatingBody.C is deprecated: use FloatingBody.damping_matrix (C is a ReducedSystem's output "
+                      "matrix)", DeprecationWarning, stacklevel=2)
+        return self.damping_matrix
 
     @property
     def nflex(self):
@@ -128,21 +137,23 @@ def missing_rigid_motions(v, rigid):
     return tuple(RIGID_NAMES[k] for k in range(6) if np.abs(rigid[:, k]).max() <= 1e-12 * scale)
 
 
-def reduced_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
+def reduced_body(name, interfaces, M, K, G, H, iface=None, rigid=None, damping_matrix=None):
     """The export's body: a floating-frame body (floating_body) when the body has its 6 rigid motions, else the reduced
-    body as it is (M, K, G, H, iface, C; floating False, the missing motions named)."""
+    body as it is (M, K, G, H, iface, damping_matrix; floating False, the missing motions named)."""
+    C = damping_matrix
     v = M.shape[0]
     missing = missing_rigid_motions(v, rigid)
     if not missing:
-        return floating_body(name, interfaces, M, K, G, H, iface=iface, rigid=rigid, C=C)
+        return floating_body(name, interfaces, M, K, G, H, iface=iface, rigid=rigid, damping_matrix=C)
     return FloatingBody(name=name, interfaces=list(interfaces), M=0.5 * (M + M.T), K=0.5 * (K + K.T), G=G, H=H,
                         iface=np.zeros((0, v)) if iface is None else iface,
-                        C=None if C is None else 0.5 * (C + C.T), floating=False, missing_rigid=tuple(missing))
+                        damping_matrix=None if C is None else 0.5 * (C + C.T), floating=False,
+                        missing_rigid=tuple(missing))
 
 
-def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
+def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, damping_matrix=None):
     """The FloatingBody of one reduced body (the arrays of ReducedModel.bodies: iface absent for a body without
-    interfaces, C for a body with a viscous damping matrix); ExportError when the body lacks any of its 6 rigid
+    interfaces, damping_matrix for a body with a viscous damping matrix); ExportError when the body lacks any of its 6 rigid
     motions (clamped, on springs, or a dof layout such as a plate's uz rx ry) or its basis does not reproduce them."""
     v = M.shape[0]
     if iface is None:
@@ -202,4 +213,5 @@ def floating_body(name, interfaces, M, K, G, H, iface=None, rigid=None, C=None):
                         modes=F, mass_flex=0.5 * (Mf + Mf.T), stiffness_flex=0.5 * (Kf + Kf.T), mass=mass,
                         center_of_mass=com, inertia=inertia, interface_positions=positions, interface_modes=imodes,
                         input_rigid=R.T @ G, input_flex=F.T @ G, output_rigid=H @ R, output_flex=H @ F,
-                        C=None if C is None else 0.5 * (C + C.T))
+                        damping_matrix=None if damping_matrix is None
+                        else 0.5 * (damping_matrix + damping_matrix.T))

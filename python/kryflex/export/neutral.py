@@ -1,4 +1,4 @@
-"""The neutral multibody file (README.md, "Multibody export"): one NumPy .npz archive, every array named, read with
+"""The neutral multibody file (docs/guide/export.md): one NumPy .npz archive, every array named, read with
 numpy.load alone. Written atomically (a temporary file beside the target, renamed when complete)."""
 import io
 import os
@@ -21,6 +21,8 @@ FRAME_ARRAYS = ("rigid_coords", "modes", "mass_flex", "stiffness_flex", "mass", 
 BODY_ARRAYS = REDUCED_ARRAYS + FRAME_ARRAYS
 # per-body arrays a file of an earlier kryflex may lack (read as zeros): the viscous damping matrix and F^T C F
 OPTIONAL_BODY_ARRAYS = ("C", "damping_flex")
+# the FloatingBody attribute of a file array named otherwise (the file's C, as in the FE convention, is the damping)
+ATTRIBUTES = {"C": "damping_matrix"}
 
 
 def _strings(values):
@@ -52,7 +54,7 @@ def arrays(data):
         out["body%d/missing_rigid" % i] = _strings(b.missing_rigid)
         keys = BODY_ARRAYS + OPTIONAL_BODY_ARRAYS if b.floating else REDUCED_ARRAYS + ("C",)
         for key in keys:
-            out["body%d/%s" % (i, key)] = np.asarray(getattr(b, key), dtype=float)
+            out["body%d/%s" % (i, key)] = np.asarray(getattr(b, ATTRIBUTES.get(key, key)), dtype=float)
     return out
 
 
@@ -92,7 +94,7 @@ def read_neutral(path):
                 # files before bodies without a floating frame have no 'floating': every body floats there
                 floating = bool(int(z["body%d/floating" % i])) if "body%d/floating" % i in z.files else True
                 kw = {key: z["body%d/%s" % (i, key)] for key in (BODY_ARRAYS if floating else REDUCED_ARRAYS)}
-                kw.update({key: z["body%d/%s" % (i, key)] for key in OPTIONAL_BODY_ARRAYS
+                kw.update({ATTRIBUTES.get(key, key): z["body%d/%s" % (i, key)] for key in OPTIONAL_BODY_ARRAYS
                            if "body%d/%s" % (i, key) in z.files})
                 if floating:
                     kw["mass"] = float(kw["mass"])

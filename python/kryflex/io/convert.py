@@ -31,7 +31,7 @@ from .dmig import nastran_body
 __all__ = ["convert", "main", "ConversionError", "ConversionWarning", "ConvertedBody"]
 
 PETSC_MAT_CLASSID = 1211216
-EXIT_USAGE, EXIT_BAD_INPUT, EXIT_OUTPUT = 2, 2, 4   # as the kryflex command: README, 'exit codes'
+EXIT_USAGE, EXIT_BAD_INPUT, EXIT_OUTPUT = 2, 2, 4   # as the kryflex command: docs/guide/troubleshooting.md
 
 
 @dataclass

@@ -12,7 +12,7 @@ continuations, every Nastran spelling of a real); this module turns what it read
              scalar points together, as Nastran sorts its a-set), components ascending. A grid keeps the
              components the matrices use: all six -> `6`, ux uy uz -> `3`, others -> `c<components>` (e.g. a
              grid whose rotations carry neither mass nor stiffness: `c123`, a plate grid without drilling
-             stiffness and inertia: `c12345`); a scalar point -> `s` (see README, "Nodes file").
+             stiffness and inertia: `c12345`); a scalar point -> `s` (docs/guide/boundary-conditions.md: dof layouts).
   positions  GRID X1 X2 X3 are in the grid's CP system (rectangular, cylindrical r theta z or spherical
              r theta phi, angles in degrees; CORD1x/CORD2x, chained through RID); they are written in the basic
              system. A grid the matrices use must have a GRID card (never silently at 0, 0, 0).

@@ -1,6 +1,6 @@
 """Scene files: bodies, joints, inputs, outputs and what the reduction must serve.
 
-A scene is one YAML file (see README.md, "Scene file reference"). Every value can be overridden from the command
+A scene is one YAML file (docs/reference/scene-file.md). Every value can be overridden from the command
 line with a PETSc option named after its path: ``-scene.damping 0.005``, ``-scene.reduction.moments 12``,
 ``-scene.angles 0,30,60``. Loading goes from cheap to expensive, so that a mistake anywhere is found before any
 heavy work: the YAML (io/yaml_load.py: size, nesting, aliases, duplicate keys), every key and value

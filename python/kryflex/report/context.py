@@ -1,41 +1,60 @@
 """Facts derived from a summary that several report sections and figures share."""
 from ..io.scene_schema import NO_JOINT_LABEL
 from .formatting import MAX_MOMENT_ENTRIES_SHOWN
-from .schema import _get
+from ..results import ChosenModel, Summary, SummaryError
+from .schema import ReportError
+
+
+def as_summary(summary):
+    """A Summary from a Summary or its JSON dict (ReportError naming the key when the dict cannot be read)."""
+    if isinstance(summary, Summary):
+        return summary
+    try:
+        return Summary.from_json(summary)
+    except SummaryError as e:
+        raise ReportError(str(e)) from None
 
 
 class _Context:
-    """Derived facts used by several sections (labels, headers, displayed I/O entries)."""
+    """Derived facts used by several sections (labels, headers, displayed I/O entries). summary: a
+    kryflex.results.Summary (typed: self.summary) or its JSON dict; self.s is the JSON dict, for the tables that
+    walk its nested per-label blocks."""
 
     def __init__(self, summary):
-        self.s = summary
-        self.labels = list(summary["angle_labels"])
-        self.label_g = summary["reduction_label"]
-        self.outputs = list(summary["outputs"])
-        self.inputs = list(summary["inputs"])
-        self.rigid = _get(summary, ("full", "rigid_modes"))
+        summary = as_summary(summary)
+        self.summary = summary
+        self.s = summary.to_json()
+        self.labels = list(summary.angle_labels)
+        self.label_g = summary.reduction_label
+        self.outputs = list(summary.outputs)
+        self.inputs = list(summary.inputs)
+        self.rigid = summary.full.rigid_modes if summary.full is not None else None
         self.entries = [(o, i) for o in range(len(self.outputs)) for i in range(len(self.inputs))]
         self.dominant_entry = self._dominant_entry()
         self.shown_entries = self.entries if len(self.entries) <= MAX_MOMENT_ENTRIES_SHOWN else [self.dominant_entry]
-        self.model_name = (summary.get("chosen_method") or _get(summary, ("settings", "method"))
+        settings = summary.settings
+        self.model_name = (summary.verdict.chosen_method or (settings.method if settings is not None else None)
                            or "single-angle") + " model"
-        self.chosen = summary.get("chosen") or {}
+        # a summary without a chosen-model block (written before it had one): every key of the block absent
+        self.chosen = summary.chosen or ChosenModel(absent=frozenset(ChosenModel.json_keys()))
 
     def chosen_error(self, label, name="frf_error"):
         """The chosen model's error at an angle of interest: name "frf_error" (relative H-inf per pair, the verdict's
-        measure) or "frf_pointwise_error" (information). Summaries without a "chosen" block (written before issue
-        11) give the single-angle model's per-angle value, the only one they hold."""
-        per = self.chosen.get(name)
-        if per is not None:
-            return per.get(label)
-        frf = (self.s.get("frf") or {}).get(label) or {}
-        return frf.get(name, frf.get("max_rel_error") if name == "frf_error" else None)
+        measure) or "frf_pointwise_error" (information). Summaries without a chosen-model block give the
+        single-angle model's per-angle value, the only one they hold."""
+        if name not in self.chosen.absent:
+            return getattr(self.chosen, name).get(label)
+        frf = self.summary.frf.get(label)
+        if frf is None:
+            return None
+        value = getattr(frf, name)
+        return frf.max_rel_error if value is None and name == "frf_error" else value
 
     def _dominant_entry(self):
         """The (output, input) entry with the largest static gain |L^0| summed over configurations."""
         weight = {e: 0.0 for e in self.entries}
         for label in self.labels:
-            moments = self.s["full"]["moments"][label]
+            moments = self.summary.full.moments[label]
             if moments:
                 for (o, i) in self.entries:
                     weight[(o, i)] += abs(moments[0][o][i])
@@ -43,7 +62,7 @@ class _Context:
 
     def no_joint(self, label):
         """True for the one configuration of a scene without revolute joints: the structure, which has no angle."""
-        angles = self.s.get("angles_deg")
+        angles = self.summary.angles_deg
         if angles is not None and label in self.labels:
             values = angles[self.labels.index(label)]
             return isinstance(values, (list, tuple)) and len(values) == 0
@@ -54,7 +73,7 @@ class _Context:
         structure' without revolute joints."""
         if self.no_joint(label):
             return "the structure"
-        angles = self.s.get("angles_deg")
+        angles = self.summary.angles_deg
         if angles is not None:
             values = angles[self.labels.index(label)]
             values = values if isinstance(values, (list, tuple)) else [values]

@@ -30,10 +30,12 @@ def plot_file_names(summary):
 
 
 def _render_plots(summary, plot_names):
-    """Yield (file name, PNG bytes) for every figure of the report."""
+    """Yield (file name, PNG bytes) for every figure of the report (summary: a Summary or its JSON dict)."""
     c = _Context(summary)
-    settings = summary.get("settings") or {}
-    arrays = {label: plots.frf_arrays(summary["frf"][label]) for label in c.labels}
+    s = c.summary
+    threshold = s.settings.keep_threshold if s.settings is not None else None
+    arrays = {label: (np.asarray(s.frf[label].freq_hz, float), s.frf[label].full(), s.frf[label].chosen())
+              for label in c.labels}
     for label in c.labels:
         freq, full, red = arrays[label]
         titles = [f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"
@@ -44,25 +46,24 @@ def _render_plots(summary, plot_names):
     o, i = c.dominant_entry
     panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
     yield "bode_overview.png", plots.figure_png_bytes(
-        plots.bode_overview_figure(panels, f"{summary['scene']}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
+        plots.bode_overview_figure(panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
     for label in c.labels:
-        kr = summary["krylov"][label]
+        kr = s.krylov[label]
         title = f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}"
         yield plot_names["importance"][label], plots.figure_png_bytes(plots.importance_figure(
-            kr["frequency_hz"], kr["importance"], kr["kept"], title,
-            threshold=settings.get("keep_threshold"), band_hz=summary.get("band_hz")))
-    series = [(f"single, {c.short_angle(l)}", summary["reduced"]["moment_ratios"][l], False) for l in c.labels]
-    multi = (summary.get("multi_angle") or {}).get("moment_ratios") or {}
+            kr.frequency_hz, kr.importance, kr.kept, title, threshold=threshold, band_hz=s.band_hz))
+    series = [(f"single, {c.short_angle(l)}", s.reduced.moment_ratios[l], False) for l in c.labels]
+    multi = (s.multi_angle.moment_ratios if s.multi_angle is not None else None) or {}
     series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
     yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
+
     def rigid(label):       # the elastic measure's rigid part of the full response, when the summary has it
-        f = summary["frf"][label]
-        if "full_rigid_re" not in f:
-            return None
-        return np.asarray(f["full_rigid_re"], float) + 1j * np.asarray(f["full_rigid_im"], float)
+        f = s.frf[label]
+        return None if f.full_rigid_re is None else f._complex(f.full_rigid_re, f.full_rigid_im)
 
     curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2], rigid(l)))
               for l in c.labels]
     yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
-        curves, summary.get("accuracy"), f"Relative {summary.get('accuracy_measure') or 'total'}-response error of the chosen model ({c.model_name})"))
-    yield from paper_figures(summary)
+        curves, s.accuracy, f"Relative {s.verdict.accuracy_measure or 'total'}-response error of the chosen model "
+                            f"({c.model_name})"))
+    yield from paper_figures(c.s)

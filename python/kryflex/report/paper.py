@@ -104,7 +104,7 @@ def _krylov_table(p, label, number):
                      "frequencies do not determine; the paper's MIC is defined in its ref. 7 (not reproduced in "
                      "the paper), and its Tables 3 and 5 agree only if it is not h2 (meshes/galileo/README.md); "
                      "kryflex ranks with the "
-                     + str(p["recipe"].get("importance")) + " measure (README, Mode importance).")
+                     + str(p["recipe"].get("importance")) + " measure (docs/guide/scenes.md, reduction.importance).")
         else:
             text += " The kept modes' frequencies agree within 5 %."
         lines += [text, ""]

@@ -1,90 +1,10 @@
-"""The summary a report is made from: its schema, and the checks that it can be reported.
+"""The checks that a summary can be reported: the keys the report needs, per-label blocks, shapes, JSON types.
 
-Summary schema (JSON types only: dict with str keys, list, int, float (finite), str, bool, None; undefined
-numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may be missing.
+The summary's schema is kryflex.results: one dataclass per block of summary.json, its fields the block's keys
+(docs/guide/results.md describes them). The checks here run on the JSON dict (Summary.to_json()), before the report
+is rendered, so that a summary written by hand or by another program is refused with the offending key named.
 
-{
- "kryflex_version": str (opt), "scene": str, "scene_file": str (opt),
- "inputs": [names], "outputs": [names], "joints": [revolute joint names] (opt),
- "angles_deg": [[a1, a2, ..] per configuration, one entry per revolute joint] (opt),
- "angle_labels": ["0", "15", ...]  (file names and table headers; e.g. "0_30" for several joints; ["structure"]
-                                  for a scene without revolute joints, whose angles_deg is [[]]),
- "band_hz": [f0, f1] (opt), "damping": z (opt), "accuracy": target (opt), "frf_floor_db": dB (opt),
- "settings": {"moments": c, "moments_max", "output_blocks", "importance", "keep_threshold", "cluster_rtol",
-              "search", "deflation_tol", "reduction_angles_deg": [[..]], "method"} (opt, any keys shown),
-
- -- the verdict, always on the model the reducer chose (issue 11; all (opt) for summaries written before it) --
- "accuracy_measure": "elastic" | "total" (opt; the response the errors are of: the total minus its rigid-body and
-                     mechanism part, or the total),
- "error_definition": str (the one measure: relative H-infinity error per input/output pair over the band, of the
-                     accuracy_measure's response),
- "pointwise_definition": str (the pointwise error with a floor: information, never the verdict),
- "chosen_method": "single-angle" | "multi-angle"   (C chosen_method),
- "target_met": bool | None   (C target_met: error <= accuracy at every angle of interest AND every midpoint;
-                              None when no error was measured or estimated; a reducer that records no
-                              verdict gets the same rule applied to the errors it recorded),
- "error_max": float | None   (C error_max: the chosen model's worst error over angles and midpoints),
- "error_estimated": bool     (C error_estimated: true when the reference was the a-posteriori estimator),
- "reference_check": {"error", "rtol", "per_angle": {<label>: {"error", "frequency_hz"}}} | None (opt; the full-order
-                    reference against direct solves of the full system, C reference_check_*),
- "moments_matched": c | None, "multi_moments_matched": c | None   (moments of each family's model),
- "chosen": {"method", "moments": c, "dofs_per_body": {body: v}, "dofs": sum of v, "system_dofs": {<label>: h},
-            "expansion_angles_deg": [[..]], "kept_modes": [1-based Krylov modes] | None (multi-angle),
-            "kept_clusters": int | "per body" | None (None: every cluster, or not known),
-            "frf_error": {<label>: e}  (THE measure, the chosen model's C frf_error / multi_frf_error),
-            "frf_pointwise_error": {<label>: e | None}  (information),
-            "worst_error": e, "worst_where": <label> or a midpoint's label, "worst_kind": "angle" | "midpoint"},
- "midpoints": [{"angles_deg": [..], "label": "7.5", "frf_error": e | None (the chosen model's)}],
- "search": [{"family": "single-angle" | "multi-angle", "moments": c, "kept_clusters": int | "per body" | None (all),
-             "expansion_angles": n, "reduced_dofs": n (sum over bodies), "max_system_dofs": n, "error": e}]
-           (C search_table, one row per candidate evaluated), "search_chosen": row index of the chosen model | None,
- "expansion_point_search": {"factorizations_spent": n (C shift_factorizations_spent),
-                            "rows": [{"moments", "points", "reduced_dofs", "system_dofs", "error",
-                                      "factorizations_spent"}] (C shift_search)} (opt; -kf_max_factorizations;
-           the chosen model's "expansion_points_hz": [f] and "expansion_point_factorizations": n are in "chosen"),
- "hankel": {<label>: {"order": r (C hankel_order: first-order states the target needs),
-                      "singular_values": [descending] (C hankel_singular_values)}},
- -- the paper's study --
- "full": {"dofs_per_body": {body: n} (opt), "system_dofs": e (opt), "rigid_modes": r (opt),
-          "body_frequencies_hz": {body: [..]} (opt; free-free component frequencies, lowest few),
-          "frequencies_hz": {<label>: [lowest flexible system frequencies]},
-          "moments": {<label>: [t x a nested list, per k = 0..c-1]} (None entries: not computed, the fixed recipe
-                     without verification or -kf_full_moments)},
- "krylov": {<label>: {"frequency_hz": [c], "importance": [c] (normalized), "kept": [c bools],
-                      "deflations": int (opt), "gram_condition_raw": float|None (opt)}},
- "reduction_label": <label> of alpha_G, "reduction_rule": str (opt; why this alpha_G),
- "kept_modes": [1-based Krylov mode numbers at alpha_G], "static_correction_modes": int (opt),
- "static_correction_frequency_hz": [..] (opt),
- "reduced": {"dofs_per_body": {body: v} (opt), "body_frequencies_hz": {body: [..]} (opt),
-             "system_dofs": {<label>: h} (opt), "frequencies_hz": {<label>: [..]},
-             "moments": {<label>: [same layout as full]} (opt),
-             "moment_ratios": {<label>: [t x a per k]}  (full/reduced; None where the full moment is negligible),
-             "static_gain_error": {<label>: float} (opt), "reassembly_rank": {<label>: int} (opt),
-             "reassembly_sigma_ratio": {<label>: float} (opt), "reassembly_seconds": float (opt),
-             "trimming": {"max_frequency": str|float|None, "max_frequency_hz": float|None,
-                          "top_frequency_hz", "untrimmed_top_frequency_hz", "explicit_step_s", "trimmed_modes":
-                          {<label>: ..}, "top_frequency_hz_max": float, "explicit_step_s_min": float|None} (opt)},
- "frf": {<label>: {"freq_hz": [nf], "full_re": [nf][t][a], "full_im", "reduced_re", "reduced_im" (the
-                   single-angle model), "chosen_re", "chosen_im" (opt: the multi-angle model's, when it was chosen;
-                   the plots draw the chosen model), "frf_error": float (single-angle model, relative H-inf),
-                   "frf_pointwise_error": float | None (single-angle model, information),
-                   "max_rel_error": float (= frf_error, the name scripts before issue 11 read),
-                   "full_rigid_re", "full_rigid_im": [nf][t][a] (opt: the full response's rigid-body and
-                   mechanism part, with the elastic accuracy measure)}},
- "dominant_modes": {<label>: [0-based indices into full["frequencies_hz"][<label>]]} (opt),
- "dominant_freq_error": {<label>: [relative error of the matched reduced frequency, same order]} (opt),
- "multi_angle": {"system_dofs": {<label>: h}, "dofs_per_body": {body: v}, "moment_ratios": {<label>: ..},
-                 "frf_error": {<label>: float}, "frf_pointwise_error": {<label>: float},
-                 "frf_max_rel_error": {<label>: float} (= frf_error)} (opt, every part optional),
- "timings_s": {stage: seconds} (opt), "notes": [str] (opt),
- "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
-                 solves)), "solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged" (block solves left
-                 above -kf_refine_rtol after escalation), "blocks_escalated" (escalated), "residual_first_max",
-                 "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
- "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
-}
-
-This module depends only on the standard library, NumPy and plots.py (no compiled kryflex code).
+This module depends only on the standard library and NumPy (no compiled kryflex code).
 """
 import math
 
@@ -193,7 +113,7 @@ def validate_summary(summary):
     for path in REQUIRED_KEYS:
         if _get(summary, path) is None:
             raise ReportError(f"{_key_text(path)} is missing: the report needs it "
-                              "(see the schema in kryflex/report.py)")
+                              "(see kryflex.results and docs/guide/results.md)")
     _check_json_types(summary, ())
     labels = summary["angle_labels"]
     if not labels or len(set(labels)) != len(labels) or not all(isinstance(a, str) for a in labels):

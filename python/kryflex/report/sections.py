@@ -17,8 +17,9 @@ ERROR_TEXT = "relative H∞ error per input/output pair over the band"
 
 
 def _error_text(s):
-    """the verdict's measure in words, naming the response it is of (summary "accuracy_measure")"""
-    measure = s.get("accuracy_measure")
+    """the verdict's measure in words, naming the response it is of (the verdict's accuracy_measure; s: the
+    Summary or its JSON dict)"""
+    measure = s.verdict.accuracy_measure if hasattr(s, "verdict") else s.get("accuracy_measure")
     return f"relative H∞ error of the {measure} response per input/output pair over the band" if measure else ERROR_TEXT
 INFO_TEXT = "information only, not the verdict"
 
@@ -56,35 +57,35 @@ def _no_angles(value):
 
 def _chosen_sentence(c):
     """The chosen model in one sentence: method, moments, kept set, sizes."""
-    s, ch = c.s, c.chosen
+    s, ch = c.summary, c.chosen
     parts = [f"The chosen model is the **{c.model_name}**"]
-    if ch.get("moments") is not None:
-        parts.append(f"c = {ch['moments']} moments")
-    if ch.get("method") == "multi-angle" and ch.get("expansion_angles_deg"):
-        parts.append("expansion angles " + ", ".join(_angles_text(a) for a in ch["expansion_angles_deg"]))
-    elif c.no_joint(s.get("reduction_label")):
+    if ch.moments is not None:
+        parts.append(f"c = {ch.moments} moments")
+    if ch.method == "multi-angle" and ch.expansion_angles_deg:
+        parts.append("expansion angles " + ", ".join(_angles_text(a) for a in ch.expansion_angles_deg))
+    elif c.no_joint(s.reduction_label):
         parts.append("one configuration (no revolute joint)")
-    elif s.get("reduction_label") is not None:
-        parts.append(f"α_G = {s['reduction_label']}°")
-    if ch.get("kept_modes") is not None:
-        parts.append(f"kept Krylov modes {mode_ranges(ch['kept_modes'])}")
-    elif ch.get("kept_clusters") == "per body":
+    elif s.reduction_label is not None:
+        parts.append(f"α_G = {s.reduction_label}°")
+    if ch.kept_modes is not None:
+        parts.append(f"kept Krylov modes {mode_ranges(ch.kept_modes)}")
+    elif ch.kept_clusters == "per body":
         parts.append("each body its share of the mode clusters")
-    elif ch.get("kept_clusters") is not None:
-        parts.append(f"{ch['kept_clusters']} kept mode clusters")
-    elif "kept_clusters" in ch:
+    elif ch.kept_clusters is not None:
+        parts.append(f"{ch.kept_clusters} kept mode clusters")
+    elif "kept_clusters" not in ch.absent:
         parts.append("every mode kept")
-    sizes = ch.get("dofs_per_body") or {}
+    sizes = ch.dofs_per_body or {}
     if sizes:
         parts.append("body sizes " + ", ".join(f"{b} {v}" for b, v in sizes.items())
-                     + f" ({ch.get('dofs', sum(sizes.values()))} dofs in all)")
-    system = [v for v in (ch.get("system_dofs") or {}).values() if v is not None]
+                     + f" ({ch.dofs if ch.dofs is not None else sum(sizes.values())} dofs in all)")
+    system = [v for v in (ch.system_dofs or {}).values() if v is not None]
     if system:
         parts.append(f"{max(system)} system dofs at most after reassembly")
-    points = ch.get("expansion_points_hz") or []
+    points = ch.expansion_points_hz or []
     if points:   # docs/guide/expansion-points.md: their blocks beside those at zero, one factorization each
         parts.append("expansion points inside the band at " + ", ".join(f"{f:.4g}" for f in points)
-                     + f" Hz ({ch.get('expansion_point_factorizations', 0)} factorizations of K - sigma M"
+                     + f" Hz ({ch.expansion_point_factorizations or 0} factorizations of K - sigma M"
                      + " beside those at zero)")
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."
 
@@ -95,44 +96,45 @@ def _row_name(c, label):
 
 
 def _section_accuracy(c):
-    s = c.s
-    accuracy = s.get("accuracy")
-    estimated = bool(s.get("error_estimated"))
+    s, verdict = c.summary, c.summary.verdict
+    accuracy = s.accuracy
+    estimated = bool(verdict.error_estimated)
     lines = ["## Accuracy of the chosen model", "", _chosen_sentence(c), ""]
-    lines += [f"Error measure (the verdict): the {s.get('error_definition') or ERROR_TEXT}. "
+    lines += [f"Error measure (the verdict): the {verdict.error_definition or ERROR_TEXT}. "
               + ("It is **estimated** by the a-posteriori estimator (the full-order verification was off: "
                  "`verify.full_order: false`), not measured." if estimated else
                  "It is **measured** against the full-order model "
                  + ("of the structure" if c.no_joint(c.label_g) else "at every angle of interest")
-                 + (" and at every midpoint between consecutive ones." if s.get("midpoints") else ".")), ""]
-    measure = f"relative H∞ error ({s['accuracy_measure']})" if s.get("accuracy_measure") else "relative H∞ error"
+                 + (" and at every midpoint between consecutive ones." if s.midpoints else ".")), ""]
+    measure = (f"relative H∞ error ({verdict.accuracy_measure})" if verdict.accuracy_measure
+               else "relative H∞ error")
     measure += " (estimated)" if estimated else ""
     rows, judged, passed = [], 0, 0
     for label in c.labels:
         err = c.chosen_error(label)
-        verdict = _verdict(err, accuracy)
-        judged += verdict != DASH
-        passed += verdict == "PASS"
-        rows.append([_row_name(c, label), "one configuration" if c.no_joint(label) else "angle of interest", _fmt_error(err),
-                     _fmt_error(accuracy), verdict])
-    for m in s.get("midpoints") or []:
-        verdict = _verdict(m.get("frf_error"), accuracy)
-        judged += verdict != DASH
-        passed += verdict == "PASS"
-        rows.append([f"{m['label']}°", "midpoint", _fmt_error(m.get("frf_error")), _fmt_error(accuracy), verdict])
+        result = _verdict(err, accuracy)
+        judged += result != DASH
+        passed += result == "PASS"
+        rows.append([_row_name(c, label), "one configuration" if c.no_joint(label) else "angle of interest",
+                     _fmt_error(err), _fmt_error(accuracy), result])
+    for m in s.midpoints or []:
+        result = _verdict(m.frf_error, accuracy)
+        judged += result != DASH
+        passed += result == "PASS"
+        rows.append([f"{m.label}°", "midpoint", _fmt_error(m.frf_error), _fmt_error(accuracy), result])
     lines += [f"Table 7. The {c.model_name}'s {_error_text(s)} against the accuracy target, "
               + ("of the structure." if c.no_joint(c.label_g) else "at the angles of interest and the midpoints between them."), "",
               table(["configuration", "where", measure, "target", "result"], rows, "llrrl"), ""]
-    check = s.get("reference_check")
-    if check and check.get("error") is not None:
+    check = verdict.reference_check
+    if check is not None and check.error is not None:
         lines += [f"The full-order reference was checked against direct solves of the full system (K − ω²M) x = G "
                   f"off resonance {'of the structure' if c.single else 'at every angle'}: worst disagreement "
-                  f"{check['error']:.2e} of the pair's peak "
-                  f"(allowed {check.get('rtol') or 1e-6:.0e}).", ""]
-    met, worst = s.get("target_met"), s.get("error_max")
-    where, kind = c.chosen.get("worst_where"), c.chosen.get("worst_kind")
+                  f"{check.error:.2e} of the pair's peak "
+                  f"(allowed {check.rtol or 1e-6:.0e}).", ""]
+    met, worst = verdict.target_met, verdict.error_max
+    where, kind = c.chosen.worst_where, c.chosen.worst_kind
     if worst is None:
-        worst = c.chosen.get("worst_error")
+        worst = c.chosen.worst_error
     if met is None and worst is not None and accuracy is not None:
         met = worst <= accuracy
     if judged:
@@ -149,7 +151,7 @@ def _section_accuracy(c):
     if any(r[1] != DASH for r in info_rows):
         lines += [f"Table 7b. Pointwise error with a floor of the {c.model_name} ({INFO_TEXT}): per pair "
                   "max_w |T_full − T_red| / max(|T_full(w)|, floor · max_w |T_full|), floor "
-                  f"{_fmt_floor(s)}. It is large in deep notches, where the response itself is tiny; the "
+                  f"{_fmt_floor(c.s)}. It is large in deep notches, where the response itself is tiny; the "
                   "verdict above does not use it.", "",
                   table(["configuration", f"pointwise error ({INFO_TEXT})"], info_rows), ""]
     return lines
@@ -165,53 +167,51 @@ def _search_marker(k, chosen_row):
 
 
 def _flexible_dofs(c, label):
-    dofs = (c.chosen.get("system_dofs") or {}).get(label)
+    dofs = (c.chosen.system_dofs or {}).get(label)
     if dofs is None:
         return None
     return dofs - (c.rigid or 0)
 
 
 def _section_choice(c):
-    s = c.s
-    rows_in = s.get("search") or []
-    hankel = s.get("hankel") or {}
-    if not rows_in and not hankel:
+    s = c.summary
+    candidates = s.search or []
+    hankel = s.hankel or {}
+    if not candidates and not hankel:
         return []
-    accuracy = s.get("accuracy")
+    accuracy = s.accuracy
     lines = ["## How the model was chosen", ""]
-    if rows_in:
-        chosen_row = s.get("search_chosen")
-        lines += [f"The reducer evaluated {len(rows_in)} candidate model(s), smallest first within each family, and "
-                  "kept the smallest that meets the target (`reduction.method: auto`: the smaller of the two "
+    if candidates:
+        lines += [f"The reducer evaluated {len(candidates)} candidate model(s), smallest first within each family, "
+                  "and kept the smallest that meets the target (`reduction.method: auto`: the smaller of the two "
                   "families; otherwise the family asked for). Error: the " + _error_text(s)
-                  + (" (estimated)" if s.get("error_estimated") else "") + "."
-                  + (" No candidate met the target: the one written is marked." if s.get("target_met") is False
+                  + (" (estimated)" if s.verdict.error_estimated else "") + "."
+                  + (" No candidate met the target: the one written is marked." if s.verdict.target_met is False
                      else ""), ""]
         rows = []
-        for k, r in enumerate(rows_in):
-            kept = "all" if r.get("kept_clusters") is None else str(r["kept_clusters"])
-            rows.append([r.get("family", DASH), fmt_general(r.get("moments")), kept,
-                         fmt_general(r.get("expansion_angles")), fmt_general(r.get("reduced_dofs")),
-                         fmt_general(r.get("max_system_dofs")), _fmt_error(r.get("error")),
-                         _verdict(r.get("error"), accuracy), _search_marker(k, chosen_row)])
+        for k, r in enumerate(candidates):
+            kept = "all" if r.kept_clusters is None else str(r.kept_clusters)
+            rows.append([r.family or DASH, fmt_general(r.moments), kept, fmt_general(r.expansion_angles),
+                         fmt_general(r.reduced_dofs), fmt_general(r.max_system_dofs), _fmt_error(r.error),
+                         _verdict(r.error, accuracy), _search_marker(k, s.search_chosen)])
         lines += ["Table 8. The search: one row per candidate evaluated.", "",
                   table(["family", "moments c", "kept clusters", "expansion angles", "size (dofs, all bodies)",
                          "max system dofs", "error", "target", ""], rows, "lrrrrrrll"), ""]
-    elif s.get("settings", {}).get("search") is False:
+    elif s.settings is not None and s.settings.search is False:
         lines += ["The search was off (`reduction.search: false`): the paper's fixed recipe (fixed moments, "
                   "keep threshold%s)." % ("" if c.single else ", α_G rule"), ""]
     if hankel:
         rows = []
         for label in c.labels:
             h = hankel.get(label)
-            if not h:
+            if h is None:
                 continue
-            order = h.get("order")
+            order = h.order
             flex = _flexible_dofs(c, label)
             needed = None if order is None else (order + 1) // 2
-            states = h.get("chosen_states", None if flex is None else 2 * flex)
+            states = h.chosen_states if "chosen_states" not in h.absent else (None if flex is None else 2 * flex)
             rows.append([c.short_angle(label), fmt_general(flex), fmt_general(states),
-                         _fmt_error(h.get("bound_at_chosen")), fmt_general(order), fmt_general(needed),
+                         _fmt_error(h.bound_at_chosen), fmt_general(order), fmt_general(needed),
                          DASH if not needed or flex is None else f"{flex / needed:.2g}×"])
         caption = ("Table 9. How close to the limit: the Hankel singular values σ of the full model's flexible part "
                    "(two first-order states (q, q̇) per mode). No model of k states has an H∞ error below σ_(k+1); a "
@@ -679,7 +679,7 @@ def render_markdown(summary, plot_names):
 
 
 def damping_text(d):
-    """One line for a damping description {modal, rayleigh: {alpha, beta}, structural} (README "Damping")."""
+    """One line for a damping description {modal, rayleigh: {alpha, beta}, structural} (docs/guide/damping.md)."""
     parts = []
     modal = d.get("modal") or 0.0
     if isinstance(modal, list):

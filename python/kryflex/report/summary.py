@@ -4,7 +4,7 @@ Every number is one the C reducer recorded (KFReducerGetResult); this module onl
 for JSON: arrays become nested lists, NaN ("negligible" or "not available") becomes None, moments and responses are
 laid out (k or frequency, outputs, inputs) as the report reads them.
 
-The one error measure (issue 11, src/measure/frf_error.c) is ERROR_DEFINITION: the summary's verdict (target_met,
+The one error measure (docs/guide/accuracy.md, src/measure/frf_error.c) is ERROR_DEFINITION: the summary's verdict (target_met,
 error_max) and every per-angle "frf_error" are of it; "frf_pointwise_error" is the notch-aware pointwise measure,
 information only. The verdict and the chosen-model blocks are always those of the model the reducer chose
 (chosen_method), never the single-angle model's when the multi-angle one was chosen. Results a reducer did not

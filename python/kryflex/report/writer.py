@@ -16,17 +16,16 @@ and returns the written paths. Everything is validated first, then rendered into
 out_dir; only when all succeeded are the files moved into place together (io.files.Staging). A failure raises
 ReportError (or the plotting error), removes the staging folder and leaves any earlier report in out_dir untouched.
 
-The summary schema is in schema.py. This package depends only on the standard library, NumPy and matplotlib
-(no compiled kryflex code).
+The summary is a kryflex.results.Summary (or its JSON dict); summary.json is its to_json(). This package depends
+only on the standard library, NumPy and matplotlib (no compiled kryflex code).
 """
-import json
 import os
 
 from ..io.files import Staging
 from ..io.scene_schema import NO_JOINT_LABEL
 from .figures import _render_plots, plot_file_names
 from .schema import _check_json_types, validate_summary
-from .context import _Context
+from .context import _Context, as_summary
 from .sections import _section_accuracy, _section_choice, render_markdown
 
 
@@ -53,8 +52,11 @@ def write_report(summary, out_dir, between=None):
     on any failure no file of this report is left in out_dir (earlier files there are untouched). between: called
     after each plot (the command stops there when it was interrupted: rendering the plots is the long part).
     """
+    if not isinstance(summary, dict):
+        summary = as_summary(summary).to_json()
     validate_summary(summary)
-    text_json = json.dumps(summary, indent=1, allow_nan=False) + "\n"
+    summary = as_summary(summary)
+    text_json = summary.dumps()
     plot_names = plot_file_names(summary)
     markdown = render_markdown(summary, plot_names)
 
@@ -73,6 +75,8 @@ def write_unverified(summary, out_dir):
     """When the full-order verification was skipped (verify.full_order: false): summary.json and a short report.md
     with what is known without the full order (sizes, alpha_G, kept modes, the estimated error of the chosen model
     and the search, full-order moments). Same guarantees as write_report."""
+    typed = as_summary(summary)
+    summary = typed.to_json()
     _check_json_types(summary, ())
     lines = [f"# kryflex reduction: {summary.get('scene', '?')}", "",
              "The full-order verification was skipped (`verify.full_order: false`): no frequency-response or",
@@ -95,5 +99,5 @@ def write_unverified(summary, out_dir):
             devs = [abs(x - 1) for k in r for row in k for x in row if x is not None]
             lines.append(f"| {label} | {max(devs) if devs else 0:.3e} |")
     return _write_together(out_dir, [
-        ("summary.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8")),
+        ("summary.json", typed.dumps().encode("utf-8")),
         ("report.md", ("\n".join(lines) + "\n").encode("utf-8"))])

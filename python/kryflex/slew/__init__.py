@@ -1,4 +1,4 @@
-"""The slewing study (issue 15): the articulated structure integrated in time while its joint angles move, the
+"""The slewing study (docs/guide/slewing.md): the articulated structure integrated in time while its joint angles move, the
 full-order model against a reduced one along the same angle history, and the error of the output histories
 against the slew rate.
 

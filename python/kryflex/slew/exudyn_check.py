@@ -8,11 +8,11 @@ and Jacobian user functions are D(alpha(t)) z and D(alpha(t))) and integrated by
 alpha, index 3, fixed step), so that the check shares the equations, not the integration, with integrator.py: with
 spectral radius 1 Exudyn's rule is the trapezoidal one, so at the same step the histories must agree to round-off
 (tests/python/slew/test_slew.py; `kryflex slew --exudyn-check` reports it for the fastest slew). Exudyn models the
-slewing structure this way because the study's model is linear time-varying by design (README: slewing).
+slewing structure this way because the study's model is linear time-varying by design (docs/guide/slewing.md).
 
     t, y = exudyn_history(bodies, profile, t_end, h, damping_beta)
 
-The second check (issue 15 item 2) is physical: the REDUCED bodies as Exudyn floating-frame bodies
+The second check is physical: the REDUCED bodies as Exudyn floating-frame bodies
 (kryflex.export.exudyn.build_mbs, ObjectFFRFreducedOrder: the nonlinear terms the linear time-varying study leaves
 out) slewed by the bearing torque, against integrator.py's full and reduced bodies along the angle history Exudyn
 produced (`kryflex slew --exudyn-ffrf`, benchmarks/slew-exudyn/bench-slew-exudyn, tests/python/slew/test_slew_exudyn.py):
@@ -100,7 +100,7 @@ def exudyn_history(bodies, profile, t_end, h, damping_beta=0.0, spectral_radius=
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-# The reduced bodies in Exudyn's nonlinear floating-frame formulation, driven by the bearing torque (issue 15, item 2)
+# The reduced bodies in Exudyn's nonlinear floating-frame formulation, driven by the bearing torque: a physical check beside the linear one
 
 class RecordedProfile:
     """An angle history sampled at times t (radians per revolute joint, linear interpolation between samples) with a
@@ -216,7 +216,7 @@ def ffrf_history(model, inputs, profile, t_end, h, torque_peak=None):
 
 
 def ffrf_comparison(study, periods):
-    """Issue 15 item 2 for a small scene: the reduced bodies in Exudyn's nonlinear floating-frame formulation
+    """The physical check for a small scene: the reduced bodies in Exudyn's nonlinear floating-frame formulation
     (ffrf_history), driven by the slew's torque of duration periods * P1, against kryflex's linear time-varying
     integrator (integrator.py) of the FULL-order bodies and of the reduced bodies along the angle history Exudyn
     produced, at the same step and without damping. Errors as the study's (per output max_t |y_a - y_b| / max_t

@@ -1,4 +1,4 @@
-"""The slewing study (issue 15): time histories of the full-order and the reduced model along the same angle
+"""The slewing study (docs/guide/slewing.md): time histories of the full-order and the reduced model along the same angle
 history, at slew rates from quasi-static to faster than the first flexible period, and the error of the outputs
 against the rate.
 

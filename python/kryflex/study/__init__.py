@@ -1,4 +1,4 @@
-"""The speed-accuracy study of a scene (issue 11, items 4-6): every reduction method swept over its size parameter and
+"""The speed-accuracy study of a scene (docs/guide/accuracy.md): every reduction method swept over its size parameter and
 measured against ONE full-order reference, on the C reducer and the C error measures.
 
     from kryflex.study import Study

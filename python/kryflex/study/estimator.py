@@ -1,4 +1,4 @@
-"""The a-posteriori error estimator against the truth (issue 11, item 2): the accuracy search run twice on the same
+"""The a-posteriori error estimator against the truth (is the search's estimate safe to stop on?): the accuracy search run twice on the same
 scene, once measuring every candidate against the full-order reference (verify.full_order on) and once estimating
 it against the richest candidate (verify.full_order off, result error_estimated 1), the two search tables joined
 candidate by candidate.

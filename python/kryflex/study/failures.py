@@ -1,4 +1,4 @@
-"""The failure table of the stress study (issue 11, item 5), from the study.csv of each stress scene and the exit of
+"""The failure table of the stress study (which scenes a method cannot reduce, and why), from the study.csv of each stress scene and the exit of
 `kryflex reduce` on it (benchmarks/accuracy/bench-accuracy runs both):
 
     /usr/bin/python3 -m kryflex.study.failures NAME=STUDY_DIR:EXIT_CODE:REASON_FILE ... > failure-table.md

@@ -48,7 +48,7 @@ LOST_MOMENT = 1e-6
 
 
 def features():
-    """What the C library offers today (the issue-11 additions arrive on main one by one): the -kf_search and
+    """What this C library offers (a library built without some of them still sweeps the rest): the -kf_search and
     -kf_krylov_raw options, the binding's frf_errors (KFFRFErrors) and modal_hankel_singular_values. Reads the
     reducer's option names from its -help listing: call it before the first reducer of the process reads its
     options (cli/common.reducer_option_names)."""
@@ -153,7 +153,7 @@ class Study:
                                                    "points inside the band)")]
         if "krylov-raw" in self.methods and not self.features["krylov_raw"]:
             return [_row("krylov-raw", "", note="skipped: the C library has no -kf_krylov_raw yet (the raw "
-                                                "recurrence of eq. 9 arrives with the issue-11 Krylov changes)")]
+                                                "recurrence of eq. 9 is not in this C library)")]
         return []
 
     def sweep(self):

@@ -1,6 +1,6 @@
 """The kryflex command as a user drives it: build/kryflex in a subprocess, real files, 1 and 2 MPI ranks.
 
-Documented exit codes (README "Troubleshooting and exit codes", python/kryflex/cli/common.py): 0 done, 2 bad command
+Documented exit codes (docs/guide/troubleshooting.md, python/kryflex/cli/common.py): 0 done, 2 bad command
 line / scene / input file, 3 the model cannot be reduced, 4 the output cannot be written, 5 an unusable
 reduced-model file, 6 the accuracy target missed (results written). Every failure must name the problem on stderr
 and leave no output behind. Failures of one rank alone, signals and failed writes: test_collective_errors.py.
@@ -97,7 +97,7 @@ def two_ranks(tmp_path_factory):
 @pytest.fixture(scope="module")
 def overridden(tmp_path_factory):
     """PETSc option overrides reach every rank; -quiet silences the progress lines. With 6 moments no model the search
-    tries reaches 1e-9 (the search meets 0.05 with them since issue 11): the target is missed (exit 6), the best model
+    tries reaches 1e-9 (the search meets 0.05 with them): the target is missed (exit 6), the best model
     is written all the same."""
     out = tmp_path_factory.mktemp("cli") / "galileo_overridden"
     return Run(out, cli("reduce", GALILEO, "-o", out, "-quiet", "-scene.reduction.moments", 6,
@@ -194,7 +194,7 @@ def test_one_verdict_in_the_command_summary_and_report(run, request):
 
 def test_reduced_model_matches_moments_at_alpha_g(serial, galileo_ref):
     """At alpha_G the single-angle model matches the static moment exactly, and all c moments when the search kept
-    every mode (issue 11: after truncation with static correction only L^0 stays exact; README "Accuracy"): in
+    every mode (after truncation with static correction only L^0 stays exact; docs/guide/accuracy.md): in
     double precision, to the ~1e-9 that moments of a model with lambda_max / lambda_1 ~ 1e8 carry."""
     import kryflex
     s = serial.summary
@@ -227,11 +227,11 @@ def test_reduced_frequencies_are_close_to_full_order(serial, galileo_ref):
         dominant = s["dominant_modes"][label]
         assert dominant, label
         # the summary's frequency error of each dominant mode is the distance to the nearest reduced frequency
-        # (issue 11: the model is the smallest meeting the FRF target, not one reproducing every dominant mode)
+        # (the model is the smallest meeting the FRF target, not one reproducing every dominant mode)
         for i, err in zip(dominant, s["dominant_freq_error"][label]):
             assert err == pytest.approx(np.min(np.abs(red - full[i])) / full[i], rel=1e-9, abs=1e-15), (label, i)
         # the lowest flexible mode, the one every candidate keeps, is reproduced closely at every angle of interest
-        # the boom mode: 2.3e-5 on Galileo fitted to the paper (issue 15), whose first mode is not dominant alone
+        # the boom mode: 2.3e-5 on Galileo fitted to the paper (meshes/galileo/fit.py), whose first mode is not dominant alone
         assert np.min(np.abs(red - full[0])) / full[0] < 1e-4, label
         # the full-order frequencies are right: dense eigensolve of reference.py's assembly
         Ms, Ks = ref.assemble(galileo_ref, config)[:2]
@@ -517,7 +517,7 @@ def test_convert_nastran_punch_into_a_scene(tmp_path):
     full = np.array(s["full"]["frequencies_hz"][label])
     lam = sl.eigh(K, M, eigvals_only=True)
     np.testing.assert_allclose(full, (np.sqrt(lam[6:]) / (2 * np.pi))[:len(full)], rtol=1e-9)
-    # the static gain is kept exactly (static correction, eq. 15-17); the model meets the FRF target (issue 11: the
+    # the static gain is kept exactly (static correction, eq. 15-17); the model meets the FRF target (the
     # smallest such model, which need not reproduce the dominant modes to 1e-6: here one flexible mode, 1 % off)
     assert s["reduced"]["static_gain_error"][label] < 1e-10
     assert s["target_met"] is True and s["error_max"] <= s["accuracy"]

@@ -1,5 +1,5 @@
 """Never hang, never lose a result, never accept nonsense: the kryflex command's failures under MPI, signals, failed
-writes and the exit-code table (README "Troubleshooting and exit codes", python/kryflex/cli/common.py).
+writes and the exit-code table (docs/guide/troubleshooting.md, python/kryflex/cli/common.py).
 
 * One rank fails alone (MPMD runs: `mpiexec -n 1 kryflex ... : -n 1 kryflex ... <fault>`): every rank ends with the
   serial run's code, the serial run's message is printed once; when the other rank waits inside a collective call,

@@ -15,7 +15,7 @@ KRYFLEX = os.path.join(ROOT, "build", "kryflex")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
            PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
 ANGLES = (0.0, 30.0, 60.0)
-MATCH = 1e-6            # the issue's requirement on the frequencies (relative)
+MATCH = 1e-6            # the frequencies must agree to this (relative): the export adds no approximation
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
@@ -59,7 +59,7 @@ def exudyn_frequencies(mbs):
 
 
 def test_exudyn_matches_reassembly_at_0_30_60(solid, neutral):
-    """Done-when of issue 15: the exported solid bodies built in Exudyn (from the neutral file) have kryflex's
+    """The exported solid bodies built in Exudyn (from the neutral file) have kryflex's
     reassembled flexible frequencies at 0, 30 and 60 deg to 1e-6, and 6 rigid + 1 mechanism zero modes."""
     import kryflex
     from kryflex.export.exudyn import build_mbs
@@ -327,7 +327,7 @@ def test_beam_bodies_export_too(oblique):
 
 
 def _dense_reassembly_hz(data, angles_deg):
-    """Independent reference (NumPy/SciPy, README 'To reassemble elsewhere'): the flexible frequencies of the export's
+    """Independent reference (NumPy/SciPy, docs/guide/export.md): the flexible frequencies of the export's
     reduced bodies tied at the given angles, D(alpha) on the interface rows, its null space by SVD."""
     from scipy.linalg import eigh, null_space
     from scipy.spatial.transform import Rotation

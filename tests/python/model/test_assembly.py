@@ -36,7 +36,7 @@ import mpi_assembly_probe as probe  # noqa: E402
 import reference as ref  # noqa: E402
 
 EIG_RTOL = 1e-10         # flexible eigenvalues, relative each; zero ones relative to the largest
-# Galileo fitted to the paper (issue 15) has a dense modal K (K = M Phi Lambda Phi^T M, eigenvalues spread over 5e8):
+# Galileo fitted to the paper (meshes/galileo/fit.py) has a dense modal K (K = M Phi Lambda Phi^T M, eigenvalues spread over 5e8):
 # rounding the matrices alone (writing them, assembling them two ways) moves its lowest eigenvalue by ~2e-9
 # relative (its 40-digit eigenvalues differ that much between kryflex's and the reference's assembly)
 GALILEO_EIG_RTOL = 1e-8

@@ -1,4 +1,4 @@
-"""Boundary conditions, massless dofs and dof layouts (issue 12): clamped, sprung, grounded-articulated, lumped-mass
+"""Boundary conditions, massless dofs and dof layouts (docs/guide/boundary-conditions.md): clamped, sprung, grounded-articulated, lumped-mass
 (massless rotations), plate (c345 nodes) and scalar-point models reduce to their stated accuracy,
 checked against dense NumPy/SciPy references written in bc_models.py (not against kryflex's own report), on 1 and 2
 ranks; the rigid and mechanism modes are derived (and the reduced systems carry them); bad conditions fail with a

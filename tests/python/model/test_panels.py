@@ -1,4 +1,4 @@
-"""The modally dense panel spacecraft of meshes/panels.py (issue 14): its modal density and joints counted by a dense
+"""The modally dense panel spacecraft of meshes/panels.py (a many-mode model for the solver's cost): its modal density and joints counted by a dense
 eigensolve, a small scene reduced end to end against the dense SciPy reference of tests/python/support/reference.py (with the
 acceleration outputs scaled by -w^2 here), the same reduction on 2 ranks, the benchmark's panel sizes, bad input."""
 import csv

@@ -31,7 +31,7 @@ generate = load_module("galileo_generate", os.path.join(ROOT, "meshes", "galileo
 PAPER_ROTOR = [0.1221, 1.0579, 2.8638, 3.4223, 4.9894, 5.2217, 73.425, 75.821, 76.998, 116.50, 116.51,
                994.70, 994.70, 2108.5, 2431.9]
 PAPER_STATOR = [57.253, 57.455, 225.24, 225.31, 1217.7, 1404.7]
-RESEMBLE = 1e-4          # README: Table 1's component frequencies are the model's eigenvalues (to its digits)
+RESEMBLE = 1e-4          # docs/guide/paper-example.md: Table 1's component frequencies are the model's eigenvalues (to its digits)
 
 
 def flexible_hz(M, K, nzero):

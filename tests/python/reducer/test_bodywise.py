@@ -187,7 +187,7 @@ def test_multi_angle_reduction_same_model(scenes):
     band, ~1 kHz for a 10 Hz band) are set by the last Krylov directions and move by ~1e-5 with rounding in any
     solve: they are not compared."""
     mono, body = reduce_with(scenes["frames"], "monolithic"), reduce_with(scenes["frames"], "bodywise")
-    sm, sb = mono.summary, body.summary
+    sm, sb = mono.summary.to_json(), body.summary.to_json()     # the numbers as summary.json holds them
     assert sm["kept_modes"] == sb["kept_modes"]
     for cfg in ([0.0, 0.0], [45.0, 120.0], [77.0, 200.0]):
         fm, fb = np.asarray(mono.model.at(cfg).frequencies_hz), np.asarray(body.model.at(cfg).frequencies_hz)

@@ -1,4 +1,4 @@
-"""Damping and velocity/acceleration outputs (issue 12, item 4), against a dense reference written here: the Galileo
+"""Damping and velocity/acceleration outputs (docs/guide/damping.md), against a dense reference written here: the Galileo
 model assembled by tests/python/support/reference.py and its damped response solved directly,
 T(w) = diag((i w)^q) H (K (1 + i g) - w^2 M + i w (C + alpha M + beta K + C_modal))^-1 G, with
 C = P^T blkdiag(C_b) P and C_modal = M Phi diag(2 zeta_k omega_k) Phi^T M on the undamped flexible modes (the
@@ -161,7 +161,11 @@ def test_damped_reduction_meets_accuracy(case):
     assert err_full <= 1e-5, err_full   # test_full_reference: 5e-6 on undamped Galileo
     assert err_red <= ACCURACY, err_red
     if with_matrices:
-        assert all(b.get("C") is not None and b["C"].shape == b["M"].shape for b in model.bodies)
+        assert all(b.get("damping_matrix") is not None and b["damping_matrix"].shape == b["M"].shape
+                   for b in model.bodies)
+        # the key's former name still reads, with a warning (C is a ReducedSystem's output matrix)
+        with pytest.warns(DeprecationWarning, match="damping_matrix"):
+            assert model.bodies[0]["C"] is not None
         system = model.at([15.0])
         assert system.damping_matrix is not None and np.allclose(system.damping_matrix, system.damping_matrix.T)
 
@@ -387,7 +391,7 @@ def test_damped_moments_at_equal_size():
     """Damped moments (second-order Krylov) against the undamped basis at equal size, heavy non-proportional damping
     (benchmarks/damped-krylov/bench-damped-krylov, its default case): with 3 moments the damped basis is closer: 10x on the Galileo stick
     model (1.5e-2 against 1.6e-1, 18 dofs each), 1.7x on the model refitted to the paper's Table 1 (7.8e-3 against
-    1.35e-2); from 4 moments on it is not better (README "Damping"), so it stays an option."""
+    1.35e-2); from 4 moments on it is not better (docs/guide/damping.md), so it stays an option."""
     mats = damping_matrices(scale=20.0)
     damping = {"modal": 0.0, "rayleigh": {"alpha": 0.5, "beta": 0.0}}
     size_u, err_u = fixed_recipe_error(mats, damping, 3, False)
@@ -416,7 +420,7 @@ def test_damped_moments_scene_key_meets_accuracy():
 def test_frame_reference_with_modes_left_out(tmp_path):
     """A 3-body frame (360 dofs) with damping matrices through the sparse reference path with the modes to 2x the
     band's top only (-kf_verify_modes): the modes left out keep no coupling and enter by the quasi-static residual.
-    Against the dense direct solve of the whole damped system: the approximation's size, stated in README "Damping"."""
+    Against the dense direct solve of the whole damped system: the approximation's size, stated in docs/guide/damping.md."""
     sys.path.insert(0, os.path.join(ROOT, "meshes"))
     import frames
     from petsc4py import PETSc

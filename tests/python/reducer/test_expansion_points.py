@@ -69,28 +69,28 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     factorizations are reported and within the cap, L^0 is exact, and its elastic error is measured independently."""
     path, dense = solid
     red = reduce(path, accuracy=1e-4, max_factorizations=MAXF, shift_family_only=True)
-    c = red.summary["chosen"]
-    points = c["expansion_points_hz"]
-    print("points %s Hz, %d factorizations, spent %d" % (points, c["expansion_point_factorizations"],
-                                                       red.summary["expansion_point_search"]["factorizations_spent"]))
+    c = red.summary.chosen
+    points = c.expansion_points_hz
+    print("points %s Hz, %d factorizations, spent %d" % (points, c.expansion_point_factorizations,
+                                                       red.summary.expansion_point_search.factorizations_spent))
     assert points, "the forced family chose no point"
     assert all(SOLID_BAND[0] < f < SOLID_BAND[1] * 1.01 for f in points)
-    assert c["expansion_point_factorizations"] == len(points)          # one angle: one factorization per point
-    assert 0 < red.summary["expansion_point_search"]["factorizations_spent"] <= MAXF
-    rows = red.summary["expansion_point_search"]["rows"]
-    assert rows and all(r["factorizations_spent"] <= MAXF for r in rows)
+    assert c.expansion_point_factorizations == len(points)          # one angle: one factorization per point
+    assert 0 < red.summary.expansion_point_search.factorizations_spent <= MAXF
+    rows = red.summary.expansion_point_search.rows
+    assert rows and all(r.factorizations_spent <= MAXF for r in rows)
     err = static_error(red.model, dense, SOLID_ANGLES[0])
     el, tot = em.errors(red.model, dense, SOLID_ANGLES, SOLID_BAND, ZETA)
     L0p = red.model.at(SOLID_ANGLES[0]).moments(1)[0]
     L0m = reduce(path, accuracy=1e-4).model.at(SOLID_ANGLES[0]).moments(1)[0]
     same = float(np.linalg.norm(L0p - L0m) / np.linalg.norm(L0m))
     print("L0 relative error %.2e (against the moment-only model's %.2e); elastic %.2e, total %.2e, kryflex's %.2e"
-          % (err, same, el, tot, c["worst_error"]))
+          % (err, same, el, tot, c.worst_error))
     assert err <= STATIC_RTOL
     assert same <= STATIC_SAME
     # the model kryflex measured is the one the dense reference measures: its verdict holds (to the grids' 5 %) on
     # the independent measure of the same kind (total here; elastic where kryflex's search measures it)
-    measure = red.summary.get("accuracy_measure", "total")
+    measure = red.summary.verdict.accuracy_measure or "total"
     assert (el if measure == "elastic" else tot) <= 1e-4 * 1.05
 
 
@@ -99,12 +99,12 @@ def test_a_point_at_the_largest_error_lowers_it(solid):
     is more accurate by kryflex's own measure (the search table's first rows are those two models)."""
     path, dense = solid
     red = reduce(path, accuracy=1e-9, max_factorizations=1, shift_family_only=True)
-    rows = red.summary["expansion_point_search"]["rows"]
-    first = [r for r in rows if r["moments"] == 1]
+    rows = red.summary.expansion_point_search.rows
+    first = [r for r in rows if r.moments == 1]
     print(first)
-    assert first[0]["points"] == 0 and first[1]["points"] == 1
-    assert first[1]["error"] < first[0]["error"]
-    assert red.summary["expansion_point_search"]["factorizations_spent"] == 1
+    assert first[0].points == 0 and first[1].points == 1
+    assert first[1].error < first[0].error
+    assert red.summary.expansion_point_search.factorizations_spent == 1
 
 
 def test_no_budget_is_the_moment_only_model(solid):
@@ -112,8 +112,8 @@ def test_no_budget_is_the_moment_only_model(solid):
     path, dense = solid
     a = reduce(path, accuracy=1e-3)
     b = reduce(path, accuracy=1e-3, max_factorizations=0)
-    assert a.summary["chosen"]["expansion_points_hz"] == [] == b.summary["chosen"]["expansion_points_hz"]
-    assert a.summary["chosen"]["dofs"] == b.summary["chosen"]["dofs"]
+    assert a.summary.chosen.expansion_points_hz == [] == b.summary.chosen.expansion_points_hz
+    assert a.summary.chosen.dofs == b.summary.chosen.dofs
     M1, M2 = a.model.at([90.0]).M, b.model.at([90.0]).M
     np.testing.assert_allclose(M1, M2, rtol=0, atol=1e-12 * np.abs(M1).max())
 
@@ -142,7 +142,7 @@ def test_elastic_target_no_more_dofs_than_moment_only_solid(solid, target):
     for name, red in (("moment-only", mo), ("points", sh)):
         el, tot = em.errors(red.model, dense, SOLID_ANGLES, SOLID_BAND, ZETA)
         dofs = em.system_dofs(red.model, SOLID_ANGLES)
-        rows.append((name, dofs, el, red.summary["chosen"]["expansion_points_hz"]))
+        rows.append((name, dofs, el, red.summary.chosen.expansion_points_hz))
         print("solid %g %s: %d dofs, elastic %.2e, total %.2e, points %s" % (target, name, dofs, el, tot, rows[-1][3]))
     assert rows[1][2] <= target * 1.05
     assert rows[1][1] <= rows[0][1]
@@ -163,7 +163,7 @@ def test_elastic_target_no_more_dofs_than_moment_only_galileo(galileo, target):
         el, tot = em.errors(red.model, dense, configs, [0.01, 10.0], ZETA)
         out.append((em.system_dofs(red.model, configs), el))
         print("galileo %g %s: %d dofs, elastic %.2e, total %.2e, points %s" % (
-            target, name, out[-1][0], el, tot, red.summary["chosen"]["expansion_points_hz"]))
+            target, name, out[-1][0], el, tot, red.summary.chosen.expansion_points_hz))
     assert out[1][1] <= target * 1.05
     assert out[1][0] <= out[0][0]
 
@@ -185,10 +185,10 @@ red = kryflex.reduce(kryflex.load_scene(sys.argv[1]), quiet=True, accuracy=1e-4,
                      shift_family_only=True)
 from mpi4py import MPI
 if MPI.COMM_WORLD.rank == 0:
-    c = red.summary["chosen"]
-    print("RESULT " + json.dumps({"dofs": c["dofs"], "points": c["expansion_points_hz"], "moments": c["moments"],
-                                  "rows": [(r["moments"], r["points"], r["reduced_dofs"])
-                                           for r in red.summary["expansion_point_search"]["rows"]]}))
+    c = red.summary.chosen
+    print("RESULT " + json.dumps({"dofs": c.dofs, "points": c.expansion_points_hz, "moments": c.moments,
+                                  "rows": [(r.moments, r.points, r.reduced_dofs)
+                                           for r in red.summary.expansion_point_search.rows]}))
 """
 
 
@@ -218,16 +218,16 @@ def test_multi_angle_points_at_every_expansion_angle(galileo):
     tolerance, and it measured 2.3e-8 and 1.9e-8 at 0 and 72 deg on 2026-11-29."""
     path, dense, configs = galileo
     red = reduce(path, accuracy=1e-3, method="multi-angle", max_factorizations=12, shift_family_only=True)
-    c = red.summary["chosen"]
-    angles = c["expansion_angles_deg"]
-    print("points %s Hz at angles %s, %d factorizations, %d dofs" % (c["expansion_points_hz"], angles,
-                                                                    c["expansion_point_factorizations"], c["dofs"]))
-    assert c["method"] == "multi-angle" and c["expansion_points_hz"]
+    c = red.summary.chosen
+    angles = c.expansion_angles_deg
+    print("points %s Hz at angles %s, %d factorizations, %d dofs" % (c.expansion_points_hz, angles,
+                                                                    c.expansion_point_factorizations, c.dofs))
+    assert c.method == "multi-angle" and c.expansion_points_hz
     distinct = {tuple(a) for a in angles}
     assert len(distinct) >= 2
-    assert c["expansion_point_factorizations"] == len(c["expansion_points_hz"]) * len(distinct)
+    assert c.expansion_point_factorizations == len(c.expansion_points_hz) * len(distinct)
     base = reduce(path, accuracy=1e-3, method="multi-angle")
-    assert base.summary["chosen"]["expansion_points_hz"] == []
+    assert base.summary.chosen.expansion_points_hz == []
     for a in sorted(distinct):
         err, err0 = static_error(red.model, dense, list(a)), static_error(base.model, dense, list(a))
         print("L0 at %s deg: %.2e (moment-only multi-angle model %.2e)" % (a, err, err0))

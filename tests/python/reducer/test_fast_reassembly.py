@@ -108,7 +108,7 @@ def numpy_reassemble(model, angles_deg, rtol=1e-9):
     N = vt[int(np.sum(s > rtol * s[0])):].T
     M = N.T @ sl.block_diag(*[b["M"] for b in model.bodies]) @ N
     K = N.T @ sl.block_diag(*[b["K"] for b in model.bodies]) @ N
-    Cb = sl.block_diag(*[b.get("C", np.zeros_like(b["M"])) for b in model.bodies])
+    Cb = sl.block_diag(*[b.get("damping_matrix", np.zeros_like(b["M"])) for b in model.bodies])
     ray = model.damping()["rayleigh"]
     C = N.T @ Cb @ N + ray["alpha"] * M + ray["beta"] * K
     G = N.T @ np.vstack([b["G"] for b in model.bodies])
@@ -169,7 +169,7 @@ def test_damping_matrix_and_rayleigh(galileo_damped):
     """The damped model's reassembled damping matrix holds the bodies' matrices and alpha M + beta K."""
     model, angles_list = galileo_damped
     assert model.damping()["rayleigh"] == RAYLEIGH
-    assert all("C" in b for b in model.bodies)
+    assert all("damping_matrix" in b for b in model.bodies)
     s = model.at(angles_list[3])
     M, K, C, G, H = numpy_reassemble(model, angles_list[3])
     Tn = damped_transfer(M, K, C, G, H, 2 * np.pi * 1.0)

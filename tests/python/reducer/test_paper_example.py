@@ -1,4 +1,4 @@
-"""Lee's example reproduced (issue 15): the fitted Galileo model against Table 1, and the report's side-by-side section.
+"""Lee's example reproduced (docs/guide/paper-example.md): the fitted Galileo model against Table 1, and the report's side-by-side section.
 
 The paper: A. Y. Lee, "A Krylov Model Reduction Methodology for Articulated, Multi-Flexible Body Structures", Jet
 Propulsion Laboratory (JPL). Its Table 1 numbers are typed here again from the paper (independently of
@@ -131,7 +131,7 @@ def test_report_has_the_papers_tables_beside_kryflexs(demo, galileo):
     row = [line for line in section.splitlines() if line.startswith("| 8 |")][0].split("|")
     assert float(row[6]) == pytest.approx(SYSTEM[0], rel=1e-6) and float(row[7]) == pytest.approx(f[0], rel=1e-4)
     # the fixed recipe: search off, single-angle, the scene's c; the static moment exact at alpha_G (the higher
-    # ones too only when no Krylov mode was dropped: README, What is exact)
+    # ones too only when no Krylov mode was dropped: docs/guide/accuracy.md, What is exact)
     assert p["recipe"]["search"] is False and p["recipe"]["moments"] == 10
     ratios = np.array(p["moment_ratios"][p["reduction_label"]], dtype=float)
     assert abs(ratios[0, 0, 0] - 1) < 1e-8

@@ -35,7 +35,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 FRAMES_ANGLES = [[0.0, 0.0], [45.0, 120.0], [210.0, 330.0]]
 OTHER_ANGLES = {"galileo": [[7.5], [100.0]], "frames": [[10.0, 250.0], [-30.0, 95.0]]}
 
-# what every configuration of interest records, and what the whole solve records (README.md, Results of a reduction)
+# what every configuration of interest records, and what the whole solve records (docs/guide/results.md, Results of a reduction)
 PER_CONFIG = {"full_moments", "krylov_frequencies_hz", "krylov_importance", "krylov_kept", "krylov_deflations",
               "gram_condition_raw", "held_dofs", "rigid_residual", "reduced_dofs", "reduced_frequencies_hz",
               "reduced_moments", "moment_ratios", "moment_error", "static_gain_error", "reassembly_rank",
@@ -140,7 +140,7 @@ def test_reducer_model_equals_the_command_model(name, ranks, scenes, solved, tmp
         cli_summary = json.load(f)
     if ranks == 1:
         mine = solved(name)
-        model, summary = mine.reduction.model, mine.summary
+        model, summary = mine.reduction.model, mine.summary.to_json()
     else:
         h5, js = tmp_path / "probe.h5", tmp_path / "probe.json"
         run(mpi(ranks) + [PYTHON, PROBE, path, h5, js, "-kf_quiet"])
@@ -191,71 +191,80 @@ def test_result_shapes(solved):
 
 @pytest.mark.parametrize("name", ["galileo", "frames"])
 def test_summary_holds_the_reducer_results(name, solved):
-    """Every number of the summary is one of the reducer's results, as recorded (NaN -> None)."""
+    """Every number of the typed summary is one of the reducer's results, as recorded (NaN -> None)."""
     s = solved(name)
     r, summary, labels = s.reducer, s.summary, s.labels
     from kryflex.report import validate_summary
-    validate_summary(summary)
-    assert summary["angle_labels"] == labels
-    assert summary["angles_deg"] == s.scene.configurations
+    from kryflex.results import Summary
+    assert isinstance(summary, Summary)
+    validate_summary(summary.to_json())
+    assert Summary.from_json(summary.to_json()).to_json() == summary.to_json()
+    assert summary.angle_labels == labels
+    assert summary.angles_deg == s.scene.configurations
     index_g = int(r.result(-1, "reduction_config")[0])
-    assert index_g >= 0 and summary["reduction_label"] == labels[index_g]
+    assert index_g >= 0 and summary.reduction_label == labels[index_g]
     np.testing.assert_allclose(np.degrees(r.result(-1, "reduction_angles")[:, 0]), s.scene.configurations[index_g],
                                rtol=1e-14, atol=1e-12)
-    assert summary["kept_modes"] == [int(k) for k in r.result(-1, "kept_modes")]
-    assert summary["static_correction_modes"] == int(r.result(-1, "static_correction_modes")[0])
-    assert summary["full"]["system_dofs"] == int(r.result(-1, "full_system_dofs")[0])
-    assert summary["full"]["rigid_modes"] == int(r.result(-1, "rigid_modes")[0]) == 6 + len(s.scene.revolute)
-    assert list(summary["reduced"]["dofs_per_body"].values()) == [int(v) for v in r.result(-1, "reduced_dofs_per_body")]
-    assert list(summary["reduced"]["dofs_per_body"].values()) == s.reduction.single_angle_model.sizes
-    assert summary["reduction_rule"] == r.rule and summary["notes"] == r.notes
+    assert summary.kept_modes == [int(k) for k in r.result(-1, "kept_modes")]
+    assert summary.static_correction_modes == int(r.result(-1, "static_correction_modes")[0])
+    full, reduced = summary.full, summary.reduced
+    assert full.system_dofs == int(r.result(-1, "full_system_dofs")[0])
+    assert full.rigid_modes == int(r.result(-1, "rigid_modes")[0]) == 6 + len(s.scene.revolute)
+    assert list(reduced.dofs_per_body.values()) == [int(v) for v in r.result(-1, "reduced_dofs_per_body")]
+    assert list(reduced.dofs_per_body.values()) == s.reduction.single_angle_model.sizes
+    assert summary.reduction_rule == r.rule and summary.notes == r.notes
     for c, lab in enumerate(labels):
-        assert summary["full"]["moments"][lab] == nan_to_none(r.moments(c, "full_moments"))
-        assert summary["reduced"]["moments"][lab] == nan_to_none(r.moments(c, "reduced_moments"))
-        assert summary["reduced"]["moment_ratios"][lab] == nan_to_none(r.moments(c, "moment_ratios"))
-        assert summary["reduced"]["moment_error"][lab] == nan_to_none(r.result(c, "moment_error"))
-        assert summary["reduced"]["frequencies_hz"][lab] == nan_to_none(r.result(c, "reduced_frequencies_hz"))
-        assert summary["reduced"]["system_dofs"][lab] == int(r.result(c, "reduced_dofs")[0])
-        assert summary["reduced"]["static_gain_error"][lab] == float(r.result(c, "static_gain_error")[0])
-        assert summary["reduced"]["reassembly_rank"][lab] == int(r.result(c, "reassembly_rank")[0])
-        assert summary["reduced"]["reassembly_sigma_ratio"][lab] == float(r.result(c, "reassembly_sigma_ratio")[0])
-        kr = summary["krylov"][lab]
-        assert kr["frequency_hz"] == nan_to_none(r.result(c, "krylov_frequencies_hz"))
-        assert kr["importance"] == nan_to_none(r.result(c, "krylov_importance"))
-        assert kr["kept"] == [bool(k) for k in r.result(c, "krylov_kept")]
-        assert kr["deflations"] == int(r.result(c, "krylov_deflations")[0])
-        assert kr["gram_condition_raw"] == nan_to_none(r.result(c, "gram_condition_raw")[0])
-        assert summary["full"]["frequencies_hz"][lab] == nan_to_none(r.result(c, "full_frequencies_hz"))
-        frf = summary["frf"][lab]
-        assert frf["freq_hz"] == nan_to_none(r.result(c, "frf_frequencies_hz"))
+        assert full.moments[lab] == nan_to_none(r.moments(c, "full_moments"))
+        assert reduced.moments[lab] == nan_to_none(r.moments(c, "reduced_moments"))
+        assert reduced.moment_ratios[lab] == nan_to_none(r.moments(c, "moment_ratios"))
+        assert reduced.moment_error[lab] == nan_to_none(r.result(c, "moment_error"))
+        assert reduced.frequencies_hz[lab] == nan_to_none(r.result(c, "reduced_frequencies_hz"))
+        assert reduced.system_dofs[lab] == int(r.result(c, "reduced_dofs")[0])
+        assert reduced.static_gain_error[lab] == float(r.result(c, "static_gain_error")[0])
+        assert reduced.reassembly_rank[lab] == int(r.result(c, "reassembly_rank")[0])
+        assert reduced.reassembly_sigma_ratio[lab] == float(r.result(c, "reassembly_sigma_ratio")[0])
+        kr = summary.krylov[lab]
+        assert kr.frequency_hz == nan_to_none(r.result(c, "krylov_frequencies_hz"))
+        assert kr.importance == nan_to_none(r.result(c, "krylov_importance"))
+        assert kr.kept == [bool(k) for k in r.result(c, "krylov_kept")]
+        assert kr.deflations == int(r.result(c, "krylov_deflations")[0])
+        assert kr.gram_condition_raw == nan_to_none(r.result(c, "gram_condition_raw")[0])
+        assert full.frequencies_hz[lab] == nan_to_none(r.result(c, "full_frequencies_hz"))
+        frf = summary.frf[lab]
+        assert frf.freq_hz == nan_to_none(r.result(c, "frf_frequencies_hz"))
         for which in ("full", "reduced"):
             T = r.frf(c, which)
-            assert frf[which + "_re"] == nan_to_none(T.real) and frf[which + "_im"] == nan_to_none(T.imag)
-        assert frf["max_rel_error"] == float(r.result(c, "frf_error")[0])
-        assert summary["dominant_modes"][lab] == [int(i) for i in r.result(c, "dominant_modes")]
-        assert summary["dominant_freq_error"][lab] == nan_to_none(r.result(c, "dominant_frequency_error"))
+            assert getattr(frf, which + "_re") == nan_to_none(T.real)
+            assert getattr(frf, which + "_im") == nan_to_none(T.imag)
+        assert frf.frf_error == frf.max_rel_error == float(r.result(c, "frf_error")[0])
+        assert summary.dominant_modes[lab] == [int(i) for i in r.result(c, "dominant_modes")]
+        assert summary.dominant_freq_error[lab] == nan_to_none(r.result(c, "dominant_frequency_error"))
         # the C measures give the summary's errors again from its own arrays (one definition of each measure)
-        T_full = np.array(frf["full_re"]) + 1j * np.array(frf["full_im"])
-        T_red = np.array(frf["reduced_re"]) + 1j * np.array(frf["reduced_im"])
-        hinf, pointwise = kryflex._core.frf_errors(T_full, T_red, float(s.scene.verify["frf_floor_db"]),
+        hinf, pointwise = kryflex._core.frf_errors(frf.full(), frf.reduced(), float(s.scene.verify["frf_floor_db"]),
                                                    rigid=r.full_rigid(c))
         # the reducer adds points across the model's own resonances and refines the worst pair's maximum between
         # points: never below the grid's value
-        assert hinf <= frf["max_rel_error"] <= hinf * 1.5 + 1e-15
-    multi = summary["multi_angle"]
-    assert list(multi["dofs_per_body"].values()) == [int(v) for v in r.result(-1, "multi_dofs_per_body")]
-    assert list(multi["dofs_per_body"].values()) == s.reduction.multi_angle_model.sizes
+        assert hinf <= frf.frf_error <= hinf * 1.5 + 1e-15
+    multi = summary.multi_angle
+    assert list(multi.dofs_per_body.values()) == [int(v) for v in r.result(-1, "multi_dofs_per_body")]
+    assert list(multi.dofs_per_body.values()) == s.reduction.multi_angle_model.sizes
     for c, lab in enumerate(labels):
-        assert multi["system_dofs"][lab] == int(r.result(c, "multi_reduced_dofs")[0])
-        assert multi["moment_ratios"][lab] == nan_to_none(r.moments(c, "multi_moment_ratios"))
-        assert multi["moment_error"][lab] == nan_to_none(r.result(c, "multi_moment_error"))
-        assert multi["frf_max_rel_error"][lab] == float(r.result(c, "multi_frf_error")[0])
+        assert multi.system_dofs[lab] == int(r.result(c, "multi_reduced_dofs")[0])
+        assert multi.moment_ratios[lab] == nan_to_none(r.moments(c, "multi_moment_ratios"))
+        assert multi.moment_error[lab] == nan_to_none(r.result(c, "multi_moment_error"))
+        assert multi.frf_error[lab] == multi.frf_max_rel_error[lab] == float(r.result(c, "multi_frf_error")[0])
+    # the verdict and the chosen model: the reducer's
+    assert summary.verdict.target_met is bool(r.result(-1, "target_met")[0])
+    assert summary.verdict.error_max == float(r.result(-1, "error_max")[0])
+    assert summary.verdict.chosen_method == ("single-angle", "multi-angle")[int(r.result(-1, "chosen_method")[0])]
+    assert summary.chosen.dofs == sum(s.reduction.model.sizes)
     # timings: the reducer's stages that took time, under the report's names
     names = {"time_assembly": "assembly", "time_factorization": "factorization", "time_basis": "krylov",
              "time_modes": "krylov modes", "time_moments": "moments", "time_projection": "projection",
              "time_verification": "verification eigensolve", "time_other": "other"}
     expected = {names[k]: float(r.result(-1, k)[0]) for k in names if float(r.result(-1, k)[0]) > 0}
-    assert summary["timings_s"] == expected and "assembly" in expected and "verification eigensolve" in expected
+    assert summary.timings_s == expected and "assembly" in expected and "verification eigensolve" in expected
+    assert summary.performance.whole_s == float(r.result(-1, "time_whole")[0])
 
 
 def test_measures_of_the_binding_are_the_reducers(solved):
@@ -310,7 +319,7 @@ def test_one_call_reduce_is_the_reducer(scenes, solved):
     assert isinstance(reduction, kryflex.Reduction)
     mine = solved("frames").reduction
     assert_same_model(reduction.model, mine.model, FRAMES_ANGLES, "kryflex.reduce")
-    assert reduction.summary["kept_modes"] == mine.summary["kept_modes"]
+    assert reduction.summary.kept_modes == mine.summary.kept_modes
 
 
 def test_kf_options_override_the_scene(scenes):
@@ -334,9 +343,9 @@ def test_kf_options_override_the_scene(scenes):
     assert reduction.model.settings["moments"] == 6 and reduction.model.settings["method"] == "multi-angle"
     assert reduction.model is reduction.multi_angle_model
     # verification off: the search measures against its estimator, and the summary says so
-    assert summary["settings"]["moments"] == 6 and summary["damping"] == 0.01 and summary["error_estimated"] is True
-    assert summary["angle_labels"] == ["45_120", "0_0"] and summary["angles_deg"] == [[45.0, 120.0], [0.0, 0.0]]
-    assert len(summary["full"]["moments"]["0_0"]) == 6
+    assert summary.settings.moments == 6 and summary.damping == 0.01 and summary.verdict.error_estimated is True
+    assert summary.angle_labels == ["45_120", "0_0"] and summary.angles_deg == [[45.0, 120.0], [0.0, 0.0]]
+    assert len(summary.full.moments["0_0"]) == 6
     assert reducer.result(-1, "error_estimated")[0] == 1     # the errors recorded are the estimator's
     with pytest.raises(kryflex.Error):
         reducer.result(2, "reduced_dofs")      # two angles of interest, not the scene's three

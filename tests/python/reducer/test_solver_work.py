@@ -1,4 +1,4 @@
-"""Issue 14: the reduction does no wasted work, and what it skips does not change the model.
+"""The reduction does no wasted work, and what it skips does not change the model.
 
 - Iterative refinement is decided by the residual of each block's first solve (-kf_refine_rtol): the model and the
   moments agree with the always-refined run (-kf_refine_rtol 0) to far below any accuracy target, and the residual

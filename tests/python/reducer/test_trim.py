@@ -95,7 +95,7 @@ def test_accuracy_met_everywhere(reduced):
     assert not bad, "%s: accuracy %g missed:\n%s" % (reduced["tag"], scene.accuracy, acc.describe(bad))
     # kryflex's verdict is on its default measure, the elastic response: measured here independently too
     elastic, _ = em.errors(model, dense, spec.configurations, scene.band, scene.damping)
-    met = reduced["result"].summary["target_met"]
+    met = reduced["result"].summary.verdict.target_met
     if reduced["tag"].endswith("search"):
         assert met is True and elastic <= scene.accuracy, "%s: elastic error %g" % (reduced["tag"], elastic)
     else:   # the paper's fixed recipe is not searched: its verdict must be the independent measure's
@@ -107,7 +107,7 @@ def test_highest_frequency_and_step(reduced):
     spec, scene, model = reduced["spec"], reduced["scene"], reduced["model"]
     limit = LIMIT * scene.band[1]
     assert float(model.settings["max_frequency_hz"]) == pytest.approx(limit, rel=1e-12)
-    trim = reduced["result"].summary["reduced"]["trimming"]
+    trim = reduced["result"].summary.reduced.trimming
     trimmed = 0
     for angles, _ in acc.with_midpoints(spec.configurations):
         system = model.at(angles)
@@ -120,8 +120,8 @@ def test_highest_frequency_and_step(reduced):
         assert system.trimmed == int(np.sum(full.frequencies_hz > limit))
         assert system.untrimmed_top_hz == pytest.approx(full.frequencies_hz.max(), rel=1e-12)
         trimmed += system.trimmed
-    for label in trim["top_frequency_hz"]:
-        assert trim["top_frequency_hz"][label] <= limit
+    for label in trim.top_frequency_hz:
+        assert trim.top_frequency_hz[label] <= limit
     if reduced["tag"].endswith("paper"):
         # the fixed recipe keeps static-correction modes far above the band: this is where trimming has work to do
         assert trimmed > 0
@@ -178,7 +178,7 @@ def test_two_ranks_agree(reduced, tmp_path):
     run = subprocess.run(["mpiexec", "-n", "2", KRYFLEX, "reduce", reduced["scene_path"], "-o", out], env=ENV,
                          capture_output=True, text=True, timeout=600)
     # the fixed recipe's verdict on the elastic measure is the serial run's: exit 0 when met, 6 when missed
-    assert run.returncode == (0 if reduced["result"].summary["target_met"] else 6), run.stderr[-3000:]
+    assert run.returncode == (0 if reduced["result"].summary.verdict.target_met else 6), run.stderr[-3000:]
     assert "highest reduced frequency" in run.stdout and "trimmed" in run.stdout
     par = kryflex.ReducedModel.load(os.path.join(out, "reduced.h5"))
     assert par.settings["max_frequency_hz"] == reduced["model"].settings["max_frequency_hz"]

@@ -1,4 +1,4 @@
-"""`kryflex study` (issue 11, items 4-6) as a user runs it: build/kryflex in a subprocess on the Galileo scene with a
+"""`kryflex study` as a user runs it: build/kryflex in a subprocess on the Galileo scene with a
 small --cmax, its CSV checked against an independent dense SciPy reference (tests/python/support/reference.py), its charts,
 the growth of the fixed-c Krylov models with c, and the same errors on 2 MPI ranks."""
 import csv

@@ -314,7 +314,7 @@ def test_convert_punch_with_separate_grid_file_and_without_grids(tmp_path):
     convert(path, tmp_path / "a", "boom", "mtx", {"root": 7}, grids=[str(bulk)])
     _, _, nodes, _ = read_body(tmp_path / "a", "boom", "mtx")
     assert nodes == expected_nodes()
-    # without GRID cards: an error, never nodes silently at (0, 0, 0) (issue 12)
+    # without GRID cards: an error, never nodes silently at (0, 0, 0)
     with pytest.raises(ConversionError, match="have no GRID card"):
         convert(path, tmp_path / "b", "boom", "mtx", {"root": 7})
     assert files_in(tmp_path / "b") == []

@@ -1,4 +1,4 @@
-"""Nastran import (issue 12): DMIG* punch + bulk GRIDs with CORD2R/C/S in CP and CD, massless rotations, an
+"""Nastran import (docs/guide/real-models.md): DMIG* punch + bulk GRIDs with CORD2R/C/S in CP and CD, massless rotations, an
 SPOINT and PARAM,WTMASS, read by `kryflex convert` and from Python, checked against the same model built directly
 in basic coordinates (nastran_model.py, NumPy, independent of the converter)."""
 import os

@@ -371,7 +371,7 @@ def test_export_single_structures(reduced, tmp_path):
     assert check["angles_deg"] == [] and check["max_rel_diff"] <= 1e-6 and check["exudyn_zero"] == 6
     model = kryflex.ReducedModel.load(beam)
     z = np.load(tmp_path / "b.npz")
-    C = model.bodies[0]["C"]
+    C = model.bodies[0]["damping_matrix"]
     np.testing.assert_allclose(z["body0/C"], 0.5 * (C + C.T), atol=1e-14 * np.abs(C).max())
     assert z["body0/interface_names"].size == 0 and z["body0/iface"].shape == (0, C.shape[0])
     assert int(z["body0/floating"]) == 1 and z["body0/missing_rigid"].size == 0
@@ -566,7 +566,7 @@ def test_model_file_damping_round_off(reduced, tmp_path):
             top = np.abs(C[...]).max()
             C[0, 0] = value * top
         if ok:
-            assert kryflex.ReducedModel.load(path).bodies[0]["C"][0, 0] < 0
+            assert kryflex.ReducedModel.load(path).bodies[0]["damping_matrix"][0, 0] < 0
         else:
             with pytest.raises(kryflex.ModelFileError, match="dataset 'C' is not a damping matrix"):
                 kryflex.ReducedModel.load(path)

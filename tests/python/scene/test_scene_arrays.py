@@ -1,4 +1,4 @@
-"""Python scenes take the data wherever a scene file takes a file (issue 12, item 7): body matrices as NumPy /
+"""Python scenes take the data wherever a scene file takes a file: body matrices as NumPy /
 SciPy / petsc4py, nodes as an (n, 5) array or a list of tuples, input/output vectors as 1-D arrays or petsc4py Vecs,
 through the one resolver io/scene.py resolve(). The Galileo scene given as arrays must reduce to the same model as
 from its files; bad arrays give the scene's usual one-line errors."""

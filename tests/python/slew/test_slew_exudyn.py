@@ -1,4 +1,4 @@
-"""Issue 15 item 2 on the small solid scene (meshes/solid --refine 0.25, 1,308 dofs; the reduction of test_export.py):
+"""The physical slewing check (the reduced bodies in Exudyn) on the small solid scene (meshes/solid --refine 0.25, 1,308 dofs; the reduction of test_export.py):
 a torque-driven slew of the REDUCED bodies in Exudyn's nonlinear floating-frame formulation (kryflex.export.exudyn:
 ObjectFFRFreducedOrder per body, GenericJoint, the bearing torque as input) against kryflex's own integrator of the
 FULL-order bodies (and of the reduced ones) along the angle history Exudyn produced (slew/exudyn_check.py:

@@ -1,4 +1,4 @@
-"""Scenes and dense yardsticks for the acceptance tests of accuracy-governed reduction (issue 11).
+"""Scenes and dense yardsticks for the acceptance tests of accuracy-governed reduction (docs/guide/accuracy.md).
 
 Helpers only (no tests): test_accuracy_target.py and accuracy_sweep.py (benchmarks/sweep/bench-sweep) use them.
 
@@ -104,7 +104,7 @@ def frame_base(out_dir):
     total = sum(ref.read_matrix(os.path.join(out_dir, b["stiffness"])).shape[0]
                 for b in yaml.safe_load(open(path))["bodies"].values())
     if total < 5000:
-        raise AssertionError("the frame scene has %d dofs, the issue asks for at least 5,000: raise FRAME_DOFS" % total)
+        raise AssertionError("the frame scene has %d dofs, the tests need at least 5,000 (a large model): raise FRAME_DOFS" % total)
     return path
 
 

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Brute-force sweep: the smallest reduced model that meets a target, found by trying every candidate, beside the
-model the reducer's accuracy search chose (issue 11: "each size is within 1.5x of the smallest found by a
+model the reducer's accuracy search chose (the requirement: "each size is within 1.5x of the smallest found by a
 brute-force sweep").
 
     benchmarks/sweep/bench-sweep [--scene galileo|frame|solid] [--target 1e-3] [--moments 1-20] [--methods single,multi]
@@ -31,7 +31,7 @@ import accuracy_scenes as acs  # noqa: E402
 
 METHODS = {"single": "single-angle", "multi": "multi-angle"}
 KEEP_ALL = 1e-12          # keep_threshold that keeps every Krylov mode of a nonzero importance
-SIZE_FACTOR = 1.5         # the issue's bound: chosen size <= SIZE_FACTOR x the sweep's smallest
+SIZE_FACTOR = 1.5         # the required bound: chosen size <= SIZE_FACTOR x the sweep's smallest
 
 
 def _whole(reducer, name):

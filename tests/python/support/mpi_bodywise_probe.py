@@ -31,7 +31,7 @@ def main():
     comm = PETSc.COMM_WORLD.tompi4py()
     opts = PETSc.Options()
     opts.setValue("kf_quiet", True)
-    # both solves refined (-kf_refine_rtol 0, every solve before issue 14's residual rule): the comparison is of the
+    # both solves refined (-kf_refine_rtol 0, every solve, as without the residual rule): the comparison is of the
     # operators K+, not of one unrefined solve's rounding (the pivoted held dofs leave 1e-9 there)
     opts.setValue("kf_refine_rtol", 0)
     configs = [[float(a) for a in c.split(",")] for c in args.angles.split(";")]

@@ -20,7 +20,7 @@ def main():
     reduction.model.save(model_path)
     if PETSc.COMM_WORLD.getRank() == 0:
         with open(summary_path, "w") as f:
-            json.dump(reduction.summary, f, allow_nan=False)
+            json.dump(reduction.summary.to_json(), f, allow_nan=False)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """A small free-free Nastran model written card by card, and its reference built directly in basic coordinates.
 
-The model (issue 12): a 3-D frame of 8 grids and 13 Euler-Bernoulli beams, lumped masses, and one scalar point
+The model: a 3-D frame of 8 grids and 13 Euler-Bernoulli beams, lumped masses, and one scalar point
 (a Craig-Bampton-like modal coordinate: stiffness w^2 to nothing, mass coupled to a grid's translations). The
 reference is the frame in basic coordinates in NumPy (beam stiffness rotated from the element frame, lumped
 masses), with the components kryflex must leave out condensed statically:

@@ -789,11 +789,11 @@ _FIXES = {
     "accuracy": "give the target relative error in (0, 1), e.g. 0.05",
 }
 # a scene keeps at least one mode: keep_threshold 0 (keep them all) is an option's value only (kryflex study)
-_SCENE_RANGES = {"reduction.keep_threshold": "(0, 1]"}
+SCENE_RANGES = {"reduction.keep_threshold": "(0, 1]"}
 
 
 def _setting(where, path, value):
-    return setting(where, path, value, _FIXES.get(path), _SCENE_RANGES.get(path))
+    return setting(where, path, value, _FIXES.get(path), SCENE_RANGES.get(path))
 
 
 def _reduction(where, given, revolute):

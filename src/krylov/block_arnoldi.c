@@ -331,7 +331,6 @@ PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm comm, PetscInt *pro
   PetscOptionsBegin(comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_progress_min_dofs", *progress_min, progress_min, NULL));
   PetscOptionsEnd();
-  PetscCheck(*progress_min >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_progress_min_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *progress_min);
   PetscFunctionReturn(0);
 }
 

@@ -31,7 +31,8 @@ PetscErrorCode KFSettingCheckRange(MPI_Comm comm, const char name[], PetscReal x
 
   PetscFunctionBegin;
   PetscCall(KFSettingRow_Private(comm, name, &row));
-  PetscCheck(KFSettingInRange_Private(row->range, x), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %g is outside %s; give a value in %s", name, (double)x, row->range, row->range);
+  if (row->type == KF_SETTING_INT) PetscCheck(KFSettingInRange_Private(row->range, x), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT " is outside %s; give an integer in %s", name, (PetscInt)x, row->range, row->range);
+  else PetscCheck(KFSettingInRange_Private(row->range, x), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %g is outside %s; give a value in %s", name, (double)x, row->range, row->range);
   PetscFunctionReturn(0);
 }
 

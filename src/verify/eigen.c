@@ -285,7 +285,6 @@ PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm comm, PetscInt *dense_
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_dense_max_dofs", *dense_max, dense_max, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_target", *target, target, has_target));
   PetscOptionsEnd();
-  PetscCheck(*dense_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_dense_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *dense_max);
   PetscFunctionReturn(0);
 }
 

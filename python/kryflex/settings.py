@@ -57,13 +57,13 @@ def _number(text, kind):
 
 
 def value(r, text=None):
-    """The row's default (or text) as a Python value: a bool, int, float, list of floats or str; "auto" stays text
-    and "none" or "" is None. An enum with true and false among its choices takes them as booleans."""
+    """The row's default (or text) as a Python value: a bool, int, float, list of floats or str; "auto" (and any word
+    the row's choices list) stays text, "none" or "" is None. An enum with true and false among its choices takes them as booleans."""
     text = r["default"] if text is None else text
     if text in ("", "none"):
         return None
-    if text in r["choices"] and r["type"] != "enum":
-        return text                  # a word a number also takes: auto
+    if text == "auto" or text in r["choices"] and r["type"] != "enum":
+        return text                  # decided at run time, or a word a number also takes
     kind = r["type"]
     if kind == "bool" or (kind == "enum" and text in ("true", "false") and "auto" in r["choices"]):
         return text == "true"

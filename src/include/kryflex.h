@@ -599,7 +599,7 @@ typedef struct {
   KFSettingType type;
   const char   *def;     /* the default as text; auto, none: decided at run time, "": no default */
   const char   *range;   /* an interval of the value (of each entry of a list), "(0, 1]", "[0, inf)"; NULL: any */
-  const char   *choices; /* an enum's values, space-separated; of a number: the words it also takes (auto); NULL */
+  const char   *choices; /* an enum's values, space-separated; of a number or list: the words it also takes (auto) */
   const char   *help;
   const char   *scene;   /* the scene file's key of the same setting ("reduction.moments"); NULL: none */
   const char   *object;  /* who reads it (KFReducer, KFFlexSolver, ...) */

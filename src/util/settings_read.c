@@ -28,12 +28,16 @@ static PetscBool KFSettingInRange_Private(const char range[], PetscReal x)
 PetscErrorCode KFSettingCheckRange(MPI_Comm comm, const char name[], PetscReal x)
 {
   const KFSettingInfo *row;
+  char                 value[64], also[80] = "";
 
   PetscFunctionBegin;
   PetscCall(KFSettingRow_Private(comm, name, &row));
-  if (row->type == KF_SETTING_INT) PetscCheck(KFSettingInRange_Private(row->range, x), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %" PetscInt_FMT " is outside %s; give an integer in %s", name, (PetscInt)x, row->range, row->range);
-  else PetscCheck(KFSettingInRange_Private(row->range, x), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %g is outside %s; give a value in %s", name, (double)x, row->range, row->range);
-  PetscFunctionReturn(0);
+  if (KFSettingInRange_Private(row->range, x)) PetscFunctionReturn(0);
+  /* the C library's %g, not PETSc's (which writes 2 as "2."): the value as the user wrote it */
+  if (row->type == KF_SETTING_INT) snprintf(value, sizeof(value), "%lld", (long long)x);
+  else snprintf(value, sizeof(value), "%g", (double)x);
+  if (row->choices) PetscCall(PetscSNPrintf(also, sizeof(also), "%s or ", row->choices));
+  SETERRQ(comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %s is outside %s; give %s%s in %s", name, value, row->range, also, row->type == KF_SETTING_INT ? "an integer" : "a value", row->range);
 }
 
 /* the row's choices (space-separated) are the n names of list, in any order: the enum the reader stores into is the

@@ -13,7 +13,8 @@ const char *const KFSettingTypes[] = {"bool", "int", "real", "enum", "string", "
 #define TS KF_SETTING_STRING
 #define TL KF_SETTING_LIST
 
-/* name, type, default, range, choices (an enum's values; words a number also takes), help, scene key, reader, setter */
+/* name, type, default (auto, none: decided at run time), range, choices (an enum's values; the words a number or a
+   list also takes), help, scene key, reader, setter */
 static const KFSettingInfo KFSettings[] = {
   /* the reducer (KFReducerSetFromOptions, src/reducer/options.c) */
   {"-kf_reducer_type", TE, "krylov", NULL, "krylov eigen", "Basis: krylov (Lee's Krylov methodology) or eigen (the eigenvector baseline)", "reduction.basis", "KFReducer", "KFReducerSetType"},
@@ -56,7 +57,7 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_verify_check_rtol", TR, "1e-06", "(0, 1)", NULL, "Largest disagreement allowed between the reference and a direct solve, a fraction of the pair's peak (beyond it the run fails, exit 3)", NULL, "KFReducer", "KFReducerSolve"},
   {"-kf_frequency_points", TI, "400", "[2, 100000]", NULL, "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "verify.frequency_points", "KFReducer", "KFReducerSetVerification"},
   {"-kf_frf_floor_db", TR, "-60", "(-inf, 0)", NULL, "FRF error: notches deeper than this below the band's peak count against this level", "verify.frf_floor_db", "KFReducer", "KFFRFError"},
-  {"-kf_full_moments", TB, "auto", NULL, "auto", "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_full_moments", TB, "auto", NULL, NULL, "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", NULL, "KFReducer", "KFReducerSolve"},
   /* the reducer's implementations */
   {"-kf_eigen_cover", TR, "1", "[1, inf)", NULL, "Full-order modes up to this multiple of the band's top frequency", "reduction.eigen_cover", "KFReducer (eigen)", "KFReducerEigenSetCover"},
   {"-kf_krylov_damped", TB, "false", NULL, NULL, "Input blocks from the moments of the damped system (second-order Krylov: x_k = -K+ (C x_{k-1} + M x_{k-2})), with the bodies' damping matrices and Rayleigh damping", "reduction.damped_moments", "KFReducer (krylov)", "KFReducerSolve"},
@@ -68,7 +69,7 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_refine", TI, "1", "[0, inf)", NULL, "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", NULL, "KFFlexSolver", "KFFlexSolverApply"},
   {"-kf_refine_rtol", TR, "1e-06", "[0, inf)", NULL, "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", NULL, "KFFlexSolver", "KFFlexSolverApply"},
   {"-kf_memory_check", TB, "true", NULL, NULL, "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
-  {"-kf_memory_limit_mb", TR, "auto", "(0, inf)", "auto", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_memory_limit_mb", TR, "auto", "(0, inf)", NULL, "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_ordering", TE, "auto", NULL, "auto amd amf scotch pord metis qamd ptscotch", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_scotch_seed", TI, "1", "[1, inf)", NULL, "Seed of SCOTCH's ordering (default 1)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_ordering_tries", TI, "1", "[1, inf)", NULL, "SCOTCH orderings to analyse (seeds s, s + 2, s + 4, ... from -kf_scotch_seed s), the factor with the fewest flops on the busiest rank kept (default 1)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
@@ -76,13 +77,13 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_ooc", TE, "auto", NULL, "auto true false", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_spd", TB, "false", NULL, NULL, "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_null_pivot_check_max_dofs", TI, "20000", "[0, inf)", NULL, "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
-  {"-kf_check_null_pivots", TB, "auto", NULL, "auto", "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_check_null_pivots", TB, "auto", NULL, NULL, "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   {"-kf_held_cond_max", TR, "1e+08", "[1, inf)", NULL, "Largest condition number of the rigid modes on the clamp's held dofs before falling back to pivoted QR (default 1e8)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
   /* the other stages */
   {"-kf_rigid_tol", TR, "1e-08", "(0, 1)", NULL, "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", NULL, "KFSystem (rigid modes)", "KFSystemComputeRigidModes"},
   {"-kf_progress_min_dofs", TI, "50000", "[0, inf)", NULL, "Print a progress line per Krylov block from this many system dofs on (default 50000)", NULL, "KFKrylovBasis", "KFKrylovBasis"},
   {"-kf_verify_dense_max_dofs", TI, "600", "[0, inf)", NULL, "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", NULL, "KFSystemEigen", "KFSystemEigen"},
-  {"-kf_verify_target", TR, "auto", NULL, "auto", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_target", TR, "auto", NULL, NULL, "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_quiet", TB, "false", NULL, NULL, "Silence the progress lines with elapsed time on rank 0 (default false)", NULL, "KFProgress", "KFProgress"},
   /* viewers, and the command's own */
   {"-kf_reducer_view_pre", TS, "none", NULL, NULL, "View the reducer (PetscViewer: ascii or ascii:file) before the solve", NULL, "KFReducer", "KFReducerViewFromOptions"},

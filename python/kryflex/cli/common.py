@@ -361,6 +361,10 @@ def option_error(exc, scene_path):
         close = difflib.get_close_matches(value, choices, n=1, cutoff=0.3)
         return "-%s %s: not one of %s: use one of them%s" % (name, value, ", ".join(choices),
                                                              " (did you mean %s?)" % close[0] if close else "")
+    outside = re.match(r"-(kf_\w+) (\S+) is outside (.*)", msg)
+    if outside and outside.group(1) in given:   # the C readers' range check (src/util/settings_read.c)
+        return "-%s %s: %s is outside %s (%s)" % (outside.group(1), given[outside.group(1)], outside.group(2),
+                                                 outside.group(3), listing)
     names = [k for k in sorted(given) if re.search(r"-%s\b" % re.escape(k), msg)]
     if names:
         return "-%s %s: %s; give -%s a valid value (%s)" % (names[0], given[names[0]], msg, names[0], listing)

@@ -155,9 +155,9 @@ BAD_COMMAND_LINES = [
     ("double-dash typo", ["reduce", GALILEO, "-o", "{out}", "--npzz"], ["unknown option --npzz (did you mean --npz?)"]),
     ("misspelt -kf_ option", ["reduce", GALILEO, "-o", "{out}", "-kf_momnets", "12"],
      ["unknown option -kf_momnets (did you mean -kf_moments?)"]),
-    ("bad option value", ["reduce", GALILEO, "-o", "{out}", "-kf_moments", "0"], ["-kf_moments", "give auto or a number of moments from 1"]),
+    ("bad option value", ["reduce", GALILEO, "-o", "{out}", "-kf_moments", "0"], ["-kf_moments 0: 0 is outside [1, 200]", "give auto or an integer in [1, 200]"]),
     ("negative --modes", ["reassemble", "{model}", "--angle", "30", "--modes", "-3"], ["--modes", "-3", ">= 0"]),
-    ("help beside a bad option value", ["reduce", "-help", "-kf_blr", "2"], ["-kf_blr 2: -kf_blr must lie in [0, 1)"]),
+    ("help beside a bad option value", ["reduce", "-help", "-kf_blr", "2"], ["-kf_blr 2: 2 is outside [0, 1); give a value in [0, 1)"]),
 ]
 
 
@@ -240,7 +240,7 @@ def test_bad_value_of_a_later_stage_option_on_two_ranks(previous):
     out, before = previous
     p = run("mpiexec", "-n", "2", KRYFLEX, "reduce", GALILEO, "-o", out, "-scene.angles", "0", "-kf_blr", "2", *FAST)
     assert p.returncode == EXIT_INPUT, p.stderr
-    assert error_lines(p.stderr) == [l for l in error_lines(p.stderr) if "-kf_blr 2: -kf_blr must lie in [0, 1)" in l]
+    assert error_lines(p.stderr) == [l for l in error_lines(p.stderr) if "-kf_blr 2: 2 is outside [0, 1)" in l]
     assert len(error_lines(p.stderr)) == 1, p.stderr
     assert snapshot(out) == before
 

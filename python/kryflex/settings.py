@@ -58,7 +58,8 @@ def _number(text, kind):
 
 def value(r, text=None):
     """The row's default (or text) as a Python value: a bool, int, float, list of floats or str; "auto" (and any word
-    the row's choices list) stays text, "none" or "" is None. An enum with true and false among its choices takes them as booleans."""
+    the row's choices list) stays text, "none" or "" is None. An enum with true and false among its choices takes
+    them as booleans."""
     text = r["default"] if text is None else text
     if text in ("", "none"):
         return None

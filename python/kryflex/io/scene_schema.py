@@ -6,9 +6,11 @@ again. node_table, check_node_references and check_vector are the rules on node 
 scene.py applies once it has read those (small) files, still before any matrix is loaded. Nothing here reads
 files or loads matrices, so a bad value anywhere is reported in milliseconds.
 
-Every message reads "<scene file>: <key path>: <what is wrong, with the value>; <the fix>". The ranges refuse at
-least everything the C setters (src/reducer/interface.c, src/scene/scene.c) refuse, so that no scene value first
-fails inside the reducer.
+Every message reads "<scene file>: <key path>: <what is wrong, with the value>; <the fix>". The keys that are
+settings (reduction.*, verify.*, band, damping, accuracy, accuracy_measure) take their defaults, choices and ranges
+from the settings table (src/util/settings_table.c, through kryflex.settings), and their type and range checks are
+the JSON Schema made from it (setting()); the ranges refuse at least everything the C setters
+(src/reducer/interface.c, src/scene/scene.c) refuse, so that no scene value first fails inside the reducer.
 """
 import difflib
 import functools
@@ -156,12 +158,6 @@ def integer(where, path, value, interval, fix=None):
     if x not in iv:
         fail(where, path, "%s is outside %s; %s" % (short_repr(value), iv.text, fix))
     return x
-
-
-def boolean(where, path, value):
-    if not isinstance(value, (bool, np.bool_)):
-        fail(where, path, "%s is not a boolean; give true or false" % short_repr(value))
-    return bool(value)
 
 
 def choice(where, path, value, choices):
@@ -734,8 +730,8 @@ def damping_spec(where, value):
     [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (the uniform ratio for a number, None
     for a mapping; the mapping normalized: absent parts zero)."""
     if not isinstance(value, dict):
-        z = real(where, "damping", value, settings.row("-kf_damping")["range"], "give the modal damping ratio in [0, 1), e.g. 0.0025, or a mapping "
-                 "{modal, rayleigh, structural}")
+        z = real(where, "damping", value, settings.row("-kf_damping")["range"],
+                 "give the modal damping ratio in [0, 1), e.g. 0.0025, or a mapping {modal, rayleigh, structural}")
         if z == 0.0:   # no modal damping: the same as {modal: 0} (the damping matrices, if any, alone)
             return damping_spec(where, {"modal": 0.0})
         return z, {"modal": z, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
@@ -865,7 +861,8 @@ def validate(spec, where, default_name="scene"):
     if not isinstance(band, list) or len(band) != 2:
         fail(where, "band", "%s is not [f_low, f_high]; give [f_low, f_high] in Hz with 0 < f_low < f_high"
              % short_repr(band))
-    band = [real(where, "band", x, settings.row("-kf_band")["range"], "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
+    band = [real(where, "band", x, settings.row("-kf_band")["range"],
+                 "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
     if not band[0] < band[1]:
         fail(where, "band", "%s: f_low is not below f_high; give [f_low, f_high] in Hz with 0 < f_low < f_high" % band)
     return {

@@ -1,7 +1,9 @@
 """Writes the manual's reference tables from what the code holds, before Sphinx reads the sources.
 
-    reference/generated/options.md     every -kf_ option of `kryflex reduce -help`: name, default, choices, help, setter
-    reference/generated/scene-file.md  the scene file's keys, defaults, choices and limits from kryflex.io.scene_schema
+    reference/generated/options.md     every -kf_ option of the settings table (src/util/settings_table.c, through
+                                       kryflex.settings): type, default, range or choices, help, scene key, setter
+    reference/generated/scene-file.md  the scene file's keys: the settings' from the same table, the others' from
+                                       kryflex.io.scene_schema
     reference/generated/c-api.md       src/include/kryflex.h, section by section, each declaration with its comment
 
 The pages under reference/ include these files, so a new option, scene key or C function shows up in the manual
@@ -10,7 +12,6 @@ without an edit to it. The generated folder is rebuilt on every build and not tr
 import ast
 import os
 import re
-import subprocess
 
 DOCS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ROOT = os.path.dirname(DOCS)
@@ -29,80 +30,39 @@ def code(text):
     return "`` %s ``" % text if "`" in text else "`%s`" % text
 
 
-# ------------------------------------------------------------------------------------------------ options (-help)
+# ------------------------------------------------------------------------------------------------ options (the table)
 
-_OPTION = re.compile(r"^\s+-(?P<name>kf_\w+):?\s*<(?P<value>[^>]*)>:?\s*(?P<rest>.*)$")
-_SETTER = re.compile(r"\s*\((?P<setter>[A-Z]\w*)\)\s*$")
-_CHOICES = re.compile(r"\s*\((?:choose )?one of\)\s*(?P<choices>[\w.+-]+(?:\s+[\w.+-]+)*)\s*$")
+def _settings():
+    import kryflex.settings
+    return kryflex.settings.table()
 
 
-def parse_help(text):
-    """The -kf_ options of a PETSc -help listing, by section: [(title, [(name, default, choices, help, setter)])]."""
-    sections, title, expect_title = [], None, False
-    for line in text.splitlines():
-        if line.startswith("-----"):
-            expect_title = True
-            continue
-        if expect_title:
-            expect_title = False
-            title = line.strip().rstrip(":")
-            if title.endswith(" options"):
-                title = title[:-len(" options")]
-            sections.append((title, []))
-            continue
-        m = _OPTION.match(line)
-        if not m or not sections:
-            continue
-        value = m.group("value").strip()
-        now = re.match(r"now (.*) : formerly .*", value)
-        default = now.group(1) if now else value.split(" : ")[0]
-        default = default.lower() if default in ("TRUE", "FALSE") else default
-        rest, setter, choices = m.group("rest"), "", ""
-        s = _SETTER.search(rest)
-        if s:
-            setter, rest = s.group("setter"), rest[:s.start()]
-        c = _CHOICES.search(rest)
-        if c:
-            choices, rest = ", ".join(c.group("choices").split()), rest[:c.start()]
-        sections[-1][1].append((m.group("name"), default, choices, rest.strip(), setter))
-    return [(t, rows) for t, rows in sections if rows]
+def _choices(row):
+    return ", ".join(row["choices"])
 
 
 def options_page():
-    kryflex = os.path.join(ROOT, "build", "kryflex")
-    if not os.access(kryflex, os.X_OK):
-        raise RuntimeError("%s is not built: run ./scripts/setup first (scripts/docs does)" % kryflex)
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
-    run = subprocess.run([kryflex, "reduce", "-help"], capture_output=True, text=True, env=env, timeout=120)
-    if run.returncode != 0:
-        raise RuntimeError("`kryflex reduce -help` failed (exit %d): %s" % (run.returncode, run.stderr[-500:]))
-    sections = parse_help(run.stdout)
-    if not sections:
-        raise RuntimeError("`kryflex reduce -help` listed no -kf_ option: has its format changed?")
+    """Every -kf_ option of the settings table, grouped by the object that reads it, in the table's order."""
+    groups = {}
+    for row in _settings():
+        groups.setdefault(row["object"], []).append(row)
+    if not groups:
+        raise RuntimeError("the settings table is empty: is the binding built?")
     lines = []
-    for title, rows in sections:
-        lines += ["## %s" % escape(title[:1].upper() + title[1:]), "",
-                  "| option | default | choices | meaning | set in C by |", "| --- | --- | --- | --- | --- |"]
-        for name, default, choices, text, setter in rows:
-            lines.append("| %s | %s | %s | %s | %s |" % (code("-" + name), code(default) if default else "",
-                                                         escape(choices), escape(text),
-                                                         code(setter) if setter else ""))
+    for obj, rows in groups.items():
+        lines += ["## %s" % escape(obj), "",
+                  "| option | type | default | range or choices | meaning | scene key | set in C by |",
+                  "| --- | --- | --- | --- | --- | --- | --- |"]
+        for r in rows:
+            limits = " ".join(x for x in (code(r["range"]) if r["range"] else "", escape(_choices(r))) if x)
+            lines.append("| %s | %s | %s | %s | %s | %s | %s |" % (
+                code(r["name"]), r["type"], code(r["default"]) if r["default"] else "", limits, escape(r["help"]),
+                code(r["scene"]) if r["scene"] else "", code(r["setter"]) if r["setter"] else ""))
         lines.append("")
     return "\n".join(lines)
 
 
 # ------------------------------------------------------------------------------------------------ scene file
-
-def _source_comments(source, block):
-    """{key: comment} of the `"key": value,  # comment` lines of the dict literal assigned to `block`."""
-    m = re.search(r"^%s = \{\n(.*?)^\}" % block, source, re.M | re.S)
-    out = {}
-    for line in (m.group(1).splitlines() if m else []):
-        k = re.match(r'\s*"(\w+)":\s*.*?#\s*(.*)$', line)
-        if k:
-            out[k.group(1)] = k.group(2).strip()
-    return out
-
 
 def _constant_comments(source):
     """{NAME: (value source, comment)} of the module's `NAME = value  # comment` lines."""
@@ -127,9 +87,7 @@ def scene_page():
     path = schema.__file__
     source = open(path).read()
     ast.parse(source)
-    choices = {"importance": schema.IMPORTANCES, "basis": schema.BASES, "method": schema.METHODS,
-               "flex_solver": schema.FLEX_SOLVERS, "type": schema.JOINT_TYPES, "quantity": schema.QUANTITIES,
-               "paper": schema.PAPERS}
+    choices = {"type": schema.JOINT_TYPES, "quantity": schema.QUANTITIES, "paper": schema.PAPERS}
     lines = []
 
     def keys_table(title, keys, defaults=None, comments=None, prefix=""):
@@ -142,11 +100,30 @@ def scene_page():
                                                      escape((comments or {}).get(k, ""))))
         lines.append("")
 
-    keys_table("Top level", schema.TOP_KEYS, schema.DEFAULTS)
-    keys_table("`reduction:`", schema.REDUCTION_DEFAULTS, schema.REDUCTION_DEFAULTS,
-               _source_comments(source, "REDUCTION_DEFAULTS"), "reduction.")
-    keys_table("`verify:`", schema.VERIFY_DEFAULTS, schema.VERIFY_DEFAULTS,
-               _source_comments(source, "VERIFY_DEFAULTS"), "verify.")
+    def settings_table(title, section, others):
+        """The keys of a section that are settings (the settings table's rows with a scene key there), then the
+        section's other keys."""
+        nonlocal lines
+        rows = {r["scene"].rpartition(".")[2]: r for r in _settings()
+                if r["scene"] and r["scene"].rpartition(".")[0] == section}
+        lines += ["## %s" % title, "", "| key | default | range or choices | meaning | option |",
+                  "| --- | --- | --- | --- | --- |"]
+        for k in sorted(set(rows) | set(others)):
+            r = rows.get(k)
+            if r is None:
+                lines.append("| %s | | %s | | |" % (code(k), escape(", ".join(choices.get(k, ())))))
+                continue
+            key = (section + "." if section else "") + k
+            rng = schema.SCENE_RANGES.get(key, r["range"])
+            limits = " ".join(x for x in (code(rng) if rng else "", escape(_choices(r))) if x)
+            lines.append("| %s | %s | %s | %s | %s |" % (code(key),
+                                                         code(r["default"]) if r["default"] else "", limits,
+                                                         escape(r["help"]), code(r["name"])))
+        lines.append("")
+
+    settings_table("Top level", "", schema.TOP_KEYS)
+    settings_table("`reduction:`", "reduction", ())
+    settings_table("`verify:`", "verify", ())
     keys_table("A body (`bodies.<name>:`)", schema.BODY_KEYS)
     keys_table("A joint (`joints.<name>:`)", schema.JOINT_KEYS)
     keys_table("A term of an input or output (`inputs.<name>: [...]`, `outputs.<name>: [...]`)", schema.TERM_KEYS)

@@ -282,3 +282,22 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping*)
     PetscErrorCode KFReducerGetDampingModel(KFReducer, KFDamping*)
+    ctypedef enum KFSettingType:
+        KF_SETTING_BOOL
+        KF_SETTING_INT
+        KF_SETTING_REAL
+        KF_SETTING_ENUM
+        KF_SETTING_STRING
+        KF_SETTING_LIST
+    const char *const KFSettingTypes[]
+    ctypedef struct KFSettingInfo:
+        const char *name
+        KFSettingType type
+        const char *default "def"
+        const char *range
+        const char *choices
+        const char *help
+        const char *scene
+        const char *object
+        const char *setter
+    PetscErrorCode KFSettingsTableGet(const KFSettingInfo**, PetscInt*)

@@ -13,7 +13,7 @@ import contextlib
 
 import numpy as np
 
-from . import _core
+from . import _core, settings
 from .api import ReducedModel
 from ._runtime import quiet_progress
 
@@ -82,8 +82,10 @@ class Reducer:
         # the flexible solve is read by every solver the solve makes, not by the reducer: kept for reduce()
         self._flex_solver = (options.pop("flex_solver"), True) if "flex_solver" in options else \
             (red.get("flex_solver", "auto"), False)
-        if self._flex_solver[0] not in ("auto", "monolithic", "bodywise"):
-            raise ValueError("flex_solver: give auto, monolithic or bodywise, got %r" % (self._flex_solver[0],))
+        kinds = settings.row("-kf_flex_solver")["choices"]
+        if self._flex_solver[0] not in kinds:
+            raise ValueError("flex_solver: give %s or %s, got %r" % (", ".join(kinds[:-1]), kinds[-1],
+                                                                     self._flex_solver[0]))
         r = _core.CReducer(scene.comm)
         r.set_type(red["basis"])
         r.set_scene(scene.cscene)

@@ -583,4 +583,30 @@ PETSC_EXTERN PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem, PetscI
 PETSC_EXTERN PetscErrorCode KFReducerSetDampingModel(KFReducer, const KFDamping *);
 PETSC_EXTERN PetscErrorCode KFReducerGetDampingModel(KFReducer, KFDamping *);
 
+/* ---------------------------------------------------------------- settings (src/util/settings_table.c) */
+/* every -kf_ option, one row each: what the readers, the binding, the scene schema, the command and the manual use */
+typedef enum {
+  KF_SETTING_BOOL,
+  KF_SETTING_INT,
+  KF_SETTING_REAL,
+  KF_SETTING_ENUM,   /* one of choices */
+  KF_SETTING_STRING,
+  KF_SETTING_LIST    /* comma-separated numbers */
+} KFSettingType;
+PETSC_EXTERN const char *const KFSettingTypes[];
+typedef struct {
+  const char   *name;    /* the option, "-kf_accuracy" */
+  KFSettingType type;
+  const char   *def;     /* the default as text; auto, none: decided at run time, "": no default */
+  const char   *range;   /* an interval of the value (of each entry of a list), "(0, 1]", "[0, inf)"; NULL: any */
+  const char   *choices; /* an enum's values, space-separated; of a number or list: the words it also takes (auto) */
+  const char   *help;
+  const char   *scene;   /* the scene file's key of the same setting ("reduction.moments"); NULL: none */
+  const char   *object;  /* who reads it (KFReducer, KFFlexSolver, ...) */
+  const char   *setter;  /* the C function that sets it */
+} KFSettingInfo;
+PETSC_EXTERN PetscErrorCode KFSettingsTableGet(const KFSettingInfo **, PetscInt *);
+/* the row of an option ("-kf_accuracy"); NULL when there is none */
+PETSC_EXTERN PetscErrorCode KFSettingFind(const char[], const KFSettingInfo **);
+
 #endif

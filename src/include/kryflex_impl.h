@@ -183,4 +183,18 @@ PETSC_INTERN PetscReal KFBodyRigidValue(const KFBodyData *, PetscInt node, Petsc
 PETSC_EXTERN PetscLogEvent KF_EVENT_LOAD, KF_EVENT_ASSEMBLE, KF_EVENT_RIGID, KF_EVENT_FACTOR, KF_EVENT_SOLVE, KF_EVENT_ORTHO, KF_EVENT_PROJECT, KF_EVENT_VERIFY, KF_EVENT_MOMENTS;
 PETSC_EXTERN PetscLogEvent KF_EVENT_BODY_BASIS, KF_EVENT_BODY_REDUCE; /* nested in KF_EVENT_ORTHO */
 
+/* option readers that take their help text, manual page and range from the settings table (src/util/settings_read.c):
+   inside a PetscOptionsBegin/End block, as PetscOptionsReal and friends; a given value outside the row's range is
+   refused naming the option, the value and the range */
+PETSC_INTERN PetscErrorCode KFOptionsSettingBool(PetscOptionItems *, const char[], PetscBool, PetscBool *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingInt(PetscOptionItems *, const char[], PetscInt, PetscInt *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingReal(PetscOptionItems *, const char[], PetscReal, PetscReal *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingRealArray(PetscOptionItems *, const char[], PetscReal[], PetscInt *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingString(PetscOptionItems *, const char[], const char[], char[], size_t, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingEList(PetscOptionItems *, const char[], const char *const *, PetscInt, const char[], PetscInt *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingEnum(PetscOptionItems *, const char[], const char *const *, PetscEnum, PetscEnum *, PetscBool *);
+PETSC_INTERN PetscErrorCode KFOptionsSettingFList(PetscOptionItems *, const char[], PetscFunctionList, const char[], char[], size_t, PetscBool *);
+/* a value given another way (a word parsed by hand) checked against the row's range */
+PETSC_INTERN PetscErrorCode KFSettingCheckRange(MPI_Comm, const char[], PetscReal);
+
 #endif

@@ -329,9 +329,8 @@ PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm comm, PetscInt *pro
   PetscFunctionBegin;
   *progress_min = 50000;
   PetscOptionsBegin(comm, NULL, "kryflex Krylov basis", "KFKrylovBasis");
-  PetscCall(PetscOptionsInt("-kf_progress_min_dofs", "Print a progress line per Krylov block from this many system dofs on (default 50000)", "KFKrylovBasis", *progress_min, progress_min, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_progress_min_dofs", *progress_min, progress_min, NULL));
   PetscOptionsEnd();
-  PetscCheck(*progress_min >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_progress_min_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *progress_min);
   PetscFunctionReturn(0);
 }
 

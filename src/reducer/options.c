@@ -1,4 +1,5 @@
-/* KFReducerSetFromOptions: every setting under -kf_ (listed with its default by -help), and the reducer's view. */
+/* KFReducerSetFromOptions: the reducer's -kf_ settings (their help, range and setter from the settings table,
+   src/util/settings_table.c; -help lists them with their defaults), and the reducer's view. */
 #include <kryflex/reducerimpl.h>
 
 static const char *const KFSaveMaps[] = {"false", "true", "auto", "KFSaveMaps", "", NULL};
@@ -49,17 +50,17 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   if (((PetscObject)r)->type_name) PetscCall(PetscStrncpy(type, ((PetscObject)r)->type_name, sizeof(type)));
   PetscObjectOptionsBegin((PetscObject)r);
-  PetscCall(PetscOptionsFList("-kf_reducer_type", "Basis: krylov (Lee's Krylov methodology) or eigen (the eigenvector baseline)", "KFReducerSetType", KFReducerList, type, type, sizeof(type), &flg));
+  PetscCall(KFOptionsSettingFList(PetscOptionsObject, "-kf_reducer_type", KFReducerList, type, type, sizeof(type), &flg));
   if (flg || !((PetscObject)r)->type_name) PetscCall(KFReducerSetType(r, type));
 
   PetscCall(PetscArrayzero(deg, KF_MAX_OPTION_ANGLES)); /* -help prints the array's first entry as the default */
   n = KF_MAX_OPTION_ANGLES;
-  PetscCall(PetscOptionsRealArray("-kf_angles", "Angles of interest in degrees, one per revolute joint per configuration, comma-separated", "KFReducerSetAngles", deg, &n, &flg));
+  PetscCall(KFOptionsSettingRealArray(PetscOptionsObject, "-kf_angles", deg, &n, &flg));
   if (flg) {
     PetscCall(KFReducerDegreesOption_Private(r, "-kf_angles", n, deg, &nconfig));
     PetscCall(KFReducerSetAngles(r, nconfig, deg));
   }
-  PetscCall(PetscOptionsString("-kf_reduction_angle", "alpha_G of the single-angle model in degrees (one per revolute joint), or auto: the paper's rule", "KFReducerSetReductionAngle", alpha, alpha, sizeof(alpha), &flg));
+  PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_reduction_angle", alpha, alpha, sizeof(alpha), &flg));
   if (flg) {
     PetscBool isauto;
 
@@ -75,25 +76,25 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   }
   PetscCall(PetscArrayzero(deg, KF_MAX_OPTION_ANGLES));
   n = KF_MAX_OPTION_ANGLES;
-  PetscCall(PetscOptionsRealArray("-kf_multi_angles", "Configurations of the multi-angle basis in degrees (default: the angles of interest)", "KFReducerSetMultiAngles", deg, &n, &flg));
+  PetscCall(KFOptionsSettingRealArray(PetscOptionsObject, "-kf_multi_angles", deg, &n, &flg));
   if (flg) {
     PetscCall(KFReducerDegreesOption_Private(r, "-kf_multi_angles", n, deg, &nconfig));
     PetscCall(KFReducerSetMultiAngles(r, nconfig, deg));
   }
   method = (PetscInt)r->method;
-  PetscCall(PetscOptionsEList("-kf_method", "auto (the smaller model that meets the accuracy), single-angle (the paper: one basis at alpha_G) or multi-angle (bases at several angles)", "KFReducerSetMethod", KFReducerMethods, 3, KFReducerMethods[r->method], &method, &flg));
+  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_method", KFReducerMethods, 3, KFReducerMethods[r->method], &method, &flg));
   if (flg) PetscCall(KFReducerSetMethod(r, (KFReducerMethod)method));
 
   band[0] = r->band[0];
   band[1] = r->band[1];
   n       = 2;
-  PetscCall(PetscOptionsRealArray("-kf_band", "Frequency band of interest in Hz: low,high (default 0.01,10)", "KFReducerSetBand", band, &n, &flg));
+  PetscCall(KFOptionsSettingRealArray(PetscOptionsObject, "-kf_band", band, &n, &flg));
   if (flg) {
     PetscCheck(n == 2, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_band: give two frequencies in Hz, low,high; got %" PetscInt_FMT, n);
     PetscCall(KFReducerSetBand(r, band[0], band[1]));
   }
   zeta = r->zeta;
-  PetscCall(PetscOptionsReal("-kf_damping", "Uniform modal damping ratio", "KFReducerSetDamping", zeta, &zeta, &flg));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_damping", zeta, &zeta, &flg));
   if (flg) PetscCall(KFReducerSetDamping(r, zeta));
   {
     KFDamping d = r->damping;
@@ -101,7 +102,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     PetscInt  nb = 2 * KF_MAX_DAMPING_BANDS, nab = 2;
     PetscBool fb, fr, fs;
 
-    PetscCall(PetscOptionsRealArray("-kf_damping_bands", "Modal damping per band: f_max_hz,zeta,f_max_hz,zeta,... (ascending; modes above the last band take its ratio)", "KFReducerSetDampingModel", bands, &nb, &fb));
+    PetscCall(KFOptionsSettingRealArray(PetscOptionsObject, "-kf_damping_bands", bands, &nb, &fb));
     if (fb) {
       PetscCheck(nb % 2 == 0 && nb > 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_damping_bands: give pairs f_max_hz,zeta; got %" PetscInt_FMT " numbers", nb);
       d.nbands = nb / 2;
@@ -110,22 +111,22 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
         d.zeta[k]    = bands[2 * k + 1];
       }
     }
-    PetscCall(PetscOptionsRealArray("-kf_damping_rayleigh", "Rayleigh damping C = alpha M + beta K: alpha,beta", "KFReducerSetDampingModel", ab, &nab, &fr));
+    PetscCall(KFOptionsSettingRealArray(PetscOptionsObject, "-kf_damping_rayleigh", ab, &nab, &fr));
     if (fr) {
       PetscCheck(nab == 2, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_SIZ, "-kf_damping_rayleigh: give alpha,beta; got %" PetscInt_FMT " numbers", nab);
       d.alpha = ab[0];
       d.beta  = ab[1];
     }
-    PetscCall(PetscOptionsReal("-kf_damping_structural", "Structural (hysteretic) damping g: stiffness K (1 + i g)", "KFReducerSetDampingModel", d.g, &d.g, &fs));
+    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_damping_structural", d.g, &d.g, &fs));
     if (fb || fr || fs) PetscCall(KFReducerSetDampingModel(r, &d));
   }
   accuracy = r->accuracy;
-  PetscCall(PetscOptionsReal("-kf_accuracy", "Target relative H-infinity error of the frequency response over the band, per input/output pair, on the response -kf_accuracy_measure names (KFFRFElasticErrors)", "KFReducerSetAccuracy", accuracy, &accuracy, &flg));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_accuracy", accuracy, &accuracy, &flg));
   if (flg) PetscCall(KFReducerSetAccuracy(r, accuracy));
   {
     PetscInt measure = (PetscInt)r->accuracy_measure;
 
-    PetscCall(PetscOptionsEList("-kf_accuracy_measure", "What the accuracy is stated on: elastic (the response minus its rigid-body and mechanism part) or total", "KFReducerSetAccuracyMeasure", KFAccuracyMeasures, 2, KFAccuracyMeasures[r->accuracy_measure], &measure, &flg));
+    PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_accuracy_measure", KFAccuracyMeasures, 2, KFAccuracyMeasures[r->accuracy_measure], &measure, &flg));
     if (flg) PetscCall(KFReducerSetAccuracyMeasure(r, (KFAccuracyMeasure)measure));
   }
 
@@ -135,7 +136,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     char mtext[64] = "auto";
 
     if (moments != PETSC_DECIDE) PetscCall(PetscSNPrintf(mtext, sizeof(mtext), "%" PetscInt_FMT, moments));
-    PetscCall(PetscOptionsString("-kf_moments", "Low-frequency moments matched exactly (c in the paper), or auto: the accuracy search chooses", "KFReducerSetMoments", mtext, mtext, sizeof(mtext), &flg));
+    PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_moments", mtext, mtext, sizeof(mtext), &flg));
     if (flg) {
       PetscBool isauto;
       char     *end;
@@ -145,50 +146,49 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
       else {
         long v = strtol(mtext, &end, 10);
 
-        PetscCheck(*mtext && !*end && v >= 1 && v <= 1000, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_moments: give auto or a number of moments from 1 to 1000, got '%s'", mtext);
+        PetscCheck(*mtext && !*end, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_moments: give auto or a number of moments, got '%s'", mtext);
+        PetscCall(KFSettingCheckRange(PetscObjectComm((PetscObject)r), "-kf_moments", (PetscReal)v));
         moments = (PetscInt)v;
       }
     }
   }
-  PetscCall(PetscOptionsInt("-kf_output_blocks", "Krylov blocks started from K+ H^T (of the moments)", "KFReducerSetMoments", oblocks, &oblocks, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_output_blocks", oblocks, &oblocks, NULL));
   PetscCall(KFReducerSetMoments(r, moments, oblocks));
   {
     PetscBool search = r->search;
     PetscInt  mmax   = r->moments_max;
     PetscReal crtol  = r->cluster_rtol;
 
-    PetscCall(PetscOptionsBool("-kf_search", "The accuracy search: the smallest model that meets -kf_accuracy (false: the paper's fixed recipe)", "KFReducerSetSearch", search, &search, NULL));
-    PetscCall(PetscOptionsInt("-kf_moments_max", "The most moments the accuracy search tries", "KFReducerSetSearch", mmax, &mmax, NULL));
+    PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_search", search, &search, NULL));
+    PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_moments_max", mmax, &mmax, NULL));
     PetscCall(KFReducerSetSearch(r, search, mmax));
-    PetscCall(PetscOptionsReal("-kf_cluster_rtol", "Krylov modes this close in frequency (relative) are kept or dropped together", "KFReducerSetClusterTolerance", crtol, &crtol, NULL));
+    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_cluster_rtol", crtol, &crtol, NULL));
     PetscCall(KFReducerSetClusterTolerance(r, crtol));
-    PetscCall(PetscOptionsInt("-kf_max_factorizations", "Expansion points inside the band: the most sparse factorizations of K - sigma M the accuracy search may spend on them, one per point and expansion angle (0: moments at zero only)", "KFReducerSolve", r->max_factorizations, &r->max_factorizations, NULL));
-    PetscCheck(r->max_factorizations >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_max_factorizations is a number of factorizations, 0 or more (0: no expansion point inside the band); got %" PetscInt_FMT, r->max_factorizations);
-    PetscCall(PetscOptionsInt("-kf_shift_blocks", "Krylov blocks at each expansion point inside the band: 1 input block, 2 input and output blocks, more: further input blocks of (K - sigma M)^-1 M (default 3)", "KFReducerSolve", r->shift_blocks, &r->shift_blocks, NULL));
-    PetscCall(PetscOptionsBool("-kf_shift_family_only", "With -kf_max_factorizations: the smallest model with expansion points inside the band is chosen even when a moment-only model is as small (to compare the families: kryflex study, benchmarks)", "KFReducerSolve", r->shift_family_only, &r->shift_family_only, NULL));
-    PetscCheck(r->shift_blocks >= 1 && r->shift_blocks <= 100, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift_blocks is a number of Krylov blocks per expansion point, 1 to 100; got %" PetscInt_FMT, r->shift_blocks);
+    PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_max_factorizations", r->max_factorizations, &r->max_factorizations, NULL));
+    PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_shift_blocks", r->shift_blocks, &r->shift_blocks, NULL));
+    PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_shift_family_only", r->shift_family_only, &r->shift_family_only, NULL));
   }
   importance = (PetscInt)r->importance;
   keep       = r->keep_threshold;
-  PetscCall(PetscOptionsEList("-kf_importance", "Mode importance: band (band-aware, cluster-invariant), h2, hinf or static", "KFReducerSetImportance", KFImportances, 4, KFImportances[r->importance], &importance, NULL));
-  PetscCall(PetscOptionsReal("-kf_keep_threshold", "Keep modes whose importance (normalized to the largest) reaches this", "KFReducerSetImportance", keep, &keep, NULL));
+  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_importance", KFImportances, 4, KFImportances[r->importance], &importance, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_keep_threshold", keep, &keep, NULL));
   PetscCall(KFReducerSetImportance(r, (KFImportance)importance, keep));
   sc = r->static_correction;
-  PetscCall(PetscOptionsBool("-kf_static_correction", "Add the static correction of the discarded modes (eq. 15-17)", "KFReducerSetStaticCorrection", sc, &sc, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_static_correction", sc, &sc, NULL));
   PetscCall(KFReducerSetStaticCorrection(r, sc));
   dtol = r->deflation_tol;
   btol = r->body_tol;
   rtol = r->reassembly_rtol;
-  PetscCall(PetscOptionsReal("-kf_deflation_tol", "Krylov block deflation tolerance (relative)", "KFReducerSetTolerances", dtol, &dtol, NULL));
-  PetscCall(PetscOptionsReal("-kf_body_tol", "Per-body rank deflation of the projected vectors (relative)", "KFReducerSetTolerances", btol, &btol, NULL));
-  PetscCall(PetscOptionsReal("-kf_reassembly_rtol", "SVD rank tolerance of the reduced interface constraints", "KFReducerSetTolerances", rtol, &rtol, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_deflation_tol", dtol, &dtol, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_body_tol", btol, &btol, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_reassembly_rtol", rtol, &rtol, NULL));
   PetscCall(KFReducerSetTolerances(r, dtol, btol, rtol));
   {
     char      text[64] = "none";
     PetscBool set;
 
     if (r->max_frequency > 0) PetscCall(PetscSNPrintf(text, sizeof(text), r->max_frequency_hz ? "%g Hz" : "%g", (double)r->max_frequency));
-    PetscCall(PetscOptionsString("-kf_max_frequency", "Reduced-system modes above this are taken out of the dynamics, their static share kept: a multiple of the band's top (3), a frequency (\"40 Hz\") or none", "KFReducerSetMaxFrequency", text, text, sizeof(text), &set));
+    PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_max_frequency", text, text, sizeof(text), &set));
     if (set) {
       PetscReal value;
       PetscBool hz;
@@ -197,35 +197,33 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
       PetscCall(KFReducerSetMaxFrequency(r, value, hz));
     }
   }
-  PetscCall(PetscOptionsBool("-kf_search_sub_bases", "Search candidates' body bases made in their visit's richest body basis (small dense work) rather than from their vectors", "", r->sub_bases, &r->sub_bases, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_search_sub_bases", r->sub_bases, &r->sub_bases, NULL));
   shift = r->shift;
-  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of holding dofs (moments then expand about -shift)", "KFReducerSetShift", shift, &shift, &flg));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_shift", shift, &shift, &flg));
   if (flg) PetscCall(KFReducerSetShift(r, shift));
   save = r->save_maps == PETSC_DECIDE ? 2 : r->save_maps;
-  PetscCall(PetscOptionsEList("-kf_save_maps", "Store each reduced body's map back to its full dofs: true, false or auto", "KFReducerSetSaveMaps", KFSaveMaps, 3, KFSaveMaps[save], &save, &flg));
+  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_save_maps", KFSaveMaps, 3, KFSaveMaps[save], &save, &flg));
   if (flg) PetscCall(KFReducerSetSaveMaps(r, save == 2 ? PETSC_DECIDE : save));
-  PetscCall(PetscOptionsInt("-kf_save_maps_max_dofs", "With -kf_save_maps auto: store the maps while no body has more dofs", "KFReducerSetSaveMaps", r->save_maps_max_dofs, &r->save_maps_max_dofs, NULL));
-  PetscCall(PetscOptionsInt("-kf_gram_condition_max_dofs", "Report the raw recurrence's Gram condition (diagnostic) up to this many system dofs", "KFReducerSolve", r->gram_condition_max_dofs, &r->gram_condition_max_dofs, NULL));
-  PetscCall(PetscOptionsReal("-kf_negligible_moment", "A moment below this fraction of its largest value over the angles counts as zero", "KFMomentErrors", r->negligible, &r->negligible, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_save_maps_max_dofs", r->save_maps_max_dofs, &r->save_maps_max_dofs, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_gram_condition_max_dofs", r->gram_condition_max_dofs, &r->gram_condition_max_dofs, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_negligible_moment", r->negligible, &r->negligible, NULL));
 
   verify   = r->verify;
   vmodes   = r->verify_modes;
   npoints  = r->frequency_points;
   floor_db = r->frf_floor_db;
-  PetscCall(PetscOptionsBool("-kf_verify", "Verify the reduced model against the full order (SLEPc eigensolve) at every angle of interest", "KFReducerSetVerification", verify, &verify, NULL));
-  PetscCall(PetscOptionsInt("-kf_verify_modes", "Full-order modes for verification (-1: cover -kf_verify_cover x the band's top)", "KFReducerSetVerification", vmodes, &vmodes, NULL));
-  PetscCall(PetscOptionsReal("-kf_verify_cover", "Automatic verification modes cover this multiple of the band's top frequency", "KFReducerSetVerification", r->verify_cover, &r->verify_cover, NULL));
-  PetscCall(PetscOptionsInt("-kf_verify_check_points", "Direct solves of the full-order system per angle checking the verification's reference, off resonance (0: no check)", "KFReducerSolve", r->verify_check_points, &r->verify_check_points, NULL));
-  PetscCall(PetscOptionsReal("-kf_verify_check_rtol", "Largest disagreement allowed between the reference and a direct solve, a fraction of the pair's peak (beyond it the run fails, exit 3)", "KFReducerSolve", r->verify_check_rtol, &r->verify_check_rtol, NULL));
-  PetscCheck(r->verify_check_points >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_check_points is a number of direct solves per angle, 0 (no check) or more; got %" PetscInt_FMT, r->verify_check_points);
-  PetscCheck(r->verify_check_rtol > 0 && r->verify_check_rtol < 1, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_check_rtol is a fraction of the peak in (0, 1), for example 1e-6; got %g", (double)r->verify_check_rtol);
-  PetscCall(PetscOptionsInt("-kf_frequency_points", "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "KFReducerSetVerification", npoints, &npoints, NULL));
-  PetscCall(PetscOptionsReal("-kf_frf_floor_db", "FRF error: notches deeper than this below the band's peak count against this level", "KFFRFError", floor_db, &floor_db, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify", verify, &verify, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_modes", vmodes, &vmodes, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_cover", r->verify_cover, &r->verify_cover, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_check_points", r->verify_check_points, &r->verify_check_points, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_check_rtol", r->verify_check_rtol, &r->verify_check_rtol, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_frequency_points", npoints, &npoints, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_frf_floor_db", floor_db, &floor_db, NULL));
   PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
   {
     PetscBool full = r->full_moments_set ? r->full_moments : r->verify, set;
 
-    PetscCall(PetscOptionsBool("-kf_full_moments", "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", "KFReducerSolve", full, &full, &set));
+    PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_full_moments", full, &full, &set));
     if (set) {
       r->full_moments     = full;
       r->full_moments_set = PETSC_TRUE;

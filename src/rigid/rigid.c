@@ -410,9 +410,8 @@ PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm comm, PetscReal *tol)
   PetscFunctionBegin;
   *tol = 1e-8;
   PetscOptionsBegin(comm, NULL, "kryflex rigid-body and mechanism modes", "KFSystemComputeRigidModes");
-  PetscCall(PetscOptionsReal("-kf_rigid_tol", "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", "KFSystemComputeRigidModes", *tol, tol, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_rigid_tol", *tol, tol, NULL));
   PetscOptionsEnd();
-  PetscCheck(*tol > 0 && *tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_rigid_tol is a relative strain in (0, 1) such as 1e-8; got %g", (double)*tol);
   PetscFunctionReturn(0);
 }
 

@@ -188,9 +188,9 @@ PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm comm, KFFlexSolverType *t
   *min_dofs = 20000;
   *spread   = PETSC_TRUE;
   PetscOptionsBegin(comm, NULL, "kryflex flexible solve: monolithic or body-wise", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEnum("-kf_flex_solver", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for large articulated multi-body scenes; the default)", "KFFlexSolverSetType", KFFlexSolverTypes, (PetscEnum)*type, (PetscEnum *)type, NULL));
-  PetscCall(PetscOptionsInt("-kf_bodywise_min_dofs", "auto takes the body-wise solve from this many system dofs on (default 20000)", "KFFlexSolverSetType", *min_dofs, min_dofs, NULL));
-  PetscCall(PetscOptionsBool("-kf_bodywise_spread", "Body-wise solve: factor each body on one rank, the bodies spread over the ranks (when there are at least as many bodies as ranks); false: every body on all ranks", "KFFlexSolverSetUp", *spread, spread, NULL));
+  PetscCall(KFOptionsSettingEnum(PetscOptionsObject, "-kf_flex_solver", KFFlexSolverTypes, (PetscEnum)*type, (PetscEnum *)type, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_bodywise_min_dofs", *min_dofs, min_dofs, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_bodywise_spread", *spread, spread, NULL));
   PetscOptionsEnd();
   PetscCheck(*min_dofs >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, *min_dofs);
   PetscFunctionReturn(0);

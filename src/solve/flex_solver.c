@@ -17,9 +17,9 @@ static PetscErrorCode KFFlexSolverCreateOptions(MPI_Comm comm, PetscReal *shift,
   *refine = 1;
   *rtol   = 1e-6;
   PetscOptionsBegin(comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
-  PetscCall(PetscOptionsReal("-kf_shift", "Factor K + shift M instead of K with dofs held (default 0: held dofs)", "KFFlexSolverSetShift", *shift, shift, NULL));
-  PetscCall(PetscOptionsInt("-kf_refine", "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", "KFFlexSolverApply", *refine, refine, refine_set));
-  PetscCall(PetscOptionsReal("-kf_refine_rtol", "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", "KFFlexSolverApply", *rtol, rtol, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_shift", *shift, shift, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_refine", *refine, refine, refine_set));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_refine_rtol", *rtol, rtol, NULL));
   PetscOptionsEnd();
   PetscCheck(*shift >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift must be >= 0 (K + shift M must be positive definite; expansion points inside the band are -kf_max_factorizations); got %g", (double)*shift);
   PetscCheck(*refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, *refine);
@@ -111,8 +111,8 @@ static PetscErrorCode KFFactorMemoryOptions(MPI_Comm comm, PetscBool *check, Pet
   *check = PETSC_TRUE;
   *limit = -1;
   PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsBool("-kf_memory_check", "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", "KFFlexSolverSetUp", *check, check, NULL));
-  PetscCall(PetscOptionsReal("-kf_memory_limit_mb", "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", "KFFlexSolverSetUp", *limit, limit, has_limit));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_memory_check", *check, check, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_memory_limit_mb", *limit, limit, has_limit));
   PetscOptionsEnd();
   PetscCheck(!*has_limit || *limit > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_memory_limit_mb is the memory per node in MB, a positive number; got %g", (double)*limit);
   PetscFunctionReturn(0);
@@ -194,12 +194,12 @@ static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, KFMumpsControls 
   c->blr      = 0;
   c->spd      = PETSC_FALSE;
   PetscOptionsBegin(comm, NULL, "kryflex factorization", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsEList("-kf_ordering", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", "KFFlexSolverSetUp", KFOrderings, 8, KFOrderings[c->ordering], &c->ordering, NULL));
-  PetscCall(PetscOptionsInt("-kf_scotch_seed", "Seed of SCOTCH's ordering (default 1)", "KFFlexSolverSetUp", c->seed, &c->seed, NULL));
-  PetscCall(PetscOptionsInt("-kf_ordering_tries", "SCOTCH orderings to analyse (seeds s, s + 2, s + 4, ... from -kf_scotch_seed s), the factor with the fewest flops on the busiest rank kept (default 1)", "KFFlexSolverSetUp", c->tries, &c->tries, NULL));
-  PetscCall(PetscOptionsReal("-kf_blr", "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", "KFFlexSolverSetUp", c->blr, &c->blr, NULL));
-  PetscCall(PetscOptionsString("-kf_ooc", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", "KFFlexSolverSetUp", val, val, sizeof(val), &set));
-  PetscCall(PetscOptionsBool("-kf_spd", "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", "KFFlexSolverSetUp", c->spd, &c->spd, NULL));
+  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_ordering", KFOrderings, 8, KFOrderings[c->ordering], &c->ordering, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_scotch_seed", c->seed, &c->seed, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_ordering_tries", c->tries, &c->tries, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_blr", c->blr, &c->blr, NULL));
+  PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_ooc", val, val, sizeof(val), &set));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_spd", c->spd, &c->spd, NULL));
   PetscOptionsEnd();
   PetscCheck(c->seed >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_scotch_seed is a positive integer; got %" PetscInt_FMT, c->seed);
   PetscCheck(c->tries >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more; got %" PetscInt_FMT, c->tries);
@@ -430,9 +430,9 @@ static PetscErrorCode KFNullPivotCheckOptions(MPI_Comm comm, PetscInt nsys, Pets
 
   PetscFunctionBegin;
   PetscOptionsBegin(comm, NULL, "kryflex null-pivot cross-check", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsInt("-kf_null_pivot_check_max_dofs", "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", "KFFlexSolverSetUp", check_max, &check_max, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_null_pivot_check_max_dofs", check_max, &check_max, NULL));
   *check = (PetscBool)(nsys <= check_max && shift == 0);
-  PetscCall(PetscOptionsBool("-kf_check_null_pivots", "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", "KFFlexSolverSetUp", *check, check, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_check_null_pivots", *check, check, NULL));
   PetscOptionsEnd();
   PetscCheck(check_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_null_pivot_check_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, check_max);
   PetscFunctionReturn(0);

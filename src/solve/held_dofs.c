@@ -144,7 +144,7 @@ PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm comm, PetscReal *cond_max
   PetscFunctionBegin;
   *cond_max = 1e8;
   PetscOptionsBegin(comm, NULL, "kryflex held dofs of the flexible solve", "KFFlexSolverSetUp");
-  PetscCall(PetscOptionsReal("-kf_held_cond_max", "Largest condition number of the rigid modes on the clamp's held dofs before falling back to pivoted QR (default 1e8)", "KFFlexSolverSetUp", *cond_max, cond_max, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_held_cond_max", *cond_max, cond_max, NULL));
   PetscOptionsEnd();
   PetscCheck(*cond_max >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_held_cond_max is a condition number, 1 or more; got %g", (double)*cond_max);
   PetscFunctionReturn(0);

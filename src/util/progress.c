@@ -42,7 +42,7 @@ PetscErrorCode KFInitialize(void)
   PetscCall(PetscLogEventRegister("KFMoments", classid, &KF_EVENT_MOMENTS));
   PetscCall(PetscLogEventRegister("KFVerify", classid, &KF_EVENT_VERIFY));
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "kryflex progress lines", "KFProgress");
-  PetscCall(PetscOptionsBool("-kf_quiet", "Silence the progress lines with elapsed time on rank 0 (default false)", "KFProgress", quiet, &quiet, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_quiet", quiet, &quiet, NULL));
   PetscOptionsEnd();
   PetscFunctionReturn(0);
 }

@@ -282,10 +282,9 @@ PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm comm, PetscInt *dense_
   *dense_max = 600;
   *target    = 0;
   PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
-  PetscCall(PetscOptionsInt("-kf_verify_dense_max_dofs", "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", "KFSystemEigen", *dense_max, dense_max, NULL));
-  PetscCall(PetscOptionsReal("-kf_verify_target", "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", "KFSystemEigen", *target, target, has_target));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_dense_max_dofs", *dense_max, dense_max, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_target", *target, target, has_target));
   PetscOptionsEnd();
-  PetscCheck(*dense_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_dense_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, *dense_max);
   PetscFunctionReturn(0);
 }
 

@@ -301,23 +301,10 @@ def given_kf_options():
 
 
 def reducer_option_names():
-    """The reducer's option names, from its -help listing (KFReducerSetFromOptions prints them on a reducer of this
-    rank alone), captured from the C standard output. Before the first reducer reads its options: PETSc prints an
-    options block's help once per process."""
-    import tempfile
-    from petsc4py import PETSc
-    from ..reducer import print_options_help
-    sys.stdout.flush()
-    with tempfile.TemporaryFile() as f:
-        saved = os.dup(1)
-        os.dup2(f.fileno(), 1)
-        try:
-            print_options_help(PETSc.COMM_SELF)
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-        f.seek(0)
-        return sorted(set(re.findall(r"-(kf_[a-z0-9_]+)", f.read().decode(errors="replace"))))
+    """The -kf_ option names (without the dash) of the settings table (src/util/settings_table.c): every option the
+    library and this command read."""
+    from .. import settings
+    return sorted(r["name"][1:] for r in settings.table())
 
 
 def check_kf_options(known):
@@ -337,7 +324,7 @@ def checked_reducer(scene, quiet=None, known=None):
     """The Reducer of a loaded scene with the scene's settings and every -kf_ option read and checked before any work,
     as each command that reduces needs it: a value the C library refuses raises its Error (option_error() words it),
     an option nothing read a Failure naming the closest real one. known: the reducer's option names when this process
-    has read them already (reducer_option_names() lists them once per process). Collective."""
+    has read them already (reducer_option_names()). Collective."""
     from ..reducer import Reducer
     if known is None:
         known = reducer_option_names() if given_kf_options() else ()
@@ -374,6 +361,10 @@ def option_error(exc, scene_path):
         close = difflib.get_close_matches(value, choices, n=1, cutoff=0.3)
         return "-%s %s: not one of %s: use one of them%s" % (name, value, ", ".join(choices),
                                                              " (did you mean %s?)" % close[0] if close else "")
+    outside = re.match(r"-(kf_\w+) (\S+) is outside (.*)", msg)
+    if outside and outside.group(1) in given:   # the C readers' range check (src/util/settings_read.c)
+        return "-%s %s: %s is outside %s (%s)" % (outside.group(1), given[outside.group(1)], outside.group(2),
+                                                 outside.group(3), listing)
     names = [k for k in sorted(given) if re.search(r"-%s\b" % re.escape(k), msg)]
     if names:
         return "-%s %s: %s; give -%s a valid value (%s)" % (names[0], given[names[0]], msg, names[0], listing)

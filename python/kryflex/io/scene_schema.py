@@ -6,16 +6,21 @@ again. node_table, check_node_references and check_vector are the rules on node 
 scene.py applies once it has read those (small) files, still before any matrix is loaded. Nothing here reads
 files or loads matrices, so a bad value anywhere is reported in milliseconds.
 
-Every message reads "<scene file>: <key path>: <what is wrong, with the value>; <the fix>". The ranges refuse at
-least everything the C setters (src/reducer/interface.c, src/scene/scene.c) refuse, so that no scene value first
-fails inside the reducer.
+Every message reads "<scene file>: <key path>: <what is wrong, with the value>; <the fix>". The keys that are
+settings (reduction.*, verify.*, band, damping, accuracy, accuracy_measure) take their defaults, choices and ranges
+from the settings table (src/util/settings_table.c, through kryflex.settings), and their type and range checks are
+the JSON Schema made from it (setting()); the ranges refuse at least everything the C setters
+(src/reducer/interface.c, src/scene/scene.c) refuse, so that no scene value first fails inside the reducer.
 """
 import difflib
+import functools
 import math
 import re
 
 import numpy as np
+import jsonschema
 
+from .. import settings
 from .yaml_load import short_repr
 
 DOF_NAMES = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5, "s": 6}   # s: a scalar point's one dof
@@ -24,15 +29,7 @@ NODE_DOFS = (3, 6)                    # src/scene/scene.c KFSceneAddBody: ux uy 
 MAX_NODE_ID = 2 ** 31 - 1             # PetscInt is 32-bit in this build
 MAX_NAME = 63                         # KF_MAX_NAME (64) holds the terminating NUL
 MAX_SCENE_NAME = 255
-MAX_ANGLE = 360.0                     # degrees
-MAX_MOMENTS = 200
-MAX_FREQUENCY_POINTS = 100000
 ORIENTATION_TOL = 1e-6                # orthonormality of a joint orientation as written (7 digits are enough)
-IMPORTANCES = ("band", "h2", "hinf", "static")
-ACCURACY_MEASURES = ("elastic", "total")   # -kf_accuracy_measure: the response the accuracy is stated on
-BASES = ("krylov", "eigen")
-METHODS = ("auto", "single-angle", "multi-angle")
-FLEX_SOLVERS = ("auto", "monolithic", "bodywise")   # -kf_flex_solver, src/solve/bodywise.c
 # the label of the one configuration of a scene without revolute joints: the structure itself, which has no angle
 NO_JOINT_LABEL = "structure"
 JOINT_TYPES = ("revolute", "fixed")
@@ -49,41 +46,36 @@ JOINT_KEYS = {"type", "parent", "parent_interface", "child", "child_interface", 
 TERM_KEYS = {"body", "node", "dof", "weight", "vector", "quantity"}
 QUANTITIES = ("displacement", "velocity", "acceleration")
 DAMPING_KEYS = {"modal", "rayleigh", "structural"}
-MAX_DAMPING_BANDS = 16
-REDUCTION_DEFAULTS = {
-    "basis": "krylov",           # krylov (kryflex) | eigen (the eigenvector baseline it replaces: EP&A / COMPARE style)
-    "eigen_cover": 1.0,          # eigen basis: full-order modes up to eigen_cover x the band's top frequency
-    "moments": "auto",           # low-frequency moments matched exactly (c in the paper): auto (the search) or a number
-    "moments_max": 24,           # the most moments the accuracy search tries
-    "search": True,              # accuracy search (false: the paper's fixed recipe: moments, keep_threshold, its alpha_G rule)
-    "cluster_rtol": 1e-3,        # Krylov modes this close in frequency (relative) are kept or dropped together
-    "output_blocks": 1,          # Krylov blocks started from K+ H^T (eq. 8's last vector)
-    "importance": "band",        # band (band-aware, cluster-invariant) | h2 | hinf | static
-    "keep_threshold": 0.05,      # keep Krylov modes whose normalized importance reaches this
-    "reduction_angle": "auto",   # alpha_G: auto, or an angle (list for several joints)
-    "method": "auto",            # auto (the smaller that meets the accuracy) | single-angle (the paper) | multi-angle
-    "reduction_angles": None,    # multi-angle: configurations to build Krylov vectors at (default: all angles)
-    "deflation_tol": 1e-10,      # Krylov block deflation (relative)
-    "body_tol": 1e-10,           # per-body rank deflation of the projected modes
-    "reassembly_rtol": 1e-9,     # SVD rank tolerance of the reduced interface constraints
-    "static_correction": True,   # eq. 15-17
-    "damped_moments": False,     # input blocks from the damped system's moments (-kf_krylov_damped; README "Damping")
-    "shift": 0.0,                # K + shift M instead of held dofs (moments then expand about -shift)
-    "save_maps": "auto",         # store each reduced body's map back to its full dofs
-    "flex_solver": "auto",       # the flexible solve: auto (body-wise for large multi-configuration solves) | monolithic | bodywise
-    "bodywise_spread": True,     # body-wise on 2+ ranks: each body factored on one rank (-kf_bodywise_spread)
-    "max_frequency": None,       # trimming: modes above it out of the dynamics, static share kept (3: 3x the band's top; "40 Hz")
-}
-VERIFY_DEFAULTS = {
-    "modes": "auto",             # full-order modes for verification (auto: cover 3 x the band's top)
-    "frequency_points": 400,     # log-spaced frequency-response points over the band (+ points at resonances)
-    "full_order": True,          # run the full-order verification at all
-    "frf_floor_db": -60.0,       # FRF error: notches deeper than this below the band's peak count against this level
-}
-DEFAULTS = {"band": [0.01, 10.0], "damping": 0.0025, "accuracy": 0.05, "accuracy_measure": "elastic"}
-# the keys under each section, for -scene.<path> options and did-you-mean hints
-SECTION_KEYS = {"reduction": set(REDUCTION_DEFAULTS), "verify": set(VERIFY_DEFAULTS), "bodies": BODY_KEYS,
-                "joints": JOINT_KEYS}
+MAX_DAMPING_BANDS = 16                # KF_MAX_DAMPING_BANDS
+# The defaults, choices and ranges of the keys that are settings (reduction.*, verify.*, band, damping, accuracy,
+# accuracy_measure) are the settings table's (src/util/settings_table.c, kryflex.settings): REDUCTION_DEFAULTS,
+# VERIFY_DEFAULTS, DEFAULTS, SECTION_KEYS, IMPORTANCES, BASES, METHODS, FLEX_SOLVERS and ACCURACY_MEASURES are made
+# from it on first use (module __getattr__ below), when the binding is loaded.
+_CHOICES_OF = {"IMPORTANCES": "-kf_importance", "BASES": "-kf_reducer_type", "METHODS": "-kf_method",
+               "FLEX_SOLVERS": "-kf_flex_solver", "ACCURACY_MEASURES": "-kf_accuracy_measure"}
+
+
+@functools.lru_cache(maxsize=None)
+def _from_table(name):
+    if name in _CHOICES_OF:
+        return tuple(settings.row(_CHOICES_OF[name])["choices"])
+    if name == "REDUCTION_DEFAULTS":
+        return settings.scene_defaults("reduction")
+    if name == "VERIFY_DEFAULTS":
+        return settings.scene_defaults("verify")
+    if name == "DEFAULTS":      # the top level's keys that have a default (angles has none)
+        return {k: v for k, v in settings.scene_defaults("").items() if v is not None}
+    if name == "SECTION_KEYS":  # the keys under each section, for -scene.<path> options and did-you-mean hints
+        return {"reduction": set(_from_table("REDUCTION_DEFAULTS")), "verify": set(_from_table("VERIFY_DEFAULTS")),
+                "bodies": BODY_KEYS, "joints": JOINT_KEYS}
+    raise AttributeError("module %r has no attribute %r" % (__name__, name))
+
+
+def __getattr__(name):
+    """The table's constants (see _from_table); the mutable ones copied."""
+    v = _from_table(name)
+    return {k: (set(x) if isinstance(x, set) else x) for k, x in v.items()} if isinstance(v, dict) else v
+
 
 NAME_RULE = ("use 1 to %d ASCII letters, digits, '_', '-', '.' or '+', not starting with '.' (names become file "
              "and HDF5 group names)" % MAX_NAME)
@@ -168,16 +160,46 @@ def integer(where, path, value, interval, fix=None):
     return x
 
 
-def boolean(where, path, value):
-    if not isinstance(value, (bool, np.bool_)):
-        fail(where, path, "%s is not a boolean; give true or false" % short_repr(value))
-    return bool(value)
-
-
 def choice(where, path, value, choices):
     if not isinstance(value, str) or value not in choices:
         fail(where, path, "%s is not one of %s; use one of them" % (short_repr(value), ", ".join(choices)))
     return value
+
+
+@functools.lru_cache(maxsize=None)
+def _validator(key, range_text, types_only):
+    r = settings.scene_row(key)
+    return jsonschema.Draft7Validator(settings.json_schema(r, range_text, types_only))
+
+
+def setting(where, path, value, fix=None, range_text=None):
+    """A scene key that is a setting (its row's scene key is path), checked on the JSON Schema made from the settings
+    table: the type, the range (range_text: a narrower one than the option's) and the choices; a value that is not
+    a finite number is refused too (JSON has none). Returns the value as its type; the message names the value,
+    what is wrong and the fix (fix, or the range)."""
+    r = settings.scene_row(path)
+    kind, rng = r["type"], range_text or r["range"]
+    value = value.item() if isinstance(value, np.generic) else value
+    if _validator(path, rng, False).is_valid(value) and not (isinstance(value, float) and not math.isfinite(value)):
+        if isinstance(value, str) or kind == "enum":
+            return value
+        return {"bool": bool, "int": int, "real": float}[kind](value)
+    if kind == "bool":
+        fail(where, path, "%s is not a boolean; give true or false" % short_repr(value))
+    if kind == "enum":
+        names = [c for c in r["choices"] if c not in ("true", "false")]
+        listed = ", ".join(names) + (", true or false" if len(names) < len(r["choices"]) else "")
+        fail(where, path, "%s is not one of %s; use one of them" % (short_repr(value), listed)
+             if len(names) == len(r["choices"]) else "%s is not %s; use one of them" % (short_repr(value), listed))
+    what = "an integer" if kind == "int" else "a number"
+    if not _validator(path, rng, True).is_valid(value):
+        fail(where, path, "%s is not %s; %s" % (short_repr(value), what,
+                                                fix or "give %s in %s" % (what if kind == "int" else "a number", rng)))
+    if isinstance(value, float) and not math.isfinite(value):
+        fail(where, path, "%s is not a finite number; %s" % (short_repr(value), fix or "give a value in %s" % rng))
+    fail(where, path, "%s is outside %s; %s" % (short_repr(value), rng,
+                                                 fix or "give %s in %s" % ("an integer" if kind == "int" else "a value",
+                                                                            rng)))
 
 
 def text(where, path, value, fix="give it as text"):
@@ -258,7 +280,8 @@ def rotation(where, path, value):
 # ------------------------------------------------------------------ angles
 
 def _angle(where, path, value):
-    return real(where, path, value, "[-%g, %g]" % (MAX_ANGLE, MAX_ANGLE), "give angles in degrees in [-360, 360]")
+    rng = settings.row("-kf_angles")["range"]
+    return real(where, path, value, rng, "give angles in degrees in %s" % rng)
 
 
 def configuration(where, path, c, revolute):
@@ -707,8 +730,8 @@ def damping_spec(where, value):
     [[f_max_hz, zeta], ...], rayleigh: {alpha, beta}, structural: g}. Returns (the uniform ratio for a number, None
     for a mapping; the mapping normalized: absent parts zero)."""
     if not isinstance(value, dict):
-        z = real(where, "damping", value, "[0, 1)", "give the modal damping ratio in [0, 1), e.g. 0.0025, or a mapping "
-                 "{modal, rayleigh, structural}")
+        z = real(where, "damping", value, settings.row("-kf_damping")["range"],
+                 "give the modal damping ratio in [0, 1), e.g. 0.0025, or a mapping {modal, rayleigh, structural}")
         if z == 0.0:   # no modal damping: the same as {modal: 0} (the damping matrices, if any, alone)
             return damping_spec(where, {"modal": 0.0})
         return z, {"modal": z, "rayleigh": {"alpha": 0.0, "beta": 0.0}, "structural": 0.0}
@@ -737,47 +760,53 @@ def damping_spec(where, value):
     if "rayleigh" in value:
         ray = mapping(where, "damping.rayleigh", value["rayleigh"], {"alpha", "beta"})
         for k in ("alpha", "beta"):
-            out["rayleigh"][k] = real(where, "damping.rayleigh." + k, ray.get(k, 0.0), "[0, inf)",
+            out["rayleigh"][k] = real(where, "damping.rayleigh." + k, ray.get(k, 0.0),
+                                      settings.row("-kf_damping_rayleigh")["range"],
                                       "give a non-negative coefficient (C = alpha M + beta K)")
     if "structural" in value:
-        out["structural"] = real(where, "damping.structural", value["structural"], "[0, 1)",
+        out["structural"] = real(where, "damping.structural", value["structural"],
+                                 settings.row("-kf_damping_structural")["range"],
                                  "give the structural damping factor g in [0, 1) (stiffness K (1 + i g))")
     return None, out   # a mapping goes to the reducer whole (a zero modal ratio is allowed there)
 
 
+# the fixes the scene's messages give, by key (the range is the settings table's unless narrower here)
+_FIXES = {
+    "reduction.cluster_rtol": "give a relative frequency gap in [0, 1)",
+    "reduction.output_blocks": "give an integer >= 0 and below moments",
+    "reduction.keep_threshold": "importances are normalized to 1: give a value in (0, 1]",
+    "reduction.deflation_tol": "tolerances are relative: give a value in (0, 1)",
+    "reduction.body_tol": "tolerances are relative: give a value in (0, 1)",
+    "reduction.reassembly_rtol": "tolerances are relative: give a value in (0, 1)",
+    "reduction.shift": "give a shift >= 0 (0: hold dofs instead)",
+    "reduction.eigen_cover": "give a multiple >= 1 of the band's top frequency",
+    "verify.modes": "give auto or a positive integer",
+    "verify.frf_floor_db": "give a level below the peak in dB (negative), e.g. -60",
+    "accuracy": "give the target relative error in (0, 1), e.g. 0.05",
+}
+# a scene keeps at least one mode: keep_threshold 0 (keep them all) is an option's value only (kryflex study)
+SCENE_RANGES = {"reduction.keep_threshold": "(0, 1]"}
+
+
+def _setting(where, path, value):
+    return setting(where, path, value, _FIXES.get(path), SCENE_RANGES.get(path))
+
+
 def _reduction(where, given, revolute):
-    red = dict(REDUCTION_DEFAULTS)
-    red.update(mapping(where, "reduction", given if given is not None else {}, set(REDUCTION_DEFAULTS)))
+    defaults = __getattr__("REDUCTION_DEFAULTS")
+    red = dict(defaults)
+    red.update(mapping(where, "reduction", given if given is not None else {}, set(defaults)))
     p = "reduction."
-    red["basis"] = choice(where, p + "basis", red["basis"], BASES)
-    red["method"] = choice(where, p + "method", red["method"], METHODS)
-    red["flex_solver"] = choice(where, p + "flex_solver", red["flex_solver"], FLEX_SOLVERS)
-    red["bodywise_spread"] = boolean(where, p + "bodywise_spread", red["bodywise_spread"])
-    red["importance"] = choice(where, p + "importance", red["importance"], IMPORTANCES)
-    if red["moments"] != "auto":
-        red["moments"] = integer(where, p + "moments", red["moments"], "[1, %d]" % MAX_MOMENTS)
-    red["moments_max"] = integer(where, p + "moments_max", red["moments_max"], "[1, %d]" % MAX_MOMENTS)
-    red["search"] = boolean(where, p + "search", red["search"])
-    red["cluster_rtol"] = real(where, p + "cluster_rtol", red["cluster_rtol"], "[0, 1)",
-                               "give a relative frequency gap in [0, 1)")
-    red["output_blocks"] = integer(where, p + "output_blocks", red["output_blocks"], "[0, inf)",
-                                   "give an integer >= 0 and below moments")
+    for key in ("basis", "method", "flex_solver", "bodywise_spread", "importance", "moments", "moments_max", "search",
+                "cluster_rtol", "output_blocks"):
+        red[key] = _setting(where, p + key, red[key])
     if red["moments"] != "auto" and red["output_blocks"] >= red["moments"]:
         fail(where, p + "output_blocks", "%d is not below moments (%d); give fewer output blocks than moments"
              % (red["output_blocks"], red["moments"]))
-    red["keep_threshold"] = real(where, p + "keep_threshold", red["keep_threshold"], "(0, 1]",
-                                 "importances are normalized to 1: give a value in (0, 1]")
-    for key in ("deflation_tol", "body_tol", "reassembly_rtol"):
-        red[key] = real(where, p + key, red[key], "(0, 1)", "tolerances are relative: give a value in (0, 1)")
-    red["shift"] = real(where, p + "shift", red["shift"], "[0, inf)", "give a shift >= 0 (0: hold dofs instead)")
-    red["eigen_cover"] = real(where, p + "eigen_cover", red["eigen_cover"], "[1, inf)",
-                              "give a multiple >= 1 of the band's top frequency")
-    red["static_correction"] = boolean(where, p + "static_correction", red["static_correction"])
+    for key in ("keep_threshold", "deflation_tol", "body_tol", "reassembly_rtol", "shift", "eigen_cover",
+                "static_correction", "damped_moments", "save_maps"):
+        red[key] = _setting(where, p + key, red[key])
     red["max_frequency"] = _max_frequency(where, p + "max_frequency", red["max_frequency"])
-    red["damped_moments"] = boolean(where, p + "damped_moments", red["damped_moments"])
-    if not (isinstance(red["save_maps"], (bool, np.bool_)) or red["save_maps"] == "auto"):
-        fail(where, p + "save_maps", "%s is not auto, true or false; use one of them" % short_repr(red["save_maps"]))
-    red["save_maps"] = red["save_maps"] if red["save_maps"] == "auto" else bool(red["save_maps"])
     red["reduction_angle"] = _reduction_angle(where, red["reduction_angle"], revolute)
     if red["reduction_angles"] is not None:
         if not revolute:
@@ -788,16 +817,11 @@ def _reduction(where, given, revolute):
 
 
 def _verify(where, given):
-    ver = dict(VERIFY_DEFAULTS)
-    ver.update(mapping(where, "verify", given if given is not None else {}, set(VERIFY_DEFAULTS)))
-    p = "verify."
-    if ver["modes"] != "auto":
-        ver["modes"] = integer(where, p + "modes", ver["modes"], "[1, inf)", "give auto or a positive integer")
-    ver["frequency_points"] = integer(where, p + "frequency_points", ver["frequency_points"],
-                                      "[2, %d]" % MAX_FREQUENCY_POINTS)
-    ver["full_order"] = boolean(where, p + "full_order", ver["full_order"])
-    ver["frf_floor_db"] = real(where, p + "frf_floor_db", ver["frf_floor_db"], "(-inf, 0)",
-                               "give a level below the peak in dB (negative), e.g. -60")
+    defaults = __getattr__("VERIFY_DEFAULTS")
+    ver = dict(defaults)
+    ver.update(mapping(where, "verify", given if given is not None else {}, set(defaults)))
+    for key in ("modes", "frequency_points", "full_order", "frf_floor_db"):
+        ver[key] = _setting(where, "verify." + key, ver[key])
     return ver
 
 
@@ -830,13 +854,15 @@ def validate(spec, where, default_name="scene"):
     bodies = _bodies(where, spec)
     joints = _joints(where, spec, bodies)
     revolute = [j["name"] for j in joints if j["type"] == "revolute" and not j.get("ground")]
-    band = spec.get("band", DEFAULTS["band"])
+    defaults = __getattr__("DEFAULTS")
+    band = spec.get("band", defaults["band"])
     if isinstance(band, (tuple, np.ndarray)):
         band = list(band)
     if not isinstance(band, list) or len(band) != 2:
         fail(where, "band", "%s is not [f_low, f_high]; give [f_low, f_high] in Hz with 0 < f_low < f_high"
              % short_repr(band))
-    band = [real(where, "band", x, "(0, inf)", "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
+    band = [real(where, "band", x, settings.row("-kf_band")["range"],
+                 "give [f_low, f_high] in Hz with 0 < f_low < f_high") for x in band]
     if not band[0] < band[1]:
         fail(where, "band", "%s: f_low is not below f_high; give [f_low, f_high] in Hz with 0 < f_low < f_high" % band)
     return {
@@ -851,11 +877,10 @@ def validate(spec, where, default_name="scene"):
         # bodies with their own damping matrices and no `damping:` key: those matrices are the whole damping (no
         # default modal ratio is added on top of them)
         "damping": damping_spec(where, spec["damping"] if "damping" in spec else
-                                {"modal": 0.0} if any("damping" in b for b in bodies) else DEFAULTS["damping"]),
-        "accuracy": real(where, "accuracy", spec.get("accuracy", DEFAULTS["accuracy"]), "(0, 1)",
-                         "give the target relative error in (0, 1), e.g. 0.05"),
-        "accuracy_measure": choice(where, "accuracy_measure", spec.get("accuracy_measure", DEFAULTS["accuracy_measure"]),
-                                   ACCURACY_MEASURES),
+                                {"modal": 0.0} if any("damping" in b for b in bodies) else defaults["damping"]),
+        "accuracy": _setting(where, "accuracy", spec.get("accuracy", defaults["accuracy"])),
+        "accuracy_measure": _setting(where, "accuracy_measure", spec.get("accuracy_measure",
+                                                                          defaults["accuracy_measure"])),
         "reduction": _reduction(where, spec.get("reduction"), revolute),
         "verify": _verify(where, spec.get("verify")),
         "paper": paper,

@@ -49,9 +49,8 @@ LOST_MOMENT = 1e-6
 
 def features():
     """What this C library offers (a library built without some of them still sweeps the rest): the -kf_search and
-    -kf_krylov_raw options, the binding's frf_errors (KFFRFErrors) and modal_hankel_singular_values. Reads the
-    reducer's option names from its -help listing: call it before the first reducer of the process reads its
-    options (cli/common.reducer_option_names)."""
+    -kf_krylov_raw options, the binding's frf_errors (KFFRFErrors) and modal_hankel_singular_values. The option
+    names are the settings table's (cli/common.reducer_option_names)."""
     from ..cli.common import reducer_option_names
     names = set(reducer_option_names())
     return {"search": "kf_search" in names, "krylov_raw": "kf_krylov_raw" in names,

@@ -98,7 +98,7 @@ static PetscErrorCode KFReducerSetFromOptions_Eigen(KFReducer r, PetscOptionItem
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "Eigenvector baseline (-kf_reducer_type eigen)");
-  PetscCall(PetscOptionsReal("-kf_eigen_cover", "Full-order modes up to this multiple of the band's top frequency", "KFReducerEigenSetCover", cover, &cover, &flg));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_eigen_cover", cover, &cover, &flg));
   PetscOptionsHeadEnd();
   if (flg) PetscCall(KFReducerEigenSetCover(r, cover));
   PetscFunctionReturn(0);

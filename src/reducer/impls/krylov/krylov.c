@@ -71,8 +71,8 @@ static PetscErrorCode KFReducerSetFromOptions_Krylov(KFReducer r, PetscOptionIte
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "Krylov basis (-kf_reducer_type krylov)");
-  PetscCall(PetscOptionsBool("-kf_krylov_damped", "Input blocks from the moments of the damped system (second-order Krylov: x_k = -K+ (C x_{k-1} + M x_{k-2})), with the bodies' damping matrices and Rayleigh damping", "KFReducerSolve", kr->damped, &kr->damped, NULL));
-  PetscCall(PetscOptionsBool("-kf_krylov_raw", "Project on the paper's raw recurrence (eq. 9), not orthogonalized: to show its failure (needs -kf_search 0)", "KFReducerSolve", kr->raw, &kr->raw, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_krylov_damped", kr->damped, &kr->damped, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_krylov_raw", kr->raw, &kr->raw, NULL));
   PetscOptionsHeadEnd();
   PetscFunctionReturn(0);
 }

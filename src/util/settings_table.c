@@ -1,0 +1,123 @@
+/* The one table of kryflex's settings: every -kf_ option with its type, default, range or choices, help text, scene
+   file key and reader. The readers take their help text and range from here (KFOptionsSetting*), the binding hands
+   the table to Python (the scene schema's defaults, choices and JSON Schema, the command's list of known options, the
+   manual's reference pages), so a setting is added by one row here and the line of its reader that stores it. */
+#include <kryflex_impl.h>
+
+const char *const KFSettingTypes[] = {"bool", "int", "real", "enum", "string", "list", "KFSettingType", "KF_SETTING_", NULL};
+
+#define TB KF_SETTING_BOOL
+#define TI KF_SETTING_INT
+#define TR KF_SETTING_REAL
+#define TE KF_SETTING_ENUM
+#define TS KF_SETTING_STRING
+#define TL KF_SETTING_LIST
+
+/* name, type, default (auto, none: decided at run time), range, choices (an enum's values; the words a number or a
+   list also takes), help, scene key, reader, setter */
+static const KFSettingInfo KFSettings[] = {
+  /* the reducer (KFReducerSetFromOptions, src/reducer/options.c) */
+  {"-kf_reducer_type", TE, "krylov", NULL, "krylov eigen", "Basis: krylov (Lee's Krylov methodology) or eigen (the eigenvector baseline)", "reduction.basis", "KFReducer", "KFReducerSetType"},
+  {"-kf_angles", TL, "", "[-360, 360]", NULL, "Angles of interest in degrees, one per revolute joint per configuration, comma-separated", "angles", "KFReducer", "KFReducerSetAngles"},
+  {"-kf_reduction_angle", TL, "auto", "[-360, 360]", "auto", "alpha_G of the single-angle model in degrees (one per revolute joint), or auto: the paper's rule", "reduction.reduction_angle", "KFReducer", "KFReducerSetReductionAngle"},
+  {"-kf_multi_angles", TL, "none", "[-360, 360]", NULL, "Configurations of the multi-angle basis in degrees (default: the angles of interest)", "reduction.reduction_angles", "KFReducer", "KFReducerSetMultiAngles"},
+  {"-kf_method", TE, "auto", NULL, "auto single-angle multi-angle", "auto (the smaller model that meets the accuracy), single-angle (the paper: one basis at alpha_G) or multi-angle (bases at several angles)", "reduction.method", "KFReducer", "KFReducerSetMethod"},
+  {"-kf_band", TL, "0.01,10", "(0, inf)", NULL, "Frequency band of interest in Hz: low,high (default 0.01,10)", "band", "KFReducer", "KFReducerSetBand"},
+  {"-kf_damping", TR, "0.0025", "[0, 1)", NULL, "Uniform modal damping ratio", "damping", "KFReducer", "KFReducerSetDamping"},
+  {"-kf_damping_bands", TL, "none", "[0, inf)", NULL, "Modal damping per band: f_max_hz,zeta,f_max_hz,zeta,... (ascending; modes above the last band take its ratio)", "damping.modal", "KFReducer", "KFReducerSetDampingModel"},
+  {"-kf_damping_rayleigh", TL, "0,0", "[0, inf)", NULL, "Rayleigh damping C = alpha M + beta K: alpha,beta", "damping.rayleigh", "KFReducer", "KFReducerSetDampingModel"},
+  {"-kf_damping_structural", TR, "0", "[0, 1)", NULL, "Structural (hysteretic) damping g: stiffness K (1 + i g)", "damping.structural", "KFReducer", "KFReducerSetDampingModel"},
+  {"-kf_accuracy", TR, "0.05", "(0, 1)", NULL, "Target relative H-infinity error of the frequency response over the band, per input/output pair, on the response -kf_accuracy_measure names (KFFRFElasticErrors)", "accuracy", "KFReducer", "KFReducerSetAccuracy"},
+  {"-kf_accuracy_measure", TE, "elastic", NULL, "elastic total", "What the accuracy is stated on: elastic (the response minus its rigid-body and mechanism part) or total", "accuracy_measure", "KFReducer", "KFReducerSetAccuracyMeasure"},
+  {"-kf_moments", TI, "auto", "[1, 200]", "auto", "Low-frequency moments matched exactly (c in the paper), or auto: the accuracy search chooses", "reduction.moments", "KFReducer", "KFReducerSetMoments"},
+  {"-kf_output_blocks", TI, "1", "[0, inf)", NULL, "Krylov blocks started from K+ H^T (of the moments)", "reduction.output_blocks", "KFReducer", "KFReducerSetMoments"},
+  {"-kf_search", TB, "true", NULL, NULL, "The accuracy search: the smallest model that meets -kf_accuracy (false: the paper's fixed recipe)", "reduction.search", "KFReducer", "KFReducerSetSearch"},
+  {"-kf_moments_max", TI, "24", "[1, 200]", NULL, "The most moments the accuracy search tries", "reduction.moments_max", "KFReducer", "KFReducerSetSearch"},
+  {"-kf_cluster_rtol", TR, "0.001", "[0, 1)", NULL, "Krylov modes this close in frequency (relative) are kept or dropped together", "reduction.cluster_rtol", "KFReducer", "KFReducerSetClusterTolerance"},
+  {"-kf_max_factorizations", TI, "0", "[0, inf)", NULL, "Expansion points inside the band: the most sparse factorizations of K - sigma M the accuracy search may spend on them, one per point and expansion angle (0: moments at zero only)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_shift_blocks", TI, "3", "[1, 100]", NULL, "Krylov blocks at each expansion point inside the band: 1 input block, 2 input and output blocks, more: further input blocks of (K - sigma M)^-1 M (default 3)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_shift_family_only", TB, "false", NULL, NULL, "With -kf_max_factorizations: the smallest model with expansion points inside the band is chosen even when a moment-only model is as small (to compare the families: kryflex study, benchmarks)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_importance", TE, "band", NULL, "band h2 hinf static", "Mode importance: band (band-aware, cluster-invariant), h2, hinf or static", "reduction.importance", "KFReducer", "KFReducerSetImportance"},
+  {"-kf_keep_threshold", TR, "0.05", "[0, 1]", NULL, "Keep modes whose importance (normalized to the largest) reaches this", "reduction.keep_threshold", "KFReducer", "KFReducerSetImportance"},
+  {"-kf_static_correction", TB, "true", NULL, NULL, "Add the static correction of the discarded modes (eq. 15-17)", "reduction.static_correction", "KFReducer", "KFReducerSetStaticCorrection"},
+  {"-kf_deflation_tol", TR, "1e-10", "(0, 1)", NULL, "Krylov block deflation tolerance (relative)", "reduction.deflation_tol", "KFReducer", "KFReducerSetTolerances"},
+  {"-kf_body_tol", TR, "1e-10", "(0, 1)", NULL, "Per-body rank deflation of the projected vectors (relative)", "reduction.body_tol", "KFReducer", "KFReducerSetTolerances"},
+  {"-kf_reassembly_rtol", TR, "1e-09", "(0, 1)", NULL, "SVD rank tolerance of the reduced interface constraints", "reduction.reassembly_rtol", "KFReducer", "KFReducerSetTolerances"},
+  {"-kf_max_frequency", TS, "none", NULL, NULL, "Reduced-system modes above this are taken out of the dynamics, their static share kept: a multiple of the band's top (3), a frequency (\"40 Hz\") or none", "reduction.max_frequency", "KFReducer", "KFReducerSetMaxFrequency"},
+  {"-kf_search_sub_bases", TB, "true", NULL, NULL, "Search candidates' body bases made in their visit's richest body basis (small dense work) rather than from their vectors", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_shift", TR, "0", "[0, inf)", NULL, "Factor K + shift M instead of holding dofs (moments then expand about -shift)", "reduction.shift", "KFReducer, KFFlexSolver", "KFReducerSetShift"},
+  {"-kf_save_maps", TE, "auto", NULL, "auto true false", "Store each reduced body's map back to its full dofs: true, false or auto", "reduction.save_maps", "KFReducer", "KFReducerSetSaveMaps"},
+  {"-kf_save_maps_max_dofs", TI, "200000", "[0, inf)", NULL, "With -kf_save_maps auto: store the maps while no body has more dofs", NULL, "KFReducer", "KFReducerSetSaveMaps"},
+  {"-kf_gram_condition_max_dofs", TI, "20000", "[0, inf)", NULL, "Report the raw recurrence's Gram condition (diagnostic) up to this many system dofs", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_negligible_moment", TR, "1e-08", "[0, 1)", NULL, "A moment below this fraction of its largest value over the angles counts as zero", NULL, "KFReducer", "KFMomentErrors"},
+  {"-kf_verify", TB, "true", NULL, NULL, "Verify the reduced model against the full order (SLEPc eigensolve) at every angle of interest", "verify.full_order", "KFReducer", "KFReducerSetVerification"},
+  {"-kf_verify_modes", TI, "auto", "[1, inf)", "auto", "Full-order modes for verification (-1: cover -kf_verify_cover x the band's top)", "verify.modes", "KFReducer", "KFReducerSetVerification"},
+  {"-kf_verify_cover", TR, "3", "(0, inf)", NULL, "Automatic verification modes cover this multiple of the band's top frequency", NULL, "KFReducer", "KFReducerSetVerification"},
+  {"-kf_verify_check_points", TI, "3", "[0, inf)", NULL, "Direct solves of the full-order system per angle checking the verification's reference, off resonance (0: no check)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_verify_check_rtol", TR, "1e-06", "(0, 1)", NULL, "Largest disagreement allowed between the reference and a direct solve, a fraction of the pair's peak (beyond it the run fails, exit 3)", NULL, "KFReducer", "KFReducerSolve"},
+  {"-kf_frequency_points", TI, "400", "[2, 100000]", NULL, "Log-spaced frequency-response points over the band (plus 7 around each resonance)", "verify.frequency_points", "KFReducer", "KFReducerSetVerification"},
+  {"-kf_frf_floor_db", TR, "-60", "(-inf, 0)", NULL, "FRF error: notches deeper than this below the band's peak count against this level", "verify.frf_floor_db", "KFReducer", "KFFRFError"},
+  {"-kf_full_moments", TB, "auto", NULL, NULL, "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", NULL, "KFReducer", "KFReducerSolve"},
+  /* the reducer's implementations */
+  {"-kf_eigen_cover", TR, "1", "[1, inf)", NULL, "Full-order modes up to this multiple of the band's top frequency", "reduction.eigen_cover", "KFReducer (eigen)", "KFReducerEigenSetCover"},
+  {"-kf_krylov_damped", TB, "false", NULL, NULL, "Input blocks from the moments of the damped system (second-order Krylov: x_k = -K+ (C x_{k-1} + M x_{k-2})), with the bodies' damping matrices and Rayleigh damping", "reduction.damped_moments", "KFReducer (krylov)", "KFReducerSolve"},
+  {"-kf_krylov_raw", TB, "false", NULL, NULL, "Project on the paper's raw recurrence (eq. 9), not orthogonalized: to show its failure (needs -kf_search 0)", NULL, "KFReducer (krylov)", "KFReducerSolve"},
+  /* the flexible solve K+ and its factorization */
+  {"-kf_flex_solver", TE, "auto", NULL, "auto monolithic bodywise", "The flexible solve: monolithic (one factorization of K_S per configuration), bodywise (one per body interior for all configurations and a dense interface problem per configuration), auto (body-wise for large articulated multi-body scenes; the default)", "reduction.flex_solver", "KFFlexSolver", "KFFlexSolverSetType"},
+  {"-kf_bodywise_min_dofs", TI, "20000", "[0, inf)", NULL, "auto takes the body-wise solve from this many system dofs on (default 20000)", NULL, "KFFlexSolver", "KFFlexSolverSetType"},
+  {"-kf_bodywise_spread", TB, "true", NULL, NULL, "Body-wise solve: factor each body on one rank, the bodies spread over the ranks (when there are at least as many bodies as ranks); false: every body on all ranks", "reduction.bodywise_spread", "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_refine", TI, "1", "[0, inf)", NULL, "At most this many steps of iterative refinement of a block solve (default 1; 5 with -kf_blr)", NULL, "KFFlexSolver", "KFFlexSolverApply"},
+  {"-kf_refine_rtol", TR, "1e-06", "[0, inf)", NULL, "Refine a block solve only while its relative residual ||P B - K_S X||_F / ||P B||_F exceeds this (default 1e-6; 0: always)", NULL, "KFFlexSolver", "KFFlexSolverApply"},
+  {"-kf_memory_check", TB, "true", NULL, NULL, "Stop before the factorization when MUMPS' memory estimate exceeds the available memory (default true)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_memory_limit_mb", TR, "auto", "(0, inf)", NULL, "Memory available to the factorization per node, MB (default: MemAvailable of /proc/meminfo)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_ordering", TE, "auto", NULL, "auto amd amf scotch pord metis qamd ptscotch", "Fill-reducing ordering of MUMPS (ICNTL(7); ptscotch: parallel analysis, ICNTL(28) and (29)): auto lets MUMPS choose among those it was built with (-mat_mumps_icntl_7 overrides it)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_scotch_seed", TI, "1", "[1, inf)", NULL, "Seed of SCOTCH's ordering (default 1)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_ordering_tries", TI, "1", "[1, inf)", NULL, "SCOTCH orderings to analyse (seeds s, s + 2, s + 4, ... from -kf_scotch_seed s), the factor with the fewest flops on the busiest rank kept (default 1)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_blr", TR, "0", "[0, 1)", NULL, "Block low-rank factorization with this dropping tolerance (MUMPS ICNTL(35), CNTL(7)); 0: full rank (default)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_ooc", TE, "auto", NULL, "auto true false", "Out-of-core factorization (MUMPS ICNTL(22)): the factors on disk, in MUMPS_OOC_TMPDIR: true, false, or auto (out of core only when the in-core factorization would not fit the node's memory)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_spd", TB, "false", NULL, NULL, "Tell MUMPS the held stiffness is positive definite (SYM=1, no pivoting)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_null_pivot_check_max_dofs", TI, "20000", "[0, inf)", NULL, "Cross-check the rigid count with MUMPS' null pivots of K_S by default up to this many system dofs (default 20000)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_check_null_pivots", TB, "auto", NULL, NULL, "Cross-check the rigid count with MUMPS' null pivots of K_S, one extra factorization (default: on up to -kf_null_pivot_check_max_dofs dofs without shift)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  {"-kf_held_cond_max", TR, "1e+08", "[1, inf)", NULL, "Largest condition number of the rigid modes on the clamp's held dofs before falling back to pivoted QR (default 1e8)", NULL, "KFFlexSolver", "KFFlexSolverSetUp"},
+  /* the other stages */
+  {"-kf_rigid_tol", TR, "1e-08", "(0, 1)", NULL, "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", NULL, "KFSystem (rigid modes)", "KFSystemComputeRigidModes"},
+  {"-kf_progress_min_dofs", TI, "50000", "[0, inf)", NULL, "Print a progress line per Krylov block from this many system dofs on (default 50000)", NULL, "KFKrylovBasis", "KFKrylovBasis"},
+  {"-kf_verify_dense_max_dofs", TI, "600", "[0, inf)", NULL, "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_target", TR, "auto", NULL, NULL, "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_quiet", TB, "false", NULL, NULL, "Silence the progress lines with elapsed time on rank 0 (default false)", NULL, "KFProgress", "KFProgress"},
+  /* viewers, and the command's own */
+  {"-kf_reducer_view_pre", TS, "none", NULL, NULL, "View the reducer (PetscViewer: ascii or ascii:file) before the solve", NULL, "KFReducer", "KFReducerViewFromOptions"},
+  {"-kf_reducer_view", TS, "none", NULL, NULL, "View the reducer (PetscViewer: ascii or ascii:file) after the solve: what it did", NULL, "KFReducer", "KFReducerViewFromOptions"},
+  {"-kf_model_view", TS, "none", NULL, NULL, "View the reduced model the solve chose (PetscViewer: ascii or ascii:file)", NULL, "KFReducedModel", "KFReducedModelViewFromOptions"},
+  {"-kf_error_agreement_timeout", TR, "20", "(0, inf)", NULL, "Seconds a failing rank of the kryflex command waits for the others to reach the error agreement before MPI_Abort", NULL, "kryflex command", ""},
+};
+
+#undef TB
+#undef TI
+#undef TR
+#undef TE
+#undef TS
+#undef TL
+
+PetscErrorCode KFSettingsTableGet(const KFSettingInfo **table, PetscInt *n)
+{
+  PetscFunctionBegin;
+  if (table) *table = KFSettings;
+  if (n) *n = (PetscInt)PETSC_STATIC_ARRAY_LENGTH(KFSettings);
+  PetscFunctionReturn(0);
+}
+
+/* the row of option name (with its dash: "-kf_accuracy"); NULL when the table has none */
+PetscErrorCode KFSettingFind(const char name[], const KFSettingInfo **info)
+{
+  PetscFunctionBegin;
+  PetscValidCharPointer(name, 1);
+  PetscValidPointer(info, 2);
+  *info = NULL;
+  for (size_t i = 0; i < PETSC_STATIC_ARRAY_LENGTH(KFSettings); i++)
+    if (!strcmp(KFSettings[i].name, name)) {
+      *info = &KFSettings[i];
+      break;
+    }
+  PetscFunctionReturn(0);
+}

@@ -59,7 +59,7 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_frf_floor_db", TR, "-60", "(-inf, 0)", NULL, "FRF error: notches deeper than this below the band's peak count against this level", "verify.frf_floor_db", "KFReducer", "KFFRFError"},
   {"-kf_full_moments", TB, "auto", NULL, NULL, "Full-order moments by block solves for the moment checks (default: with -kf_verify; without, the search's richest candidate gives them)", NULL, "KFReducer", "KFReducerSolve"},
   /* the reducer's implementations */
-  {"-kf_eigen_cover", TR, "1", "[1, inf)", NULL, "Full-order modes up to this multiple of the band's top frequency", "reduction.eigen_cover", "KFReducer (eigen)", "KFReducerEigenSetCover"},
+  {"-kf_eigen_cover", TR, "1", "(0, inf)", NULL, "Full-order modes up to this multiple of the band's top frequency", "reduction.eigen_cover", "KFReducer (eigen)", "KFReducerEigenSetCover"},
   {"-kf_krylov_damped", TB, "false", NULL, NULL, "Input blocks from the moments of the damped system (second-order Krylov: x_k = -K+ (C x_{k-1} + M x_{k-2})), with the bodies' damping matrices and Rayleigh damping", "reduction.damped_moments", "KFReducer (krylov)", "KFReducerSolve"},
   {"-kf_krylov_raw", TB, "false", NULL, NULL, "Project on the paper's raw recurrence (eq. 9), not orthogonalized: to show its failure (needs -kf_search 0)", NULL, "KFReducer (krylov)", "KFReducerSolve"},
   /* the flexible solve K+ and its factorization */

@@ -784,8 +784,9 @@ _FIXES = {
     "verify.frf_floor_db": "give a level below the peak in dB (negative), e.g. -60",
     "accuracy": "give the target relative error in (0, 1), e.g. 0.05",
 }
-# a scene keeps at least one mode: keep_threshold 0 (keep them all) is an option's value only (kryflex study)
-SCENE_RANGES = {"reduction.keep_threshold": "(0, 1]"}
+# narrower in a scene than as options, which kryflex study also sets: a scene keeps at least one mode
+# (keep_threshold 0 keeps them all) and covers at least its band (eigen_cover below 1 is a study's undercover run)
+SCENE_RANGES = {"reduction.keep_threshold": "(0, 1]", "reduction.eigen_cover": "[1, inf)"}
 
 
 def _setting(where, path, value):

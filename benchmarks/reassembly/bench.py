@@ -1,7 +1,8 @@
 """Reassembly per call, side by side in one run: the C paths (bench_reassembly: KFReducedModelReassemble against
-KFReassemblyApply, with and without KFReassemblyEig) and the Python ones (today's ReducedModel.at() on the fast path,
-with and without its lazy modes, against the previous at(): CReducedModel.reassemble plus a copy of every array and
-the settings parsed at each call, which is what at() did before the fast path).
+KFReassemblyApply on the SVD path and on the closed form, with and without the rank, rigid modes and
+KFReassemblyEig) and the Python ones (the binding's CReassembly.apply on either path, ReducedModel.at() on the closed
+form with and without its lazy modes, against the previous at(): CReducedModel.reassemble plus a copy of every array
+and the settings parsed at each call).
 
     .venv/bin/python benchmarks/reassembly/bench.py [--calls 2000] [--reps 5]
 
@@ -25,6 +26,7 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 import kryflex  # noqa: E402
+from kryflex import _core  # noqa: E402
 from kryflex.api import ReducedSystem  # noqa: E402
 
 BENCH = os.path.join(ROOT, "build", "benchmarks", "bench_reassembly")
@@ -42,8 +44,11 @@ def previous_at(model, angles_deg):
 
 def python_times(model, nrev, calls, reps):
     angles = [np.degrees(2 * np.pi * (i / calls + 0.37 * np.arange(nrev))) for i in range(calls)]
+    svd, closed = _core.CReassembly(model, svd=True), _core.CReassembly(model)
     paths = {"previous at() (C system, copies)": lambda a: previous_at(model, a),
-             "at() (fast path, matrices)": lambda a: model.at(a),
+             "CReassembly.apply, SVD (matrices)": lambda a: svd.apply(np.radians(a), False, False),
+             "CReassembly.apply, closed form (matrices)": lambda a: closed.apply(np.radians(a), False, False),
+             "at() (closed form, matrices)": lambda a: model.at(a),
              "at() + frequencies_hz (lazy eig)": lambda a: model.at(a).frequencies_hz}
     best = {k: np.inf for k in paths}
     for _ in range(reps):
@@ -85,7 +90,7 @@ def main():
             best = python_times(model, nrev, args.calls, args.reps)
             ref = best["previous at() (C system, copies)"]
             for k, v in best.items():
-                print("Py %-38s %9.2f us   ratio to the previous at() %.3f" % (k, v * 1e6, v / ref))
+                print("Py %-44s %9.2f us   ratio to the previous at() %.3f" % (k, v * 1e6, v / ref))
 
 
 if __name__ == "__main__":

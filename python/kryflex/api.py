@@ -199,7 +199,7 @@ class ReducedModel(_core.CReducedModel):
                              % (len(names), ", ".join(names), len(names), angles.size))
         if not np.isfinite(angles).all():
             raise ValueError("the angles must be finite numbers (degrees), got %s" % angles)
-        limit = self.setting_strings().get("max_frequency_hz")
+        limit = fast["max_frequency_hz"]
         if limit is not None and float(limit) > 0:
             if trimmed:
                 handle = self.reassemble(np.radians(angles))
@@ -225,7 +225,8 @@ class ReducedModel(_core.CReducedModel):
         if fast is None:
             fast = dict(reassembly=_core.CReassembly(self), nrevolute=self.info()["revolute"],
                         nrigid=self.info()["rigid"], damping=float(self.settings.get("damping", 0.0)),
-                        damping_model=self.damping(), quantities=self.output_quantities())
+                        damping_model=self.damping(), quantities=self.output_quantities(),
+                        max_frequency_hz=self.setting_strings().get("max_frequency_hz"))
             self.__dict__["_fast_cache"] = fast
         return fast
 

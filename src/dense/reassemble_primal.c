@@ -325,6 +325,120 @@ static PetscBool ParentJoints(KFReassembly r, PetscInt pj[])
   return PETSC_TRUE;
 }
 
+/* X (rows r0.. of an m x nc array, ld m) <- T^T X on r rows (rows) or X T on r columns (cols): one term's share */
+static void CongruenceRows(PetscInt m, PetscInt nc, PetscInt r0, PetscInt r, const PetscReal T[], PetscReal X[], PetscReal w[])
+{
+  for (PetscInt c = 0; c < nc; c++) {
+    for (PetscInt i = 0; i < r; i++) {
+      PetscReal sum = 0;
+      for (PetscInt k = 0; k < r; k++) sum += T[k + i * r] * X[r0 + k + c * m];
+      w[i] = sum;
+    }
+    for (PetscInt i = 0; i < r; i++) X[r0 + i + c * m] = w[i];
+  }
+}
+
+static void CongruenceCols(PetscInt m, PetscInt c0, PetscInt r, const PetscReal T[], PetscReal X[], PetscReal w[])
+{
+  for (PetscInt i = 0; i < m; i++) {
+    for (PetscInt j = 0; j < r; j++) {
+      PetscReal sum = 0;
+      for (PetscInt k = 0; k < r; k++) sum += X[i + (c0 + k) * m] * T[k + j * r];
+      w[j] = sum;
+    }
+    for (PetscInt j = 0; j < r; j++) X[i + (c0 + j) * m] = w[j];
+  }
+}
+
+static void CongruenceL2(PetscInt l, PetscInt s0, PetscInt r, const PetscReal T[], long double X[], long double w[])
+{
+  for (PetscInt c = 0; c < l; c++) {
+    for (PetscInt i = 0; i < r; i++) {
+      long double sum = 0;
+      for (PetscInt k = 0; k < r; k++) sum += (long double)T[k + i * r] * X[s0 + k + c * l];
+      w[i] = sum;
+    }
+    for (PetscInt i = 0; i < r; i++) X[s0 + i + c * l] = w[i];
+  }
+  for (PetscInt i = 0; i < l; i++) {
+    for (PetscInt j = 0; j < r; j++) {
+      long double sum = 0;
+      for (PetscInt k = 0; k < r; k++) sum += X[i + (s0 + k) * l] * (long double)T[k + j * r];
+      w[j] = sum;
+    }
+    for (PetscInt j = 0; j < r; j++) X[i + (s0 + j) * l] = w[j];
+  }
+}
+
+/* The body's terms on its local coordinates s0 .. s0 + r - 1 taken to new coordinates through T (r x r) */
+static void TransformBody(KFPrimalBody *pb, PetscInt a, PetscInt t, PetscInt s0, PetscInt r, const PetscReal T[], PetscBool damped, PetscReal w[], long double wl[])
+{
+  const PetscInt l = pb->l, ll = l * l, ng = pb->nt > 1 ? 3 : 1;
+  for (PetscInt k = 0; k < pb->nt; k++) {
+    CongruenceRows(l, l, s0, r, T, pb->Mt + k * ll, w);
+    CongruenceCols(l, s0, r, T, pb->Mt + k * ll, w);
+    if (damped) {
+      CongruenceRows(l, l, s0, r, T, pb->Ct + k * ll, w);
+      CongruenceCols(l, s0, r, T, pb->Ct + k * ll, w);
+    }
+    CongruenceL2(l, s0, r, T, pb->Kt + k * ll, wl);
+  }
+  for (PetscInt k = 0; k < ng; k++) {
+    CongruenceRows(l, a, s0, r, T, pb->Gt + k * l * a, w);
+    CongruenceCols(t, s0, r, T, pb->Ht + k * t * l, w);
+  }
+}
+
+/* The coordinates of the rows a body's children are tied to carry the children's mass (Galileo: the rotor's, 3e3 on
+   the diagonal): each body's u block is taken to M-orthonormal coordinates at zero angles, T = Phi Lambda^-1/2 from
+   that block of M, so that the closed form's M is as well conditioned as the SVD path's there. */
+static PetscErrorCode BalanceCoordinates(KFReassembly r, const PetscInt pj[])
+{
+  KFPrimal pr = r->primal;
+
+  PetscFunctionBegin;
+  for (PetscInt p = 0; p < r->nb; p++) {
+    KFPrimalBody  *pb = &pr->b[p];
+    const PetscInt ru = pb->ru, own0 = pb->l - (r->bodies[p].v - pb->cw); /* p's u coordinates in its local ones */
+    PetscReal     *B, *Id, *lam, *T, *Ti, *w;
+    long double   *wl;
+
+    if (!ru) continue;
+    PetscCall(PetscCalloc6(ru * ru, &B, ru * ru, &Id, ru, &lam, ru * ru, &T, ru * ru, &Ti, PetscMax(pr->b[p].l, PetscMax(r->a, ru)) + ru, &w));
+    PetscCall(PetscMalloc1(PetscMax(pr->b[p].l, ru) + 1, &wl));
+    for (PetscInt b = 0; b < r->nb; b++) { /* the u block of M at zero angles: weights 1, 1, 0, 0, 0 */
+      const KFPrimalBody *q  = &pr->b[b];
+      PetscInt            s0 = -1;
+      if (b == p) s0 = own0;
+      else if (pj[b] >= 0 && r->joints[pj[b]].parent == p) s0 = 0;
+      if (s0 < 0) continue;
+      for (PetscInt j = 0; j < ru; j++)
+        for (PetscInt i = 0; i < ru; i++) {
+          const PetscInt e = s0 + i + (s0 + j) * q->l;
+          B[i + j * ru] += q->Mt[e] + (q->nt > 1 ? q->Mt[e + q->l * q->l] : 0);
+        }
+    }
+    for (PetscInt i = 0; i < ru; i++) Id[i + i * ru] = 1;
+    PetscCall(KFDenseEig(ru, B, Id, lam, T)); /* B T = T diag(lam), T^T T = I */
+    if (lam[0] > 1e-12 * lam[ru - 1]) {      /* a massless interface leaves the coordinates as they are */
+      for (PetscInt j = 0; j < ru; j++)
+        for (PetscInt i = 0; i < ru; i++) {
+          Ti[i + j * ru] = T[i + j * ru] * PetscSqrtReal(lam[j]); /* (T^-1)^T = Phi Lambda^1/2, as CongruenceRows takes it */
+          T[i + j * ru] /= PetscSqrtReal(lam[j]);
+        }
+      for (PetscInt b = 0; b < r->nb; b++) {
+        if (b == p) TransformBody(&pr->b[b], r->a, r->t, own0, ru, T, r->bodies[b].C ? PETSC_TRUE : PETSC_FALSE, w, wl);
+        else if (pj[b] >= 0 && r->joints[pj[b]].parent == p) TransformBody(&pr->b[b], r->a, r->t, 0, ru, T, r->bodies[b].C ? PETSC_TRUE : PETSC_FALSE, w, wl);
+      }
+      /* the coordinates from phi: u~' = T^-1 u~ */
+      CongruenceRows(r->bodies[p].v - pb->cw, r->bodies[p].v, 0, ru, Ti, pb->Lq, w);
+    }
+    PetscCall(PetscFree6(B, Id, lam, T, Ti, w));
+    PetscCall(PetscFree(wl));
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFPrimalCreate_Private(KFReassembly r)
 {
   KFPrimal   pr;
@@ -368,6 +482,7 @@ PetscErrorCode KFPrimalCreate_Private(KFReassembly r)
       lmax = PetscMax(lmax, pr->b[b].l);
     }
     PetscCall(PetscMalloc2(lmax * PetscMax(lmax, PetscMax(r->a, r->t)) + 1, &pr->work, lmax * lmax + 1, &pr->workl));
+    PetscCall(BalanceCoordinates(r, pj));
   }
   for (PetscInt b = 0; b < r->nb; b++) {
     PetscCall(PetscFree(O[b]));

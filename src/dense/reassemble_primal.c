@@ -169,7 +169,8 @@ static PetscErrorCode SplitBody(KFReassembly r, PetscInt b, PetscInt pjoint, KFP
     PetscCall(PetscFPTrapPop());
     PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "KFReassemblyCreate: the SVD of body %" PetscInt_FMT "'s %" PetscInt_FMT " interface rows did not converge (LAPACK gesvd info %d)", b, q, (int)info);
     if (!(s[q - 1] > 1e3 * r->rtol * s[0])) goto done; /* dependent rows: the SVD path decides the rank */
-  }
+  } else
+    for (PetscInt i = 0; i < v; i++) VT[i + i * v] = 1; /* a body in no joint: its own coordinates as they are */
   /* P = V1 S^-1 U^T (v x q) */
   for (PetscInt c = 0; c < q; c++)
     for (PetscInt i = 0; i < v; i++) {

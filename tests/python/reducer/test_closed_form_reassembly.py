@@ -1,7 +1,8 @@
 """The closed-form reassembly (KFReassemblyApply on a tree of bodies, no SVD per angle) against the SVD path
 (KFReassemblySetUseSVD: the null space of the ties by SVD at every call), on Galileo (with body damping matrices and
 Rayleigh damping), a 3-body chain of two skew revolute joints, a scene with a fixed joint (random R0), a clamped arm
-(revolute joint to ground) and the solid bus/rotor pair, at the angles of interest and far from them.
+(revolute joint to ground), one free body with massless rotations and no joint, and the solid bus/rotor pair, at the
+angles of interest and far from them.
 
 The two paths use different bases of the same null space, so the comparison is on what does not depend on the basis:
 the generalized eigenvalues, each well-separated mode's residue H phi phi^T G, the rigid modes' residue, and the
@@ -73,6 +74,12 @@ def clamped(tmp):
     return model, FAR if len(model.revolute) == 1 else FAR2
 
 
+def lumped(tmp):
+    """One free body with massless rotations (no joint: its coordinates are kept as they are)."""
+    model = kryflex.reduce(kryflex.scene_from_dict(bc_models.lumped_frame()), quiet=True).model
+    return model, [[]]
+
+
 def solid(tmp):
     subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "0.25",
                     "-o", str(tmp)], check=True, capture_output=True, env=ENV)
@@ -80,7 +87,8 @@ def solid(tmp):
     return model, FAR
 
 
-SCENES = {"galileo_damped": galileo_damped, "chain": chain, "fixed": fixed, "clamped": clamped, "solid": solid}
+SCENES = {"galileo_damped": galileo_damped, "chain": chain, "fixed": fixed, "clamped": clamped, "lumped": lumped,
+          "solid": solid}
 
 
 @pytest.fixture(scope="module", params=list(SCENES))

@@ -64,10 +64,9 @@ def reduce(scene_path, moments, rtol):
     reducer = kryflex.Reducer(scene, quiet=True)
     model = reducer.reduce().model
     wall = time.perf_counter() - t0
-    extra = {k: float(np.ravel(reducer.result(-1, k))[0]) for k in ("time_whole", "time_factor_total", "time_solves", "time_ratio", "solve_blocks",
-                                                                "refinement_solves", "solve_residual_first_max",
-                                                                "solve_residual_final_max")
-             if _has(reducer, k)}
+    keys = ("time_whole", "time_factor_total", "time_solves", "time_ratio", "solve_blocks", "refinement_solves",
+            "solve_residual_first_max", "solve_residual_final_max")
+    extra = {k: float(np.ravel(reducer.result(-1, k))[0]) for k in keys if _has(reducer, k)}
     e1 = events()
     fact = e1["MatLUFactorNum"] - e0["MatLUFactorNum"] + e1["MatCholFctrNum"] - e0["MatCholFctrNum"]
     solves = e1["MatMatSolve"] - e0["MatMatSolve"]

@@ -10,6 +10,7 @@ Importing this module initializes PETSc and SLEPc (petsc4py's default, or kryfle
 import numpy as np
 cimport numpy as cnp
 from libc.string cimport memcpy, memset
+from libc.math cimport isfinite
 from cpython.mem cimport PyMem_Malloc, PyMem_Free
 from petsc4py.PETSc cimport Comm, Mat, Object, Vec, Viewer
 from slepc4py.SLEPc cimport BV

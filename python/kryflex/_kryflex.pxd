@@ -188,6 +188,8 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReassemblyApply(KFReassembly, const PetscReal*, PetscInt*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscReal*, PetscInt*, PetscReal*, PetscInt*, PetscReal*)
     PetscErrorCode KFReassemblyEig(KFReassembly, PetscInt, const PetscReal*, const PetscReal*, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFReassemblyDestroy(KFReassembly*)
+    PetscErrorCode KFReassemblySetUseSVD(KFReassembly, PetscBool)
+    PetscErrorCode KFReassemblyGetUseSVD(KFReassembly, PetscBool*)
     PetscErrorCode KFSceneGetFingerprint(KFScene, char*)
     PetscErrorCode KFSceneSetName(KFScene, const char*)
     PetscErrorCode KFSceneGetName(KFScene, const char**)

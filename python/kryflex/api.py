@@ -41,11 +41,12 @@ class ReducedSystem:
 
     def __init__(self, angles_deg, M, K, damping, B, C, rigid_modes, constraint_rank, sigma_ratio, damping_matrix=None,
                  damping_model=None, output_quantities=None, *, nrigid=None, reassembly=None, model=None,
-                 handle=None, eigen=None, feedthrough=None, trimmed=0, max_frequency_hz=0.0, untrimmed_top_hz=0.0):
+                 handle=None, eigen=None, feedthrough=None, trimmed=0, max_frequency_hz=0.0, untrimmed_top_hz=0.0,
+                 lazy_info=False):
         self.feedthrough, self.trimmed = feedthrough, trimmed
         self.max_frequency_hz, self._untrimmed_top_hz = max_frequency_hz, untrimmed_top_hz
         self.angles_deg, self.M, self.K, self.damping, self.B, self.C = tuple(angles_deg), M, K, damping, B, C
-        self.rigid_modes, self.constraint_rank, self.sigma_ratio = rigid_modes, constraint_rank, sigma_ratio
+        self._info = None if lazy_info else (rigid_modes, constraint_rank, sigma_ratio)
         self.damping_matrix, self.damping_model, self.output_quantities = damping_matrix, damping_model, \
             output_quantities
         self._nrigid, self._reassembly, self._model, self._handle, self._eigen = nrigid, reassembly, model, handle, \
@@ -66,6 +67,31 @@ class ReducedSystem:
         return cls(angles_deg, M, K, damping, G, H, Phir, int(rank), float(ratio), Cd, model, output_quantities,
                    nrigid=int(nrigid), handle=handle, eigen=(lam, Phi, handle.frequencies_hz()), feedthrough=D,
                    trimmed=ntrim, max_frequency_hz=fmax, untrimmed_top_hz=ftop)
+
+    def _reassembly_info(self):
+        """(rigid modes, constraint rank, sigma ratio): from the workspace's SVDs of the ties on first use when at()
+        left them out. Where the ties degenerate at these angles that call takes the SVD path, whose matrices then
+        replace the closed form's (the same system in another basis)."""
+        if self._info is None:
+            M, K, Cd, G, H, Phir, rank, ratio = self._reassembly.apply(np.radians(np.asarray(self.angles_deg, float)))
+            if M.shape != self.M.shape or not np.array_equal(M, self.M):
+                self.M, self.K, self.damping_matrix, self.B, self.C, self._eigen = M, K, Cd, G, H, None
+            self._info = (Phir, int(rank), float(ratio))
+            if Phir is not None:
+                self._nrigid = Phir.shape[1]
+        return self._info
+
+    @property
+    def rigid_modes(self):
+        return self._reassembly_info()[0]
+
+    @property
+    def constraint_rank(self):
+        return self._reassembly_info()[1]
+
+    @property
+    def sigma_ratio(self):
+        return self._reassembly_info()[2]
 
     @property
     def dofs(self):
@@ -92,8 +118,9 @@ class ReducedSystem:
         """(eigenvalues, modes, flexible frequencies): the rigid modes from the bodies' rigid motions when known and no
         more than the dofs, else the whole pencil with the model's rigid count (as KFReducedModelReassemble)."""
         if self._eigen is None:
-            known = self.rigid_modes is not None and self.rigid_modes.shape[1] <= self.dofs
-            lam, Phi = self._reassembly.eig(self.M, self.K, self.rigid_modes if known else None)
+            Phir = self.rigid_modes
+            known = Phir is not None and Phir.shape[1] <= self.dofs
+            lam, Phi = self._reassembly.eig(self.M, self.K, Phir if known else None)
             nrigid = self._nrigid
             freqs = np.sqrt(np.maximum(lam[nrigid:], 0.0)) / (2 * np.pi)
             self._eigen = (lam, Phi, freqs)
@@ -198,7 +225,7 @@ class ReducedModel(_core.CReducedModel):
                              % (len(names), ", ".join(names), len(names), angles.size))
         if not np.isfinite(angles).all():
             raise ValueError("the angles must be finite numbers (degrees), got %s" % angles)
-        limit = self.setting_strings().get("max_frequency_hz")
+        limit = fast["max_frequency_hz"]
         if limit is not None and float(limit) > 0:
             if trimmed:
                 handle = self.reassemble(np.radians(angles))
@@ -210,11 +237,11 @@ class ReducedModel(_core.CReducedModel):
                     self.set_setting("max_frequency_hz", limit)
             return ReducedSystem.from_handle(handle, angles.tolist(), float(self.settings.get("damping", 0.0)),
                                              self.output_quantities())
-        M, K, Cd, G, H, Phir, rank, ratio = fast["reassembly"].apply(angles * (np.pi / 180.0))
-        nrigid = Phir.shape[1] if Phir is not None else fast["nrigid"]
-        return ReducedSystem(angles.tolist(), M, K, fast["damping"], G, H, Phir, rank, ratio, Cd,
-                             fast["damping_model"], fast["quantities"], nrigid=nrigid, reassembly=fast["reassembly"],
-                             model=self)
+        # the matrices alone: the rigid modes and the ties' rank come from SVDs, made when they are read
+        M, K, Cd, G, H, _, _, _ = fast["reassembly"].apply(angles * (np.pi / 180.0), False, False)
+        return ReducedSystem(angles.tolist(), M, K, fast["damping"], G, H, None, None, None, Cd,
+                             fast["damping_model"], fast["quantities"], nrigid=fast["nrigid"],
+                             reassembly=fast["reassembly"], model=self, lazy_info=True)
 
     @property
     def _fast(self):
@@ -224,7 +251,8 @@ class ReducedModel(_core.CReducedModel):
         if fast is None:
             fast = dict(reassembly=_core.CReassembly(self), nrevolute=self.info()["revolute"],
                         nrigid=self.info()["rigid"], damping=float(self.settings.get("damping", 0.0)),
-                        damping_model=self.damping(), quantities=self.output_quantities())
+                        damping_model=self.damping(), quantities=self.output_quantities(),
+                        max_frequency_hz=self.setting_strings().get("max_frequency_hz"))
             self.__dict__["_fast_cache"] = fast
         return fast
 

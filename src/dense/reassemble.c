@@ -1,10 +1,10 @@
 /* Reassembly of reduced bodies at any joint angles (eq. 20-24): interface constraints D phi = 0 of the
    reduced coordinates, their null space N by SVD, and the reduced system projected on N. */
-#include "dense_impl.h"
+#include "reassemble_impl.h"
 
 /* Two unit vectors spanning the plane perpendicular to the (unit) axis k: the rotation rows of a revolute
    joint. Any orthonormal pair gives the same constraint space; this one is well conditioned. */
-static void PerpendicularPair(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3])
+void KFPerpendicularPair_Private(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3])
 {
   PetscReal c[3] = {0, 0, 0}, dot, len;
   int       imin = 0;
@@ -95,26 +95,6 @@ static void CongruenceExtended(PetscInt v, PetscInt hh, const PetscReal K[], con
     }
 }
 
-/* Everything a reassembly at one more angle needs, sized once: copies of the bodies and joints, the constraint matrix,
-   its SVD, the products, the system's rigid motions R (angle-independent) and the eigensolver's workspace. */
-struct _n_KFReassembly {
-  PetscInt       nb, nj, nrev, n, m, a, t, vmax;
-  PetscReal      rtol, alpha, beta; /* Rayleigh alpha M + beta K added to the damping */
-  PetscBool      viscous;           /* some body has a viscous damping matrix */
-  KFReducedBody *bodies;            /* pointers into data */
-  KFJointDef    *joints;
-  PetscInt      *off;
-  PetscReal     *data;
-  PetscReal     *D, *N, *A, *s, *VT, *svdwork, *W;
-  PetscBLASInt   lsvd, lsvd_D, lsvd_E; /* allocated; LAPACK's query at D's size and at D R's */
-  long double   *WL;
-  PetscInt       nr; /* -1: some body's rigid motions unknown */
-  PetscReal     *R, *E, *Z, *Y;
-  PetscReal     *eigwork;
-  PetscInt       leig;
-  PetscInt       eig_h, eig_r;             /* the sizes of the last KFReassemblyEig, and LAPACK's queries there */
-  PetscBLASInt   eig_lsvd, eig_leig;
-};
 
 /* The system's rigid motions R = blkdiag(R_b) (n x nr), without the columns a body does not have and with dependent
    motions combined: depends on the bodies only, not on the angles. */
@@ -266,6 +246,8 @@ static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReduc
     }
     PetscCall(PetscMalloc1(r->leig, &r->eigwork));
   }
+  /* the closed form costs a few one-shot reassemblies to make: for workspaces that serve many angles only */
+  if (witheig) PetscCall(KFPrimalCreate_Private(r));
   *reassembly = r;
   PetscFunctionReturn(0);
 }
@@ -292,6 +274,7 @@ PetscErrorCode KFReassemblyDestroy(KFReassembly *reassembly)
   PetscCall(PetscFree(r->WL));
   PetscCall(PetscFree3(r->E, r->Z, r->Y));
   PetscCall(PetscFree(r->eigwork));
+  PetscCall(KFPrimalDestroy_Private(&r->primal));
   PetscCall(PetscFree(r));
   *reassembly = NULL;
   PetscFunctionReturn(0);
@@ -312,26 +295,15 @@ PetscErrorCode KFReassemblyGetSizes(KFReassembly r, PetscInt *n, PetscInt *a, Pe
   PetscFunctionReturn(0);
 }
 
-/*
-  KFReassemblyApply - KFReassembleDamped of the workspace's bodies and joints at these angles (one per revolute joint,
-  radians) into the caller's arrays, with no allocation: h x h Mh, Kh (and Ch: the bodies' viscous damping plus
-  Rayleigh, if Ch is not NULL), h x a Gh, t x h Hh, the constraints' rank and sigma ratio (either may be NULL), the
-  rigid-body and mechanism modes Phir (h x nrigid; nrigid -1 when unknown; Phir may be NULL). Arrays sized for n
-  (KFReassemblyGetSizes): n n, n a, t n.
-*/
-PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+/* D (r->D, m x n): the interface ties (eq. 20) on the stacked reduced coordinates at these angles */
+PetscErrorCode KFReassemblyConstraints_Private(KFReassembly r, const PetscReal angles[])
 {
   const KFReducedBody *bodies = r->bodies;
-  const PetscInt       n = r->n, m = r->m, a = r->a, t = r->t, *off = r->off;
-  PetscInt             row = 0, irev = 0, hh, rk;
-  PetscReal           *D = r->D, *N = r->N, ratio;
+  const PetscInt       n = r->n, m = r->m, *off = r->off;
+  PetscInt             row = 0, irev = 0;
+  PetscReal           *D = r->D;
 
   PetscFunctionBegin;
-  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
-  PetscCheck(angles || !r->nrev, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemble: the scene has %" PetscInt_FMT " revolute joints but no angles were given: pass one angle (radians) per revolute joint, in joint order", r->nrev);
-  PetscCheck(h && Mh && Kh && (Gh || !a) && (Hh || !t), PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemblyApply: give the output arrays h, M, K, G, H (sized n n, n n, n a, t n)");
-
-  /* D: the interface ties (eq. 20) on the stacked reduced coordinates, body blocks in body order */
   PetscCall(PetscArrayzero(D, m * n));
   for (PetscInt j = 0; j < r->nj; j++) {
     const KFJointDef    *J = &r->joints[j];
@@ -349,7 +321,7 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
       PetscCall(KFJointRotation(J->axis, J->R0, angles[irev++], R));
       len = PetscSqrtReal(J->axis[0] * J->axis[0] + J->axis[1] * J->axis[1] + J->axis[2] * J->axis[2]);
       for (int i = 0; i < 3; i++) k[i] = J->axis[i] / len;
-      PerpendicularPair(k, E[0], E[1]);
+      KFPerpendicularPair_Private(k, E[0], E[1]);
       AddTieRows(m, D, row, 3, I3, R, 0, P, off[J->parent], J->parent_interface, C, off[J->child], J->child_interface);
       AddTieRows(m, D, row + 3, 2, (const PetscReal(*)[3])E, R, 3, P, off[J->parent], J->parent_interface, C, off[J->child], J->child_interface);
       row += 5;
@@ -361,14 +333,46 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
     }
   }
 
-  /* eq. (21-22): the reduced coordinates that satisfy the ties, phi = N phi_h */
-  PetscCall(KFDenseNullSpace_Private(m, n, D, r->rtol, &hh, N, &rk, &ratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_D));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReassemblyApply - KFReassembleDamped of the workspace's bodies and joints at these angles (one per revolute joint,
+  radians) into the caller's arrays, with no allocation: h x h Mh, Kh (and Ch: the bodies' viscous damping plus
+  Rayleigh, if Ch is not NULL), h x a Gh, t x h Hh, the constraints' rank and sigma ratio (either may be NULL), the
+  rigid-body and mechanism modes Phir (h x nrigid; nrigid -1 when unknown; Phir may be NULL). Arrays sized for n
+  (KFReassemblyGetSizes): n n, n a, t n.
+*/
+PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
+  const KFReducedBody *bodies = r ? r->bodies : NULL;
+  PetscInt             n, m, a, t, *off, hh, rk = -1;
+  PetscReal           *D, *N, ratio = 0;
+  PetscBool            primal;
+
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  PetscCheck(angles || !r->nrev, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemble: the scene has %" PetscInt_FMT " revolute joints but no angles were given: pass one angle (radians) per revolute joint, in joint order", r->nrev);
+  PetscCheck(h && Mh && Kh && (Gh || !r->a) && (Hh || !r->t), PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemblyApply: give the output arrays h, M, K, G, H (sized n n, n n, n a, t n)");
+  n = r->n, m = r->m, a = r->a, t = r->t, off = r->off, D = r->D, N = r->N;
+  primal = r->primal && !r->use_svd ? PETSC_TRUE : PETSC_FALSE;
+
+  /* D and, for the SVD path or when the rank is asked for, its SVD (eq. 21-22): phi = N phi_h. The closed-form path
+     needs neither; where it exists the SVD's rank is m unless the ties degenerate at these angles, and then this
+     call takes the SVD path. */
+  if (!primal || rank || sratio || (nrigid && Phir && r->nr > 0)) PetscCall(KFReassemblyConstraints_Private(r, angles));
+  if (!primal || rank || sratio) {
+    PetscCall(KFDenseNullSpace_Private(m, n, D, r->rtol, &hh, N, &rk, &ratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_D));
+    if (rk != m) primal = PETSC_FALSE;
+  }
+  if (primal) hh = r->hprimal;
   *h = hh;
   if (rank) *rank = rk;
   if (sratio) *sratio = ratio;
 
   /* the system's rigid and mechanism modes: combinations of the bodies' rigid motions R that satisfy the ties,
-     Z = null(D R), in reassembled coordinates N^T R Z. They come from geometry, not from an eigensolve. */
+     Z = null(D R), in reassembled coordinates (N^T R Z on the SVD path's orthonormal N). They come from geometry,
+     not from an eigensolve. */
   if (nrigid) *nrigid = -1;
   if (nrigid && Phir && r->nr >= 0) {
     const PetscInt nr = r->nr;
@@ -380,9 +384,16 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
       PetscCall(KFDenseGemm_Private('N', 'N', m, nr, n, 1.0, D, m, r->R, n, 0.0, r->E, PetscMax(m, 1)));
       PetscCall(KFDenseNullSpace_Private(m, nr, r->E, r->rtol, &q, r->Z, &qrank, &qratio, r->A, r->s, r->VT, r->svdwork, r->lsvd_E));
       PetscCall(KFDenseGemm_Private('N', 'N', n, q, nr, 1.0, r->R, n, r->Z, nr, 0.0, r->Y, n));
-      PetscCall(KFDenseGemm_Private('T', 'N', hh, q, n, 1.0, N, n, r->Y, n, 0.0, Phir, hh));
+      if (primal) PetscCall(KFPrimalToCoordinates_Private(r, q, r->Y, Phir));
+      else PetscCall(KFDenseGemm_Private('T', 'N', hh, q, n, 1.0, N, n, r->Y, n, 0.0, Phir, hh));
       *nrigid = q;
     }
+  }
+  if (primal) {
+    PetscCall(KFPrimalApply_Private(r, angles, Mh, Kh, Ch, Gh, Hh));
+    if (Ch && (r->alpha > 0 || r->beta > 0))
+      for (PetscInt e = 0; e < hh * hh; e++) Ch[e] += r->alpha * Mh[e] + r->beta * Kh[e];
+    PetscFunctionReturn(0);
   }
 
   /* eq. (23-24), body by body: blkdiag(M_b) is never formed */
@@ -474,5 +485,27 @@ PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[]
   PetscCall(PetscFree(used));
   PetscCall(KFReassemblyApply(r, angles, h, Mh, Kh, Ch, Gh, Hh, rank, sratio, nrigid, Phir));
   PetscCall(KFReassemblyDestroy(&r));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReassemblySetUseSVD - svd PETSC_TRUE: the null space of the ties by SVD at every call (the reference path, an
+  orthonormal basis); PETSC_FALSE (the default): the closed-form path where the joints form a tree whose bodies see
+  their interface motions (the same null space in another basis, no SVD per call), the SVD elsewhere.
+  KFReassemblyGetUseSVD: whether calls take the SVD path (PETSC_TRUE also when the closed form is not available).
+*/
+PetscErrorCode KFReassemblySetUseSVD(KFReassembly r, PetscBool svd)
+{
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  r->use_svd = svd;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReassemblyGetUseSVD(KFReassembly r, PetscBool *svd)
+{
+  PetscFunctionBegin;
+  PetscCheck(r, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassembly: NULL workspace: make one with KFReassemblyCreate or KFReducedModelCreateReassembly");
+  *svd = (r->use_svd || !r->primal) ? PETSC_TRUE : PETSC_FALSE;
   PetscFunctionReturn(0);
 }

@@ -549,8 +549,12 @@ PETSC_EXTERN PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[
 PETSC_EXTERN PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
 /* Reassembly at changing angles without allocation (a simulation reassembles at every time step): a workspace made
    once for the bodies and joints (their arrays are copied), then KFReassemblyApply at each angle into the caller's
-   arrays (exactly KFReassembleDamped's results, plus Rayleigh alpha M + beta K in Ch), and KFReassemblyEig for the
-   eigen-decomposition when it is wanted. Plain data, not a PETSc object; one per thread. */
+   arrays, and KFReassemblyEig for the eigen-decomposition when it is wanted. Plain data, not a PETSc object; one per
+   thread. Where the joints form a tree whose bodies see their interface motions, Apply takes a closed form made at
+   creation (no SVD per call): KFReassembleDamped's system in another, non-orthonormal basis of the same null space
+   (same eigenvalues and transfer functions). KFReassemblySetUseSVD(r, PETSC_TRUE): exactly KFReassembleDamped's
+   arrays (plus Rayleigh alpha M + beta K in Ch). The rank, sigma ratio and rigid modes, when asked for, cost an SVD
+   of the ties on either path. */
 typedef struct _n_KFReassembly *KFReassembly;
 PETSC_EXTERN PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *);
 /* n: the largest reassembled size (outputs sized n n, n a, t n); viscous: some body has a damping matrix; rigid: the
@@ -561,6 +565,9 @@ PETSC_EXTERN PetscErrorCode KFReassemblyApply(KFReassembly, const PetscReal angl
    rigid modes as given (KFDenseEigRigid), otherwise the whole pencil (KFDenseEig) */
 PETSC_EXTERN PetscErrorCode KFReassemblyEig(KFReassembly, PetscInt h, const PetscReal Mh[], const PetscReal Kh[], PetscInt nrigid, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[]);
 PETSC_EXTERN PetscErrorCode KFReassemblyDestroy(KFReassembly *);
+/* the null space by SVD at every call (PETSC_TRUE) or in closed form on trees of bodies (PETSC_FALSE, the default) */
+PETSC_EXTERN PetscErrorCode KFReassemblySetUseSVD(KFReassembly, PetscBool svd);
+PETSC_EXTERN PetscErrorCode KFReassemblyGetUseSVD(KFReassembly, PetscBool *svd);
 /* the workspace of KFReassemblyApply for this model: its bodies, joints, reassembly_rtol and Rayleigh damping (the
    rigid count when the bodies' rigid motions are unknown: KFReducedModelGetInfo's nrigid) */
 PETSC_EXTERN PetscErrorCode KFReducedModelCreateReassembly(KFReducedModel, KFReassembly *);

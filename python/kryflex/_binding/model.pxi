@@ -282,11 +282,12 @@ cdef class CReassembly:
     cdef readonly PetscInt n, a, t, nrevolute
     cdef readonly bint damped, rigid
 
-    def __cinit__(self, CReducedModel model not None):
+    def __cinit__(self, CReducedModel model not None, bint svd=False):
         cdef PetscBool viscous, rigid
         cdef KFDamping d
         cdef PetscInt nb, nj
         check(KFReducedModelCreateReassembly(model.m, &self.r))
+        check(KFReassemblySetUseSVD(self.r, PETSC_TRUE if svd else PETSC_FALSE))
         check(KFReassemblyGetSizes(self.r, &self.n, &self.a, &self.t, &viscous, &rigid))
         check(KFReducedModelGetInfo(model.m, &nb, &nj, &self.nrevolute, NULL, NULL, NULL))
         check(KFReducedModelGetDamping(model.m, &d))
@@ -297,26 +298,37 @@ cdef class CReassembly:
         if self.r != NULL:
             KFReassemblyDestroy(&self.r)
 
-    def apply(self, angles_rad):
+    @property
+    def svd(self):
+        """Whether apply() takes the SVD of the ties at each call (else the closed form of a tree of bodies)."""
+        cdef PetscBool svd
+        check(KFReassemblyGetUseSVD(self.r, &svd))
+        return bool(svd)
+
+    def apply(self, angles_rad, bint info=True, bint rigid=True):
         """The reassembled system at angles_rad (one per revolute joint, radians): (M, K, C or None, G, H, Phir or None,
-        rank, sigma ratio), C the viscous damping (bodies' C_b + Rayleigh), Phir the rigid-body and mechanism modes."""
-        cdef cnp.ndarray ang = np.ascontiguousarray(angles_rad, dtype=np.float64)
+        rank, sigma ratio), C the viscous damping (bodies' C_b + Rayleigh), Phir the rigid-body and mechanism modes.
+        info False: rank and sigma ratio None (no SVD of the ties); rigid False: Phir None (no SVD of D R)."""
+        cdef double[::1] ang = np.ascontiguousarray(angles_rad, dtype=np.float64)
         cdef PetscInt n = self.n, h = 0, rank = 0, nrigid = -1
         cdef PetscReal ratio = 0
-        if ang.ndim != 1 or ang.shape[0] != self.nrevolute:
+        if ang.shape[0] != self.nrevolute or np.ndim(angles_rad) > 1:
             raise ValueError("the model has %d revolute joint(s): give %d angle(s), got %d"
-                             % (self.nrevolute, self.nrevolute, ang.size))
-        if not np.isfinite(ang).all():
-            raise ValueError("the angles must be finite numbers, got %s" % ang)
+                             % (self.nrevolute, self.nrevolute, np.size(angles_rad)))
+        for i in range(ang.shape[0]):
+            if not isfinite(ang[i]):
+                raise ValueError("the angles must be finite numbers, got %s" % np.asarray(angles_rad))
+        cdef bint want_rigid = rigid and self.rigid
         cdef cnp.ndarray M = np.empty(n * n)
         cdef cnp.ndarray K = np.empty(n * n)
         cdef cnp.ndarray G = np.empty(n * self.a + 1)
         cdef cnp.ndarray H = np.empty(self.t * n + 1)
         cdef cnp.ndarray C = np.empty(n * n) if self.damped else None
-        cdef cnp.ndarray R = np.empty(n * n) if self.rigid else None
-        check(KFReassemblyApply(self.r, real_ptr(ang) if self.nrevolute else NULL, &h, real_ptr(M), real_ptr(K),
-                                real_ptr(C) if self.damped else NULL, real_ptr(G), real_ptr(H), &rank, &ratio,
-                                &nrigid, real_ptr(R) if self.rigid else NULL))
+        cdef cnp.ndarray R = np.empty(n * n) if want_rigid else None
+        check(KFReassemblyApply(self.r, &ang[0] if self.nrevolute else NULL, &h, real_ptr(M), real_ptr(K),
+                                real_ptr(C) if self.damped else NULL, real_ptr(G), real_ptr(H),
+                                &rank if info else NULL, &ratio if info else NULL,
+                                &nrigid if want_rigid else NULL, real_ptr(R) if want_rigid else NULL))
         if h < 1:
             raise ValueError("the joints' interface ties leave no free coordinate in the reduced model: reduce again "
                              "with a larger body basis")
@@ -324,7 +336,8 @@ cdef class CReassembly:
         return (M[:hh].reshape(h, h, order="F"), K[:hh].reshape(h, h, order="F"),
                 C[:hh].reshape(h, h, order="F") if self.damped else None,
                 G[:h * self.a].reshape(h, self.a, order="F"), H[:self.t * h].reshape(self.t, h, order="F"),
-                R[:h * nrigid].reshape(h, nrigid, order="F") if nrigid >= 0 else None, rank, ratio)
+                R[:h * nrigid].reshape(h, nrigid, order="F") if nrigid >= 0 else None,
+                rank if info else None, ratio if info else None)
 
     def eig(self, M, K, Phir=None):
         """(eigenvalues ascending, M-orthonormal modes) of what apply() returned; with Phir the rigid modes as given."""

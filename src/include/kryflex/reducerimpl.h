@@ -127,7 +127,7 @@ typedef struct {
   PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
   PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
 } KFFullReference;
-PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
+PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFlexSolver, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
 /* errors of the reassembled models against the full order at every configuration of interest (results, notes) */
 PETSC_INTERN PetscErrorCode KFReducerRecordSettings_Private(KFReducer, KFReducedModel, KFReducerMethod, PetscInt moments, PetscInt n, const PetscReal angles[]);
@@ -186,7 +186,7 @@ typedef struct _KFEvalPoint {
   PetscReal      *chk_w, *chk_T; /* their frequencies (rad/s) and undamped responses H (K - w^2 M)^-1 G, nchk x t x a */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
-PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer, KFSystem, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);

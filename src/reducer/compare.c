@@ -29,11 +29,13 @@ static PetscErrorCode KFReferenceUsesSolver(KFReducer r, KFFlexSolver solver, Pe
 /* The lowest nev flexible modes (w2, H Phi, Phi^T G; or the modes themselves with viscous damping), with the
    flexible solver's factor when it may serve: its block solves are the verification's, so the solver's own
    accounting (the reduction's solves) is left as it was */
-static PetscErrorCode KFReferenceEigen(KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFFlexSolverPerf perf;
+  PetscLogDouble   t0, t1;
 
   PetscFunctionBegin;
+  PetscCall(PetscTime(&t0));
   if (solver) PetscCall(KFFlexSolverGetPerf(solver, &perf));
   if (viscous) {
     PetscCall(MatDestroy(modes));
@@ -42,6 +44,9 @@ static PetscErrorCode KFReferenceEigen(KFSystem sys, KFFlexSolver solver, PetscB
   } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
   else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
   if (solver) solver->perf = perf;
+  PetscCall(PetscTime(&t1));
+  r->verify_eigen_seconds += t1 - t0;
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_eigensolve", (PetscReal)r->verify_eigen_seconds));
   PetscFunctionReturn(0);
 }
 
@@ -79,7 +84,7 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    PetscCall(KFReferenceEigen(sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes));
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);

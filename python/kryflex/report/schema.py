@@ -80,7 +80,9 @@ numbers are None). <label> is an entry of "angle_labels". Keys marked (opt) may 
  "performance": {"factorization_s", "solves_s", "whole_s", "ratio" ((whole - verification) / (factorization +
                  solves)), "solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged" (block solves left
                  above -kf_refine_rtol after escalation), "blocks_escalated" (escalated), "residual_first_max",
-                 "residual_final_max", "memory_estimate_mb"} (opt; C results time_* / solve_* of issue 14)
+                 "residual_final_max", "memory_estimate_mb", "reference_eigensolve_s", "reference_check_s" (the
+                 verification's eigensolves and direct solves), "search_s" (the accuracy search)} (opt; C results
+                 time_* / solve_*)
  "paper": {...} (opt; scenes with paper: lee: the paper's tables and kryflex's fixed-recipe answer, kryflex/paper.py)
 }
 

@@ -84,6 +84,7 @@ struct _p_KFReducer {
   PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
+  PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */

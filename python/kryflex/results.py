@@ -321,6 +321,9 @@ class Performance(Record):
     residual_first_max: float = _value()
     residual_final_max: float = _value()
     memory_estimate_mb: float = _value()
+    reference_eigensolve_s: float = _value(doc="the verification's full-order eigensolves")
+    reference_check_s: float = _value(doc="the verification's direct solves of the full system")
+    search_s: float = _value(doc="the accuracy search")
 
 
 

@@ -45,7 +45,9 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("refinement_solves", "refinement_solves"), ("solve_blocks_unconverged", "blocks_unconverged"),
                ("solve_blocks_escalated", "blocks_escalated"),
                ("solve_residual_first_max", "residual_first_max"),
-               ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb")]
+               ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb"),
+               ("time_reference_eigensolve", "reference_eigensolve_s"), ("time_reference_check", "reference_check_s"),
+               ("time_search", "search_s")]
 PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
 

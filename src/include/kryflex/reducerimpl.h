@@ -84,6 +84,7 @@ struct _p_KFReducer {
   PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
+  PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */
@@ -127,7 +128,7 @@ typedef struct {
   PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
   PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
 } KFFullReference;
-PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFullReference *);
+PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFlexSolver, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
 /* errors of the reassembled models against the full order at every configuration of interest (results, notes) */
 PETSC_INTERN PetscErrorCode KFReducerRecordSettings_Private(KFReducer, KFReducedModel, KFReducerMethod, PetscInt moments, PetscInt n, const PetscReal angles[]);
@@ -186,7 +187,7 @@ typedef struct _KFEvalPoint {
   PetscReal      *chk_w, *chk_T; /* their frequencies (rad/s) and undamped responses H (K - w^2 M)^-1 G, nchk x t x a */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
-PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer, KFSystem, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);

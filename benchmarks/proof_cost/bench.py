@@ -1,0 +1,111 @@
+"""What the proof costs: the default `kryflex reduce` (search, full-order verification, report and plots) beside the
+bare reduction (`-kf_verify false`: the error only estimated, no plots), side by side in one run, on the solid
+spacecraft of meshes/solid.
+
+    .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR]
+
+For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
+process, the reduction's factorization and block solves (summary.json's performance), the model check, the
+verification split (eigensolves, direct solves, the rest), the search, the report and plots, and the ratio the goal
+is stated in: default wall / (factorization + block solves of the bare run). The machine is shared: read the ratios
+of runs taken together, and the CPU seconds beside the wall.
+"""
+import argparse
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+STAMP = re.compile(r"^\[kryflex\s+([0-9.]+) s\] (.*)$")
+
+
+def scene_of(refine, work):
+    """The solid spacecraft at this refinement (generated once into work)."""
+    out = os.path.join(work, "solid_%s" % refine)
+    path = os.path.join(out, "spacecraft.yaml")
+    if not os.path.exists(path):
+        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine",
+                        str(refine), "-o", out], check=True, stdout=subprocess.DEVNULL)
+    return path
+
+
+def stamps(log):
+    """(seconds, text) of the progress lines."""
+    return [(float(m.group(1)), m.group(2)) for m in map(STAMP.match, log.splitlines()) if m]
+
+
+def first(lines, prefix):
+    return next((t for t, text in lines if text.startswith(prefix)), None)
+
+
+def run(scene, out, extra):
+    """One kryflex reduce: its figures from the clock, the progress lines and summary.json."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    cmd = [os.path.join(ROOT, "build", "kryflex"), "reduce", scene, "-o", out] + extra
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode:
+        sys.exit("kryflex reduce exited %d:\n%s" % (proc.returncode, proc.stdout[-3000:]))
+    lines = stamps(proc.stdout)
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    perf = s.get("performance") or {}
+    t_check0, t_scene = first(lines, "rigid-body and mechanism modes"), first(lines, "scene '")
+    t_write = first(lines, "writing the results")
+    return dict(wall=wall, cpu=(after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
+                factorization=perf.get("factorization_s", 0.0), solves=perf.get("solves_s", 0.0),
+                whole=perf.get("whole_s", 0.0), verification=(s.get("timings_s") or {}).get("verification eigensolve", 0.0),
+                eigensolve=perf.get("reference_eigensolve_s"), check=perf.get("reference_check_s"),
+                search=perf.get("search_s"),
+                model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
+                report=(wall - t_write) if t_write is not None else None,
+                error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"))
+
+
+def fmt(x):
+    return "%8.2f" % x if isinstance(x, (int, float)) else "%8s" % "-"
+
+
+def show(name, r, denom):
+    print("%-8s %s %s %s %s %s %s %s %s %s %s  ratio %5.2f  error %s" % (
+        name, fmt(r["wall"]), fmt(r["cpu"]), fmt(r["factorization"]), fmt(r["solves"]), fmt(r["model_check"]),
+        fmt(r["verification"]), fmt(r["eigensolve"]), fmt(r["check"]), fmt(r["search"]), fmt(r["report"]),
+        r["wall"] / denom, "%.4g%s" % (r["error"], " (est.)" if r["estimated"] else "") if r["error"] is not None else "-"))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--refine", type=float, nargs="+", default=[0.5], help="meshes/solid refinements (1.55: 57k dofs)")
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    print("proof cost, %s UTC, load average %s" % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+                                                    " ".join("%.1f" % x for x in os.getloadavg())))
+    print("seconds: wall, CPU (user + sys), factorization, block solves, model check, verification (eigensolves, "
+          "direct solves), search, report and plots; ratio = wall / (factorization + solves of the bare run)")
+    for refine in args.refine:
+        scene = scene_of(refine, args.work)
+        for rep in range(args.repeat):
+            bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
+            full = run(scene, os.path.join(args.work, "default_%s" % refine), [])
+            denom = bare["factorization"] + bare["solves"]
+            print("\nrefine %s (%s dofs), run %d; bare factorization + solves %.2f s" % (refine, full["dofs"], rep + 1, denom))
+            print("%-8s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
+                                                                "verify", "eigen", "direct", "search", "report"))
+            show("bare", bare, denom)
+            show("default", full, denom)
+            print("default / bare: wall %.2f, CPU %.2f; report and plots %.1f %% of the default wall" % (
+                full["wall"] / bare["wall"], full["cpu"] / bare["cpu"], 100 * (full["report"] or 0) / full["wall"]))
+
+
+if __name__ == "__main__":
+    main()

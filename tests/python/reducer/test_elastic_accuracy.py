@@ -179,16 +179,8 @@ def test_galileo_elastic_target(galileo, target):
     check_target(galileo, target)
 
 
-# At 1e-3 the solid's reported error (2.2e-4) is not within 10 % of the measured one (3.2e-4): the difference is at
-# the band's bottom (0.01 Hz, pair corner_uy <- tip_force, 0 deg), where the rigid part is 670x the elastic peak, and
-# it is kryflex's full-order reference itself (its rigid part from the geometric rigid modes) that differs there from
-# the dense one (the stiffness matrix's numerical null space) by 3.2e-4 of the elastic peak, 5e-7 of the rigid part.
-SOLID_1E3 = pytest.mark.xfail(strict=True, reason="the full-order reference's geometric rigid part differs from the "
-                              "dense null space's by 5e-7 of the rigid part, 3.2e-4 of the elastic peak at 0.01 Hz")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("target", [0.05, 1e-2, pytest.param(1e-3, marks=SOLID_1E3)])
+@pytest.mark.parametrize("target", TARGETS)
 def test_solid_elastic_target(solid, target):
     check_target(solid, target)
 

@@ -197,6 +197,19 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
         pw    = k;
       }
     }
+  if (p->interest >= 0) { /* both sides of the check, for scripts that verify it: (t, a, nchk) each */
+    const PetscInt shape[3] = {t, a, p->nchk};
+    PetscReal     *fhz;
+
+    PetscCall(PetscMalloc1(p->nchk, &fhz));
+    for (PetscInt s = 0; s < p->nchk; s++) fhz[s] = p->chk_w[s] / (2 * PETSC_PI);
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_frequencies_hz", 1, &p->nchk, fhz));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_truth_re", 3, shape, p->chk_T));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_truth_im", 3, shape, p->chk_Ti));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_reference_re", 3, shape, Tre));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_reference_im", 3, shape, Tim));
+    PetscCall(PetscFree(fhz));
+  }
   PetscCall(PetscFree(pk));
   PetscCall(PetscFree2(Tre, Tim));
   PetscCall(KFReducerConfigPlace_Private(nrev, p->angles, label, sizeof(label)));

@@ -73,9 +73,10 @@ def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, f
     s = study
     lines = ["# Slewing study: %s" % s.scene.name, "",
              "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency %.4g Hz "
-             "(P1 %.4g s); stiffness-proportional damping %.3g at f1; drive on %s; accuracy %g."
+             "(P1 %.4g s); damping ratio %.3g: with the angle held the frequency domain's damping model on each "
+             "model's own modes, while slewing stiffness-proportional at f1; drive on %s; accuracy %g."
              % (s.full.dofs, s.reduced.dofs, s.kind, _deg(s.alpha0_deg), _deg(s.amplitude_deg), s.f1, s.P1, s.zeta,
-                ", ".join(s.inputs), s.accuracy), ""]
+                ", ".join(s.inputs), s.accuracy), ""] + ["Note: %s." % n for n in getattr(s, "notes", [])]
     step, step_untrimmed = s.explicit_step
     if s.trim_hz > 0:
         lines += ["Trimmed reduced model (reduction.max_frequency, %.4g Hz): highest frequency at %s deg %.4g Hz "

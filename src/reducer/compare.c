@@ -6,9 +6,10 @@
 */
 #include <kryflex/reducerimpl.h>
 
-/* up to this many modes (rigid and flexible) the damping matrices couple all of them: a dense solve of that size per
-   frequency is cheap, and the cut at cover x the band's top is an approximation */
-#define KF_COUPLED_ALL 200
+/* up to this many modes (rigid and flexible) the damping matrices couple all of them: the cut at cover x the band's
+   top is an approximation, and a dense 2m x 2m solve per grid frequency stays cheap (m = 64: ~1e6 flops, a second
+   over a 2,000-point grid; m = 200 would be 30 times that) */
+#define KF_COUPLED_ALL 64
 
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);

@@ -272,6 +272,7 @@ cdef extern from "kryflex.h" nogil:
         KF_QUANTITY_VELOCITY
         KF_QUANTITY_ACCELERATION
     PetscErrorCode KFDampingSetUniform(KFDamping*, PetscReal)
+    PetscReal KFDampingModalRatio(const KFDamping*, PetscReal)
     PetscErrorCode KFSceneSetBodyDamping(KFScene, PetscInt, PetscMat)
     PetscErrorCode KFSceneSetOutputQuantity(KFScene, PetscInt, KFQuantity)
     PetscErrorCode KFSceneGetOutputQuantity(KFScene, PetscInt, KFQuantity*)

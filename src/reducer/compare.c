@@ -6,6 +6,11 @@
 */
 #include <kryflex/reducerimpl.h>
 
+/* up to this many modes (rigid and flexible) the damping matrices couple all of them: the cut at cover x the band's
+   top is an approximation, and a dense 2m x 2m solve per grid frequency stays cheap (m = 64: ~1e6 flops, a second
+   over a 2,000-point grid; m = 200 would be 30 times that) */
+#define KF_COUPLED_ALL 64
+
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
@@ -135,10 +140,12 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
       for (PetscInt j = 0; j < a; j++) ref->PhiG[k + j * nconv] = XtG[ref->r + k + j * m];
     }
     PetscCall(KFSystemProjectDamping_Private(sys, X, &has, ref->Cm));
-    /* the modes to cover x the band's top are solved together; the higher ones keep their own damping only */
+    /* the modes to cover x the band's top are solved together; the higher ones keep their own damping only. Up to
+       KF_COUPLED_ALL modes all are coupled: on Galileo with damping matrices the modes above 3x the band's top,
+       left uncoupled, put the reference 3e-6 of the peak off the damped direct solve at the band's bottom */
     ref->nc = ref->r;
     for (PetscInt k = 0; k < nconv; k++)
-      if (PetscSqrtReal(w2[k]) / (2 * PETSC_PI) <= fmax) ref->nc = ref->r + k + 1;
+      if (PetscSqrtReal(w2[k]) / (2 * PETSC_PI) <= fmax || m <= KF_COUPLED_ALL) ref->nc = ref->r + k + 1;
     PetscCall(PetscFree2(XtH, XtG));
     PetscCall(MatDestroy(&X));
     PetscCall(MatDestroy(&modes));

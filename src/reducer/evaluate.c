@@ -182,7 +182,7 @@ PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *p)
   PetscCall(PetscFree(p->fhz));
   PetscCall(PetscFree3(p->w, p->Tre, p->Tim));
   PetscCall(PetscFree2(p->Tgre, p->Tgim));
-  PetscCall(PetscFree2(p->chk_w, p->chk_T));
+  PetscCall(PetscFree3(p->chk_w, p->chk_T, p->chk_Ti));
   PetscCall(PetscFree(p->angles));
   PetscCall(PetscMemzero(p, sizeof(*p)));
   PetscFunctionReturn(0);

@@ -1,12 +1,13 @@
 /*
   The verification's reference checked against the truth: at a few frequencies of the band, away from the reference's
-  resonances, one direct solve of the full-order system (K_S - w^2 M_S) X = G_S (MUMPS LDL^T of the symmetric
-  indefinite matrix) gives H_S X exactly; the reference evaluated at w with the damping taken out must agree with it.
-  Undamped on both sides: what can go wrong in the reference is its modal content (modes missed, rigid modes, the
-  residual of the modes not computed, M's null space), and the damping model is applied the same way to it and to the
-  reduced models; off resonance the undamped response is finite and well conditioned. A disagreement above
-  -kf_verify_check_rtol of the pair's peak fails the run (exit 3) naming the frequency and the angle: a verdict against
-  a wrong reference would be wrong.
+  resonances, one direct solve of the full-order system gives H_S X exactly; the reference evaluated at w under the
+  same damping must agree with it. Undamped, or with only modal ratios (whose equivalent viscous matrix is built on
+  the reference's own modes and adds the same term to both sides: damped_check.c), it is one MUMPS LDL^T of the
+  symmetric indefinite K_S - w^2 M_S, here; with Rayleigh, structural damping or the bodies' damping matrices it is the
+  real 2 x 2 block form of the complex system, damped_check.c. What can go wrong in the reference is its modal content
+  (modes missed, rigid modes, the residual of the modes not computed, M's null space) and its damping. A disagreement
+  above -kf_verify_check_rtol of the pair's peak fails the run (exit 3) naming the frequency, the angle and the pair:
+  a verdict against a wrong reference would be wrong.
 */
 #include <kryflex/reducerimpl.h>
 
@@ -78,6 +79,8 @@ PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEval
   PetscInt       a, t, npts = r->verify_check_points;
   Mat            Ms, Ks, G, Ht;
   PetscLogDouble t0, t1;
+  KFDamping      damp;
+  PetscBool      viscous;
 
   PetscFunctionBegin;
   p->nchk = 0;
@@ -85,9 +88,13 @@ PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEval
   PetscCall(PetscTime(&t0));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, &Ht));
-  PetscCall(PetscMalloc2(npts, &p->chk_w, npts * t * a, &p->chk_T));
+  PetscCall(PetscCalloc3(npts, &p->chk_w, npts * t * a, &p->chk_T, npts * t * a, &p->chk_Ti));
   PetscCall(KFCheckFrequencies(r, &p->ref, npts, p->chk_w));
-  {
+  PetscCall(KFCheckDampingModel_Private(r, &damp, &viscous));
+  if (viscous || damp.alpha != 0 || damp.beta != 0 || damp.g != 0) { /* damped_check.c */
+    p->nchk = npts;
+    PetscCall(KFEvalPointDampedSolves_Private(r, sys, p, &damp, viscous));
+  } else {
     Mat           A, F, Gd;
     MatFactorInfo info;
     IS            rp, cp;
@@ -155,7 +162,8 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
 {
   PetscInt   a, t, ta, nrev, fw = -1, pw = -1;
   PetscReal *pk, *Tre, *Tim, top = 0, worst = 0;
-  KFDamping  none;
+  KFDamping  damp;
+  PetscBool  viscous;
   char       label[128];
   MPI_Comm   comm = PetscObjectComm((PetscObject)r);
 
@@ -163,24 +171,24 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
   if (!p->nchk) PetscFunctionReturn(0);
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, &t));
   ta = t * a;
-  PetscCall(PetscMemzero(&none, sizeof(none)));
-  none.nbands     = 1;
-  none.fmax_hz[0] = PETSC_MAX_REAL;
+  PetscCall(KFCheckDampingModel_Private(r, &damp, &viscous));
   PetscCall(PetscCalloc1(PetscMax(ta, 1), &pk));
   PetscCall(PetscMalloc2(p->nchk * ta, &Tre, p->nchk * ta, &Tim));
   for (PetscInt f = 0; f < p->nw; f++)
     for (PetscInt k = 0; k < ta; k++) pk[k] = PetscMax(pk[k], PetscSqrtReal(p->Tre[f * ta + k] * p->Tre[f * ta + k] + p->Tim[f * ta + k] * p->Tim[f * ta + k]));
   for (PetscInt k = 0; k < ta; k++) top = PetscMax(top, pk[k]);
   {
-    KFFullReference undamped = p->ref; /* the same modes without the viscous coupling */
+    KFFullReference same = p->ref; /* the same modes under the damping the direct solves used */
 
-    undamped.Cm = NULL;
-    undamped.nc = 0;
-    PetscCall(KFFullFRF_Private(&undamped, t, a, p->nmom, p->L0, &none, NULL, p->nchk, p->chk_w, Tre, Tim));
+    if (!viscous) {
+      same.Cm = NULL;
+      same.nc = 0;
+    }
+    PetscCall(KFFullFRF_Private(&same, t, a, p->nmom, p->L0, &damp, NULL, p->nchk, p->chk_w, Tre, Tim));
   }
   for (PetscInt s = 0; s < p->nchk; s++)
     for (PetscInt k = 0; k < ta; k++) {
-      const PetscReal dre = Tre[s * ta + k] - p->chk_T[s * ta + k], dim = Tim[s * ta + k];
+      const PetscReal dre = Tre[s * ta + k] - p->chk_T[s * ta + k], dim = Tim[s * ta + k] - p->chk_Ti[s * ta + k];
       const PetscReal e   = PetscSqrtReal(dre * dre + dim * dim) / PetscMax(PetscMax(pk[k], KF_FRF_PAIR_FLOOR * top), 1e-300);
 
       if (!(e <= worst)) {
@@ -189,6 +197,19 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
         pw    = k;
       }
     }
+  if (p->interest >= 0) { /* both sides of the check, for scripts that verify it: (t, a, nchk) each */
+    const PetscInt shape[3] = {t, a, p->nchk};
+    PetscReal     *fhz;
+
+    PetscCall(PetscMalloc1(p->nchk, &fhz));
+    for (PetscInt s = 0; s < p->nchk; s++) fhz[s] = p->chk_w[s] / (2 * PETSC_PI);
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_frequencies_hz", 1, &p->nchk, fhz));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_truth_re", 3, shape, p->chk_T));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_truth_im", 3, shape, p->chk_Ti));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_reference_re", 3, shape, Tre));
+    PetscCall(KFReducerResultSet_Private(r, p->interest, "reference_check_reference_im", 3, shape, Tim));
+    PetscCall(PetscFree(fhz));
+  }
   PetscCall(PetscFree(pk));
   PetscCall(PetscFree2(Tre, Tim));
   PetscCall(KFReducerConfigPlace_Private(nrev, p->angles, label, sizeof(label)));

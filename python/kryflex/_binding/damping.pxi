@@ -45,6 +45,13 @@ cdef object damping_to_dict(const KFDamping *d):
     return dict(modal=modal, rayleigh=dict(alpha=float(d.alpha), beta=float(d.beta)), structural=float(d.g))
 
 
+def modal_ratios(d, freqs_hz):
+    """The modal damping ratio of each frequency (Hz) under the damping description d (KFDampingModalRatio)."""
+    cdef KFDamping c
+    damping_from_dict(d, &c)
+    return np.array([KFDampingModalRatio(&c, float(f)) for f in np.ravel(freqs_hz)])
+
+
 cdef KFQuantity quantity_code(q, PetscInt i) except *:
     if q not in QUANTITIES:
         raise ValueError("output %d: quantity %r is not one of %s" % (i, q, ", ".join(QUANTITIES)))

@@ -4,9 +4,10 @@ step (index-3 form, Lagrange multipliers):
 
     M z'' + C z' + K z + D(alpha(t))^T lambda = G u(t),      D(alpha(t)) z = 0
 
-with z the bodies' own coordinates and C = beta K (stiffness-proportional damping, the same beta for the full and
-the reduced bodies, so the reduced C is the projection of the full one). With the effective stiffness
-Keff = K + gamma/(beta_N h) C + M/(beta_N h^2) factored once (SciPy's SuperLU), a step is one solve and a small dense
+with z the bodies' own coordinates and C the frequency domain's damping model as a viscous operator (damping.py:
+Rayleigh on the bodies, modal ratios on the model's own modes, C = Cs + U diag(d) U^T), or C = beta K. With the
+effective stiffness Keff = K + gamma/(beta_N h) C + M/(beta_N h^2), its sparse part factored once (SciPy's SuperLU)
+and the modal part U by the Woodbury identity (n solves once), a step is one solve and a small dense
 system of the ties: D = T(alpha) I (bodies.py), W = Keff^-1 I^T is formed once, so the ties' Schur complement
 T (I W) T^T is (ties x ties) at every step; its correction W T^T (T S T^T)^-1 T is kept while the angle does not
 change. Bodies up to DENSE_MAX dofs step with Keff^-1 products formed once (a few dense products per step). Outputs
@@ -16,6 +17,8 @@ import numpy as np
 import scipy.sparse.linalg as spla
 from scipy.sparse import issparse as sp_issparse
 
+from .damping import ViscousDamping
+
 BETA, GAMMA = 0.25, 0.5
 
 
@@ -23,20 +26,33 @@ DENSE_MAX = 600   # below this many dofs the step is a few dense products (Keff^
 
 
 class Integrator:
-    """The Newmark integrator of one SlewBodies with step h and stiffness-proportional damping coefficient
-    damping_beta (s)."""
+    """The Newmark integrator of one SlewBodies with step h and damping: a ViscousDamping (damping.py), or without
+    it stiffness-proportional damping with coefficient damping_beta (s)."""
 
-    def __init__(self, bodies, h, damping_beta=0.0):
+    def __init__(self, bodies, h, damping_beta=0.0, damping=None):
         self.bodies, self.h, self.cb = bodies, float(h), float(damping_beta)
         b, h = bodies, self.h
-        self.C = self.cb * b.K
-        keff = (b.K + (GAMMA / (BETA * h)) * self.C + b.M / (BETA * h * h)).tocsc()
+        self.C = damping if damping is not None else ViscousDamping(self.cb * b.K)
+        g = GAMMA / (BETA * h)
+        keff = (b.K + g * self.C.Cs + b.M / (BETA * h * h)).tocsc()
         self.lu = spla.splu(keff)
+        U = self.C.U
+        if U.shape[1]:      # Keff = A + U (g d) U^T: Woodbury, A^-1 U (S)^-1 formed once
+            AU = self.lu.solve(U)
+            S = np.diag(1.0 / (g * self.C.d)) + U.T @ AU
+            self._X = np.linalg.solve(S.T, AU.T).T          # A^-1 U S^-1
         It = b.I.T.toarray()
-        self.W = self.lu.solve(It) if It.shape[1] else np.zeros((b.dofs, 0))
+        self.W = self.solve(It) if It.shape[1] else np.zeros((b.dofs, 0))
         self.S = np.asarray(b.I @ self.W)
         self.dense = b.dofs <= DENSE_MAX
         self._ties_at, self._rigid = None, {}
+
+    def solve(self, rhs):
+        """Keff^-1 rhs (a vector or columns)."""
+        y = self.lu.solve(rhs)
+        if self.C.U.shape[1]:
+            y = y - self._X @ (self.C.U.T @ y)
+        return y
 
     def _correction(self, alpha):
         """X = W T^T (T S T^T)^-1 T (N x interface rows): z = y0 - X I y0 meets the ties D(alpha) z = 0 (the Schur
@@ -92,8 +108,8 @@ class Integrator:
         if self.dense:
             # y0 = Keff^-1 (G1 u + (c0 M + d0 C) z + (c1 M + d1 C) v + (c2 M + d2 C) a), the products formed once
             Md, Cd = M.toarray(), C.toarray()
-            Pu = self.lu.solve(G1)
-            Pz, Pv, Pa = (self.lu.solve(ci * Md + di * Cd) for ci, di in ((c0, d0), (c1, d1), (c2, d2)))
+            Pu = self.solve(G1)
+            Pz, Pv, Pa = (self.solve(ci * Md + di * Cd) for ci, di in ((c0, d0), (c1, d1), (c2, d2)))
             Id = b.I.toarray()
         keep = np.arange(0, nsteps + 1, record_every)
         ys = np.zeros((len(keep), b.H.shape[0]))
@@ -106,9 +122,9 @@ class Integrator:
                 Iy0 = Id @ y0
             else:
                 rhs = G1 * u[n] + M @ (c0 * z + c1 * v + c2 * a)
-                if self.cb:
+                if C.nnz:
                     rhs += C @ (d0 * z + d1 * v + d2 * a)
-                y0 = self.lu.solve(rhs)
+                y0 = self.solve(rhs)
                 Iy0 = b.I @ y0
             if b.nties:
                 znew = y0 - self._correction(alpha[n]) @ Iy0

@@ -99,22 +99,22 @@ def _where(s):
 
 def markdown(rows, study, limit, check, frf_error, exudyn=None, baseline=None, ffrf=None, measure="elastic"):
     s = study
+    damping = ("damping ratio %.3g: the frequency domain's damping model on each model's own modes" % s.zeta if s.held
+               else "damping ratio %.3g: with the angle held the frequency domain's damping model on each model's own "
+               "modes, while slewing stiffness-proportional at f1" % s.zeta)
     if s.held:
         what = ("a %s of force %g on %s (rise time or pulse length T swept), %s" % (
             s.kind, s.force, ", ".join(s.inputs), "no joint" if s.jointfree else "angles held %s" % _where(s)))
         lines = ["# Time response at rest: %s" % s.scene.name, "",
-                 "Full order %d dofs, reduced %d dofs; %s; first flexible frequency %.4g Hz (P1 %.4g s); "
-                 "stiffness-proportional damping %.3g at f1; accuracy %g." % (s.full.dofs, s.reduced.dofs, what, s.f1,
-                                                                             s.P1, s.zeta, s.accuracy), ""]
+                 "Full order %d dofs, reduced %d dofs; %s; first flexible frequency %.4g Hz (P1 %.4g s); %s; "
+                 "accuracy %g." % (s.full.dofs, s.reduced.dofs, what, s.f1, s.P1, damping, s.accuracy), ""]
     else:
         lines = ["# Slewing study: %s" % s.scene.name, "",
                  "Full order %d dofs, reduced %d dofs; profile %s from %s deg by %s deg; first flexible frequency "
-                 "%.4g Hz (P1 %.4g s); stiffness-proportional damping %.3g at f1; drive on %s; accuracy %g."
+                 "%.4g Hz (P1 %.4g s); %s; drive on %s; accuracy %g."
                  % (s.full.dofs, s.reduced.dofs, s.kind, _deg(s.alpha0_deg), _deg(s.amplitude_deg), s.f1, s.P1,
-                    s.zeta, ", ".join(s.inputs), s.accuracy), ""]
-    if s.damping_matrices:
-        lines += ["The damping matrices of %s are not in the time integration: both models take the "
-                  "stiffness-proportional damping above." % ", ".join(s.damping_matrices), ""]
+                    damping, ", ".join(s.inputs), s.accuracy), ""]
+    lines += ["Note: %s." % n for n in getattr(s, "notes", [])]
     step, step_untrimmed = s.explicit_step
     if s.trim_hz > 0:
         lines += ["Trimmed reduced model (reduction.max_frequency, %.4g Hz): highest frequency %s %.4g Hz "

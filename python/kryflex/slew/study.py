@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from .bodies import SlewBodies
+from .damping import time_damping
 from .integrator import Integrator
 from .profiles import HELD, Profile
 
@@ -35,8 +36,10 @@ class SlewStudy:
     span of the scene's angles of interest, or 60 deg when they span nothing); durations: slew durations as
     multiples of the first flexible period P1 (from periods_max down to periods_min, nrates of them, geometric);
     steps_per_period: time steps per period of the band's top frequency (h = 1 / (steps_per_period f_top), and at
-    most T/100); settle_periods: first flexible periods simulated after the slew; damping: stiffness-proportional,
-    the scene's damping ratio at the first flexible frequency."""
+    most T/100); settle_periods: first flexible periods simulated after the slew; damping: with the angle held, the
+    scene's damping model as the frequency domain applies it (damping.py: modal ratios on each model's own modes,
+    Rayleigh on the bodies; structural damping and bodies' damping matrices are left out and noted in notes); while
+    slewing, stiffness-proportional with the scene's ratio at the first flexible frequency."""
 
     def __init__(self, scene, model, profile=None, amplitude_deg=None, periods_max=20.0, periods_min=0.1, nrates=8,
                  steps_per_period=20, settle_periods=2.0, progress=None, inputs=None, force=1.0):
@@ -62,7 +65,16 @@ class SlewStudy:
         self.P1 = 1.0 / self.f1
         self.f_top = float(scene.band[1])
         self.zeta = float(scene.damping)
-        self.damping_beta = 2 * self.zeta / (2 * np.pi * self.f1)
+        self.damping_beta = 2 * self.zeta / (2 * np.pi * self.f1)   # slewing runs and the Exudyn cross-check
+        self.damping_model = dict(scene.damping_model)
+        self.notes = []
+        if float(self.damping_model.get("structural") or 0.0):
+            self.notes.append("structural damping (%g) has no viscous equivalent in time: left out of both models"
+                              % float(self.damping_model["structural"]))
+        if getattr(scene, "damping_matrices", None):
+            self.notes.append("the bodies' damping matrices (%s) are left out of both models in time"
+                              % ", ".join(scene.damping_matrices))
+        self._damping = {}
         self.accuracy = float(scene.accuracy)
         self.periods = np.geomspace(periods_max, periods_min, int(nrates))
         self.steps_per_period = int(steps_per_period)
@@ -98,14 +110,25 @@ class SlewStudy:
         h = self.step(duration) if h is None else h
         t_end = duration + self.settle_periods * self.P1
         every = max(1, int(np.ceil(t_end / h / 2000)))     # at most ~2000 recorded samples per run
-        return self.integrator(bodies, h).run(self.profile(duration, still), t_end, record_every=every)
+        return self.integrator(bodies, h, still).run(self.profile(duration, still), t_end, record_every=every)
 
-    def integrator(self, bodies, h):
-        """The integrator of one model: the trimmed one for the reduced bodies of a trimmed model."""
+    def damping(self, bodies):
+        """The viscous operator of one model (damping.time_damping), its modal part on the model's own modes at
+        alpha0, made once."""
+        if bodies.label not in self._damping:
+            self._damping[bodies.label] = time_damping(bodies, np.radians(self.alpha0_deg), self.damping_model)
+        return self._damping[bodies.label]
+
+    def integrator(self, bodies, h, still=False):
+        """The integrator of one model: the trimmed one for the reduced bodies of a trimmed model. The angle held
+        (still, or a held profile): the frequency domain's damping model (damping()); slewing: stiffness-proportional damping with the
+        scene's ratio at f1 (modal damping is defined per configuration; docs/guide/slewing.md says why it is not
+        carried through a slew)."""
+        damping = self.damping(bodies) if still or self.held else None
         if bodies is self.reduced and self.trim_hz > 0:
             from .trimmed import TrimmedIntegrator
-            return TrimmedIntegrator(bodies, h, self.damping_beta, self.trim_hz, self.reassembly_rtol)
-        return Integrator(bodies, h, self.damping_beta)
+            return TrimmedIntegrator(bodies, h, self.damping_beta, self.trim_hz, self.reassembly_rtol, damping=damping)
+        return Integrator(bodies, h, self.damping_beta, damping=damping)
 
     @property
     def explicit_step(self):

@@ -18,6 +18,7 @@ small and dense) and imposes the ties in a saddle-point solve.
 import numpy as np
 
 from .. import _core
+from .damping import ViscousDamping
 from .integrator import BETA, GAMMA, Integrator
 
 
@@ -54,11 +55,11 @@ class TrimmedIntegrator(Integrator):
     """Newmark's average-acceleration rule (integrator.py) on the bodies with the trimmed mass M'(alpha(t)): at each
     step K + gamma/(beta h) C + M'/(beta h^2) and the ties D(alpha) in one dense saddle-point solve."""
 
-    def __init__(self, bodies, h, damping_beta=0.0, limit_hz=None, rtol=1e-9):
+    def __init__(self, bodies, h, damping_beta=0.0, limit_hz=None, rtol=1e-9, damping=None):
         if not limit_hz or limit_hz <= 0:
             raise ValueError("the trimmed integrator needs a trimming limit (Hz) > 0")
         self.bodies, self.h, self.cb = bodies, float(h), float(damping_beta)
-        self.C = self.cb * bodies.K
+        self.C = damping if damping is not None else ViscousDamping(self.cb * bodies.K)
         self.mass = TrimmedMass(bodies, limit_hz, rtol)
         self._rigid = {}
 

@@ -184,13 +184,16 @@ typedef struct _KFEvalPoint {
   PetscReal      *fhz, *w, *Tre, *Tim; /* grid (Hz, rad/s) and the reference response, nw blocks of t x a */
   PetscReal      *Tgre, *Tgim; /* its rigid-body and mechanism part on the grid (elastic measure), else NULL */
   PetscInt        nchk;        /* direct solves of the full order (src/verify/direct_check.c) */
-  PetscReal      *chk_w, *chk_T; /* their frequencies (rad/s) and undamped responses H (K - w^2 M)^-1 G, nchk x t x a */
+  PetscReal      *chk_w, *chk_T, *chk_Ti; /* their frequencies (rad/s) and responses (real, imaginary parts) under the
+                                   damping without modal ratios (KFCheckDampingModel_Private), nchk x t x a */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer, KFSystem, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFCheckDampingModel_Private(KFReducer, KFDamping *, PetscBool *viscous);
+PETSC_INTERN PetscErrorCode KFEvalPointDampedSolves_Private(KFReducer, KFSystem, KFEvalPoint *, const KFDamping *, PetscBool viscous);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
    angle of interest in Lfull */
 PETSC_INTERN PetscErrorCode KFReducerAddPerf_Private(KFReducer, KFFlexSolver);

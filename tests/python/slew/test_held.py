@@ -76,14 +76,23 @@ def _dense_model(scene_path):
     return M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], G[keep], H[:, keep], nrigid, velocity
 
 
-def _modal_elastic(M, K, G, H, nrigid, beta, u, t, velocity):
-    """The elastic outputs H Phi_f q_f(t) (H Phi_f q_f'(t) for the velocity rows) of M z'' + beta K z' + K z = G u(t)
-    from rest: the flexible modes' state space (each mode q'' + beta w^2 q' + w^2 q = phi^T G u) by
-    scipy.signal.lsim, exact for the piecewise-linear input on the fine grid t."""
+def _mode_damping(model):
+    """The viscous coefficient of each flexible mode, c(w^2) = 2 zeta w + alpha + beta w^2, under the scene's damping
+    model (a modal ratio and Rayleigh), which a held structure's time response takes as the frequency domain does."""
+    zeta = float(model.get("modal") or 0.0)
+    ray = model.get("rayleigh") or {}
+    a, b = float(ray.get("alpha", 0.0)), float(ray.get("beta", 0.0))
+    return lambda lam: 2 * zeta * np.sqrt(lam) + a + b * lam
+
+
+def _modal_elastic(M, K, G, H, nrigid, damping, u, t, velocity):
+    """The elastic outputs H Phi_f q_f(t) (H Phi_f q_f'(t) for the velocity rows) of M z'' + C z' + K z = G u(t)
+    from rest, C damping each flexible mode by its own coefficient: the modes' state space (each mode
+    q'' + c(w^2) q' + w^2 q = phi^T G u) by scipy.signal.lsim, exact for the piecewise-linear input on the fine grid t."""
     lam, Phi = sl.eigh(K, M)
     lam, Phi = lam[nrigid:], Phi[:, nrigid:]
     n = len(lam)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(lam), -beta * np.diag(lam)]])
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(lam), -np.diag(damping(lam))]])
     B = np.vstack([np.zeros((n, G.shape[1])), Phi.T @ G]).sum(axis=1, keepdims=True)
     C = np.hstack([H @ Phi, np.zeros((H.shape[0], n))])
     C[velocity] = np.roll(C[velocity], n, axis=1)
@@ -119,16 +128,19 @@ def test_held_response_matches_modal_solution(studies, name, kind, periods):
     u = study.profile(row["duration_s"]).torque(fine)
     M, K, G, H, nrigid, velocity = _dense_model(path)
     assert study.full.dofs == M.shape[0] and velocity.any() == (name == "plate_velocity")
-    ref_full = _modal_elastic(M, K, G, H, nrigid, study.damping_beta, u, fine, velocity)
+    damping = _mode_damping(study.damping_model)
+    ref_full = _modal_elastic(M, K, G, H, nrigid, damping, u, fine, velocity)
     b = study.model.bodies[0]
-    ref_red = _modal_elastic(b["M"], b["K"], b["G"], b["H"], nrigid, study.damping_beta, u, fine, velocity)
+    ref_red = _modal_elastic(b["M"], b["K"], b["G"], b["H"], nrigid, damping, u, fine, velocity)
     for ref, run in ((ref_full, row["full"]), (ref_red, row["reduced"])):
         at_t = np.stack([np.interp(t, fine, ref[:, o]) for o in range(ref.shape[1])], axis=1)
         scale = np.abs(at_t).max(axis=0)
         assert np.all(scale > 0)
-        # Newmark's phase error at h = 1/(200 f_top): measured up to 1.4e-3 of the peak on displacements and 2.5e-3
-        # on the velocity (which weighs the higher modes by their frequency)
-        tol = np.where(velocity, 4e-3, 2e-3)
+        # Newmark's period error at h = 1/(200 f_top): measured up to 2.5e-3 of the peak on displacements and 5.5e-3
+        # on the velocity (which weighs the higher modes by their frequency). Modal damping leaves the modes above the
+        # band at the scene's ratio (stiffness-proportional damping took them out), so a short pulse keeps them
+        # ringing and their period error shows in the history
+        tol = np.where(velocity, 8e-3, 4e-3)
         assert np.all(np.abs(run[2] - at_t).max(axis=0) < tol * scale), (name, kind)
     err_ref = (np.abs(ref_full - ref_red).max(axis=0) / np.abs(ref_full).max(axis=0)).max()
     assert abs(row["elastic_error"] - err_ref) < 0.05 * err_ref + 1e-5, (row["elastic_error"], err_ref)

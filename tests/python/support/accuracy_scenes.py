@@ -194,9 +194,26 @@ class ModalData:
         return out
 
 
-def modal_data(Ms, Ks, Gs, Hs):
+def modal_data(Ms, Ks, Gs, Hs, rigid_modes=None):
+    """The modes of (K_S, M_S) by one dense eigendecomposition. Given the geometric rigid modes
+    (reference.geometric_rigid_modes), those, M-orthonormalized, replace the eigensolver's null space as the rigid
+    modes: the eigensolver knows K_S's null space only to eps lam_max / lam_1 (2.2e-9 rad on the 2,755-dof solid), and
+    the rigid part is what the elastic measure subtracts, 670 times the elastic peak at the solid's band bottom. The
+    flexible modes stay the eigensolver's (their static sum L^0 agrees with kryflex's to 1.4e-10 there; modes solved
+    on the geometric modes' M-orthogonal complement gave 1e-9). The geometric modes must be as many as the zero
+    eigenvalues and carry no energy beyond K_S's rounding (ref.RIGID_RTOL lam_max)."""
     lam, phi = sl.eigh(Ks, Ms)
     rigid = np.abs(lam) <= ref.RIGID_RTOL * np.abs(lam).max()
+    if rigid_modes is not None and rigid_modes.shape[1]:
+        Q = rigid_modes @ np.linalg.inv(sl.cholesky(rigid_modes.T @ Ms @ rigid_modes))     # Q^T M Q = I
+        energy = np.abs(np.linalg.eigvalsh(Q.T @ Ks @ Q)).max()
+        if Q.shape[1] != rigid.sum() or energy > ref.RIGID_RTOL * np.abs(lam).max():
+            raise ValueError("the geometric rigid modes are not K_S's null space: %d of them, %d zero eigenvalues, "
+                             "their energy %.3g against the largest eigenvalue %.3g"
+                             % (Q.shape[1], rigid.sum(), energy, np.abs(lam).max()))
+        order = np.argsort(~rigid, kind="stable")       # the rigid ones first
+        lam, rigid, phi = lam[order], rigid[order], phi[:, order]
+        phi[:, :Q.shape[1]] = Q
     return ModalData(np.where(rigid, 0.0, lam), rigid, Hs @ phi, phi.T @ Gs)
 
 
@@ -208,6 +225,7 @@ class DenseReference:
         self.scene = ref.load_scene(scene_path)
         raw = self.scene.raw
         key = yaml.safe_dump({k: raw.get(k) for k in ("bodies", "joints", "inputs", "outputs")}, sort_keys=True)
+        key += "rigid modes from geometry, flexible from eigh\n"     # older caches are not reused
         for b in raw["bodies"].values():         # the body files' sizes and times: a regenerated body is a new key
             for k in ("mass", "stiffness", "nodes"):
                 st = os.stat(os.path.join(self.scene.here, b[k]))
@@ -229,7 +247,8 @@ class DenseReference:
             else:
                 import time
                 t0 = time.perf_counter()
-                data = modal_data(*ref.assemble(self.scene, list(angles)))
+                data = modal_data(*ref.assemble(self.scene, list(angles)),
+                                  rigid_modes=ref.geometric_rigid_modes(self.scene, list(angles)))
                 self.seconds += time.perf_counter() - t0
                 tmp = path + ".tmp.npz"
                 np.savez(tmp, lam=data.lam, rigid=data.rigid, hp=data.hp, pg=data.pg)

@@ -110,11 +110,11 @@ PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal 
 
 /* ---------------------------------------------------------------- flexible solve operator K+ */
 
-typedef struct _n_KFFlexSolver *KFFlexSolver;
+typedef struct _p_KFFlexSolver *KFFlexSolver;
 
-/* One MUMPS factorization of K_S with a statically determinate set of dofs held (or of K_S + shift M_S).
-   Options: -kf_shift <sigma>, -kf_refine <steps of iterative refinement, 1>, -kf_check_null_pivots,
-   -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
+/* K+ applied by factorizations of K_S with a statically determinate set of dofs held (or of K_S + shift M_S), a PETSc
+   object with one implementation per type (KFFlexSolverSetType). Options: -kf_shift <sigma>, -kf_refine <steps of
+   iterative refinement, 1>, -kf_check_null_pivots, -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
 PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
 /* an expansion point inside the band: the solver applies (K_S - sigma M_S)^-1 (sigma > 0, indefinite, MUMPS LDL^T) */
@@ -135,18 +135,24 @@ typedef struct {
   PetscInt       blocks_escalated; /* blocks still above -kf_refine_rtol after the refinement steps: escalated */
 } KFFlexSolverPerf;
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
-/* Which implementation of K+ (src/solve/bodywise.c): monolithic (one factorization of K_S per configuration),
-   bodywise (one factorization per body interior, kept on the KFSystem for all its configurations, and a dense
-   interface problem per configuration: the same K+ B), auto. -kf_flex_solver overrides. */
-typedef enum {
-  KF_FLEX_SOLVER_AUTO,
-  KF_FLEX_SOLVER_MONOLITHIC,
-  KF_FLEX_SOLVER_BODYWISE
-} KFFlexSolverType;
-PETSC_EXTERN const char *const KFFlexSolverTypes[];
+/* Which implementation applies K+ (src/solve/impls/<type>/): monolithic (one factorization of K_S per
+   configuration), bodywise (one factorization per body interior, kept on the KFSystem for all its configurations, and
+   a dense interface problem per configuration: the same K+ B), auto (body-wise where it pays, decided at the set-up).
+   -kf_flex_solver overrides KFFlexSolverSetType. New types: KFFlexSolverRegister(name, create), create filling the
+   solver's ops table (src/include/kryflex/flexsolverimpl.h). */
+typedef const char *KFFlexSolverType;
+#define KFFLEXSOLVERAUTO       "auto"
+#define KFFLEXSOLVERMONOLITHIC "monolithic"
+#define KFFLEXSOLVERBODYWISE   "bodywise"
+PETSC_EXTERN PetscErrorCode KFFlexSolverRegister(const char[], PetscErrorCode (*)(KFFlexSolver));
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetType(KFFlexSolver, KFFlexSolverType);
 /* the implementation set up (after KFFlexSolverSetUp): monolithic or bodywise */
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetType(KFFlexSolver, KFFlexSolverType *);
+/* options are read with this prefix (a reducer's solvers take the reducer's) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetOptionsPrefix(KFFlexSolver, const char[]);
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetFromOptions(KFFlexSolver);
+PETSC_EXTERN PetscErrorCode KFFlexSolverView(KFFlexSolver, PetscViewer);
+PETSC_EXTERN PetscErrorCode KFFlexSolverGetSystem(KFFlexSolver, KFSystem *);
 /* sparse factorizations made for the solves on this system so far (all its configurations; a null-pivot cross-check
    is not counted) */
 PETSC_EXTERN PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt *);

@@ -250,6 +250,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
 
     t0 = t1;
     PetscCall(KFFlexSolverCreate(sys, &solver));
+    PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer\'s options are the solver\'s */
     PetscCall(KFFlexSolverSetShift(solver, r->shift)); /* the reducer's value, whatever the global options say */
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));
@@ -468,6 +469,8 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, PetscInt nm
     KFFlexSolver solver;
 
     PetscCall(KFFlexSolverCreate(sys, &solver));
+
+    PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer\'s options are the solver\'s */
     PetscCall(KFFlexSolverSetShift(solver, r->shift));
     PetscCall(KFFlexSolverMoments(solver, 2, p->L0));
     PetscCall(KFReducerAddPerf_Private(r, solver));
@@ -581,6 +584,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     times[0] += t1 - t0;
     t0 = t1;
     PetscCall(KFFlexSolverCreate(sys, &solver));
+    PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer\'s options are the solver\'s */
     PetscCall(KFFlexSolverSetShift(solver, r->shift));
     PetscCall(KFFlexSolverSetUp(solver));
     PetscCall(PetscTime(&t1));

@@ -485,8 +485,11 @@ PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, P
 /* KFSystemEigenModes with the flexible solver's factorization (the modal baseline: one factorization, as Krylov) */
 PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
+  KFSystem sys;
+
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(solver->sys, solver, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFFlexSolverGetSystem(solver, &sys));
+  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 

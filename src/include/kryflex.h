@@ -153,6 +153,10 @@ PETSC_EXTERN PetscErrorCode KFFlexSolverSetOptionsPrefix(KFFlexSolver, const cha
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetFromOptions(KFFlexSolver);
 PETSC_EXTERN PetscErrorCode KFFlexSolverView(KFFlexSolver, PetscViewer);
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetSystem(KFFlexSolver, KFSystem *);
+/* the body-wise implementation's settings (nothing on another type): bodies spread over the ranks, and the system dofs
+   from which auto takes it (-kf_bodywise_spread, -kf_bodywise_min_dofs) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverBodywiseSetSpread(KFFlexSolver, PetscBool);
+PETSC_EXTERN PetscErrorCode KFFlexSolverBodywiseSetMinDofs(KFFlexSolver, PetscInt);
 /* sparse factorizations made for the solves on this system so far (all its configurations; a null-pivot cross-check
    is not counted) */
 PETSC_EXTERN PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt *);

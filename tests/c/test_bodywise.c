@@ -132,6 +132,25 @@ int main(int argc, char **argv)
     PetscCall(Solve(sys1, KFFLEXSOLVERAUTO, 0, &X1, used));
     PetscCall(CheckTrue("auto at 4 configurations of a scene below -kf_bodywise_min_dofs (20000): monolithic", (PetscBool)(!strcmp(used, KFFLEXSOLVERMONOLITHIC))));
     PetscCall(MatDestroy(&X1));
+    { /* the threshold through the implementation's composed setter: body-wise; a monolithic solver ignores the call */
+      KFFlexSolver     f;
+      KFFlexSolverType t;
+
+      PetscCall(KFFlexSolverCreate(sys1, &f));
+      PetscCall(KFFlexSolverSetFromOptions(f)); /* auto, the default type */
+      PetscCall(KFFlexSolverBodywiseSetMinDofs(f, 0));
+      PetscCall(KFFlexSolverSetUp(f));
+      PetscCall(KFFlexSolverGetType(f, &t));
+      PetscCall(CheckTrue("auto at 4 configurations after KFFlexSolverBodywiseSetMinDofs(0): body-wise", (PetscBool)!strcmp(t, KFFLEXSOLVERBODYWISE)));
+      PetscCall(KFFlexSolverDestroy(&f));
+      PetscCall(KFFlexSolverCreate(sys1, &f));
+      PetscCall(KFFlexSolverSetType(f, KFFLEXSOLVERMONOLITHIC));
+      PetscCall(KFFlexSolverBodywiseSetMinDofs(f, 0));
+      PetscCall(KFFlexSolverSetUp(f));
+      PetscCall(KFFlexSolverGetType(f, &t));
+      PetscCall(CheckTrue("a monolithic solver ignores KFFlexSolverBodywiseSetMinDofs", (PetscBool)!strcmp(t, KFFLEXSOLVERMONOLITHIC)));
+      PetscCall(KFFlexSolverDestroy(&f));
+    }
     PetscCall(KFSystemDestroy(&sys1));
   }
   PetscCall(PetscSNPrintf(what, sizeof(what), "factorizations over 4 configurations: monolithic %" PetscInt_FMT " (4), body-wise %" PetscInt_FMT " (3 bodies), auto %" PetscInt_FMT " (3)", nmono, nbody, nauto));

@@ -570,6 +570,8 @@ static PetscErrorCode KFFlexSolverDestroy_Bodywise(KFFlexSolver solver)
   PetscFunctionBegin;
   PetscCall(KFBodywiseReset((KFBodywise)solver->data));
   PetscCall(PetscFree(solver->data));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetSpread_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetMinDofs_C", NULL));
   PetscFunctionReturn(0);
 }
 
@@ -872,6 +874,44 @@ static PetscErrorCode KFFlexSolverView_Bodywise(KFFlexSolver solver, PetscViewer
   PetscFunctionReturn(0);
 }
 
+static PetscErrorCode KFFlexSolverBodywiseSetSpread_Bodywise(KFFlexSolver solver, PetscBool spread)
+{
+  PetscFunctionBegin;
+  ((KFBodywise)solver->data)->spread = spread;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverBodywiseSetMinDofs_Bodywise(KFFlexSolver solver, PetscInt min_dofs)
+{
+  PetscFunctionBegin;
+  PetscCheck(min_dofs >= 0, PetscObjectComm((PetscObject)solver), PETSC_ERR_ARG_OUTOFRANGE, "the body-wise solve's least system dofs must be >= 0; got %" PetscInt_FMT, min_dofs);
+  ((KFBodywise)solver->data)->min_dofs = min_dofs;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFFlexSolverBodywiseSetSpread - whether each body is factored on one rank, the bodies spread over the ranks (when
+  there are at least as many bodies as ranks; the default), or every body on all ranks (-kf_bodywise_spread). Does
+  nothing on a solver of another type.
+*/
+PetscErrorCode KFFlexSolverBodywiseSetSpread(KFFlexSolver solver, PetscBool spread)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(solver, "KFFlexSolverBodywiseSetSpread_C", (KFFlexSolver, PetscBool), (solver, spread));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFFlexSolverBodywiseSetMinDofs - the system dofs from which auto takes the body-wise solve (default 20000;
+  -kf_bodywise_min_dofs). Does nothing on a solver of another type.
+*/
+PetscErrorCode KFFlexSolverBodywiseSetMinDofs(KFFlexSolver solver, PetscInt min_dofs)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(solver, "KFFlexSolverBodywiseSetMinDofs_C", (KFFlexSolver, PetscInt), (solver, min_dofs));
+  PetscFunctionReturn(0);
+}
+
 PETSC_INTERN PetscErrorCode KFFlexSolverCreate_Bodywise(KFFlexSolver solver)
 {
   KFBodywise bw;
@@ -886,6 +926,8 @@ PETSC_INTERN PetscErrorCode KFFlexSolverCreate_Bodywise(KFFlexSolver solver)
   solver->ops->solve          = KFFlexSolverSolve_Bodywise;
   solver->ops->view           = KFFlexSolverView_Bodywise;
   solver->ops->destroy        = KFFlexSolverDestroy_Bodywise;
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetSpread_C", KFFlexSolverBodywiseSetSpread_Bodywise));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetMinDofs_C", KFFlexSolverBodywiseSetMinDofs_Bodywise));
   PetscFunctionReturn(0);
 }
 

@@ -475,6 +475,8 @@ PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerView(KFReducer, PetscViewer);
 PETSC_EXTERN PetscErrorCode KFReducerViewFromOptions(KFReducer, PetscObject, const char[]);
+/* releases the results, models and caches of the last solve; the settings stay */
+PETSC_EXTERN PetscErrorCode KFReducerReset(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerDestroy(KFReducer *);
 /* after Solve: the model of the chosen method (borrowed); both models (multi NULL when not built) */
 PETSC_EXTERN PetscErrorCode KFReducerGetReducedModel(KFReducer, KFReducedModel *);

@@ -427,6 +427,19 @@ PetscErrorCode KFReducerGetReductionRule(KFReducer r, const char **rule)
   PetscFunctionReturn(0);
 }
 
+/*
+  KFReducerReset - releases what a solve left: its results and models, and the search's cache (which a search stopped
+  by an error leaves behind); the settings stay.
+*/
+PetscErrorCode KFReducerReset(KFReducer r)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(KFReducerResultsReset_Private(r));
+  if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerDestroy(KFReducer *reducer)
 {
   KFReducer r;
@@ -438,7 +451,7 @@ PetscErrorCode KFReducerDestroy(KFReducer *reducer)
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   if (--((PetscObject)r)->refct > 0) PetscFunctionReturn(0);
   if (r->ops->destroy) PetscCall((*r->ops->destroy)(r));
-  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(KFReducerReset(r));
   PetscCall(KFSceneDestroy(&r->scene));
   PetscCall(PetscFree(r->angles));
   PetscCall(PetscFree(r->alpha_g));

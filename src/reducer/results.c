@@ -82,7 +82,6 @@ PetscErrorCode KFReducerResultsReset_Private(KFReducer r)
   r->rule[0] = 0;
   PetscCall(KFReducedModelDestroy(&r->single));
   PetscCall(KFReducedModelDestroy(&r->multi_model));
-  PetscCall(KFCandidateCacheReset_Private(r)); /* a search stopped by an error leaves it behind */
   r->solved = PETSC_FALSE;
   PetscFunctionReturn(0);
 }

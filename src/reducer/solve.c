@@ -890,7 +890,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
-  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(KFReducerReset(r));
   r->verify_check_worst    = -1;
   r->verify_check_worst_hz = 0;
   r->verify_check_seconds  = 0;

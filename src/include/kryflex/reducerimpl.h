@@ -53,6 +53,7 @@ struct _p_KFReducer {
   PETSCHEADER(struct _KFReducerOps);
   void     *data; /* the implementation's */
   void     *candcache; /* the last candidate's finished body basis (visit.c), during a search only */
+  PetscErrorCode (*candcache_reset)(KFReducer); /* releases it: set with it, called by KFReducerReset */
   KFScene   scene;
   PetscBool setupcalled, solved;
 

@@ -15,28 +15,6 @@ static PetscBool KFReducerFullMoments_Private(KFReducer r)
   return (PetscBool)(r->verify || (r->full_moments_set && r->full_moments));
 }
 
-PetscErrorCode KFReducerAddPerf_Private(KFReducer r, KFFlexSolver solver)
-{
-  KFFlexSolverPerf p;
-
-  PetscFunctionBegin;
-  PetscCall(KFFlexSolverGetPerf(solver, &p));
-  r->perf.factor_seconds += p.factor_seconds;
-  r->perf.solve_seconds += p.solve_seconds;
-  r->perf.memory_estimate_mb = PetscMax(r->perf.memory_estimate_mb, p.memory_estimate_mb);
-  r->perf.residual_first_max = PetscMax(r->perf.residual_first_max, p.residual_first_max);
-  r->perf.residual_final_max = PetscMax(r->perf.residual_final_max, p.residual_final_max);
-  r->perf.solve_calls += p.solve_calls;
-  r->perf.solve_columns += p.solve_columns;
-  r->perf.refinement_solves += p.refinement_solves;
-  r->perf.blocks += p.blocks;
-  r->perf.blocks_refined += p.blocks_refined;
-  r->perf.blocks_unconverged += p.blocks_unconverged;
-  r->perf.blocks_escalated += p.blocks_escalated;
-  PetscFunctionReturn(0);
-}
-
-
 /* one configuration the solve visits */
 typedef struct {
   const PetscReal *angles;   /* nrev (points into the reducer's arrays) */
@@ -881,7 +859,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   KFEvalPoint *evals;
   PetscInt     neval = 0, a, t, nfull;
   PetscReal   *Lfull;
-  PetscBool    search, krylov;
+  PetscBool    search;
   PetscLogDouble tstart, tend;
 
   PetscFunctionBegin;
@@ -898,9 +876,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
   PetscCall(PetscTime(&tstart));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
-  PetscCall(PetscObjectTypeCompare((PetscObject)r, KFREDUCERKRYLOV, &krylov));
-  search = (PetscBool)(r->search && krylov);
-  if (r->search && !krylov) PetscCall(KFReducerNote_Private(r, "the %s basis has no accuracy search: its fixed recipe was used (-kf_search applies to the krylov type)", ((PetscObject)r)->type_name));
+  search = (PetscBool)(r->search && r->ops->blocks);
+  if (r->search && !r->ops->blocks) PetscCall(KFReducerNote_Private(r, "the %s basis has no accuracy search: its fixed recipe was used (-kf_search applies to the krylov type)", ((PetscObject)r)->type_name));
   /* moments: the fixed number, the search's most, or the paper's 10 for a fixed recipe without a number */
   r->build_moments = r->moments != PETSC_DECIDE ? r->moments : (search ? r->moments_max : 10);
   if (r->build_moments <= r->output_blocks) r->build_moments = r->output_blocks + 1;

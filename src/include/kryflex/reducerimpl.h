@@ -34,6 +34,9 @@ struct _KFReducerOps {
      kept NULL: the whole basis */
   PetscErrorCode (*vectors)(KFReducer, KFSystem, KFFlexSolver, KFReducerBasis *, const PetscBool kept[], PetscBool static_correction, Mat *X);
   PetscErrorCode (*destroybasis)(KFReducer, KFReducerBasis *);
+  /* the basis comes in blocks of moments whose leading blocks are sub-bases: the accuracy search applies (cleared
+     with the table when the type changes) */
+  PetscBool blocks;
 };
 
 /* A named result array (column-major over shape) */

@@ -1,18 +1,28 @@
 /*
   kryflex: Krylov reduction of articulated multi-flexible-body structures (A. Y. Lee, JPL).
 
-  Stages, one folder each under src/:
+  Stages, one folder each under src/, from the foundations to the reduction that drives them:
+    util/      shared helpers: the package initializer (class ids, log events), progress lines, parallel dense
+               products in extended precision, interrupts, error recording
+    dense/     small dense algebra: Krylov modes, importance, static correction,
+               reassembly at any angle (eq. 12-24), moments and frequency responses
+    damping/   the damping description (modal, Rayleigh, structural) shared by the reference and the reduced model
+    measure/   comparison measures: frequency grids, FRF and moment errors, rigid-mode tolerances
     body/      load and check one body's M and K
     scene/     bodies, joints, inputs, outputs: the tree and its dof maps
     assemble/  P(alpha) by elimination and the full-order system (eq. 2-4)
     rigid/     rigid-body and mechanism modes from geometry
-    solve/     the flexible solve operator K+ (one MUMPS factorization)
+    solve/     the flexible solve operator K+, a PETSc object (KFFlexSolver): MUMPS factorization (mumps.c), held
+               dofs, and one implementation per type under solve/impls/ (monolithic, bodywise)
     krylov/    deflated block Krylov basis in the M-inner product (eq. 8-9), raw recurrence
     moments/   low-frequency moments L^k of the full-order system (eq. 5)
-    verify/    full-order eigensolve with SLEPc (verification only)
+    verify/    full-order eigensolve with SLEPc and the direct check of the verification's reference
     project/   reduced system (eq. 10-11) and reduced bodies (eq. 18-19)
-    dense/     small dense algebra: Krylov modes, importance, static correction,
-               reassembly at any angle (eq. 12-24), moments and frequency responses
+    model/     the reduced model (KFReducedModel): reassembly at any angle, trimming, its damping and outputs
+    io/        reduced-model files (HDF5): the one writer and the one reader
+    reducer/   the reduction as a PETSc object (KFReducer): options, the per-configuration pipeline, the accuracy
+               search, the verification; one basis per type under reducer/impls/ (krylov, eigen)
+    include/   this header, kryflex_impl.h (private data of the stages) and kryflex/*impl.h (the objects')
 
   Dense arrays in this API are column-major, replicated on every rank.
 */

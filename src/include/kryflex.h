@@ -22,7 +22,7 @@
     io/        reduced-model files (HDF5): the one writer and the one reader
     reducer/   the reduction as a PETSc object (KFReducer): options, the per-configuration pipeline, the accuracy
                search, the verification; one basis per type under reducer/impls/ (krylov, eigen)
-    include/   this header, kryflex_impl.h (private data of the stages) and kryflex/*impl.h (the objects')
+    include/   this header, kryflex_impl.h (private data of the stages) and kryflex/<object>impl.h (the objects' private data)
 
   Dense arrays in this API are column-major, replicated on every rank.
 */

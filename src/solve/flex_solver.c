@@ -3,61 +3,13 @@
    K_S. How K_h^-1 is applied is the implementation's (src/solve/impls/<type>/, registered in src/solve/register.c). */
 #include <kryflex/flexsolverimpl.h>
 
-PetscFunctionList KFFlexSolverList      = NULL;
-static PetscBool  KFFlexSolverRegisterAllCalled = PETSC_FALSE;
-static char     **KFFlexSolverNames = NULL; /* the registered names, in order: KFFlexSolverCheckOptions reads each one's options */
-static PetscInt   KFFlexSolverNamesCount = 0;
-
-static PetscErrorCode KFFlexSolverFinalizePackage(void)
-{
-  PetscFunctionBegin;
-  PetscCall(PetscFunctionListDestroy(&KFFlexSolverList));
-  for (PetscInt i = 0; i < KFFlexSolverNamesCount; i++) PetscCall(PetscFree(KFFlexSolverNames[i]));
-  PetscCall(PetscFree(KFFlexSolverNames));
-  KFFlexSolverNamesCount        = 0;
-  KFFlexSolverRegisterAllCalled = PETSC_FALSE;
-  PetscFunctionReturn(0);
-}
-
-/* the registry: filled once per PetscInitialize, on the first solver made */
-static PetscErrorCode KFFlexSolverRegisterAllOnce(void)
-{
-  PetscFunctionBegin;
-  if (KFFlexSolverRegisterAllCalled) PetscFunctionReturn(0);
-  KFFlexSolverRegisterAllCalled = PETSC_TRUE;
-  PetscCall(KFInitialize());
-  PetscCall(PetscRegisterFinalize(KFFlexSolverFinalizePackage));
-  PetscCall(KFFlexSolverRegisterAll());
-  PetscFunctionReturn(0);
-}
-
-/*
-  KFFlexSolverRegister - adds an implementation of the flexible solve: KFFlexSolverSetType(solver, name) then calls
-  create(solver), which fills solver->ops and solver->data.
-*/
-PetscErrorCode KFFlexSolverRegister(const char name[], PetscErrorCode (*create)(KFFlexSolver))
-{
-  char **names;
-
-  PetscFunctionBegin;
-  PetscCall(KFInitialize());
-  PetscCall(PetscFunctionListAdd(&KFFlexSolverList, name, create));
-  PetscCall(PetscMalloc1(KFFlexSolverNamesCount + 1, &names));
-  PetscCall(PetscArraycpy(names, KFFlexSolverNames, KFFlexSolverNamesCount));
-  PetscCall(PetscStrallocpy(name, &names[KFFlexSolverNamesCount]));
-  PetscCall(PetscFree(KFFlexSolverNames));
-  KFFlexSolverNames = names;
-  KFFlexSolverNamesCount++;
-  PetscFunctionReturn(0);
-}
-
 /* A solver with no type yet, on sys (NULL: a solver whose options are only read and checked) */
 static PetscErrorCode KFFlexSolverCreate_Private(MPI_Comm comm, KFSystem sys, KFFlexSolver *solver)
 {
   KFFlexSolver f;
 
   PetscFunctionBegin;
-  PetscCall(KFFlexSolverRegisterAllOnce());
+  PetscCall(KFFlexSolverRegisterAll());
   PetscCall(PetscHeaderCreate(f, KF_FLEXSOLVER_CLASSID, "KFFlexSolver", "Flexible solve operator K+", "KF", comm, KFFlexSolverDestroy, KFFlexSolverView));
   f->sys         = sys;
   f->refine      = 1;
@@ -105,7 +57,7 @@ PetscErrorCode KFFlexSolverSetType(KFFlexSolver solver, KFFlexSolverType type)
   PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the type before KFFlexSolverSetUp()");
   PetscCall(PetscObjectTypeCompare((PetscObject)solver, type, &same));
   if (same) PetscFunctionReturn(0);
-  PetscCall(KFFlexSolverRegisterAllOnce());
+  PetscCall(KFFlexSolverRegisterAll());
   PetscCall(PetscFunctionListFind(KFFlexSolverList, type, &create));
   PetscCheck(create, PetscObjectComm((PetscObject)solver), PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown flexible solver type '%s': give auto, monolithic or bodywise (or a type added by KFFlexSolverRegister)", type);
   if (solver->ops->destroy) PetscCall((*solver->ops->destroy)(solver));
@@ -228,21 +180,24 @@ PetscErrorCode KFFlexSolverSetFromOptions(KFFlexSolver solver)
    (KFReducerSetFromOptions) */
 PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm comm, const char prefix[])
 {
-  KFFlexSolver solver;
-  PetscReal    cond_max;
-  const char  *chosen;
+  KFFlexSolver       solver;
+  PetscReal          cond_max;
+  const char        *chosen;
+  const char *const *names;
+  PetscInt           ntypes;
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverCreate_Private(comm, NULL, &solver));
   PetscCall(PetscObjectSetOptionsPrefix((PetscObject)solver, prefix));
   PetscCall(KFFlexSolverSetFromOptions(solver));
   chosen = ((PetscObject)solver)->type_name;
-  for (PetscInt i = 0; i < KFFlexSolverNamesCount; i++) { /* the options of the types not chosen are checked too */
+  PetscCall(KFFlexSolverGetTypeNames(&ntypes, &names));
+  for (PetscInt i = 0; i < ntypes; i++) { /* the options of the types not chosen are checked too */
     PetscBool same;
 
-    PetscCall(PetscStrcmp(KFFlexSolverNames[i], chosen, &same));
+    PetscCall(PetscStrcmp(names[i], chosen, &same));
     if (same) continue;
-    PetscCall(KFFlexSolverSetType(solver, KFFlexSolverNames[i]));
+    PetscCall(KFFlexSolverSetType(solver, names[i]));
     PetscCall(KFFlexSolverTypeOptions(solver));
     chosen = ((PetscObject)solver)->type_name;
   }
@@ -278,6 +233,13 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
   PetscCall(KFFlexSolverRefineSteps(solver));
   if (solver->shift < 0) PetscCall(KFFlexSolverSetType(solver, KFFLEXSOLVERMONOLITHIC));
   PetscCall((*solver->ops->setup)(solver));
+  if (solver->handoff) { /* the type found it does not apply here: the one it named sets the solver up instead */
+    const char *handoff = solver->handoff;
+
+    solver->handoff = NULL;
+    PetscCall(KFFlexSolverSetType(solver, handoff));
+    PetscCall((*solver->ops->setup)(solver));
+  }
   solver->setup = PETSC_TRUE;
   PetscFunctionReturn(0);
 }

@@ -8,8 +8,8 @@
 
 struct _KFFlexSolverOps {
   PetscErrorCode (*setfromoptions)(KFFlexSolver, PetscOptionItems *);
-  /* the factorization(s); an implementation that does not apply may hand the solver to another type
-     (KFFlexSolverSetType, then that type's setup) */
+  /* the factorization(s); an implementation that does not apply names another type in solver->handoff and returns:
+     KFFlexSolverSetUp sets that type up instead */
   PetscErrorCode (*setup)(KFFlexSolver);
   /* X = K_h^-1 W for a block W already made self-equilibrated and zero on the held rows */
   PetscErrorCode (*solve)(KFFlexSolver, Mat W, Mat X);
@@ -31,12 +31,14 @@ struct _p_KFFlexSolver {
   PetscBool refine_set;      /* -kf_refine given: no default by the factor (KFFlexSolverRefineSteps) */
   PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
   PetscBool setfromoptionscalled, setup;
+  const char *handoff;       /* set by an implementation's setup that does not apply: the type to set up instead */
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
 };
 
 PETSC_EXTERN PetscClassId      KF_FLEXSOLVER_CLASSID; /* src/util/package.c */
 PETSC_EXTERN PetscFunctionList KFFlexSolverList;
-PETSC_INTERN PetscErrorCode    KFFlexSolverRegisterAll(void); /* src/solve/register.c */
+PETSC_INTERN PetscErrorCode    KFFlexSolverRegisterAll(void); /* src/solve/register.c: the built-in types, once */
+PETSC_INTERN PetscErrorCode    KFFlexSolverGetTypeNames(PetscInt *, const char *const **);
 PETSC_INTERN PetscErrorCode    KFFlexSolverCreate_Monolithic(KFFlexSolver);
 PETSC_INTERN PetscErrorCode    KFFlexSolverCreate_Bodywise(KFFlexSolver);
 PETSC_INTERN PetscErrorCode    KFFlexSolverCreate_Auto(KFFlexSolver);

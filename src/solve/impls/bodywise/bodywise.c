@@ -672,16 +672,8 @@ static PetscErrorCode KFBodyFactorsGet(KFSystem sys, PetscReal shift, KFBodyFact
   PetscFunctionReturn(0);
 }
 
-/* The solver handed to the monolithic implementation (the body-wise solve does not apply, or auto declines it) */
-static PetscErrorCode KFFlexSolverSetUpMonolithicInstead(KFFlexSolver solver)
-{
-  PetscFunctionBegin;
-  PetscCall(KFFlexSolverSetType(solver, KFFLEXSOLVERMONOLITHIC));
-  PetscCall((*solver->ops->setup)(solver));
-  PetscFunctionReturn(0);
-}
-
-/* Body-wise where it applies (auto: where it pays, KFBodywiseWanted), else handed to the monolithic implementation */
+/* Body-wise where it applies (auto: where it pays, KFBodywiseWanted), else handed to the monolithic implementation
+   (solver->handoff) */
 static PetscErrorCode KFFlexSolverSetUp_Bodywise(KFFlexSolver solver)
 {
   KFBodywise       bw  = (KFBodywise)solver->data;
@@ -694,8 +686,8 @@ static PetscErrorCode KFFlexSolverSetUp_Bodywise(KFFlexSolver solver)
 
   PetscFunctionBegin;
   PetscCall(KFBodywiseWanted(solver, &use));
-  if (!use) {
-    PetscCall(KFFlexSolverSetUpMonolithicInstead(solver));
+  if (!use) { /* the monolithic solve instead */
+    solver->handoff = KFFLEXSOLVERMONOLITHIC;
     PetscFunctionReturn(0);
   }
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -711,7 +703,7 @@ static PetscErrorCode KFFlexSolverSetUp_Bodywise(KFFlexSolver solver)
     PetscCall(PetscFree(solver->held));
     solver->nheld = 0;
     PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
-    PetscCall(KFFlexSolverSetUpMonolithicInstead(solver));
+    solver->handoff = KFFLEXSOLVERMONOLITHIC;
     PetscFunctionReturn(0);
   }
   if (asked_auto) PetscCall(PetscObjectChangeTypeName((PetscObject)solver, KFFLEXSOLVERBODYWISE));

@@ -175,6 +175,48 @@ static PetscErrorCode KFReducerAddFactorSetUp_Private(KFFlexSolver solver, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The per-configuration pipeline that the fixed recipe and the search share: the system at the configuration's
+   angles, its rigid modes, its factored flexible solver (the reducer's prefix and shift) and the basis the reducer's
+   type builds with it. times[0..2]: assembly, factorization, basis; setup_s: the factorization stage outside MUMPS. */
+static PetscErrorCode KFReducerConfigBasis_Private(KFReducer r, KFSystem sys, PetscInt nrev, const PetscReal angles[], PetscReal times[], PetscReal *setup_s, Mat *Phir, PetscReal *rigid_res, KFFlexSolver *solver, KFReducerBasis *basis)
+{
+  MPI_Comm       comm = PetscObjectComm((PetscObject)r);
+  PetscLogDouble t0, t1;
+  char           label[128];
+
+  PetscFunctionBegin;
+  /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
+  PetscCall(KFInterruptCheck(comm));
+  PetscCall(KFReducerConfigLabel_Private(nrev, angles, label, sizeof(label)));
+  if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
+  else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFSystemSetAngles(sys, angles));
+  PetscCall(KFSystemGetRigidModes(sys, Phir, rigid_res));
+  PetscCall(PetscTime(&t1));
+  times[0] += t1 - t0;
+
+  t0 = t1;
+  PetscCall(KFFlexSolverCreate(sys, solver));
+  PetscCall(KFFlexSolverSetOptionsPrefix(*solver, ((PetscObject)r)->prefix)); /* the reducer's options are the solver's */
+  PetscCall(KFFlexSolverSetShift(*solver, r->shift)); /* the reducer's value, whatever the global options say */
+  PetscCall(KFFlexSolverSetUp(*solver));
+  PetscCall(PetscTime(&t1));
+  times[1] += t1 - t0;
+  PetscCall(KFReducerAddFactorSetUp_Private(*solver, t1 - t0, setup_s));
+  PetscCall(KFInterruptCheck(comm));
+
+  t0 = t1;
+  PetscCall(PetscMemzero(basis, sizeof(*basis)));
+  basis->gram_condition = (PetscReal)NAN;
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+  PetscCall((*r->ops->buildbasis)(r, sys, *solver, basis));
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+  PetscCall(PetscTime(&t1));
+  times[2] += t1 - t0;
+  PetscFunctionReturn(0);
+}
+
 /* the stage times a solve records, in the order of its times[] */
 static const char *const KFSolveTimeNames[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
 
@@ -296,40 +338,10 @@ static PetscErrorCode KFReducerFixedConfig_Private(KFReducer r, KFFixed *fx, Pet
   PetscBool      *kept;
   PetscInt        nkept = 0, nheld, c, tam = fx->nmom * fx->t * fx->a;
   PetscLogDouble  t0, t1;
-  char            label[128];
 
   PetscFunctionBegin;
-  /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
-  PetscCall(KFInterruptCheck(fx->comm));
-  PetscCall(KFReducerConfigLabel_Private(fx->nrev, cfg->angles, label, sizeof(label)));
-  if (fx->nrev) PetscCall(KFProgress(fx->comm, "configuration %s deg", label));
-  else PetscCall(KFProgress(fx->comm, "the structure (no revolute joint)"));
+  PetscCall(KFReducerConfigBasis_Private(r, sys, fx->nrev, cfg->angles, fx->times, &fx->setup_s, &Phir, &rigid_res, &solver, &basis));
   PetscCall(PetscTime(&t0));
-  PetscCall(KFSystemSetAngles(sys, cfg->angles));
-  PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
-  PetscCall(PetscTime(&t1));
-  fx->times[0] += t1 - t0;
-
-  t0 = t1;
-  PetscCall(KFFlexSolverCreate(sys, &solver));
-  PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer's options are the solver's */
-  PetscCall(KFFlexSolverSetShift(solver, r->shift)); /* the reducer's value, whatever the global options say */
-  PetscCall(KFFlexSolverSetUp(solver));
-  PetscCall(PetscTime(&t1));
-  fx->times[1] += t1 - t0;
-  PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &fx->setup_s));
-  PetscCall(KFInterruptCheck(fx->comm));
-
-  t0 = t1;
-  PetscCall(PetscMemzero(&basis, sizeof(basis)));
-  basis.gram_condition = (PetscReal)NAN;
-  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-  PetscCall((*r->ops->buildbasis)(r, sys, solver, &basis));
-  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-  PetscCall(PetscTime(&t1));
-  fx->times[2] += t1 - t0;
-
-  t0 = t1;
   c = basis.size;
   PetscCall(PetscMalloc4(c, &imp, c, &kept, c, &freq, c, &keptf));
   PetscCall(KFReducerFixedModes_Private(r, fx, &basis, imp, kept, freq, keptf, &nkept));
@@ -627,35 +639,11 @@ static PetscErrorCode KFReducerSearchVisit_Private(KFReducer r, KFSearch *st, Pe
   Mat            Phir;
   PetscReal      rigid_res;
   PetscInt       nheld;
-  PetscLogDouble t0, t1;
-  char           label[128], place[160];
+  char           place[160];
 
   PetscFunctionBegin;
-  PetscCall(KFInterruptCheck(st->comm));
-  PetscCall(KFReducerConfigLabel_Private(st->nrev, cfg->angles, label, sizeof(label)));
   PetscCall(KFReducerConfigPlace_Private(st->nrev, cfg->angles, place, sizeof(place)));
-  if (st->nrev) PetscCall(KFProgress(st->comm, "configuration %s deg", label));
-  else PetscCall(KFProgress(st->comm, "the structure (no revolute joint)"));
-  PetscCall(PetscTime(&t0));
-  PetscCall(KFSystemSetAngles(sys, cfg->angles));
-  PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
-  PetscCall(PetscTime(&t1));
-  st->times[0] += t1 - t0;
-  t0 = t1;
-  PetscCall(KFFlexSolverCreate(sys, &solver));
-  PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer's options are the solver's */
-  PetscCall(KFFlexSolverSetShift(solver, r->shift));
-  PetscCall(KFFlexSolverSetUp(solver));
-  PetscCall(PetscTime(&t1));
-  st->times[1] += t1 - t0;
-  PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &st->setup_s));
-  t0 = t1;
-  v->basis.gram_condition = (PetscReal)NAN;
-  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-  PetscCall((*r->ops->buildbasis)(r, sys, solver, &v->basis));
-  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-  PetscCall(PetscTime(&t1));
-  st->times[2] += t1 - t0;
+  PetscCall(KFReducerConfigBasis_Private(r, sys, st->nrev, cfg->angles, st->times, &st->setup_s, &Phir, &rigid_res, &solver, &v->basis));
   PetscCall(PetscMalloc1(st->nrev1, &v->angles));
   PetscCall(PetscArraycpy(v->angles, cfg->angles, st->nrev1));
   v->interest = cfg->interest;

@@ -318,94 +318,101 @@ static PetscErrorCode KFBodyErrorsCheck(KFScene s, KFBodyError *e)
   SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread%s)", e->msg, (int)first, e->code == PETSC_ERR_MEM ? "; the ranks of a node factor their bodies at the same time, each checked against its share of the node's memory unless -kf_memory_limit_mb is given" : "");
 }
 
-/* All bodies' factors: spread, each body gathered onto its owner and factored there (the ranks at once), then S_b
-   broadcast from the owner; else each body on all ranks in turn. */
+/* Spread bodies: each gathered onto its owner and factored there, the ranks at once, then S_b broadcast from the owner */
+static PetscErrorCode KFBodyFactorsSetUpSpread(KFScene s, const char prefix[], PetscReal shift, KFBodyFactors bf)
+{
+  PetscMPIInt rank;
+  PetscInt   *nnull, *nneg;
+  Mat        *Kq, *Mq;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscCalloc4(s->nb, &nnull, s->nb, &nneg, s->nb, &Kq, s->nb, &Mq));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B    = &s->bodies[b];
+    PetscBool   mine = (PetscBool)(rank == bf->owner[b]);
+    IS          is;
+    Mat        *sub;
+
+    PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
+    PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
+    PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
+    if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
+    if (mine) Kq[b] = sub[0];
+    PetscCall(MatDestroySubMatrices(1, &sub));
+    if (shift > 0) {
+      PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
+      if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
+      if (mine) Mq[b] = sub[0];
+      PetscCall(MatDestroySubMatrices(1, &sub));
+    }
+    PetscCall(ISDestroy(&is));
+    PetscCall(KFBodySFCreate(s, b, bf));
+  }
+  /* the ranks factor their own bodies at the same time: no communication until every rank is done */
+  {
+    KFBodyError    e = {0, ""};
+    PetscErrorCode ierr = 0;
+    PetscBool      has_limit, share = PETSC_FALSE;
+    MPI_Comm       node;
+    PetscMPIInt    nn;
+
+    /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
+       memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
+       theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
+       (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
+    char limit_name[256];
+
+    PetscCall(PetscSNPrintf(limit_name, sizeof(limit_name), "-%skf_memory_limit_mb", prefix ? prefix : ""));
+    PetscCall(PetscOptionsHasName(NULL, NULL, limit_name, &has_limit));
+    PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+    PetscCallMPI(MPI_Comm_size(node, &nn));
+    if (!has_limit && nn > 1) {
+      PetscReal avail = KFNodeMemoryAvailableMB(), least;
+      char      val[32];
+
+      PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
+      if (least > 0) {
+        PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
+        PetscCall(PetscOptionsSetValue(NULL, limit_name, val));
+        share = PETSC_TRUE;
+      }
+    }
+    PetscCallMPI(MPI_Comm_free(&node));
+    PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
+    for (PetscInt b = 0; b < s->nb && !ierr; b++)
+      if (Kq[b]) ierr = KFBodyFactorSetUp(s, prefix, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
+    PetscCall(PetscPopErrorHandler());
+    if (share) PetscCall(PetscOptionsClearValue(NULL, limit_name));
+    if (ierr && !e.code) e.code = ierr;
+    for (PetscInt b = 0; b < s->nb; b++) {
+      PetscCall(MatDestroy(&Kq[b]));
+      PetscCall(MatDestroy(&Mq[b]));
+    }
+    PetscCall(KFBodyErrorsCheck(s, &e));
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
+    if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));
+    PetscCallMPI(MPI_Bcast(bf->S[b], (PetscMPIInt)(bf->ng[b] * bf->ng[b]), MPIU_REAL, bf->owner[b], s->comm));
+  }
+  PetscCall(PetscFree4(nnull, nneg, Kq, Mq));
+  PetscFunctionReturn(0);
+}
+
+/* All bodies' factors: spread (KFBodyFactorsSetUpSpread), else each body on all ranks in turn. */
 static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, const char prefix[], PetscReal shift, KFBodyFactors bf)
 {
   PetscFunctionBegin;
-  if (!bf->spread) {
-    for (PetscInt b = 0; b < s->nb; b++) {
-      PetscInt nnull = 0, nneg = 0;
-      PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
-      PetscCall(KFBodyFactorSetUp(s, prefix, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
-      PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
-    }
-  } else {
-    PetscMPIInt rank;
-    PetscInt   *nnull, *nneg;
-    Mat        *Kq, *Mq;
-
-    PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-    PetscCall(PetscCalloc4(s->nb, &nnull, s->nb, &nneg, s->nb, &Kq, s->nb, &Mq));
-    for (PetscInt b = 0; b < s->nb; b++) {
-      KFBodyData *B    = &s->bodies[b];
-      PetscBool   mine = (PetscBool)(rank == bf->owner[b]);
-      IS          is;
-      Mat        *sub;
-
-      PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
-      PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
-      PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
-      if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
-      if (mine) Kq[b] = sub[0];
-      PetscCall(MatDestroySubMatrices(1, &sub));
-      if (shift > 0) {
-        PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
-        if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
-        if (mine) Mq[b] = sub[0];
-        PetscCall(MatDestroySubMatrices(1, &sub));
-      }
-      PetscCall(ISDestroy(&is));
-      PetscCall(KFBodySFCreate(s, b, bf));
-    }
-    /* the ranks factor their own bodies at the same time: no communication until every rank is done */
-    {
-      KFBodyError    e = {0, ""};
-      PetscErrorCode ierr = 0;
-      PetscBool      has_limit, share = PETSC_FALSE;
-      MPI_Comm       node;
-      PetscMPIInt    nn;
-
-      /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
-         memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
-         theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
-         (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
-      char limit_name[256];
-
-      PetscCall(PetscSNPrintf(limit_name, sizeof(limit_name), "-%skf_memory_limit_mb", prefix ? prefix : ""));
-      PetscCall(PetscOptionsHasName(NULL, NULL, limit_name, &has_limit));
-      PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-      PetscCallMPI(MPI_Comm_size(node, &nn));
-      if (!has_limit && nn > 1) {
-        PetscReal avail = KFNodeMemoryAvailableMB(), least;
-        char      val[32];
-
-        PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
-        if (least > 0) {
-          PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
-          PetscCall(PetscOptionsSetValue(NULL, limit_name, val));
-          share = PETSC_TRUE;
-        }
-      }
-      PetscCallMPI(MPI_Comm_free(&node));
-      PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
-      for (PetscInt b = 0; b < s->nb && !ierr; b++)
-        if (Kq[b]) ierr = KFBodyFactorSetUp(s, prefix, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
-      PetscCall(PetscPopErrorHandler());
-      if (share) PetscCall(PetscOptionsClearValue(NULL, limit_name));
-      if (ierr && !e.code) e.code = ierr;
-      for (PetscInt b = 0; b < s->nb; b++) {
-        PetscCall(MatDestroy(&Kq[b]));
-        PetscCall(MatDestroy(&Mq[b]));
-      }
-      PetscCall(KFBodyErrorsCheck(s, &e));
-    }
-    for (PetscInt b = 0; b < s->nb; b++) {
-      PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
-      if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));
-      PetscCallMPI(MPI_Bcast(bf->S[b], (PetscMPIInt)(bf->ng[b] * bf->ng[b]), MPIU_REAL, bf->owner[b], s->comm));
-    }
-    PetscCall(PetscFree4(nnull, nneg, Kq, Mq));
+  if (bf->spread) {
+    PetscCall(KFBodyFactorsSetUpSpread(s, prefix, shift, bf));
+    PetscFunctionReturn(0);
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    PetscInt nnull = 0, nneg = 0;
+    PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
+    PetscCall(KFBodyFactorSetUp(s, prefix, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
+    PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
   }
   PetscFunctionReturn(0);
 }
@@ -755,6 +762,50 @@ static PetscErrorCode KFCopyKept(KFScene s, const KFBodyData *B, Mat Sm, Mat Bm,
   PetscFunctionReturn(0);
 }
 
+/* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G (g, nG x p) set directly. Y[b]: body b's
+   K_II^-1 f_b,I (on its owner alone when spread), destroyed here. */
+static PetscErrorCode KFBodywiseBackSubstitute(KFFlexSolver solver, PetscInt p, const PetscReal g[], Mat Y[], Mat X)
+{
+  KFSystem      sys = solver->sys;
+  KFScene       s   = sys->scene;
+  KFBodyFactors bf  = sys->bodyf;
+  KFBodywise    bw  = (KFBodywise)solver->data;
+  PetscInt      nG = bw->nG, rstart, rend, lda;
+  PetscReal    *z;
+  PetscScalar  *x;
+
+  PetscFunctionBegin;
+  PetscCall(MatZeroEntries(X));
+  for (PetscInt b = 0; b < s->nb; b++) { /* spread: every owner back-substitutes its bodies before any rows move */
+    PetscInt ng = bf->ng[b];
+    if (!Y[b]) continue;
+    PetscCall(PetscMalloc1(ng * p + 1, &z));
+    PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
+    PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
+    PetscCall(PetscFree(z));
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    if (bf->spread) {
+      Mat D;
+      PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &D));
+      PetscCall(KFBodyMoveRows(bf, b, D, Y[b], PETSC_FALSE));
+      PetscCall(MatDestroy(&Y[b]));
+      Y[b] = D;
+    }
+    PetscCall(KFCopyKept(s, B, X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
+    PetscCall(MatDestroy(&Y[b]));
+  }
+  PetscCall(MatGetOwnershipRange(X, &rstart, &rend));
+  PetscCall(MatDenseGetLDA(X, &lda));
+  PetscCall(MatDenseGetArray(X, &x));
+  for (PetscInt k = 0; k < nG; k++)
+    if (bw->Gidx[k] >= rstart && bw->Gidx[k] < rend)
+      for (PetscInt j = 0; j < p; j++) x[(bw->Gidx[k] - rstart) + j * lda] = g[k + j * nG];
+  PetscCall(MatDenseRestoreArray(X, &x));
+  PetscFunctionReturn(0);
+}
+
 /* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute.
    Spread bodies: each body's rows of W go to its owner, which solves its interior and condenses alone; the ranks do
    so for their bodies at the same time, and only the small condensed pieces (nG x p) are summed over the ranks. */
@@ -764,10 +815,9 @@ static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat
   KFScene       s   = sys->scene;
   KFBodyFactors bf  = sys->bodyf;
   KFBodywise    bw  = (KFBodywise)solver->data;
-  PetscInt      nG = bw->nG, p, rstart, rend, lda;
-  PetscReal    *g, *c, *z, *gl = NULL;
+  PetscInt      nG = bw->nG, p;
+  PetscReal    *g, *c, *gl = NULL;
   Mat          *Y, *Q;
-  PetscScalar  *x;
   PetscMPIInt   rank;
 
   PetscFunctionBegin;
@@ -823,35 +873,7 @@ static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat
     PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bn, &bp, bw->S, &bn, g, &bn, &info));
     PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK potrs failed (info %d)", (int)info);
   }
-  /* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G set directly */
-  PetscCall(MatZeroEntries(X));
-  for (PetscInt b = 0; b < s->nb; b++) { /* spread: every owner back-substitutes its bodies before any rows move */
-    PetscInt ng = bf->ng[b];
-    if (!Y[b]) continue;
-    PetscCall(PetscMalloc1(ng * p + 1, &z));
-    PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
-    PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
-    PetscCall(PetscFree(z));
-  }
-  for (PetscInt b = 0; b < s->nb; b++) {
-    KFBodyData *B = &s->bodies[b];
-    if (bf->spread) {
-      Mat D;
-      PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &D));
-      PetscCall(KFBodyMoveRows(bf, b, D, Y[b], PETSC_FALSE));
-      PetscCall(MatDestroy(&Y[b]));
-      Y[b] = D;
-    }
-    PetscCall(KFCopyKept(s, B, X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
-    PetscCall(MatDestroy(&Y[b]));
-  }
-  PetscCall(MatGetOwnershipRange(X, &rstart, &rend));
-  PetscCall(MatDenseGetLDA(X, &lda));
-  PetscCall(MatDenseGetArray(X, &x));
-  for (PetscInt k = 0; k < nG; k++)
-    if (bw->Gidx[k] >= rstart && bw->Gidx[k] < rend)
-      for (PetscInt j = 0; j < p; j++) x[(bw->Gidx[k] - rstart) + j * lda] = g[k + j * nG];
-  PetscCall(MatDenseRestoreArray(X, &x));
+  PetscCall(KFBodywiseBackSubstitute(solver, p, g, Y, X));
   PetscCall(PetscFree2(Y, Q));
   PetscCall(PetscFree(g));
   PetscFunctionReturn(0);

@@ -113,7 +113,7 @@ struct _n_KFSystem {
 
 /* the flexible solver's body-wise implementation keeps the bodies' factors on the system (src/solve/impls/bodywise) */
 PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
-PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, PetscReal *cond_max); /* src/solve/held_dofs.c */
+PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, const char prefix[], PetscReal *cond_max); /* src/solve/held_dofs.c */
 PETSC_INTERN KFSystem       KFFlexSolverSystem_Private(KFFlexSolver); /* the system it solves on (in declarations) */
 PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm, const char prefix[]); /* every option of the flexible solve, before any work */
 PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm, PetscReal *tol); /* src/rigid/rigid.c */

@@ -203,7 +203,7 @@ PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm comm, const char p
   }
   PetscCall(KFFlexSolverDestroy(&solver));
   PetscCall(KFMumpsCheckOptions(comm, prefix));
-  PetscCall(KFHeldDofsOptions(comm, &cond_max));
+  PetscCall(KFHeldDofsOptions(comm, prefix, &cond_max));
   PetscFunctionReturn(0);
 }
 

@@ -54,7 +54,7 @@ PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);
    the cross-check of its rigid count by MUMPS' null pivots of K_S */
 PETSC_INTERN PetscErrorCode KFNullPivotCheckOptions(MPI_Comm, const char prefix[], PetscInt nsys, PetscReal shift, PetscBool *check);
 
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);         /* src/solve/held_dofs.c */
+PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, const char prefix[], PetscInt *nheld, PetscInt **held);         /* src/solve/held_dofs.c */
 PETSC_INTERN PetscErrorCode KFSelectPivotedDofs(Mat Phi, PetscInt *nheld, PetscInt **held);
 
 #endif

@@ -591,7 +591,7 @@ static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw, PetscBo
   PetscBool inG = PETSC_TRUE;
 
   PetscFunctionBegin;
-  PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
+  PetscCall(KFSelectHeldDofs(sys, ((PetscObject)solver)->prefix, &solver->nheld, &solver->held));
   for (PetscInt k = 0; k < solver->nheld; k++) {
     PetscInt g;
     PetscCall(PetscFindInt(solver->held[k], bw->nG, bw->Gidx, &g));

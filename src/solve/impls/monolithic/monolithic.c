@@ -46,7 +46,7 @@ static PetscErrorCode KFFlexSolverSetUp_Monolithic(KFFlexSolver solver)
   } else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
     Vec       d;
     PetscReal dsum;
-    PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
+    PetscCall(KFSelectHeldDofs(sys, ((PetscObject)solver)->prefix, &solver->nheld, &solver->held));
     PetscCall(MatCreateVecs(sys->Ks, &d, NULL));
     PetscCall(MatGetDiagonal(sys->Ks, d));
     PetscCall(VecNorm(d, NORM_1, &dsum));

@@ -64,8 +64,8 @@ cdef extern from "kryflex.h" nogil:
     # ------------------------------------------------------------ full-order system, K+, Krylov basis, projection
     ctypedef struct _n_KFSystem
     ctypedef _n_KFSystem* KFSystem
-    ctypedef struct _n_KFFlexSolver
-    ctypedef _n_KFFlexSolver* KFFlexSolver
+    ctypedef struct _p_KFFlexSolver
+    ctypedef _p_KFFlexSolver* KFFlexSolver
     ctypedef struct _n_KFBodyBasis
     ctypedef _n_KFBodyBasis* KFBodyBasis
 
@@ -90,11 +90,8 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFFlexSolverApply(KFFlexSolver, PetscMat, PetscMat)
     PetscErrorCode KFFlexSolverDestroy(KFFlexSolver*)
     PetscErrorCode KFFlexSolverGetStats(KFFlexSolver, PetscInt*, PetscInt*, PetscInt*)
-    ctypedef enum KFFlexSolverType:
-        KF_FLEX_SOLVER_AUTO
-        KF_FLEX_SOLVER_MONOLITHIC
-        KF_FLEX_SOLVER_BODYWISE
-    PetscErrorCode KFFlexSolverSetType(KFFlexSolver, KFFlexSolverType)
+    ctypedef const char* KFFlexSolverType
+    PetscErrorCode KFFlexSolverSetType(KFFlexSolver, const char*)
     PetscErrorCode KFFlexSolverGetType(KFFlexSolver, KFFlexSolverType*)
     PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt*)
     PetscErrorCode KFFlexSolverMoments(KFFlexSolver, PetscInt, PetscReal*)

@@ -1,18 +1,28 @@
 /*
   kryflex: Krylov reduction of articulated multi-flexible-body structures (A. Y. Lee, JPL).
 
-  Stages, one folder each under src/:
+  Stages, one folder each under src/, from the foundations to the reduction that drives them:
+    util/      shared helpers: the package initializer (class ids, log events), progress lines, parallel dense
+               products in extended precision, interrupts, error recording
+    dense/     small dense algebra: Krylov modes, importance, static correction,
+               reassembly at any angle (eq. 12-24), moments and frequency responses
+    damping/   the damping description (modal, Rayleigh, structural) shared by the reference and the reduced model
+    measure/   comparison measures: frequency grids, FRF and moment errors, rigid-mode tolerances
     body/      load and check one body's M and K
     scene/     bodies, joints, inputs, outputs: the tree and its dof maps
     assemble/  P(alpha) by elimination and the full-order system (eq. 2-4)
     rigid/     rigid-body and mechanism modes from geometry
-    solve/     the flexible solve operator K+ (one MUMPS factorization)
+    solve/     the flexible solve operator K+, a PETSc object (KFFlexSolver): MUMPS factorization (mumps.c), held
+               dofs, and one implementation per type under solve/impls/ (monolithic, bodywise)
     krylov/    deflated block Krylov basis in the M-inner product (eq. 8-9), raw recurrence
     moments/   low-frequency moments L^k of the full-order system (eq. 5)
-    verify/    full-order eigensolve with SLEPc (verification only)
+    verify/    full-order eigensolve with SLEPc and the direct check of the verification's reference
     project/   reduced system (eq. 10-11) and reduced bodies (eq. 18-19)
-    dense/     small dense algebra: Krylov modes, importance, static correction,
-               reassembly at any angle (eq. 12-24), moments and frequency responses
+    model/     the reduced model (KFReducedModel): reassembly at any angle, trimming, its damping and outputs
+    io/        reduced-model files (HDF5): the one writer and the one reader
+    reducer/   the reduction as a PETSc object (KFReducer): options, the per-configuration pipeline, the accuracy
+               search, the verification; one basis per type under reducer/impls/ (krylov, eigen)
+    include/   this header, kryflex_impl.h (private data of the stages) and kryflex/<object>impl.h (the objects' private data)
 
   Dense arrays in this API are column-major, replicated on every rank.
 */
@@ -110,11 +120,11 @@ PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal 
 
 /* ---------------------------------------------------------------- flexible solve operator K+ */
 
-typedef struct _n_KFFlexSolver *KFFlexSolver;
+typedef struct _p_KFFlexSolver *KFFlexSolver;
 
-/* One MUMPS factorization of K_S with a statically determinate set of dofs held (or of K_S + shift M_S).
-   Options: -kf_shift <sigma>, -kf_refine <steps of iterative refinement, 1>, -kf_check_null_pivots,
-   -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
+/* K+ applied by factorizations of K_S with a statically determinate set of dofs held (or of K_S + shift M_S), a PETSc
+   object with one implementation per type (KFFlexSolverSetType). Options: -kf_shift <sigma>, -kf_refine <steps of
+   iterative refinement, 1>, -kf_check_null_pivots, -kf_null_pivot_check_max_dofs <20000>, -kf_held_cond_max <1e8> */
 PETSC_EXTERN PetscErrorCode KFFlexSolverCreate(KFSystem, KFFlexSolver *);
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetShift(KFFlexSolver, PetscReal);
 /* an expansion point inside the band: the solver applies (K_S - sigma M_S)^-1 (sigma > 0, indefinite, MUMPS LDL^T) */
@@ -135,18 +145,28 @@ typedef struct {
   PetscInt       blocks_escalated; /* blocks still above -kf_refine_rtol after the refinement steps: escalated */
 } KFFlexSolverPerf;
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver, KFFlexSolverPerf *);
-/* Which implementation of K+ (src/solve/bodywise.c): monolithic (one factorization of K_S per configuration),
-   bodywise (one factorization per body interior, kept on the KFSystem for all its configurations, and a dense
-   interface problem per configuration: the same K+ B), auto. -kf_flex_solver overrides. */
-typedef enum {
-  KF_FLEX_SOLVER_AUTO,
-  KF_FLEX_SOLVER_MONOLITHIC,
-  KF_FLEX_SOLVER_BODYWISE
-} KFFlexSolverType;
-PETSC_EXTERN const char *const KFFlexSolverTypes[];
+/* Which implementation applies K+ (src/solve/impls/<type>/): monolithic (one factorization of K_S per
+   configuration), bodywise (one factorization per body interior, kept on the KFSystem for all its configurations, and
+   a dense interface problem per configuration: the same K+ B), auto (body-wise where it pays, decided at the set-up).
+   -kf_flex_solver overrides KFFlexSolverSetType. New types: KFFlexSolverRegister(name, create), create filling the
+   solver's ops table (src/include/kryflex/flexsolverimpl.h). */
+typedef const char *KFFlexSolverType;
+#define KFFLEXSOLVERAUTO       "auto"
+#define KFFLEXSOLVERMONOLITHIC "monolithic"
+#define KFFLEXSOLVERBODYWISE   "bodywise"
+PETSC_EXTERN PetscErrorCode KFFlexSolverRegister(const char[], PetscErrorCode (*)(KFFlexSolver));
 PETSC_EXTERN PetscErrorCode KFFlexSolverSetType(KFFlexSolver, KFFlexSolverType);
 /* the implementation set up (after KFFlexSolverSetUp): monolithic or bodywise */
 PETSC_EXTERN PetscErrorCode KFFlexSolverGetType(KFFlexSolver, KFFlexSolverType *);
+/* options are read with this prefix (a reducer's solvers take the reducer's) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetOptionsPrefix(KFFlexSolver, const char[]);
+PETSC_EXTERN PetscErrorCode KFFlexSolverSetFromOptions(KFFlexSolver);
+PETSC_EXTERN PetscErrorCode KFFlexSolverView(KFFlexSolver, PetscViewer);
+PETSC_EXTERN PetscErrorCode KFFlexSolverGetSystem(KFFlexSolver, KFSystem *);
+/* the body-wise implementation's settings (nothing on another type): bodies spread over the ranks, and the system dofs
+   from which auto takes it (-kf_bodywise_spread, -kf_bodywise_min_dofs) */
+PETSC_EXTERN PetscErrorCode KFFlexSolverBodywiseSetSpread(KFFlexSolver, PetscBool);
+PETSC_EXTERN PetscErrorCode KFFlexSolverBodywiseSetMinDofs(KFFlexSolver, PetscInt);
 /* sparse factorizations made for the solves on this system so far (all its configurations; a null-pivot cross-check
    is not counted) */
 PETSC_EXTERN PetscErrorCode KFSystemGetFactorCount(KFSystem, PetscInt *);
@@ -465,6 +485,8 @@ PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerView(KFReducer, PetscViewer);
 PETSC_EXTERN PetscErrorCode KFReducerViewFromOptions(KFReducer, PetscObject, const char[]);
+/* releases the results, models and caches of the last solve; the settings stay */
+PETSC_EXTERN PetscErrorCode KFReducerReset(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerDestroy(KFReducer *);
 /* after Solve: the model of the chosen method (borrowed); both models (multi NULL when not built) */
 PETSC_EXTERN PetscErrorCode KFReducerGetReducedModel(KFReducer, KFReducedModel *);

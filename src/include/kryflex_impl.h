@@ -66,8 +66,7 @@ struct _KFSceneOps {
   PetscErrorCode (*view)(KFScene, PetscViewer);
 };
 PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
-/* Registers KF_SCENE_CLASSID and KF_REDUCEDMODEL_CLASSID (src/model/package.c); called by KFInitialize. */
-PETSC_EXTERN PetscErrorCode KFModelInitializePackage(void);
+PETSC_INTERN PetscErrorCode KFGetStartTime(PetscLogDouble *); /* src/util/package.c: when KFInitialize first ran */
 
 struct _n_KFScene {
   PETSCHEADER(struct _KFSceneOps);
@@ -88,9 +87,8 @@ struct _n_KFScene {
   PetscInt     nrigid;     /* rigid-body and mechanism modes once a system derived them (-1 before) */
 };
 
-/* the body-wise flexible solve (src/solve/bodywise.c): body factors kept per system, the interface problem per solver */
+/* the body-wise flexible solve (src/solve/impls/bodywise): body factors kept per system, valid at every angle */
 typedef struct _n_KFBodyFactors *KFBodyFactors;
-typedef struct _n_KFBodywise    *KFBodywise;
 typedef struct _n_KFHeldEntries *KFHeldEntries; /* K_S's held rows and columns, saved while they are held */
 PETSC_INTERN PetscErrorCode KFHoldDofsInPlace(Mat, PetscInt, const PetscInt[], PetscScalar, KFHeldEntries *);
 PETSC_INTERN PetscErrorCode KFRestoreHeldDofs(Mat, KFHeldEntries *);
@@ -113,29 +111,12 @@ struct _n_KFSystem {
   PetscInt   nconfig;        /* configurations it will be solved at (KFSystemSetConfigurationCount) */
 };
 
-struct _n_KFFlexSolver {
-  KFSystem  sys;
-  Mat       Kh, F;           /* shifted stiffness (NULL without a shift: K_S is factored in place) and the MUMPS factor */
-  PetscInt  nheld, *held;    /* held system dofs (global) */
-  PetscReal shift;
-  PetscInt  null_pivots, negative_pivots;
-  PetscInt  refine;          /* at most this many iterative refinement steps against K_S per block */
-  PetscBool refine_set;      /* -kf_refine given: no default by the factor (KFFlexSolverRefineSteps) */
-  PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
-  PetscBool setup;
-  KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
-  KFFlexSolverType type;     /* as asked (auto by default) */
-  KFBodywise bw;             /* -kf_flex_solver bodywise: the interface problem; NULL for the monolithic solve */
-};
-
-/* the body-wise flexible solve (src/solve/bodywise.c) */
-PETSC_INTERN PetscErrorCode KFBodywiseSetUp(KFFlexSolver); /* sets solver->bw when -kf_flex_solver selects it */
-PETSC_INTERN PetscErrorCode KFBodywiseSolve(KFFlexSolver, Mat W, Mat X);
-PETSC_INTERN PetscErrorCode KFBodywiseDestroy(KFBodywise *);
+/* the flexible solver's body-wise implementation keeps the bodies' factors on the system (src/solve/impls/bodywise) */
 PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
-PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm, KFFlexSolverType *, PetscInt *min_dofs, PetscBool *spread);
-PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, PetscReal *cond_max); /* src/solve/held_dofs.c */
-PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm);               /* every option of the flexible solve, before any work */
+PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, const char prefix[], PetscReal *cond_max); /* src/solve/held_dofs.c */
+PETSC_INTERN KFSystem       KFFlexSolverSystem_Private(KFFlexSolver); /* the system it solves on (in declarations) */
+PETSC_INTERN PetscErrorCode KFFlexSolverSetPerf_Private(KFFlexSolver, const KFFlexSolverPerf *);
+PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm, const char prefix[]); /* every option of the flexible solve, before any work */
 PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm, PetscReal *tol); /* src/rigid/rigid.c */
 PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm, PetscInt *progress_min); /* src/krylov/block_arnoldi.c */
 PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, PetscReal *target, PetscBool *has_target); /* src/verify/eigen.c */

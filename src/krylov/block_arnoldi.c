@@ -370,7 +370,7 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
 PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *damp, BV *Vout, KFKrylovInfo *info)
 {
   KFDampedChain dch;
-  KFSystem sys = solver->sys;
+  KFSystem sys = KFFlexSolverSystem_Private(solver);
   KFScene  s   = sys->scene;
   PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min;
   PetscInt made[2] = {0, 0}, want[2] = {nin, nout}, nblocks = nin + nout;

@@ -77,7 +77,7 @@ static PetscErrorCode KFDampedNorm(KFSystem sys, Vec u, Vec v, PetscReal *n)
 
 PetscErrorCode KFDampedChainCreate_Private(KFFlexSolver solver, const KFKrylovDamping *d, PetscInt maxcols, KFDampedChain *ch)
 {
-  KFSystem sys = solver->sys;
+  KFSystem sys = KFFlexSolverSystem_Private(solver);
   KFScene  s   = sys->scene;
 
   PetscFunctionBegin;
@@ -105,7 +105,7 @@ PetscErrorCode KFDampedChainDestroy_Private(KFDampedChain *ch)
    orthonormalized block; U (e x p', p' >= 0 columns kept, NULL when none) receives its u halves */
 PetscErrorCode KFDampedChainNext_Private(KFFlexSolver solver, KFDampedChain *ch, Mat B, PetscReal tol, Mat *U)
 {
-  KFSystem  sys = solver->sys;
+  KFSystem  sys = KFFlexSolverSystem_Private(solver);
   Mat       Wu, Wv = NULL;
   PetscInt  p, k = ch->k, k0 = ch->k;
   PetscReal g = ch->d.gamma;

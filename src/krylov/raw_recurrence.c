@@ -7,7 +7,7 @@
    made unit below anyway) the Gram matrix' conditioning. */
 PetscErrorCode KFKrylovRawBasis(KFFlexSolver solver, PetscInt nin, PetscInt nout, Mat *Praw, PetscReal *gram_cond)
 {
-  KFSystem   sys = solver->sys;
+  KFSystem   sys = KFFlexSolverSystem_Private(solver);
   KFScene    s   = sys->scene;
   PetscInt   a = s->ninputs, t = s->noutputs, c = a * nin + t * nout, col = 0, lda, ldw;
   PetscReal *Gm, *ev, *vecs, *Id;

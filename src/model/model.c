@@ -8,7 +8,7 @@ PetscErrorCode KFReducedModelCreateEmpty_Private(MPI_Comm comm, PetscInt nb, Pet
   KFReducedModel m;
 
   PetscFunctionBegin;
-  PetscCall(KFModelInitializePackage());
+  PetscCall(KFInitialize());
   PetscCall(PetscHeaderCreate(m, KF_REDUCEDMODEL_CLASSID, "KFReducedModel", "Reduced model of an articulated structure", "KF", comm, KFReducedModelDestroy, KFReducedModelView));
   /* one kind so far: reduced bodies reassembled at any angle (the view would otherwise say "type not yet set") */
   PetscCall(PetscObjectChangeTypeName((PetscObject)m, "reduced-bodies"));

@@ -3,7 +3,7 @@
 /* L^k = H (K+ M)^k K+ G (eq. 5-6) by repeated flexible solves with the one factorization. */
 PetscErrorCode KFFlexSolverMoments(KFFlexSolver solver, PetscInt nmom, PetscReal L[])
 {
-  KFSystem sys = solver->sys;
+  KFSystem sys = KFFlexSolverSystem_Private(solver);
   KFScene  s   = sys->scene;
   PetscInt a = s->ninputs, t = s->noutputs;
   Mat      X, B;

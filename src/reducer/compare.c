@@ -48,7 +48,7 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
     else PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
   } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
   else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
-  if (solver) solver->perf = perf;
+  if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));
   r->verify_eigen_seconds += t1 - t0;
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_eigensolve", (PetscReal)r->verify_eigen_seconds));

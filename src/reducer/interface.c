@@ -1,9 +1,7 @@
 /* KFReducer: life cycle, implementations, what the reduction must serve (setters) and what the solve left (getters). */
 #include <kryflex/reducerimpl.h>
 
-PetscClassId      KF_REDUCER_CLASSID = 0;
 PetscFunctionList KFReducerList      = NULL;
-PetscLogEvent     KF_EVENT_REDUCER_SETUP, KF_EVENT_REDUCER_SOLVE, KF_EVENT_REDUCER_BASIS, KF_EVENT_REDUCER_VERIFY;
 static PetscBool  KFReducerPackageInitialized = PETSC_FALSE;
 
 const char *const KFReducerMethods[] = {"single-angle", "multi-angle", "auto", "KFReducerMethod", "KF_METHOD_", NULL};
@@ -15,22 +13,16 @@ static PetscErrorCode KFReducerFinalizePackage(void)
   PetscFunctionBegin;
   PetscCall(PetscFunctionListDestroy(&KFReducerList));
   KFReducerPackageInitialized = PETSC_FALSE;
-  KF_REDUCER_CLASSID          = 0;
   PetscFunctionReturn(0);
 }
 
-/* class id, log events and the two implementations; once per PetscInitialize */
+/* the two implementations; once per PetscInitialize (the class id and log events: KFInitialize) */
 static PetscErrorCode KFReducerInitializePackage(void)
 {
   PetscFunctionBegin;
   if (KFReducerPackageInitialized) PetscFunctionReturn(0);
   KFReducerPackageInitialized = PETSC_TRUE;
   PetscCall(KFInitialize());
-  PetscCall(PetscClassIdRegister("KFReducer", &KF_REDUCER_CLASSID));
-  PetscCall(PetscLogEventRegister("KFReducerSetUp", KF_REDUCER_CLASSID, &KF_EVENT_REDUCER_SETUP));
-  PetscCall(PetscLogEventRegister("KFReducerSolve", KF_REDUCER_CLASSID, &KF_EVENT_REDUCER_SOLVE));
-  PetscCall(PetscLogEventRegister("KFReducerBasis", KF_REDUCER_CLASSID, &KF_EVENT_REDUCER_BASIS));
-  PetscCall(PetscLogEventRegister("KFReducerVerify", KF_REDUCER_CLASSID, &KF_EVENT_REDUCER_VERIFY));
   PetscCall(PetscFunctionListAdd(&KFReducerList, KFREDUCERKRYLOV, KFReducerCreate_Krylov));
   PetscCall(PetscFunctionListAdd(&KFReducerList, KFREDUCEREIGEN, KFReducerCreate_Eigen));
   PetscCall(PetscRegisterFinalize(KFReducerFinalizePackage));
@@ -435,6 +427,19 @@ PetscErrorCode KFReducerGetReductionRule(KFReducer r, const char **rule)
   PetscFunctionReturn(0);
 }
 
+/*
+  KFReducerReset - releases what a solve left: its results and models, and the search's cache (which a search stopped
+  by an error leaves behind); the settings stay.
+*/
+PetscErrorCode KFReducerReset(KFReducer r)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(KFReducerResultsReset_Private(r));
+  if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerDestroy(KFReducer *reducer)
 {
   KFReducer r;
@@ -446,7 +451,7 @@ PetscErrorCode KFReducerDestroy(KFReducer *reducer)
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   if (--((PetscObject)r)->refct > 0) PetscFunctionReturn(0);
   if (r->ops->destroy) PetscCall((*r->ops->destroy)(r));
-  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(KFReducerReset(r));
   PetscCall(KFSceneDestroy(&r->scene));
   PetscCall(PetscFree(r->angles));
   PetscCall(PetscFree(r->alpha_g));

@@ -22,14 +22,14 @@ static PetscErrorCode KFReducerDegreesOption_Private(KFReducer r, const char wha
 /* The options of the objects a reduction makes later (the flexible solver and its factorization, the rigid modes, the
    Krylov chain's progress, the verification eigensolve), read and checked by their own readers now: a bad value is
    refused as a bad option before any work, not after the assembly as a failed reduction; -help lists them here. */
-static PetscErrorCode KFReducerCheckStageOptions_Private(MPI_Comm comm)
+static PetscErrorCode KFReducerCheckStageOptions_Private(MPI_Comm comm, const char prefix[])
 {
   PetscReal rigid_tol, target;
   PetscInt  progress_min, dense_max;
   PetscBool has_target;
 
   PetscFunctionBegin;
-  PetscCall(KFFlexSolverCheckOptions(comm));
+  PetscCall(KFFlexSolverCheckOptions(comm, prefix));
   PetscCall(KFRigidTolFromOptions(comm, &rigid_tol));
   PetscCall(KFKrylovProgressOptions(comm, &progress_min));
   PetscCall(KFVerifyEigenOptions(comm, &dense_max, &target, &has_target));
@@ -232,7 +232,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   if (r->ops->setfromoptions) PetscCall((*r->ops->setfromoptions)(r, PetscOptionsObject));
   PetscCall(PetscObjectProcessOptionsHandlers((PetscObject)r, PetscOptionsObject));
   PetscOptionsEnd();
-  PetscCall(KFReducerCheckStageOptions_Private(PetscObjectComm((PetscObject)r)));
+  PetscCall(KFReducerCheckStageOptions_Private(PetscObjectComm((PetscObject)r), ((PetscObject)r)->prefix));
   PetscFunctionReturn(0);
 }
 

@@ -1,4 +1,5 @@
-/* What a solve leaves: named result arrays per configuration and for the whole solve, and notes for the user.
+/* What a solve leaves: named result arrays per configuration and for the whole solve, notes for the user, and the
+   flexible solvers' work summed.
    The names and their meanings are listed in README.md ("Results of a reduction"). */
 #include <kryflex/reducerimpl.h>
 #include <stdarg.h>
@@ -82,7 +83,6 @@ PetscErrorCode KFReducerResultsReset_Private(KFReducer r)
   r->rule[0] = 0;
   PetscCall(KFReducedModelDestroy(&r->single));
   PetscCall(KFReducedModelDestroy(&r->multi_model));
-  PetscCall(KFCandidateCacheReset_Private(r)); /* a search stopped by an error leaves it behind */
   r->solved = PETSC_FALSE;
   PetscFunctionReturn(0);
 }
@@ -177,5 +177,27 @@ PetscErrorCode KFReducerModelSizes_Private(KFReducedModel m, char buf[], size_t 
     PetscCall(PetscSNPrintf(buf + used, len - used, "%s%" PetscInt_FMT, b ? " + " : "", body.v));
     PetscCall(PetscStrlen(buf, &used));
   }
+  PetscFunctionReturn(0);
+}
+
+/* a flexible solver's work added to the solve's (the timing table and the summary's performance) */
+PetscErrorCode KFReducerAddPerf_Private(KFReducer r, KFFlexSolver solver)
+{
+  KFFlexSolverPerf p;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverGetPerf(solver, &p));
+  r->perf.factor_seconds += p.factor_seconds;
+  r->perf.solve_seconds += p.solve_seconds;
+  r->perf.memory_estimate_mb = PetscMax(r->perf.memory_estimate_mb, p.memory_estimate_mb);
+  r->perf.residual_first_max = PetscMax(r->perf.residual_first_max, p.residual_first_max);
+  r->perf.residual_final_max = PetscMax(r->perf.residual_final_max, p.residual_final_max);
+  r->perf.solve_calls += p.solve_calls;
+  r->perf.solve_columns += p.solve_columns;
+  r->perf.refinement_solves += p.refinement_solves;
+  r->perf.blocks += p.blocks;
+  r->perf.blocks_refined += p.blocks_refined;
+  r->perf.blocks_unconverged += p.blocks_unconverged;
+  r->perf.blocks_escalated += p.blocks_escalated;
   PetscFunctionReturn(0);
 }

@@ -110,6 +110,7 @@ static PetscErrorCode KFShiftVisitCreate(KFReducer r, KFSystem sys, const KFVisi
   PetscCall(KFSystemSetAngles(sys, v0->angles));
   PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
   PetscCall(KFFlexSolverCreate(sys, &solver));
+  PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix)); /* the reducer\'s options are the solver\'s */
   PetscCall(KFFlexSolverSetInteriorShift(solver, sigma));
   PetscCall(KFFlexSolverSetUp(solver));
   nout = PetscMin(r->output_blocks, r->shift_blocks / 2);

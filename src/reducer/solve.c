@@ -15,28 +15,6 @@ static PetscBool KFReducerFullMoments_Private(KFReducer r)
   return (PetscBool)(r->verify || (r->full_moments_set && r->full_moments));
 }
 
-PetscErrorCode KFReducerAddPerf_Private(KFReducer r, KFFlexSolver solver)
-{
-  KFFlexSolverPerf p;
-
-  PetscFunctionBegin;
-  PetscCall(KFFlexSolverGetPerf(solver, &p));
-  r->perf.factor_seconds += p.factor_seconds;
-  r->perf.solve_seconds += p.solve_seconds;
-  r->perf.memory_estimate_mb = PetscMax(r->perf.memory_estimate_mb, p.memory_estimate_mb);
-  r->perf.residual_first_max = PetscMax(r->perf.residual_first_max, p.residual_first_max);
-  r->perf.residual_final_max = PetscMax(r->perf.residual_final_max, p.residual_final_max);
-  r->perf.solve_calls += p.solve_calls;
-  r->perf.solve_columns += p.solve_columns;
-  r->perf.refinement_solves += p.refinement_solves;
-  r->perf.blocks += p.blocks;
-  r->perf.blocks_refined += p.blocks_refined;
-  r->perf.blocks_unconverged += p.blocks_unconverged;
-  r->perf.blocks_escalated += p.blocks_escalated;
-  PetscFunctionReturn(0);
-}
-
-
 /* one configuration the solve visits */
 typedef struct {
   const PetscReal *angles;   /* nrev (points into the reducer's arrays) */
@@ -197,209 +175,247 @@ static PetscErrorCode KFReducerAddFactorSetUp_Private(KFFlexSolver solver, Petsc
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals[], PetscReal Lfull[])
+/* The per-configuration pipeline that the fixed recipe and the search share: the system at the configuration's
+   angles, its rigid modes, its factored flexible solver (the reducer's prefix and shift) and the basis the reducer's
+   type builds with it. times[0..2]: assembly, factorization, basis; setup_s: the factorization stage outside MUMPS. */
+static PetscErrorCode KFReducerConfigBasis_Private(KFReducer r, KFSystem sys, PetscInt nrev, const PetscReal angles[], PetscReal times[], PetscReal *setup_s, Mat *Phir, PetscReal *rigid_res, KFFlexSolver *solver, KFReducerBasis *basis)
 {
-  MPI_Comm         comm;
-  KFSystem         sys = NULL;
-  KFConfig        *configs = NULL;
-  KFBodyBasis     *candidates, multi_bb = NULL;
-  PetscInt         nc = 0, nrev, nrev1, nb, nsys, a, t, nrigid, nmom, g = -1, multi_n = 0;
-  PetscReal       *multi_angles = NULL, *kept_g = NULL;
-  PetscReal        times[7] = {0}, best_imp = -1, setup_s = 0;
-  PetscInt         best_kept = -1, nkept_g = 0, nstatic_g = 0;
-  PetscLogDouble   t0, t1;
-  const char      *name, *type;
-  char             sizes[256], sizes_multi[256];
-  static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
+  MPI_Comm       comm = PetscObjectComm((PetscObject)r);
+  PetscLogDouble t0, t1;
+  char           label[128];
 
   PetscFunctionBegin;
-  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
-  PetscCall(KFReducerGetType(r, &type));
-  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, &nsys, &a, &t));
-  PetscCall(KFSceneGetName(r->scene, &name));
-  nrev1  = PetscMax(nrev, 1);
-  nrigid = 6 + nrev;
-  nmom   = r->build_moments;
-  PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
-  PetscCall(PetscCalloc1(nc, &candidates));
-  if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &multi_bb));
-  PetscCall(PetscMalloc1(nc * nrev1, &multi_angles));
-  PetscCall(KFSystemCreate(r->scene, &sys));
-  PetscCall(KFSystemSetConfigurationCount(sys, nc));
-
-  for (PetscInt i = 0; i < nc; i++) {
-    KFConfig       *cfg = &configs[i];
-    KFFlexSolver    solver = NULL;
-    KFReducerBasis  basis;
-    Mat             Phir, X;
-    PetscReal       rigid_res, *imp, *freq, *keptf;
-    PetscBool      *kept;
-    PetscInt        nkept = 0, nheld, c;
-    char            label[128];
-
-    /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
-    PetscCall(KFInterruptCheck(comm));
-    PetscCall(KFReducerConfigLabel_Private(nrev, cfg->angles, label, sizeof(label)));
-    if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
-    else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
-    PetscCall(PetscTime(&t0));
-    PetscCall(KFSystemSetAngles(sys, cfg->angles));
-    PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
-    PetscCall(PetscTime(&t1));
-    times[0] += t1 - t0;
-
-    t0 = t1;
-    PetscCall(KFFlexSolverCreate(sys, &solver));
-    PetscCall(KFFlexSolverSetShift(solver, r->shift)); /* the reducer's value, whatever the global options say */
-    PetscCall(KFFlexSolverSetUp(solver));
-    PetscCall(PetscTime(&t1));
-    times[1] += t1 - t0;
-    PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &setup_s));
-    PetscCall(KFInterruptCheck(comm));
-
-    t0 = t1;
-    PetscCall(PetscMemzero(&basis, sizeof(basis)));
-    basis.gram_condition = (PetscReal)NAN;
-    PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-    PetscCall((*r->ops->buildbasis)(r, sys, solver, &basis));
-    PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-    PetscCall(PetscTime(&t1));
-    times[2] += t1 - t0;
-
-    t0 = t1;
-    c = basis.size;
-    PetscCall(PetscMalloc4(c, &imp, c, &kept, c, &freq, c, &keptf));
-    if (r->importance == KF_IMPORTANCE_BAND) {
-      PetscInt *clu;
-
-      PetscCall(PetscMalloc1(c, &clu));
-      PetscCall(KFDenseModeImportanceBand(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->band, r->cluster_rtol, 0.0, imp, clu));
-      PetscCall(PetscFree(clu));
-    } else PetscCall(KFDenseModeImportance(c, basis.lambda, basis.Phi, a, basis.Gr, t, basis.Hr, r->zeta, r->importance, 0.0, imp));
-    for (PetscInt k = 0; k < c; k++) {
-      kept[k]  = (PetscBool)(imp[k] >= r->keep_threshold);
-      keptf[k] = kept[k] ? 1.0 : 0.0;
-      freq[k]  = PetscSqrtReal(PetscMax(basis.lambda[k], 0)) / (2 * PETSC_PI);
-      nkept += kept[k];
-    }
-    PetscCall(PetscTime(&t1));
-    times[3] += t1 - t0;
-
-    if (cfg->interest >= 0 && KFReducerFullMoments_Private(r)) { /* full-order moments where the models are compared */
-      t0 = t1;
-      PetscCall(KFFlexSolverMoments(solver, nmom, &Lfull[cfg->interest * nmom * t * a]));
-      PetscCall(PetscTime(&t1));
-      times[4] += t1 - t0;
-    } else if (cfg->interest >= 0) { /* not asked for: the moment checks say "not computed" (NaN) */
-      for (PetscInt e = 0; e < nmom * t * a; e++) Lfull[cfg->interest * nmom * t * a + e] = (PetscReal)NAN;
-    }
-    PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
-
-    t0 = t1;
-    if (cfg->is_g || (r->auto_alpha && cfg->interest >= 0)) {
-      PetscReal sum = 0;
-      PetscInt  ncols;
-
-      for (PetscInt k = 0; k < c; k++)
-        if (kept[k]) sum += imp[k];
-      /* the paper's rule: alpha_G is the angle of interest whose model needs the most modes (ties: the larger kept
-         importance, then the first); only the best candidate's body basis is kept */
-      if (cfg->is_g || nkept > best_kept || (nkept == best_kept && sum > best_imp)) {
-        PetscCall((*r->ops->vectors)(r, sys, solver, &basis, kept, r->static_correction, &X));
-        PetscCall(MatGetSize(X, NULL, &ncols));
-        if (g >= 0) PetscCall(KFBodyBasisDestroy(&candidates[g]));
-        g         = i;
-        best_kept = nkept;
-        best_imp  = sum;
-        nkept_g   = nkept;
-        nstatic_g = ncols - nkept;
-        PetscCall(PetscFree(kept_g));
-        PetscCall(PetscMalloc1(PetscMax(nkept, 1), &kept_g));
-        for (PetscInt k = 0, m = 0; k < c; k++)
-          if (kept[k]) kept_g[m++] = k + 1;
-        PetscCall(KFBodyBasisCreate(r->scene, &candidates[i]));
-        PetscCall(KFBodyBasisAdd(candidates[i], sys, Phir));
-        PetscCall(KFBodyBasisAdd(candidates[i], sys, X));
-        PetscCall(MatDestroy(&X));
-      }
-    }
-    if (multi_bb && cfg->in_multi) {
-      PetscCall(KFBodyBasisAdd(multi_bb, sys, Phir));
-      PetscCall((*r->ops->vectors)(r, sys, solver, &basis, NULL, PETSC_FALSE, &X));
-      PetscCall(KFBodyBasisAdd(multi_bb, sys, X));
-      PetscCall(MatDestroy(&X));
-      PetscCall(PetscArraycpy(&multi_angles[multi_n * nrev1], cfg->angles, nrev1));
-      multi_n++;
-    }
-    PetscCall(PetscTime(&t1));
-    times[5] += t1 - t0;
-
-    if (cfg->interest >= 0) {
-      const PetscInt ci = cfg->interest, shape[3] = {t, a, nmom};
-
-      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nmom * t * a]));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &c, freq));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &c, imp));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &c, keptf));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)basis.ndeflated));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", basis.gram_condition));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
-      if (r->verify) {
-        PetscCall(KFInterruptCheck(comm));
-        PetscCall(PetscTime(&t0));
-        PetscCall(KFReducerReference_Private(r, sys, solver, nmom, &Lfull[ci * nmom * t * a], &evals[ci]));
-        PetscCall(PetscTime(&t1));
-        times[6] += t1 - t0;
-      }
-    }
-    PetscCall(KFReducerAddPerf_Private(r, solver));
-    PetscCall(KFFlexSolverDestroy(&solver));
-    PetscCall(KFProgress(comm, "  %" PetscInt_FMT " %s vectors (%" PetscInt_FMT " deflated), %" PetscInt_FMT " of %" PetscInt_FMT " modes kept; held dofs %" PetscInt_FMT, c, type, basis.ndeflated, nkept, c, nheld));
-    PetscCall(PetscFree4(imp, kept, freq, keptf));
-    PetscCall(KFReducerBasisDestroy_Private(r, &basis));
-  }
-  PetscCall(KFSystemDestroy(&sys));
+  /* a command's SIGINT/SIGTERM stops the solve at stage boundaries, on every rank together */
   PetscCall(KFInterruptCheck(comm));
-  if (!KFReducerFullMoments_Private(r)) PetscCall(KFReducerNote_Private(r, "full-order moments not computed (verification off): the moment checks are empty; -kf_full_moments computes them"));
+  PetscCall(KFReducerConfigLabel_Private(nrev, angles, label, sizeof(label)));
+  if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
+  else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFSystemSetAngles(sys, angles));
+  PetscCall(KFSystemGetRigidModes(sys, Phir, rigid_res));
+  PetscCall(PetscTime(&t1));
+  times[0] += t1 - t0;
 
-  /* alpha_G and its model; the other candidates are not needed */
-  {
-    const PetscInt gi = configs[g].interest;
-    char           label[128];
+  t0 = t1;
+  PetscCall(KFFlexSolverCreate(sys, solver));
+  PetscCall(KFFlexSolverSetOptionsPrefix(*solver, ((PetscObject)r)->prefix)); /* the reducer's options are the solver's */
+  PetscCall(KFFlexSolverSetShift(*solver, r->shift)); /* the reducer's value, whatever the global options say */
+  PetscCall(KFFlexSolverSetUp(*solver));
+  PetscCall(PetscTime(&t1));
+  times[1] += t1 - t0;
+  PetscCall(KFReducerAddFactorSetUp_Private(*solver, t1 - t0, setup_s));
+  PetscCall(KFInterruptCheck(comm));
 
-    PetscCall(KFReducerConfigLabel_Private(nrev, configs[g].angles, label, sizeof(label)));
-    if (!nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the structure's Krylov model (no revolute joint: one configuration), %" PetscInt_FMT " modes above the importance threshold %g", nkept_g, (double)r->keep_threshold));
-    else if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, nkept_g));
-    else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg, named in the scene", label));
-    PetscCall(KFProgress(comm, "%s", r->rule));
-    PetscCall(PetscTime(&t0));
-    PetscCall(KFReducerMakeModel_Private(r, candidates[g], KF_METHOD_SINGLE_ANGLE, 1, configs[g].angles, &r->single));
-    if (multi_bb) PetscCall(KFReducerMakeModel_Private(r, multi_bb, KF_METHOD_MULTI_ANGLE, multi_n, multi_angles, &r->multi_model));
-    PetscCall(PetscTime(&t1));
-    times[5] += t1 - t0;
-    {
-      const PetscInt shape[2] = {nrev1, 1};
-      PetscReal      one;
+  t0 = t1;
+  PetscCall(PetscMemzero(basis, sizeof(*basis)));
+  basis->gram_condition = (PetscReal)NAN;
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+  PetscCall((*r->ops->buildbasis)(r, sys, *solver, basis));
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
+  PetscCall(PetscTime(&t1));
+  times[2] += t1 - t0;
+  PetscFunctionReturn(0);
+}
 
-      PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, configs[g].angles));
-      PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)gi));
-      PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept_g, kept_g));
-      PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic_g));
-      PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
-      PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
-      one = (PetscReal)nrigid;
-      PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", one));
+/* the stage times a solve records, in the order of its times[] */
+static const char *const KFSolveTimeNames[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
+
+/* The fixed recipe's state across its configurations: the candidates for alpha_G and the multi-angle basis */
+typedef struct {
+  MPI_Comm     comm;
+  const char  *type;
+  PetscInt     nc, nrev, nrev1, a, t, nmom;
+  KFConfig    *configs;
+  KFBodyBasis *candidates, multi_bb;
+  PetscInt     g, best_kept, nkept_g, nstatic_g, multi_n;
+  PetscReal    best_imp, setup_s, *multi_angles, *kept_g;
+  PetscReal    times[7]; /* assembly, factorization, basis, modes, moments, projection, verification */
+} KFFixed;
+
+/* One configuration's modes: frequencies, importance (band or per-mode rule), which the threshold keeps */
+static PetscErrorCode KFReducerFixedModes_Private(KFReducer r, const KFFixed *fx, const KFReducerBasis *basis, PetscReal imp[], PetscBool kept[], PetscReal freq[], PetscReal keptf[], PetscInt *nkept)
+{
+  const PetscInt c = basis->size, a = fx->a, t = fx->t;
+
+  PetscFunctionBegin;
+  if (r->importance == KF_IMPORTANCE_BAND) {
+    PetscInt *clu;
+
+    PetscCall(PetscMalloc1(c, &clu));
+    PetscCall(KFDenseModeImportanceBand(c, basis->lambda, basis->Phi, a, basis->Gr, t, basis->Hr, r->zeta, r->band, r->cluster_rtol, 0.0, imp, clu));
+    PetscCall(PetscFree(clu));
+  } else PetscCall(KFDenseModeImportance(c, basis->lambda, basis->Phi, a, basis->Gr, t, basis->Hr, r->zeta, r->importance, 0.0, imp));
+  *nkept = 0;
+  for (PetscInt k = 0; k < c; k++) {
+    kept[k]  = (PetscBool)(imp[k] >= r->keep_threshold);
+    keptf[k] = kept[k] ? 1.0 : 0.0;
+    freq[k]  = PetscSqrtReal(PetscMax(basis->lambda[k], 0)) / (2 * PETSC_PI);
+    *nkept += kept[k];
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The paper's rule: alpha_G is the angle of interest whose model needs the most modes (ties: the larger kept
+   importance, then the first); only the best candidate's body basis is kept. Configuration i's multi-angle vectors
+   join the multi-angle basis. */
+static PetscErrorCode KFReducerFixedBases_Private(KFReducer r, KFFixed *fx, PetscInt i, KFSystem sys, KFFlexSolver solver, KFReducerBasis *basis, Mat Phir, const PetscReal imp[], const PetscBool kept[], PetscInt nkept)
+{
+  KFConfig *cfg = &fx->configs[i];
+  PetscInt  c   = basis->size;
+  Mat       X;
+
+  PetscFunctionBegin;
+  if (cfg->is_g || (r->auto_alpha && cfg->interest >= 0)) {
+    PetscReal sum = 0;
+    PetscInt  ncols;
+
+    for (PetscInt k = 0; k < c; k++)
+      if (kept[k]) sum += imp[k];
+    if (cfg->is_g || nkept > fx->best_kept || (nkept == fx->best_kept && sum > fx->best_imp)) {
+      PetscCall((*r->ops->vectors)(r, sys, solver, basis, kept, r->static_correction, &X));
+      PetscCall(MatGetSize(X, NULL, &ncols));
+      if (fx->g >= 0) PetscCall(KFBodyBasisDestroy(&fx->candidates[fx->g]));
+      fx->g         = i;
+      fx->best_kept = nkept;
+      fx->best_imp  = sum;
+      fx->nkept_g   = nkept;
+      fx->nstatic_g = ncols - nkept;
+      PetscCall(PetscFree(fx->kept_g));
+      PetscCall(PetscMalloc1(PetscMax(nkept, 1), &fx->kept_g));
+      for (PetscInt k = 0, m = 0; k < c; k++)
+        if (kept[k]) fx->kept_g[m++] = k + 1;
+      PetscCall(KFBodyBasisCreate(r->scene, &fx->candidates[i]));
+      PetscCall(KFBodyBasisAdd(fx->candidates[i], sys, Phir));
+      PetscCall(KFBodyBasisAdd(fx->candidates[i], sys, X));
+      PetscCall(MatDestroy(&X));
     }
   }
-  {
-    PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
-    if (r->multi_model) {
-      const PetscInt shape[2] = {nrev1, multi_n};
+  if (fx->multi_bb && cfg->in_multi) {
+    PetscCall(KFBodyBasisAdd(fx->multi_bb, sys, Phir));
+    PetscCall((*r->ops->vectors)(r, sys, solver, basis, NULL, PETSC_FALSE, &X));
+    PetscCall(KFBodyBasisAdd(fx->multi_bb, sys, X));
+    PetscCall(MatDestroy(&X));
+    PetscCall(PetscArraycpy(&fx->multi_angles[fx->multi_n * fx->nrev1], cfg->angles, fx->nrev1));
+    fx->multi_n++;
+  }
+  PetscFunctionReturn(0);
+}
 
-      PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
-      PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, shape, multi_angles));
-    }
+/* What an angle of interest records, and its full-order reference when the models are verified */
+static PetscErrorCode KFReducerFixedRecord_Private(KFReducer r, KFFixed *fx, const KFConfig *cfg, KFSystem sys, KFFlexSolver solver, const KFReducerBasis *basis, const PetscReal freq[], const PetscReal imp[], const PetscReal keptf[], PetscInt nheld, PetscReal rigid_res, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  const PetscInt ci = cfg->interest, nmom = fx->nmom, t = fx->t, a = fx->a, c = basis->size, shape[3] = {t, a, nmom};
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nmom * t * a]));
+  PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &c, freq));
+  PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &c, imp));
+  PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &c, keptf));
+  PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)basis->ndeflated));
+  PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", basis->gram_condition));
+  PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
+  PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
+  if (r->verify) {
+    PetscCall(KFInterruptCheck(fx->comm));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFReducerReference_Private(r, sys, solver, nmom, &Lfull[ci * nmom * t * a], &evals[ci]));
+    PetscCall(PetscTime(&t1));
+    fx->times[6] += t1 - t0;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The system at configuration i, its factorization and basis: KFReducerFixedModes_Private, the full-order moments where
+   the models are compared, KFReducerFixedBases_Private and KFReducerFixedRecord_Private */
+static PetscErrorCode KFReducerFixedConfig_Private(KFReducer r, KFFixed *fx, PetscInt i, KFSystem sys, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  KFConfig       *cfg    = &fx->configs[i];
+  KFFlexSolver    solver = NULL;
+  KFReducerBasis  basis;
+  Mat             Phir;
+  PetscReal       rigid_res, *imp, *freq, *keptf;
+  PetscBool      *kept;
+  PetscInt        nkept = 0, nheld, c, tam = fx->nmom * fx->t * fx->a;
+  PetscLogDouble  t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerConfigBasis_Private(r, sys, fx->nrev, cfg->angles, fx->times, &fx->setup_s, &Phir, &rigid_res, &solver, &basis));
+  PetscCall(PetscTime(&t0));
+  c = basis.size;
+  PetscCall(PetscMalloc4(c, &imp, c, &kept, c, &freq, c, &keptf));
+  PetscCall(KFReducerFixedModes_Private(r, fx, &basis, imp, kept, freq, keptf, &nkept));
+  PetscCall(PetscTime(&t1));
+  fx->times[3] += t1 - t0;
+
+  if (cfg->interest >= 0 && KFReducerFullMoments_Private(r)) { /* full-order moments where the models are compared */
+    t0 = t1;
+    PetscCall(KFFlexSolverMoments(solver, fx->nmom, &Lfull[cfg->interest * tam]));
+    PetscCall(PetscTime(&t1));
+    fx->times[4] += t1 - t0;
+  } else if (cfg->interest >= 0) { /* not asked for: the moment checks say "not computed" (NaN) */
+    for (PetscInt e = 0; e < tam; e++) Lfull[cfg->interest * tam + e] = (PetscReal)NAN;
+  }
+  PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
+
+  t0 = t1;
+  PetscCall(KFReducerFixedBases_Private(r, fx, i, sys, solver, &basis, Phir, imp, kept, nkept));
+  PetscCall(PetscTime(&t1));
+  fx->times[5] += t1 - t0;
+
+  if (cfg->interest >= 0) PetscCall(KFReducerFixedRecord_Private(r, fx, cfg, sys, solver, &basis, freq, imp, keptf, nheld, rigid_res, evals, Lfull));
+  PetscCall(KFReducerAddPerf_Private(r, solver));
+  PetscCall(KFFlexSolverDestroy(&solver));
+  PetscCall(KFProgress(fx->comm, "  %" PetscInt_FMT " %s vectors (%" PetscInt_FMT " deflated), %" PetscInt_FMT " of %" PetscInt_FMT " modes kept; held dofs %" PetscInt_FMT, c, fx->type, basis.ndeflated, nkept, c, nheld));
+  PetscCall(PetscFree4(imp, kept, freq, keptf));
+  PetscCall(KFReducerBasisDestroy_Private(r, &basis));
+  PetscFunctionReturn(0);
+}
+
+/* alpha_G and its model, the multi-angle model; the other candidates are not needed */
+static PetscErrorCode KFReducerFixedModels_Private(KFReducer r, KFFixed *fx)
+{
+  const KFConfig *cg = &fx->configs[fx->g];
+  PetscInt        nrigid, nsys;
+  PetscLogDouble  t0, t1;
+  char            label[128];
+  const PetscInt  shape[2] = {fx->nrev1, 1};
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerConfigLabel_Private(fx->nrev, cg->angles, label, sizeof(label)));
+  if (!fx->nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the structure's Krylov model (no revolute joint: one configuration), %" PetscInt_FMT " modes above the importance threshold %g", fx->nkept_g, (double)r->keep_threshold));
+  else if (r->auto_alpha) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg: of the angles of interest, its Krylov model needs the most modes above the importance threshold %g (%" PetscInt_FMT "), so its kept set covers the others' (the paper's rule)", label, (double)r->keep_threshold, fx->nkept_g));
+  else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "alpha_G = %s deg, named in the scene", label));
+  PetscCall(KFProgress(fx->comm, "%s", r->rule));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFReducerMakeModel_Private(r, fx->candidates[fx->g], KF_METHOD_SINGLE_ANGLE, 1, cg->angles, &r->single));
+  if (fx->multi_bb) PetscCall(KFReducerMakeModel_Private(r, fx->multi_bb, KF_METHOD_MULTI_ANGLE, fx->multi_n, fx->multi_angles, &r->multi_model));
+  PetscCall(PetscTime(&t1));
+  fx->times[5] += t1 - t0;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
+  PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, cg->angles));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)cg->interest));
+  PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &fx->nkept_g, fx->kept_g));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)fx->nstatic_g));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
+  PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
+  PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)nrigid));
+  PetscFunctionReturn(0);
+}
+
+/* The models' sizes, the stage times and the moments matched */
+static PetscErrorCode KFReducerFixedSummary_Private(KFReducer r, KFFixed *fx)
+{
+  char      sizes[256], sizes_multi[256];
+  PetscReal mm = (PetscReal)fx->nmom;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
+  if (r->multi_model) {
+    const PetscInt shape[2] = {fx->nrev1, fx->multi_n};
+
+    PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
+    PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, shape, fx->multi_angles));
   }
   PetscCall(KFReducerModelSizes_Private(r->single, sizes, sizeof(sizes)));
   if (r->multi_model) {
@@ -408,23 +424,49 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
     PetscCall(KFReducerModelSizes_Private(r->multi_model, tmp, sizeof(tmp)));
     PetscCall(PetscSNPrintf(sizes_multi, sizeof(sizes_multi), "; %s dofs (multi-angle)", tmp));
   } else sizes_multi[0] = 0;
-  PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
-
-  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
-  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", setup_s));
+  PetscCall(KFProgress(fx->comm, "reduced bodies: %s dofs (single-angle)%s", sizes, sizes_multi));
+  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, KFSolveTimeNames[k], fx->times[k]));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", fx->setup_s));
   r->chosen = r->method == KF_METHOD_MULTI_ANGLE && r->multi_model ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
-  {
-    PetscReal mm = (PetscReal)nmom;
+  PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", mm));
+  if (r->multi_model) PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", mm));
+  PetscFunctionReturn(0);
+}
 
-    PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", mm));
-    if (r->multi_model) PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", mm));
-  }
-  for (PetscInt i = 0; i < nc; i++) PetscCall(KFBodyBasisDestroy(&candidates[i]));
-  PetscCall(KFBodyBasisDestroy(&multi_bb));
-  PetscCall(PetscFree(candidates));
-  PetscCall(PetscFree(kept_g));
-  PetscCall(PetscFree(multi_angles));
-  PetscCall(PetscFree(configs));
+/* The fixed recipe: every configuration reduced once (KFReducerFixedConfig_Private), then the models */
+static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  KFFixed  fx;
+  KFSystem sys = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMemzero(&fx, sizeof(fx)));
+  fx.g         = -1;
+  fx.best_kept = -1;
+  fx.best_imp  = -1;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &fx.comm));
+  PetscCall(KFReducerGetType(r, &fx.type));
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &fx.nrev, NULL, &fx.a, &fx.t));
+  fx.nrev1 = PetscMax(fx.nrev, 1);
+  fx.nmom  = r->build_moments;
+  PetscCall(KFReducerConfigurations_Private(r, fx.nrev1, &fx.nc, &fx.configs));
+  PetscCall(PetscCalloc1(fx.nc, &fx.candidates));
+  if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &fx.multi_bb));
+  PetscCall(PetscMalloc1(fx.nc * fx.nrev1, &fx.multi_angles));
+  PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFSystemSetConfigurationCount(sys, fx.nc));
+  for (PetscInt i = 0; i < fx.nc; i++) PetscCall(KFReducerFixedConfig_Private(r, &fx, i, sys, evals, Lfull));
+  PetscCall(KFSystemDestroy(&sys));
+  PetscCall(KFInterruptCheck(fx.comm));
+  if (!KFReducerFullMoments_Private(r)) PetscCall(KFReducerNote_Private(r, "full-order moments not computed (verification off): the moment checks are empty; -kf_full_moments computes them"));
+  PetscCall(KFReducerFixedModels_Private(r, &fx));
+  PetscCall(KFReducerFixedSummary_Private(r, &fx));
+  for (PetscInt i = 0; i < fx.nc; i++) PetscCall(KFBodyBasisDestroy(&fx.candidates[i]));
+  PetscCall(KFBodyBasisDestroy(&fx.multi_bb));
+  PetscCall(PetscFree(fx.candidates));
+  PetscCall(PetscFree(fx.kept_g));
+  PetscCall(PetscFree(fx.multi_angles));
+  PetscCall(PetscFree(fx.configs));
   PetscFunctionReturn(0);
 }
 
@@ -464,6 +506,7 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, KFFlexSolve
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   if (!solver) {
     PetscCall(KFFlexSolverCreate(sys, &own));
+    PetscCall(KFFlexSolverSetOptionsPrefix(own, ((PetscObject)r)->prefix)); /* the reducer's options are the solver's */
     PetscCall(KFFlexSolverSetShift(own, r->shift));
     solver = own;
   }
@@ -544,145 +587,132 @@ static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, 
 
 /* the search's way: every configuration's basis kept (moments up to moments_max), the references, the search, and
    the best model of each family */
-static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
+/* The search's state across its visits */
+typedef struct {
+  MPI_Comm  comm;
+  PetscInt  nc, nrev, nrev1, nb, a, t, nfull;
+  KFConfig *configs;
+  KFVisit  *visits;
+  PetscReal times[7], setup_s; /* assembly, factorization, basis, modes, moments, projection, verification */
+} KFSearch;
+
+/* What an angle of interest records of visit v, its full-order moments and reference */
+static PetscErrorCode KFReducerSearchVisitRecord_Private(KFReducer r, KFSearch *st, KFVisit *v, KFSystem sys, KFFlexSolver solver, PetscInt nheld, PetscReal rigid_res, KFEvalPoint evals[], PetscReal Lfull[])
 {
-  MPI_Comm       comm;
-  KFSystem       sys;
-  KFConfig      *configs;
-  KFVisit       *visits;
-  KFCandidate    single, multi;
-  PetscInt       nc, nrev, nrev1, nb, a, t, nfull = r->build_moments, nrows;
-  PetscReal      times[7] = {0}, *rows, setup_s = 0;
+  const PetscInt nfull = st->nfull, t = st->t, a = st->a;
+  PetscReal     *times = st->times;
   PetscLogDouble t0, t1;
-  static const char *const time_names[] = {"time_assembly", "time_factorization", "time_basis", "time_modes", "time_moments", "time_projection", "time_verification"};
 
   PetscFunctionBegin;
-  PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
-  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, &t));
-  nrev1 = PetscMax(nrev, 1);
-  PetscCall(KFReducerConfigurations_Private(r, nrev1, &nc, &configs));
-  PetscCall(PetscCalloc1(nc, &visits));
-  PetscCall(KFSystemCreate(r->scene, &sys));
-  PetscCall(KFSystemSetConfigurationCount(sys, nc + (r->verify ? neval - r->nconfig : 0))); /* the midpoints' references too */
-  for (PetscInt i = 0; i < nc; i++) {
-    KFVisit     *v = &visits[i];
-    KFFlexSolver solver;
-    Mat          Phir;
-    PetscReal    rigid_res;
-    PetscInt     nheld;
-    char         label[128], place[160];
+  PetscCall(PetscTime(&t1));
+  {
+    const PetscInt ci = v->interest, shape[3] = {t, a, nfull};
 
-    PetscCall(KFInterruptCheck(comm));
-    PetscCall(KFReducerConfigLabel_Private(nrev, configs[i].angles, label, sizeof(label)));
-    PetscCall(KFReducerConfigPlace_Private(nrev, configs[i].angles, place, sizeof(place)));
-    if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
-    else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
-    PetscCall(PetscTime(&t0));
-    PetscCall(KFSystemSetAngles(sys, configs[i].angles));
-    PetscCall(KFSystemGetRigidModes(sys, &Phir, &rigid_res));
-    PetscCall(PetscTime(&t1));
-    times[0] += t1 - t0;
-    t0 = t1;
-    PetscCall(KFFlexSolverCreate(sys, &solver));
-    PetscCall(KFFlexSolverSetShift(solver, r->shift));
-    PetscCall(KFFlexSolverSetUp(solver));
-    PetscCall(PetscTime(&t1));
-    times[1] += t1 - t0;
-    PetscCall(KFReducerAddFactorSetUp_Private(solver, t1 - t0, &setup_s));
-    t0 = t1;
-    v->basis.gram_condition = (PetscReal)NAN;
-    PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-    PetscCall((*r->ops->buildbasis)(r, sys, solver, &v->basis));
-    PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_BASIS, r, 0, 0, 0));
-    PetscCall(PetscTime(&t1));
-    times[2] += t1 - t0;
-    PetscCall(PetscMalloc1(nrev1, &v->angles));
-    PetscCall(PetscArraycpy(v->angles, configs[i].angles, nrev1));
-    v->interest = configs[i].interest;
-    v->is_g     = configs[i].is_g;
-    v->in_multi = configs[i].in_multi;
-    PetscCall(MatDuplicate(Phir, MAT_COPY_VALUES, &v->Phir));
-    PetscCall(PetscMalloc1(nb, &v->P));
-    for (PetscInt b = 0; b < nb; b++) PetscCall(MatDuplicate(sys->P[b], MAT_COPY_VALUES, &v->P[b]));
-    PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
-    if (v->interest >= 0) {
-      const PetscInt ci = v->interest, shape[3] = {t, a, nfull};
-
-      if (KFReducerFullMoments_Private(r)) {
-        t0 = t1;
-        PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
-        PetscCall(PetscTime(&t1));
-        times[4] += t1 - t0;
-        PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
-      }
-      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)v->basis.ndeflated));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", v->basis.gram_condition));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_rigid_content", v->basis.rigid_content));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_orthogonality", v->basis.orthogonality));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
-      PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
-      if (r->verify) {
-        PetscCall(PetscTime(&t0));
-        PetscCall(KFReducerReference_Private(r, sys, solver, nfull, &Lfull[ci * nfull * t * a], &evals[ci]));
-        PetscCall(PetscTime(&t1));
-        times[6] += t1 - t0;
-      }
-    }
-    if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis %s: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", place, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
-    PetscCall(KFProgress(comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
-    PetscCall(KFReducerAddPerf_Private(r, solver));
-    PetscCall(KFFlexSolverDestroy(&solver));
-  }
-  if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &times[6]));
-  if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
-  if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
-    KFCandidate    rich = {0};
-    KFReducedModel model;
-
-    PetscCall(PetscTime(&t0)); /* its model is projection work (the bodies' bases and reduced matrices) */
-    rich.family = KF_METHOD_MULTI_ANGLE;
-    rich.c      = nfull;
-    rich.kept   = -1;
-    for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
-    PetscCall(KFCandidateModel_Private(r, visits, &rich, PETSC_FALSE, &model));
-    PetscCall(KFReducedModelSetSetting(model, "max_frequency_hz", "0")); /* the reference is never trimmed */
-    for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
-    PetscCall(PetscTime(&t1));
-    times[5] += t1 - t0;
-    if (!KFReducerFullMoments_Private(r)) {
-      /* the moment checks' reference without the full-order solves: the richest candidate holds every angle's whole
-         Krylov basis, so its moments are the full order's (to the solves' accuracy) at the angles of interest */
-      const PetscInt shape[3] = {t, a, nfull};
-
-      PetscCall(PetscTime(&t0));
-      for (PetscInt ci = 0; ci < r->nconfig; ci++) {
-        PetscCall(KFReducedSystemMoments(evals[ci].rich, nfull, &Lfull[ci * nfull * t * a]));
-        PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
-        PetscCall(KFReducerResultScalar_Private(r, ci, "full_moments_estimated", 1.0));
-      }
+    if (KFReducerFullMoments_Private(r)) {
+      t0 = t1;
+      PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
       PetscCall(PetscTime(&t1));
       times[4] += t1 - t0;
+      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
     }
-    PetscCall(KFReducedModelDestroy(&model));
-    PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_deflations", (PetscReal)v->basis.ndeflated));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "gram_condition_raw", v->basis.gram_condition));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_rigid_content", v->basis.rigid_content));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "krylov_orthogonality", v->basis.orthogonality));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "held_dofs", (PetscReal)nheld));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "rigid_residual", rigid_res));
+    if (r->verify) {
+      PetscCall(PetscTime(&t0));
+      PetscCall(KFReducerReference_Private(r, sys, solver, nfull, &Lfull[ci * nfull * t * a], &evals[ci]));
+      PetscCall(PetscTime(&t1));
+      times[6] += t1 - t0;
+    }
   }
-  for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
+  PetscFunctionReturn(0);
+}
 
-  if (!nrev) PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g of the structure", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy));
-  else PetscCall(KFProgress(comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
-  PetscCall(PetscTime(&t0));
-  PetscCall(KFReducerSearch_Private(r, nc, visits, neval, evals, &single, &multi, &nrows, &rows));
-  PetscCall(KFReducerSearchShifts_Private(r, sys, &nc, &visits, neval, evals, &single, &multi, &nrows, &rows));
-  PetscCall(KFSystemDestroy(&sys));
-  PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
-  PetscCall(KFReducerResultScalar_Private(r, -1, "time_search", (PetscReal)(t1 - t0)));
-  {
-    const PetscInt shape[2] = {7, nrows};
+/* Visit i: the system at its angles, its factorization and Krylov basis, kept for the search (the basis, the rigid
+   modes and the body maps) */
+static PetscErrorCode KFReducerSearchVisit_Private(KFReducer r, KFSearch *st, PetscInt i, KFSystem sys, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  KFVisit       *v = &st->visits[i];
+  KFConfig      *cfg = &st->configs[i];
+  KFFlexSolver   solver;
+  Mat            Phir;
+  PetscReal      rigid_res;
+  PetscInt       nheld;
+  char           place[160];
 
-    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
-    PetscCall(PetscFree(rows));
+  PetscFunctionBegin;
+  PetscCall(KFReducerConfigPlace_Private(st->nrev, cfg->angles, place, sizeof(place)));
+  PetscCall(KFReducerConfigBasis_Private(r, sys, st->nrev, cfg->angles, st->times, &st->setup_s, &Phir, &rigid_res, &solver, &v->basis));
+  PetscCall(PetscMalloc1(st->nrev1, &v->angles));
+  PetscCall(PetscArraycpy(v->angles, cfg->angles, st->nrev1));
+  v->interest = cfg->interest;
+  v->is_g     = cfg->is_g;
+  v->in_multi = cfg->in_multi;
+  PetscCall(MatDuplicate(Phir, MAT_COPY_VALUES, &v->Phir));
+  PetscCall(PetscMalloc1(st->nb, &v->P));
+  for (PetscInt b = 0; b < st->nb; b++) PetscCall(MatDuplicate(sys->P[b], MAT_COPY_VALUES, &v->P[b]));
+  PetscCall(KFFlexSolverGetStats(solver, &nheld, NULL, NULL));
+  if (v->interest >= 0) PetscCall(KFReducerSearchVisitRecord_Private(r, st, v, sys, solver, nheld, rigid_res, evals, Lfull));
+  if (v->basis.rigid_content > 1e-6 || v->basis.orthogonality > 1e-6) PetscCall(KFReducerNote_Private(r, "Krylov basis %s: rigid content %.2e, loss of M-orthogonality %.2e: the moments beyond the first blocks may not be trusted (a stiffness or mass spread the solve cannot resolve)", place, (double)v->basis.rigid_content, (double)v->basis.orthogonality));
+  PetscCall(KFProgress(st->comm, "  %" PetscInt_FMT " Krylov vectors in %" PetscInt_FMT " blocks (%" PetscInt_FMT " deflated); rigid content %.1e, orthogonality %.1e; held dofs %" PetscInt_FMT, v->basis.size, v->basis.nblocks, v->basis.ndeflated, (double)v->basis.rigid_content, (double)v->basis.orthogonality, nheld));
+  PetscCall(KFReducerAddPerf_Private(r, solver));
+  PetscCall(KFFlexSolverDestroy(&solver));
+  PetscFunctionReturn(0);
+}
+
+/* Without verification, the estimator: the richest candidate, every basis whole, stands in for the full order */
+static PetscErrorCode KFReducerSearchEstimator_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  const PetscInt nc = st->nc, nfull = st->nfull, t = st->t, a = st->a;
+  KFVisit       *visits = st->visits;
+  PetscReal     *times = st->times;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
+  KFCandidate    rich = {0};
+  KFReducedModel model;
+
+  PetscCall(PetscTime(&t0)); /* its model is projection work (the bodies' bases and reduced matrices) */
+  rich.family = KF_METHOD_MULTI_ANGLE;
+  rich.c      = nfull;
+  rich.kept   = -1;
+  for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
+  PetscCall(KFCandidateModel_Private(r, visits, &rich, PETSC_FALSE, &model));
+  PetscCall(KFReducedModelSetSetting(model, "max_frequency_hz", "0")); /* the reference is never trimmed */
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
+  PetscCall(PetscTime(&t1));
+  times[5] += t1 - t0;
+  if (!KFReducerFullMoments_Private(r)) {
+    /* the moment checks' reference without the full-order solves: the richest candidate holds every angle's whole
+       Krylov basis, so its moments are the full order's (to the solves' accuracy) at the angles of interest */
+    const PetscInt shape[3] = {t, a, nfull};
+
+    PetscCall(PetscTime(&t0));
+    for (PetscInt ci = 0; ci < r->nconfig; ci++) {
+      PetscCall(KFReducedSystemMoments(evals[ci].rich, nfull, &Lfull[ci * nfull * t * a]));
+      PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));
+      PetscCall(KFReducerResultScalar_Private(r, ci, "full_moments_estimated", 1.0));
+    }
+    PetscCall(PetscTime(&t1));
+    times[4] += t1 - t0;
   }
-  PetscCheck(single.nexp || multi.nexp, comm, PETSC_ERR_PLIB, "the accuracy search tried no model");
+  PetscCall(KFReducedModelDestroy(&model));
+  PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
+}
+  PetscFunctionReturn(0);
+}
+
+/* The method of the chosen model: of the two that meet the target the smaller, else the one that meets it, else the
+   one nearer it */
+static PetscErrorCode KFReducerSearchChoose_Private(KFReducer r, const KFCandidate *sp_, const KFCandidate *mp_)
+{
+  const KFCandidate single = *sp_, multi = *mp_;
+
+  PetscFunctionBegin;
   {
     const PetscBool sp = (PetscBool)(single.nexp && single.complete && single.error <= r->accuracy), mp = (PetscBool)(multi.nexp && multi.complete && multi.error <= r->accuracy);
 
@@ -690,100 +720,110 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     else if (sp || mp) r->chosen = sp ? KF_METHOD_SINGLE_ANGLE : KF_METHOD_MULTI_ANGLE;
     else r->chosen = !single.nexp || (multi.nexp && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
   }
-  if (!single.nexp) { /* multi-angle only: the single-angle model of the first expansion angle, whole, for reference */
-    single      = multi;
-    single.family = KF_METHOD_SINGLE_ANGLE;
-    single.nexp = 1;
-  }
-  PetscCall(KFCandidateModel_Private(r, visits, &single, PETSC_TRUE, &r->single));
-  if (multi.nexp) PetscCall(KFCandidateModel_Private(r, visits, &multi, PETSC_TRUE, &r->multi_model));
-  PetscCall(PetscTime(&t1));
-  times[5] += t1 - t0;
+  PetscFunctionReturn(0);
+}
+
+/* The kept modes of the single-angle model, in its sub-basis: what the report's tables show. Arrays of m (kept: its
+   nkept 1-based indices). */
+static PetscErrorCode KFReducerSearchKeptModes_Private(const KFCandidate *sp_, PetscInt m, const PetscReal lambda[], const PetscReal imp[], const PetscInt clu[], PetscInt nclu, PetscReal freq[], PetscReal keptf[], PetscReal kept[], PetscReal cluf[], PetscInt *nkept_)
+{
+  const KFCandidate single = *sp_;
+  PetscInt          nkept = 0;
+
+  PetscFunctionBegin;
   {
-    const PetscInt   g = single.exp[0], shape[2] = {nrev1, 1};
-    PetscInt         m, nclu, *clu, nkept = 0, nstatic;
-    PetscReal       *lambda, *Phi, *imp, *freq, *keptf, *kept, *cluf, *dofs;
-    char             label[128];
-    KFVisit         *v = &visits[g];
+    PetscReal *ci;
+    PetscInt  *order;
 
-    PetscCall(KFReducerConfigLabel_Private(nrev, v->angles, label, sizeof(label)));
-    /* the kept modes of the single-angle model, in its sub-basis: what the report's tables show */
-    PetscCall(KFVisitModes_Private(r, v, single.c, &m, &lambda, &Phi, &imp, &clu, &nclu));
-    PetscCall(PetscMalloc5(m, &freq, m, &keptf, m, &kept, m, &cluf, nb, &dofs));
-    {
-      PetscReal *ci;
-      PetscInt  *order;
+    PetscCall(PetscCalloc2(PetscMax(nclu, 1), &ci, PetscMax(nclu, 1), &order));
+    for (PetscInt i = 0; i < m; i++)
+      if (clu[i] >= 0) ci[clu[i]] = PetscMax(ci[clu[i]], imp[i]);
+    PetscInt skept = single.kept;
 
-      PetscCall(PetscCalloc2(PetscMax(nclu, 1), &ci, PetscMax(nclu, 1), &order));
-      for (PetscInt i = 0; i < m; i++)
-        if (clu[i] >= 0) ci[clu[i]] = PetscMax(ci[clu[i]], imp[i]);
-      PetscInt skept = single.kept;
+    if (single.nbody) /* each body its share: the clusters of the body that keeps the most */
+      for (PetscInt b = 0; b < single.nbody; b++) skept = PetscMax(skept, single.bkept[b]);
+    for (PetscInt k = 0; k < nclu; k++) { /* the kept clusters are the skept most important */
+      PetscInt rank = 0;
 
-      if (single.nbody) /* each body its share: the clusters of the body that keeps the most */
-        for (PetscInt b = 0; b < single.nbody; b++) skept = PetscMax(skept, single.bkept[b]);
-      for (PetscInt k = 0; k < nclu; k++) { /* the kept clusters are the skept most important */
-        PetscInt rank = 0;
-
-        for (PetscInt q = 0; q < nclu; q++) rank += ci[q] > ci[k] || (ci[q] == ci[k] && q < k);
-        order[k] = rank;
-      }
-      for (PetscInt i = 0; i < m; i++) {
-        keptf[i] = clu[i] >= 0 && (skept < 0 || order[clu[i]] < skept) ? 1.0 : 0.0;
-        freq[i]  = PetscSqrtReal(PetscMax(lambda[i], 0)) / (2 * PETSC_PI);
-        cluf[i]  = (PetscReal)clu[i];
-        if (keptf[i] > 0) kept[nkept++] = (PetscReal)(i + 1);
-      }
-      PetscCall(PetscFree2(ci, order));
+      for (PetscInt q = 0; q < nclu; q++) rank += ci[q] > ci[k] || (ci[q] == ci[k] && q < k);
+      order[k] = rank;
     }
-    nstatic = nkept < m && r->static_correction ? a : 0;
-    for (PetscInt ci = 0; ci < r->nconfig; ci++) {
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &m, freq));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &m, imp));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &m, keptf));
-      PetscCall(KFReducerResultSet_Private(r, ci, "krylov_clusters", 1, &m, cluf));
+    for (PetscInt i = 0; i < m; i++) {
+      keptf[i] = clu[i] >= 0 && (skept < 0 || order[clu[i]] < skept) ? 1.0 : 0.0;
+      freq[i]  = PetscSqrtReal(PetscMax(lambda[i], 0)) / (2 * PETSC_PI);
+      cluf[i]  = (PetscReal)clu[i];
+      if (keptf[i] > 0) kept[nkept++] = (PetscReal)(i + 1);
     }
-    PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, v->angles));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)v->interest));
-    PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept, kept));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", (PetscReal)single.c));
-    { /* per body, the clusters of Krylov modes the chosen model keeps (-1: every mode) */
-      const KFCandidate *ch = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? &multi : &single;
-
-      for (PetscInt b = 0; b < nb; b++) dofs[b] = (PetscReal)(ch->nbody ? ch->bkept[b] : ch->kept);
-      PetscCall(KFReducerResultSet_Private(r, -1, "body_kept_clusters", 1, &nb, dofs));
-    }
-    {
-      PetscInt nrigid;
-      PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
-      PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)nrigid));
-    }
-    {
-      PetscInt nsys;
-
-      PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
-      PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
-    }
-    PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
-    if (r->multi_model) {
-      PetscReal     *ma;
-      const PetscInt mshape[2] = {nrev1, multi.nexp};
-
-      PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
-      PetscCall(PetscMalloc1(nrev1 * multi.nexp, &ma));
-      for (PetscInt e = 0; e < multi.nexp; e++) PetscCall(PetscArraycpy(&ma[e * nrev1], visits[multi.exp[e]].angles, nrev1));
-      PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, mshape, ma));
-      PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", (PetscReal)multi.c));
-      PetscCall(PetscFree(ma));
-    }
-    if (!nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response of the structure is %" PetscInt_FMT " moments%s (%" PetscInt_FMT " reduced dofs)%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], single.c,
-                                       single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction"), single.size, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
-    else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
-                           r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction")), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
-    PetscCall(KFProgress(comm, "%s", r->rule));
-    PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));
-    PetscCall(PetscFree4(lambda, Phi, imp, clu));
+    PetscCall(PetscFree2(ci, order));
   }
+  *nkept_ = nkept;
+  PetscFunctionReturn(0);
+}
+
+/* The search's results: the single-angle model's modes at every angle of interest, what the chosen models keep, their
+   sizes, and the rule in one sentence */
+static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, const KFCandidate *sp_, const KFCandidate *mp_)
+{
+  const KFCandidate single = *sp_, multi = *mp_;
+  const PetscInt    g = single.exp[0], shape[2] = {st->nrev1, 1}, nb = st->nb, nrev = st->nrev, nrev1 = st->nrev1, a = st->a;
+  PetscInt          m, nclu, *clu, nkept = 0, nstatic;
+  PetscReal        *lambda, *Phi, *imp, *freq, *keptf, *kept, *cluf, *dofs;
+  char              label[128];
+  KFVisit          *visits = st->visits, *v = &visits[g];
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerConfigLabel_Private(nrev, v->angles, label, sizeof(label)));
+  PetscCall(KFVisitModes_Private(r, v, single.c, &m, &lambda, &Phi, &imp, &clu, &nclu));
+  PetscCall(PetscMalloc5(m, &freq, m, &keptf, m, &kept, m, &cluf, nb, &dofs));
+  PetscCall(KFReducerSearchKeptModes_Private(&single, m, lambda, imp, clu, nclu, freq, keptf, kept, cluf, &nkept));
+  nstatic = nkept < m && r->static_correction ? a : 0;
+  for (PetscInt ci = 0; ci < r->nconfig; ci++) {
+    PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &m, freq));
+    PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &m, imp));
+    PetscCall(KFReducerResultSet_Private(r, ci, "krylov_kept", 1, &m, keptf));
+    PetscCall(KFReducerResultSet_Private(r, ci, "krylov_clusters", 1, &m, cluf));
+  }
+  PetscCall(KFReducerResultSet_Private(r, -1, "reduction_angles", 2, shape, v->angles));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reduction_config", (PetscReal)v->interest));
+  PetscCall(KFReducerResultSet_Private(r, -1, "kept_modes", 1, &nkept, kept));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "static_correction_modes", (PetscReal)nstatic));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "moments_matched", (PetscReal)single.c));
+  { /* per body, the clusters of Krylov modes the chosen model keeps (-1: every mode) */
+    const KFCandidate *ch = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? &multi : &single;
+
+    for (PetscInt b = 0; b < nb; b++) dofs[b] = (PetscReal)(ch->nbody ? ch->bkept[b] : ch->kept);
+    PetscCall(KFReducerResultSet_Private(r, -1, "body_kept_clusters", 1, &nb, dofs));
+  }
+  {
+    PetscInt nrigid;
+    PetscCall(KFSceneGetRigidCount(r->scene, &nrigid)); /* derived from geometry, joints and boundary conditions */
+    PetscCall(KFReducerResultScalar_Private(r, -1, "rigid_modes", (PetscReal)nrigid));
+  }
+  {
+    PetscInt nsys;
+
+    PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "full_system_dofs", (PetscReal)nsys));
+  }
+  PetscCall(KFReducerRecordBodySizes_Private(r, r->single, "reduced_dofs_per_body"));
+  if (r->multi_model) {
+    PetscReal     *ma;
+    const PetscInt mshape[2] = {nrev1, multi.nexp};
+
+    PetscCall(KFReducerRecordBodySizes_Private(r, r->multi_model, "multi_dofs_per_body"));
+    PetscCall(PetscMalloc1(nrev1 * multi.nexp, &ma));
+    for (PetscInt e = 0; e < multi.nexp; e++) PetscCall(PetscArraycpy(&ma[e * nrev1], visits[multi.exp[e]].angles, nrev1));
+    PetscCall(KFReducerResultSet_Private(r, -1, "multi_reduction_angles", 2, mshape, ma));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "multi_moments_matched", (PetscReal)multi.c));
+    PetscCall(PetscFree(ma));
+  }
+  if (!nrev) PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response of the structure is %" PetscInt_FMT " moments%s (%" PetscInt_FMT " reduced dofs)%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], single.c,
+                                     single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction"), single.size, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
+  else PetscCall(PetscSNPrintf(r->rule, sizeof(r->rule), "the accuracy search: the smallest model meeting relative H-inf error %g of the %s response at the %" PetscInt_FMT " angles of interest and the midpoints between them is %s (%" PetscInt_FMT " moments%s%s, %" PetscInt_FMT " reduced dofs); single-angle alpha_G = %s deg with %" PetscInt_FMT " moments%s", (double)r->accuracy, KFAccuracyMeasures[r->accuracy_measure], r->nconfig, r->chosen == KF_METHOD_MULTI_ANGLE ? "multi-angle" : "single-angle", r->chosen == KF_METHOD_MULTI_ANGLE ? multi.c : single.c,
+                         r->chosen == KF_METHOD_MULTI_ANGLE ? ", bases at several angles" : "", r->chosen == KF_METHOD_MULTI_ANGLE ? "" : (single.kept == -1 ? ", every Krylov mode" : (single.nbody ? ", each body its share of the important clusters + static correction" : ", important clusters + static correction")), r->chosen == KF_METHOD_MULTI_ANGLE ? multi.size : single.size, label, single.c, (single.complete && single.error <= r->accuracy) ? "" : " (misses the target)"));
+  PetscCall(KFProgress(st->comm, "%s", r->rule));
+  PetscCall(PetscFree5(freq, keptf, kept, cluf, dofs));
+  PetscCall(PetscFree4(lambda, Phi, imp, clu));
   {
     char sizes[256], tmp[256] = "";
 
@@ -794,14 +834,70 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       PetscCall(KFReducerModelSizes_Private(r->multi_model, ms, sizeof(ms)));
       PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "; %s dofs (multi-angle)", ms));
     }
-    PetscCall(KFProgress(comm, "reduced bodies: %s dofs (single-angle)%s", sizes, tmp));
+    PetscCall(KFProgress(st->comm, "reduced bodies: %s dofs (single-angle)%s", sizes, tmp));
   }
-  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, time_names[k], times[k]));
-  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", setup_s));
-  for (PetscInt i = 0; i < nc; i++) PetscCall(KFVisitDestroy_Private(r, &visits[i]));
+  PetscFunctionReturn(0);
+}
+
+/* The accuracy search: every configuration visited (KFReducerSearchVisit_Private), the references or the estimator set
+   up, the smallest models meeting the target found (src/reducer/search.c, shifts.c), then made and recorded */
+static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
+{
+  KFSearch       st;
+  KFSystem       sys;
+  KFCandidate    single, multi;
+  PetscInt       nrows;
+  PetscReal     *rows;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMemzero(&st, sizeof(st)));
+  st.nfull = r->build_moments;
+  PetscCall(PetscObjectGetComm((PetscObject)r, &st.comm));
+  PetscCall(KFSceneGetInfo(r->scene, &st.nb, NULL, &st.nrev, NULL, &st.a, &st.t));
+  st.nrev1 = PetscMax(st.nrev, 1);
+  PetscCall(KFReducerConfigurations_Private(r, st.nrev1, &st.nc, &st.configs));
+  PetscCall(PetscCalloc1(st.nc, &st.visits));
+  PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify ? neval - r->nconfig : 0))); /* the midpoints' references too */
+  for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
+  if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
+  if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
+  if (!r->verify) PetscCall(KFReducerSearchEstimator_Private(r, &st, neval, evals, Lfull));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
+
+  if (!st.nrev) PetscCall(KFProgress(st.comm, "searching the smallest model with relative H-inf error of the %s response <= %g of the structure", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy));
+  else PetscCall(KFProgress(st.comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFReducerSearch_Private(r, st.nc, st.visits, neval, evals, &single, &multi, &nrows, &rows));
+  PetscCall(KFReducerSearchShifts_Private(r, sys, &st.nc, &st.visits, neval, evals, &single, &multi, &nrows, &rows));
+  PetscCall(KFSystemDestroy(&sys));
+  PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_search", (PetscReal)(t1 - t0)));
+  {
+    const PetscInt shape[2] = {7, nrows};
+
+    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
+    PetscCall(PetscFree(rows));
+  }
+  PetscCheck(single.nexp || multi.nexp, st.comm, PETSC_ERR_PLIB, "the accuracy search tried no model");
+  PetscCall(KFReducerSearchChoose_Private(r, &single, &multi));
+  if (!single.nexp) { /* multi-angle only: the single-angle model of the first expansion angle, whole, for reference */
+    single        = multi;
+    single.family = KF_METHOD_SINGLE_ANGLE;
+    single.nexp   = 1;
+  }
+  PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
+  if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
+  PetscCall(PetscTime(&t1));
+  st.times[5] += t1 - t0;
+  PetscCall(KFReducerSearchRecord_Private(r, &st, &single, &multi));
+  for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, KFSolveTimeNames[k], st.times[k]));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", st.setup_s));
+  for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFVisitDestroy_Private(r, &st.visits[i]));
   PetscCall(KFCandidateCacheReset_Private(r)); /* its body bases belong to these visits */
-  PetscCall(PetscFree(visits));
-  PetscCall(PetscFree(configs));
+  PetscCall(PetscFree(st.visits));
+  PetscCall(PetscFree(st.configs));
   PetscFunctionReturn(0);
 }
 
@@ -882,7 +978,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   KFEvalPoint *evals;
   PetscInt     neval = 0, a, t, nfull;
   PetscReal   *Lfull;
-  PetscBool    search, krylov;
+  PetscBool    search;
   PetscLogDouble tstart, tend;
 
   PetscFunctionBegin;
@@ -891,7 +987,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
-  PetscCall(KFReducerResultsReset_Private(r));
+  PetscCall(KFReducerReset(r));
   r->verify_check_worst    = -1;
   r->verify_check_worst_hz = 0;
   r->verify_check_seconds  = 0;
@@ -900,9 +996,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
   PetscCall(PetscTime(&tstart));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
-  PetscCall(PetscObjectTypeCompare((PetscObject)r, KFREDUCERKRYLOV, &krylov));
-  search = (PetscBool)(r->search && krylov);
-  if (r->search && !krylov) PetscCall(KFReducerNote_Private(r, "the %s basis has no accuracy search: its fixed recipe was used (-kf_search applies to the krylov type)", ((PetscObject)r)->type_name));
+  search = (PetscBool)(r->search && r->ops->blocks);
+  if (r->search && !r->ops->blocks) PetscCall(KFReducerNote_Private(r, "the %s basis has no accuracy search: its fixed recipe was used (-kf_search applies to the krylov type)", ((PetscObject)r)->type_name));
   /* moments: the fixed number, the search's most, or the paper's 10 for a fixed recipe without a number */
   r->build_moments = r->moments != PETSC_DECIDE ? r->moments : (search ? r->moments_max : 10);
   if (r->build_moments <= r->output_blocks) r->build_moments = r->output_blocks + 1;

@@ -386,7 +386,8 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   for (PetscInt e = 0; e < cand->nexp; e++) PetscCall(PetscArraycpy(&angles[e * nrev1], visits[cand->exp[e]].angles, nrev1));
   if (!cc) {
     PetscCall(PetscNew(&cc));
-    r->candcache = cc;
+    r->candcache       = cc;
+    r->candcache_reset = KFCandidateCacheReset_Private;
   }
   if (!cc->bb || !KFSameVectors(&cc->key, cand)) { /* not the vectors of the last model: a body basis of its own */
     PetscBool krylov = PETSC_TRUE; /* every visit has a Krylov basis (block columns; an eigen basis has none) */

@@ -7,7 +7,6 @@ PetscErrorCode KFSceneCreate(MPI_Comm comm, KFScene *scene)
   PetscFunctionBegin;
   PetscValidPointer(scene, 2);
   PetscCall(KFInitialize());
-  PetscCall(KFModelInitializePackage());
   PetscCall(PetscHeaderCreate(s, KF_SCENE_CLASSID, "KFScene", "Articulated multi-flexible-body scene", "KF", comm, KFSceneDestroy, KFSceneView));
   s->comm   = comm; /* the caller's communicator, as before: the header keeps PETSc's duplicate */
   s->nrigid = -1;

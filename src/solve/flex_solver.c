@@ -1,40 +1,80 @@
-#define _GNU_SOURCE /* dladdr */
-#include <dlfcn.h>
-#include <kryflex_impl.h>
+/* KFFlexSolver, the flexible solve operator K+: the generic object (life cycle, type, options, view) and what every
+   implementation shares, the projection of a block onto the flexible subspace and its iterative refinement against
+   K_S. How K_h^-1 is applied is the implementation's (src/solve/impls/<type>/, registered in src/solve/register.c). */
+#include <kryflex/flexsolverimpl.h>
 
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
-
-/* The flexible solver's options are each read and checked in one function below: by the solver when it is made and
-   set up, and before any of that by KFFlexSolverCheckOptions() (from KFReducerSetFromOptions), so that a bad value
-   stops the run as a bad option before the scene is assembled, not as a failed reduction after it. */
-
-/* What the solver reads when it is made: -kf_shift, -kf_refine (refine_set: whether given; the default, 1 or 5,
-   follows -kf_blr: KFFlexSolverRefineSteps()) and -kf_refine_rtol */
-static PetscErrorCode KFFlexSolverCreateOptions(MPI_Comm comm, PetscReal *shift, PetscInt *refine, PetscBool *refine_set, PetscReal *rtol)
+/* A solver with no type yet, on sys (NULL: a solver whose options are only read and checked) */
+static PetscErrorCode KFFlexSolverCreate_Private(MPI_Comm comm, KFSystem sys, KFFlexSolver *solver)
 {
+  KFFlexSolver f;
+
   PetscFunctionBegin;
-  *shift = 0;
-  *refine = 1;
-  *rtol   = 1e-6;
-  PetscOptionsBegin(comm, NULL, "kryflex flexible solve operator K+", "KFFlexSolverCreate");
-  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_shift", *shift, shift, NULL));
-  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_refine", *refine, refine, refine_set));
-  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_refine_rtol", *rtol, rtol, NULL));
-  PetscOptionsEnd();
-  PetscCheck(*shift >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift must be >= 0 (K + shift M must be positive definite; expansion points inside the band are -kf_max_factorizations); got %g", (double)*shift);
-  PetscCheck(*refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, *refine);
-  PetscCheck(*rtol >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)*rtol);
+  PetscCall(KFFlexSolverRegisterAll());
+  PetscCall(PetscHeaderCreate(f, KF_FLEXSOLVER_CLASSID, "KFFlexSolver", "Flexible solve operator K+", "KF", comm, KFFlexSolverDestroy, KFFlexSolverView));
+  f->sys         = sys;
+  f->refine      = 1;
+  f->refine_rtol = 1e-6;
+  *solver        = f;
   PetscFunctionReturn(0);
 }
 
+/*
+  KFFlexSolverCreate - the flexible solver of an assembled system. Its type (KFFlexSolverSetType; -kf_flex_solver,
+  default auto) and options (-kf_shift, -kf_refine, -kf_refine_rtol, the factorization's) are read with the solver's
+  options prefix (KFFlexSolverSetOptionsPrefix; a reducer's solvers take the reducer's) by KFFlexSolverSetFromOptions,
+  which KFFlexSolverSetUp calls when nobody did.
+*/
 PetscErrorCode KFFlexSolverCreate(KFSystem sys, KFFlexSolver *solver)
 {
   PetscFunctionBegin;
+  PetscValidPointer(solver, 2);
   PetscCheck(sys->assembled, sys->scene->comm, PETSC_ERR_ORDER, "call KFSystemSetAngles() before KFFlexSolverCreate()");
-  PetscCall(PetscNew(solver));
-  (*solver)->sys    = sys;
-  (*solver)->type   = KF_FLEX_SOLVER_AUTO; /* body-wise where it is faster (src/solve/bodywise.c) */
-  PetscCall(KFFlexSolverCreateOptions(sys->scene->comm, &(*solver)->shift, &(*solver)->refine, &(*solver)->refine_set, &(*solver)->refine_rtol));
+  PetscCall(KFFlexSolverCreate_Private(sys->scene->comm, sys, solver));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFlexSolverSetOptionsPrefix(KFFlexSolver solver, const char prefix[])
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
+  PetscCall(PetscObjectSetOptionsPrefix((PetscObject)solver, prefix));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFFlexSolverSetType - how K+ is applied: KFFLEXSOLVERMONOLITHIC (one factorization of K_S per configuration),
+  KFFLEXSOLVERBODYWISE (one factorization per body interior, kept on the KFSystem for all its configurations, and a
+  dense interface problem per configuration: the same K+ B), KFFLEXSOLVERAUTO (body-wise where it pays, decided at
+  the set-up), or any type added by KFFlexSolverRegister. -kf_flex_solver overrides it.
+*/
+PetscErrorCode KFFlexSolverSetType(KFFlexSolver solver, KFFlexSolverType type)
+{
+  PetscErrorCode (*create)(KFFlexSolver);
+  PetscBool same;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
+  PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the type before KFFlexSolverSetUp()");
+  PetscCall(PetscObjectTypeCompare((PetscObject)solver, type, &same));
+  if (same) PetscFunctionReturn(0);
+  PetscCall(KFFlexSolverRegisterAll());
+  PetscCall(PetscFunctionListFind(KFFlexSolverList, type, &create));
+  PetscCheck(create, PetscObjectComm((PetscObject)solver), PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown flexible solver type '%s': give auto, monolithic or bodywise (or a type added by KFFlexSolverRegister)", type);
+  if (solver->ops->destroy) PetscCall((*solver->ops->destroy)(solver));
+  PetscCall(PetscMemzero(solver->ops, sizeof(struct _KFFlexSolverOps)));
+  solver->data = NULL;
+  PetscCall(PetscObjectChangeTypeName((PetscObject)solver, type));
+  PetscCall((*create)(solver));
+  PetscFunctionReturn(0);
+}
+
+/* the implementation set up (after KFFlexSolverSetUp): monolithic or bodywise; auto has chosen one of them by then */
+PetscErrorCode KFFlexSolverGetType(KFFlexSolver solver, KFFlexSolverType *type)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
+  PetscCheck(solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call KFFlexSolverSetUp() first");
+  *type = ((PetscObject)solver)->type_name;
   PetscFunctionReturn(0);
 }
 
@@ -43,19 +83,21 @@ PetscErrorCode KFFlexSolverSetShift(KFFlexSolver solver, PetscReal shift)
   PetscFunctionBegin;
   PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the shift before KFFlexSolverSetUp()");
   PetscCheck(shift >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "the shift must be >= 0 (K + shift M must be positive definite); got %g", (double)shift);
-  solver->shift = shift;
+  solver->shift     = shift;
+  solver->shift_set = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
 /* An expansion point inside the band: factor K_S - sigma M_S (sigma > 0), indefinite, by MUMPS' LDL^T with pivoting
-   (SYM=2); the solve then gives the Krylov blocks of (K - sigma M)^-1 M at sigma (src/krylov/shifted.c). The
-   shift is stored as -sigma: what is factored is always K + shift M. */
+   (SYM=2); the solve then gives the Krylov blocks of (K - sigma M)^-1 M at sigma (src/reducer/shifts.c). The
+   shift is stored as -sigma: what is factored is always K + shift M, by the monolithic implementation. */
 PetscErrorCode KFFlexSolverSetInteriorShift(KFFlexSolver solver, PetscReal sigma)
 {
   PetscFunctionBegin;
   PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the shift before KFFlexSolverSetUp()");
   PetscCheck(sigma > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "an expansion point inside the band is a positive sigma = (2 pi f)^2; got %g", (double)sigma);
-  solver->shift = -sigma;
+  solver->shift     = -sigma;
+  solver->shift_set = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
@@ -63,347 +105,105 @@ PetscErrorCode KFFlexSolverDestroy(KFFlexSolver *solver)
 {
   PetscFunctionBegin;
   if (!*solver) PetscFunctionReturn(0);
-  PetscCall(MatDestroy(&(*solver)->Kh));
-  PetscCall(MatDestroy(&(*solver)->F));
-  PetscCall(KFBodywiseDestroy(&(*solver)->bw));
+  PetscValidHeaderSpecific(*solver, KF_FLEXSOLVER_CLASSID, 1);
+  if (--((PetscObject)(*solver))->refct > 0) {
+    *solver = NULL;
+    PetscFunctionReturn(0);
+  }
+  if ((*solver)->ops->destroy) PetscCall((*(*solver)->ops->destroy)(*solver));
   PetscCall(PetscFree((*solver)->held));
-  PetscCall(PetscFree(*solver));
+  PetscCall(PetscHeaderDestroy(solver));
   PetscFunctionReturn(0);
 }
 
-/* MemAvailable of this node (/proc/meminfo), in MB; -1 where it cannot be read (also the body-wise solve's share) */
-PETSC_INTERN PetscReal KFNodeMemoryAvailableMB(void)
+PetscErrorCode KFFlexSolverView(KFFlexSolver solver, PetscViewer viewer)
 {
-  FILE  *f = fopen("/proc/meminfo", "r");
-  char   line[256];
-  double kb = -1;
-
-  if (!f) return -1;
-  while (fgets(line, sizeof(line), f))
-    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
-  fclose(f);
-  return kb < 0 ? -1 : kb / 1024.0;
-}
-
-/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core
-   (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
-static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
-{
-  PetscInt mine;
+  PetscBool ascii;
 
   PetscFunctionBegin;
-  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine));
-  if (mine > 0) *mb = (PetscReal)mine;
-  else {
-    PetscInt nr, ni;
-
-    PetscCall(MatMumpsGetInfo(F, 3, &nr));
-    PetscCall(MatMumpsGetInfo(F, 4, &ni));
-    *mb = ((nr < 0 ? -1e6 * nr : nr) * sizeof(PetscScalar) + (ni < 0 ? -1e6 * ni : ni) * sizeof(int)) / 1048576.0;
-  }
+  if (!viewer) PetscCall(PetscViewerASCIIGetStdout(PetscObjectComm((PetscObject)solver), &viewer));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(0);
+  PetscCall(PetscObjectPrintClassNamePrefixType((PetscObject)solver, viewer));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "shift %g, %" PetscInt_FMT " held dofs, at most %" PetscInt_FMT " refinement steps above relative residual %g\n", (double)solver->shift, solver->nheld, solver->refine, (double)solver->refine_rtol));
+  if (solver->ops->view) PetscCall((*solver->ops->view)(solver, viewer));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }
 
-/* -kf_memory_check and -kf_memory_limit_mb (has_limit: whether given) */
-static PetscErrorCode KFFactorMemoryOptions(MPI_Comm comm, PetscBool *check, PetscReal *limit, PetscBool *has_limit)
+/* the implementation's own options, in a block of their own */
+static PetscErrorCode KFFlexSolverTypeOptions(KFFlexSolver solver)
 {
   PetscFunctionBegin;
-  *check = PETSC_TRUE;
-  *limit = -1;
-  PetscOptionsBegin(comm, NULL, "kryflex factorization memory check", "KFFlexSolverSetUp");
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_memory_check", *check, check, NULL));
-  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_memory_limit_mb", *limit, limit, has_limit));
+  if (!solver->ops->setfromoptions) PetscFunctionReturn(0);
+  PetscObjectOptionsBegin((PetscObject)solver);
+  PetscCall((*solver->ops->setfromoptions)(solver, PetscOptionsObject));
   PetscOptionsEnd();
-  PetscCheck(!*has_limit || *limit > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_memory_limit_mb is the memory per node in MB, a positive number; got %g", (double)*limit);
   PetscFunctionReturn(0);
 }
 
-/* After MUMPS' analysis: its estimates of the factorization's memory in core and out of core, summed over the ranks
-   of each node, against the node's available memory (or -kf_memory_limit_mb). ooc_mode: 0 in core, 1 out of core,
-   2 auto (in core when it fits on every node, else out of core when that fits: *ooc tells which, and MUMPS is told
-   before its factorization). Too much either way stops every rank with one message, before the factorization that
-   would be killed. */
-static PetscErrorCode KFCheckFactorMemory(Mat F, PetscInt ooc_mode, PetscBool *ooc, PetscReal *estimate_mb)
+/*
+  KFFlexSolverSetFromOptions - -kf_flex_solver, -kf_shift (unless KFFlexSolverSetShift set one), -kf_refine (the
+  default, 1 or 5, follows -kf_blr: KFFlexSolverRefineSteps), -kf_refine_rtol and the implementation's options,
+  read and checked with the solver's prefix.
+*/
+PetscErrorCode KFFlexSolverSetFromOptions(KFFlexSolver solver)
 {
-  MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
-  PetscReal limit, mine[2], need[2], avail, in[5], worst[5];
-  PetscBool check, has_limit;
+  char      type[256] = KFFLEXSOLVERAUTO;
+  PetscReal shift     = 0;
+  PetscBool flg, shift_given;
+  MPI_Comm  comm = PetscObjectComm((PetscObject)solver);
 
   PetscFunctionBegin;
-  PetscCall(KFFactorMemoryOptions(comm, &check, &limit, &has_limit));
-  PetscCall(KFFactorEstimateMB(F, PETSC_FALSE, &mine[0]));
-  PetscCall(KFFactorEstimateMB(F, PETSC_TRUE, &mine[1]));
-  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCall(MPIU_Allreduce(mine, need, 2, MPIU_REAL, MPIU_SUM, node));
-  avail = has_limit ? limit : KFNodeMemoryAvailableMB();
-  PetscCallMPI(MPI_Comm_free(&node));
-  /* the node whose estimate exceeds its memory by the most decides (same on every rank) */
-  in[0] = (check && avail >= 0) ? need[0] - avail : -PETSC_MAX_REAL; /* in core */
-  in[1] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL; /* out of core */
-  in[2] = mine[0];
-  in[3] = mine[1];
-  in[4] = 0;
-  PetscCall(MPIU_Allreduce(in, worst, 5, MPIU_REAL, MPIU_MAX, comm));
-  *ooc = (PetscBool)(ooc_mode == 1 || (ooc_mode == 2 && worst[0] > 0 && worst[1] <= 0));
-  *estimate_mb = worst[*ooc ? 3 : 2];
-  if (worst[*ooc ? 1 : 0] > 0) {
-    /* every rank learns the offending node's figures */
-    PetscReal fig[3], myfig[3] = {-1, -1, -1};
-    if (in[*ooc ? 1 : 0] == worst[*ooc ? 1 : 0]) {
-      myfig[0] = need[0];
-      myfig[1] = need[1];
-      myfig[2] = avail;
-    }
-    PetscCall(MPIU_Allreduce(myfig, fig, 3, MPIU_REAL, MPIU_MAX, comm));
-    SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB in core and %.3g MB out of core (-kf_ooc) for the factorization on one node, %.3g MB are available%s. Run on more nodes or a machine with more memory, free memory on this one, or try anyway with -kf_memory_check 0", (double)fig[0], (double)fig[1], (double)fig[2], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
-  }
-  if (*ooc && ooc_mode == 2) PetscCall(KFProgress(comm, "  the in-core factorization would need %.4g MB on one node, %.4g MB are available: the factors go out of core (%.4g MB in core; the folder MUMPS_OOC_TMPDIR, default the working directory; -kf_ooc false keeps them in core)", (double)need[0], (double)avail, (double)need[1]));
-  if (*ooc) PetscCall(MatMumpsSetIcntl(F, 22, 1)); /* read by MUMPS at the factorization */
-  PetscFunctionReturn(0);
-}
-
-/* MUMPS' ordering (ICNTL(7)) by name; ptscotch: the parallel analysis (ICNTL(28) = 2) with PT-SCOTCH (ICNTL(29) = 1);
-   auto: MUMPS' own choice among the orderings it was built with (the SCOTCH build chose SCOTCH for the solid
-   spacecraft from 13k to 1M dofs, on 1 and 2 ranks: README, "Nested dissection") */
-static const char *const KFOrderings[] = {"amd", "amf", "scotch", "pord", "metis", "qamd", "auto", "ptscotch"};
-static const PetscInt    KFOrderingIcntl[] = {0, 2, 3, 4, 5, 6, 7, -1};
-#define KF_ORDERING_SCOTCH   2
-#define KF_ORDERING_AUTO     6
-#define KF_ORDERING_PTSCOTCH 7
-
-/* MUMPS' controls that the options set (the factorization of the flexible solve; the null-pivot cross-check takes
-   MUMPS' defaults) */
-typedef struct {
-  PetscInt  ordering, seed, tries;
-  PetscInt  ooc_mode; /* 0 in core, 1 out of core, 2 auto */
-  PetscReal blr;      /* CNTL(7) of a block low-rank factorization; 0: full rank */
-  PetscBool spd;
-} KFMumpsControls;
-
-/* -kf_ordering, -kf_scotch_seed, -kf_ordering_tries, -kf_blr, -kf_ooc and -kf_spd */
-static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, KFMumpsControls *c)
-{
-  char      val[16] = "auto";
-  PetscBool set, on;
-
-  PetscFunctionBegin;
-  c->ordering = KF_ORDERING_AUTO;
-  c->seed     = 1;
-  c->tries    = 1;
-  c->ooc_mode = 2;
-  c->blr      = 0;
-  c->spd      = PETSC_FALSE;
-  PetscOptionsBegin(comm, NULL, "kryflex factorization", "KFFlexSolverSetUp");
-  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_ordering", KFOrderings, 8, KFOrderings[c->ordering], &c->ordering, NULL));
-  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_scotch_seed", c->seed, &c->seed, NULL));
-  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_ordering_tries", c->tries, &c->tries, NULL));
-  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_blr", c->blr, &c->blr, NULL));
-  PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_ooc", val, val, sizeof(val), &set));
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_spd", c->spd, &c->spd, NULL));
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
+  if (((PetscObject)solver)->type_name) PetscCall(PetscStrncpy(type, ((PetscObject)solver)->type_name, sizeof(type)));
+  PetscObjectOptionsBegin((PetscObject)solver);
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_shift", shift, &shift, &shift_given));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_refine", solver->refine, &solver->refine, &flg));
+  solver->refine_set = (PetscBool)(solver->refine_set || flg);
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_refine_rtol", solver->refine_rtol, &solver->refine_rtol, NULL));
+  PetscCall(KFOptionsSettingFList(PetscOptionsObject, "-kf_flex_solver", KFFlexSolverList, type, type, sizeof(type), &flg));
   PetscOptionsEnd();
-  PetscCheck(c->seed >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_scotch_seed is a positive integer; got %" PetscInt_FMT, c->seed);
-  PetscCheck(c->tries >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more; got %" PetscInt_FMT, c->tries);
-  PetscCheck(c->blr >= 0 && c->blr < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)c->blr);
-  if (set && !val[0]) c->ooc_mode = 1; /* a bare -kf_ooc */
-  else if (set) {
-    PetscCall(PetscStrcasecmp(val, "auto", &on));
-    if (!on) {
-      PetscErrorCode ierr;
-
-      PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-      ierr = PetscOptionsStringToBool(val, &on);
-      PetscCall(PetscPopErrorHandler());
-      PetscCheck(!ierr, comm, PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
-      c->ooc_mode = on ? 1 : 0;
-    }
-  }
+  PetscCheck(!shift_given || shift >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_shift must be >= 0 (K + shift M must be positive definite; expansion points inside the band are -kf_max_factorizations); got %g", (double)shift);
+  PetscCheck(solver->refine >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine must be >= 0; got %" PetscInt_FMT, solver->refine);
+  PetscCheck(solver->refine_rtol >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_refine_rtol must be >= 0; got %g", (double)solver->refine_rtol);
+  if (shift_given && !solver->shift_set) solver->shift = shift;
+  PetscCall(KFFlexSolverSetType(solver, type));
+  PetscCall(KFFlexSolverTypeOptions(solver));
+  solver->setfromoptionscalled = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
-/* Whether the MUMPS that PETSc calls is Debian's SCOTCH/PT-SCOTCH build (libdmumps_ptscotch: the kryflex command and
-   the C programs linked by CMakeLists.txt load it before PETSc's plain build, which has PORD, AMD, AMF and QAMD only):
-   the library that the process's global scope resolves dmumps_c to, by its file name. */
-static PetscBool KFMumpsHasScotch(void)
+/* Every option of the flexible solver under prefix, of each registered implementation, its factorization and its held
+   dofs, read and checked with nothing made: a bad value is refused here, before the scene is assembled
+   (KFReducerSetFromOptions) */
+PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm comm, const char prefix[])
 {
-  void   *sym = dlsym(RTLD_DEFAULT, "dmumps_c");
-  Dl_info info;
-
-  return (PetscBool)(sym && dladdr(sym, &info) && info.dli_fname && strstr(info.dli_fname, "scotch"));
-}
-
-/* A repeatable SCOTCH ordering: with its default threads SCOTCH 7 ordered the same matrix differently from run to run
-   (flops 1.76e11..1.86e11 at 202k dofs: factors, and so reduced models, that differ by rounding between runs of the
-   same reduction); on one thread (SCOTCH_PTHREAD_NUMBER, read when SCOTCH makes its first context; the user's value is
-   kept) and with its generator at a given seed it gave the same ordering every time. SCOTCH_Num may be 32 or 64 bits:
-   a long argument serves both on this ABI. */
-static void KFScotchRepeatable(long seed)
-{
-  void (*set)(long)   = (void (*)(long))dlsym(RTLD_DEFAULT, "SCOTCH_randomSeed");
-  void (*reset)(void) = (void (*)(void))dlsym(RTLD_DEFAULT, "SCOTCH_randomReset");
-
-  setenv("SCOTCH_PTHREAD_NUMBER", "1", 0);
-  if (set) set(seed);
-  if (reset) reset();
-}
-
-/* The seed of the i-th SCOTCH ordering tried from -kf_scotch_seed s: s, s + 2, s + 4, ..., because in SCOTCH 7.0.3
-   seeds 2j and 2j + 1 gave the same ordering of the solid spacecraft (1M dofs, seeds 1 to 8) */
-static long KFScotchTrySeed(PetscInt seed, PetscInt i)
-{
-  return (long)seed + 2 * (long)i;
-}
-
-/* A MUMPS Cholesky factor of A with kryflex's controls, analysed (ordering and symbolic factorization); SCOTCH, when
-   it is the build's, at the given seed. null_threshold: CNTL(3) (0: MUMPS' default); blr: CNTL(7) of a block low-rank
-   factorization (0: full rank); ooc: out-of-core factors. ICNTL(7), (28), (29) come from the options database. */
-static PetscErrorCode KFMumpsAnalyse(Mat A, PetscReal null_threshold, PetscReal blr, PetscBool ooc, PetscBool scotch, long seed, Mat *F)
-{
-  MatFactorInfo info;
+  KFFlexSolver       solver;
+  PetscReal          cond_max;
+  const char        *chosen;
+  const char *const *names;
+  PetscInt           ntypes;
 
   PetscFunctionBegin;
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F));
-  PetscCall(MatMumpsSetIcntl(*F, 24, 1)); /* null-pivot detection */
-  if (null_threshold != 0) PetscCall(MatMumpsSetCntl(*F, 3, null_threshold));
-  PetscCall(MatMumpsSetIcntl(*F, 13, 1)); /* no ScaLAPACK on the root node: LDL^T keeps the inertia exact */
-  if (blr > 0) {
-    PetscCall(MatMumpsSetIcntl(*F, 35, 1)); /* BLR factorization, automatic choice of the variant */
-    PetscCall(MatMumpsSetCntl(*F, 7, blr));
+  PetscCall(KFFlexSolverCreate_Private(comm, NULL, &solver));
+  PetscCall(PetscObjectSetOptionsPrefix((PetscObject)solver, prefix));
+  PetscCall(KFFlexSolverSetFromOptions(solver));
+  chosen = ((PetscObject)solver)->type_name;
+  PetscCall(KFFlexSolverGetTypeNames(&ntypes, &names));
+  for (PetscInt i = 0; i < ntypes; i++) { /* the options of the types not chosen are checked too */
+    PetscBool same;
+
+    PetscCall(PetscStrcmp(names[i], chosen, &same));
+    if (same) continue;
+    PetscCall(KFFlexSolverSetType(solver, names[i]));
+    PetscCall(KFFlexSolverTypeOptions(solver));
+    chosen = ((PetscObject)solver)->type_name;
   }
-  if (ooc) PetscCall(MatMumpsSetIcntl(*F, 22, 1));
-  if (scotch) KFScotchRepeatable(seed);
-  PetscCall(MatCholeskyFactorSymbolic(*F, A, NULL, &info));
-  PetscFunctionReturn(0);
-}
-
-/* MUMPS' estimate of the factorization's flops on the busiest rank (RINFO(1)): what the factorization's time follows */
-static PetscErrorCode KFMumpsBusiestFlops(Mat F, PetscReal *flops)
-{
-  PetscReal mine;
-
-  PetscFunctionBegin;
-  PetscCall(MatMumpsGetRinfo(F, 1, &mine));
-  PetscCall(MPIU_Allreduce(&mine, flops, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)F)));
-  PetscFunctionReturn(0);
-}
-
-/* SCOTCH orders by recursive bisection from a random start, and its seed moved the factorization's work on the
-   busiest rank by a quarter on the 1M-dof solid (2.72e12..3.53e12 flops over seeds 1..8, seed 1 the worst; 2 ranks
-   factored in 103 s with seed 6 against 121 s). After the first analysis (-kf_scotch_seed), when SCOTCH ordered,
-   tries - 1 more seeds are analysed and the factor whose busiest rank has the fewest flops is kept. Each try costs one
-   analysis (7.7 s at 1M dofs), about what a better seed saves in one factorization: the tries are for finding the
-   seed of a mesh reduced again and again, which -kf_scotch_seed then gives at no cost. */
-static PetscErrorCode KFMumpsTryOrderings(Mat A, PetscReal null_threshold, PetscReal blr, PetscBool ooc, PetscInt seed, PetscInt tries, Mat *F)
-{
-  PetscInt       used, analysis, kept = 0;
-  PetscReal      best, f;
-  PetscLogDouble t0, t1;
-  char           list[256] = "";
-  size_t         len;
-
-  PetscFunctionBegin;
-  PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* the ordering MUMPS applied */
-  PetscCall(MatMumpsGetInfog(*F, 32, &analysis)); /* 2: the parallel analysis (PT-SCOTCH's seeds are not tried) */
-  if (used != KFOrderingIcntl[KF_ORDERING_SCOTCH] || analysis == 2 || tries < 2) PetscFunctionReturn(0);
-  PetscCall(KFMumpsBusiestFlops(*F, &best));
-  PetscCall(PetscSNPrintf(list, sizeof(list), "%.3g", (double)best));
-  PetscCall(PetscTime(&t0));
-  for (PetscInt i = 1; i < tries; i++) {
-    Mat G;
-
-    PetscCall(KFMumpsAnalyse(A, null_threshold, blr, ooc, PETSC_TRUE, KFScotchTrySeed(seed, i), &G));
-    PetscCall(KFMumpsBusiestFlops(G, &f));
-    PetscCall(PetscStrlen(list, &len));
-    PetscCall(PetscSNPrintf(list + len, sizeof(list) - len, ", %.3g", (double)f));
-    if (f < best) { /* strictly fewer: ties keep the earlier seed */
-      PetscCall(MatDestroy(F));
-      *F   = G;
-      best = f;
-      kept = i;
-    } else PetscCall(MatDestroy(&G));
-  }
-  PetscCall(PetscTime(&t1));
-  PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  SCOTCH orderings of %" PetscInt_FMT " seeds tried in %.1f s (-kf_ordering_tries), flops on the busiest rank %s: seed %ld kept (-kf_scotch_seed %ld orders so at once)", tries, (double)(t1 - t0), list, KFScotchTrySeed(seed, kept), KFScotchTrySeed(seed, kept)));
-  PetscFunctionReturn(0);
-}
-
-/* ICNTL(i) = v for the analysis through the options database: PETSc 3.18 rereads ICNTL(7), (28) and (29) from
-   -mat_mumps_icntl_i at the analysis (MatMumpsSetIcntl before it does not hold); nothing when the user gave the
-   option. *set: whether it was set here (cleared after the analysis). */
-static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscBool *set)
-{
-  char      name[32], val[8];
-  PetscBool user;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSNPrintf(name, sizeof(name), "-mat_mumps_icntl_%d", (int)i));
-  PetscCall(PetscOptionsHasName(NULL, ((PetscObject)A)->prefix, name, &user));
-  *set = (PetscBool)!user;
-  if (user) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(val, sizeof(val), "%d", (int)v));
-  PetscCall(PetscOptionsSetValue(NULL, name, val));
-  PetscFunctionReturn(0);
-}
-
-/* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
-   (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
-   options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
-PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
-{
-  MatFactorInfo   info;
-  MatFactorError  err;
-  KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE};
-  PetscMPIInt     size;
-  PetscBool       ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
-
-  PetscFunctionBegin;
-  if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), &c));
-  {
-    PetscBool known, spd;
-
-    PetscCall(MatIsSPDKnown(A, &known, &spd));
-    if (c.spd && !(known && !spd)) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE)); /* an interior shift is known indefinite */
-  }
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
-  if (opts) {
-    if (c.ordering == KF_ORDERING_PTSCOTCH && size == 1) c.ordering = KF_ORDERING_SCOTCH; /* a parallel analysis on one rank: SCOTCH itself */
-    if (c.ordering == KF_ORDERING_PTSCOTCH && scotch) {
-      PetscCall(KFMumpsAnalysisIcntl(A, 28, 2, &set28));
-      PetscCall(KFMumpsAnalysisIcntl(A, 29, 1, &set29));
-    } else {
-      /* the sequential analysis whichever MUMPS runs (the SCOTCH build's automatic choice could go parallel) */
-      PetscCall(KFMumpsAnalysisIcntl(A, 28, 1, &set28));
-      if (KFOrderingIcntl[c.ordering] >= 0 && KFOrderingIcntl[c.ordering] != 7) PetscCall(KFMumpsAnalysisIcntl(A, 7, KFOrderingIcntl[c.ordering], &set7));
-    }
-  }
-  PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
-  /* out of core from the analysis on when asked (auto: decided after it) */
-  PetscCall(KFMumpsAnalyse(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), scotch, KFScotchTrySeed(c.seed, 0), F));
-  if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), c.seed, c.tries, F));
-  if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
-  if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
-  if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
-  if (estimate_mb) {
-    PetscInt    used, analysis;
-    const char *name = "unknown";
-
-    PetscCall(KFCheckFactorMemory(*F, c.ooc_mode, &ooc, estimate_mb));
-    PetscCall(MatMumpsGetInfog(*F, 32, &analysis)); /* 2: the parallel analysis ran */
-    PetscCall(MatMumpsGetInfog(*F, 7, &used));      /* the sequential analysis' ordering (auto, or a fallback) */
-    for (PetscInt k = 0; k < KF_ORDERING_AUTO + 1; k++)
-      if (KFOrderingIcntl[k] == used) name = KFOrderings[k];
-    if (analysis == 2) name = "ptscotch (parallel analysis)";
-    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  MUMPS analysis: %s ordering, %s%s, estimate %.4g MB per rank (largest)", name, c.spd ? "SYM=1" : "SYM=2", c.blr > 0 ? (ooc ? ", block low-rank, out-of-core" : ", block low-rank") : (ooc ? ", out-of-core" : ""), (double)*estimate_mb));
-    if (opts && !scotch && (c.ordering == KF_ORDERING_SCOTCH || c.ordering == KF_ORDERING_PTSCOTCH))
-      PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[c.ordering], name));
-
-  }
-  PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
-  PetscCall(MatFactorGetError(*F, &err));
-  PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
-  PetscCall(MatMumpsGetInfog(*F, 28, null_pivots));
-  PetscCall(MatMumpsGetInfog(*F, 12, negative_pivots));
+  PetscCall(KFFlexSolverDestroy(&solver));
+  PetscCall(KFMumpsCheckOptions(comm, prefix));
+  PetscCall(KFHeldDofsOptions(comm, prefix, &cond_max));
   PetscFunctionReturn(0);
 }
 
@@ -413,116 +213,32 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, Petsc
    each step winning a factor ~170, so 3 steps reach 1e-6. */
 static PetscErrorCode KFFlexSolverRefineSteps(KFFlexSolver solver)
 {
-  KFMumpsControls c;
+  PetscReal blr;
 
   PetscFunctionBegin;
   if (solver->refine_set) PetscFunctionReturn(0);
-  PetscCall(KFMumpsControlsFromOptions(solver->sys->scene->comm, &c)); /* what KFFactorMumps factors with */
-  if (c.blr > 0) solver->refine = 5;
+  PetscCall(KFMumpsGetBLR(PetscObjectComm((PetscObject)solver), ((PetscObject)solver)->prefix, &blr));
+  if (blr > 0) solver->refine = 5;
   PetscFunctionReturn(0);
 }
 
-/* -kf_null_pivot_check_max_dofs and -kf_check_null_pivots: whether a system of nsys dofs factored with this shift
-   gets the cross-check */
-static PetscErrorCode KFNullPivotCheckOptions(MPI_Comm comm, PetscInt nsys, PetscReal shift, PetscBool *check)
-{
-  PetscInt check_max = 20000;
-
-  PetscFunctionBegin;
-  PetscOptionsBegin(comm, NULL, "kryflex null-pivot cross-check", "KFFlexSolverSetUp");
-  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_null_pivot_check_max_dofs", check_max, &check_max, NULL));
-  *check = (PetscBool)(nsys <= check_max && shift == 0);
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_check_null_pivots", *check, check, NULL));
-  PetscOptionsEnd();
-  PetscCheck(check_max >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_null_pivot_check_max_dofs is a number of system dofs, 0 or more; got %" PetscInt_FMT, check_max);
-  PetscFunctionReturn(0);
-}
-
-/* Every option of the flexible solver, its factorization, its body-wise variant and its held dofs, read and checked
-   with nothing made: a bad value is refused here, before the scene is assembled (KFReducerSetFromOptions) */
-PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm comm)
-{
-  KFMumpsControls  c;
-  KFFlexSolverType type = KF_FLEX_SOLVER_AUTO;
-  PetscReal        shift, rtol, memory_limit, cond_max;
-  PetscInt         refine, min_dofs;
-  PetscBool        refine_given, memory_check, limit_given, null_check, spread;
-
-  PetscFunctionBegin;
-  PetscCall(KFFlexSolverCreateOptions(comm, &shift, &refine, &refine_given, &rtol));
-  PetscCall(KFMumpsControlsFromOptions(comm, &c));
-  PetscCall(KFFactorMemoryOptions(comm, &memory_check, &memory_limit, &limit_given));
-  PetscCall(KFNullPivotCheckOptions(comm, 0, 0, &null_check));
-  PetscCall(KFBodywiseOptions(comm, &type, &min_dofs, &spread));
-  PetscCall(KFHeldDofsOptions(comm, &cond_max));
-  PetscFunctionReturn(0);
-}
-
+/* The implementation's factorization(s). An expansion point inside the band (a negative shift,
+   KFFlexSolverSetInteriorShift) is factored indefinite by the monolithic implementation whatever the type. */
 PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
 {
-  KFSystem  sys = solver->sys;
-  KFScene   s   = sys->scene;
-  PetscBool check;
-  KFHeldEntries held = NULL;
-
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
   if (solver->setup) PetscFunctionReturn(0);
+  if (!solver->setfromoptionscalled) PetscCall(KFFlexSolverSetFromOptions(solver));
   PetscCall(KFFlexSolverRefineSteps(solver));
-  /* a negative shift is an expansion point inside the band (KFFlexSolverSetInteriorShift): monolithic, indefinite */
-  if (solver->shift >= 0) PetscCall(KFBodywiseSetUp(solver)); /* -kf_flex_solver bodywise: body factorizations and an interface problem instead */
-  solver->setup = (PetscBool)(solver->bw != NULL);
-  if (solver->setup) PetscFunctionReturn(0);
-  PetscCall(KFSystemComputeRigidModes(sys));
-  PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
-  if (solver->shift != 0) {
-    PetscCall(MatDuplicate(sys->Ks, MAT_COPY_VALUES, &solver->Kh));
-    PetscCall(MatAXPY(solver->Kh, solver->shift, sys->Ms, UNKNOWN_NONZERO_PATTERN));
-    if (solver->shift < 0) PetscCall(MatSetOption(solver->Kh, MAT_SPD, PETSC_FALSE)); /* never SYM=1 (-kf_spd) */
-  } else if (sys->nrigid > 0) { /* a clamped scene (no rigid modes) factors K_S itself: plain Cholesky */
-    Vec       d;
-    PetscReal dsum;
-    PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
-    PetscCall(MatCreateVecs(sys->Ks, &d, NULL));
-    PetscCall(MatGetDiagonal(sys->Ks, d));
-    PetscCall(VecNorm(d, NORM_1, &dsum));
-    PetscCall(VecDestroy(&d));
-    /* a unit-scaled identity on the held rows keeps the factor well conditioned; K_S is held in place (no copy of
-       the system's largest matrix) and restored after the factorization */
-    PetscCall(KFHoldDofsInPlace(sys->Ks, solver->nheld, solver->held, dsum / s->nsys, &held));
-  }
-  PetscCall(KFProgress(s->comm, "factorization of the %" PetscInt_FMT "-dof system (MUMPS LDL^T, %" PetscInt_FMT " dofs held)", s->nsys, solver->nheld));
-  {
-    PetscLogDouble t0, t1;
+  if (solver->shift < 0) PetscCall(KFFlexSolverSetType(solver, KFFLEXSOLVERMONOLITHIC));
+  PetscCall((*solver->ops->setup)(solver));
+  if (solver->handoff) { /* the type found it does not apply here: the one it named sets the solver up instead */
+    const char *handoff = solver->handoff;
 
-    PetscCall(PetscTime(&t0));
-    PetscErrorCode ierr;
-
-    ierr = KFFactorMumps(solver->Kh ? solver->Kh : sys->Ks, 0.0, PETSC_TRUE, &solver->F, &solver->null_pivots, &solver->negative_pivots, &solver->perf.memory_estimate_mb);
-    /* K_S unheld again even when the factorization failed (a caller may retry with other options) */
-    PetscCall(KFRestoreHeldDofs(sys->Ks, &held));
-    if (!solver->Kh) PetscCall(MatSetOption(sys->Ks, MAT_SPD, PETSC_FALSE)); /* -kf_spd holds for the held K_S only */
-    PetscCall(ierr);
-    PetscCall(PetscTime(&t1));
-    solver->perf.factor_seconds += t1 - t0;
-    sys->nfactor++;
-  }
-  PetscCheck(solver->negative_pivots == 0 || solver->shift < 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
-  PetscCheck(solver->null_pivots == 0 || solver->shift >= 0, s->comm, PETSC_ERR_ARG_WRONG, "the expansion point sigma = %g (%g Hz) is a natural frequency of the structure: K - sigma M is singular (MUMPS found %" PetscInt_FMT " null pivots). Move the point off the resonance", (double)-solver->shift, (double)(PetscSqrtReal(-solver->shift) / (2 * PETSC_PI)), solver->null_pivots);
-  PetscCheck(solver->null_pivots == 0, s->comm, PETSC_ERR_ARG_WRONG, "the structure has %" PetscInt_FMT " zero-energy mode(s) beyond the %" PetscInt_FMT " rigid-body and mechanism modes that geometry, joints and boundary conditions give: a mechanism nothing declares (an unconnected dof, a missing tie, a body in pieces, a support missing from the scene's constraints). Fix the model, or declare the joint or constraint", solver->null_pivots, sys->nrigid);
-  PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
-
-  /* cross-check (small models by default): MUMPS' null pivots of K_S itself should number the rigid modes */
-  PetscCall(KFNullPivotCheckOptions(s->comm, s->nsys, solver->shift, &check));
-  if (check) {
-    Mat      F0;
-    PetscInt nnull, nneg;
-    PetscCall(KFFactorMumps(sys->Ks, -1e-10, PETSC_FALSE, &F0, &nnull, &nneg, NULL)); /* relative threshold: rigid pivots are rounding-sized */
-    PetscCall(MatDestroy(&F0));
-    /* MUMPS' threshold is a heuristic: a disagreement is worth a line, not an alarm (the held factorization above
-       is the mechanism that catches undeclared modes) */
-    if (nnull != sys->nrigid)
-      PetscCall(KFProgress(s->comm, "cross-check: MUMPS null-pivot detection finds %" PetscInt_FMT " zero-energy modes in K_S, geometry gives %" PetscInt_FMT " (the count depends on MUMPS' threshold, -mat_mumps_cntl_3)", nnull, sys->nrigid));
-    else PetscCall(KFProgress(s->comm, "cross-check: MUMPS null pivots of K_S = %" PetscInt_FMT " = rigid-body and mechanism modes", nnull));
+    solver->handoff = NULL;
+    PetscCall(KFFlexSolverSetType(solver, handoff));
+    PetscCall((*solver->ops->setup)(solver));
   }
   solver->setup = PETSC_TRUE;
   PetscFunctionReturn(0);
@@ -556,8 +272,7 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
 
     PetscCall(MatGetSize(W, NULL, &p));
     PetscCall(PetscTime(&t0));
-    if (solver->bw) PetscCall(KFBodywiseSolve(solver, W, X));
-    else PetscCall(MatMatSolve(solver->F, W, X));
+    PetscCall((*solver->ops->solve)(solver, W, X));
     PetscCall(PetscTime(&t1));
     solver->perf.solve_seconds += t1 - t0;
     solver->perf.solve_calls++;
@@ -609,42 +324,6 @@ static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat B, Mat X, Mat 
   PetscFunctionReturn(0);
 }
 
-/* A block low-rank factor refactored full rank (MUMPS takes ICNTL(35) = 0 at a new numerical factorization of the
-   same analysis): K_S held again as at the set-up, factored, restored */
-static PetscErrorCode KFFlexSolverRefactorFullRank(KFFlexSolver solver, PetscBool *done)
-{
-  KFSystem      sys = solver->sys;
-  KFScene       s   = sys->scene;
-  PetscInt      blr = 0;
-  KFHeldEntries held = NULL;
-  MatFactorInfo info;
-  Mat           A = solver->Kh ? solver->Kh : sys->Ks;
-
-  PetscFunctionBegin;
-  *done = PETSC_FALSE;
-  if (solver->bw || !solver->F) PetscFunctionReturn(0);
-  PetscCall(MatMumpsGetIcntl(solver->F, 35, &blr));
-  if (!blr) PetscFunctionReturn(0);
-  PetscCall(KFProgress(s->comm, "block solves above -kf_refine_rtol after refinement: the block low-rank factor is refactored full rank"));
-  if (!solver->Kh && solver->nheld) {
-    Vec       d;
-    PetscReal dsum;
-
-    PetscCall(MatCreateVecs(sys->Ks, &d, NULL));
-    PetscCall(MatGetDiagonal(sys->Ks, d));
-    PetscCall(VecNorm(d, NORM_1, &dsum));
-    PetscCall(VecDestroy(&d));
-    PetscCall(KFHoldDofsInPlace(sys->Ks, solver->nheld, solver->held, dsum / s->nsys, &held));
-  }
-  PetscCall(MatMumpsSetIcntl(solver->F, 35, 0));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorNumeric(solver->F, A, &info));
-  if (held) PetscCall(KFRestoreHeldDofs(sys->Ks, &held));
-  sys->nfactor++;
-  *done = PETSC_TRUE;
-  PetscFunctionReturn(0);
-}
-
 /* X = K+ B, refined against K_S itself when the residual says so: the residual (I - M Phi Phi^T) B - K_S X of the
    first solve is measured, and only above -kf_refine_rtol goes through the factor again (up to -kf_refine steps,
    fewer when a step does not halve the residual: the factor can do no better, more solves would be wasted).
@@ -677,7 +356,7 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
 
       solver->perf.blocks_escalated++;
       PetscCall(KFFlexSolverRefine(solver, B, X, &R, &rel, 4 * solver->refine + 10, 0.9));
-      if (rel > solver->refine_rtol) PetscCall(KFFlexSolverRefactorFullRank(solver, &refactored));
+      if (rel > solver->refine_rtol && solver->ops->refactor) PetscCall((*solver->ops->refactor)(solver, &refactored));
       else refactored = PETSC_FALSE;
       if (refactored) {
         PetscCall(MatDestroy(&R));
@@ -701,6 +380,15 @@ PetscErrorCode KFFlexSolverGetPerf(KFFlexSolver solver, KFFlexSolverPerf *perf)
   PetscFunctionReturn(0);
 }
 
+/* the accounting set back: the verification borrows the factor for its eigensolves, which are not the reduction's
+   solves */
+PetscErrorCode KFFlexSolverSetPerf_Private(KFFlexSolver solver, const KFFlexSolverPerf *perf)
+{
+  PetscFunctionBegin;
+  solver->perf = *perf;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFFlexSolverGetStats(KFFlexSolver solver, PetscInt *nheld, PetscInt *null_pivots, PetscInt *negative_pivots)
 {
   PetscFunctionBegin;
@@ -708,4 +396,25 @@ PetscErrorCode KFFlexSolverGetStats(KFFlexSolver solver, PetscInt *nheld, PetscI
   if (null_pivots) *null_pivots = solver->null_pivots;
   if (negative_pivots) *negative_pivots = solver->negative_pivots;
   PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
+{
+  PetscFunctionBegin;
+  *n = sys->nfactor;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFlexSolverGetSystem(KFFlexSolver solver, KFSystem *sys)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(solver, KF_FLEXSOLVER_CLASSID, 1);
+  *sys = solver->sys;
+  PetscFunctionReturn(0);
+}
+
+/* the same as a value, for the declarations of the stages that apply the solver */
+PETSC_INTERN KFSystem KFFlexSolverSystem_Private(KFFlexSolver solver)
+{
+  return solver->sys;
 }

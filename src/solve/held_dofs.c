@@ -139,23 +139,23 @@ static PetscErrorCode KFHeldConditioning(Mat Phi, PetscInt nheld, const PetscInt
 }
 
 /* -kf_held_cond_max, read and checked (also before any work: KFFlexSolverCheckOptions) */
-PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm comm, PetscReal *cond_max)
+PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm comm, const char prefix[], PetscReal *cond_max)
 {
   PetscFunctionBegin;
   *cond_max = 1e8;
-  PetscOptionsBegin(comm, NULL, "kryflex held dofs of the flexible solve", "KFFlexSolverSetUp");
+  PetscOptionsBegin(comm, prefix, "kryflex held dofs of the flexible solve", "KFFlexSolverSetUp");
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_held_cond_max", *cond_max, cond_max, NULL));
   PetscOptionsEnd();
   PetscCheck(*cond_max >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_held_cond_max is a condition number, 1 or more; got %g", (double)*cond_max);
   PetscFunctionReturn(0);
 }
 
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, PetscInt *nheld, PetscInt **held)
+PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem sys, const char prefix[], PetscInt *nheld, PetscInt **held)
 {
   PetscReal cond = PETSC_INFINITY, cond_max;
 
   PetscFunctionBegin;
-  PetscCall(KFHeldDofsOptions(sys->scene->comm, &cond_max));
+  PetscCall(KFHeldDofsOptions(sys->scene->comm, prefix, &cond_max));
   /* the clamp holds for supplied rigid modes too when they span the same motions: its conditioning tells */
   PetscCall(KFSelectClampDofs(sys->scene, nheld, held));
   if (*nheld) PetscCall(KFHeldConditioning(sys->Phi, *nheld, *held, &cond));

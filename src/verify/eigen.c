@@ -485,8 +485,11 @@ PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, P
 /* KFSystemEigenModes with the flexible solver's factorization (the modal baseline: one factorization, as Krylov) */
 PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
+  KFSystem sys;
+
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(solver->sys, solver, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFFlexSolverGetSystem(solver, &sys));
+  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
@@ -495,7 +498,7 @@ PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscIn
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(solver->sys, solver, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 

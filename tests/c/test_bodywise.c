@@ -35,10 +35,11 @@ static PetscErrorCode ChainScene(PetscBool single, KFScene *scene)
 }
 
 /* K+ G with the given implementation (and shift); the type actually set up */
-static PetscErrorCode Solve(KFSystem sys, KFFlexSolverType type, PetscReal shift, Mat *X, KFFlexSolverType *used)
+static PetscErrorCode Solve(KFSystem sys, KFFlexSolverType type, PetscReal shift, Mat *X, char used[32])
 {
-  KFFlexSolver solver;
-  Mat          G;
+  KFFlexSolver     solver;
+  KFFlexSolverType t;
+  Mat              G;
 
   PetscFunctionBegin;
   PetscCall(KFSystemGetMatrices(sys, NULL, NULL, &G, NULL));
@@ -47,7 +48,8 @@ static PetscErrorCode Solve(KFSystem sys, KFFlexSolverType type, PetscReal shift
   if (shift > 0) PetscCall(KFFlexSolverSetShift(solver, shift));
   PetscCall(MatDuplicate(G, MAT_DO_NOT_COPY_VALUES, X));
   PetscCall(KFFlexSolverApply(solver, G, *X));
-  PetscCall(KFFlexSolverGetType(solver, used));
+  PetscCall(KFFlexSolverGetType(solver, &t));
+  PetscCall(PetscStrncpy(used, t, 32)); /* the name is the solver's: copied before it goes */
   PetscCall(KFFlexSolverDestroy(&solver));
   PetscFunctionReturn(0);
 }
@@ -73,7 +75,7 @@ int main(int argc, char **argv)
   KFSystem         mono, body, autos;
   PetscReal        configs[4][2] = {{0, 0}, {0.4, 1.1}, {2.5, -0.7}, {4.0, 3.0}}, rel;
   PetscInt         nmono, nbody, nauto;
-  KFFlexSolverType used, used2;
+  char             used[32], used2[32];
   char             what[256];
   PetscBool        types_ok = PETSC_TRUE, auto_ok = PETSC_TRUE;
   Mat              X1;
@@ -91,21 +93,21 @@ int main(int argc, char **argv)
     PetscCall(KFSystemSetAngles(mono, configs[c]));
     PetscCall(KFSystemSetAngles(body, configs[c]));
     PetscCall(KFSystemSetAngles(autos, configs[c]));
-    PetscCall(Solve(mono, KF_FLEX_SOLVER_MONOLITHIC, 0, &Xm, &used));
-    types_ok = (PetscBool)(types_ok && used == KF_FLEX_SOLVER_MONOLITHIC);
-    PetscCall(Solve(body, KF_FLEX_SOLVER_BODYWISE, 0, &Xb, &used));
-    types_ok = (PetscBool)(types_ok && used == KF_FLEX_SOLVER_BODYWISE);
+    PetscCall(Solve(mono, KFFLEXSOLVERMONOLITHIC, 0, &Xm, used));
+    types_ok = (PetscBool)(types_ok && !strcmp(used, KFFLEXSOLVERMONOLITHIC));
+    PetscCall(Solve(body, KFFLEXSOLVERBODYWISE, 0, &Xb, used));
+    types_ok = (PetscBool)(types_ok && !strcmp(used, KFFLEXSOLVERBODYWISE));
     PetscCall(RelDiff(Xb, Xm, &rel));
     PetscCall(PetscSNPrintf(what, sizeof(what), "3-body chain at (%g, %g) rad: |K+G body-wise - monolithic| / |K+G|", (double)configs[c][0], (double)configs[c][1]));
     PetscCall(Check(what, rel, SAME));
     PetscCall(MatDestroy(&Xb));
     /* auto takes the body-wise solve from -kf_bodywise_min_dofs system dofs on: 0 for this small chain */
     PetscCall(PetscOptionsSetValue(NULL, "-kf_bodywise_min_dofs", "0"));
-    PetscCall(Solve(autos, KF_FLEX_SOLVER_AUTO, 0, &Xb, &used));
+    PetscCall(Solve(autos, KFFLEXSOLVERAUTO, 0, &Xb, used));
     PetscCall(PetscOptionsClearValue(NULL, "-kf_bodywise_min_dofs"));
-    auto_ok = (PetscBool)(auto_ok && used == KF_FLEX_SOLVER_BODYWISE);
+    auto_ok = (PetscBool)(auto_ok && !strcmp(used, KFFLEXSOLVERBODYWISE));
     PetscCall(RelDiff(Xb, Xm, &rel));
-    PetscCall(PetscSNPrintf(what, sizeof(what), "  the same with -kf_flex_solver auto (%s)", used == KF_FLEX_SOLVER_BODYWISE ? "body-wise" : "monolithic"));
+    PetscCall(PetscSNPrintf(what, sizeof(what), "  the same with -kf_flex_solver auto (%s)", !strcmp(used, KFFLEXSOLVERBODYWISE) ? "body-wise" : "monolithic"));
     PetscCall(Check(what, rel, SAME));
     PetscCall(MatDestroy(&Xb));
     PetscCall(MatDestroy(&Xm));
@@ -122,14 +124,33 @@ int main(int argc, char **argv)
     PetscCall(KFSystemCreate(scene, &sys1));
     PetscCall(KFSystemSetAngles(sys1, configs[1]));
     PetscCall(PetscOptionsSetValue(NULL, "-kf_bodywise_min_dofs", "0"));
-    PetscCall(Solve(sys1, KF_FLEX_SOLVER_AUTO, 0, &X1, &used));
+    PetscCall(Solve(sys1, KFFLEXSOLVERAUTO, 0, &X1, used));
     PetscCall(PetscOptionsClearValue(NULL, "-kf_bodywise_min_dofs"));
-    PetscCall(CheckTrue("auto at one configuration: monolithic", (PetscBool)(used == KF_FLEX_SOLVER_MONOLITHIC)));
+    PetscCall(CheckTrue("auto at one configuration: monolithic", (PetscBool)(!strcmp(used, KFFLEXSOLVERMONOLITHIC))));
     PetscCall(MatDestroy(&X1));
     PetscCall(KFSystemSetConfigurationCount(sys1, 4));
-    PetscCall(Solve(sys1, KF_FLEX_SOLVER_AUTO, 0, &X1, &used));
-    PetscCall(CheckTrue("auto at 4 configurations of a scene below -kf_bodywise_min_dofs (20000): monolithic", (PetscBool)(used == KF_FLEX_SOLVER_MONOLITHIC)));
+    PetscCall(Solve(sys1, KFFLEXSOLVERAUTO, 0, &X1, used));
+    PetscCall(CheckTrue("auto at 4 configurations of a scene below -kf_bodywise_min_dofs (20000): monolithic", (PetscBool)(!strcmp(used, KFFLEXSOLVERMONOLITHIC))));
     PetscCall(MatDestroy(&X1));
+    { /* the threshold through the implementation's composed setter: body-wise; a monolithic solver ignores the call */
+      KFFlexSolver     f;
+      KFFlexSolverType t;
+
+      PetscCall(KFFlexSolverCreate(sys1, &f));
+      PetscCall(KFFlexSolverSetFromOptions(f)); /* auto, the default type */
+      PetscCall(KFFlexSolverBodywiseSetMinDofs(f, 0));
+      PetscCall(KFFlexSolverSetUp(f));
+      PetscCall(KFFlexSolverGetType(f, &t));
+      PetscCall(CheckTrue("auto at 4 configurations after KFFlexSolverBodywiseSetMinDofs(0): body-wise", (PetscBool)!strcmp(t, KFFLEXSOLVERBODYWISE)));
+      PetscCall(KFFlexSolverDestroy(&f));
+      PetscCall(KFFlexSolverCreate(sys1, &f));
+      PetscCall(KFFlexSolverSetType(f, KFFLEXSOLVERMONOLITHIC));
+      PetscCall(KFFlexSolverBodywiseSetMinDofs(f, 0));
+      PetscCall(KFFlexSolverSetUp(f));
+      PetscCall(KFFlexSolverGetType(f, &t));
+      PetscCall(CheckTrue("a monolithic solver ignores KFFlexSolverBodywiseSetMinDofs", (PetscBool)!strcmp(t, KFFLEXSOLVERMONOLITHIC)));
+      PetscCall(KFFlexSolverDestroy(&f));
+    }
     PetscCall(KFSystemDestroy(&sys1));
   }
   PetscCall(PetscSNPrintf(what, sizeof(what), "factorizations over 4 configurations: monolithic %" PetscInt_FMT " (4), body-wise %" PetscInt_FMT " (3 bodies), auto %" PetscInt_FMT " (3)", nmono, nbody, nauto));
@@ -137,8 +158,8 @@ int main(int argc, char **argv)
   {
     /* a shift: K + sigma M factored body by body (the body factors are made again for it) */
     Mat Xm, Xb;
-    PetscCall(Solve(mono, KF_FLEX_SOLVER_MONOLITHIC, 10.0, &Xm, &used));
-    PetscCall(Solve(body, KF_FLEX_SOLVER_BODYWISE, 10.0, &Xb, &used2));
+    PetscCall(Solve(mono, KFFLEXSOLVERMONOLITHIC, 10.0, &Xm, used));
+    PetscCall(Solve(body, KFFLEXSOLVERBODYWISE, 10.0, &Xb, used2));
     PetscCall(RelDiff(Xb, Xm, &rel));
     PetscCall(Check("with shift 10: |K+G body-wise - monolithic| / |K+G|", rel, SAME));
     PetscCall(MatDestroy(&Xm));
@@ -148,8 +169,8 @@ int main(int argc, char **argv)
     /* without iterative refinement (which makes both the nearest doubles of one answer): the raw solves agree */
     Mat Xm, Xb;
     PetscCall(PetscOptionsSetValue(NULL, "-kf_refine", "0"));
-    PetscCall(Solve(mono, KF_FLEX_SOLVER_MONOLITHIC, 0, &Xm, &used));
-    PetscCall(Solve(body, KF_FLEX_SOLVER_BODYWISE, 0, &Xb, &used2));
+    PetscCall(Solve(mono, KFFLEXSOLVERMONOLITHIC, 0, &Xm, used));
+    PetscCall(Solve(body, KFFLEXSOLVERBODYWISE, 0, &Xb, used2));
     PetscCall(PetscOptionsClearValue(NULL, "-kf_refine"));
     PetscCall(RelDiff(Xb, Xm, &rel));
     PetscCall(Check("without refinement (-kf_refine 0): |K+G body-wise - monolithic| / |K+G|", rel, SAME));
@@ -167,8 +188,8 @@ int main(int argc, char **argv)
   PetscCall(KFSystemSetAngles(body, NULL));
   {
     Mat X;
-    PetscCall(Solve(body, KF_FLEX_SOLVER_BODYWISE, 0, &X, &used));
-    PetscCall(CheckTrue("a single body falls back to the monolithic solve", (PetscBool)(used == KF_FLEX_SOLVER_MONOLITHIC)));
+    PetscCall(Solve(body, KFFLEXSOLVERBODYWISE, 0, &X, used));
+    PetscCall(CheckTrue("a single body falls back to the monolithic solve", (PetscBool)(!strcmp(used, KFFLEXSOLVERMONOLITHIC))));
     PetscCall(MatDestroy(&X));
   }
   PetscCall(KFSystemDestroy(&body));

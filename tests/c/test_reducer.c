@@ -342,6 +342,26 @@ static PetscErrorCode TestErrors(void)
   PetscCall(KFReducerSetFromOptions(r));
   PetscCall(PetscOptionsClearValue(NULL, "-bad_kf_angles"));
   PetscCall(CheckTrue("after the failures: -kf_angles 0,15,30,45 (2 configurations of 2 angles) accepted", PETSC_TRUE));
+  /* the flexible solver's options are read with the reducer's prefix: a bad -bad_kf_flex_solver or -bad_kf_refine is
+     refused by the reducer's options reader, and the same values without the prefix do not reach this reducer */
+  PetscCall(PetscOptionsSetValue(NULL, "-bad_kf_flex_solver", "nosuchsolver"));
+  PetscCall(KFPushErrorRecorder());
+  ierr = KFReducerSetFromOptions(r);
+  PetscCall(ExpectFailure("-bad_kf_flex_solver nosuchsolver (the reducer's prefix reaches the flexible solver)", ierr));
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(PetscOptionsClearValue(NULL, "-bad_kf_flex_solver"));
+  PetscCall(PetscOptionsSetValue(NULL, "-bad_kf_refine", "-1"));
+  PetscCall(KFPushErrorRecorder());
+  ierr = KFReducerSetFromOptions(r);
+  PetscCall(ExpectFailure("-bad_kf_refine -1", ierr));
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(PetscOptionsClearValue(NULL, "-bad_kf_refine"));
+  PetscCall(PetscOptionsSetValue(NULL, "-kf_flex_solver", "nosuchsolver"));
+  PetscCall(PetscOptionsSetValue(NULL, "-bad_kf_angles", "0,15,30,45"));
+  PetscCall(KFReducerSetFromOptions(r));
+  PetscCall(PetscOptionsClearValue(NULL, "-kf_flex_solver"));
+  PetscCall(PetscOptionsClearValue(NULL, "-bad_kf_angles"));
+  PetscCall(CheckTrue("-kf_flex_solver without the prefix does not reach a reducer with prefix bad_", PETSC_TRUE));
   PetscCall(KFReducerDestroy(&r));
   PetscCall(KFSceneDestroy(&chain));
   PetscFunctionReturn(0);

@@ -135,16 +135,17 @@ cdef class FlexSolver:
     cdef readonly CSystem system
 
     def __cinit__(self, CSystem system not None, shift=None, type=None):
+        cdef bytes tname
         self.system = system
         check(KFFlexSolverCreate(system.y, &self.f))
         if shift is not None:
             check(KFFlexSolverSetShift(self.f, float(shift)))
         if type is not None:
-            types = {"auto": KF_FLEX_SOLVER_AUTO, "monolithic": KF_FLEX_SOLVER_MONOLITHIC,
-                     "bodywise": KF_FLEX_SOLVER_BODYWISE}
+            types = ("auto", "monolithic", "bodywise")
             if type not in types:
                 raise ValueError("type: give one of %s, got %r" % (", ".join(types), type))
-            check(KFFlexSolverSetType(self.f, types[type]))
+            tname = cstr(type, "flexible solver type")
+            check(KFFlexSolverSetType(self.f, tname))
 
     @property
     def type(self):
@@ -152,7 +153,7 @@ cdef class FlexSolver:
         cdef KFFlexSolverType t
         check(KFFlexSolverSetUp(self.f))
         check(KFFlexSolverGetType(self.f, &t))
-        return "bodywise" if t == KF_FLEX_SOLVER_BODYWISE else "monolithic"
+        return (<bytes>t).decode()
 
     def __dealloc__(self):
         if self.f != NULL:

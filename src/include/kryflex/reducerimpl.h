@@ -34,6 +34,9 @@ struct _KFReducerOps {
      kept NULL: the whole basis */
   PetscErrorCode (*vectors)(KFReducer, KFSystem, KFFlexSolver, KFReducerBasis *, const PetscBool kept[], PetscBool static_correction, Mat *X);
   PetscErrorCode (*destroybasis)(KFReducer, KFReducerBasis *);
+  /* the basis comes in blocks of moments whose leading blocks are sub-bases: the accuracy search applies (cleared
+     with the table when the type changes) */
+  PetscBool blocks;
 };
 
 /* A named result array (column-major over shape) */
@@ -53,6 +56,7 @@ struct _p_KFReducer {
   PETSCHEADER(struct _KFReducerOps);
   void     *data; /* the implementation's */
   void     *candcache; /* the last candidate's finished body basis (visit.c), during a search only */
+  PetscErrorCode (*candcache_reset)(KFReducer); /* releases it: set with it, called by KFReducerReset */
   KFScene   scene;
   PetscBool setupcalled, solved;
 

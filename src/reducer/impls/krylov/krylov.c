@@ -144,5 +144,6 @@ PetscErrorCode KFReducerCreate_Krylov(KFReducer r)
   r->ops->buildbasis   = KFReducerBuildBasis_Krylov;
   r->ops->vectors      = KFReducerVectors_Krylov;
   r->ops->destroybasis = KFReducerDestroyBasis_Krylov;
+  r->ops->blocks       = PETSC_TRUE;
   PetscFunctionReturn(0);
 }

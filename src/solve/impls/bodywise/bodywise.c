@@ -13,16 +13,9 @@
 
    The body factors (K_b with its Gamma rows and columns replaced by a scaled identity: the interior factor) are kept
    on the KFSystem, which lives for the whole reduction while the solvers are made per angle. */
-#include <kryflex_impl.h>
+#include <kryflex/flexsolverimpl.h>
 #include <petscblaslapack.h>
 #include <petscsf.h>
-
-PETSC_INTERN PetscErrorCode KFSelectHeldDofs(KFSystem, PetscInt *nheld, PetscInt **held);
-PETSC_INTERN PetscErrorCode KFSelectPivotedDofs(Mat Phi, PetscInt *nheld, PetscInt **held);
-PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb);
-PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);
-PETSC_INTERN PetscErrorCode KFSystemInterfaceExprs(KFSystem, KFExpr ***);
-PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
 
 /* angle-independent, per system: one factorization per body */
 struct _n_KFBodyFactors {
@@ -44,14 +37,18 @@ struct _n_KFBodyFactors {
   PetscReal    estimate_mb; /* MUMPS' estimate of the largest body factorization's memory on a rank, MB */
 };
 
-/* per solver (one angle): the interface problem */
-struct _n_KFBodywise {
+/* per solver (one angle): the interface problem, and the options that choose and spread the body-wise solve */
+typedef struct {
+  PetscBool   asked_auto; /* type auto: body-wise only where it pays (KFBodywiseWanted), else monolithic */
+  PetscInt    min_dofs;   /* -kf_bodywise_min_dofs */
+  PetscBool   spread;     /* -kf_bodywise_spread */
   PetscInt    nb;
   PetscInt    nG, *Gidx; /* interface unknowns: their system dofs, sorted, replicated */
   PetscReal **T;         /* per body |Gamma_b| x nG (column-major): u_Gamma = T_b x_G */
   PetscReal  *S;         /* nG x nG: Cholesky factor of S(alpha) with the held unknowns replaced by identity rows */
   PetscInt    nheldG, *heldG;
-};
+} KFFlexSolver_Bodywise;
+typedef KFFlexSolver_Bodywise *KFBodywise;
 
 PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *bf)
 {
@@ -121,7 +118,7 @@ static PetscErrorCode KFBodyGammaNodes(KFScene s, PetscInt b, KFBodyFactors bf)
 /* One body: the interior factor, Psi_b and S_b, from the body's K and M on their communicator (the scene's, or the
    owner's PETSC_COMM_SELF when the bodies are spread over the ranks). The pivots' counts are returned for the caller
    to check collectively. */
-static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, PetscReal shift, KFBodyFactors bf, PetscInt *nnull, PetscInt *nneg)
+static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt b, Mat K, Mat M, PetscReal shift, KFBodyFactors bf, PetscInt *nnull, PetscInt *nneg)
 {
   KFBodyData *B = &s->bodies[b];
   PetscInt    ng = bf->ng[b], rstart, rend, nloc = 0, *loc;
@@ -150,7 +147,7 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
   PetscCall(PetscFree(loc));
   /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
      few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
-  PetscCall(KFFactorMumps(bf->Kb[b], 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
+  PetscCall(KFFactorMumps(bf->Kb[b], prefix, 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
   bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
@@ -180,19 +177,17 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, PetscInt b, Mat K, Mat M, Pet
   PetscFunctionReturn(0);
 }
 
-/* -kf_flex_solver (type: the solver's own on entry, the one asked for on return), -kf_bodywise_min_dofs and
-   -kf_bodywise_spread, read and checked (also before any work: KFFlexSolverCheckOptions) */
-PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm comm, KFFlexSolverType *type, PetscInt *min_dofs, PetscBool *spread)
+/* -kf_bodywise_min_dofs and -kf_bodywise_spread (also read and checked before any work: KFFlexSolverCheckOptions) */
+static PetscErrorCode KFFlexSolverSetFromOptions_Bodywise(KFFlexSolver solver, PetscOptionItems *PetscOptionsObject)
 {
+  KFBodywise bw = (KFBodywise)solver->data;
+
   PetscFunctionBegin;
-  *min_dofs = 20000;
-  *spread   = PETSC_TRUE;
-  PetscOptionsBegin(comm, NULL, "kryflex flexible solve: monolithic or body-wise", "KFFlexSolverSetUp");
-  PetscCall(KFOptionsSettingEnum(PetscOptionsObject, "-kf_flex_solver", KFFlexSolverTypes, (PetscEnum)*type, (PetscEnum *)type, NULL));
-  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_bodywise_min_dofs", *min_dofs, min_dofs, NULL));
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_bodywise_spread", *spread, spread, NULL));
-  PetscOptionsEnd();
-  PetscCheck(*min_dofs >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, *min_dofs);
+  PetscOptionsHeadBegin(PetscOptionsObject, "kryflex flexible solve: monolithic or body-wise");
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_bodywise_min_dofs", bw->min_dofs, &bw->min_dofs, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_bodywise_spread", bw->spread, &bw->spread, NULL));
+  PetscOptionsHeadEnd();
+  PetscCheck(bw->min_dofs >= 0, PetscObjectComm((PetscObject)solver), PETSC_ERR_ARG_OUTOFRANGE, "-kf_bodywise_min_dofs must be >= 0; got %" PetscInt_FMT, bw->min_dofs);
   PetscFunctionReturn(0);
 }
 
@@ -201,17 +196,14 @@ PETSC_INTERN PetscErrorCode KFBodywiseOptions(MPI_Comm comm, KFFlexSolverType *t
    of a body's factorization is taken as n_b^2 (the flops of a nested-dissection factorization of a 3-D solid mesh
    grow as n^2): what matters is the order of the bodies and the balance of the loads. More ranks than bodies, or one
    rank: every body on all ranks (distributed MUMPS per body), as before. */
-static PetscErrorCode KFBodywiseAssign(KFScene s, KFBodyFactors bf)
+static PetscErrorCode KFBodywiseAssign(KFScene s, PetscBool spread, KFBodyFactors bf)
 {
   PetscMPIInt      size;
-  PetscBool        spread;
   PetscReal       *cost, *load;
-  PetscInt        *order, min_dofs;
-  KFFlexSolverType type = KF_FLEX_SOLVER_AUTO;
+  PetscInt        *order;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_size(s->comm, &size));
-  PetscCall(KFBodywiseOptions(s->comm, &type, &min_dofs, &spread));
   bf->spread = (PetscBool)(spread && size > 1 && size <= s->nb);
   if (!bf->spread) PetscFunctionReturn(0);
   PetscCall(PetscCalloc2(s->nb, &bf->owner, s->nb, &bf->sf));
@@ -326,117 +318,102 @@ static PetscErrorCode KFBodyErrorsCheck(KFScene s, KFBodyError *e)
   SETERRQ(s->comm, e->code, "%s (on rank %d, which factors the body alone: -kf_bodywise_spread%s)", e->msg, (int)first, e->code == PETSC_ERR_MEM ? "; the ranks of a node factor their bodies at the same time, each checked against its share of the node's memory unless -kf_memory_limit_mb is given" : "");
 }
 
-/* All bodies' factors: spread, each body gathered onto its owner and factored there (the ranks at once), then S_b
-   broadcast from the owner; else each body on all ranks in turn. */
-static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, PetscReal shift, KFBodyFactors bf)
+/* Spread bodies: each gathered onto its owner and factored there, the ranks at once, then S_b broadcast from the owner */
+static PetscErrorCode KFBodyFactorsSetUpSpread(KFScene s, const char prefix[], PetscReal shift, KFBodyFactors bf)
 {
+  PetscMPIInt rank;
+  PetscInt   *nnull, *nneg;
+  Mat        *Kq, *Mq;
+
   PetscFunctionBegin;
-  if (!bf->spread) {
-    for (PetscInt b = 0; b < s->nb; b++) {
-      PetscInt nnull = 0, nneg = 0;
-      PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
-      PetscCall(KFBodyFactorSetUp(s, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
-      PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
-    }
-  } else {
-    PetscMPIInt rank;
-    PetscInt   *nnull, *nneg;
-    Mat        *Kq, *Mq;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PetscCalloc4(s->nb, &nnull, s->nb, &nneg, s->nb, &Kq, s->nb, &Mq));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B    = &s->bodies[b];
+    PetscBool   mine = (PetscBool)(rank == bf->owner[b]);
+    IS          is;
+    Mat        *sub;
 
-    PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-    PetscCall(PetscCalloc4(s->nb, &nnull, s->nb, &nneg, s->nb, &Kq, s->nb, &Mq));
-    for (PetscInt b = 0; b < s->nb; b++) {
-      KFBodyData *B    = &s->bodies[b];
-      PetscBool   mine = (PetscBool)(rank == bf->owner[b]);
-      IS          is;
-      Mat        *sub;
-
-      PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
-      PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
-      PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
+    PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
+    PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
+    PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
+    if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
+    if (mine) Kq[b] = sub[0];
+    PetscCall(MatDestroySubMatrices(1, &sub));
+    if (shift > 0) {
+      PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
       if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
-      if (mine) Kq[b] = sub[0];
+      if (mine) Mq[b] = sub[0];
       PetscCall(MatDestroySubMatrices(1, &sub));
-      if (shift > 0) {
-        PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
-        if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
-        if (mine) Mq[b] = sub[0];
-        PetscCall(MatDestroySubMatrices(1, &sub));
-      }
-      PetscCall(ISDestroy(&is));
-      PetscCall(KFBodySFCreate(s, b, bf));
     }
-    /* the ranks factor their own bodies at the same time: no communication until every rank is done */
-    {
-      KFBodyError    e = {0, ""};
-      PetscErrorCode ierr = 0;
-      PetscBool      has_limit, share = PETSC_FALSE;
-      MPI_Comm       node;
-      PetscMPIInt    nn;
-
-      /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
-         memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
-         theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
-         (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
-      PetscCall(PetscOptionsHasName(NULL, NULL, "-kf_memory_limit_mb", &has_limit));
-      PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-      PetscCallMPI(MPI_Comm_size(node, &nn));
-      if (!has_limit && nn > 1) {
-        PetscReal avail = KFNodeMemoryAvailableMB(), least;
-        char      val[32];
-
-        PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
-        if (least > 0) {
-          PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
-          PetscCall(PetscOptionsSetValue(NULL, "-kf_memory_limit_mb", val));
-          share = PETSC_TRUE;
-        }
-      }
-      PetscCallMPI(MPI_Comm_free(&node));
-      PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
-      for (PetscInt b = 0; b < s->nb && !ierr; b++)
-        if (Kq[b]) ierr = KFBodyFactorSetUp(s, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
-      PetscCall(PetscPopErrorHandler());
-      if (share) PetscCall(PetscOptionsClearValue(NULL, "-kf_memory_limit_mb"));
-      if (ierr && !e.code) e.code = ierr;
-      for (PetscInt b = 0; b < s->nb; b++) {
-        PetscCall(MatDestroy(&Kq[b]));
-        PetscCall(MatDestroy(&Mq[b]));
-      }
-      PetscCall(KFBodyErrorsCheck(s, &e));
-    }
-    for (PetscInt b = 0; b < s->nb; b++) {
-      PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
-      if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));
-      PetscCallMPI(MPI_Bcast(bf->S[b], (PetscMPIInt)(bf->ng[b] * bf->ng[b]), MPIU_REAL, bf->owner[b], s->comm));
-    }
-    PetscCall(PetscFree4(nnull, nneg, Kq, Mq));
+    PetscCall(ISDestroy(&is));
+    PetscCall(KFBodySFCreate(s, b, bf));
   }
+  /* the ranks factor their own bodies at the same time: no communication until every rank is done */
+  {
+    KFBodyError    e = {0, ""};
+    PetscErrorCode ierr = 0;
+    PetscBool      has_limit, share = PETSC_FALSE;
+    MPI_Comm       node;
+    PetscMPIInt    nn;
+
+    /* the memory check of a factorization weighs MUMPS' estimate on its communicator's ranks against the node's
+       memory: a spread body's factorization is alone on its communicator while the node's other ranks factor
+       theirs, so unless -kf_memory_limit_mb says otherwise each rank is checked against its share of the node
+       (MemAvailable / ranks on the node; -kf_ooc auto then puts a body that exceeds it out of core) */
+    char limit_name[256];
+
+    PetscCall(PetscSNPrintf(limit_name, sizeof(limit_name), "-%skf_memory_limit_mb", prefix ? prefix : ""));
+    PetscCall(PetscOptionsHasName(NULL, NULL, limit_name, &has_limit));
+    PetscCallMPI(MPI_Comm_split_type(s->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+    PetscCallMPI(MPI_Comm_size(node, &nn));
+    if (!has_limit && nn > 1) {
+      PetscReal avail = KFNodeMemoryAvailableMB(), least;
+      char      val[32];
+
+      PetscCall(MPIU_Allreduce(&avail, &least, 1, MPIU_REAL, MPIU_MIN, node));
+      if (least > 0) {
+        PetscCall(PetscSNPrintf(val, sizeof(val), "%.17g", (double)(least / nn)));
+        PetscCall(PetscOptionsSetValue(NULL, limit_name, val));
+        share = PETSC_TRUE;
+      }
+    }
+    PetscCallMPI(MPI_Comm_free(&node));
+    PetscCall(PetscPushErrorHandler(KFBodyErrorHandler, &e));
+    for (PetscInt b = 0; b < s->nb && !ierr; b++)
+      if (Kq[b]) ierr = KFBodyFactorSetUp(s, prefix, b, Kq[b], Mq[b], shift, bf, &nnull[b], &nneg[b]);
+    PetscCall(PetscPopErrorHandler());
+    if (share) PetscCall(PetscOptionsClearValue(NULL, limit_name));
+    if (ierr && !e.code) e.code = ierr;
+    for (PetscInt b = 0; b < s->nb; b++) {
+      PetscCall(MatDestroy(&Kq[b]));
+      PetscCall(MatDestroy(&Mq[b]));
+    }
+    PetscCall(KFBodyErrorsCheck(s, &e));
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    PetscCall(KFBodyPivotsCheck(s, b, nnull[b], nneg[b]));
+    if (rank != bf->owner[b]) PetscCall(PetscMalloc1(bf->ng[b] * bf->ng[b], &bf->S[b]));
+    PetscCallMPI(MPI_Bcast(bf->S[b], (PetscMPIInt)(bf->ng[b] * bf->ng[b]), MPIU_REAL, bf->owner[b], s->comm));
+  }
+  PetscCall(PetscFree4(nnull, nneg, Kq, Mq));
   PetscFunctionReturn(0);
 }
 
-const char *const KFFlexSolverTypes[] = {"auto", "monolithic", "bodywise", "KFFlexSolverType", "KF_FLEX_SOLVER_", NULL};
-
-PetscErrorCode KFFlexSolverSetType(KFFlexSolver solver, KFFlexSolverType type)
+/* All bodies' factors: spread (KFBodyFactorsSetUpSpread), else each body on all ranks in turn. */
+static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, const char prefix[], PetscReal shift, KFBodyFactors bf)
 {
   PetscFunctionBegin;
-  PetscCheck(!solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "set the type before KFFlexSolverSetUp()");
-  solver->type = type;
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KFFlexSolverGetType(KFFlexSolver solver, KFFlexSolverType *type)
-{
-  PetscFunctionBegin;
-  PetscCheck(solver->setup, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call KFFlexSolverSetUp() first");
-  *type = solver->bw ? KF_FLEX_SOLVER_BODYWISE : KF_FLEX_SOLVER_MONOLITHIC;
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
-{
-  PetscFunctionBegin;
-  *n = sys->nfactor;
+  if (bf->spread) {
+    PetscCall(KFBodyFactorsSetUpSpread(s, prefix, shift, bf));
+    PetscFunctionReturn(0);
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    PetscInt nnull = 0, nneg = 0;
+    PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
+    PetscCall(KFBodyFactorSetUp(s, prefix, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
+    PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -453,26 +430,23 @@ PetscErrorCode KFSystemGetFactorCount(KFSystem sys, PetscInt *n)
    factorization is saved (6 configurations: 1.27-2.68x at 57k-540k dofs). On more ranks than bodies (or
    -kf_bodywise_spread false) auto keeps the monolithic solve. */
 #define KF_AUTO_MAX_INTERFACE 3000
-static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFlexSolverType *asked)
+static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use)
 {
+  KFBodywise       bw  = (KFBodywise)solver->data;
   KFSystem         sys = solver->sys;
   KFScene          s   = sys->scene;
-  KFFlexSolverType type = solver->type;
   PetscBool        all_iface = PETSC_TRUE, bcs = PETSC_FALSE;
-  PetscInt         nG = s->nrevolute, min_dofs;
+  PetscInt         nG = s->nrevolute;
   PetscReal        psi_entries = 0, k_entries = 0;
-  PetscBool        spread;
 
   PetscFunctionBegin;
-  PetscCall(KFBodywiseOptions(s->comm, &type, &min_dofs, &spread));
-  *asked = type;
   for (PetscInt b = 0; b < s->nb; b++) {
     all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
     nG += 6 * s->bodies[b].ninterfaces; /* at most: shared nodes and tied dofs count once */
     /* the body interiors are factored as the bodies come, with no boundary condition removed: clamped dofs (and joints
        to ground, which clamp) are system dofs no longer, so a scene with them takes the monolithic solve */
     bcs = (PetscBool)(bcs || s->bodies[b].nclamp > 0);
-    if (type == KF_FLEX_SOLVER_AUTO) {
+    if (bw->asked_auto) {
       MatInfo info;
 
       /* Psi_b = K_II^-1 K_IGamma is dense: n_b x |Gamma_b| entries (at most 6 per interface node) */
@@ -482,16 +456,16 @@ static PetscErrorCode KFBodywiseWanted(KFFlexSolver solver, PetscBool *use, KFFl
     }
   }
   *use = PETSC_FALSE;
-  if (type == KF_FLEX_SOLVER_BODYWISE) {
+  if (!bw->asked_auto) {
     if (s->nb > 1 && all_iface && !bcs) *use = PETSC_TRUE;
     else PetscCall(KFProgress(s->comm, "-kf_flex_solver bodywise: %s; the monolithic solve is used", s->nb < 2 ? "a single body has no interface problem" : (bcs ? "the body-wise solve does not take clamped dofs or joints to ground yet" : "a body without interface node")));
-  } else if (type == KF_FLEX_SOLVER_AUTO) {
+  } else {
     PetscMPIInt size;
 
     /* on several ranks only when the bodies can be spread: every body distributed over all ranks paid a distributed
        MUMPS solve per body per block and came out even with the monolithic solve (README, run 4) */
     PetscCallMPI(MPI_Comm_size(s->comm, &size));
-    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && sys->nconfig > 1 && s->nsys >= min_dofs && psi_entries <= k_entries && (size == 1 || (spread && size <= s->nb)));
+    *use = (PetscBool)(s->nb > 1 && all_iface && !bcs && nG <= KF_AUTO_MAX_INTERFACE && s->nrevolute > 0 && sys->nconfig > 1 && s->nsys >= bw->min_dofs && psi_entries <= k_entries && (size == 1 || (bw->spread && size <= s->nb)));
   }
   PetscFunctionReturn(0);
 }
@@ -585,16 +559,26 @@ static PetscErrorCode KFSmallGemm(const char *ta, PetscInt m, PetscInt p, PetscI
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFBodywiseDestroy(KFBodywise *bw)
+/* the interface problem of the configuration set up (the options are kept: the solver may be set up again) */
+static PetscErrorCode KFBodywiseReset(KFBodywise bw)
 {
   PetscFunctionBegin;
-  if (!*bw) PetscFunctionReturn(0);
-  for (PetscInt b = 0; b < (*bw)->nb && (*bw)->T; b++) PetscCall(PetscFree((*bw)->T[b]));
-  PetscCall(PetscFree((*bw)->T));
-  PetscCall(PetscFree((*bw)->Gidx));
-  PetscCall(PetscFree((*bw)->S));
-  PetscCall(PetscFree((*bw)->heldG));
-  PetscCall(PetscFree(*bw));
+  for (PetscInt b = 0; b < bw->nb && bw->T; b++) PetscCall(PetscFree(bw->T[b]));
+  PetscCall(PetscFree(bw->T));
+  PetscCall(PetscFree(bw->Gidx));
+  PetscCall(PetscFree(bw->S));
+  PetscCall(PetscFree(bw->heldG));
+  bw->nb = bw->nG = bw->nheldG = 0;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverDestroy_Bodywise(KFFlexSolver solver)
+{
+  PetscFunctionBegin;
+  PetscCall(KFBodywiseReset((KFBodywise)solver->data));
+  PetscCall(PetscFree(solver->data));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetSpread_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetMinDofs_C", NULL));
   PetscFunctionReturn(0);
 }
 
@@ -607,7 +591,7 @@ static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw, PetscBo
   PetscBool inG = PETSC_TRUE;
 
   PetscFunctionBegin;
-  PetscCall(KFSelectHeldDofs(sys, &solver->nheld, &solver->held));
+  PetscCall(KFSelectHeldDofs(sys, ((PetscObject)solver)->prefix, &solver->nheld, &solver->held));
   for (PetscInt k = 0; k < solver->nheld; k++) {
     PetscInt g;
     PetscCall(PetscFindInt(solver->held[k], bw->nG, bw->Gidx, &g));
@@ -674,51 +658,66 @@ static PetscErrorCode KFBodywiseFactorInterface(KFScene s, KFBodyFactors bf, KFB
   PetscFunctionReturn(0);
 }
 
-/* -kf_flex_solver bodywise: set the solver up body-wise (solver->bw non-NULL) or leave it to the monolithic path */
-PetscErrorCode KFBodywiseSetUp(KFFlexSolver solver)
+/* The system's body factors, made once for all its configurations (and again for another shift): here only their
+   interface nodes, the factorizations follow in KFFlexSolverSetUp_Bodywise */
+static PetscErrorCode KFBodyFactorsGet(KFSystem sys, PetscReal shift, KFBodyFactors *bfo)
 {
-  KFSystem         sys = solver->sys;
-  KFScene          s   = sys->scene;
-  KFBodyFactors    bf;
-  KFBodywise       bw;
-  KFFlexSolverType asked;
-  PetscBool        use = PETSC_FALSE, same = PETSC_TRUE;
-  PetscInt         nfact = 0;
-  PetscLogDouble   t0, t1;
+  KFScene       s = sys->scene;
+  KFBodyFactors bf;
 
   PetscFunctionBegin;
-  PetscCall(KFBodywiseWanted(solver, &use, &asked));
-  if (!use) PetscFunctionReturn(0);
-  PetscCall(KFSystemComputeRigidModes(sys));
-  PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
-  PetscCall(PetscTime(&t0));
-  if (sys->bodyf && sys->bodyf->shift != solver->shift) PetscCall(KFBodyFactorsDestroy(&sys->bodyf));
+  if (sys->bodyf && sys->bodyf->shift != shift) PetscCall(KFBodyFactorsDestroy(&sys->bodyf));
   if (!sys->bodyf) {
     PetscCall(PetscNew(&bf));
-    bf->shift = solver->shift;
+    bf->shift = shift;
     bf->nb    = s->nb;
     PetscCall(PetscCalloc6(s->nb, &bf->ng, s->nb, &bf->gif, s->nb, &bf->Kb, s->nb, &bf->F, s->nb, &bf->Psi, s->nb, &bf->S));
     sys->bodyf = bf;
     for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
   }
-  bf = sys->bodyf;
-  PetscCall(PetscNew(&bw));
+  *bfo = sys->bodyf;
+  PetscFunctionReturn(0);
+}
+
+/* Body-wise where it applies (auto: where it pays, KFBodywiseWanted), else handed to the monolithic implementation
+   (solver->handoff) */
+static PetscErrorCode KFFlexSolverSetUp_Bodywise(KFFlexSolver solver)
+{
+  KFBodywise       bw  = (KFBodywise)solver->data;
+  KFSystem         sys = solver->sys;
+  KFScene          s   = sys->scene;
+  KFBodyFactors    bf  = NULL;
+  PetscBool        use = PETSC_FALSE, same = PETSC_TRUE, asked_auto = bw->asked_auto;
+  PetscInt         nfact = 0;
+  PetscLogDouble   t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(KFBodywiseWanted(solver, &use));
+  if (!use) { /* the monolithic solve instead */
+    solver->handoff = KFFLEXSOLVERMONOLITHIC;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KFSystemComputeRigidModes(sys));
+  PetscCall(PetscLogEventBegin(KF_EVENT_FACTOR, 0, 0, 0, 0));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFBodyFactorsGet(sys, solver->shift, &bf));
+  PetscCall(KFBodywiseReset(bw));
   bw->nb = s->nb;
   PetscCall(KFBodywiseInterface(sys, bf, bw));
-  if (solver->shift == 0) PetscCall(KFBodywiseHeld(solver, bw, (PetscBool)(asked == KF_FLEX_SOLVER_AUTO), &same));
-  if (!same && asked == KF_FLEX_SOLVER_AUTO) {
+  if (solver->shift == 0) PetscCall(KFBodywiseHeld(solver, bw, asked_auto, &same));
+  if (!same && asked_auto) {
     /* the monolithic held dofs are off the interface (a clamp elsewhere): auto keeps the monolithic solve */
-    PetscCall(KFBodywiseDestroy(&bw));
     PetscCall(PetscFree(solver->held));
     solver->nheld = 0;
     PetscCall(PetscLogEventEnd(KF_EVENT_FACTOR, 0, 0, 0, 0));
+    solver->handoff = KFFLEXSOLVERMONOLITHIC;
     PetscFunctionReturn(0);
   }
-  solver->bw = bw;
+  if (asked_auto) PetscCall(PetscObjectChangeTypeName((PetscObject)solver, KFFLEXSOLVERBODYWISE));
   if (!bf->factored) {
-    if (asked == KF_FLEX_SOLVER_AUTO) PetscCall(KFProgress(s->comm, "flexible solve: body-wise, the bodies factored once for all configurations (-kf_flex_solver auto; monolithic or bodywise to choose)"));
-    PetscCall(KFBodywiseAssign(s, bf));
-    PetscCall(KFBodyFactorsSetUpAll(s, solver->shift, bf));
+    if (asked_auto) PetscCall(KFProgress(s->comm, "flexible solve: body-wise, the bodies factored once for all configurations (-kf_flex_solver auto; monolithic or bodywise to choose)"));
+    PetscCall(KFBodywiseAssign(s, bw->spread, bf));
+    PetscCall(KFBodyFactorsSetUpAll(s, ((PetscObject)solver)->prefix, solver->shift, bf));
     PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bf->estimate_mb, 1, MPIU_REAL, MPIU_MAX, s->comm));
     bf->factored = PETSC_TRUE;
     nfact        = s->nb;
@@ -763,19 +762,62 @@ static PetscErrorCode KFCopyKept(KFScene s, const KFBodyData *B, Mat Sm, Mat Bm,
   PetscFunctionReturn(0);
 }
 
-/* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute.
-   Spread bodies: each body's rows of W go to its owner, which solves its interior and condenses alone; the ranks do
-   so for their bodies at the same time, and only the small condensed pieces (nG x p) are summed over the ranks. */
-PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
+/* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G (g, nG x p) set directly. Y[b]: body b's
+   K_II^-1 f_b,I (on its owner alone when spread), destroyed here. */
+static PetscErrorCode KFBodywiseBackSubstitute(KFFlexSolver solver, PetscInt p, const PetscReal g[], Mat Y[], Mat X)
 {
   KFSystem      sys = solver->sys;
   KFScene       s   = sys->scene;
   KFBodyFactors bf  = sys->bodyf;
-  KFBodywise    bw  = solver->bw;
-  PetscInt      nG = bw->nG, p, rstart, rend, lda;
-  PetscReal    *g, *c, *z, *gl = NULL;
-  Mat          *Y, *Q;
+  KFBodywise    bw  = (KFBodywise)solver->data;
+  PetscInt      nG = bw->nG, rstart, rend, lda;
+  PetscReal    *z;
   PetscScalar  *x;
+
+  PetscFunctionBegin;
+  PetscCall(MatZeroEntries(X));
+  for (PetscInt b = 0; b < s->nb; b++) { /* spread: every owner back-substitutes its bodies before any rows move */
+    PetscInt ng = bf->ng[b];
+    if (!Y[b]) continue;
+    PetscCall(PetscMalloc1(ng * p + 1, &z));
+    PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
+    PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
+    PetscCall(PetscFree(z));
+  }
+  for (PetscInt b = 0; b < s->nb; b++) {
+    KFBodyData *B = &s->bodies[b];
+    if (bf->spread) {
+      Mat D;
+      PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &D));
+      PetscCall(KFBodyMoveRows(bf, b, D, Y[b], PETSC_FALSE));
+      PetscCall(MatDestroy(&Y[b]));
+      Y[b] = D;
+    }
+    PetscCall(KFCopyKept(s, B, X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
+    PetscCall(MatDestroy(&Y[b]));
+  }
+  PetscCall(MatGetOwnershipRange(X, &rstart, &rend));
+  PetscCall(MatDenseGetLDA(X, &lda));
+  PetscCall(MatDenseGetArray(X, &x));
+  for (PetscInt k = 0; k < nG; k++)
+    if (bw->Gidx[k] >= rstart && bw->Gidx[k] < rend)
+      for (PetscInt j = 0; j < p; j++) x[(bw->Gidx[k] - rstart) + j * lda] = g[k + j * nG];
+  PetscCall(MatDenseRestoreArray(X, &x));
+  PetscFunctionReturn(0);
+}
+
+/* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute.
+   Spread bodies: each body's rows of W go to its owner, which solves its interior and condenses alone; the ranks do
+   so for their bodies at the same time, and only the small condensed pieces (nG x p) are summed over the ranks. */
+static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat X)
+{
+  KFSystem      sys = solver->sys;
+  KFScene       s   = sys->scene;
+  KFBodyFactors bf  = sys->bodyf;
+  KFBodywise    bw  = (KFBodywise)solver->data;
+  PetscInt      nG = bw->nG, p;
+  PetscReal    *g, *c, *gl = NULL;
+  Mat          *Y, *Q;
   PetscMPIInt   rank;
 
   PetscFunctionBegin;
@@ -831,36 +873,83 @@ PetscErrorCode KFBodywiseSolve(KFFlexSolver solver, Mat W, Mat X)
     PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bn, &bp, bw->S, &bn, g, &bn, &info));
     PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK potrs failed (info %d)", (int)info);
   }
-  /* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G set directly */
-  PetscCall(MatZeroEntries(X));
-  for (PetscInt b = 0; b < s->nb; b++) { /* spread: every owner back-substitutes its bodies before any rows move */
-    PetscInt ng = bf->ng[b];
-    if (!Y[b]) continue;
-    PetscCall(PetscMalloc1(ng * p + 1, &z));
-    PetscCall(KFSmallGemm("N", ng, p, nG, 1.0, bw->T[b], g, 0.0, z));
-    PetscCall(KFDenseMultSmall(bf->Psi[b], ng, p, z, -1.0, Y[b]));
-    PetscCall(PetscFree(z));
-  }
-  for (PetscInt b = 0; b < s->nb; b++) {
-    KFBodyData *B = &s->bodies[b];
-    if (bf->spread) {
-      Mat D;
-      PetscCall(KFDenseCreate(s->comm, B->rend - B->rstart, B->n, p, &D));
-      PetscCall(KFBodyMoveRows(bf, b, D, Y[b], PETSC_FALSE));
-      PetscCall(MatDestroy(&Y[b]));
-      Y[b] = D;
-    }
-    PetscCall(KFCopyKept(s, B, X, Y[b], PETSC_FALSE)); /* Y is zero on Gamma; x_G is set below */
-    PetscCall(MatDestroy(&Y[b]));
-  }
-  PetscCall(MatGetOwnershipRange(X, &rstart, &rend));
-  PetscCall(MatDenseGetLDA(X, &lda));
-  PetscCall(MatDenseGetArray(X, &x));
-  for (PetscInt k = 0; k < nG; k++)
-    if (bw->Gidx[k] >= rstart && bw->Gidx[k] < rend)
-      for (PetscInt j = 0; j < p; j++) x[(bw->Gidx[k] - rstart) + j * lda] = g[k + j * nG];
-  PetscCall(MatDenseRestoreArray(X, &x));
+  PetscCall(KFBodywiseBackSubstitute(solver, p, g, Y, X));
   PetscCall(PetscFree2(Y, Q));
   PetscCall(PetscFree(g));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverView_Bodywise(KFFlexSolver solver, PetscViewer viewer)
+{
+  KFBodywise bw = (KFBodywise)solver->data;
+
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "one MUMPS factorization per body interior, %s; dense interface problem of %" PetscInt_FMT " unknowns\n", bw->spread ? "the bodies spread over the ranks where they are at least as many" : "every body on all ranks", bw->nG));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverBodywiseSetSpread_Bodywise(KFFlexSolver solver, PetscBool spread)
+{
+  PetscFunctionBegin;
+  ((KFBodywise)solver->data)->spread = spread;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverBodywiseSetMinDofs_Bodywise(KFFlexSolver solver, PetscInt min_dofs)
+{
+  PetscFunctionBegin;
+  PetscCheck(min_dofs >= 0, PetscObjectComm((PetscObject)solver), PETSC_ERR_ARG_OUTOFRANGE, "the body-wise solve's least system dofs must be >= 0; got %" PetscInt_FMT, min_dofs);
+  ((KFBodywise)solver->data)->min_dofs = min_dofs;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFFlexSolverBodywiseSetSpread - whether each body is factored on one rank, the bodies spread over the ranks (when
+  there are at least as many bodies as ranks; the default), or every body on all ranks (-kf_bodywise_spread). Does
+  nothing on a solver of another type.
+*/
+PetscErrorCode KFFlexSolverBodywiseSetSpread(KFFlexSolver solver, PetscBool spread)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(solver, "KFFlexSolverBodywiseSetSpread_C", (KFFlexSolver, PetscBool), (solver, spread));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFFlexSolverBodywiseSetMinDofs - the system dofs from which auto takes the body-wise solve (default 20000;
+  -kf_bodywise_min_dofs). Does nothing on a solver of another type.
+*/
+PetscErrorCode KFFlexSolverBodywiseSetMinDofs(KFFlexSolver solver, PetscInt min_dofs)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(solver, "KFFlexSolverBodywiseSetMinDofs_C", (KFFlexSolver, PetscInt), (solver, min_dofs));
+  PetscFunctionReturn(0);
+}
+
+PETSC_INTERN PetscErrorCode KFFlexSolverCreate_Bodywise(KFFlexSolver solver)
+{
+  KFBodywise bw;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&bw));
+  bw->min_dofs                = 20000;
+  bw->spread                  = PETSC_TRUE;
+  solver->data                = bw;
+  solver->ops->setfromoptions = KFFlexSolverSetFromOptions_Bodywise;
+  solver->ops->setup          = KFFlexSolverSetUp_Bodywise;
+  solver->ops->solve          = KFFlexSolverSolve_Bodywise;
+  solver->ops->view           = KFFlexSolverView_Bodywise;
+  solver->ops->destroy        = KFFlexSolverDestroy_Bodywise;
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetSpread_C", KFFlexSolverBodywiseSetSpread_Bodywise));
+  PetscCall(PetscObjectComposeFunction((PetscObject)solver, "KFFlexSolverBodywiseSetMinDofs_C", KFFlexSolverBodywiseSetMinDofs_Bodywise));
+  PetscFunctionReturn(0);
+}
+
+/* auto: the body-wise implementation, which at its set-up keeps itself only where it pays (KFBodywiseWanted) */
+PETSC_INTERN PetscErrorCode KFFlexSolverCreate_Auto(KFFlexSolver solver)
+{
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverCreate_Bodywise(solver));
+  ((KFBodywise)solver->data)->asked_auto = PETSC_TRUE;
   PetscFunctionReturn(0);
 }

@@ -31,4 +31,7 @@ PETSC_INTERN PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal 
 /* Tolerance of KFDenseCheckSymmetric_Private for input pencils */
 #define KF_DENSE_SYMMETRY_RTOL 1e-6
 
+/* two unit vectors spanning the plane perpendicular to a unit joint axis (joint_rotation.c) */
+PETSC_INTERN void           KFPerpendicularPair_Private(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3]);
+
 #endif

@@ -34,3 +34,22 @@ PetscErrorCode KFJointRotation(const PetscReal axis[3], const PetscReal R0[9], P
   }
   PetscFunctionReturn(0);
 }
+
+/* Two unit vectors spanning the plane perpendicular to the (unit) axis k: the rotation rows of a revolute
+   joint. Any orthonormal pair gives the same constraint space; this one is well conditioned. */
+void KFPerpendicularPair_Private(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3])
+{
+  PetscReal c[3] = {0, 0, 0}, dot, len;
+  int       imin = 0;
+
+  for (int i = 1; i < 3; i++)
+    if (PetscAbsReal(k[i]) < PetscAbsReal(k[imin])) imin = i;
+  c[imin] = 1;
+  dot     = k[imin];
+  for (int i = 0; i < 3; i++) e1[i] = c[i] - dot * k[i];
+  len = PetscSqrtReal(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+  for (int i = 0; i < 3; i++) e1[i] /= len;
+  e2[0] = k[1] * e1[2] - k[2] * e1[1];
+  e2[1] = k[2] * e1[0] - k[0] * e1[2];
+  e2[2] = k[0] * e1[1] - k[1] * e1[0];
+}

@@ -34,7 +34,6 @@ struct _n_KFReassembly {
 /* the interface ties D (m x n) at these angles into r->D */
 PETSC_INTERN PetscErrorCode KFReassemblyConstraints_Private(KFReassembly, const PetscReal angles[]);
 /* Two unit vectors spanning the plane perpendicular to the unit axis k */
-PETSC_INTERN void           KFPerpendicularPair_Private(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3]);
 /* the closed-form path: made at creation when the joints form a tree whose bodies see their interface motions
    (r->primal stays NULL otherwise), applied at each call, destroyed with the workspace */
 PETSC_INTERN PetscErrorCode KFPrimalCreate_Private(KFReassembly);

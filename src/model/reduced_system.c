@@ -209,3 +209,22 @@ PetscErrorCode KFReducedSystemView(KFReducedSystem y, PetscViewer viewer)
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(0);
 }
+
+/* Tre + i Tim += (i w)^q D per output (q: its quantity: displacement 0, velocity 1, acceleration 2) */
+PetscErrorCode KFReducedSystemAddFeedthrough_Private(KFReducedSystem y, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
+{
+  const PetscInt t = y->t, a = y->a;
+
+  PetscFunctionBegin;
+  if (!y->D) PetscFunctionReturn(0);
+  for (PetscInt k = 0; k < nw; k++)
+    for (PetscInt j = 0; j < a; j++)
+      for (PetscInt i = 0; i < t; i++) {
+        const PetscInt  e = i + j * t, q = quantity ? quantity[i] : KF_QUANTITY_DISPLACEMENT;
+        const PetscReal d = y->D[e];
+        if (q == KF_QUANTITY_VELOCITY) Tim[k * t * a + e] += w[k] * d;
+        else if (q == KF_QUANTITY_ACCELERATION) Tre[k * t * a + e] -= w[k] * w[k] * d;
+        else Tre[k * t * a + e] += d;
+      }
+  PetscFunctionReturn(0);
+}

@@ -9,105 +9,6 @@
 */
 #include <kryflex/reducerimpl.h>
 
-/* Full-order response: rigid modes, computed flexible modes, and the modes not computed by their first two moments:
-   sum_{i not computed} H phi_i phi_i^T G / (omega_i^2 - w^2) = R^0 + w^2 R^1 + O(w^4 / omega_i^4), with
-   R^k = L^k - sum_{i computed} H phi_i phi_i^T G / omega_i^(2k+2) (L^k = H (K+ M)^k K+ G). The w^2 term makes the
-   truncation error (w / omega_i)^4 of the residual instead of (w / omega_i)^2: with modes to 3x the band's top, 1e-2
-   of the residual instead of 1e-1. The residuals are differences of large numbers when the computed modes include
-   very soft ones (1/omega_i^4 in R^1), so: none when every mode was computed, and R^1 dropped when it is below the
-   accuracy of L^1 itself (||R^1|| <= 1e-8 ||L^1||). L: nmom blocks of t x a (nmom 1: the static residual
-   alone). Tre, Tim: nw blocks of t x a. */
-PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], const KFDamping *d, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
-{
-  const PetscInt n = ref->r + ref->n;
-  PetscReal     *lam, *HPhi, *PhiG, *resid;
-
-  PetscFunctionBegin;
-  PetscCall(PetscMalloc4(n, &lam, t * n, &HPhi, n * a, &PhiG, 2 * t * a, &resid));
-  for (PetscInt k = 0; k < n; k++) lam[k] = k < ref->r ? 0 : ref->w2[k - ref->r];
-  PetscCall(PetscArraycpy(HPhi, ref->HPr, t * ref->r));
-  PetscCall(PetscArraycpy(HPhi + t * ref->r, ref->HPhi, t * ref->n));
-  for (PetscInt j = 0; j < a; j++) {
-    for (PetscInt k = 0; k < ref->r; k++) PhiG[k + j * n] = ref->PrG[k + j * ref->r];
-    for (PetscInt k = 0; k < ref->n; k++) PhiG[ref->r + k + j * n] = ref->PhiG[k + j * ref->n];
-  }
-  PetscCall(KFDampedModalFRF(n, lam, t, HPhi, a, PhiG, d, ref->Cm, ref->nc, quantity, 1e-300, nw, w, Tre, Tim));
-  for (PetscInt j = 0; j < a; j++)
-    for (PetscInt i = 0; i < t; i++) {
-      PetscReal s0 = L[i + j * t], s1 = nmom > 1 ? L[t * a + i + j * t] : 0;
-      for (PetscInt k = 0; k < ref->n; k++) {
-        const PetscReal rk = ref->HPhi[i + k * t] / ref->w2[k] * ref->PhiG[k + j * ref->n];
-
-        s0 -= rk;
-        if (nmom > 1) s1 -= rk / ref->w2[k];
-      }
-      resid[i + j * t]         = s0;
-      resid[t * a + i + j * t] = s1;
-    }
-  {
-    PetscReal n0 = 0, n1 = 0, l1 = 0, wmax = nw ? w[nw - 1] : 0;
-
-    for (PetscInt e = 0; e < t * a; e++) {
-      n0 += resid[e] * resid[e];
-      n1 += resid[t * a + e] * resid[t * a + e];
-      if (nmom > 1) l1 += L[t * a + e] * L[t * a + e];
-    }
-    /* R^1 is kept where it is above its own noise and the small correction it must be. Noise: L^1 comes from block
-       solves (refined to a residual of 1e-6) and R^1 = L^1 - (computed part) cancels, so below 1e-8 ||L^1|| it is
-       taken for noise. Small: ||R^1|| w_max^2 <= ||R^0|| / 4; beyond that R^1 is the difference of large numbers
-       (hundreds of computed modes, 1/omega_i^4), which acceleration outputs multiply by w^2 again: a 2,012-dof panel
-       scene with 640 computed modes gave a reference 4 times its own peak off the dense one with R^1 kept there. */
-    const PetscBool keep0 = (PetscBool)!ref->complete;
-    const PetscBool keep1 = (PetscBool)(keep0 && nmom > 1 && n1 > 1e-16 * l1 && PetscSqrtReal(n1) * wmax * wmax <= 0.25 * PetscSqrtReal(n0));
-
-    for (PetscInt e = 0; e < t * a; e++) {
-      if (!keep0) resid[e] = 0;
-      if (!keep1) resid[t * a + e] = 0;
-      if (ref->D) resid[e] += ref->D[e]; /* the static response of M's null space (dense path) */
-    }
-  }
-  /* the residual is quasi-static: structural damping divides it by 1 + i g; then the output's quantity */
-  for (PetscInt f = 0; f < nw; f++)
-    for (PetscInt j = 0; j < a; j++)
-      for (PetscInt i = 0; i < t; i++) {
-        const PetscInt  e  = i + j * t;
-        const PetscReal rr = resid[e] + w[f] * w[f] * resid[t * a + e], g = d->g;
-        PetscReal       xr = rr / (1 + g * g), xi = -rr * g / (1 + g * g), yr = xr, yi = xi;
-
-        if (quantity && quantity[i] == KF_QUANTITY_VELOCITY) {
-          yr = -w[f] * xi;
-          yi = w[f] * xr;
-        } else if (quantity && quantity[i] == KF_QUANTITY_ACCELERATION) {
-          yr = -w[f] * w[f] * xr;
-          yi = -w[f] * w[f] * xi;
-        }
-        Tre[f * t * a + e] += yr;
-        Tim[f * t * a + e] += yi;
-      }
-  PetscCall(PetscFree4(lam, HPhi, PhiG, resid));
-  PetscFunctionReturn(0);
-}
-
-/* the rigid-body and mechanism part of the full-order response: the geometric rigid modes (H Phi_r, Phi_r^T G) with
-   the damping model the full response uses (their block of the modal viscous damping, Rayleigh; modal ratios and
-   structural damping are zero on them) */
-static PetscErrorCode KFFullRigidFRF(const KFFullReference *ref, PetscInt t, PetscInt a, const KFDamping *d, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
-{
-  const PetscInt nr = ref->r, m = ref->r + ref->n;
-  PetscReal     *lam, *Crr = NULL;
-
-  PetscFunctionBegin;
-  PetscCall(PetscCalloc1(PetscMax(nr, 1), &lam));
-  if (ref->Cm && ref->nc >= nr && nr) {
-    PetscCall(PetscMalloc1(nr * nr, &Crr));
-    for (PetscInt j = 0; j < nr; j++)
-      for (PetscInt i = 0; i < nr; i++) Crr[i + j * nr] = ref->Cm[i + j * m];
-  }
-  PetscCall(KFDampedModalFRF(nr, lam, t, ref->HPr, a, ref->PrG, d, Crr, nr, quantity, 0, nw, w, Tre, Tim));
-  PetscCall(PetscFree(Crr));
-  PetscCall(PetscFree(lam));
-  PetscFunctionReturn(0);
-}
 
 /* the reference's rigid-body and mechanism part at nw frequencies */
 static PetscErrorCode KFEvalPointRigid(KFReducer r, KFEvalPoint *p, PetscInt nw, const PetscReal w[], PetscReal re[], PetscReal im[])
@@ -117,7 +18,7 @@ static PetscErrorCode KFEvalPointRigid(KFReducer r, KFEvalPoint *p, PetscInt nw,
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   if (p->rich) PetscCall(KFReducedSystemRigidResponse(p->rich, nw, w, re, im));
-  else PetscCall(KFFullRigidFRF(&p->ref, t, a, &r->damping, r->scene->nquantity == t ? r->scene->out_quantity : NULL, nw, w, re, im));
+  else PetscCall(KFFullRigidFRF_Private(&p->ref, t, a, &r->damping, r->scene->nquantity == t ? r->scene->out_quantity : NULL, nw, w, re, im));
   PetscFunctionReturn(0);
 }
 

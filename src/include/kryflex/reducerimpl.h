@@ -208,6 +208,7 @@ PETSC_INTERN PetscErrorCode KFReducerCompare_Private(KFReducer, PetscInt nfull, 
 PETSC_INTERN PetscErrorCode KFEvalPointErrors_Private(KFReducer, KFEvalPoint *, KFReducedSystem, PetscReal *hinf, PetscReal *pointwise, PetscReal Trre[], PetscReal Trim[]);
 /* the full-order response of a reference at nw frequencies */
 PETSC_INTERN PetscErrorCode KFFullFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, PetscInt nmom, const PetscReal L[], const KFDamping *, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
+PETSC_INTERN PetscErrorCode KFFullRigidFRF_Private(const KFFullReference *, PetscInt t, PetscInt a, const KFDamping *, const PetscInt quantity[], PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[]);
 /* the equivalent ratio r->zeta of r->damping over r->band (src/reducer/damping.c) */
 PETSC_INTERN PetscErrorCode KFReducerDampingUpdate_Private(KFReducer);
 /* JSON text of a damping description (src/damping/damping.c) */

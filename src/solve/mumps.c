@@ -135,9 +135,6 @@ static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, const char prefi
   PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_ooc", val, val, sizeof(val), &set));
   PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_spd", c->spd, &c->spd, NULL));
   PetscOptionsEnd();
-  PetscCheck(c->seed >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_scotch_seed is a positive integer; got %" PetscInt_FMT, c->seed);
-  PetscCheck(c->tries >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more; got %" PetscInt_FMT, c->tries);
-  PetscCheck(c->blr >= 0 && c->blr < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_blr must lie in [0, 1) (a relative dropping tolerance such as 1e-8); got %g", (double)c->blr);
   if (set && !val[0]) c->ooc_mode = 1; /* a bare -kf_ooc */
   else if (set) {
     PetscCall(PetscStrcasecmp(val, "auto", &on));

@@ -150,9 +150,17 @@ PetscErrorCode KFOptionsSettingEnum(PetscOptionItems *PetscOptionsObject, const 
 PetscErrorCode KFOptionsSettingFList(PetscOptionItems *PetscOptionsObject, const char name[], PetscFunctionList list, const char cur[], char value[], size_t len, PetscBool *set)
 {
   const KFSettingInfo *row;
+  PetscBool            given = PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscCall(KFSettingRow_Private(PetscOptionsObject->comm, name, &row));
-  PetscCall(PetscOptionsFList_Private(PetscOptionsObject, name, row->help, row->setter, list, cur, value, len, set));
+  PetscCall(PetscOptionsFList_Private(PetscOptionsObject, name, row->help, row->setter, list, cur, value, len, &given));
+  if (given) { /* PETSc takes any string here: a name no type was registered under is refused as an enum's would be */
+    void (*create)(void) = NULL;
+
+    PetscCall(PetscFunctionListFind(list, value, &create));
+    PetscCheck(create, PetscOptionsObject->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "Unknown option %s for -%s%s. Available options: %s", value, PetscOptionsObject->prefix ? PetscOptionsObject->prefix : "", name + 1, row->choices);
+  }
+  if (set) *set = given;
   PetscFunctionReturn(0);
 }

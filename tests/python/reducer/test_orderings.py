@@ -131,8 +131,8 @@ def test_ordering_tries_keep_the_fewest_flops(solid, runs, tmp_path, ranks):
 
 
 @pytest.mark.parametrize("option,value,message", [
-    ("-kf_ordering_tries", "0", "-kf_ordering_tries is the number of SCOTCH orderings to analyse, 1 or more"),
-    ("-kf_scotch_seed", "0", "-kf_scotch_seed is a positive integer")])
+    ("-kf_ordering_tries", "0", "0 is outside [1, inf); give an integer in [1, inf)"),
+    ("-kf_scotch_seed", "0", "0 is outside [1, inf); give an integer in [1, inf)")])
 def test_ordering_options_bad_value_is_refused(solid, tmp_path, option, value, message):
     p = subprocess.run([KRYFLEX_CMD, "reduce", solid, "-o", str(tmp_path / "bad"), *ONE_ANGLE, option, value],
                        capture_output=True, text=True, env=ENV, timeout=600)

@@ -173,7 +173,7 @@ def test_factorization_options_keep_the_model(runs, opts):
 
 
 def test_bad_factorization_option_is_named():
-    with pytest.raises(kryflex.Error, match="-kf_blr must lie in"):
+    with pytest.raises(kryflex.Error, match=r"-kf_blr 2 is outside \[0, 1\); give a value in \[0, 1\)"):
         reduce(verify=False, blr=2.0)
 
 

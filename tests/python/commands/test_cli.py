@@ -253,7 +253,9 @@ def test_two_ranks_give_the_serial_reduction(serial, two_ranks):
         assert normwise_errors(L1, L2).max() < 1e-8, label
     m1 = kryflex.ReducedModel.load(os.path.join(serial.out, "reduced.h5"))
     m2 = kryflex.ReducedModel.load(os.path.join(two_ranks.out, "reduced.h5"))
-    np.testing.assert_allclose(m2.at([37.5]).frequencies_hz, m1.at([37.5]).frequencies_hz, rtol=1e-8)
+    # the two runs' reduced stiffnesses differ at round-off (4.6e-12 of their largest entry), and the 0.11 Hz mode is
+    # (1221 / 0.11)^2 = 1.2e8 times softer than the stiffest: at() moves it by 1.1e-8 (the SVD path by 3.2e-10)
+    np.testing.assert_allclose(m2.at([37.5]).frequencies_hz, m1.at([37.5]).frequencies_hz, rtol=1e-7)
 
 
 @pytest.mark.mpi

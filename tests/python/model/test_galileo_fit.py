@@ -331,3 +331,117 @@ def test_physical_fits_stay_above_the_floors(measured, implied, fit_file):
     floors = implied.frequency_floors(fit["mass_band"], fit.get("layout", "stick"))
     for a in (0, 60):
         assert np.all(measured[a][0] >= floors * (1 - 1e-9)), (a, measured[a][0], floors)
+
+
+# ------------------------------------------------------------------ the trace bound (meshes/galileo/sumrule.py)
+
+@pytest.fixture(scope="module")
+def sumrule(generate, implied):
+    """meshes/galileo/sumrule.py, bound to meshes/galileo's generate and fit (as implied)."""
+    here = os.path.join(ROOT, "meshes", "galileo")
+    saved = {name: sys.modules.pop(name) for name in ("generate", "fit") if name in sys.modules}
+    try:
+        sys.modules["generate"], sys.modules["fit"] = generate, implied.fit
+        return load_module("galileo_sumrule", os.path.join(here, "sumrule.py"))
+    finally:
+        for name in ("generate", "fit"):
+            sys.modules.pop(name, None)
+        sys.modules.update(saved)
+
+
+def _system_at(alpha, Ms, Ks, Mr, Kr):
+    """The bearing at alpha, written here: the hub's ux uy uz and rx ry, turned by alpha about z, equal the stator
+    node 1's; the system's (M, K) on the null space of those 5 rows."""
+    ns, nr = Ms.shape[0], Mr.shape[0]
+    c, s = np.cos(np.radians(alpha)), np.sin(np.radians(alpha))
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    C = np.zeros((5, ns + nr))
+    C[:3, :3], C[:3, ns:ns + 3] = np.eye(3), -R
+    C[3:, 3:5], C[3:, ns + 3:ns + 6] = np.eye(2), -R[:2]
+    P = sl.null_space(C)
+    return P.T @ sl.block_diag(Ms, Mr) @ P, P.T @ sl.block_diag(Ks, Kr) @ P
+
+
+def _sampled(generate, center, band, rng, corner=None):
+    nm = len(generate.MASS_PARAMETERS)
+    n = nm + generate.n_rotation(12) + generate.n_rotation(21)
+    p = np.zeros(n)
+    p[:nm] = center + np.log(band) * (corner if corner is not None else rng.uniform(-1, 1, nm))
+    p[nm:] = rng.normal(0.0, 1.0, n - nm)
+    return p
+
+
+@pytest.mark.parametrize("layout, band", [("stick", 2.0), ("bearing-ring", 2.0), ("light-bearing", 2.0),
+                                         ("mid-bearing", 2.0), ("light-bearing", 50.0)])
+def test_trace_bound_holds_on_sampled_models(generate, sumrule, layout, band):
+    """The deficit D (Table 1's component eigenvalues' sum less the system's) measured by a dense eigensolve of the
+    system assembled here equals sumrule's trace formula, and stays under the bound for its masses (any mode
+    shapes) and under the box bound of the band, at 0, 37 and 60 deg; masses anywhere in the band, both bodies'
+    interface corners included, random mode shapes."""
+    rng = np.random.default_rng(11)
+    center = sumrule.fit.layout_center(layout)
+    iface = np.array([1.0 if name in sumrule.INTERFACE["rotor"] else -1.0 if name in sumrule.INTERFACE["stator"]
+                      else 0.0 for _, _, name in generate.MASS_PARAMETERS])
+    ls, lr = sumrule.component_lambdas()
+    for trial in range(6):
+        corner = (iface, -iface)[trial] if trial < 2 else None
+        p = _sampled(generate, center, band, rng, corner)
+        bodies = generate.fitted_bodies(p)
+        (Ms, Ks, _), (Mr, Kr, _) = bodies
+        comp = np.r_[sl.eigh(Ks, Ms, eigvals_only=True), sl.eigh(Kr, Mr, eigvals_only=True)].sum()
+        assert comp == pytest.approx(ls.sum() + lr.sum(), rel=1e-9)
+        for alpha in (0.0, 37.0, 60.0):
+            lam = sl.eigh(*_system_at(alpha, Ms, Ks, Mr, Kr)[::-1], eigvals_only=True)
+            D = comp - lam.sum()
+            assert sumrule.deficit(alpha, bodies) == pytest.approx(D, rel=1e-7, abs=1e-9 * comp)
+            tight = sumrule.masses_bound(alpha, p[:len(center)])
+            assert D <= tight * (1 + 1e-9) + 1e-9 * comp, (trial, alpha, D, tight)
+            assert tight <= sumrule.masses_bound(alpha, p[:len(center)], rigid=False) * (1 + 1e-12)
+            assert tight <= sumrule.box_bound(alpha, layout, band) * (1 + 1e-9), (trial, alpha)
+
+
+def test_interlacing_on_sampled_models(generate, sumrule):
+    """The model-independent interlacing sumrule checks the paper's tables with, measured on random models: each
+    flexible system frequency between the components' (k-5)-th and k-th, and the systems at 0 and 60 deg within
+    four modes of each other."""
+    rng = np.random.default_rng(5)
+    for trial in range(4):
+        p = _sampled(generate, sumrule.fit.layout_center("light-bearing"), 5.0, rng)
+        (Ms, Ks, _), (Mr, Kr, _) = generate.fitted_bodies(p)
+        comp = np.sort(np.r_[sl.eigh(Ks, Ms, eigvals_only=True), sl.eigh(Kr, Mr, eigvals_only=True)])
+        lam = {a: sl.eigh(*_system_at(a, Ms, Ks, Mr, Kr)[::-1], eigvals_only=True) for a in (0.0, 60.0)}
+        tol = 1e-9 * comp[-1]
+        for a in lam:
+            assert np.all(comp[:28] <= lam[a] + tol) and np.all(lam[a] <= comp[5:] + tol), (trial, a)
+        assert np.all(lam[60.0][:-4] <= lam[0.0][4:] + tol) and np.all(lam[0.0][:-4] <= lam[60.0][4:] + tol)
+
+
+def test_paper_tables_pass_the_interlacing(sumrule):
+    """Tables 1 and 4 against each other and the components: no model-independent check fails."""
+    rows = sumrule.interlacing()
+    assert len(rows) == 2 * 21 + 2 * 17 and all(r[-1] for r in rows)
+
+
+def test_table1_needs_the_bearing_node_heavy_enough(sumrule, implied):
+    """The trace bound excludes the light-bearing layout within the physical band (at least 4 % off somewhere,
+    at 0 and 60 deg), not the stick or bearing-ring ones (whose clamped floors exclude them); mid-bearing passes
+    both bounds."""
+    for alpha in (0.0, 60.0):
+        assert sumrule.least_deviation(alpha, sumrule.box_bound(alpha, "light-bearing", PHYS_BAND)) > 0.04
+        for layout in ("stick", "bearing-ring", "mid-bearing"):
+            assert sumrule.least_deviation(alpha, sumrule.box_bound(alpha, layout, PHYS_BAND)) == 0
+    assert np.all(implied.least_deviation(PHYS_BAND, SYSTEM_0, "mid-bearing") <= 0)
+    assert np.all(implied.least_deviation(PHYS_BAND, SYSTEM_60, "mid-bearing") <= 0)
+    band = sumrule.least_band(0.0, "light-bearing")
+    assert sumrule.box_bound(0.0, "light-bearing", band) >= sumrule.paper_deficit(0.0) > sumrule.box_bound(
+        0.0, "light-bearing", 0.99 * band)
+
+
+def test_physical_fits_respect_the_trace_bound(measured, sumrule, fit_file):
+    """A light-bearing fit's frequencies cannot all be within the trace bound's least deviation of the paper's:
+    measured on the fit's model at 0 and 60 deg."""
+    with open(fit_file) as f:
+        fit = json.load(f)
+    for a, paper in ((0, SYSTEM_0), (60, SYSTEM_60)):
+        least = sumrule.least_deviation(float(a), sumrule.box_bound(float(a), fit["layout"], fit["mass_band"]))
+        assert np.abs(measured[a][0] / np.array(paper) - 1).max() >= least * (1 - 1e-6), a

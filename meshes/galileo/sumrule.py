@@ -144,6 +144,16 @@ def least_deviation(alpha, bound):
     return max(np.sqrt(least / paper) - 1.0, 0.0)
 
 
+def least_deviation_above(alpha, bound, low=fit.LOW):
+    """The same for the modes above the band alone (modes 18-28): the band's modes can take at most the
+    components' lowest ten squared (interlacing), far less than the shortfall, so the rest falls on these."""
+    ls, lr = component_lambdas()
+    comp = np.sort(np.r_[ls, lr])
+    paper = TWO_PI2 * np.square(g.PAPER_SYSTEM_HZ if alpha == 0 else fit.SYSTEM_60_HZ)
+    least = comp.sum() - bound - comp[:low].sum()
+    return max(np.sqrt(least / paper[low:].sum()) - 1.0, 0.0)
+
+
 def least_band(alpha, layout, lo=1.0, hi=1e4):
     """The smallest band around the layout whose box bound allows Table 1's (or 4's) D (bisection on log band:
     the box grows with the band)."""

@@ -61,7 +61,8 @@ def _split(alpha, Ms, Mr):
 
 
 def deficit(alpha, bodies):
-    """D = trace(W^-1 C M^-1 K M^-1 C^T) of a model ((Ms, Ks, ts), (Mr, Kr, tr)): sum lambda(pair) - sum lambda(system)."""
+    """D = trace(W^-1 C M^-1 K M^-1 C^T) of a model ((Ms, Ks, ts), (Mr, Kr, tr)): sum lambda(pair) less
+    sum lambda(system)."""
     (Ms, Ks, _), (Mr, Kr, _) = bodies
     C, Cs, Cr = _split(alpha, Ms, Mr)
     W = Cs @ np.linalg.solve(Ms, Cs.T) + Cr @ np.linalg.solve(Mr, Cr.T)
@@ -173,7 +174,8 @@ def interlacing():
     for label, sys_hz in (("Table 1, 0°", g.PAPER_SYSTEM_HZ), ("Table 4, 60°", fit.SYSTEM_60_HZ)):
         for k, f in enumerate(sys_hz):
             lo = comp[k - 5] if k >= 5 else 0.0
-            rows.append((f"{label} between the components' (k-5)-th and k-th", k + 8, f, lo, comp[k], lo <= f <= comp[k]))
+            rows.append((f"{label} between the components' (k-5)-th and k-th", k + 8, f, lo, comp[k],
+                         lo <= f <= comp[k]))
     for label, a, b in (("Table 4 (60°) at most Table 1's (0°) four modes up", fit.SYSTEM_60_HZ, g.PAPER_SYSTEM_HZ),
                         ("Table 1 (0°) at most Table 4's (60°) four modes up", g.PAPER_SYSTEM_HZ, fit.SYSTEM_60_HZ)):
         for k in range(len(a) - 4):
@@ -185,7 +187,8 @@ def main():
     ls, lr = component_lambdas()
     print(f"Σ f² of Table 1's components: {(ls.sum() + lr.sum()) / TWO_PI2:.6g} Hz²; the deficit D (Hz²) Table 1 "
           f"needs at 0°: {paper_deficit(0) / TWO_PI2:.6g}, Table 4 at 60°: {paper_deficit(60) / TWO_PI2:.6g}\n")
-    print("| layout | band | bound on D, 0° (Hz²) | least uniform deviation 0° / 60° | least band that allows Table 1 |")
+    print("| layout | band | bound on D, 0° (Hz²) | least uniform deviation 0° / 60° | "
+          "least band that allows Table 1 |")
     print("|---|---|---|---|---|")
     for layout in sorted(fit.LAYOUTS, reverse=True):
         for band in (1, 2, 5):

@@ -16,7 +16,8 @@ For every layout (fit.LAYOUTS) with every mass and inertia within fit.PHYS_BAND 
     system's modal sum of u u^T is at most M^-1), h the output (ry at point A), g the input (the bearing torque):
     the cap is smallest with those nodes' inertias heaviest (x band). Table 5 is excluded for a layout when the
     cap is below the least sum.
-and the model-independent interlacing checks (sumrule.interlacing). Figures are the scripts' own; nothing here is
+the same floors and trace bound at the committed model's own masses (fit.json), and the model-independent
+interlacing checks (sumrule.interlacing). Figures are the scripts' own; nothing here is
 typed in by hand.
 """
 import json
@@ -90,6 +91,20 @@ def layout_account(layout, band, table5):
     return out
 
 
+def model_account(path=g.FIT_FILE):
+    """The same bounds at one model's own masses (the committed fit.json by default: masses free, so the layouts'
+    bands do not hold it): per-mode clamped floors and the trace bound's least deviation above the band."""
+    Ms, ts, Mr, tr = g.fitted_masses(g.load_fit(path)[:len(g.MASS_PARAMETERS)])
+    floors = np.sort(np.r_[implied.clamped_floors(g.PAPER_STATOR_HZ, implied.clamped_ratios(Ms, ts, 1.0)),
+                           implied.clamped_floors(g.PAPER_ROTOR_HZ, implied.clamped_ratios(Mr, tr, 1.0))])
+    params = g.load_fit(path)[:len(g.MASS_PARAMETERS)]
+    return {"file": os.path.basename(path),
+            "frequency_floor_least_deviation": {f"{a:g}": [float(max(v, 0.0)) for v in floors / paper_hz(a) - 1]
+                                                for a in ANGLES},
+            "trace_least_deviation_above_band": {f"{a:g}": float(sumrule.least_deviation_above(
+                a, sumrule.masses_bound(a, params))) for a in ANGLES}}
+
+
 def account():
     table5 = {f"{a:g}": least_residue_sum(a)[0] for a in ANGLES}
     checks = sumrule.interlacing()
@@ -104,6 +119,7 @@ def account():
         "interlacing": {"checks": len(checks), "failed": [f"{w}: mode {m}" for w, m, *_, ok in checks if not ok]},
         "table5_least_residue_sum": table5,
         "layouts": {name: layout_account(name, fit.PHYS_BAND, table5) for name in sorted(fit.LAYOUTS)},
+        "committed_model": model_account(),
     }
 
 

@@ -261,6 +261,96 @@ def _table5(p):
     return lines
 
 
+def _bound_cell(lay, label, m, tol):
+    """One layout's verdict on one mode of Table 1 (label '0') or 4 ('60'): the clamped floor's least deviation
+    when it exceeds tol, '‡' when the mode is among those the trace bound keeps from all being within tol."""
+    floor = lay["frequency_floor_least_deviation"][label][m]
+    above = m + 8 >= lay.get("first_mode_above_band", 18)
+    trace = above and lay["trace_least_deviation_above_band"][label] > tol
+    cell = f"≥ +{100 * floor:.1f} % (floor)" if floor > tol else ""
+    return (cell + " ‡" if trace else cell).strip() or "open"
+
+
+def _kryflex_cell(ours, paper, tol, verdict):
+    """met, or the difference and what the bounds at the model's own masses say of the entry (verdict)."""
+    if ours is None or paper is None:
+        return DASH
+    return "met" if abs(ours / paper - 1) <= tol else f"{100 * (ours / paper - 1):+.1f} % ({verdict})"
+
+
+def _allowed_rows(p, b, layouts):
+    tol = b["frequency_tolerance"]
+    lee, rigid = p["lee"], p["rigid_modes"]
+    full = {label: p["full_hz"].get(label) or [] for label in ("0", "60")}
+    paper = {"0": lee["system_hz"], "60": lee["full_system_60_hz"]}
+    first_above = b.get("first_mode_above_band", 18)
+    own = dict(b["committed_model"], first_mode_above_band=first_above)
+    rows = []
+    for m in range(len(lee["system_hz"])):
+        row = [str(m + rigid + 1)]
+        for label in ("0", "60"):
+            ours = full[label][m] if m < len(full[label]) else None
+            verdict = _bound_cell(own, label, m, tol)
+            row += [fmt_freq(paper[label][m]), _kryflex_cell(ours, paper[label][m], tol, verdict)]
+        for name in layouts:
+            lay = dict(b["layouts"][name], first_mode_above_band=first_above)
+            cells = {label: _bound_cell(lay, label, m, tol) for label in ("0", "60")}
+            row.append(cells["0"] if cells["0"] == cells["60"] else f"{cells['0']} / {cells['60']}")
+        rows.append(row)
+    return rows
+
+
+def _allowed(p):
+    """Table P7: entry by entry, what kryflex's model meets and what the bounds allow any model of the paper's
+    topology with physical masses (meshes/galileo/tables.py's account, tables_bounds.json)."""
+    b = p.get("bounds")
+    if not b:
+        return []
+    layouts = sorted(b["layouts"])
+    band, tol = b["mass_band"], b["frequency_tolerance"]
+    lines = [f"Table P7. Which entries of Tables 1 and 4 can be met, and by what (within {100 * tol:g} %). kryflex: "
+             f"the model above ({b['committed_model']['file']}, masses free): met, or its difference and what the "
+             "bounds say at its own masses (open: none excludes it, the fit's local optimum). Then, for every "
+             f"mass and inertia within a factor {band:g} of each layout (meshes/galileo/README.md), what any mode "
+             "shapes allow: ≥ x % (floor): the clamped floors (meshes/galileo/implied.py: Cauchy interlacing "
+             "with both bearing nodes held, the multiplicative Weyl inequality) keep the mode at least that far "
+             "above the paper's; ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band from "
+             "all being within it; open: no bound excludes it. One cell for both angles where they agree, else "
+             "0° / 60°.", "",
+             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts,
+                   _allowed_rows(p, b, layouts)), ""]
+    for name in layouts:
+        tr = b["layouts"][name]["trace_least_deviation_above_band"]
+        if max(tr.values()) > tol:
+            lines.append(f"‡ {name}: modes {b.get('first_mode_above_band', 18)}-28 cannot all be within "
+                         f"{100 * tr['0']:.2f} % of Table 1 nor within {100 * tr['60']:.2f} % of Table 4: joining "
+                         "the bodies lowers the sum of the squared frequencies by at most what the interface "
+                         "masses allow, less than the paper's columns need.")
+    failed = b["interlacing"]["failed"]
+    lines += ["", f"Model-independent: {b['interlacing']['checks'] - len(failed)} of {b['interlacing']['checks']} "
+              "interlacing checks hold (each system mode between the components' (k-5)-th and k-th, 5 ties; "
+              "Tables 1 and 4 within four modes of each other, 4 more ties common to both angles)"
+              + (": fails " + "; ".join(failed) if failed else ": Tables 1 and 4 agree with each other and with "
+                 "the components."), ""]
+    lines += _table5_allowed(b, layouts)
+    return lines
+
+
+def _table5_allowed(b, layouts):
+    least = b["table5_least_residue_sum"]
+    caps = {name: b["layouts"][name]["table5_residue_cap"] for name in layouts}
+    excluded = [name for name in layouts if any(b["layouts"][name]["table5_excluded"].values())]
+    text = ("Table 5: at the paper's frequencies (0° and 60°) residues exist that meet every entry of the column "
+            "(a linear program, meshes/galileo/tables.py): their least Σ|r_i| is "
+            + ", ".join(f"{v:.3g} at {a}°" for a, v in least.items() if v is not None)
+            + "; a model's Σ|r_i| is at most √(hᵀM⁻¹h · gᵀM⁻¹g) (Cauchy-Schwarz), at least "
+            + ", ".join(f"{v:.3g} ({name})" for name, v in caps.items()) + " within the band. ")
+    text += ("So no bound excludes Table 5 for any layout: its entries are open (the fits' local optima, "
+             "meshes/galileo/README.md)." if not excluded else
+             "Excluded for " + ", ".join(excluded) + ": the cap is below the least sum.")
+    return [text, ""]
+
+
 def _table6(p):
     labels = p["angle_labels"]
     o, i = 0, 0
@@ -313,6 +403,7 @@ def section_paper(summary):
     lines += _table4(p)
     lines += _table5(p)
     lines += _table6(p)
+    lines += _allowed(p)
     err = p.get("frf_error") or {}
     lines += [f"Fig. 3 (paper's Fig. 3): full-order against the fixed-recipe model at every angle of interest "
               "(uniform damping as the paper, 0.25 %). The paper's figure is a plot; its curves are not tabulated, "

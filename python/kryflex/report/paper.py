@@ -177,6 +177,8 @@ def _table4(p):
                      "components with six, need the stator's mass at point A and almost none at its bearing node "
                      "(a bound on any model of this topology: meshes/galileo/implied.py); fits that add Table 4 "
                      "move the 0° modes (meshes/galileo/README.md).")
+            if p.get("bounds"):
+                text += " Which entries any physical model can meet: Table P7."
         lines += [text, ""]
     bodies = p.get("reduced_body_hz") or {}
     if bodies:
@@ -257,7 +259,8 @@ def _table5(p):
                   "the bearing and at point A and on the masses, which the paper does not give; kryflex's model "
                   "was fitted to Table 1 alone, with node masses no spacecraft has (Table 5 scales with 1/mass). "
                   "The fits of Tables 1, 4 and 5 together with physical masses and what the tables imply are in "
-                  "meshes/galileo/README.md.", ""]
+                  "meshes/galileo/README.md" + ("; Table P7 says what the bounds allow." if p.get("bounds") else "."),
+                  ""]
     return lines
 
 

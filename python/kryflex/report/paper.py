@@ -264,13 +264,17 @@ def _table5(p):
     return lines
 
 
+FLOORS = (("frequency_floor_least_deviation", "clamped"), ("rotor_mode_floor_least_deviation", "rotor modes"))
+
+
 def _bound_cell(lay, label, m, tol):
-    """One layout's verdict on one mode of Table 1 (label '0') or 4 ('60'): the clamped floor's least deviation
-    when it exceeds tol, '‡' when the mode is among those the trace bound keeps from all being within tol."""
-    floor = lay["frequency_floor_least_deviation"][label][m]
+    """One layout's verdict on one mode of Table 1 (label '0') or 4 ('60'): the larger floor's least deviation and
+    its name (clamped floors, rotor-mode floors) when it exceeds tol, '‡' when the mode is among those the trace
+    bound keeps from all being within tol; 'open' when none."""
+    floor, name = max((lay[key][label][m] if key in lay else 0.0, name) for key, name in FLOORS)
     above = m + 8 >= lay.get("first_mode_above_band", 18)
     trace = above and lay["trace_least_deviation_above_band"][label] > tol
-    cell = f"≥ +{100 * floor:.1f} % (floor)" if floor > tol else ""
+    cell = f"≥ +{100 * floor:.1f} % ({name})" if floor > tol else ""
     return (cell + " ‡" if trace else cell).strip() or "open"
 
 
@@ -315,11 +319,13 @@ def _allowed(p):
              f"the model above ({b['committed_model']['file']}, masses free): met, or its difference and what the "
              "bounds say at its own masses (open: none excludes it, the fit's local optimum). Then, for every "
              f"mass and inertia within a factor {band:g} of each layout (meshes/galileo/README.md), what any mode "
-             "shapes allow: ≥ x % (floor): the clamped floors (meshes/galileo/implied.py: Cauchy interlacing "
+             "shapes allow: ≥ x % (clamped): the clamped floors (meshes/galileo/implied.py: Cauchy interlacing "
              "with both bearing nodes held, the multiplicative Weyl inequality) keep the mode at least that far "
-             "above the paper's; ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band from "
-             "all being within it; open: no bound excludes it. One cell for both angles where they agree, else "
-             "0° / 60°.", "",
+             "above the paper's; ≥ x % (rotor modes): the rotor's highest modes, extended by the bearing node "
+             "following the hub, keep it there (meshes/galileo/topmodes.py: Courant-Fischer, the bearing node's "
+             "mass against the hub's); ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band "
+             "from all being within it; open: no bound excludes it. One cell for both angles where they agree, "
+             "else 0° / 60°.", "",
              table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts,
                    _allowed_rows(p, b, layouts)), ""]
     for name in layouts:

@@ -18,7 +18,8 @@ For every layout (fit.LAYOUTS) with every mass and inertia within fit.PHYS_BAND 
     system's modal sum of u u^T is at most M^-1), h the output (ry at point A), g the input (the bearing torque):
     the cap is smallest with those nodes' inertias heaviest (x band). Table 5 is excluded for a layout when the
     cap is below the least sum.
-the same floors and trace bound at the committed model's own masses (fit.json), and the model-independent
+the same floors and trace bound at the committed model's own masses (fit.json), family.py's closest layouts, and
+the model-independent
 interlacing checks (sumrule.interlacing). Figures are the scripts' own; nothing here is
 typed in by hand.
 """
@@ -36,6 +37,7 @@ import fit  # noqa: E402
 import implied  # noqa: E402
 import sumrule  # noqa: E402
 import topmodes  # noqa: E402
+import family  # noqa: E402
 
 OUT = os.path.join(HERE, "tables_bounds.json")
 ANGLES = (0.0, 60.0)
@@ -113,6 +115,17 @@ def model_account(path=g.FIT_FILE):
                 a, sumrule.masses_bound(a, params))) for a in ANGLES}}
 
 
+def family_account():
+    """family.py's grid: the closest any bearing node of the despun family comes to Tables 1 and 4, among nodes no
+    wider than family.R_GYRATION and among the wider ones."""
+    out = {"radius_of_gyration_m": family.R_GYRATION, "masses_kg": list(family.MASSES),
+           "inertias_kg_m2": list(family.INERTIAS)}
+    for ring, (dev, m, J, name) in family.closest().items():
+        out["closest_ring" if ring else "closest_wider"] = {"least_deviation": float(dev), "mass_kg": float(m),
+                                                            "inertia_kg_m2": float(J), "bound": name}
+    return out
+
+
 def account():
     table5 = {f"{a:g}": least_residue_sum(a)[0] for a in ANGLES}
     checks = sumrule.interlacing()
@@ -129,6 +142,7 @@ def account():
         "table5_least_residue_sum": table5,
         "layouts": {name: layout_account(name, fit.PHYS_BAND, table5) for name in sorted(fit.LAYOUTS)},
         "committed_model": model_account(),
+        "family": family_account(),
     }
 
 

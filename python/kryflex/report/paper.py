@@ -315,6 +315,7 @@ def _allowed(p):
         return []
     layouts = sorted(b["layouts"])
     band, tol = b["mass_band"], b["frequency_tolerance"]
+    rows = _allowed_rows(p, b, layouts)
     lines = [f"Table P7. Which entries of Tables 1 and 4 can be met, and by what (within {100 * tol:g} %). kryflex: "
              f"the model above ({b['committed_model']['file']}, masses free): met, or its difference and what the "
              "bounds say at its own masses (open: none excludes it, the fit's local optimum). Then, for every "
@@ -326,8 +327,11 @@ def _allowed(p):
              "mass against the hub's); ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band "
              "from all being within it; open: no bound excludes it. One cell for both angles where they agree, "
              "else 0° / 60°.", "",
-             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts,
-                   _allowed_rows(p, b, layouts)), ""]
+             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts, rows), ""]
+    excluded = [name for col, name in enumerate(layouts, start=5) if any(r[col] != "open" for r in rows)]
+    lines += [f"Excluded (some entry of Tables 1 and 4 provably outside {100 * tol:g} %, whatever the mode shapes): "
+              + (", ".join(excluded) if excluded else "none") + f" of the {len(layouts)} layouts; open: "
+              + (", ".join(n for n in layouts if n not in excluded) or "none") + ".", ""]
     for name in layouts:
         tr = b["layouts"][name]["trace_least_deviation_above_band"]
         if max(tr.values()) > tol:

@@ -639,4 +639,6 @@ def test_report_table7_names_each_entrys_bound(tables, implied, sumrule, topmode
             assert cell.endswith("‡") == (trace[name] and m >= 18), (name, m, cell)
             assert (cell == "open") == (dev0[m - 8] <= FREQ_TOL and not cell.endswith("‡")), (name, m, cell)
     assert trace["light-bearing"] and not trace["stick"] and "‡ light-bearing: modes 18-28" in text
+    # every layout has an excluded entry (the floors or the trace bound), so none is left open
+    assert f"{', '.join(layouts)} of the {len(layouts)} layouts; open: none." in text
     assert "no bound excludes Table 5 for any layout" in text

@@ -28,9 +28,10 @@ README.md "Mass layout"). Stages 1-2 (fit, --start scratch) are the seeded fit o
 Stage W (class Whole, fit_whole): scipy.optimize.least_squares ('trf') on the 42 system frequencies at 0 and 60
 deg, the 60 moments and the bodies' masses, each residual divided by its tolerance (0.5 %, 5 % or half the last
 printed digit; each body's total within 1.5x of the layout's), in the steps WHOLE_STEPS (the moments joining
-gradually); --targets frequencies or moments runs the sub-fits that show what each part implies alone. With
-physical masses Table 1 cannot be met whatever the mode shapes (implied.py), so the committed model stays the fit
-to Table 1. The run is deterministic for a given start (and LAPACK); the output keeps the parameters with 17
+gradually); --targets frequencies or moments runs the sub-fits that show what each part implies alone. Within the
+band of each layout Tables 1 and 4 cannot be met whatever the mode shapes (implied.py's clamped floors,
+topmodes.py's rotor-mode floors, sumrule.py's trace bound; tables.py and family.py sum them up), so the committed
+model stays the fit to Table 1. The run is deterministic for a given start (and LAPACK); the output keeps the parameters with 17
 digits and what they reach entry by entry ("achieved"), so a model is rebuilt from its file, never refitted at
 run time. tests/python/model/test_galileo_fit.py measures the physical fits' accounts independently.
 """

@@ -65,7 +65,9 @@ MASS_BOUND = np.log(PHYS_BAND)
 # bus: 1000 kg) at point A, the stator's total unchanged; "light-bearing" keeps only the bearing's despun race and
 # housing there (10 kg; 2.5, 2.5, 5 kg m^2) and 1050 kg at point A (README.md "Mass layout"); "mid-bearing" (40 kg;
 # 10, 10, 20 kg m^2; 1020 kg at point A) lies in the window neither of the bounds on Table 1 excludes (implied.py's
-# clamped floors want the bearing node light, sumrule.py's trace bound wants it heavy enough).
+# clamped floors want the bearing node light, sumrule.py's trace bound wants it heavy enough; topmodes.py's rotor-mode
+# floors exclude it); "light-hub" (a 160 kg bearing node of 16 kg m^2, 900 kg at point A, the hub a quarter of the
+# stick layout's: 225 kg; 190, 190, 275 kg m^2) is one that all three bounds allow (family.py).
 LAYOUTS = {
     "stick": {},
     "bearing-ring": {"bearing node mass": np.log(60.0 / 420.0), "bearing node Jxx": np.log(15.0 / 600.0),
@@ -77,6 +79,10 @@ LAYOUTS = {
     "mid-bearing": {"bearing node mass": np.log(40.0 / 420.0), "bearing node Jxx": np.log(10.0 / 600.0),
                     "bearing node Jyy": np.log(10.0 / 1500.0), "bearing node Jzz": np.log(20.0 / 260.0),
                     "point A mass": np.log(1020.0 / 640.0)},
+    "light-hub": {"bearing node mass": np.log(160.0 / 420.0), "bearing node Jxx": np.log(16.0 / 600.0),
+                  "bearing node Jyy": np.log(16.0 / 1500.0), "bearing node Jzz": np.log(16.0 / 260.0),
+                  "point A mass": np.log(900.0 / 640.0), "hub mass": np.log(0.25), "hub Jxx": np.log(0.25),
+                  "hub Jyy": np.log(0.25), "hub Jzz": np.log(0.25)},
 }
 CENTER = np.zeros(len(g.MASS_PARAMETERS))     # the chosen layout's log factors (main sets it from --layout)
 

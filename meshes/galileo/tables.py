@@ -115,14 +115,19 @@ def model_account(path=g.FIT_FILE):
                 a, sumrule.masses_bound(a, params))) for a in ANGLES}}
 
 
+FAMILY_HUBS = (1.0, 0.25)    # the hub as laid out, and a quarter of it (family.py prints every HUB_SCALES)
+
+
 def family_account():
-    """family.py's grid: the closest any bearing node of the despun family comes to Tables 1 and 4, among nodes no
-    wider than family.R_GYRATION and among the wider ones."""
+    """family.py's grid: per hub scale, the closest any bearing node of the despun family comes to Tables 1 and 4,
+    among nodes no wider than family.R_GYRATION and among the wider ones."""
     out = {"radius_of_gyration_m": family.R_GYRATION, "masses_kg": list(family.MASSES),
-           "inertias_kg_m2": list(family.INERTIAS)}
-    for ring, (dev, m, J, name) in family.closest().items():
-        out["closest_ring" if ring else "closest_wider"] = {"least_deviation": float(dev), "mass_kg": float(m),
-                                                            "inertia_kg_m2": float(J), "bound": name}
+           "inertias_kg_m2": list(family.INERTIAS), "hub_scales": {}}
+    for hub in FAMILY_HUBS:
+        out["hub_scales"][f"{hub:g}"] = {
+            "closest_ring" if ring else "closest_wider": {"least_deviation": float(dev), "mass_kg": float(m),
+                                                          "inertia_kg_m2": float(J), "bound": name}
+            for ring, (dev, m, J, name) in family.closest(hub).items()}
     return out
 
 

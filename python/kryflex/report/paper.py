@@ -347,6 +347,9 @@ def _allowed(p):
               + (": fails " + "; ".join(failed) if failed else ": Tables 1 and 4 agree with each other and with "
                  "the components."), ""]
     lines += _table5_allowed(b, layouts)
+    lines += ["Tables 2, 3 and 6 and Fig. 3 are the recipe's output on a model (kept sets, importances, moment "
+              "ratios, frequency responses), not constraints on it: no bound is taken on them here; Tables P2-P6 "
+              "say where and why they differ.", ""]
     return lines
 
 

@@ -106,6 +106,22 @@ def fixed_recipe(scene):
     return result.summary, result.model
 
 
+BOUNDS_FILE = "tables_bounds.json"
+
+
+def table_bounds(scene):
+    """What the bounds say of the paper's tables per mass layout (meshes/galileo/tables.py writes it beside the
+    scene), or None when the scene's folder has no such file."""
+    import json
+    import os
+    where = getattr(scene, "path", None)
+    path = os.path.join(os.path.dirname(where), BOUNDS_FILE) if where else None
+    if not path or not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
 def paper_block(scene, summary=None):
     """kryflex's side of the comparison with LEE (plain JSON): component frequencies, and the fixed recipe's
     Krylov tables, alpha_G, kept set, reduced sizes and frequencies, moments, ratios and frequency responses.
@@ -140,6 +156,7 @@ def paper_block(scene, summary=None):
         "frf": s["frf"],
         "frf_error": {lab: v.get("frf_error") for lab, v in s["frf"].items()},
         "outputs": s["outputs"], "inputs": s["inputs"],
+        "bounds": table_bounds(scene),
     }
     if model is not None:
         block["reduced_body_hz"] = _body_frequencies(model)

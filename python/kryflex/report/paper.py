@@ -177,6 +177,8 @@ def _table4(p):
                      "components with six, need the stator's mass at point A and almost none at its bearing node "
                      "(a bound on any model of this topology: meshes/galileo/implied.py); fits that add Table 4 "
                      "move the 0° modes (meshes/galileo/README.md).")
+            if p.get("bounds"):
+                text += " Which entries any physical model can meet: Table P7."
         lines += [text, ""]
     bodies = p.get("reduced_body_hz") or {}
     if bodies:
@@ -257,8 +259,132 @@ def _table5(p):
                   "the bearing and at point A and on the masses, which the paper does not give; kryflex's model "
                   "was fitted to Table 1 alone, with node masses no spacecraft has (Table 5 scales with 1/mass). "
                   "The fits of Tables 1, 4 and 5 together with physical masses and what the tables imply are in "
-                  "meshes/galileo/README.md.", ""]
+                  "meshes/galileo/README.md" + ("; Table P7 says what the bounds allow." if p.get("bounds") else "."),
+                  ""]
     return lines
+
+
+FLOORS = (("frequency_floor_least_deviation", "clamped"), ("rotor_mode_floor_least_deviation", "rotor modes"))
+
+
+def _bound_cell(lay, label, m, tol):
+    """One layout's verdict on one mode of Table 1 (label '0') or 4 ('60'): the larger floor's least deviation and
+    its name (clamped floors, rotor-mode floors) when it exceeds tol, '‡' when the mode is among those the trace
+    bound keeps from all being within tol; 'open' when none."""
+    floor, name = max((lay[key][label][m] if key in lay else 0.0, name) for key, name in FLOORS)
+    above = m + 8 >= lay.get("first_mode_above_band", 18)
+    trace = above and lay["trace_least_deviation_above_band"][label] > tol
+    cell = f"≥ +{100 * floor:.1f} % ({name})" if floor > tol else ""
+    return (cell + " ‡" if trace else cell).strip() or "open"
+
+
+def _kryflex_cell(ours, paper, tol, verdict):
+    """met, or the difference and what the bounds at the model's own masses say of the entry (verdict)."""
+    if ours is None or paper is None:
+        return DASH
+    return "met" if abs(ours / paper - 1) <= tol else f"{100 * (ours / paper - 1):+.1f} % ({verdict})"
+
+
+def _allowed_rows(p, b, layouts):
+    tol = b["frequency_tolerance"]
+    lee, rigid = p["lee"], p["rigid_modes"]
+    full = {label: p["full_hz"].get(label) or [] for label in ("0", "60")}
+    paper = {"0": lee["system_hz"], "60": lee["full_system_60_hz"]}
+    first_above = b.get("first_mode_above_band", 18)
+    own = dict(b["committed_model"], first_mode_above_band=first_above)
+    rows = []
+    for m in range(len(lee["system_hz"])):
+        row = [str(m + rigid + 1)]
+        for label in ("0", "60"):
+            ours = full[label][m] if m < len(full[label]) else None
+            verdict = _bound_cell(own, label, m, tol)
+            row += [fmt_freq(paper[label][m]), _kryflex_cell(ours, paper[label][m], tol, verdict)]
+        for name in layouts:
+            lay = dict(b["layouts"][name], first_mode_above_band=first_above)
+            cells = {label: _bound_cell(lay, label, m, tol) for label in ("0", "60")}
+            row.append(cells["0"] if cells["0"] == cells["60"] else f"{cells['0']} / {cells['60']}")
+        rows.append(row)
+    return rows
+
+
+def _allowed(p):
+    """Table P7: entry by entry, what kryflex's model meets and what the bounds allow any model of the paper's
+    topology with physical masses (meshes/galileo/tables.py's account, tables_bounds.json)."""
+    b = p.get("bounds")
+    if not b:
+        return []
+    layouts = sorted(b["layouts"])
+    band, tol = b["mass_band"], b["frequency_tolerance"]
+    rows = _allowed_rows(p, b, layouts)
+    lines = [f"Table P7. Which entries of Tables 1 and 4 can be met, and by what (within {100 * tol:g} %). kryflex: "
+             f"the model above ({b['committed_model']['file']}, masses free): met, or its difference and what the "
+             "bounds say at its own masses (open: none excludes it, the fit's local optimum). Then, for every "
+             f"mass and inertia within a factor {band:g} of each layout (meshes/galileo/README.md), what any mode "
+             "shapes allow: ≥ x % (clamped): the clamped floors (meshes/galileo/implied.py: Cauchy interlacing "
+             "with both bearing nodes held, the multiplicative Weyl inequality) keep the mode at least that far "
+             "above the paper's; ≥ x % (rotor modes): the rotor's highest modes, extended by the bearing node "
+             "following the hub, keep it there (meshes/galileo/topmodes.py: Courant-Fischer, the bearing node's "
+             "mass against the hub's); ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band "
+             "from all being within it; open: no bound excludes it. One cell for both angles where they agree, "
+             "else 0° / 60°.", "",
+             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts, rows), ""]
+    excluded = [name for col, name in enumerate(layouts, start=5) if any(r[col] != "open" for r in rows)]
+    lines += [f"Excluded (some entry of Tables 1 and 4 provably outside {100 * tol:g} %, whatever the mode shapes): "
+              + (", ".join(excluded) if excluded else "none") + f" of the {len(layouts)} layouts; open: "
+              + (", ".join(n for n in layouts if n not in excluded) or "none") + ".", ""]
+    for name in layouts:
+        tr = b["layouts"][name]["trace_least_deviation_above_band"]
+        if max(tr.values()) > tol:
+            lines.append(f"‡ {name}: modes {b.get('first_mode_above_band', 18)}-28 cannot all be within "
+                         f"{100 * tr['0']:.2f} % of Table 1 nor within {100 * tr['60']:.2f} % of Table 4: joining "
+                         "the bodies lowers the sum of the squared frequencies by at most what the interface "
+                         "masses allow, less than the paper's columns need.")
+    lines += _family_lines(b.get("family"), band)
+    failed = b["interlacing"]["failed"]
+    lines += ["", f"Model-independent: {b['interlacing']['checks'] - len(failed)} of {b['interlacing']['checks']} "
+              "interlacing checks hold (each system mode between the components' (k-5)-th and k-th, 5 ties; "
+              "Tables 1 and 4 within four modes of each other, 4 more ties common to both angles)"
+              + (": fails " + "; ".join(failed) if failed else ": Tables 1 and 4 agree with each other and with "
+                 "the components."), ""]
+    lines += _table5_allowed(b, layouts)
+    lines += ["Tables 2, 3 and 6 and Fig. 3 are the recipe's output on a model (kept sets, importances, moment "
+              "ratios, frequency responses), not constraints on it: no bound is taken on them here; Tables P2-P6 "
+              "say where and why they differ.", ""]
+    return lines
+
+
+def _family_lines(fam, band):
+    """family.py's closest layouts, as laid out and with a lighter hub."""
+    if not fam:
+        return []
+    cells = []
+    for hub, c in fam["hub_scales"].items():
+        ring, wide = c["closest_ring"], c["closest_wider"]
+        what = lambda x: (f"{100 * x['least_deviation']:.1f} % ({x['mass_kg']:g} kg, "  # noqa: E731
+                          f"{x['inertia_kg_m2']:g} kg m², bound: {x['bound']})")
+        cells.append(f"with the hub at {hub}x the layout's, the closest node no wider than "
+                     f"{fam['radius_of_gyration_m']:g} m keeps a mode {what(ring)} off, the closest wider one "
+                     f"{what(wide)}")
+    return ["", f"Over a family of despun layouts (meshes/galileo/family.py: the bearing node "
+            f"{min(fam['masses_kg']):g}-{max(fam['masses_kg']):g} kg and {min(fam['inertias_kg_m2']):g}-"
+            f"{max(fam['inertias_kg_m2']):g} kg m², point A the rest of 1060 kg, every mass within {band:g}x; a "
+            "grid, nothing claimed between its points): " + "; ".join(cells) + ". A layout the bounds do not "
+            "exclude is open: no fit has met Tables 1 and 4 there (meshes/galileo/README.md)."]
+
+
+def _table5_allowed(b, layouts):
+    least = b["table5_least_residue_sum"]
+    caps = {name: b["layouts"][name]["table5_residue_cap"] for name in layouts}
+    excluded = [name for name in layouts if any(b["layouts"][name]["table5_excluded"].values())]
+    text = ("Table 5: at the paper's frequencies (0° and 60°) residues exist that meet every entry of the column "
+            "(a linear program, meshes/galileo/tables.py): their least Σ|r_i| is "
+            + ", ".join(f"{v:.3g} at {a}°" for a, v in least.items() if v is not None)
+            + "; a model's Σ|r_i| is at most √(hᵀM⁻¹h · gᵀM⁻¹g) (Cauchy-Schwarz), at least "
+            + ", ".join(f"{v:.3g} ({name})" for name, v in caps.items()) + " within the band. ")
+    text += ("So no bound excludes Table 5 for any layout: its entries are open (the fits' local optima, "
+             "meshes/galileo/README.md)." if not excluded else
+             "Excluded for " + ", ".join(excluded) + ": the cap is below the least sum.")
+    return [text, ""]
 
 
 def _table6(p):
@@ -313,6 +439,7 @@ def section_paper(summary):
     lines += _table4(p)
     lines += _table5(p)
     lines += _table6(p)
+    lines += _allowed(p)
     err = p.get("frf_error") or {}
     lines += [f"Fig. 3 (paper's Fig. 3): full-order against the fixed-recipe model at every angle of interest "
               "(uniform damping as the paper, 0.25 %). The paper's figure is a plot; its curves are not tabulated, "

@@ -114,7 +114,7 @@ def test_report_has_the_papers_tables_beside_kryflexs(demo, galileo):
         text = f.read()
     section = text[text.index("The paper's example, side by side"):]
     for caption in ("Table P1", "Table P2", "Table P3", "Table P4a", "Table P4b", "Table P4c", "Table P5",
-                    "Table P6", "Fig. 3"):
+                    "Table P6", "Table P7", "Fig. 3"):
         assert caption in section, caption
     assert "Jet Propulsion Laboratory" in section
     with open(os.path.join(out, "paper_fig3.png"), "rb") as f:

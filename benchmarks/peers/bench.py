@@ -92,21 +92,7 @@ def full_order(scene, angle):
     assert np.abs(C @ T).max() < 1e-10
     M = (T.T @ Mb @ T).tocsc()
     K = (T.T @ Kb @ T).tocsc()
-    return 0.5 * (M + M.T), 0.5 * (K + K.T), T.T @ G, H @ T, T
-
-
-def geometric_rigid(scene, angle, T, M):
-    """The rigid-body and mechanism modes from node coordinates and joints, in the tied coordinates, M-orthonormal.
-    Exact where an eigensolver's null space of K is only good to about 1e-9: at the band's bottom the rigid response
-    is up to 1e5 times a pair's elastic peak, so that error alone would put a floor of about 2e-4 under every model's
-    measured elastic error."""
-    import scipy.linalg as sl
-    Bg = sl.block_diag(*[ref.body_rigid_modes(scene, b) for b in range(len(scene.bodies))])
-    X = Bg @ sl.null_space(ref.constraint_matrix(scene, [angle]) @ Bg)
-    Tt = T.tocsc()
-    Y = spla.spsolve((Tt.T @ Tt).tocsc(), Tt.T @ X)       # T Y = X: T is the identity on the independent dofs
-    Y = np.asarray(Y).reshape(Tt.shape[1], X.shape[1])
-    return Y @ np.linalg.inv(np.linalg.cholesky(Y.T @ (M @ Y))).T
+    return 0.5 * (M + M.T), 0.5 * (K + K.T), T.T @ G, H @ T
 
 
 def modes(M, K, band_top, nrigid):
@@ -258,11 +244,11 @@ def main():
         scene_path = os.path.join(folder, "spacecraft.yaml")
         scene = ref.load_scene(scene_path)
         band, zeta = scene.raw["band"], float(scene.raw["damping"])
-        M, K, G, H, T = full_order(scene, args.angle)
+        M, K, G, H = full_order(scene, args.angle)
         nrigid = 6 + scene.nrevolute
         t0 = time.perf_counter()
         lam, Phi = modes(M, K, band[1], nrigid)
-        PhiR = geometric_rigid(scene, args.angle, T, M)
+        PhiR = Phi[:, :nrigid]
         w1 = np.sqrt(lam[nrigid])
         beta = 2 * zeta / w1
         f_res = np.sqrt(np.maximum(lam[nrigid:], 0)) / (2 * np.pi)

@@ -1,5 +1,5 @@
 """Moment-only models against models with expansion points inside the band, on the elastic error measured by an
-independent dense reference (tests/python/elastic_measure.py), side by side in one run.
+independent dense reference (tests/python/support/elastic_measure.py), side by side in one run.
 
 For each scene and family, kryflex reduces at a sweep of its own accuracy targets (-kf_accuracy: the search's measure
 as built); every model is then measured on the elastic response. For each elastic target the table gives the
@@ -18,7 +18,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python", "support"))
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
 

@@ -95,6 +95,23 @@ class Reference:
     """The full-order modal data at one configuration: lam, H Phi, Phi^T G of the computed flexible modes, the static
     residual H (K^+ Ge - Phi lam^-1 Phi^T G) and the rigid part's H Q Q^T G."""
 
+    FIELDS = ("lam", "hp", "pg", "residual", "rigid", "zeta", "dofs", "seconds", "check")
+
+    @classmethod
+    def cached(cls, path, *args):
+        """The reference from path (npz) if there, else computed and saved there."""
+        if os.path.exists(path):
+            R = cls.__new__(cls)
+            with np.load(path) as z:
+                for k in cls.FIELDS:
+                    setattr(R, k, z[k])
+            R.check = [tuple(c) for c in R.check]
+            return R
+        R = cls(*args)
+        np.savez(path + ".tmp.npz", **{k: np.asarray(getattr(R, k)) for k in cls.FIELDS})
+        os.replace(path + ".tmp.npz", path)
+        return R
+
     def __init__(self, scene, angle, band, zeta, cover, check_points):
         t0 = time.perf_counter()
         M, K, G, H, Q = peers.full_order(scene, angle)
@@ -144,7 +161,14 @@ class Reference:
 
 
 def reduce(scene_path, target, out):
-    """kryflex reduce with the default run at target: (exit code, summary or None, wall s, reduced.h5 path)."""
+    """kryflex reduce with the default run at target: (exit code, summary or None, wall s, reduced.h5 path). A run
+    already in out (run.json beside its summary) is reused."""
+    done = os.path.join(out, "run.json")
+    if os.path.exists(done):
+        with open(done) as f:
+            rc, wall = json.load(f)
+        with open(os.path.join(out, "summary.json")) as f:
+            return rc, json.load(f), wall, os.path.join(out, "reduced.h5")
     with open(scene_path) as f:
         spec = yaml.safe_load(f)
     base = os.path.dirname(os.path.abspath(scene_path))
@@ -167,6 +191,9 @@ def reduce(scene_path, target, out):
             summary = json.load(f)
     if p.returncode not in (0, 6):
         print(p.stdout[-2000:], p.stderr[-2000:])
+    elif summary is not None:
+        with open(done, "w") as f:
+            json.dump([p.returncode, wall], f)
     return p.returncode, summary, wall, os.path.join(out, "reduced.h5")
 
 
@@ -212,7 +239,9 @@ def main(argv=None):
             target, rc, (summary or {}).get("accuracy_measure"), (summary or {}).get("error_max"), wall), flush=True)
     refs = {}
     for angles, kind in acs.with_midpoints([[float(a)] for a in scene.raw["angles"]]):
-        R = Reference(scene, angles[0], band, float(zeta), args.cover, args.check_points)
+        cache = os.path.join(args.out, "reference_%g_%g_%g_%d.npz" % (args.refine, angles[0], args.cover,
+                                                                       args.check_points))
+        R = Reference.cached(cache, scene, angles[0], band, float(zeta), args.cover, args.check_points)
         refs[(angles[0], kind)] = R
         print("reference at %g deg (%s): %d dofs, %d flexible modes up to %.3g Hz (%d in the band), %.0f s, maxrss "
               "%.2f GB; direct check %s" % (angles[0], kind, R.dofs, R.lam.size, R.flexible_hz[-1],

@@ -337,7 +337,8 @@ static PetscErrorCode KFBodyFactorsSetUpSpread(KFScene s, const char prefix[], P
     IS          is;
     Mat        *sub;
 
-    PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
+    if (shift < 0) PetscCall(KFProgress(s->comm, "  body %s's K - w^2 M at %.4g Hz (%" PetscInt_FMT " dofs) factored on rank %d alone, for every configuration", B->name, (double)(PetscSqrtReal(-shift) / (2 * PETSC_PI)), B->n, (int)bf->owner[b]));
+    else PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
     PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
     PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
     if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
@@ -413,7 +414,8 @@ static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, const char prefix[], Pets
   }
   for (PetscInt b = 0; b < s->nb; b++) {
     PetscInt nnull = 0, nneg = 0;
-    PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
+    if (shift < 0) PetscCall(KFProgress(s->comm, "  body %s's K - w^2 M at %.4g Hz (%" PetscInt_FMT " dofs, interior MUMPS LDL^T), for every configuration", s->bodies[b].name, (double)(PetscSqrtReal(-shift) / (2 * PETSC_PI)), s->bodies[b].n));
+    else PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
     PetscCall(KFBodyFactorSetUp(s, prefix, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
     PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
   }

@@ -668,7 +668,7 @@ static PetscErrorCode KFBodywiseFactorInterface(KFScene s, KFBodyFactors bf, KFB
     if (nG > 0) PetscCallBLAS("LAPACKsytrf", LAPACKsytrf_("L", &bn, bw->S, &bn, bw->ipiv, work, &lwork, &info));
     else info = 0;
     PetscCall(PetscFree(work));
-    PetscCheck(info == 0, s->comm, PETSC_ERR_MAT_LU_ZRPVT, "the body-wise interface problem at the shift %g is singular (LAPACK sytrf info %d): the shift is a resonance of the jointed structure", (double)bf->shift, (int)info);
+    PetscCheck(info == 0, s->comm, PETSC_ERR_MAT_LU_ZRPVT, "the body-wise interface problem of K - w^2 M at %g Hz is singular (LAPACK sytrf info %d): w^2 is an eigenvalue of the jointed structure; solve at other frequencies, or use -kf_verify_check_bodywise false for the reference check", (double)(PetscSqrtReal(-bf->shift) / (2 * PETSC_PI)), (int)info);
     PetscFunctionReturn(0);
   }
   if (nG > 0) PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, bw->S, &bn, &info));

@@ -90,6 +90,7 @@ def galileo_truth(angles, freqs_hz, clamps=None):
     return dense_truth(0.5 * (Ms + Ms.T), 0.5 * (Ks + Ks.T), P.T @ G, H @ P, R, freqs_hz)
 
 
+@pytest.mark.fast
 def test_bodywise_truth_is_the_dense_solve():
     """Galileo with modal ratios: the body-wise truth is the dense undamped solve, and the whole-system truth."""
     spec = td.galileo_spec({"modal": 0.002})
@@ -118,6 +119,7 @@ def test_bodywise_truth_is_the_dense_solve():
     assert scalar(bodywise, "reference_check_residual") <= 1e-13   # the backward error taken without a fallback
 
 
+@pytest.mark.fast
 def test_clamped_scene_keeps_the_whole_system_solve():
     """Galileo's rotor clamped (the stator's rotation about the bearing its one mechanism): the body-wise solve does
     not take clamps, so every point's system is factored per frequency (as before); the truth is the dense solve's."""

@@ -2,8 +2,10 @@
   The verification's reference checked against the truth: at a few frequencies of the band, away from the reference's
   resonances, one direct solve of the full-order system gives H_S X exactly; the reference evaluated at w under the
   same damping must agree with it. Undamped, or with only modal ratios (whose equivalent viscous matrix is built on
-  the reference's own modes and adds the same term to both sides: damped_check.c), it is one MUMPS LDL^T of the
-  symmetric indefinite K_S - w^2 M_S, here; with Rayleigh, structural damping or the bodies' damping matrices it is the
+  the reference's own modes and adds the same term to both sides: damped_check.c), it is a solve of the symmetric
+  indefinite K_S - w^2 M_S, here: body-wise where the scene allows (the bodies' K_b - w^2 M_b factored once per check
+  frequency for every angle, the frequencies common to all angles), else one MUMPS LDL^T per angle and frequency;
+  either way refined against K_S - w^2 M_S and taken only at a backward error of a few eps. With Rayleigh, structural damping or the bodies' damping matrices it is the
   real 2 x 2 block form of the complex system, damped_check.c. What can go wrong in the reference is its modal content
   (modes missed, rigid modes, the residual of the modes not computed, M's null space) and its damping. A disagreement
   above -kf_verify_check_rtol of the pair's peak fails the run (exit 3) naming the frequency, the angle and the pair:

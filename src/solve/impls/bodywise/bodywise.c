@@ -923,16 +923,18 @@ PetscErrorCode KFBodywiseApplies(KFScene s, PetscBool *use)
 
 PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *bfo)
 {
-  KFScene       s = sys->scene;
+  KFScene       s      = sys->scene;
+  PetscBool     spread = PETSC_TRUE;
   KFBodyFactors bf;
 
   PetscFunctionBegin;
+  PetscCall(PetscOptionsGetBool(NULL, prefix, "-kf_bodywise_spread", &spread, NULL)); /* as the flexible solve's */
   PetscCall(PetscNew(&bf));
   bf->shift = shift;
   bf->nb    = s->nb;
   PetscCall(PetscCalloc6(s->nb, &bf->ng, s->nb, &bf->gif, s->nb, &bf->Kb, s->nb, &bf->F, s->nb, &bf->Psi, s->nb, &bf->S));
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
-  PetscCall(KFBodywiseAssign(s, PETSC_TRUE, bf));
+  PetscCall(KFBodywiseAssign(s, spread, bf));
   PetscCall(KFBodyFactorsSetUpAll(s, prefix, shift, bf));
   bf->factored = PETSC_TRUE;
   *bfo         = bf;

@@ -2,12 +2,14 @@
 bare reduction (`-kf_verify false`: the error only estimated, no plots), side by side in one run, on the solid
 spacecraft of meshes/solid.
 
-    .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR]
+    .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
 verification split (eigensolves, direct solves, the rest), the search, the report and plots, and the ratio the goal
-is stated in: default wall / (factorization + block solves of the bare run). The machine is shared: read the ratios
+is stated in: default wall / (factorization + block solves of the bare run), and the direct check's numerical
+factorizations (its progress line). --whole-check adds a third run, the default with the direct check factoring the
+whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
 of runs taken together, and the CPU seconds beside the wall.
 """
 import argparse
@@ -60,6 +62,7 @@ def run(scene, out, extra):
     perf = s.get("performance") or {}
     t_check0, t_scene = first(lines, "rigid-body and mechanism modes"), first(lines, "scene '")
     t_write = first(lines, "writing the results")
+    nfact = re.search(r"reference checks: .*?, (\d+) numerical factorizations", proc.stdout)
     return dict(wall=wall, cpu=(after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
                 factorization=perf.get("factorization_s", 0.0), solves=perf.get("solves_s", 0.0),
                 whole=perf.get("whole_s", 0.0), verification=(s.get("timings_s") or {}).get("verification eigensolve", 0.0),
@@ -67,6 +70,7 @@ def run(scene, out, extra):
                 search=perf.get("search_s"),
                 model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
                 report=(wall - t_write) if t_write is not None else None,
+                check_factorizations=int(nfact.group(1)) if nfact else None,
                 error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"))
 
 
@@ -75,16 +79,20 @@ def fmt(x):
 
 
 def show(name, r, denom):
-    print("%-8s %s %s %s %s %s %s %s %s %s %s  ratio %5.2f  error %s" % (
+    print("%-8s %s %s %s %s %s %s %s %s %s %s  ratio %5.2f  error %s%s" % (
         name, fmt(r["wall"]), fmt(r["cpu"]), fmt(r["factorization"]), fmt(r["solves"]), fmt(r["model_check"]),
         fmt(r["verification"]), fmt(r["eigensolve"]), fmt(r["check"]), fmt(r["search"]), fmt(r["report"]),
-        r["wall"] / denom, "%.4g%s" % (r["error"], " (est.)" if r["estimated"] else "") if r["error"] is not None else "-"))
+        r["wall"] / denom, "%.4g%s" % (r["error"], " (est.)" if r["estimated"] else "") if r["error"] is not None else "-",
+        "  check factorizations %d" % r["check_factorizations"] if r["check_factorizations"] is not None else ""))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--refine", type=float, nargs="+", default=[0.5], help="meshes/solid refinements (1.55: 57k dofs)")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--whole-check", action="store_true",
+                    help="a third run: the default with the direct check factoring the whole system per angle and "
+                         "frequency (-kf_verify_check_bodywise false), beside the body-wise one")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
@@ -97,12 +105,18 @@ def main():
         for rep in range(args.repeat):
             bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
             full = run(scene, os.path.join(args.work, "default_%s" % refine), [])
+            whole = run(scene, os.path.join(args.work, "whole_%s" % refine), ["-kf_verify_check_bodywise", "false"]) \
+                if args.whole_check else None
             denom = bare["factorization"] + bare["solves"]
             print("\nrefine %s (%s dofs), run %d; bare factorization + solves %.2f s" % (refine, full["dofs"], rep + 1, denom))
             print("%-8s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
                                                                 "verify", "eigen", "direct", "search", "report"))
             show("bare", bare, denom)
             show("default", full, denom)
+            if whole:
+                show("whole", whole, denom)
+                print("direct solves, body-wise / whole-system: %.2f (%s against %s factorizations)" % (
+                    full["check"] / whole["check"], full["check_factorizations"], whole["check_factorizations"]))
             print("default / bare: wall %.2f, CPU %.2f; report and plots %.1f %% of the default wall" % (
                 full["wall"] / bare["wall"], full["cpu"] / bare["cpu"], 100 * (full["report"] or 0) / full["wall"]))
 

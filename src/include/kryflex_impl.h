@@ -113,6 +113,13 @@ struct _n_KFSystem {
 
 /* the flexible solver's body-wise implementation keeps the bodies' factors on the system (src/solve/impls/bodywise) */
 PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
+/* the body-wise solve of K_S + shift M_S at any shift and configuration, outside a flexible solver (bodywise.c) */
+typedef struct _n_KFBodywiseOp *KFBodywiseOp;
+PETSC_INTERN PetscErrorCode KFBodywiseApplies(KFScene, PetscBool *);
+PETSC_INTERN PetscErrorCode KFBodyFactorsCreateShifted(KFSystem, const char[], PetscReal, KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFBodywiseOpCreate(KFSystem, KFBodyFactors, KFBodywiseOp *);
+PETSC_INTERN PetscErrorCode KFBodywiseOpSolve(KFSystem, KFBodyFactors, KFBodywiseOp, Mat, Mat);
+PETSC_INTERN PetscErrorCode KFBodywiseOpDestroy(KFBodywiseOp *);
 PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, const char prefix[], PetscReal *cond_max); /* src/solve/held_dofs.c */
 PETSC_INTERN KFSystem       KFFlexSolverSystem_Private(KFFlexSolver); /* the system it solves on (in declarations) */
 PETSC_INTERN PetscErrorCode KFFlexSolverSetPerf_Private(KFFlexSolver, const KFFlexSolverPerf *);

@@ -217,6 +217,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_cover", r->verify_cover, &r->verify_cover, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_check_points", r->verify_check_points, &r->verify_check_points, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_check_rtol", r->verify_check_rtol, &r->verify_check_rtol, NULL));
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify_check_bodywise", r->verify_check_bodywise, &r->verify_check_bodywise, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_frequency_points", npoints, &npoints, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_frf_floor_db", floor_db, &floor_db, NULL));
   PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));

@@ -519,7 +519,6 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, KFFlexSolve
     PetscCall(KFReducerAddPerf_Private(r, own));
     PetscCall(KFFlexSolverDestroy(&own));
   }
-  PetscCall(KFEvalPointDirectSolves_Private(r, sys, p)); /* the truth the reference is checked against */
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -864,6 +863,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
   if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
   if (!r->verify) PetscCall(KFReducerSearchEstimator_Private(r, &st, neval, evals, Lfull));
+  if (r->verify) { /* the truth the references are checked against, verification too */
+    const PetscLogDouble c0 = r->verify_check_seconds;
+
+    PetscCall(KFReducerDirectChecks_Private(r, neval, evals));
+    st.times[6] += r->verify_check_seconds - c0;
+  }
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
 
   if (!st.nrev) PetscCall(KFProgress(st.comm, "searching the smallest model with relative H-inf error of the %s response <= %g of the structure", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy));
@@ -1016,6 +1021,9 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       PetscCall(KFSystemSetConfigurationCount(sys, PetscMax(neval - r->nconfig, 1)));
       PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &seconds));
       PetscCall(KFSystemDestroy(&sys));
+      seconds -= r->verify_check_seconds; /* the truth the references are checked against, verification too */
+      PetscCall(KFReducerDirectChecks_Private(r, neval, evals));
+      seconds += r->verify_check_seconds;
       { /* the midpoints' references are verification too */
         const PetscReal *v;
 
@@ -1023,7 +1031,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
         seconds += v[0];
         PetscCall(KFReducerResultScalar_Private(r, -1, "time_verification", seconds));
       }
-      for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointSetUp_Private(r, &evals[e]));
     }
   }
   PetscCall(KFInterruptCheck(comm));

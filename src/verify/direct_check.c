@@ -2,8 +2,10 @@
   The verification's reference checked against the truth: at a few frequencies of the band, away from the reference's
   resonances, one direct solve of the full-order system gives H_S X exactly; the reference evaluated at w under the
   same damping must agree with it. Undamped, or with only modal ratios (whose equivalent viscous matrix is built on
-  the reference's own modes and adds the same term to both sides: damped_check.c), it is one MUMPS LDL^T of the
-  symmetric indefinite K_S - w^2 M_S, here; with Rayleigh, structural damping or the bodies' damping matrices it is the
+  the reference's own modes and adds the same term to both sides: damped_check.c), it is a solve of the symmetric
+  indefinite K_S - w^2 M_S, here: body-wise where the scene allows (the bodies' K_b - w^2 M_b factored once per check
+  frequency for every angle, the frequencies common to all angles), else one MUMPS LDL^T per angle and frequency;
+  either way refined against K_S - w^2 M_S and taken only at a backward error of a few eps. With Rayleigh, structural damping or the bodies' damping matrices it is the
   real 2 x 2 block form of the complex system, damped_check.c. What can go wrong in the reference is its modal content
   (modes missed, rigid modes, the residual of the modes not computed, M's null space) and its damping. A disagreement
   above -kf_verify_check_rtol of the pair's peak fails the run (exit 3) naming the frequency, the angle and the pair:
@@ -40,24 +42,24 @@ static PetscErrorCode KFRigidEnergy(KFSystem sys, const KFFullReference *ref, Pe
 }
 
 /* npts frequencies (rad/s) in the band, one per log-equal slice, each the geometric middle of the widest gap
-   between the reference's resonances (and the slice's ends) in its slice: as far from a resonance as the slice allows */
-static PetscErrorCode KFCheckFrequencies(KFReducer r, const KFFullReference *ref, PetscInt npts, PetscReal w[])
+   between the resonances f[] (Hz; every evaluation point's, and the slice's ends) in its slice: as far from a
+   resonance of any point as the slice allows. One set for all points, so that the bodies' factorizations at a check
+   frequency serve every angle (KFDirectSolvesBodywise). */
+static PetscErrorCode KFCheckFrequencies(KFReducer r, PetscInt nf, const PetscReal f[], PetscInt npts, PetscReal w[])
 {
   const PetscReal f0 = r->band[0] > 0 ? r->band[0] : 1e-3 * r->band[1], f1 = r->band[1];
   PetscReal      *pts;
 
   PetscFunctionBegin;
-  PetscCall(PetscMalloc1(ref->n + 2, &pts));
+  PetscCall(PetscMalloc1(nf + 2, &pts));
   for (PetscInt s = 0; s < npts; s++) {
     const PetscReal lo = f0 * PetscPowReal(f1 / f0, (PetscReal)s / npts), hi = f0 * PetscPowReal(f1 / f0, (PetscReal)(s + 1) / npts);
     PetscInt        m = 0;
     PetscReal       best = -1, at = PetscSqrtReal(lo * hi);
 
     pts[m++] = lo;
-    for (PetscInt k = 0; k < ref->n; k++) {
-      const PetscReal f = PetscSqrtReal(PetscMax(ref->w2[k], 0)) / (2 * PETSC_PI);
-      if (f > lo && f < hi) pts[m++] = f;
-    }
+    for (PetscInt k = 0; k < nf; k++)
+      if (f[k] > lo && f[k] < hi) pts[m++] = f[k];
     pts[m++] = hi;
     PetscCall(PetscSortReal(m, pts));
     for (PetscInt i = 0; i + 1 < m; i++) {
@@ -73,86 +75,248 @@ static PetscErrorCode KFCheckFrequencies(KFReducer r, const KFFullReference *ref
   PetscFunctionReturn(0);
 }
 
-/* the direct solves at the evaluation point's configuration (sys), kept in p until the reference's grid exists */
-PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer r, KFSystem sys, KFEvalPoint *p)
+/* every checked point's resonances (Hz) in one array */
+static PetscErrorCode KFAllResonances(PetscInt neval, const KFEvalPoint evals[], PetscInt *nf, PetscReal **f)
 {
-  PetscInt       a, t, npts = r->verify_check_points;
-  Mat            Ms, Ks, G, Ht;
-  PetscLogDouble t0, t1;
-  KFDamping      damp;
-  PetscBool      viscous;
+  PetscInt n = 0;
 
   PetscFunctionBegin;
-  p->nchk = 0;
-  if (!npts || !p->ref.w2) PetscFunctionReturn(0);
+  for (PetscInt e = 0; e < neval; e++)
+    if (evals[e].ref.w2) n += evals[e].ref.n;
+  PetscCall(PetscMalloc1(n + 1, f));
+  *nf = 0;
+  for (PetscInt e = 0; e < neval; e++)
+    for (PetscInt k = 0; evals[e].ref.w2 && k < evals[e].ref.n; k++) (*f)[(*nf)++] = PetscSqrtReal(PetscMax(evals[e].ref.w2[k], 0)) / (2 * PETSC_PI);
+  PetscFunctionReturn(0);
+}
+
+/* The truth at w from X = A^-1 P^T G (system layout): projected, read by the outputs, and the rigid part added
+   exactly, -H Phi_r Phi_r^T G / w^2; into T (t x a, column-major) */
+static PetscErrorCode KFCheckTruth(KFSystem sys, const KFFullReference *ref, PetscReal w, PetscInt t, PetscInt a, Mat X, PetscReal T[])
+{
+  Mat Ht;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemGetMatrices(sys, NULL, NULL, NULL, &Ht));
+  if (ref->r) PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE)); /* P X */
+  PetscCall(KFMatTransposeMatMultGather(Ht, X, T));
+  for (PetscInt j = 0; j < a; j++)
+    for (PetscInt q = 0; q < t; q++)
+      for (PetscInt k = 0; k < ref->r; k++) T[q + j * t] -= ref->HPr[q + k * t] * ref->PrG[k + j * ref->r] / (w * w);
+  PetscFunctionReturn(0);
+}
+
+/* A = K_S - w^2 M_S at the system's configuration, and the loads P^T G as a dense matrix of MUMPS' own (G may be a
+   sub-matrix view) */
+static PetscErrorCode KFCheckOperator(KFSystem sys, PetscBool project, PetscReal w, Mat *A, Mat *Gd)
+{
+  Mat Ms, Ks, G;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, NULL));
+  PetscCall(MatDuplicate(Ks, MAT_COPY_VALUES, A));
+  PetscCall(MatAXPY(*A, -w * w, Ms, DIFFERENT_NONZERO_PATTERN));
+  PetscCall(MatSetOption(*A, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatConvert(G, MATDENSE, MAT_INITIAL_MATRIX, Gd));
+  if (project) PetscCall(KFProjectFlexible(sys, *Gd, PETSC_TRUE)); /* P^T G: the loads self-equilibrated */
+  PetscFunctionReturn(0);
+}
+
+/* the solve X = A^-1 Gd by one of the two ways (F: a MUMPS factor of A; else the body-wise operator), then two
+   refinement steps against A itself: near the band's bottom A is nearly singular on the rigid modes (eigenvalues
+   -w^2 m), and the truth must not carry eps cond(A). res: the normwise backward error after,
+   ||Gd - A X||_F / (||A||_F ||X||_F + ||Gd||_F) (a backward-stable solve's is a few eps; the residual relative to
+   Gd alone would grow with cond(A) near the band's bottom whichever way solved it). */
+static PetscErrorCode KFCheckSolve(KFSystem sys, Mat F, KFBodyFactors bf, KFBodywiseOp op, Mat A, Mat Gd, Mat X, PetscReal *res)
+{
+  Mat       R = NULL, dX;
+  PetscReal ng, nr, na, nx;
+
+  PetscFunctionBegin;
+  if (F) PetscCall(MatMatSolve(F, Gd, X));
+  else PetscCall(KFBodywiseOpSolve(sys, bf, op, Gd, X));
+  for (PetscInt it = 0; it < 3; it++) {
+    PetscCall(MatDestroy(&R));
+    PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &R));
+    PetscCall(MatAYPX(R, -1.0, Gd, SAME_NONZERO_PATTERN)); /* R = G - A X */
+    if (it == 2) break;
+    PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
+    if (F) PetscCall(MatMatSolve(F, R, dX));
+    else PetscCall(KFBodywiseOpSolve(sys, bf, op, R, dX));
+    PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
+    PetscCall(MatDestroy(&dX));
+  }
+  PetscCall(MatNorm(R, NORM_FROBENIUS, &nr));
+  PetscCall(MatNorm(Gd, NORM_FROBENIUS, &ng));
+  PetscCall(MatNorm(A, NORM_FROBENIUS, &na));
+  PetscCall(MatNorm(X, NORM_FROBENIUS, &nx));
+  PetscCall(MatDestroy(&R));
+  *res = na * nx + ng > 0 ? nr / (na * nx + ng) : 0;
+  PetscFunctionReturn(0);
+}
+
+/* one MUMPS LDL^T of A (symmetric indefinite: MUMPS SYM=2) and the refined solve: the monolithic way */
+static PetscErrorCode KFCheckSolveMonolithic(KFSystem sys, Mat A, Mat Gd, Mat X, PetscReal *res)
+{
+  Mat           F;
+  MatFactorInfo info;
+  IS            rp, cp;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+  PetscCall(MatGetOrdering(A, MATORDERINGNATURAL, &rp, &cp));
+  PetscCall(MatFactorInfoInitialize(&info));
+  PetscCall(MatCholeskyFactorSymbolic(F, A, rp, &info));
+  PetscCall(MatCholeskyFactorNumeric(F, A, &info));
+  PetscCall(KFCheckSolve(sys, F, NULL, NULL, A, Gd, X, res));
+  PetscCall(ISDestroy(&rp));
+  PetscCall(ISDestroy(&cp));
+  PetscCall(MatDestroy(&F));
+  PetscFunctionReturn(0);
+}
+
+/* a refined solve whose backward error stays above this is not taken as the truth: the body-wise way is then redone
+   by the monolithic factorization (a check frequency near a body's own fixed-interface frequency makes its interior
+   factor nearly singular, which refinement against A may not repair) */
+#define KF_CHECK_RESIDUAL 1e-13
+
+/* One evaluation point at one check frequency s, the system at its configuration: the truth into p->chk_T. bf NULL:
+   the monolithic way; else the body-wise one, its interface problem made here at the point's angles. *nfact counts
+   the numerical factorizations, *resmax the worst residual taken. */
+static PetscErrorCode KFCheckPointAt(KFReducer r, KFSystem sys, KFBodyFactors bf, KFEvalPoint *p, PetscInt s, PetscInt *nfact, PetscReal *resmax)
+{
+  const PetscReal w = p->chk_w[s];
+  PetscInt        a, t;
+  Mat             A, Gd, X;
+  PetscReal       res;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(KFCheckOperator(sys, (PetscBool)(p->ref.r > 0), w, &A, &Gd));
+  PetscCall(MatDuplicate(Gd, MAT_DO_NOT_COPY_VALUES, &X));
+  if (bf) {
+    KFBodywiseOp op;
+
+    PetscCall(KFBodywiseOpCreate(sys, bf, &op));
+    PetscCall(KFCheckSolve(sys, NULL, bf, op, A, Gd, X, &res));
+    PetscCall(KFBodywiseOpDestroy(&op));
+    if (!(res <= KF_CHECK_RESIDUAL)) {
+      PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "reference check at %.4g Hz: the body-wise solve's backward error %.1e is above %.0e, solved again by a factorization of the whole system", (double)(w / (2 * PETSC_PI)), (double)res, (double)KF_CHECK_RESIDUAL));
+      bf = NULL;
+    }
+  }
+  if (!bf) {
+    PetscCall(KFCheckSolveMonolithic(sys, A, Gd, X, &res));
+    (*nfact)++;
+  }
+  *resmax = PetscMax(*resmax, res);
+  PetscCall(KFCheckTruth(sys, &p->ref, w, t, a, X, &p->chk_T[s * t * a]));
+  PetscCall(MatDestroy(&X));
+  PetscCall(MatDestroy(&Gd));
+  PetscCall(MatDestroy(&A));
+  PetscFunctionReturn(0);
+}
+
+/* the system at point p's angles, its rigid modes, and the export's rigid energy recorded there */
+static PetscErrorCode KFCheckConfigure(KFReducer r, KFSystem sys, KFEvalPoint *p, PetscBool energy)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemSetAngles(sys, p->angles));
+  PetscCall(KFSystemComputeRigidModes(sys));
+  if (energy) {
+    PetscReal e;
+
+    PetscCall(KFRigidEnergy(sys, &p->ref, &e));
+    if (p->interest >= 0) PetscCall(KFReducerResultScalar_Private(r, p->interest, "reference_check_rigid_energy", e));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Undamped, body-wise: at each check frequency the bodies' K_b - w^2 M_b are factored once and every point's
+   jointed system is solved from them with its own small interface problem (the bodies' matrices do not depend on
+   the angle, only the joint's transformation of the interface does): npts x bodies factorizations, not
+   npts x points. The npts sets of factors are kept together, so that each point's system is assembled once (its
+   assembly and rigid modes cost about a factorization at 57k dofs): the memory of npts body-wise factorizations. */
+static PetscErrorCode KFDirectSolvesBodywise(KFReducer r, KFSystem sys, PetscInt neval, KFEvalPoint evals[], PetscInt npts, const PetscReal w[], PetscInt *nfact, PetscReal *resmax)
+{
+  KFScene        s = r->scene;
+  KFBodyFactors *bf;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(npts, &bf));
+  for (PetscInt k = 0; k < npts; k++) {
+    PetscCall(KFProgress(s->comm, "reference check at %.4g Hz: the %" PetscInt_FMT " bodies' K - w^2 M factored once for every angle", (double)(w[k] / (2 * PETSC_PI)), s->nb));
+    PetscCall(KFBodyFactorsCreateShifted(sys, ((PetscObject)r)->prefix, -w[k] * w[k], &bf[k]));
+    *nfact += s->nb;
+  }
+  for (PetscInt e = 0; e < neval; e++) {
+    if (!evals[e].ref.w2) continue;
+    PetscCall(KFInterruptCheck(s->comm));
+    PetscCall(KFCheckConfigure(r, sys, &evals[e], PETSC_TRUE));
+    for (PetscInt k = 0; k < npts; k++) PetscCall(KFCheckPointAt(r, sys, bf[k], &evals[e], k, nfact, resmax));
+  }
+  for (PetscInt k = 0; k < npts; k++) PetscCall(KFBodyFactorsDestroy(&bf[k]));
+  PetscCall(PetscFree(bf));
+  PetscFunctionReturn(0);
+}
+
+/* Every evaluation point's direct solves, once all the references exist: the check frequencies are common to all
+   points (KFCheckFrequencies), so that the undamped check shares the bodies' factorizations between the angles where
+   the body-wise solve applies (KFBodywiseApplies; -kf_verify_check_bodywise); otherwise each point's system is
+   factored at each frequency (MUMPS LDL^T), and the damped check takes the 2 x 2 block form (damped_check.c). */
+PetscErrorCode KFReducerDirectChecks_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[])
+{
+  PetscInt       a, t, npts = r->verify_check_points, nf, nfact = 0, npoints = 0;
+  PetscReal     *f, *w, resmax = 0;
+  PetscLogDouble t0, t1;
+  KFDamping      damp;
+  PetscBool      viscous, damped, bodywise;
+  KFSystem       sys;
+
+  PetscFunctionBegin;
+  for (PetscInt e = 0; e < neval; e++) {
+    evals[e].nchk = 0;
+    if (evals[e].ref.w2) npoints++;
+  }
+  if (!npts || !npoints) PetscFunctionReturn(0);
+  PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
-  PetscCall(KFSystemGetMatrices(sys, &Ms, &Ks, &G, &Ht));
-  PetscCall(PetscCalloc3(npts, &p->chk_w, npts * t * a, &p->chk_T, npts * t * a, &p->chk_Ti));
-  PetscCall(KFCheckFrequencies(r, &p->ref, npts, p->chk_w));
+  PetscCall(KFAllResonances(neval, evals, &nf, &f));
+  PetscCall(PetscMalloc1(npts, &w));
+  PetscCall(KFCheckFrequencies(r, nf, f, npts, w));
+  PetscCall(PetscFree(f));
+  for (PetscInt e = 0; e < neval; e++) {
+    if (!evals[e].ref.w2) continue;
+    PetscCall(PetscCalloc3(npts, &evals[e].chk_w, npts * t * a, &evals[e].chk_T, npts * t * a, &evals[e].chk_Ti));
+    PetscCall(PetscArraycpy(evals[e].chk_w, w, npts));
+    evals[e].nchk = npts;
+  }
   PetscCall(KFCheckDampingModel_Private(r, &damp, &viscous));
-  if (viscous || damp.alpha != 0 || damp.beta != 0 || damp.g != 0) { /* damped_check.c */
-    p->nchk = npts;
-    PetscCall(KFEvalPointDampedSolves_Private(r, sys, p, &damp, viscous));
-  } else {
-    Mat           A, F, Gd;
-    MatFactorInfo info;
-    IS            rp, cp;
-
-    /* one analysis for every frequency (K_S - w^2 M_S has one pattern), one numerical factorization each */
-    PetscCall(MatDuplicate(Ks, MAT_COPY_VALUES, &A));
-    PetscCall(MatAXPY(A, -1.0, Ms, DIFFERENT_NONZERO_PATTERN));
-    PetscCall(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
-    PetscCall(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F)); /* LDL^T (MUMPS SYM=2): A is indefinite */
-    PetscCall(MatGetOrdering(A, MATORDERINGNATURAL, &rp, &cp));
-    PetscCall(MatFactorInfoInitialize(&info));
-    PetscCall(MatCholeskyFactorSymbolic(F, A, rp, &info));
-    /* MUMPS wants a dense right-hand side of its own (G may be a sub-matrix view); the loads self-equilibrated */
-    PetscCall(MatConvert(G, MATDENSE, MAT_INITIAL_MATRIX, &Gd));
-    if (p->ref.r) PetscCall(KFProjectFlexible(sys, Gd, PETSC_TRUE)); /* P^T G */
-    for (PetscInt s = 0; s < npts; s++) {
-      Mat X;
-
-      PetscCall(MatCopy(Ks, A, SUBSET_NONZERO_PATTERN));
-      PetscCall(MatAXPY(A, -p->chk_w[s] * p->chk_w[s], Ms, SUBSET_NONZERO_PATTERN));
-      PetscCall(MatCholeskyFactorNumeric(F, A, &info));
-      PetscCall(MatDuplicate(Gd, MAT_DO_NOT_COPY_VALUES, &X));
-      PetscCall(MatMatSolve(F, Gd, X));
-      /* two steps of refinement against A itself: near the band's bottom A is nearly singular on the rigid modes
-         (eigenvalues -w^2 m), and the truth must not carry eps cond(A) */
-      for (PetscInt it = 0; it < 2; it++) {
-        Mat Rr, dX;
-
-        PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Rr));
-        PetscCall(MatAYPX(Rr, -1.0, Gd, SAME_NONZERO_PATTERN)); /* R = G - A X */
-        PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
-        PetscCall(MatMatSolve(F, Rr, dX));
-        PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
-        PetscCall(MatDestroy(&dX));
-        PetscCall(MatDestroy(&Rr));
-      }
-      if (p->ref.r) PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE)); /* P X */
-      PetscCall(KFMatTransposeMatMultGather(Ht, X, &p->chk_T[s * t * a])); /* t x a, column-major */
-      for (PetscInt j = 0; j < a; j++) /* the rigid part, exact: -H Phi_r Phi_r^T G / w^2 */
-        for (PetscInt q = 0; q < t; q++)
-          for (PetscInt k = 0; k < p->ref.r; k++) p->chk_T[s * t * a + q + j * t] -= p->ref.HPr[q + k * t] * p->ref.PrG[k + j * p->ref.r] / (p->chk_w[s] * p->chk_w[s]);
-      PetscCall(MatDestroy(&X));
+  damped = (PetscBool)(viscous || damp.alpha != 0 || damp.beta != 0 || damp.g != 0);
+  PetscCall(KFBodywiseApplies(r->scene, &bodywise));
+  bodywise = (PetscBool)(bodywise && r->verify_check_bodywise && !damped);
+  PetscCall(KFSystemCreate(r->scene, &sys));
+  if (bodywise) PetscCall(KFDirectSolvesBodywise(r, sys, neval, evals, npts, w, &nfact, &resmax));
+  else
+    for (PetscInt e = 0; e < neval; e++) {
+      if (!evals[e].ref.w2) continue;
+      PetscCall(KFInterruptCheck(r->scene->comm));
+      PetscCall(KFCheckConfigure(r, sys, &evals[e], PETSC_TRUE));
+      if (damped) {
+        PetscCall(KFEvalPointDampedSolves_Private(r, sys, &evals[e], &damp, viscous));
+        nfact += npts;
+      } else
+        for (PetscInt k = 0; k < npts; k++) PetscCall(KFCheckPointAt(r, sys, NULL, &evals[e], k, &nfact, &resmax));
     }
-    PetscCall(MatDestroy(&Gd));
-    PetscCall(ISDestroy(&rp));
-    PetscCall(ISDestroy(&cp));
-    PetscCall(MatDestroy(&F));
-    PetscCall(MatDestroy(&A));
-  }
-  {
-    PetscReal energy;
-
-    PetscCall(KFRigidEnergy(sys, &p->ref, &energy));
-    if (p->interest >= 0) PetscCall(KFReducerResultScalar_Private(r, p->interest, "reference_check_rigid_energy", energy));
-  }
-  p->nchk = npts;
+  PetscCall(KFSystemDestroy(&sys));
+  PetscCall(PetscFree(w));
   PetscCall(PetscTime(&t1));
   r->verify_check_seconds += t1 - t0;
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_factorizations", (PetscReal)nfact));
+  if (!damped) PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_residual", resmax));
+  PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
+  PetscCall(KFProgress(r->scene->comm, "reference checks: %" PetscInt_FMT " points x %" PetscInt_FMT " frequencies solved directly, %s, %" PetscInt_FMT " numerical factorizations, %.3g s", npoints, npts, bodywise ? "body-wise (the bodies factored once per frequency)" : (damped ? "damped 2 x 2 block form" : "the whole system factored per point and frequency"), nfact, (double)(t1 - t0)));
   PetscFunctionReturn(0);
 }
 

@@ -86,6 +86,7 @@ struct _p_KFReducer {
   PetscReal       verify_cover;
   PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
   PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
+  PetscBool       verify_check_bodywise; /* the undamped check from the bodies' factorizations where it applies */
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
@@ -194,7 +195,7 @@ typedef struct _KFEvalPoint {
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
-PETSC_INTERN PetscErrorCode KFEvalPointDirectSolves_Private(KFReducer, KFSystem, KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFReducerDirectChecks_Private(KFReducer, PetscInt, KFEvalPoint[]);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFCheckDampingModel_Private(KFReducer, KFDamping *, PetscBool *viscous);
 PETSC_INTERN PetscErrorCode KFEvalPointDampedSolves_Private(KFReducer, KFSystem, KFEvalPoint *, const KFDamping *, PetscBool viscous);

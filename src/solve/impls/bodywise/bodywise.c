@@ -38,7 +38,7 @@ struct _n_KFBodyFactors {
 };
 
 /* per solver (one angle): the interface problem, and the options that choose and spread the body-wise solve */
-typedef struct {
+typedef struct _n_KFBodywiseOp {
   PetscBool   asked_auto; /* type auto: body-wise only where it pays (KFBodywiseWanted), else monolithic */
   PetscInt    min_dofs;   /* -kf_bodywise_min_dofs */
   PetscBool   spread;     /* -kf_bodywise_spread */
@@ -47,6 +47,7 @@ typedef struct {
   PetscReal **T;         /* per body |Gamma_b| x nG (column-major): u_Gamma = T_b x_G */
   PetscReal  *S;         /* nG x nG: Cholesky factor of S(alpha) with the held unknowns replaced by identity rows */
   PetscInt    nheldG, *heldG;
+  PetscBLASInt *ipiv;    /* a shift below zero (K_b - w^2 M_b): S(alpha) indefinite, its LDL^T's pivots (LAPACK sytrf) */
 } KFFlexSolver_Bodywise;
 typedef KFFlexSolver_Bodywise *KFBodywise;
 
@@ -130,7 +131,8 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
 
   PetscFunctionBegin;
   PetscCall(MatDuplicate(K, MAT_COPY_VALUES, &bf->Kb[b]));
-  if (shift > 0) PetscCall(MatAXPY(bf->Kb[b], shift, M, DIFFERENT_NONZERO_PATTERN));
+  if (shift != 0) PetscCall(MatAXPY(bf->Kb[b], shift, M, DIFFERENT_NONZERO_PATTERN));
+  if (shift < 0) PetscCall(MatSetOption(bf->Kb[b], MAT_SPD, PETSC_FALSE)); /* K_b - w^2 M_b: MUMPS' LDL^T with pivoting */
   PetscCall(MatCreateVecs(bf->Kb[b], &d, NULL));
   PetscCall(MatGetDiagonal(bf->Kb[b], d));
   PetscCall(VecNorm(d, NORM_1, &dsum));
@@ -149,6 +151,7 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
      few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
   PetscCall(KFFactorMumps(bf->Kb[b], prefix, 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
   bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
+  if (shift < 0) *nneg = 0;                     /* above the body's first fixed-interface frequency: negative pivots */
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */
@@ -334,13 +337,14 @@ static PetscErrorCode KFBodyFactorsSetUpSpread(KFScene s, const char prefix[], P
     IS          is;
     Mat        *sub;
 
-    PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
+    if (shift < 0) PetscCall(KFProgress(s->comm, "  body %s's K - w^2 M at %.4g Hz (%" PetscInt_FMT " dofs) factored on rank %d alone, for every configuration", B->name, (double)(PetscSqrtReal(-shift) / (2 * PETSC_PI)), B->n, (int)bf->owner[b]));
+    else PetscCall(KFProgress(s->comm, "body-wise solve: body %s's interior (%" PetscInt_FMT " dofs) factored on rank %d alone (sequential MUMPS LDL^T), once for all configurations", B->name, B->n, (int)bf->owner[b]));
     PetscCall(ISCreateStride(PETSC_COMM_SELF, mine ? B->n : 0, 0, 1, &is));
     PetscCall(MatCreateSubMatrices(B->K, 1, &is, &is, MAT_INITIAL_MATRIX, &sub)); /* collective: the owner gets all of K_b */
     if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
     if (mine) Kq[b] = sub[0];
     PetscCall(MatDestroySubMatrices(1, &sub));
-    if (shift > 0) {
+    if (shift != 0) {
       PetscCall(MatCreateSubMatrices(B->M, 1, &is, &is, MAT_INITIAL_MATRIX, &sub));
       if (mine) PetscCall(PetscObjectReference((PetscObject)sub[0]));
       if (mine) Mq[b] = sub[0];
@@ -410,7 +414,8 @@ static PetscErrorCode KFBodyFactorsSetUpAll(KFScene s, const char prefix[], Pets
   }
   for (PetscInt b = 0; b < s->nb; b++) {
     PetscInt nnull = 0, nneg = 0;
-    PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
+    if (shift < 0) PetscCall(KFProgress(s->comm, "  body %s's K - w^2 M at %.4g Hz (%" PetscInt_FMT " dofs, interior MUMPS LDL^T), for every configuration", s->bodies[b].name, (double)(PetscSqrtReal(-shift) / (2 * PETSC_PI)), s->bodies[b].n));
+    else PetscCall(KFProgress(s->comm, "body-wise solve: factorization of body %s's interior (%" PetscInt_FMT " dofs, MUMPS LDL^T), once for all configurations", s->bodies[b].name, s->bodies[b].n));
     PetscCall(KFBodyFactorSetUp(s, prefix, b, s->bodies[b].K, s->bodies[b].M, shift, bf, &nnull, &nneg));
     PetscCall(KFBodyPivotsCheck(s, b, nnull, nneg));
   }
@@ -568,6 +573,7 @@ static PetscErrorCode KFBodywiseReset(KFBodywise bw)
   PetscCall(PetscFree(bw->Gidx));
   PetscCall(PetscFree(bw->S));
   PetscCall(PetscFree(bw->heldG));
+  PetscCall(PetscFree(bw->ipiv));
   bw->nb = bw->nG = bw->nheldG = 0;
   PetscFunctionReturn(0);
 }
@@ -629,7 +635,8 @@ static PetscErrorCode KFBodywiseHeld(KFFlexSolver solver, KFBodywise bw, PetscBo
   PetscFunctionReturn(0);
 }
 
-/* S(alpha) = sum_b T_b^T S_b T_b, held unknowns -> scaled identity, Cholesky-factored (replicated, LAPACK) */
+/* S(alpha) = sum_b T_b^T S_b T_b, held unknowns -> scaled identity, Cholesky-factored (replicated, LAPACK); below a
+   zero shift (K_b - w^2 M_b) S(alpha) is indefinite: LDL^T with Bunch-Kaufman pivoting instead */
 static PetscErrorCode KFBodywiseFactorInterface(KFScene s, KFBodyFactors bf, KFBodywise bw)
 {
   PetscInt     nG = bw->nG;
@@ -652,6 +659,18 @@ static PetscErrorCode KFBodywiseFactorInterface(KFScene s, KFBodyFactors bf, KFB
     bw->S[h + h * nG] = dsum / nG; /* as the monolithic solve: a unit-scaled identity on the held rows */
   }
   PetscCall(PetscBLASIntCast(nG, &bn));
+  if (bf->shift < 0) {
+    PetscBLASInt lwork = PetscMax(64 * bn, 1);
+    PetscReal   *work;
+
+    PetscCall(PetscMalloc1(nG + 1, &bw->ipiv));
+    PetscCall(PetscMalloc1(lwork, &work));
+    if (nG > 0) PetscCallBLAS("LAPACKsytrf", LAPACKsytrf_("L", &bn, bw->S, &bn, bw->ipiv, work, &lwork, &info));
+    else info = 0;
+    PetscCall(PetscFree(work));
+    PetscCheck(info == 0, s->comm, PETSC_ERR_MAT_LU_ZRPVT, "the body-wise interface problem of K - w^2 M at %g Hz is singular (LAPACK sytrf info %d): w^2 is an eigenvalue of the jointed structure; solve at other frequencies, or use -kf_verify_check_bodywise false for the reference check", (double)(PetscSqrtReal(-bf->shift) / (2 * PETSC_PI)), (int)info);
+    PetscFunctionReturn(0);
+  }
   if (nG > 0) PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bn, bw->S, &bn, &info));
   else info = 0;
   PetscCheck(info == 0, s->comm, PETSC_ERR_ARG_WRONG, "the body-wise interface problem (%" PetscInt_FMT " unknowns) is not positive definite with the %" PetscInt_FMT " held dofs (LAPACK potrf info %d): the structure has a zero-energy mode beyond the rigid-body and mechanism modes the joints declare (a missing tie, an undeclared mechanism). Fix the model, or declare the joint", nG, bw->nheldG, (int)info);
@@ -764,12 +783,9 @@ static PetscErrorCode KFCopyKept(KFScene s, const KFBodyData *B, Mat Sm, Mat Bm,
 
 /* x_b,I = y_b - Psi_b T_b x_G, scattered to the system's interior rows; x_G (g, nG x p) set directly. Y[b]: body b's
    K_II^-1 f_b,I (on its owner alone when spread), destroyed here. */
-static PetscErrorCode KFBodywiseBackSubstitute(KFFlexSolver solver, PetscInt p, const PetscReal g[], Mat Y[], Mat X)
+static PetscErrorCode KFBodywiseBackSubstitute(KFSystem sys, KFBodyFactors bf, KFBodywise bw, PetscInt p, const PetscReal g[], Mat Y[], Mat X)
 {
-  KFSystem      sys = solver->sys;
   KFScene       s   = sys->scene;
-  KFBodyFactors bf  = sys->bodyf;
-  KFBodywise    bw  = (KFBodywise)solver->data;
   PetscInt      nG = bw->nG, rstart, rend, lda;
   PetscReal    *z;
   PetscScalar  *x;
@@ -809,12 +825,9 @@ static PetscErrorCode KFBodywiseBackSubstitute(KFFlexSolver solver, PetscInt p, 
 /* X = Kh^-1 W (W: system layout, zero on the held rows), body-wise: condense, interface solve, back-substitute.
    Spread bodies: each body's rows of W go to its owner, which solves its interior and condenses alone; the ranks do
    so for their bodies at the same time, and only the small condensed pieces (nG x p) are summed over the ranks. */
-static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat X)
+static PetscErrorCode KFBodywiseSolveWith(KFSystem sys, KFBodyFactors bf, KFBodywise bw, Mat W, Mat X)
 {
-  KFSystem      sys = solver->sys;
   KFScene       s   = sys->scene;
-  KFBodyFactors bf  = sys->bodyf;
-  KFBodywise    bw  = (KFBodywise)solver->data;
   PetscInt      nG = bw->nG, p;
   PetscReal    *g, *c, *gl = NULL;
   Mat          *Y, *Q;
@@ -870,12 +883,90 @@ static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat
     PetscBLASInt bn, bp, info;
     PetscCall(PetscBLASIntCast(nG, &bn));
     PetscCall(PetscBLASIntCast(p, &bp));
-    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bn, &bp, bw->S, &bn, g, &bn, &info));
-    PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK potrs failed (info %d)", (int)info);
+    if (bw->ipiv) PetscCallBLAS("LAPACKsytrs", LAPACKsytrs_("L", &bn, &bp, bw->S, &bn, bw->ipiv, g, &bn, &info));
+    else PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bn, &bp, bw->S, &bn, g, &bn, &info));
+    PetscCheck(info == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK %s failed (info %d)", bw->ipiv ? "sytrs" : "potrs", (int)info);
   }
-  PetscCall(KFBodywiseBackSubstitute(solver, p, g, Y, X));
+  PetscCall(KFBodywiseBackSubstitute(sys, bf, bw, p, g, Y, X));
   PetscCall(PetscFree2(Y, Q));
   PetscCall(PetscFree(g));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFFlexSolverSolve_Bodywise(KFFlexSolver solver, Mat W, Mat X)
+{
+  PetscFunctionBegin;
+  PetscCall(KFBodywiseSolveWith(solver->sys, solver->sys->bodyf, (KFBodywise)solver->data, W, X));
+  PetscFunctionReturn(0);
+}
+
+/*
+  The body-wise solve of K_S + shift M_S at any shift, for callers that solve the jointed system at one shift and many
+  configurations outside a flexible solver (the verification's direct check: shift -w^2 at a check frequency w). The
+  bodies' factors of K_b + shift M_b (KFBodyFactorsCreateShifted) belong to the caller, not to the system, and serve
+  every configuration; an operator (KFBodywiseOpCreate) is the interface problem at the system's angles. Nothing is
+  held: away from the structure's resonances K_S - w^2 M_S is regular, and the result is (K_S + shift M_S)^-1 W.
+  KFBodywiseApplies says whether the scene allows it (the rules of -kf_flex_solver bodywise).
+*/
+PetscErrorCode KFBodywiseApplies(KFScene s, PetscBool *use)
+{
+  PetscBool all_iface = PETSC_TRUE, bcs = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < s->nb; b++) {
+    all_iface = (PetscBool)(all_iface && s->bodies[b].ninterfaces > 0);
+    bcs       = (PetscBool)(bcs || s->bodies[b].nclamp > 0);
+  }
+  *use = (PetscBool)(s->nb > 1 && all_iface && !bcs);
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *bfo)
+{
+  KFScene       s      = sys->scene;
+  PetscBool     spread = PETSC_TRUE;
+  KFBodyFactors bf;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetBool(NULL, prefix, "-kf_bodywise_spread", &spread, NULL)); /* as the flexible solve's */
+  PetscCall(PetscNew(&bf));
+  bf->shift = shift;
+  bf->nb    = s->nb;
+  PetscCall(PetscCalloc6(s->nb, &bf->ng, s->nb, &bf->gif, s->nb, &bf->Kb, s->nb, &bf->F, s->nb, &bf->Psi, s->nb, &bf->S));
+  for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
+  PetscCall(KFBodywiseAssign(s, spread, bf));
+  PetscCall(KFBodyFactorsSetUpAll(s, prefix, shift, bf));
+  bf->factored = PETSC_TRUE;
+  *bfo         = bf;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodywiseOpCreate(KFSystem sys, KFBodyFactors bf, KFBodywiseOp *op)
+{
+  KFBodywise bw;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(&bw));
+  bw->nb = sys->scene->nb;
+  PetscCall(KFBodywiseInterface(sys, bf, bw));
+  PetscCall(KFBodywiseFactorInterface(sys->scene, bf, bw));
+  *op = bw;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodywiseOpSolve(KFSystem sys, KFBodyFactors bf, KFBodywiseOp op, Mat W, Mat X)
+{
+  PetscFunctionBegin;
+  PetscCall(KFBodywiseSolveWith(sys, bf, op, W, X));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodywiseOpDestroy(KFBodywiseOp *op)
+{
+  PetscFunctionBegin;
+  if (!*op) PetscFunctionReturn(0);
+  PetscCall(KFBodywiseReset(*op));
+  PetscCall(PetscFree(*op));
   PetscFunctionReturn(0);
 }
 

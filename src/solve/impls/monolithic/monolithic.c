@@ -89,7 +89,6 @@ static PetscErrorCode KFFlexSolverRefactor_Monolithic(KFFlexSolver solver, Petsc
   KFScene       s   = sys->scene;
   PetscInt      blr = 0;
   KFHeldEntries held = NULL;
-  MatFactorInfo info;
   Mat           A = mono->Kh ? mono->Kh : sys->Ks;
 
   PetscFunctionBegin;
@@ -109,8 +108,7 @@ static PetscErrorCode KFFlexSolverRefactor_Monolithic(KFFlexSolver solver, Petsc
     PetscCall(KFHoldDofsInPlace(sys->Ks, solver->nheld, solver->held, dsum / s->nsys, &held));
   }
   PetscCall(MatMumpsSetIcntl(mono->F, 35, 0));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorNumeric(mono->F, A, &info));
+  PetscCall(KFMumpsFactorNumeric(mono->F, A)); /* an out-of-core factor's files into its folder again */
   if (held) PetscCall(KFRestoreHeldDofs(sys->Ks, &held));
   sys->nfactor++;
   *done = PETSC_TRUE;

@@ -34,14 +34,15 @@ PETSC_INTERN PetscReal KFNodeMemoryAvailableMB(void)
   return kb < 0 ? -1 : kb / 1024.0;
 }
 
-/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core
-   (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
+/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core,
+   INFO(30) and INFO(31) for a block low-rank factor (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
 static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
 {
-  PetscInt mine;
+  PetscInt mine, blr;
 
   PetscFunctionBegin;
-  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine));
+  PetscCall(MatMumpsGetIcntl(F, 35, &blr)); /* analysed block low-rank: INFO(30), INFO(31) (the factors compressed at ICNTL(38)'s rate) */
+  PetscCall(MatMumpsGetInfo(F, blr ? (ooc ? 31 : 30) : (ooc ? 17 : 15), &mine));
   if (mine > 0) *mb = (PetscReal)mine;
   else {
     PetscInt nr, ni;
@@ -294,6 +295,56 @@ static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscB
   PetscFunctionReturn(0);
 }
 
+/* The block low-rank dropping tolerance -kf_ooc auto takes when the in-core factorization does not fit: on the 202k-dof
+   solid -kf_blr 1e-8 left the reduced model unchanged (1.6e-13) and its solves refine to the full-rank residual */
+#define KF_AUTO_BLR_TOL 1e-8
+
+/* -kf_ooc auto when MUMPS' in-core estimate does not fit the node's memory (KFCheckFactorMemory's test): first a
+   block low-rank factorization in core, analysed again with ICNTL(35) = 1, if MUMPS' estimate of it (INFO(30))
+   fits; its workspace is then capped at the node's share (ICNTL(23)) so that factors compressing worse than MUMPS
+   assumed fail cleanly (KFFactorMumps then factors out of core). *F becomes that factor and c->blr its tolerance;
+   otherwise *F stays and the memory check sends it out of core. *why: the progress line's reason. */
+static PetscErrorCode KFMumpsAutoBLR(Mat A, const char prefix[], PetscReal null_threshold, PetscBool scotch, KFMumpsControls *c, Mat *F)
+{
+  MPI_Comm    comm = PetscObjectComm((PetscObject)A), node;
+  PetscReal   limit, mine[2], need[2], avail, in[2], worst[2];
+  PetscBool   check, has_limit;
+  PetscMPIInt nrank;
+  Mat         G;
+
+  PetscFunctionBegin;
+  PetscCall(KFFactorMemoryOptions(comm, prefix, &check, &limit, &has_limit));
+  avail = has_limit ? limit : KFNodeMemoryAvailableMB();
+  if (!check || avail < 0) PetscFunctionReturn(0);
+  PetscCall(KFFactorEstimateMB(*F, PETSC_FALSE, &mine[0]));
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCallMPI(MPI_Comm_size(node, &nrank));
+  PetscCall(MPIU_Allreduce(&mine[0], &need[0], 1, MPIU_REAL, MPIU_SUM, node));
+  in[0] = need[0] - avail;
+  PetscCall(MPIU_Allreduce(in, worst, 1, MPIU_REAL, MPIU_MAX, comm));
+  if (worst[0] <= 0) { /* in core, full rank */
+    PetscCallMPI(MPI_Comm_free(&node));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KFMumpsAnalyse(A, null_threshold, KF_AUTO_BLR_TOL, PETSC_FALSE, scotch, KFScotchTrySeed(c->seed, 0), &G));
+  PetscCall(KFFactorEstimateMB(G, PETSC_FALSE, &mine[1]));
+  PetscCall(MPIU_Allreduce(&mine[1], &need[1], 1, MPIU_REAL, MPIU_SUM, node));
+  PetscCallMPI(MPI_Comm_free(&node));
+  in[1] = need[1] - avail;
+  PetscCall(MPIU_Allreduce(&in[1], &worst[1], 1, MPIU_REAL, MPIU_MAX, comm));
+  if (worst[1] > 0) {
+    PetscCall(MatDestroy(&G));
+    PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node and block low-rank (-kf_blr %g) %.4g MB, %.4g MB are available", (double)need[0], KF_AUTO_BLR_TOL, (double)need[1], (double)avail));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(MatMumpsSetIcntl(G, 23, (PetscInt)(avail / nrank))); /* MB per rank: a clean failure, not the OOM killer */
+  PetscCall(MatDestroy(F));
+  *F     = G;
+  c->blr = KF_AUTO_BLR_TOL;
+  PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node, %.4g MB are available: block low-rank (-kf_blr %g), MUMPS' estimate %.4g MB (its factors compressed to ICNTL(38) per mille); -kf_ooc true or false chooses otherwise", (double)need[0], (double)avail, KF_AUTO_BLR_TOL, (double)need[1]));
+  PetscFunctionReturn(0);
+}
+
 /* The out-of-core factor's folder on every rank, named in a progress line (rank 0's) */
 static PetscErrorCode KFMumpsOocFolder(Mat F, const char given[])
 {
@@ -315,10 +366,11 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
   MatFactorError  err;
   KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE, ""};
   PetscMPIInt     size;
-  PetscBool       ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
+  PetscBool       auto_blr, user_blr, ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
 
   PetscFunctionBegin;
   if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), prefix, &c));
+  user_blr = (PetscBool)(c.blr > 0);
   {
     PetscBool known, spd;
 
@@ -346,6 +398,8 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
   if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
   if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
   if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
+  if (estimate_mb && opts && c.ooc_mode == 2 && c.blr == 0) PetscCall(KFMumpsAutoBLR(A, prefix, null_threshold, scotch, &c, F));
+  auto_blr = (PetscBool)(estimate_mb && opts && c.ooc_mode == 2 && c.blr > 0 && !user_blr);
   if (estimate_mb) {
     PetscInt    used, analysis;
     const char *name = "unknown";
@@ -364,6 +418,14 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
   if (ooc) PetscCall(KFMumpsOocFolder(*F, c.ooc_dir));
   PetscCall(KFMumpsFactorNumeric(*F, A));
   PetscCall(MatFactorGetError(*F, &err));
+  if (auto_blr && !ooc && err != MAT_FACTOR_NOERROR) { /* the factors compressed worse than MUMPS assumed: out of core, full rank */
+    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  the block low-rank factorization did not fit (MUMPS error type %d): factoring out of core, full rank", (int)err));
+    PetscCall(MatDestroy(F));
+    PetscCall(KFMumpsAnalyse(A, null_threshold, 0, PETSC_TRUE, scotch, KFScotchTrySeed(c.seed, 0), F));
+    PetscCall(KFMumpsOocFolder(*F, c.ooc_dir));
+    PetscCall(KFMumpsFactorNumeric(*F, A));
+    PetscCall(MatFactorGetError(*F, &err));
+  }
   PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
   PetscCall(MatMumpsGetInfog(*F, 28, null_pivots));
   PetscCall(MatMumpsGetInfog(*F, 12, negative_pivots));

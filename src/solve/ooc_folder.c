@@ -132,3 +132,25 @@ PETSC_INTERN PetscErrorCode KFMumpsFactorNumeric(Mat F, Mat A)
   PetscCall(ierr);
   PetscFunctionReturn(0);
 }
+
+/* X = F^-1 B for a block B. MUMPS solves a block of right-hand sides ICNTL(27) columns at a time, and an out-of-core
+   factor is read from disk once per such group: behind one, the group is the whole block (ICNTL(27) = its columns;
+   MUMPS' default, -32, groups 32 at most), so that the factor is read once per Krylov block; at most 1024 columns at
+   a time (MUMPS' solve workspace grows with the group: the body-wise solve's interface responses can have thousands
+   of columns). In core the default stays. */
+PETSC_INTERN PetscErrorCode KFMumpsMatSolve(Mat F, Mat B, Mat X)
+{
+  const char *path;
+  PetscInt    ncols;
+  PetscBool   user = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscCall(KFOocFolderGet(F, &path));
+  if (path) PetscCall(PetscOptionsHasName(NULL, ((PetscObject)F)->prefix, "-mat_mumps_icntl_27", &user));
+  if (path && !user) { /* the user's -mat_mumps_icntl_27 stands (benchmarks/ooc: 1, a column at a time) */
+    PetscCall(MatGetSize(B, NULL, &ncols));
+    PetscCall(MatMumpsSetIcntl(F, 27, PetscClipInterval(ncols, 1, 1024)));
+  }
+  PetscCall(MatMatSolve(F, B, X));
+  PetscFunctionReturn(0);
+}

@@ -102,3 +102,47 @@ def test_out_of_core_folder_that_cannot_be_made(solid14k, tmp_path):
     assert str(missing) in p.stderr and "-kf_ooc_dir" in p.stderr and "-kf_ooc false" in p.stderr
     assert "Traceback" not in p.stderr
     assert not (tmp_path / "out").exists()
+
+
+@pytest.fixture(scope="module")
+def solid57k(tmp_path_factory):
+    """The 57,031-dof solid pair: large enough that MUMPS' block low-rank estimate is below its full-rank one."""
+    out = tmp_path_factory.mktemp("solid57k")
+    r = subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "1.55", "-o",
+                        str(out)], env=ENV, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return os.path.join(out, "spacecraft.yaml")
+
+
+@pytest.mark.slow
+def test_auto_takes_block_low_rank_between_its_estimate_and_full_rank(solid57k, tmp_path):
+    """-kf_ooc auto with the plain MUMPS build (KRYFLEX_MUMPS=plain: block low-rank is not tried with the SCOTCH
+    build): at a memory limit between MUMPS' block low-rank and full-rank in-core estimates (read off the refusal at a
+    tiny limit), the factorization is block low-rank in core, or, when its factors compress worse than MUMPS
+    assumed, out of core after a clean failure; either way the in-core model (measured: frequencies 1.6e-8, the
+    in-band response 3.7e-12 apart at -kf_blr 1e-8)."""
+    import re
+    env = dict(ENV, KRYFLEX_MUMPS="plain")
+
+    def run(out, *options):
+        return subprocess.run([KRYFLEX, "reduce", solid57k, "-o", str(out), "-kf_verify", "false", "-scene.angles",
+                               "30", *options], env=env, capture_output=True, text=True, timeout=600)
+    p = run(tmp_path / "refused", "-kf_memory_limit_mb", "1e-3")
+    assert p.returncode == EXIT_NUMERIC, p.stderr
+    m = re.search(r"full rank would need ([0-9.e+]+) MB on one node and block low-rank \(-kf_blr 1e-08\) ([0-9.e+]+) MB",
+                  p.stdout + p.stderr)
+    assert m, p.stdout + p.stderr
+    full, blr = float(m.group(1)), float(m.group(2))
+    assert blr < full
+    p = run(tmp_path / "auto", "-kf_memory_limit_mb", str(full - 0.25 * (full - blr)))
+    assert p.returncode == 0, p.stderr
+    log = p.stdout + p.stderr
+    assert "block low-rank (-kf_blr 1e-08), MUMPS' estimate" in log
+    assert ", block low-rank, estimate" in log or "factoring out of core, full rank" in log
+    q = run(tmp_path / "incore", "-kf_ooc", "false")
+    assert q.returncode == 0, q.stderr
+    a, b = (kryflex.ReducedModel.load(str(tmp_path / d / "reduced.h5")).at([30.0]) for d in ("auto", "incore"))
+    np.testing.assert_allclose(a.frequencies_hz, b.frequencies_hz, rtol=1e-6, atol=0)
+    f = np.linspace(0.05, 15, 60)
+    Ha, Hb = a.frf(f), b.frf(f)
+    assert (np.abs(Ha - Hb).max(axis=0) / np.abs(Hb).max(axis=0)).max() <= 1e-8

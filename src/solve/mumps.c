@@ -431,6 +431,12 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
     PetscCall(KFMumpsOocFolder(*F, c.ooc_dir));
     PetscCall(KFMumpsFactorNumeric(*F, A));
     PetscCall(MatFactorGetError(*F, &err));
+    if (estimate_mb) { /* the timing line's estimate: this factor's */
+      PetscReal mine;
+
+      PetscCall(KFFactorEstimateMB(*F, PETSC_TRUE, &mine));
+      PetscCall(MPIU_Allreduce(&mine, estimate_mb, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)A)));
+    }
   }
   if (err != MAT_FACTOR_NOERROR) PetscCall(MatDestroy(F)); /* its out-of-core folder with it, on every rank */
   PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);

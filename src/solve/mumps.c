@@ -3,7 +3,22 @@
    implementation of the flexible solver factors through KFFactorMumps. */
 #define _GNU_SOURCE /* dladdr */
 #include <dlfcn.h>
+#if defined(__GLIBC__)
+  #include <malloc.h>
+#endif
 #include <kryflex/flexsolverimpl.h>
+
+/* Memory freed before the factorization back to the system. glibc keeps freed blocks below its (dynamic) mmap
+   threshold in the process's heap, and MUMPS' workspace is one large allocation that cannot reuse them: on the 2M-dof
+   solid the model check's and the assembly's temporaries, freed, still held 10 GB of the process's 17.5 GB before
+   MUMPS' analysis (the 202k-dof solid: 1.71 GB resident after the check, 0.47 GB after malloc_trim). The memory check
+   then also compares MUMPS' estimate with what is really available. */
+static void KFReturnFreedMemory(void)
+{
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
 
 /* MemAvailable of this node (/proc/meminfo), in MB; -1 where it cannot be read (also the body-wise solve's share) */
 PETSC_INTERN PetscReal KFNodeMemoryAvailableMB(void)
@@ -19,14 +34,15 @@ PETSC_INTERN PetscReal KFNodeMemoryAvailableMB(void)
   return kb < 0 ? -1 : kb / 1024.0;
 }
 
-/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core
-   (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
+/* MUMPS' estimate of the numerical factorization's memory on this rank, MB: INFO(15) in core, INFO(17) out of core,
+   INFO(30) and INFO(31) for a block low-rank factor (a small model reports 0: then its factors' entries, INFO(3) reals and INFO(4) integers, negative: millions) */
 static PetscErrorCode KFFactorEstimateMB(Mat F, PetscBool ooc, PetscReal *mb)
 {
-  PetscInt mine;
+  PetscInt mine, blr;
 
   PetscFunctionBegin;
-  PetscCall(MatMumpsGetInfo(F, ooc ? 17 : 15, &mine));
+  PetscCall(MatMumpsGetIcntl(F, 35, &blr)); /* analysed block low-rank: INFO(30), INFO(31) (the factors compressed at ICNTL(38)'s rate) */
+  PetscCall(MatMumpsGetInfo(F, blr ? (ooc ? 31 : 30) : (ooc ? 17 : 15), &mine));
   if (mine > 0) *mb = (PetscReal)mine;
   else {
     PetscInt nr, ni;
@@ -91,7 +107,7 @@ static PetscErrorCode KFCheckFactorMemory(Mat F, const char prefix[], PetscInt o
     PetscCall(MPIU_Allreduce(myfig, fig, 3, MPIU_REAL, MPIU_MAX, comm));
     SETERRQ(comm, PETSC_ERR_MEM, "not enough memory to factor the stiffness matrix: MUMPS' analysis estimates %.3g MB in core and %.3g MB out of core (-kf_ooc) for the factorization on one node, %.3g MB are available%s. Run on more nodes or a machine with more memory, free memory on this one, or try anyway with -kf_memory_check 0", (double)fig[0], (double)fig[1], (double)fig[2], has_limit ? " (-kf_memory_limit_mb)" : " (MemAvailable)");
   }
-  if (*ooc && ooc_mode == 2) PetscCall(KFProgress(comm, "  the in-core factorization would need %.4g MB on one node, %.4g MB are available: the factors go out of core (%.4g MB in core; the folder MUMPS_OOC_TMPDIR, default the working directory; -kf_ooc false keeps them in core)", (double)need[0], (double)avail, (double)need[1]));
+  if (*ooc && ooc_mode == 2) PetscCall(KFProgress(comm, "  the in-core factorization would need %.4g MB on one node, %.4g MB are available: the factors go out of core (%.4g MB in core; -kf_ooc false keeps them in core)", (double)need[0], (double)avail, (double)need[1]));
   if (*ooc) PetscCall(MatMumpsSetIcntl(F, 22, 1)); /* read by MUMPS at the factorization */
   PetscFunctionReturn(0);
 }
@@ -112,9 +128,10 @@ typedef struct {
   PetscInt  ooc_mode; /* 0 in core, 1 out of core, 2 auto */
   PetscReal blr;      /* CNTL(7) of a block low-rank factorization; 0: full rank */
   PetscBool spd;
+  char      ooc_dir[PETSC_MAX_PATH_LEN]; /* -kf_ooc_dir: the parent of the out-of-core folders; empty: the default */
 } KFMumpsControls;
 
-/* -kf_ordering, -kf_scotch_seed, -kf_ordering_tries, -kf_blr, -kf_ooc and -kf_spd */
+/* -kf_ordering, -kf_scotch_seed, -kf_ordering_tries, -kf_blr, -kf_ooc, -kf_ooc_dir and -kf_spd */
 static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, const char prefix[], KFMumpsControls *c)
 {
   char      val[16] = "auto";
@@ -127,6 +144,7 @@ static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, const char prefi
   c->ooc_mode = 2;
   c->blr      = 0;
   c->spd      = PETSC_FALSE;
+  c->ooc_dir[0] = 0;
   PetscOptionsBegin(comm, prefix, "kryflex factorization", "KFFlexSolverSetUp");
   PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_ordering", KFOrderings, 8, KFOrderings[c->ordering], &c->ordering, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_scotch_seed", c->seed, &c->seed, NULL));
@@ -134,6 +152,7 @@ static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, const char prefi
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_blr", c->blr, &c->blr, NULL));
   PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_ooc", val, val, sizeof(val), &set));
   PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_spd", c->spd, &c->spd, NULL));
+  PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_ooc_dir", c->ooc_dir, c->ooc_dir, sizeof(c->ooc_dir), NULL));
   PetscOptionsEnd();
   if (set && !val[0]) c->ooc_mode = 1; /* a bare -kf_ooc */
   else if (set) {
@@ -276,26 +295,94 @@ static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscB
   PetscFunctionReturn(0);
 }
 
+/* The block low-rank dropping tolerance -kf_ooc auto takes when the in-core factorization does not fit: on the 202k-dof
+   solid -kf_blr 1e-8 left the reduced model unchanged (1.6e-13) and its solves refine to the full-rank residual */
+#define KF_AUTO_BLR_TOL 1e-8
+
+/* -kf_ooc auto when MUMPS' in-core estimate does not fit the node's memory (KFCheckFactorMemory's test): first a
+   block low-rank factorization in core, analysed again with ICNTL(35) = 1, if MUMPS' estimate of it (INFO(30))
+   fits; its workspace is then capped at the node's share (ICNTL(23)) so that factors compressing worse than MUMPS
+   assumed fail cleanly (KFFactorMumps then factors out of core). *F becomes that factor and c->blr its tolerance;
+   otherwise *F stays and the memory check sends it out of core. *why: the progress line's reason. */
+static PetscErrorCode KFMumpsAutoBLR(Mat A, const char prefix[], PetscReal null_threshold, PetscBool scotch, KFMumpsControls *c, Mat *F)
+{
+  MPI_Comm    comm = PetscObjectComm((PetscObject)A), node;
+  PetscReal   limit, mine[2], need[2], avail, in[2], worst[2];
+  PetscBool   check, has_limit;
+  PetscMPIInt nrank;
+  Mat         G;
+
+  PetscFunctionBegin;
+  PetscCall(KFFactorMemoryOptions(comm, prefix, &check, &limit, &has_limit));
+  avail = has_limit ? limit : KFNodeMemoryAvailableMB();
+  if (!check || avail < 0) PetscFunctionReturn(0);
+  PetscCall(KFFactorEstimateMB(*F, PETSC_FALSE, &mine[0]));
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCallMPI(MPI_Comm_size(node, &nrank));
+  PetscCall(MPIU_Allreduce(&mine[0], &need[0], 1, MPIU_REAL, MPIU_SUM, node));
+  in[0] = need[0] - avail;
+  PetscCall(MPIU_Allreduce(in, worst, 1, MPIU_REAL, MPIU_MAX, comm));
+  if (worst[0] <= 0) { /* in core, full rank */
+    PetscCallMPI(MPI_Comm_free(&node));
+    PetscFunctionReturn(0);
+  }
+  if (scotch) { /* MUMPS 5.5's block low-rank analysis with the SCOTCH build crashed in SCOTCH (_SCOTCHthreadContextNbr,
+                   from its graph coarsening) in 6 of 11 runs of -kf_blr 1e-8 on the 57k-dof solid: not taken unasked */
+    PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node, %.4g MB are available; block low-rank is not tried with the SCOTCH build of MUMPS (its analysis can crash: docs/guide/large-models.md)", (double)need[0], (double)avail));
+    PetscCallMPI(MPI_Comm_free(&node));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KFMumpsAnalyse(A, null_threshold, KF_AUTO_BLR_TOL, PETSC_FALSE, scotch, KFScotchTrySeed(c->seed, 0), &G));
+  PetscCall(KFFactorEstimateMB(G, PETSC_FALSE, &mine[1]));
+  PetscCall(MPIU_Allreduce(&mine[1], &need[1], 1, MPIU_REAL, MPIU_SUM, node));
+  PetscCallMPI(MPI_Comm_free(&node));
+  in[1] = need[1] - avail;
+  PetscCall(MPIU_Allreduce(&in[1], &worst[1], 1, MPIU_REAL, MPIU_MAX, comm));
+  if (worst[1] > 0) {
+    PetscCall(MatDestroy(&G));
+    PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node and block low-rank (-kf_blr %g) %.4g MB, %.4g MB are available", (double)need[0], KF_AUTO_BLR_TOL, (double)need[1], (double)avail));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(MatMumpsSetIcntl(G, 23, (PetscInt)(avail / nrank))); /* MB per rank: a clean failure, not the OOM killer */
+  PetscCall(MatDestroy(F));
+  *F     = G;
+  c->blr = KF_AUTO_BLR_TOL;
+  PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node, %.4g MB are available: block low-rank (-kf_blr %g), MUMPS' estimate %.4g MB (its factors compressed to ICNTL(38) per mille); -kf_ooc true or false chooses otherwise", (double)need[0], (double)avail, KF_AUTO_BLR_TOL, (double)need[1]));
+  PetscFunctionReturn(0);
+}
+
+/* The out-of-core factor's folder on every rank, named in a progress line (rank 0's) */
+static PetscErrorCode KFMumpsOocFolder(Mat F, const char given[])
+{
+  const char *parent, *path;
+
+  PetscFunctionBegin;
+  PetscCall(KFOocParent(given, &parent));
+  PetscCall(KFOocFolderCreate(F, parent));
+  PetscCall(KFOocFolderGet(F, &path));
+  PetscCall(KFProgress(PetscObjectComm((PetscObject)F), "  out-of-core factors in %s (one folder per rank, removed with the factor; -kf_ooc_dir or MUMPS_OOC_TMPDIR chooses the parent)", path));
+  PetscFunctionReturn(0);
+}
+
 /* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
    (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
    options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
 PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb)
 {
-  MatFactorInfo   info;
   MatFactorError  err;
-  KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE};
+  KFMumpsControls c = {KF_ORDERING_AUTO, 1, 1, 0, 0, PETSC_FALSE, ""};
   PetscMPIInt     size;
-  PetscBool       ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
+  PetscBool       auto_blr, user_blr, ooc = PETSC_FALSE, set7 = PETSC_FALSE, set28 = PETSC_FALSE, set29 = PETSC_FALSE, scotch = KFMumpsHasScotch();
 
   PetscFunctionBegin;
   if (opts) PetscCall(KFMumpsControlsFromOptions(PetscObjectComm((PetscObject)A), prefix, &c));
+  user_blr = (PetscBool)(c.blr > 0);
   {
     PetscBool known, spd;
 
     PetscCall(MatIsSPDKnown(A, &known, &spd));
     if (c.spd && !(known && !spd)) PetscCall(MatSetOption(A, MAT_SPD, PETSC_TRUE)); /* an interior shift is known indefinite */
   }
-  PetscCall(MatFactorInfoInitialize(&info));
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
   if (opts) {
     if (c.ordering == KF_ORDERING_PTSCOTCH && size == 1) c.ordering = KF_ORDERING_SCOTCH; /* a parallel analysis on one rank: SCOTCH itself */
@@ -309,12 +396,16 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
     }
   }
   PetscCall(MatSetErrorIfFailure(A, PETSC_FALSE));
+  KFReturnFreedMemory();
+  ooc = (PetscBool)(c.ooc_mode == 1);
   /* out of core from the analysis on when asked (auto: decided after it) */
   PetscCall(KFMumpsAnalyse(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), scotch, KFScotchTrySeed(c.seed, 0), F));
   if (opts && scotch) PetscCall(KFMumpsTryOrderings(A, null_threshold, c.blr, (PetscBool)(c.ooc_mode == 1), c.seed, c.tries, F));
   if (set7) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_7"));
   if (set28) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_28"));
   if (set29) PetscCall(PetscOptionsClearValue(NULL, "-mat_mumps_icntl_29"));
+  if (estimate_mb && opts && c.ooc_mode == 2 && c.blr == 0) PetscCall(KFMumpsAutoBLR(A, prefix, null_threshold, scotch, &c, F));
+  auto_blr = (PetscBool)(estimate_mb && opts && c.ooc_mode == 2 && c.blr > 0 && !user_blr);
   if (estimate_mb) {
     PetscInt    used, analysis;
     const char *name = "unknown";
@@ -330,8 +421,24 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
       PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  -kf_ordering %s: the MUMPS in use has no SCOTCH, MUMPS chose %s instead (install Debian's libmumps-ptscotch-5.5, which scripts/setup does, and import kryflex before petsc4py)", KFOrderings[c.ordering], name));
 
   }
-  PetscCall(MatCholeskyFactorNumeric(*F, A, &info));
+  if (ooc) PetscCall(KFMumpsOocFolder(*F, c.ooc_dir));
+  PetscCall(KFMumpsFactorNumeric(*F, A));
   PetscCall(MatFactorGetError(*F, &err));
+  if (auto_blr && !ooc && err != MAT_FACTOR_NOERROR) { /* the factors compressed worse than MUMPS assumed: out of core, full rank */
+    PetscCall(KFProgress(PetscObjectComm((PetscObject)A), "  the block low-rank factorization did not fit (MUMPS error type %d): factoring out of core, full rank", (int)err));
+    PetscCall(MatDestroy(F));
+    PetscCall(KFMumpsAnalyse(A, null_threshold, 0, PETSC_TRUE, scotch, KFScotchTrySeed(c.seed, 0), F));
+    PetscCall(KFMumpsOocFolder(*F, c.ooc_dir));
+    PetscCall(KFMumpsFactorNumeric(*F, A));
+    PetscCall(MatFactorGetError(*F, &err));
+    if (estimate_mb) { /* the timing line's estimate: this factor's */
+      PetscReal mine;
+
+      PetscCall(KFFactorEstimateMB(*F, PETSC_TRUE, &mine));
+      PetscCall(MPIU_Allreduce(&mine, estimate_mb, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)A)));
+    }
+  }
+  if (err != MAT_FACTOR_NOERROR) PetscCall(MatDestroy(F)); /* its out-of-core folder with it, on every rank */
   PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
   PetscCall(MatMumpsGetInfog(*F, 28, null_pivots));
   PetscCall(MatMumpsGetInfog(*F, 12, negative_pivots));

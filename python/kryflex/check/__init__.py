@@ -47,8 +47,11 @@ def _asymmetry(A):
     At = A.transpose(PETSc.Mat())
     D = A.copy()
     D.axpy(-1.0, At, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    At.destroy()    # now: dropped, they would wait in PETSc's garbage (2 copies of each body matrix, 7 GB at 2M dofs)
     na = A.norm(PETSc.NormType.FROBENIUS)
-    return float(D.norm(PETSc.NormType.FROBENIUS) / na) if na > 0 else 0.0
+    nd = D.norm(PETSc.NormType.FROBENIUS)
+    D.destroy()
+    return float(nd / na) if na > 0 else 0.0
 
 
 def _quotients(K, M, cols):

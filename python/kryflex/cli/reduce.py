@@ -56,6 +56,7 @@ def run(argv):
 
     out = os.path.abspath(args.output)
     staging, created, clean_up = staged_output(out)
+    ooc_folder_default(staging.path)
     committed = False
     try:
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
@@ -264,6 +265,16 @@ def staged_output(out):
             _remove_if_empty(out)
     common.before_abort.append(clean_up)
     return staging, created, clean_up
+
+
+def ooc_folder_default(path):
+    """An out-of-core factorization writes its factors under the output's staging folder (its own folder per rank,
+    removed with the factor, and with the staging folder when the run fails), unless the user chose the folder:
+    -kf_ooc_dir, or MUMPS_OOC_TMPDIR in the environment."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    if not opts.hasName("kf_ooc_dir") and not os.environ.get("MUMPS_OOC_TMPDIR"):
+        opts.setValue("kf_ooc_dir", path)
 
 
 def _prepare_output(out):

@@ -50,6 +50,14 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
 PETSC_INTERN PetscErrorCode KFMumpsCheckOptions(MPI_Comm, const char prefix[]); /* every factorization option, read and checked */
 PETSC_INTERN PetscErrorCode KFMumpsGetBLR(MPI_Comm, const char prefix[], PetscReal *blr); /* -kf_blr */
 PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);
+/* out-of-core folders (src/solve/ooc_folder.c): the parent (-kf_ooc_dir given, else MUMPS_OOC_TMPDIR, TMPDIR, /tmp),
+   a private folder per rank attached to the factor and removed with it, and the numerical factorization that puts
+   the factor's files there */
+PETSC_INTERN PetscErrorCode KFOocParent(const char given[], const char **parent);
+PETSC_INTERN PetscErrorCode KFOocFolderCreate(Mat F, const char parent[]);
+PETSC_INTERN PetscErrorCode KFOocFolderGet(Mat F, const char **path);
+PETSC_INTERN PetscErrorCode KFMumpsFactorNumeric(Mat F, Mat A);
+PETSC_INTERN PetscErrorCode KFMumpsMatSolve(Mat F, Mat B, Mat X); /* an out-of-core factor read once per block */
 /* -kf_null_pivot_check_max_dofs and -kf_check_null_pivots: whether a system of nsys dofs factored with this shift gets
    the cross-check of its rigid count by MUMPS' null pivots of K_S */
 PETSC_INTERN PetscErrorCode KFNullPivotCheckOptions(MPI_Comm, const char prefix[], PetscInt nsys, PetscReal shift, PetscBool *check);

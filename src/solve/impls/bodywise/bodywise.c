@@ -165,7 +165,7 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
   PetscCall(MatMatMult(KPhi, E, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KE));
   PetscCall(KFZeroGammaRows(B, ng, bf->gif[b], KE));
   PetscCall(MatDuplicate(E, MAT_DO_NOT_COPY_VALUES, &bf->Psi[b]));
-  PetscCall(MatMatSolve(bf->F[b], KE, bf->Psi[b]));
+  PetscCall(KFMumpsMatSolve(bf->F[b], KE, bf->Psi[b]));
   PetscCall(KFZeroGammaRows(B, ng, bf->gif[b], bf->Psi[b])); /* exact zeros: the identity rows give f_G / d = 0 */
   PetscCall(MatDestroy(&KE));
   PetscCall(MatAXPY(E, -1.0, bf->Psi[b], SAME_NONZERO_PATTERN)); /* E <- Phi_c */
@@ -854,7 +854,7 @@ static PetscErrorCode KFBodywiseSolveWith(KFSystem sys, KFBodyFactors bf, KFBody
       continue;
     }
     PetscCall(MatDuplicate(Fb, MAT_DO_NOT_COPY_VALUES, &Y[b]));
-    PetscCall(MatMatSolve(bf->F[b], Fb, Y[b])); /* K_II^-1 f_b,I, zero on Gamma */
+    PetscCall(KFMumpsMatSolve(bf->F[b], Fb, Y[b])); /* K_II^-1 f_b,I, zero on Gamma */
     PetscCall(PetscMalloc1(ng * p + 1, &c));
     PetscCall(KFMatTransposeMatMultGather(bf->Psi[b], Fb, c)); /* K_GI K_II^-1 f_b,I */
     PetscCall(KFSmallGemm("T", nG, p, ng, -1.0, bw->T[b], c, 1.0, g));
@@ -866,7 +866,7 @@ static PetscErrorCode KFBodywiseSolveWith(KFSystem sys, KFBodyFactors bf, KFBody
       PetscInt ng = bf->ng[b];
       if (!Q[b]) continue;
       PetscCall(MatDuplicate(Q[b], MAT_DO_NOT_COPY_VALUES, &Y[b]));
-      PetscCall(MatMatSolve(bf->F[b], Q[b], Y[b]));
+      PetscCall(KFMumpsMatSolve(bf->F[b], Q[b], Y[b]));
       PetscCall(PetscMalloc1(ng * p + 1, &c));
       PetscCall(KFMatTransposeMatMultGather(bf->Psi[b], Q[b], c)); /* sequential: no communication */
       PetscCall(KFSmallGemm("T", nG, p, ng, -1.0, bw->T[b], c, 1.0, gl));

@@ -69,6 +69,12 @@ static PetscErrorCode KFFlexSolverSetUp_Monolithic(KFFlexSolver solver)
     PetscCall(ierr);
     PetscCall(PetscTime(&t1));
     solver->perf.factor_seconds += t1 - t0;
+    if (!solver->refine_set) { /* -kf_ooc auto may have chosen block low-rank: its refinement steps (KFFlexSolverRefineSteps) */
+      PetscInt blr;
+
+      PetscCall(MatMumpsGetIcntl(mono->F, 35, &blr));
+      if (blr) solver->refine = PetscMax(solver->refine, 5);
+    }
     sys->nfactor++;
   }
   PetscCheck(solver->negative_pivots == 0 || solver->shift < 0, s->comm, PETSC_ERR_ARG_WRONG, "the assembled stiffness matrix is indefinite: MUMPS found %" PetscInt_FMT " negative pivots. A body's K is not positive semi-definite (check its export and units)", solver->negative_pivots);
@@ -87,9 +93,8 @@ static PetscErrorCode KFFlexSolverRefactor_Monolithic(KFFlexSolver solver, Petsc
   KFFlexSolver_Monolithic *mono = (KFFlexSolver_Monolithic *)solver->data;
   KFSystem      sys = solver->sys;
   KFScene       s   = sys->scene;
-  PetscInt      blr = 0;
+  PetscInt      blr = 0, cap = 0;
   KFHeldEntries held = NULL;
-  MatFactorInfo info;
   Mat           A = mono->Kh ? mono->Kh : sys->Ks;
 
   PetscFunctionBegin;
@@ -97,6 +102,11 @@ static PetscErrorCode KFFlexSolverRefactor_Monolithic(KFFlexSolver solver, Petsc
   if (!mono->F) PetscFunctionReturn(0);
   PetscCall(MatMumpsGetIcntl(mono->F, 35, &blr));
   if (!blr) PetscFunctionReturn(0);
+  PetscCall(MatMumpsGetIcntl(mono->F, 23, &cap));
+  if (cap > 0) { /* -kf_ooc auto chose block low-rank because the full-rank factor does not fit in core */
+    PetscCall(KFProgress(s->comm, "block solves above -kf_refine_rtol after refinement: the block low-rank factor stays (-kf_ooc auto chose it because the full-rank one does not fit in core; -kf_ooc true factors full rank out of core)"));
+    PetscFunctionReturn(0);
+  }
   PetscCall(KFProgress(s->comm, "block solves above -kf_refine_rtol after refinement: the block low-rank factor is refactored full rank"));
   if (!mono->Kh && solver->nheld) {
     Vec       d;
@@ -109,8 +119,7 @@ static PetscErrorCode KFFlexSolverRefactor_Monolithic(KFFlexSolver solver, Petsc
     PetscCall(KFHoldDofsInPlace(sys->Ks, solver->nheld, solver->held, dsum / s->nsys, &held));
   }
   PetscCall(MatMumpsSetIcntl(mono->F, 35, 0));
-  PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorNumeric(mono->F, A, &info));
+  PetscCall(KFMumpsFactorNumeric(mono->F, A)); /* an out-of-core factor's files into its folder again */
   if (held) PetscCall(KFRestoreHeldDofs(sys->Ks, &held));
   sys->nfactor++;
   *done = PETSC_TRUE;
@@ -123,7 +132,7 @@ static PetscErrorCode KFFlexSolverSolve_Monolithic(KFFlexSolver solver, Mat W, M
   KFFlexSolver_Monolithic *mono = (KFFlexSolver_Monolithic *)solver->data;
 
   PetscFunctionBegin;
-  PetscCall(MatMatSolve(mono->F, W, X));
+  PetscCall(KFMumpsMatSolve(mono->F, W, X));
   PetscFunctionReturn(0);
 }
 

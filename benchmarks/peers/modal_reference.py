@@ -34,7 +34,6 @@ import time
 
 import numpy as np
 import scipy.linalg as sl
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -111,7 +110,7 @@ class ModalReference:
 
     @staticmethod
     def _pinv(M, R, lu, b, rtol=1e-14):
-        """K^+ b for b M-orthogonal... (b in range(K)): x <- (K + M)^-1 (b + M x), kept M-orthogonal to R."""
+        """K^+ b for b in range(K) (R^T b = 0): x <- (K + M)^-1 (b + M x), kept M-orthogonal to R."""
         x = np.zeros_like(b)
         for _ in range(80):
             new = lu.solve(np.asarray(b + M @ x))

@@ -253,6 +253,8 @@ def main():
                     help="pyMOR methods to run, by the start of their names (default: all)")
     ap.add_argument("--budget", type=float, default=120.0,
                     help="seconds: a method whose reduction took longer is not tried at larger orders")
+    ap.add_argument("--reference", choices=["direct", "modal"], default="direct",
+                    help="direct: a sparse LU per grid point; modal: modal_reference.py (sizes of 57k dofs and up)")
     args = ap.parse_args()
     ensure_pymor()
     print("peers bench, %s UTC, solid spacecraft --refine %g at %g deg, 1 rank" %
@@ -274,7 +276,11 @@ def main():
         freqs = grid(band, f_res, beta * 2 * np.pi * f_res / 2)
         Ge = G - M @ (PhiR @ (PhiR.T @ G))
         He = H - (H @ PhiR) @ (PhiR.T @ M)
-        T_el = direct_response(M, K, beta, Ge, He, freqs)
+        if args.reference == "modal":      # modal_reference.py: one factorization instead of one per point
+            from modal_reference import ModalReference
+            T_el = ModalReference(M, K, Ge, He, PhiR, beta, 4 * band[1]).elastic(freqs)
+        else:
+            T_el = direct_response(M, K, beta, Ge, He, freqs)
         w = 2 * np.pi * freqs
         T_rigid = -(H @ PhiR @ PhiR.T @ G)[None] / (w ** 2)[:, None, None]
         T_full = T_el + T_rigid

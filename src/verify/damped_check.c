@@ -1,8 +1,11 @@
 /*
   The direct check under the damping in use. The complex system (K_S - w^2 M_S + i B) X = G with
   B = w (C_S + alpha M_S + beta K_S) + g K_S (the bodies' viscous matrices C_S = sum_b P_b^T C_b P_b, Rayleigh,
-  structural) is solved in its real 2 x 2 block form [A -B; B A] [Xr; Xi] = [G; 0] (the Debian PETSc is real) by one
-  MUMPS LU per check frequency, refined twice against the block matrix.
+  structural) is solved in its real 2 x 2 block form (the Debian PETSc is real), by one MUMPS factorization per check
+  frequency, refined twice against the block matrix. Without a rigid border it is written symmetric,
+  [A B; B -A] [Xr; -Xi] = [G; 0], and factored LDL^T (SYM=2: the unsymmetric form's LU took 8 GB at 57k dofs with
+  Rayleigh damping); with the border (below) it is [A -B; B A] [Xr; Xi] = [G; 0] and an LU: the bordered symmetric
+  form, a saddle point with a zero diagonal block, factored wrongly on 2 ranks.
 
   Modal ratios are the one damping defined by the modes themselves: their equivalent viscous matrix is
   M Phi diag(2 zeta_k w_k) Phi^T M on the reference's own modes Phi, whose inverse update (Sherman-Morrison-Woodbury
@@ -55,21 +58,22 @@ static PetscErrorCode KFSystemDampingMatrix(KFSystem sys, Mat *Cs)
   PetscFunctionReturn(0);
 }
 
-/* [A -B; B A] as one AIJ matrix (MatNest's layout: on each rank its rows of each block row in turn); with a border
-   W (e x 2r) and E^-1 (2r x 2r), [A -B W 0; B A 0 W; W^T 0 -E^-1 0; 0 W^T 0 -E^-1]: eliminating the border gives
+/* The block form as one AIJ matrix (MatNest's layout: on each rank its rows of each block row in turn). Without a
+   border, [A B; B -A] (symmetric; unknowns [Xr; -Xi]). With a border W (e x 2r) and E^-1 (2r x 2r),
+   [A -B W 0; B A 0 W; W^T 0 -E^-1 0; 0 W^T 0 -E^-1] (unknowns [Xr; Xi; ...]): eliminating the border gives
    A + W E W^T in both diagonal blocks */
 static PetscErrorCode KFBlockForm(Mat A, Mat B, Mat W, Mat Einv, Mat *S)
 {
-  Mat       mB, N, blocks[16] = {NULL}, Wt = NULL, mE = NULL;
+  Mat       mX, N, blocks[16] = {NULL}, Wt = NULL, mE = NULL;
   PetscInt  nb = W ? 4 : 2;
 
   PetscFunctionBegin;
-  PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &mB));
-  PetscCall(MatScale(mB, -1.0));
+  PetscCall(MatDuplicate(W ? B : A, MAT_COPY_VALUES, &mX));
+  PetscCall(MatScale(mX, -1.0));
   blocks[0 * nb + 0] = A;
-  blocks[0 * nb + 1] = mB;
+  blocks[0 * nb + 1] = W ? mX : B;
   blocks[1 * nb + 0] = B;
-  blocks[1 * nb + 1] = A;
+  blocks[1 * nb + 1] = W ? A : mX;
   if (W) {
     PetscCall(MatTranspose(W, MAT_INITIAL_MATRIX, &Wt));
     PetscCall(MatDuplicate(Einv, MAT_COPY_VALUES, &mE));
@@ -83,8 +87,9 @@ static PetscErrorCode KFBlockForm(Mat A, Mat B, Mat W, Mat Einv, Mat *S)
   }
   PetscCall(MatCreateNest(PetscObjectComm((PetscObject)A), nb, NULL, nb, NULL, blocks, &N));
   PetscCall(MatConvert(N, MATAIJ, MAT_INITIAL_MATRIX, S));
+  if (!W) PetscCall(MatSetOption(*S, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatDestroy(&N));
-  PetscCall(MatDestroy(&mB));
+  PetscCall(MatDestroy(&mX));
   PetscCall(MatDestroy(&Wt));
   PetscCall(MatDestroy(&mE));
   PetscFunctionReturn(0);
@@ -142,11 +147,17 @@ static PetscErrorCode KFDampedSolve(Mat A, Mat B, Mat W, Mat Einv, Mat Gd, Mat X
   PetscCall(MatDuplicate(Gd, MAT_DO_NOT_COPY_VALUES, &Zero));
   PetscCall(MatZeroEntries(Zero));
   PetscCall(KFBlockSplit(R, PETSC_TRUE, Gd, Zero)); /* the right-hand side [G; 0] */
-  PetscCall(MatGetFactor(S, MATSOLVERMUMPS, MAT_FACTOR_LU, &F));
   PetscCall(MatGetOrdering(S, MATORDERINGNATURAL, &rp, &cp));
   PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatLUFactorSymbolic(F, S, rp, cp, &info));
-  PetscCall(MatLUFactorNumeric(F, S, &info));
+  if (W) {
+    PetscCall(MatGetFactor(S, MATSOLVERMUMPS, MAT_FACTOR_LU, &F));
+    PetscCall(MatLUFactorSymbolic(F, S, rp, cp, &info));
+    PetscCall(MatLUFactorNumeric(F, S, &info));
+  } else {
+    PetscCall(MatGetFactor(S, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F)); /* indefinite: MUMPS SYM=2 */
+    PetscCall(MatCholeskyFactorSymbolic(F, S, rp, &info));
+    PetscCall(MatCholeskyFactorNumeric(F, S, &info));
+  }
   PetscCall(MatDuplicate(R, MAT_DO_NOT_COPY_VALUES, &X));
   PetscCall(MatMatSolve(F, R, X));
   for (PetscInt it = 0; it < 2; it++) { /* near the band's bottom A is nearly singular on the rigid modes */
@@ -161,6 +172,7 @@ static PetscErrorCode KFDampedSolve(Mat A, Mat B, Mat W, Mat Einv, Mat Gd, Mat X
     PetscCall(MatDestroy(&SX));
   }
   PetscCall(KFBlockSplit(X, PETSC_FALSE, Xr, Xi));
+  if (!W) PetscCall(MatScale(Xi, -1.0)); /* the symmetric form's second unknown is -Xi */
   PetscCall(MatDestroy(&X));
   PetscCall(MatDestroy(&Zero));
   PetscCall(MatDestroy(&R));

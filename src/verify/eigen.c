@@ -351,7 +351,48 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver, KFSystem, Mat, PetscInt, PetscReal, PetscInt, PetscInt *, PetscReal[], Mat *, PetscInt *, PetscInt *);
+
+/* the tolerance of both sparse eigensolves: SLEPc's shift-and-invert rule ||K+ M x - theta x||_M / theta */
+#define KF_VERIFY_EIG_TOL 1e-10
+
+/* -kf_verify_block: the eigensolve with the flexible solver's factor in blocks (src/verify/block_eigen.c), or SLEPc's
+   Krylov-Schur one vector at a time */
+static PetscErrorCode KFVerifyBlockOption(MPI_Comm comm, PetscBool *block)
+{
+  PetscFunctionBegin;
+  *block = PETSC_TRUE;
+  PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
+  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify_block", *block, block, NULL));
+  PetscOptionsEnd();
+  PetscFunctionReturn(0);
+}
+
+/* The modes by block solves of the flexible solver's factor: H Phi, Phi^T G and the modes themselves from them */
+static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+{
+  KFScene   s = sys->scene;
+  Mat       X;
+  PetscInt  a = s->ninputs, t = s->noutputs, solves, columns;
+  PetscReal *XtH;
+
+  PetscFunctionBegin;
+  PetscCall(KFVerifyBlockEigen(solver, sys, start, nev, KF_VERIFY_EIG_TOL, 40, nconv, omega2, &X, &solves, &columns));
+  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " of %" PetscInt_FMT " modes converged with %" PetscInt_FMT " block solves (%" PetscInt_FMT " columns)", *nconv, nev, solves, columns));
+  if (HPhi) {
+    PetscCall(PetscMalloc1(nev * t + 1, &XtH));
+    PetscCall(KFMatTransposeMatMultGather(X, sys->Ht, XtH)); /* nev x t */
+    for (PetscInt k = 0; k < *nconv; k++)
+      for (PetscInt i = 0; i < t; i++) HPhi[i + k * t] = XtH[k + i * nev];
+    PetscCall(PetscFree(XtH));
+  }
+  if (PhiG && a) PetscCall(KFMatTransposeMatMultGather(X, sys->G, PhiG)); /* nev x a, leading dimension nev */
+  if (modes) *modes = X;
+  else PetscCall(MatDestroy(&X));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   EPS       eps;
@@ -360,7 +401,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
   PetscReal target;
   PetscInt  dense_max;
-  PetscBool dense, has_target;
+  PetscBool dense, has_target, block;
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -381,9 +422,16 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     }
   }
   PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
-  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
+  PetscCall(KFVerifyBlockOption(s->comm, &block));
+  block = (PetscBool)(block && solver && !dense);
+  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (block ? "block Krylov, shift-and-invert with the flexible solver's factor" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS"))));
   /* before the operators are set: the factorization holds dofs of K_S in place, which would change its state */
   if (solver && !dense) PetscCall(KFFlexSolverSetUp(solver));
+  if (block) {
+    PetscCall(KFSystemEigenBlock(sys, solver, start, nev, nconv, omega2, HPhi, PhiG, modes));
+    PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
+    PetscFunctionReturn(0);
+  }
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));
   PetscCall(EPSSetProblemType(eps, EPS_GHEP));
@@ -397,7 +445,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     PetscCall(PCShellSetContext(pc, solver));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
-    PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
+    PetscCall(EPSSetTolerances(eps, KF_VERIFY_EIG_TOL, PETSC_DEFAULT));
   } else {
     PetscReal nK, nM;
     if (!has_target) {
@@ -471,14 +519,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
 PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
@@ -489,16 +537,17 @@ PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscIn
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverGetSystem(solver, &sys));
-  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, solver, NULL, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
 /* KFSystemEigen with a flexible solver's factor: K+ is the shift-and-invert step (target 0), so the verification's
-   reference at a configuration the reduction has factored needs no factorization of its own */
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
+   reference at a configuration the reduction has factored needs no factorization of its own. start (or NULL): vectors
+   to begin with (the block eigensolve takes them: a neighbouring configuration's modes); modes (or NULL): the modes */
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, start, nev, nconv, omega2, HPhi, PhiG, modes));
   PetscFunctionReturn(0);
 }
 

@@ -454,7 +454,6 @@ PetscErrorCode KFReducerDestroy(KFReducer *reducer)
   PetscCall(KFReducerReset(r));
   PetscCall(KFSceneDestroy(&r->scene));
   PetscCall(PetscFree(r->angles));
-  PetscCall(MatDestroy(&r->verify_start));
   PetscCall(PetscFree(r->alpha_g));
   PetscCall(PetscFree(r->multi));
   PetscCall(PetscHeaderDestroy(&r));

@@ -15,7 +15,7 @@
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, Mat, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[]);
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -43,16 +43,11 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
   PetscFunctionBegin;
   PetscCall(PetscTime(&t0));
   if (solver) PetscCall(KFFlexSolverGetPerf(solver, &perf));
-  if (viscous) PetscCall(MatDestroy(modes));
-  if (solver) { /* the modes kept: the next configuration's eigensolve starts from them */
-    Mat X = NULL;
-
-    PetscCall(KFFlexSolverEigen_Private(solver, r->verify_start, nev, nconv, w2, viscous ? NULL : HPhi, viscous ? NULL : PhiG, &X));
-    PetscCall(MatDestroy(&r->verify_start));
-    if (viscous) PetscCall(MatDuplicate(X, MAT_COPY_VALUES, &r->verify_start));
-    if (viscous) *modes = X;
-    else r->verify_start = X;
-  } else if (viscous) PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
+  if (viscous) {
+    PetscCall(MatDestroy(modes));
+    if (solver) PetscCall(KFFlexSolverEigenModes(solver, nev, nconv, w2, modes));
+    else PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
+  } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
   else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));

@@ -230,28 +230,11 @@ static PetscErrorCode KFBlockRestart(KFBlockKrylov *bk, PetscInt m, const PetscR
   PetscFunctionReturn(0);
 }
 
-/* rank-independent start vectors (a hash of the global row and the column): serial and parallel runs start alike;
-   the first p0 columns are start's (the modes of a neighbouring configuration), when its layout is the system's */
-static PetscErrorCode KFBlockStart(KFBlockKrylov *bk, Mat start, PetscInt p, PetscScalar *C)
+/* rank-independent start vectors (a hash of the global row and the column): serial and parallel runs start alike */
+static PetscErrorCode KFBlockStart(KFBlockKrylov *bk, PetscInt p, PetscScalar *C)
 {
-  PetscInt p0 = 0;
-
   PetscFunctionBegin;
-  if (start) {
-    PetscInt nl, N, ps, ld;
-    const PetscScalar *a;
-
-    PetscCall(MatGetLocalSize(start, &nl, NULL));
-    PetscCall(MatGetSize(start, &N, &ps));
-    if (nl == bk->nl && N == bk->N) {
-      p0 = PetscMin(ps, p);
-      PetscCall(MatDenseGetLDA(start, &ld));
-      PetscCall(MatDenseGetArrayRead(start, &a));
-      for (PetscInt j = 0; j < p0; j++) PetscCall(PetscArraycpy(C + j * bk->nl, a + j * ld, bk->nl));
-      PetscCall(MatDenseRestoreArrayRead(start, &a));
-    }
-  }
-  for (PetscInt j = p0; j < p; j++)
+  for (PetscInt j = 0; j < p; j++)
     for (PetscInt i = 0; i < bk->nl; i++) {
       const PetscReal s = PetscSinReal(12.9898 * (PetscReal)(bk->rstart + i + 1) + 78.233 * (PetscReal)(j + 1)) * 43758.5453;
 
@@ -276,17 +259,12 @@ static PetscErrorCode KFBlockModes(KFBlockKrylov *bk, PetscInt nev, PetscInt got
   PetscFunctionReturn(0);
 }
 
-/* Below this multiple of the tolerance the residual from the held S V is at the block's rounding floor (a column's
-   solve error is relative to the block's largest, theta_1 / theta_nev times the pair's own): S X is then made afresh */
-#define KF_BLOCK_FLOOR 1e3
-
 /*
   The nev lowest flexible modes: omega2 (ascending) and X (nsys x nev, M-orthonormal, created), *nconv of them
-  converged to tol. start (or NULL): vectors to begin with, the modes of a neighbouring configuration. Blocks of
-  b = min(2 nev, 64) columns; the basis holds at most nev + 4b and restarts on its nev + b best Ritz vectors.
+  converged to tol. Blocks of b = min(2 nev, 64) columns; the basis holds at most nev + 4b and restarts on its nev + b best Ritz vectors.
   *solves, *columns: the block solves made and the columns they solved.
 */
-PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver solver, KFSystem sys, Mat start, PetscInt nev, PetscReal tol, PetscInt maxit, PetscInt *nconv, PetscReal omega2[], Mat *modes, PetscInt *solves, PetscInt *columns)
+PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver solver, KFSystem sys, PetscInt nev, PetscReal tol, PetscInt maxit, PetscInt *nconv, PetscReal omega2[], Mat *modes, PetscInt *solves, PetscInt *columns)
 {
   KFBlockKrylov bk;
   PetscScalar  *C, *MC, *X, *SX;
@@ -309,27 +287,19 @@ PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver solver, KFSystem sys
   /* the first block: S applied to the start vectors, so that every basis vector is in S's range (flexible, and
      consistent on M's null space) */
   q = bk.b;
-  PetscCall(KFBlockStart(&bk, start, q, C));
+  PetscCall(KFBlockStart(&bk, q, C));
   PetscCall(KFBlockMultM(&bk, C, q, MC));
   PetscCall(KFBlockApplyK(&bk, MC, q, C));
   PetscCall(KFBlockMultM(&bk, C, q, MC));
   PetscCall(KFBlockExpand(&bk, C, MC, q, &q));
   for (it = 0;; it++) {
-    PetscInt  last = q, p;
-    PetscBool fresh;
+    PetscInt last = q, p;
 
     m = PetscMin(nev, bk.k);
     PetscCall(KFBlockRitz(&bk, theta, Y));
     PetscCall(KFBlockRitzVectors(&bk, m, Y, X, SX));
     PetscCall(KFBlockResidual(&bk, m, SX, X, theta, err));
     KFBlockCount(m, err, tol, &got, &worst);
-    fresh = (PetscBool)(got < m && worst <= KF_BLOCK_FLOOR * tol && it < maxit);
-    if (fresh) { /* S X made afresh: the pairs judged on it; it is the next candidates too */
-      PetscCall(KFBlockMultM(&bk, X, m, MC));
-      PetscCall(KFBlockApplyK(&bk, MC, m, SX));
-      PetscCall(KFBlockResidual(&bk, m, SX, X, theta, err));
-      KFBlockCount(m, err, tol, &got, &worst);
-    }
     if (got == nev || !last || it >= maxit) break; /* all converged, the space invariant (nothing more to find), or the steps spent */
     if (bk.k + bk.b > bk.maxdim) { /* restart on the best Ritz vectors; the next candidates are S of them */
       p = PetscMin(bk.k, nev + bk.b);
@@ -338,10 +308,6 @@ PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver solver, KFSystem sys
     } else { /* the next block: S of the last one */
       p = last;
       PetscCall(PetscArraycpy(C, bk.W + (bk.k - last) * bk.nl, bk.nl * last));
-    }
-    if (fresh) {
-      p = m;
-      PetscCall(PetscArraycpy(C, SX, bk.nl * m));
     }
     PetscCall(KFBlockMultM(&bk, C, p, MC));
     PetscCall(KFBlockExpand(&bk, C, MC, p, &q));

@@ -351,7 +351,7 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
   PetscFunctionReturn(0);
 }
 
-PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver, KFSystem, Mat, PetscInt, PetscReal, PetscInt, PetscInt *, PetscReal[], Mat *, PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver, KFSystem, PetscInt, PetscReal, PetscInt, PetscInt *, PetscReal[], Mat *, PetscInt *, PetscInt *);
 
 /* the tolerance of both sparse eigensolves: SLEPc's shift-and-invert rule ||K+ M x - theta x||_M / theta */
 #define KF_VERIFY_EIG_TOL 1e-10
@@ -369,7 +369,7 @@ static PetscErrorCode KFVerifyBlockOption(MPI_Comm comm, PetscBool *block)
 }
 
 /* The modes by block solves of the flexible solver's factor: H Phi, Phi^T G and the modes themselves from them */
-static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   Mat       X;
@@ -377,7 +377,7 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, Mat 
   PetscReal *XtH;
 
   PetscFunctionBegin;
-  PetscCall(KFVerifyBlockEigen(solver, sys, start, nev, KF_VERIFY_EIG_TOL, 40, nconv, omega2, &X, &solves, &columns));
+  PetscCall(KFVerifyBlockEigen(solver, sys, nev, KF_VERIFY_EIG_TOL, 40, nconv, omega2, &X, &solves, &columns));
   PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " of %" PetscInt_FMT " modes converged with %" PetscInt_FMT " block solves (%" PetscInt_FMT " columns)", *nconv, nev, solves, columns));
   if (HPhi) {
     PetscCall(PetscMalloc1(nev * t + 1, &XtH));
@@ -392,7 +392,7 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, Mat 
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   EPS       eps;
@@ -428,7 +428,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Mat 
   /* before the operators are set: the factorization holds dofs of K_S in place, which would change its state */
   if (solver && !dense) PetscCall(KFFlexSolverSetUp(solver));
   if (block) {
-    PetscCall(KFSystemEigenBlock(sys, solver, start, nev, nconv, omega2, HPhi, PhiG, modes));
+    PetscCall(KFSystemEigenBlock(sys, solver, nev, nconv, omega2, HPhi, PhiG, modes));
     PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
     PetscFunctionReturn(0);
   }
@@ -519,14 +519,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Mat 
 PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
@@ -537,17 +537,16 @@ PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscIn
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverGetSystem(solver, &sys));
-  PetscCall(KFSystemEigenSolve(sys, solver, NULL, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
 /* KFSystemEigen with a flexible solver's factor: K+ is the shift-and-invert step (target 0), so the verification's
-   reference at a configuration the reduction has factored needs no factorization of its own. start (or NULL): vectors
-   to begin with (the block eigensolve takes them: a neighbouring configuration's modes); modes (or NULL): the modes */
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, Mat start, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+   reference at a configuration the reduction has factored needs no factorization of its own */
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, start, nev, nconv, omega2, HPhi, PhiG, modes));
+  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 

@@ -84,7 +84,6 @@ struct _p_KFReducer {
   PetscBool       verify;
   PetscInt        verify_modes;   /* PETSC_DECIDE: cover verify_cover x the band's top */
   PetscReal       verify_cover;
-  Mat             verify_start;   /* the last sparse reference's modes: the next configuration's eigensolve starts from them */
   PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
   PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */

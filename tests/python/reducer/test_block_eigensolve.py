@@ -86,6 +86,17 @@ def reduce_sparse(scene, **options):
     return reducer
 
 
+def on_common_grid(a, b, c):
+    """The two runs' reference responses at the frequencies both grids hold (each grid adds points across its
+    resonances: a double frequency computed equal in one run and 1 ulp apart in the other gives its points once or
+    twice)."""
+    fa, fb = np.ravel(a.result(c, "frf_frequencies_hz")), np.ravel(b.result(c, "frf_frequencies_hz"))
+    common = np.intersect1d(fa, fb)
+    ia, ib = np.searchsorted(fa, common), np.searchsorted(fb, common)
+    assert common.size >= 0.9 * min(fa.size, fb.size)
+    return a.frf(c, "full")[ia], b.frf(c, "full")[ib]
+
+
 @pytest.mark.parametrize("name", ["frame", "clamped", "clustered", "lumped"])
 def test_block_eigensolve_against_dense_scipy_and_krylov_schur(tmp_path, name):
     scene, systems = case(name, tmp_path)
@@ -100,7 +111,7 @@ def test_block_eigensolve_against_dense_scipy_and_krylov_schur(tmp_path, name):
             assert np.sum(np.isclose(f_dense[1:n], f_dense[:n - 1], rtol=1e-9)) >= 3
         d_dense = np.abs(f_block / f_dense[:n] - 1).max()
         d_slepc = np.abs(f_block / f_slepc - 1).max()
-        T_block, T_slepc = block.frf(c, "full"), slepc.frf(c, "full")
+        T_block, T_slepc = on_common_grid(block, slepc, c)
         peak = np.abs(T_slepc).max()
         d_frf = np.abs(T_block - T_slepc).max() / peak
         print("%s, configuration %d: %d modes; block vs dense SciPy %.1e, vs Krylov-Schur %.1e; reference response vs "

@@ -1,0 +1,145 @@
+"""The sparse verification eigensolve in blocks (src/verify/block_eigen.c: a block Krylov space of K+ M made of the
+reduction's block solves, Rayleigh-Ritz in the M inner product, SLEPc's shift-and-invert rule). Small models forced
+through the sparse path (-kf_verify_dense_max_dofs 0): the full-order frequencies against a dense SciPy eigensolve
+(M's null space condensed), and the frequencies and the reference response against SLEPc's Krylov-Schur on the same
+factor (-kf_verify_block false), on a free-free frame with rigid and mechanism modes at two joint angles, a clamped
+beam, a beam with double bending frequencies (equal section inertias) and a frame whose rotations are massless
+(M singular). Serially and on 2 ranks (which must agree with the serial run). The block eigensolve is asked for
+(-kf_verify_block true): Krylov-Schur stays the default, cheaper at 57k dofs (benchmarks/proof_cost/README.md)."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+from petsc4py import PETSc
+
+import kryflex
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
+sys.path.insert(0, os.path.join(ROOT, "meshes"))
+import bc_models  # noqa: E402
+import frames  # noqa: E402
+import reference as ref  # noqa: E402
+
+pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
+PROBE = os.path.join(SUPPORT, "block_eigen_probe.py")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+
+
+def dense_flexible_frequencies(M, K, rigid_rtol=1e-8):
+    """Every finite flexible frequency (Hz, ascending) of (K, M) by SciPy: M's null space condensed statically (numpy
+    eigh of M), the condensed pencil by scipy.linalg.eigh, the rigid and mechanism modes (|lambda| <= rigid_rtol
+    times the largest) left out."""
+    mu, U = np.linalg.eigh(0.5 * (M + M.T))
+    null = mu <= 1e-8 * mu.max()
+    Z, Y = U[:, null], U[:, ~null]
+    T = Y - Z @ np.linalg.solve(Z.T @ K @ Z, Z.T @ K @ Y) if null.any() else Y
+    Kc, Mc = T.T @ K @ T, T.T @ M @ T
+    lam = sl.eigh(0.5 * (Kc + Kc.T), 0.5 * (Mc + Mc.T), eigvals_only=True)
+    lam = lam[lam > rigid_rtol * np.abs(lam).max()]
+    return np.sqrt(lam) / (2 * np.pi)
+
+
+def clustered_beam():
+    """The clamped cantilever of bc_models with equal section inertias: its bending frequencies in y and z pair up."""
+    spec = bc_models.clamped_beam()
+    pts = [(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 11)]
+    n = len(pts)
+    K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
+    for e in range(n - 1):
+        k, m = bc_models.beam_element(pts[e], pts[e + 1], Iy=3e-7, Iz=3e-7)
+        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += k
+        M[6 * e:6 * e + 12, 6 * e:6 * e + 12] += m
+    M[6 * (n - 1):6 * (n - 1) + 3, 6 * (n - 1):6 * (n - 1) + 3] += 0.5 * np.eye(3)
+    spec["bodies"]["beam"].update(mass=M, stiffness=K)
+    spec["name"] = "clustered"
+    return spec
+
+
+def case(name, tmp):
+    """(scene, [(M_S, K_S) per configuration]) of a named small model."""
+    if name == "frame":
+        path = frames.write_random_scene(str(tmp), 360, nbodies=3, ninputs=2, noutputs=2, seed=5, nangles=2)
+        scene, dense = kryflex.load_scene(path), ref.load_scene(path)
+        return scene, [ref.assemble(dense, a)[:2] for a in scene.configurations]
+    spec = {"clamped": bc_models.clamped_beam, "clustered": clustered_beam, "lumped": bc_models.lumped_frame}[name]()
+    Ms, Ks = bc_models.single_body_reference(spec)[:2]
+    return kryflex.scene_from_dict(spec), [(Ms, Ks)]
+
+
+def reduce_sparse(scene, **options):
+    opts = PETSc.Options()
+    values = dict(kf_verify_dense_max_dofs=0, **options)
+    for k, v in values.items():
+        opts.setValue(k, v)
+    try:
+        reducer = kryflex.Reducer(scene, quiet=True, search=False)
+        reducer.reduce()
+    finally:
+        for k in values:
+            opts.delValue(k)
+    return reducer
+
+
+def on_common_grid(a, b, c):
+    """The two runs' reference responses at the frequencies both grids hold (each grid adds points across its
+    resonances: a double frequency computed equal in one run and 1 ulp apart in the other gives its points once or
+    twice)."""
+    fa, fb = np.ravel(a.result(c, "frf_frequencies_hz")), np.ravel(b.result(c, "frf_frequencies_hz"))
+    common = np.intersect1d(fa, fb)
+    ia, ib = np.searchsorted(fa, common), np.searchsorted(fb, common)
+    assert common.size >= 0.9 * min(fa.size, fb.size)
+    return a.frf(c, "full")[ia], b.frf(c, "full")[ib]
+
+
+@pytest.mark.parametrize("name", ["frame", "clamped", "clustered", "lumped"])
+def test_block_eigensolve_against_dense_scipy_and_krylov_schur(tmp_path, name):
+    scene, systems = case(name, tmp_path)
+    block, slepc = reduce_sparse(scene, kf_verify_block="true"), reduce_sparse(scene)
+    for c, (Ms, Ks) in enumerate(systems):
+        f_block = np.ravel(block.result(c, "full_frequencies_hz"))
+        f_slepc = np.ravel(slepc.result(c, "full_frequencies_hz"))
+        f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+        n = f_block.size
+        assert n == f_slepc.size and 0 < n <= f_dense.size, (n, f_slepc.size, f_dense.size)
+        if name == "clustered":      # the pairs are there, each frequency twice
+            assert np.sum(np.isclose(f_dense[1:n], f_dense[:n - 1], rtol=1e-9)) >= 3
+        d_dense = np.abs(f_block / f_dense[:n] - 1).max()
+        d_slepc = np.abs(f_block / f_slepc - 1).max()
+        T_block, T_slepc = on_common_grid(block, slepc, c)
+        peak = np.abs(T_slepc).max()
+        d_frf = np.abs(T_block - T_slepc).max() / peak
+        print("%s, configuration %d: %d modes; block vs dense SciPy %.1e, vs Krylov-Schur %.1e; reference response vs "
+              "Krylov-Schur's %.1e of the peak" % (name, c, n, d_dense, d_slepc, d_frf))
+        assert d_dense <= 1e-8
+        assert d_slepc <= 1e-8
+        assert d_frf <= 1e-8
+
+
+@pytest.mark.mpi
+def test_block_eigensolve_two_ranks_agree_with_one(tmp_path):
+    path = frames.write_random_scene(str(tmp_path), 360, nbodies=3, ninputs=2, noutputs=2, seed=5, nangles=2)
+    serial = reduce_sparse(kryflex.load_scene(path), kf_verify_block="true")
+    out = tmp_path / "two.npz"
+    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, str(out), "-kf_verify_block", "true"],
+                       env=ENV, capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    two = np.load(out)
+    dense = ref.load_scene(path)
+    for c, angles in enumerate(serial.configurations):
+        f1, f2 = np.ravel(serial.result(c, "full_frequencies_hz")), two["f%d" % c]
+        f_dense = dense_flexible_frequencies(*ref.assemble(dense, angles)[:2])
+        assert f1.size == f2.size > 0
+        T1, T2 = serial.frf(c, "full"), two["T%d" % c]
+        print("configuration %d: 2 ranks vs 1: frequencies %.1e, reference response %.1e of the peak; 2 ranks vs "
+              "dense SciPy %.1e" % (c, np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max(),
+                                    np.abs(f2 / f_dense[:f2.size] - 1).max()))
+        assert np.allclose(f2, f1, rtol=1e-9, atol=0)
+        assert np.abs(f2 / f_dense[:f2.size] - 1).max() <= 1e-8
+        assert np.abs(T2 - T1).max() <= 1e-8 * np.abs(T1).max()

@@ -85,7 +85,6 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_rigid_tol", TR, "1e-08", "(0, 1)", NULL, "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", NULL, "KFSystem (rigid modes)", "KFSystemComputeRigidModes"},
   {"-kf_progress_min_dofs", TI, "50000", "[0, inf)", NULL, "Print a progress line per Krylov block from this many system dofs on (default 50000)", NULL, "KFKrylovBasis", "KFKrylovBasis"},
   {"-kf_verify_dense_max_dofs", TI, "600", "[0, inf)", NULL, "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", NULL, "KFSystemEigen", "KFSystemEigen"},
-  {"-kf_verify_block", TB, "false", NULL, NULL, "Sparse verification eigensolve with the flexible solver's factor in blocks (block Krylov, Rayleigh-Ritz, SLEPc's shift-and-invert convergence rule) instead of SLEPc Krylov-Schur, one solve per vector (default false: measured slower at 57k dofs)", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_verify_target", TR, "auto", NULL, NULL, "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_quiet", TB, "false", NULL, NULL, "Silence the progress lines with elapsed time on rank 0 (default false)", NULL, "KFProgress", "KFProgress"},
   /* viewers, and the command's own */

@@ -351,49 +351,6 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
   PetscFunctionReturn(0);
 }
 
-PETSC_INTERN PetscErrorCode KFVerifyBlockEigen(KFFlexSolver, KFSystem, PetscInt, PetscReal, PetscInt, PetscInt *, PetscReal[], Mat *, PetscInt *, PetscInt *);
-
-/* the tolerance of both sparse eigensolves: SLEPc's shift-and-invert rule ||K+ M x - theta x||_M / theta */
-#define KF_VERIFY_EIG_TOL 1e-10
-
-/* -kf_verify_block: the eigensolve with the flexible solver's factor in blocks (src/verify/block_eigen.c), or SLEPc's
-   Krylov-Schur one vector at a time (the default: at 57k dofs the blocks need 240 columns per eigensolve where
-   Krylov-Schur needs about 61 vectors, and a block solve's column costs a quarter of a single vector's, so the solves
-   cost the same and the block's dense work comes on top; benchmarks/proof_cost/README.md) */
-static PetscErrorCode KFVerifyBlockOption(MPI_Comm comm, PetscBool *block)
-{
-  PetscFunctionBegin;
-  *block = PETSC_FALSE;
-  PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (full order)", "KFSystemEigen");
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify_block", *block, block, NULL));
-  PetscOptionsEnd();
-  PetscFunctionReturn(0);
-}
-
-/* The modes by block solves of the flexible solver's factor: H Phi, Phi^T G and the modes themselves from them */
-static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
-{
-  KFScene   s = sys->scene;
-  Mat       X;
-  PetscInt  a = s->ninputs, t = s->noutputs, solves, columns;
-  PetscReal *XtH;
-
-  PetscFunctionBegin;
-  PetscCall(KFVerifyBlockEigen(solver, sys, nev, KF_VERIFY_EIG_TOL, 40, nconv, omega2, &X, &solves, &columns));
-  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " of %" PetscInt_FMT " modes converged with %" PetscInt_FMT " block solves (%" PetscInt_FMT " columns)", *nconv, nev, solves, columns));
-  if (HPhi) {
-    PetscCall(PetscMalloc1(nev * t + 1, &XtH));
-    PetscCall(KFMatTransposeMatMultGather(X, sys->Ht, XtH)); /* nev x t */
-    for (PetscInt k = 0; k < *nconv; k++)
-      for (PetscInt i = 0; i < t; i++) HPhi[i + k * t] = XtH[k + i * nev];
-    PetscCall(PetscFree(XtH));
-  }
-  if (PhiG && a) PetscCall(KFMatTransposeMatMultGather(X, sys->G, PhiG)); /* nev x a, leading dimension nev */
-  if (modes) *modes = X;
-  else PetscCall(MatDestroy(&X));
-  PetscFunctionReturn(0);
-}
-
 /* The first m eigenvectors purified in one block solve: P = K+ M X. SLEPc purifies shift-and-invert vectors the same
    way (EPSSetPurify), one K+ application per vector: a third of a 20-mode eigensolve's applications, where a block
    solve costs a fraction of that (benchmarks/proof_cost/README.md) */
@@ -426,7 +383,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
   PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
   PetscReal target;
   PetscInt  dense_max;
-  PetscBool dense, has_target, block;
+  PetscBool dense, has_target;
   Mat       P = NULL; /* the purified eigenvectors (with the flexible solver's factor) */
 
   PetscFunctionBegin;
@@ -448,16 +405,9 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     }
   }
   PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
-  PetscCall(KFVerifyBlockOption(s->comm, &block));
-  block = (PetscBool)(block && solver && !dense);
-  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (block ? "block Krylov, shift-and-invert with the flexible solver's factor" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS"))));
+  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
   /* before the operators are set: the factorization holds dofs of K_S in place, which would change its state */
   if (solver && !dense) PetscCall(KFFlexSolverSetUp(solver));
-  if (block) {
-    PetscCall(KFSystemEigenBlock(sys, solver, nev, nconv, omega2, HPhi, PhiG, modes));
-    PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
-    PetscFunctionReturn(0);
-  }
   PetscCall(EPSCreate(s->comm, &eps));
   PetscCall(EPSSetOperators(eps, sys->Ks, sys->Ms));
   PetscCall(EPSSetProblemType(eps, EPS_GHEP));
@@ -471,7 +421,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     PetscCall(PCShellSetContext(pc, solver));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
-    PetscCall(EPSSetTolerances(eps, KF_VERIFY_EIG_TOL, PETSC_DEFAULT));
+    PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
   } else {
     PetscReal nK, nM;
     if (!has_target) {

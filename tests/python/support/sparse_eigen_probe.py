@@ -1,7 +1,7 @@
-"""A scene reduced on the ranks this runs on with the sparse verification eigensolve forced (for the block
-eigensolve's 2-rank test):
+"""A scene reduced on the ranks this runs on with the sparse verification eigensolve forced (for its 2-rank test,
+tests/python/reducer/test_sparse_eigensolve.py):
 
-    mpiexec -n 2 .venv/bin/python tests/python/support/block_eigen_probe.py SCENE.yaml OUT.npz [PETSc options]
+    mpiexec -n 2 .venv/bin/python tests/python/support/sparse_eigen_probe.py SCENE.yaml OUT.npz [PETSc options]
 
 Writes (rank 0) per configuration the full-order frequencies and the full-order reference response on its grid."""
 import sys

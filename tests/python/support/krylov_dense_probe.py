@@ -95,20 +95,30 @@ def main():
     Phi = gathered(Phi, PETSc) if Phi.getSize()[1] else np.zeros((len(M), 0))
     V = gathered(basis.combine(np.eye(basis.size)), PETSc)
     if PETSc.COMM_WORLD.getRank() == 0:
-        R = reference_basis(M, K, G, Ht, Phi, args.input_blocks, args.output_blocks)
-        sines = np.sqrt(np.clip(1 - np.linalg.svd(V.T @ M @ R, compute_uv=False) ** 2, 0, None))
-        lam = sla.eigh(Kr, Mr, eigvals_only=True)
-        lam_ref = np.linalg.eigvalsh(R.T @ K @ R)
-        result = {
-            "ranks": PETSc.COMM_WORLD.getSize(), "dofs": len(M), "size": basis.size, "reference_size": R.shape[1],
-            "deflated": ndeflated,
-            "orthonormality": float(np.abs(V.T @ M @ V - np.eye(V.shape[1])).max()),
-            "rigid_content": float(np.abs(Phi.T @ M @ V).max()) if Phi.size else 0.0,
-            "largest_sine": float(sines.max()) if len(lam) == len(lam_ref) else None,
-            "eigenvalues_rel": float(np.max(np.abs(lam - lam_ref) / np.abs(lam_ref))) if len(lam) == len(lam_ref) else None,
-        }
-        with open(args.out, "w") as f:
-            json.dump(result, f, indent=1)
+        try:
+            write_result(args, PETSc.COMM_WORLD.getSize(), basis, ndeflated, Mr, Kr, M, K, G, Ht, Phi, V)
+        except Exception:   # the other ranks wait in MPI_Finalize: take them down with this one
+            import traceback
+            traceback.print_exc()
+            PETSc.COMM_WORLD.abort(1)
+
+
+def write_result(args, nranks, basis, ndeflated, Mr, Kr, M, K, G, Ht, Phi, V):
+    """the reference and the comparison, written to args.out (rank 0)"""
+    R = reference_basis(M, K, G, Ht, Phi, args.input_blocks, args.output_blocks)
+    sines = np.sqrt(np.clip(1 - np.linalg.svd(V.T @ M @ R, compute_uv=False) ** 2, 0, None))
+    lam = sla.eigh(Kr, Mr, eigvals_only=True)
+    lam_ref = np.linalg.eigvalsh(R.T @ K @ R)
+    result = {
+        "ranks": nranks, "dofs": len(M), "size": basis.size, "reference_size": R.shape[1],
+        "deflated": ndeflated,
+        "orthonormality": float(np.abs(V.T @ M @ V - np.eye(V.shape[1])).max()),
+        "rigid_content": float(np.abs(Phi.T @ M @ V).max()) if Phi.size else 0.0,
+        "largest_sine": float(sines.max()) if len(lam) == len(lam_ref) else None,
+        "eigenvalues_rel": float(np.max(np.abs(lam - lam_ref) / np.abs(lam_ref))) if len(lam) == len(lam_ref) else None,
+    }
+    with open(args.out, "w") as f:
+        json.dump(result, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -45,7 +45,7 @@ def probe(scene, out, nranks):
     cmd = [sys.executable, PROBE, scene, out, "--input-blocks", "8", "--output-blocks", "2"]
     if nranks > 1:
         cmd = ["mpiexec", "-n", str(nranks)] + cmd
-    proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, f"{' '.join(cmd)} failed:\n{proc.stdout}\n{proc.stderr}"
     with open(out) as f:
         return json.load(f)

@@ -12,10 +12,37 @@ typedef struct {
 
 /* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
 typedef struct {
-  KFSystem sys;
-  Mat      MPhi; /* NULL without rigid modes (clamped) */
-  PetscInt r;
+  KFSystem           sys;
+  Mat                MPhi; /* NULL without rigid modes (clamped) */
+  PetscInt           r, ldp, ldmp;
+  const PetscScalar *phi, *mphi; /* the local rows of Phi and M Phi while the basis is built (KFRigidSpaceOpen) */
+  PetscReal          mnorm;      /* ||M||_inf >= M's largest eigenvalue: the null-space test of KFMBasisAppend */
 } KFRigidSpace;
+
+/* The rigid modes of the system, M Phi (the system's own: no product here), their local arrays, and ||M||. The arrays
+   are read while the basis is built; neither matrix changes meanwhile. */
+static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, KFRigidSpace *rs)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscMemzero(rs, sizeof(*rs)));
+  rs->sys = sys;
+  PetscCall(MatGetSize(sys->Phi, NULL, &rs->r));
+  PetscCall(KFSystemGetMPhi(sys, &rs->MPhi));
+  if (rs->r) {
+    PetscCall(MatDenseGetLDA(sys->Phi, &rs->ldp));
+    PetscCall(MatDenseGetLDA(rs->MPhi, &rs->ldmp));
+    const PetscScalar *a;
+
+    PetscCall(MatDenseGetArrayRead(sys->Phi, &a));
+    rs->phi = a; /* the restore clears its argument, not the array */
+    PetscCall(MatDenseRestoreArrayRead(sys->Phi, &a));
+    PetscCall(MatDenseGetArrayRead(rs->MPhi, &a));
+    rs->mphi = a;
+    PetscCall(MatDenseRestoreArrayRead(rs->MPhi, &a));
+  }
+  PetscCall(MatNorm(sys->Ms, NORM_INFINITY, &rs->mnorm));
+  PetscFunctionReturn(0);
+}
 
 static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
 {
@@ -51,97 +78,110 @@ static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x,
   PetscFunctionReturn(0);
 }
 
-/* One classical Gram-Schmidt pass of the block w (nl x p, mw = M w) against the rigid modes and the basis columns:
-   the coefficients Phi^T M w and V^T M w come from mw, then w -= Phi c_r + V c_v, and mw with it when update is set
-   (from the kept products M Phi and M V: exact up to rounding of the small correction, so only worth it when the
-   coefficients are small, i.e. on the second pass). With mw NULL the coefficients come from the kept products
-   instead, (M Phi)^T w and (M V)^T w: a first pass needs no product of w with M. cnorm2, when given, receives each
-   column's |c|^2 (its M-norm squared inside the span of [Phi V], which is M-orthonormal). */
-static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool update, PetscReal cnorm2[])
+/* Row chunk of the skinny products below: a chunk of the block (ROWS x p) stays in cache while every basis column
+   meets it, and each operand is read once from memory in order. A whole-height BLAS gemm of a tall basis with a block
+   of 1-8 columns copies (packs) the basis into a buffer before using it for 2-16 flops per entry: on this
+   bandwidth-bound product the copy was half of the Gram-Schmidt's time (perf, 200k-dof panel scene). */
+#define KF_SKINNY_ROWS 2048
+
+/* out (nc x p, leading dimension ldo) += A^T X over local rows, A nl x nc (lda), X nl x p (ldx), chunk by chunk */
+static PetscErrorCode KFSkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *x, PetscInt ldx, PetscScalar *out, PetscInt ldo)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blo;
+  PetscScalar  one = 1.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldo, &blo));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bc, &bp, &bm, &one, a + i0, &bla, x + i0, &blx, &one, out, &blo));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* X (nl x p, ldx) -= A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
+static PetscErrorCode KFSkinnyMultSub(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blc;
+  PetscScalar  one = 1.0, mone = -1.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldc, &blc));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &mone, a + i0, &bla, c, &blc, &one, x + i0, &blx));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The coefficients c ((r + k) x p, column-major, rigid rows first, replicated) of the block w (nl x p) against the
+   rigid modes and the basis columns: [Phi V]^T (M w) from mw = M w, or with mw NULL from the kept products,
+   (M [Phi V])^T w: a first pass needs no product of w with M. One reduction over the ranks. */
+static PetscErrorCode KFMBasisCoefficients(const KFRigidSpace *rs, const KFMBasis *mb, PetscInt p, const PetscScalar *w, const PetscScalar *mw, PetscReal c[])
 {
   const PetscInt     r = rs->r, k = mb->k, nl = mb->nl;
-  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
-  PetscReal         *c;
-  const PetscScalar *phi = NULL, *mphi = NULL, *v;
-  PetscInt           ldp = nl, ldmp = nl;
+  const PetscScalar *x = mw ? mw : w, *v;
+  PetscReal         *loc;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
+  if (r) PetscCall(KFSkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
+  PetscCall(BVGetArrayRead(mb->V, &v));
+  PetscCall(KFSkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
+  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)mb->V)));
+  PetscCall(PetscFree(loc));
+  PetscFunctionReturn(0);
+}
+
+/* w -= [Phi V] c, and mw -= [M Phi, M V] c when mw is given (from the kept products: exact up to the rounding of the
+   correction, so only used when the coefficients are small) */
+static PetscErrorCode KFMBasisSubtract(const KFRigidSpace *rs, const KFMBasis *mb, PetscInt p, const PetscReal c[], PetscScalar *w, PetscScalar *mw)
+{
+  const PetscInt     r = rs->r, k = mb->k, nl = mb->nl;
+  const PetscScalar *v;
+
+  PetscFunctionBegin;
+  if (r) {
+    PetscCall(KFSkinnyMultSub(nl, r, rs->phi, rs->ldp, p, c, r + k, w, nl));
+    if (mw) PetscCall(KFSkinnyMultSub(nl, r, rs->mphi, rs->ldmp, p, c, r + k, mw, nl));
+  }
+  PetscCall(BVGetArrayRead(mb->V, &v));
+  PetscCall(KFSkinnyMultSub(nl, k, v, nl, p, c + r, r + k, w, nl));
+  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  if (mw) PetscCall(KFSkinnyMultSub(nl, k, mb->MV, nl, p, c + r, r + k, mw, nl));
+  PetscFunctionReturn(0);
+}
+
+/* One classical Gram-Schmidt pass of the block w (nl x p, mw = M w) against the rigid modes and the basis columns:
+   the coefficients (KFMBasisCoefficients: from mw, or from the kept products with mw NULL), then w -= [Phi V] c, and
+   mw with it when update is set. cnorm2, when given, receives each column's |c|^2 (its M-norm squared inside the span
+   of [Phi V], which is M-orthonormal). */
+static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool update, PetscReal cnorm2[])
+{
+  const PetscInt r = rs->r, k = mb->k;
+  PetscReal     *c;
 
   PetscFunctionBegin;
   if (cnorm2)
     for (PetscInt j = 0; j < p; j++) cnorm2[j] = 0;
   if (!r && !k) PetscFunctionReturn(0);
   PetscCall(PetscMalloc1((r + k) * p + 1, &c));
-  PetscCall(BVGetArrayRead(mb->V, &v));
-  if (r) {
-    PetscCall(MatDenseGetLDA(rs->sys->Phi, &ldp));
-    PetscCall(MatDenseGetLDA(rs->MPhi, &ldmp));
-    PetscCall(MatDenseGetArrayRead(rs->sys->Phi, &phi));
-    PetscCall(MatDenseGetArrayRead(rs->MPhi, &mphi));
-  }
-  /* [Phi V]^T (M w) in one reduction: r rows for the rigid modes, then k for the basis */
-  {
-    PetscReal         *loc;
-    const PetscScalar *x = mw ? mw : w, *lp = mw ? phi : mphi, *lv = mw ? v : mb->MV;
-    const PetscInt     ldl = mw ? ldp : ldmp;
-
-    PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
-    if (nl > 0 && p > 0) {
-      PetscBLASInt bn, bp, bld, bmw, bq;
-      PetscScalar  one = 1.0, zero = 0.0;
-      PetscCall(PetscBLASIntCast(nl, &bn));
-      PetscCall(PetscBLASIntCast(p, &bp));
-      PetscCall(PetscBLASIntCast(nl, &bmw));
-      PetscCall(PetscBLASIntCast(r + k, &bq));
-      if (r) {
-        PetscBLASInt br;
-        PetscCall(PetscBLASIntCast(r, &br));
-        PetscCall(PetscBLASIntCast(ldl, &bld));
-        /* rows 0..r-1 of the (r + k) x p result */
-        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &br, &bp, &bn, &one, lp, &bld, x, &bmw, &zero, loc, &bq));
-      }
-      if (k) {
-        PetscBLASInt bk;
-        PetscCall(PetscBLASIntCast(k, &bk));
-        PetscCall(PetscBLASIntCast(nl, &bld));
-        PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bk, &bp, &bn, &one, lv, &bld, x, &bmw, &zero, loc + r, &bq));
-      }
-    }
-    PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, comm));
-    PetscCall(PetscFree(loc));
-  }
+  PetscCall(KFMBasisCoefficients(rs, mb, p, w, mw, c));
   if (cnorm2)
     for (PetscInt j = 0; j < p; j++)
       for (PetscInt i = 0; i < r + k; i++) cnorm2[j] += PetscRealPart(c[i + j * (r + k)] * c[i + j * (r + k)]);
-  /* w -= [Phi V] c, and mw -= [M Phi, M V] c: column j of c starts at c + j (r + k), rigid rows first */
-  if (nl > 0 && p > 0) {
-    PetscBLASInt bn, bp, bld, bw, bq;
-    PetscScalar  one = 1.0, mone = -1.0;
-    PetscCall(PetscBLASIntCast(nl, &bn));
-    PetscCall(PetscBLASIntCast(p, &bp));
-    PetscCall(PetscBLASIntCast(nl, &bw));
-    PetscCall(PetscBLASIntCast(r + k, &bq));
-    if (r) {
-      PetscBLASInt br;
-      PetscCall(PetscBLASIntCast(r, &br));
-      PetscCall(PetscBLASIntCast(ldp, &bld));
-      PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, phi, &bld, c, &bq, &one, w, &bw));
-      if (update && mw) {
-        PetscCall(PetscBLASIntCast(ldmp, &bld));
-        PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &br, &mone, mphi, &bld, c, &bq, &one, mw, &bw));
-      }
-    }
-    if (k) {
-      PetscBLASInt bk;
-      PetscCall(PetscBLASIntCast(k, &bk));
-      PetscCall(PetscBLASIntCast(nl, &bld));
-      PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, v, &bld, c + r, &bq, &one, w, &bw));
-      if (update && mw) PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bn, &bp, &bk, &mone, mb->MV, &bld, c + r, &bq, &one, mw, &bw));
-    }
-  }
-  if (r) {
-    PetscCall(MatDenseRestoreArrayRead(rs->sys->Phi, &phi));
-    PetscCall(MatDenseRestoreArrayRead(rs->MPhi, &mphi));
-  }
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  PetscCall(KFMBasisSubtract(rs, mb, p, c, w, update ? mw : NULL));
   PetscCall(PetscFree(c));
   PetscFunctionReturn(0);
 }
@@ -161,19 +201,62 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
   PetscFunctionReturn(0);
 }
 
+/* The block w (nl x p) made M-orthogonal to the rigid modes and the basis, mw = M w with it; nrm0: each column's M-norm
+   before. With the block's product (have_mw) pass 1 takes its coefficients from it; when no column loses more than
+   half of its M-norm squared there (DGKS's criterion: the block was nearly orthogonal to the basis already, as a
+   chain's orthonormalized block is to a basis holding its chain) one pass is enough (Giraud, Langou, Rozloznik: the
+   result is orthogonal to rounding), and mw follows from the kept products, exact up to the rounding of the small
+   correction: no product with M and no second pass over the basis. Otherwise pass 2 takes its coefficients from a
+   fresh product of the projected block, which is what makes it a refinement (a product updated through pass 1 would
+   carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Without the block's product, pass 1
+   takes them from the kept products, (M [Phi V])^T w, and the norm before follows by Pythagoras ([Phi V] being
+   M-orthonormal). */
+static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool have_mw, PetscReal nrm0[])
+{
+  const PetscInt r = rs->r, k = mb->k, nl = mb->nl;
+  MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
+  PetscReal     *cn2;
+  PetscBool      once = PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(p, &cn2));
+  if (have_mw) {
+    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+    if (r + k) {
+      PetscReal *c;
+
+      PetscCall(PetscMalloc1((r + k) * p, &c));
+      PetscCall(KFMBasisCoefficients(rs, mb, p, w, mw, c));
+      once = PETSC_TRUE;
+      for (PetscInt j = 0; j < p; j++) {
+        for (PetscInt i = 0; i < r + k; i++) cn2[j] += c[i + j * (r + k)] * c[i + j * (r + k)];
+        if (!(nrm0[j] > 0) || !(nrm0[j] * nrm0[j] - cn2[j] >= 0.5 * nrm0[j] * nrm0[j])) once = PETSC_FALSE;
+      }
+      PetscCall(KFMBasisSubtract(rs, mb, p, c, w, once ? mw : NULL)); /* pass 1 */
+      PetscCall(PetscFree(c));
+    } else once = PETSC_TRUE; /* nothing to be orthogonal to */
+    if (!once) PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
+  } else {
+    PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 1 */
+    PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
+    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+    for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
+  }
+  if (!once) PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE, NULL)); /* pass 2 */
+  PetscCall(PetscFree(cn2));
+  PetscFunctionReturn(0);
+}
+
 /* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
    it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
    is dropped (deflation). MW, when given, is M W (the caller has it).
 
-   Block classical Gram-Schmidt, twice (DESIGN.md: rigid content creeps back through rounding, so the rigid modes are
-   projected out of every block together with the basis): pass 1 takes [Phi V]^T M W from the block's product MW, or
-   without one from the kept products, (M [Phi V])^T W, the same numbers up to rounding that pass 2 corrects; pass 2
-   the same from a fresh product of the projected block, which is what makes it a refinement (a product updated
-   through pass 1 would carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Then the block's
-   own columns, in order, by Gram-Schmidt on the (pass-2) products; a column that loses more than half of its norm there
-   gets a fresh product and one more pass against everything (DGKS's criterion), so that the near-dependent inputs of a
-   block stay as orthogonal as the rest. One block product with M per append (pass 2's), whatever the basis size,
-   instead of several mat-vecs per column. */
+   Block classical Gram-Schmidt (KFMBasisPasses: twice, or once where DGKS's criterion shows it is enough; DESIGN.md:
+   rigid content creeps back through rounding, so the rigid modes are projected out of every block together with the
+   basis). Then the block's own columns, in order, by Gram-Schmidt on the products; a column that loses more than half
+   of its norm there gets a fresh product and one more pass against everything (DGKS's criterion), so that the
+   near-dependent inputs of a block stay as orthogonal as the rest. At most one block product with M per append,
+   whatever the basis size, instead of several mat-vecs per column. */
 static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, Mat MW, PetscReal tol, PetscInt *ndeflated)
 {
   const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
@@ -182,11 +265,10 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscScalar       *w, *mw;
   const PetscScalar *src;
   PetscInt           ld;
-  PetscReal         *nrm0, mnorm;
+  PetscReal         *nrm0, mnorm = rs->mnorm;
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
-  PetscCall(MatNorm(Ms, NORM_INFINITY, &mnorm)); /* >= M's largest eigenvalue */
   PetscCall(PetscMalloc3(nl * p + 1, &w, nl * p + 1, &mw, p, &nrm0));
   PetscCall(MatDenseGetLDA(W, &ld));
   PetscCall(MatDenseGetArrayRead(W, &src));
@@ -197,20 +279,8 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     PetscCall(MatDenseGetArrayRead(MW, &src));
     for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&mw[j * nl], &src[(j0 + j) * ld], nl));
     PetscCall(MatDenseRestoreArrayRead(MW, &src));
-    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-    PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_FALSE, NULL)); /* pass 1 */
-    PetscCall(KFMProduct(Ms, nl, p, w, mw));
-  } else { /* pass 1 from the kept products; the norm before it by Pythagoras, [Phi V] being M-orthonormal */
-    PetscReal *cn2;
-
-    PetscCall(PetscMalloc1(p, &cn2));
-    PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2));
-    PetscCall(KFMProduct(Ms, nl, p, w, mw));
-    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-    for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
-    PetscCall(PetscFree(cn2));
   }
-  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE, NULL)); /* pass 2 */
+  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, MW ? PETSC_TRUE : PETSC_FALSE, nrm0));
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
     PetscReal    nb, na;
@@ -397,10 +467,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
     PetscCall(BVSetActiveColumns(chain[c], 0, 0));
     PetscCall(KFMBasisCreate(chain[c], &mchain[c]));
   }
-  rs.sys  = sys;
-  rs.MPhi = NULL;
-  PetscCall(MatGetSize(sys->Phi, NULL, &rs.r));
-  PetscCall(KFSystemGetMPhi(sys, &rs.MPhi)); /* the system's own: no product here */
+  PetscCall(KFRigidSpaceOpen(sys, &rs));
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
@@ -530,10 +597,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
   PetscCall(BVSetFromOptions(V));
   PetscCall(KFMBasisCreate(V, &basis));
-  rs.sys  = sys;
-  rs.MPhi = NULL;
-  PetscCall(MatGetSize(sys->Phi, NULL, &rs.r));
-  PetscCall(KFSystemGetMPhi(sys, &rs.MPhi));
+  PetscCall(KFRigidSpaceOpen(sys, &rs));
   for (PetscInt i = 0; i < n; i++) {
     Mat      A;
     PetscInt l0, k0;

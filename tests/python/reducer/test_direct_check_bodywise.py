@@ -16,7 +16,6 @@ independent dense solves (NumPy/SciPy, nothing from kryflex's numerics):
 - a reference left incomplete (the sparse path with 2 modes) fails with exit 3 naming the frequency and the angle,
   serially and on 2 ranks; 2 ranks give the serial truth and verdict.
 """
-import json
 import os
 import subprocess
 import sys
@@ -31,6 +30,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import test_damping as td  # noqa: E402
 import test_damped_check as tdc  # noqa: E402
+from rank_runs import results_on_ranks  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
 EXIT_NOT_CONVERGED = 3
@@ -186,15 +186,7 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.mpi
 def test_two_ranks_same_truth_and_verdict(tmp_path):
     """2 ranks (each body factored on its own rank): the body-wise truth and the verdict as on 1 rank."""
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS % {"here": HERE})
-    results = []
-    for n in (1, 2):
-        p = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script)], env=td.ENV, capture_output=True,
-                           text=True, timeout=300)
-        assert p.returncode == 0, p.stderr[-2000:]
-        line = [x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0]
-        results.append(json.loads(line[7:]))
+    results = results_on_ranks(TWO_RANKS % {"here": HERE}, tmp_path, td.ENV)
     one, two = (np.array(r["truth"]) for r in results)
     print("2 ranks vs 1: truth %.2e, errors %s %s" % (np.abs(one - two).max() / np.abs(one).max(),
                                                      results[0]["error"], results[1]["error"]))

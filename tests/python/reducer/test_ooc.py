@@ -2,12 +2,12 @@
 removed after the run, whether it succeeded or failed, on 1 and 2 ranks."""
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import kryflex
+from solid_runs import reduce_solid, solid_scene
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
@@ -23,18 +23,11 @@ pytestmark = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryfl
 @pytest.fixture(scope="module")
 def solid14k(tmp_path_factory):
     """The 13,513-dof solid pair: MUMPS writes its factor to disk out of core (13 MB in core against 32 MB)."""
-    out = tmp_path_factory.mktemp("solid14k")
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "1", "-o",
-                        str(out)], env=ENV, capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    return os.path.join(out, "spacecraft.yaml")
+    return solid_scene(tmp_path_factory, "solid14k", 1, ENV)
 
 
 def _reduce(scene, out, ranks, *options):
-    cmd = (["mpiexec", "-n", str(ranks)] if ranks > 1 else []) + [
-        KRYFLEX, "reduce", scene, "-o", str(out), "-kf_verify", "false", "-scene.angles", "30",
-        "-kf_error_agreement_timeout", "5", *options]
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
+    return reduce_solid(scene, out, ranks, *options, env=ENV)
 
 
 def _leftovers(folder):
@@ -107,11 +100,7 @@ def test_out_of_core_folder_that_cannot_be_made(solid14k, tmp_path):
 @pytest.fixture(scope="module")
 def solid57k(tmp_path_factory):
     """The 57,031-dof solid pair: large enough that MUMPS' block low-rank estimate is below its full-rank one."""
-    out = tmp_path_factory.mktemp("solid57k")
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "1.55", "-o",
-                        str(out)], env=ENV, capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    return os.path.join(out, "spacecraft.yaml")
+    return solid_scene(tmp_path_factory, "solid57k", 1.55, ENV)
 
 
 @pytest.mark.slow

@@ -34,6 +34,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 EXIT_NUMERIC = 3
 sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
+from solid_runs import reduce_solid, solid_scene  # noqa: E402
 
 SAME_MODEL_RTOL = 1e-5      # Galileo refitted to the paper: unrefined first solves leave residuals 1.1e-7 (the stick model
                             # ~1e-9), and the refined and unrefined models' FRFs differ by up to 1.1e-6 of the peak; the
@@ -232,18 +233,11 @@ def test_ordering_is_the_one_applied(tmp_path, ordering):
 @pytest.fixture(scope="module")
 def solid14k(tmp_path_factory):
     """The 13,513-dof solid pair: large enough that MUMPS' in-core and out-of-core estimates differ (31 / 13 MB)."""
-    out = tmp_path_factory.mktemp("solid14k")
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine", "1", "-o",
-                        str(out)], env=ENV, capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    return os.path.join(out, "spacecraft.yaml")
+    return solid_scene(tmp_path_factory, "solid14k", 1, ENV)
 
 
 def _reduce_solid(scene, out, ranks, *options):
-    cmd = (["mpiexec", "-n", str(ranks)] if ranks > 1 else []) + [
-        KRYFLEX, "reduce", scene, "-o", str(out), "-kf_verify", "false", "-scene.angles", "30",
-        "-kf_error_agreement_timeout", "5", *options]
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
+    return reduce_solid(scene, out, ranks, *options, env=ENV)
 
 
 @pytest.mark.mpi

@@ -40,7 +40,6 @@ import sys
 import time
 
 import numpy as np
-import scipy.sparse.linalg as spla
 import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -50,45 +49,10 @@ sys.path.insert(0, os.path.join(ROOT, "benchmarks", "peers"))
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import accuracy_scenes as acs  # noqa: E402
 import bench as peers  # noqa: E402
+import modal_reference as mref  # noqa: E402  (SuperLU, the modes by shift-invert and K^+: shared with the peers' reference)
 import reference as ref  # noqa: E402
 
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-
-
-def factor(A):
-    """SuperLU of a symmetric sparse matrix (symmetric ordering: a third of COLAMD's fill on the 3-D solid)."""
-    return spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", options=dict(SymmetricMode=True), diag_pivot_thresh=0.0)
-
-
-def flexible_modes(M, K, Q, lu, top_hz):
-    """The flexible eigenpairs (lam ascending, Phi M-orthonormal) up to past top_hz, shift-invert on lu = K + M."""
-    op = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
-    nr, k = Q.shape[1], Q.shape[1] + 40
-    while True:
-        lam, Phi = spla.eigsh(K, k=min(k, K.shape[0] - 2), M=M, sigma=-1.0, which="LM", OPinv=op)
-        order = np.argsort(lam)
-        lam, Phi = lam[order], Phi[:, order]
-        if lam[-1] > (2 * np.pi * top_hz) ** 2 or k >= K.shape[0] - 2:
-            break
-        k *= 2
-    lam, Phi = lam[nr:], Phi[:, nr:]
-    Phi -= Q @ (Q.T @ (M @ Phi))                       # the rigid modes exactly out (round-off)
-    keep = lam <= (2 * np.pi * top_hz) ** 2
-    return lam[keep], Phi[:, keep]
-
-
-def static_flexible(M, Q, lu, G, rtol=1e-14):
-    """x = K^+ Ge (M-orthogonal to Q), Ge = G - M Q Q^T G: x = (K + M)^-1 (Ge + M x) to convergence."""
-    Ge = G - M @ (Q @ (Q.T @ G))
-    x = np.zeros_like(Ge)
-    for it in range(60):
-        new = lu.solve(np.asarray(Ge + M @ x))
-        new -= Q @ (Q.T @ (M @ new))
-        change = np.abs(new - x).max() / max(np.abs(new).max(), 1e-300)
-        x = new
-        if change <= rtol:
-            return x
-    raise RuntimeError("the static residual did not converge (change %.3g)" % change)
 
 
 class Reference:
@@ -115,9 +79,9 @@ class Reference:
     def __init__(self, scene, angle, band, zeta, cover, check_points):
         t0 = time.perf_counter()
         M, K, G, H, Q = peers.full_order(scene, angle)
-        lu = factor(K + M)
-        lam, Phi = flexible_modes(M, K, Q, lu, cover * band[1])
-        x = static_flexible(M, Q, lu, G)
+        lu = mref.factor(K + M)
+        lam, Phi = mref.flexible_modes(M, K, Q, lu, cover * band[1], first=40)
+        x = mref.pinv(M, Q, lu, G - M @ (Q @ (Q.T @ G)))   # K^+ Ge, Ge = G - M Q Q^T G
         del lu
         self.lam, self.hp, self.pg = lam, H @ Phi, Phi.T @ G
         self.residual = H @ x - (self.hp / lam) @ self.pg
@@ -150,7 +114,7 @@ class Reference:
         for hi, lo in sorted(gaps):                                          # error grows as w^2
             f = float(np.sqrt(lo * hi))
             w = 2 * np.pi * f
-            lu = factor(K - w ** 2 * M)
+            lu = mref.factor(K - w ** 2 * M)
             Zb, ZU = lu.solve(np.asarray(Ge)), lu.solve(np.asarray(U))
             d = 2j * self.zeta * np.sqrt(self.lam) * w         # modal damping of the computed modes, exactly
             small = np.diag(1.0 / d) + U.T @ ZU

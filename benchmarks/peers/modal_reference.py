@@ -48,6 +48,39 @@ def factor(A, dtype=float):
                      diag_pivot_thresh=0.0)
 
 
+def flexible_modes(M, K, R, lu, top_hz, first):
+    """The flexible eigenpairs (lam ascending, Phi M-orthonormal and M-orthogonal to R, the rigid-body and mechanism
+    modes) up to top_hz: shift-invert Lanczos (eigsh) on lu = K + M, asking for `first` modes beyond R's, then twice
+    as many until the highest is past top_hz."""
+    op = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
+    nr, k = R.shape[1], R.shape[1] + first
+    while True:
+        lam, Phi = spla.eigsh(K, k=min(k, K.shape[0] - 2), M=M, sigma=-1.0, which="LM", OPinv=op)
+        order = np.argsort(lam)
+        lam, Phi = lam[order], Phi[:, order]
+        if lam[-1] > (2 * np.pi * top_hz) ** 2 or k >= K.shape[0] - 2:
+            break
+        k *= 2
+    lam, Phi = lam[nr:], Phi[:, nr:]
+    Phi -= R @ (R.T @ (M @ Phi))                         # the rigid modes exactly out (round-off)
+    keep = lam <= (2 * np.pi * top_hz) ** 2
+    return lam[keep], Phi[:, keep]
+
+
+def pinv(M, R, lu, b, rtol=1e-14):
+    """K^+ b for b in range(K) (R^T b = 0) on lu = K + M: x <- (K + M)^-1 (b + M x), kept M-orthogonal to R, which
+    converges as 1 / (1 + lam_1)."""
+    x = np.zeros_like(b)
+    for _ in range(80):
+        new = lu.solve(np.asarray(b + M @ x))
+        new -= R @ (R.T @ (M @ new))
+        change = np.abs(new - x).max() / max(np.abs(new).max(), 1e-300)
+        x = new
+        if change <= rtol:
+            return x
+    raise RuntimeError("K^+ by fixed-point iteration did not converge (change %.3g)" % change)
+
+
 def full_order(scene, angle):
     """bench.full_order's M, K, G, H and R, the geometric rigid-body and mechanism modes in the same coordinates."""
     return bench.full_order(scene, angle)
@@ -60,45 +93,16 @@ class ModalReference:
         t0 = time.perf_counter()
         self.beta, self.top_hz = beta, top_hz
         lu = factor(K + M)
-        lam, Phi = self._modes(M, K, R, lu, top_hz)
+        lam, Phi = flexible_modes(M, K, R, lu, top_hz, first=30)
         Ge = G - M @ (R @ (R.T @ G))
         self.lam, self.hp, self.pg = lam, H @ Phi, Phi.T @ G
         self.S, x = [], Ge
         for j in range(terms):                          # S_j = H (K^+ M)^j K^+ Ge - sum H phi phi^T G / lam^(j+1)
-            x = self._pinv(M, R, lu, x if j == 0 else M @ x)
+            x = pinv(M, R, lu, x if j == 0 else M @ x)
             self.S.append(H @ x - (self.hp / lam ** (j + 1)) @ self.pg)
         self.rigid = H @ (R @ (R.T @ G))
         self.seconds = time.perf_counter() - t0
         self.maxrss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
-
-    @staticmethod
-    def _modes(M, K, R, lu, top_hz):
-        op = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
-        nr, k = R.shape[1], R.shape[1] + 30
-        while True:
-            lam, Phi = spla.eigsh(K, k=min(k, K.shape[0] - 2), M=M, sigma=-1.0, which="LM", OPinv=op)
-            order = np.argsort(lam)
-            lam, Phi = lam[order], Phi[:, order]
-            if lam[-1] > (2 * np.pi * top_hz) ** 2 or k >= K.shape[0] - 2:
-                break
-            k *= 2
-        lam, Phi = lam[nr:], Phi[:, nr:]
-        Phi -= R @ (R.T @ (M @ Phi))                     # the rigid modes exactly out (round-off)
-        keep = lam <= (2 * np.pi * top_hz) ** 2
-        return lam[keep], Phi[:, keep]
-
-    @staticmethod
-    def _pinv(M, R, lu, b, rtol=1e-14):
-        """K^+ b for b in range(K) (R^T b = 0): x <- (K + M)^-1 (b + M x), kept M-orthogonal to R."""
-        x = np.zeros_like(b)
-        for _ in range(80):
-            new = lu.solve(np.asarray(b + M @ x))
-            new -= R @ (R.T @ (M @ new))
-            change = np.abs(new - x).max() / max(np.abs(new).max(), 1e-300)
-            x = new
-            if change <= rtol:
-                return x
-        raise RuntimeError("K^+ by fixed-point iteration did not converge (change %.3g)" % change)
 
     @property
     def flexible_hz(self):

@@ -68,6 +68,26 @@ static PetscErrorCode KFFactorMemoryOptions(MPI_Comm comm, const char prefix[], 
   PetscFunctionReturn(0);
 }
 
+/* The node-memory test: this rank's estimates mine[k] (MB, k < n <= 2) summed over the ranks of its node, need[k],
+   and the most by which any node's sum exceeds the memory available there, over[k] (the same on every rank: the node
+   that exceeds it by the most decides). A rank that does not check (check false, or avail < 0: its memory unknown)
+   counts as fitting. nrank (optional): the number of ranks on this rank's node. */
+static PetscErrorCode KFNodeMemoryOver(MPI_Comm comm, PetscInt n, const PetscReal mine[], PetscBool check, PetscReal avail, PetscReal need[], PetscReal over[], PetscMPIInt *nrank)
+{
+  MPI_Comm  node;
+  PetscReal in[2];
+
+  PetscFunctionBegin;
+  PetscCheck(n >= 1 && n <= 2, comm, PETSC_ERR_ARG_OUTOFRANGE, "the node-memory test takes 1 or 2 estimates, not %d", (int)n);
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  if (nrank) PetscCallMPI(MPI_Comm_size(node, nrank));
+  PetscCall(MPIU_Allreduce(mine, need, n, MPIU_REAL, MPIU_SUM, node));
+  PetscCallMPI(MPI_Comm_free(&node));
+  for (PetscInt k = 0; k < n; k++) in[k] = (check && avail >= 0) ? need[k] - avail : -PETSC_MAX_REAL;
+  PetscCall(MPIU_Allreduce(in, over, n, MPIU_REAL, MPIU_MAX, comm));
+  PetscFunctionReturn(0);
+}
+
 /* After MUMPS' analysis: its estimates of the factorization's memory in core and out of core, summed over the ranks
    of each node, against the node's available memory (or -kf_memory_limit_mb). ooc_mode: 0 in core, 1 out of core,
    2 auto (in core when it fits on every node, else out of core when that fits: *ooc tells which, and MUMPS is told
@@ -75,31 +95,23 @@ static PetscErrorCode KFFactorMemoryOptions(MPI_Comm comm, const char prefix[], 
    would be killed. */
 static PetscErrorCode KFCheckFactorMemory(Mat F, const char prefix[], PetscInt ooc_mode, PetscBool *ooc, PetscReal *estimate_mb)
 {
-  MPI_Comm  comm = PetscObjectComm((PetscObject)F), node;
-  PetscReal limit, mine[2], need[2], avail, in[5], worst[5];
+  MPI_Comm  comm = PetscObjectComm((PetscObject)F);
+  PetscReal limit, mine[2], need[2], avail, worst[2], largest[2];
   PetscBool check, has_limit;
 
   PetscFunctionBegin;
   PetscCall(KFFactorMemoryOptions(comm, prefix, &check, &limit, &has_limit));
   PetscCall(KFFactorEstimateMB(F, PETSC_FALSE, &mine[0]));
   PetscCall(KFFactorEstimateMB(F, PETSC_TRUE, &mine[1]));
-  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCall(MPIU_Allreduce(mine, need, 2, MPIU_REAL, MPIU_SUM, node));
   avail = has_limit ? limit : KFNodeMemoryAvailableMB();
-  PetscCallMPI(MPI_Comm_free(&node));
-  /* the node whose estimate exceeds its memory by the most decides (same on every rank) */
-  in[0] = (check && avail >= 0) ? need[0] - avail : -PETSC_MAX_REAL; /* in core */
-  in[1] = (check && avail >= 0) ? need[1] - avail : -PETSC_MAX_REAL; /* out of core */
-  in[2] = mine[0];
-  in[3] = mine[1];
-  in[4] = 0;
-  PetscCall(MPIU_Allreduce(in, worst, 5, MPIU_REAL, MPIU_MAX, comm));
-  *ooc = (PetscBool)(ooc_mode == 1 || (ooc_mode == 2 && worst[0] > 0 && worst[1] <= 0));
-  *estimate_mb = worst[*ooc ? 3 : 2];
+  PetscCall(KFNodeMemoryOver(comm, 2, mine, check, avail, need, worst, NULL)); /* [0] in core, [1] out of core */
+  PetscCall(MPIU_Allreduce(mine, largest, 2, MPIU_REAL, MPIU_MAX, comm));
+  *ooc         = (PetscBool)(ooc_mode == 1 || (ooc_mode == 2 && worst[0] > 0 && worst[1] <= 0));
+  *estimate_mb = largest[*ooc ? 1 : 0];
   if (worst[*ooc ? 1 : 0] > 0) {
     /* every rank learns the offending node's figures */
     PetscReal fig[3], myfig[3] = {-1, -1, -1};
-    if (in[*ooc ? 1 : 0] == worst[*ooc ? 1 : 0]) {
+    if (check && avail >= 0 && need[*ooc ? 1 : 0] - avail == worst[*ooc ? 1 : 0]) {
       myfig[0] = need[0];
       myfig[1] = need[1];
       myfig[2] = avail;
@@ -299,15 +311,15 @@ static PetscErrorCode KFMumpsAnalysisIcntl(Mat A, PetscInt i, PetscInt v, PetscB
    solid -kf_blr 1e-8 left the reduced model unchanged (1.6e-13) and its solves refine to the full-rank residual */
 #define KF_AUTO_BLR_TOL 1e-8
 
-/* -kf_ooc auto when MUMPS' in-core estimate does not fit the node's memory (KFCheckFactorMemory's test): first a
+/* -kf_ooc auto when MUMPS' in-core estimate does not fit the node's memory (KFNodeMemoryOver): first a
    block low-rank factorization in core, analysed again with ICNTL(35) = 1, if MUMPS' estimate of it (INFO(30))
    fits; its workspace is then capped at the node's share (ICNTL(23)) so that factors compressing worse than MUMPS
    assumed fail cleanly (KFFactorMumps then factors out of core). *F becomes that factor and c->blr its tolerance;
    otherwise *F stays and the memory check sends it out of core. *why: the progress line's reason. */
 static PetscErrorCode KFMumpsAutoBLR(Mat A, const char prefix[], PetscReal null_threshold, PetscBool scotch, KFMumpsControls *c, Mat *F)
 {
-  MPI_Comm    comm = PetscObjectComm((PetscObject)A), node;
-  PetscReal   limit, mine[2], need[2], avail, in[2], worst[2];
+  MPI_Comm    comm = PetscObjectComm((PetscObject)A);
+  PetscReal   limit, mine[2], need[2], avail, worst[2];
   PetscBool   check, has_limit;
   PetscMPIInt nrank;
   Mat         G;
@@ -317,27 +329,16 @@ static PetscErrorCode KFMumpsAutoBLR(Mat A, const char prefix[], PetscReal null_
   avail = has_limit ? limit : KFNodeMemoryAvailableMB();
   if (!check || avail < 0) PetscFunctionReturn(0);
   PetscCall(KFFactorEstimateMB(*F, PETSC_FALSE, &mine[0]));
-  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
-  PetscCallMPI(MPI_Comm_size(node, &nrank));
-  PetscCall(MPIU_Allreduce(&mine[0], &need[0], 1, MPIU_REAL, MPIU_SUM, node));
-  in[0] = need[0] - avail;
-  PetscCall(MPIU_Allreduce(in, worst, 1, MPIU_REAL, MPIU_MAX, comm));
-  if (worst[0] <= 0) { /* in core, full rank */
-    PetscCallMPI(MPI_Comm_free(&node));
-    PetscFunctionReturn(0);
-  }
+  PetscCall(KFNodeMemoryOver(comm, 1, &mine[0], check, avail, &need[0], &worst[0], &nrank));
+  if (worst[0] <= 0) PetscFunctionReturn(0); /* in core, full rank */
   if (scotch) { /* MUMPS 5.5's block low-rank analysis with the SCOTCH build crashed in SCOTCH (_SCOTCHthreadContextNbr,
                    from its graph coarsening) in 6 of 11 runs of -kf_blr 1e-8 on the 57k-dof solid: not taken unasked */
     PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node, %.4g MB are available; block low-rank is not tried with the SCOTCH build of MUMPS (its analysis can crash: docs/guide/large-models.md)", (double)need[0], (double)avail));
-    PetscCallMPI(MPI_Comm_free(&node));
     PetscFunctionReturn(0);
   }
   PetscCall(KFMumpsAnalyse(A, null_threshold, KF_AUTO_BLR_TOL, PETSC_FALSE, scotch, KFScotchTrySeed(c->seed, 0), &G));
   PetscCall(KFFactorEstimateMB(G, PETSC_FALSE, &mine[1]));
-  PetscCall(MPIU_Allreduce(&mine[1], &need[1], 1, MPIU_REAL, MPIU_SUM, node));
-  PetscCallMPI(MPI_Comm_free(&node));
-  in[1] = need[1] - avail;
-  PetscCall(MPIU_Allreduce(&in[1], &worst[1], 1, MPIU_REAL, MPIU_MAX, comm));
+  PetscCall(KFNodeMemoryOver(comm, 1, &mine[1], check, avail, &need[1], &worst[1], NULL));
   if (worst[1] > 0) {
     PetscCall(MatDestroy(&G));
     PetscCall(KFProgress(comm, "  in core, full rank would need %.4g MB on one node and block low-rank (-kf_blr %g) %.4g MB, %.4g MB are available", (double)need[0], KF_AUTO_BLR_TOL, (double)need[1], (double)avail));

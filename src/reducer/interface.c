@@ -297,6 +297,15 @@ PetscErrorCode KFReducerSetSearch(KFReducer r, PetscBool search, PetscInt moment
   PetscFunctionReturn(0);
 }
 
+/* the chosen model compressed body by body by what its response needs, when that makes it smaller (-kf_compress) */
+PetscErrorCode KFReducerSetCompress(KFReducer r, PetscBool compress)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  r->compress = compress;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerSetClusterTolerance(KFReducer r, PetscReal rtol)
 {
   PetscFunctionBegin;

@@ -3,7 +3,7 @@
   direction its system vectors restrict to, whatever share of the response each carries; here each body's reduced
   coordinates are ordered by that share:
     - snapshots: the body's part q_b = N_b y(w) of the reassembled model's elastic response y(w) to every input (N: the
-      null space of the ties), at the given frequencies and configurations, under uniform modal damping;
+      null space of the ties), at the given frequencies and configurations, under the model's damping;
     - kept exactly: the body's 6 rigid motions and its part of the static elastic response y(0) at every
       configuration, so that the static moment L^0 there is reproduced (a Galerkin projection whose space holds the
       static solution returns it);
@@ -67,7 +67,7 @@ static void KFOrthonormalize(PetscInt v, PetscInt n, PetscReal X[], PetscReal to
 
 /* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
    column nS) and the Gram matrix of its dynamic response (added to Gq[b], v_b x v_b), in reduced body coordinates */
-static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], PetscReal zeta, PetscInt nS, PetscReal *S[], PetscReal *Gq[])
+static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], PetscInt nS, PetscReal *S[], PetscReal *Gq[])
 {
   const PetscInt a = m->ninputs;
   PetscInt       n = 0, h, rank, nrigid, *off;
@@ -118,8 +118,9 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
     for (PetscInt f = 0; f < nw; f++) {
       PetscCall(PetscArrayzero(y, n * a));
       PetscCall(PetscArrayzero(yi, n * a));
-      for (PetscInt k = 0; k < nf; k++) { /* 1 / (lambda - w^2 + 2 i zeta sqrt(lambda) w) */
-        const PetscReal lk = lambda[nrigid + k], re = lk - w[f] * w[f], im = 2 * zeta * PetscSqrtReal(PetscMax(lk, 0)) * w[f], den = re * re + im * im;
+      for (PetscInt k = 0; k < nf; k++) { /* 1 / (lambda (1 + i g) - w^2 + i w (2 zeta_k sqrt(lambda) + alpha + beta lambda)) */
+        const PetscReal lk = lambda[nrigid + k], sk = PetscSqrtReal(PetscMax(lk, 0)), zk = KFDampingModalRatio(&m->damping, sk / (2 * PETSC_PI));
+        const PetscReal re = lk - w[f] * w[f], im = lk * m->damping.g + w[f] * (2 * zk * sk + m->damping.alpha + m->damping.beta * lk), den = re * re + im * im;
         for (PetscInt j = 0; j < a; j++) {
           const PetscReal c = PG[k + j * nf], cr = c * re / den, ci = -c * im / den;
           for (PetscInt i = 0; i < n; i++) {
@@ -209,9 +210,9 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
 /*
   KFBodyCompressDirections - every body's directions ordered by its share of the model's elastic response at nconf
   configurations (angles: nconf x nrevolute, row by row, radians), configuration k at the nw[k] frequencies w[k]
-  (rad/s), under uniform modal damping zeta. dirs: nb of them, freed with KFBodyDirectionsDestroy.
+  (rad/s), under the model's damping (modal, Rayleigh and structural; the bodies' viscous matrices left out). dirs: nb of them, freed with KFBodyDirectionsDestroy.
 */
-PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], PetscReal zeta, KFBodyDirections **dirs)
+PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], KFBodyDirections **dirs)
 {
   const PetscInt nrev1 = PetscMax(m->nrevolute, 1), a = m->ninputs;
   PetscReal    **S, **Gq;
@@ -227,7 +228,7 @@ PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const 
     PetscCall(PetscCalloc1(v * a * nconf + 1, &S[b]));
     PetscCall(PetscCalloc1(v * v + 1, &Gq[b]));
   }
-  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], zeta, k * a, S, Gq));
+  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], k * a, S, Gq));
   for (PetscInt b = 0; b < m->nb; b++) {
     PetscCall(KFCompressBody(&m->bodies[b], a * nconf, S[b], Gq[b], &(*dirs)[b]));
     PetscCall(PetscFree(S[b]));

@@ -301,6 +301,7 @@ static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint eva
     *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
   }
   PetscCall(KFReducedModelDestroy(&c));
+  PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
   PetscFunctionReturn(0);
 }
 
@@ -327,8 +328,11 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     nw[e] = evals[e].nw;
     w[e]  = evals[e].w;
   }
-  PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, r->zeta, &d));
-  for (PetscInt b = 0; b < nb; b++) counts[b] = d[b].ndir;
+  PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, &d));
+  for (PetscInt b = 0; b < nb; b++) {
+    counts[b] = d[b].ndir;
+    PetscCall(PetscInfo(r, "compression: body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", b, d[b].v, d[b].nkeep, d[b].ndir));
+  }
   *from = 0;
   for (PetscInt b = 0; b < nb; b++) {
     KFReducedBody body;

@@ -106,13 +106,9 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
     KFAtB(h, nf, a, Pf, h, Gh, h, PG);      /* Phi_f^T G (nf x a) */
     KFAB(n, h, nf, N, n, Pf, h, NP, n);     /* N Phi_f (n x nf) */
     PetscCall(PetscMalloc2(n * a, &y, n * a, &yi));
-    /* static: N Phi_f Lambda^-1 Phi_f^T G */
-    for (PetscInt j = 0; j < a; j++)
-      for (PetscInt i = 0; i < n; i++) {
-        PetscReal d = 0;
-        for (PetscInt k = 0; k < nf; k++) d += NP[i + k * n] * PG[k + j * nf] / lambda[nrigid + k];
-        y[i + j * n] = d;
-      }
+    /* static: N K^+ G on the flexible subspace, by solves that keep the digits an eigendecomposition of a stiff model
+       loses (KFDenseMomentsRigid with the outputs N) */
+    PetscCall(KFDenseMomentsRigid(h, Kh, Mh, a, Gh, n, N, nrigid, Phir, 1, y));
     for (PetscInt b = 0; b < m->nb; b++)
       for (PetscInt j = 0; j < a; j++) PetscCall(PetscArraycpy(&S[b][(nS + j) * bodies[b].v], &y[off[b] + j * n], bodies[b].v));
     for (PetscInt f = 0; f < nw; f++) {
@@ -181,8 +177,17 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
     for (PetscInt i = 0; i < j; i++) Gz[i + j * v] = Gz[j + i * v] = 0.5 * (Gz[i + j * v] + Gz[j + i * v]);
   PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bv, Gz, &bv, ev, work, &lwork, &info));
   PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': the eigensolve of its response snapshots failed (syev %d)", B->name, (int)info);
-  /* directions, leading first, after the kept ones; what the kept span already holds drops out */
-  for (PetscInt q = 0; q < v; q++) PetscCall(PetscArraycpy(X + (nk + q) * v, Gz + (v - 1 - q) * v, v));
+  /* directions, leading first, after the kept ones; what the kept span already holds drops out. Each with its largest
+     entry positive: an eigenvector's sign is arbitrary, and 1 and 2 ranks must make the same model */
+  for (PetscInt q = 0; q < v; q++) {
+    PetscReal *x = X + (nk + q) * v, big = 0;
+
+    PetscCall(PetscArraycpy(x, Gz + (v - 1 - q) * v, v));
+    for (PetscInt i = 0; i < v; i++)
+      if (PetscAbsReal(x[i]) > PetscAbsReal(big) * (1 + 1e-8)) big = x[i];
+    if (big < 0)
+      for (PetscInt i = 0; i < v; i++) x[i] = -x[i];
+  }
   {
     PetscInt nall;
     PetscReal top = ev[v - 1] > 0 ? ev[v - 1] : 0;
@@ -247,18 +252,30 @@ PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **dirs)
   PetscFunctionReturn(0);
 }
 
-/* X^T A X (k x k) of A (v x v), W v x k; symmetric */
+/* W^T A W (k x k) of A (v x v), W v x k, symmetric, accumulated in long double: a reduced body keeps its stiff
+   modes, and the static moment the compression promises to keep is read through K */
 static PetscErrorCode KFCongruence(PetscInt v, PetscInt k, const PetscReal A[], const PetscReal W[], PetscReal **out)
 {
-  PetscReal *T;
+  long double *T;
 
   PetscFunctionBegin;
   PetscCall(PetscMalloc1(v * k + 1, &T));
   PetscCall(PetscMalloc1(k * k + 1, out));
-  KFAB(v, v, k, A, v, W, v, T, v);
-  KFAtB(v, k, k, W, v, T, v, *out);
   for (PetscInt j = 0; j < k; j++)
-    for (PetscInt i = 0; i < j; i++) (*out)[i + j * k] = (*out)[j + i * k] = 0.5 * ((*out)[i + j * k] + (*out)[j + i * k]);
+    for (PetscInt i = 0; i < v; i++) {
+      long double d = 0;
+      for (PetscInt l = 0; l < v; l++) d += (long double)A[i + l * v] * W[l + j * v];
+      T[i + j * v] = d;
+    }
+  for (PetscInt j = 0; j < k; j++)
+    for (PetscInt i = 0; i <= j; i++) {
+      long double d = 0, e = 0;
+      for (PetscInt l = 0; l < v; l++) {
+        d += (long double)W[l + i * v] * T[l + j * v];
+        e += (long double)W[l + j * v] * T[l + i * v];
+      }
+      (*out)[i + j * k] = (*out)[j + i * k] = (PetscReal)(0.5L * (d + e));
+    }
   PetscCall(PetscFree(T));
   PetscFunctionReturn(0);
 }

@@ -151,6 +151,11 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
   PetscInt       nk;
 
   PetscFunctionBegin;
+  d->v = v;
+  if (!v) { /* a body reduced to nothing keeps nothing */
+    PetscCall(PetscMalloc2(1, &d->W, 1, &d->weight));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscBLASIntCast(v, &bv));
   lwork = PetscMax(3 * bv, 1) * 4;
   PetscCall(PetscMalloc6(v * v, &L, v * (6 + ns + v), &X, v * v, &Gz, v * v, &T, v, &ev, lwork, &work));

@@ -1,8 +1,9 @@
 """How far each body of a kryflex model can be truncated by what the assembled response needs, on the peers bench's
-scene and elastic measure (a prototype of the compression step; dense, on top of the library).
+scene and elastic measure: the prototype of -kf_compress (src/project/body_compress.c), dense, on top of the library,
+kept as an independent check of the C step's sizes.
 
     .venv/bin/python benchmarks/peers/compress.py [--refine 0.5] [--targets 1e-2 1e-3 1e-4]
-        [--kryflex-options "default:" "points:max_factorizations=6"]
+            [--kryflex-options "default:" "points:max_factorizations=6"] [--source-factor 0.01] [--cache ref.npz]
 
 For each kryflex model (the search's, at each target):
 - snapshots of each body's share of the assembled reduced model's elastic response: the reduced displacement
@@ -48,7 +49,7 @@ class Compressor:
     def _system(self, bodies, ang, H=None):
         bs = [dict(M=b["M"], K=b["K"], G=b["G"], H=b["H"] if H is None else H[i], iface=b["iface"], rigid=b["rigid"])
               for i, b in enumerate(bodies)]
-        M, K, G, Hh, rank, ratio, P = reassemble(bs, self.joints, ang, self.a, Hh_rows(bs))
+        M, K, G, Hh, rank, ratio, P = reassemble(bs, self.joints, ang, self.a, bs[0]["H"].shape[0])
         return M, K, G, Hh, P
 
     def _modes(self, M, K, P):
@@ -133,10 +134,6 @@ class Compressor:
         return c
 
 
-def Hh_rows(bs):
-    return bs[0]["H"].shape[0]
-
-
 def mgs(L, X, tol=1e-10):
     """M-orthonormal basis (M = L L^T) of span X, columns in order, dependent ones dropped"""
     Y = L.T @ X
@@ -201,9 +198,9 @@ def main():
               "error | L^0 rel. change | compression s |")
         print("|---|---|---|---|---|---|")
         for name, opts in B.parse_options(args.kryflex_options).items():
+            opts = dict({"compress": "0"}, **opts)      # the search's own model; kryflex's compression is the C one
             for target in args.targets:
-                s, sec, reported = B.kryflex_run(scene_path, args.angle, beta, target * args.source_factor, opts)
-                model = last_model[0]
+                s, sec, model = kryflex_model(scene_path, args.angle, beta, target * args.source_factor, opts)
                 e0 = B.elastic_error(T_full, s.frf(freqs), T_el)
                 st0 = 2 * (s.dofs - s.rigid_modes.shape[1])
                 t1 = time.perf_counter()
@@ -225,27 +222,22 @@ def main():
                     time.perf_counter() - t1), flush=True)
 
 
-last_model = [None]
-_orig_run = B.kryflex_run
-
-
-def _run(scene_path, angle, beta, target, options):
-    """bench.py's kryflex_run, keeping the model"""
+def kryflex_model(scene_path, angle, beta, target, options):
+    """bench.py's kryflex run, with the model itself: (system at the angle, seconds, model)"""
     import kryflex
-    orig = kryflex.Reducer.reduce
+    import yaml
+    with open(scene_path) as f:
+        spec = yaml.safe_load(f)
+    base = os.path.dirname(scene_path)
+    for b in spec["bodies"].values():
+        for k in ("mass", "stiffness", "nodes"):
+            b[k] = os.path.join(base, b[k])
+    spec.update(angles=[angle], accuracy=target, damping={"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": beta}})
+    spec.pop("reduction", None)
+    t0 = time.perf_counter()
+    model = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, **options).reduce().model
+    return model.at([angle]), time.perf_counter() - t0, model
 
-    def keep(self, *a, **k):
-        out = orig(self, *a, **k)
-        last_model[0] = out.model
-        return out
-    kryflex.Reducer.reduce = keep
-    try:
-        return _orig_run(scene_path, angle, beta, target, options)
-    finally:
-        kryflex.Reducer.reduce = orig
-
-
-B.kryflex_run = _run
 
 if __name__ == "__main__":
     main()

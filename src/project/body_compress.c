@@ -300,9 +300,10 @@ static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t
   PetscCall(KFCongruence(v, k, B->K, W, &R->K));
   R->C = NULL;
   if (B->C) PetscCall(KFCongruence(v, k, B->C, W, &R->C));
-  PetscCall(PetscMalloc1(k * a + 1, &R->G)); /* one allocation each: the model frees them one by one */
-  PetscCall(PetscMalloc1(t * k + 1, &R->H));
-  PetscCall(PetscMalloc1(6 * ni * k + 1, &R->iface));
+  /* one allocation each (the model frees them one by one), NULL when empty, as the model's own constructor */
+  PetscCall(PetscMalloc1(k * a, &R->G));
+  PetscCall(PetscMalloc1(t * k, &R->H));
+  PetscCall(PetscMalloc1(6 * ni * k, &R->iface));
   PetscCall(PetscMalloc1(6 * k, &R->rigid));
   KFAtB(v, k, a, W, v, B->G, v, R->G);
   KFAB(t, v, k, B->H, t, W, v, R->H, t);
@@ -314,7 +315,7 @@ static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t
   PetscCall(PetscFree(MR));
   R->map = NULL;
   if (B->map) {
-    PetscCall(PetscMalloc1(B->full_dofs * k + 1, &R->map));
+    PetscCall(PetscMalloc1(B->full_dofs * k, &R->map));
     KFAB(B->full_dofs, v, k, B->map, B->full_dofs, W, v, R->map, B->full_dofs);
   }
   PetscFunctionReturn(0);

@@ -360,7 +360,11 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     if (size < *from && error <= r->accuracy) {
       KFReducedModel c;
 
+      char text[32];
+
       PetscCall(KFReducedModelCompress(*model, d, counts, &c));
+      PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
+      PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
       PetscCall(KFReducedModelDestroy(model));
       *model = c;
       *to    = size;

@@ -160,8 +160,7 @@ def test_compression_with_boundary_conditions(name):
 def test_solid_spacecraft_compressed_meets_the_target_with_fewer_states(tmp_path_factory):
     """The 2,760-dof solid at one angle (0 deg, band 0.01-15 Hz): at 1e-3 the compressed model has fewer elastic
     states than the search's (measured 28 -> 26 under the scene's modal damping), meets the target on the independent
-    dense elastic measure, and keeps
-    the search model's L^0."""
+    dense elastic measure, and keeps the search model's L^0."""
     work = str(tmp_path_factory.mktemp("compress_solid"))
     base = acc.solid_base(os.path.join(work, "solid"))
     angles, band = [[0.0]], [0.01, 15.0]

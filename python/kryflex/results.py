@@ -324,6 +324,7 @@ class Performance(Record):
     reference_eigensolve_s: float = _value(doc="the verification's full-order eigensolves")
     reference_check_s: float = _value(doc="the verification's direct solves of the full system")
     search_s: float = _value(doc="the accuracy search")
+    compress_s: float = _value(doc="the compression of the chosen model (-kf_compress)")
 
 
 
@@ -376,6 +377,8 @@ class ChosenModel(Record):
     worst_kind: str = _value(doc="angle | midpoint")
     expansion_points_hz: list = _value([])
     expansion_point_factorizations: int = _value()
+    compressed_from_dofs: int = _value(doc="-kf_compress: reduced dofs before the compression (None: not run)")
+    compressed_to_dofs: int = _value(doc="-kf_compress: reduced dofs after it (equal: no body could lose a direction)")
 
 
 @dataclass(kw_only=True)

@@ -464,6 +464,10 @@ PETSC_EXTERN PetscErrorCode KFReducerSetMoments(KFReducer, PetscInt moments, Pet
    candidate as an estimator). Off: the paper's fixed recipe (moments, keep threshold, its alpha_G rule).
    moments_max: the most moments the search tries (-kf_moments_max, 24). */
 PETSC_EXTERN PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool search, PetscInt moments_max);
+/* After the search: the chosen model compressed body by body, each body truncated to the fewest of its directions
+   (ordered by their share of the reassembled model's response, rigid motions and static response kept exactly) that
+   still meet the accuracy, when that is smaller (-kf_compress) */
+PETSC_EXTERN PetscErrorCode KFReducerSetCompress(KFReducer, PetscBool compress);
 /* Krylov modes whose frequencies lie within rtol (relative) of each other form a cluster, kept or dropped whole
    (-kf_cluster_rtol, 1e-3) */
 PETSC_EXTERN PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal rtol);

@@ -144,6 +144,16 @@ PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalizeProduct(Mat M, Mat X, PetscInt passes, Mat *MX, const char what[]); /* MX = M X of the result */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMapped(KFBodyBasis, const Mat P[], Mat X); /* X: columns of unit system M-norm */
 PETSC_INTERN PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis, PetscInt body, Mat Pb, Mat X); /* to one body only */
+/* body-wise compression of a reduced model by its assembled response (src/project/body_compress.c): per body the
+   kept columns (rigid motions, static response) and the other directions, leading first, M_b-orthonormal in W */
+typedef struct {
+  PetscInt   v, nkeep, ndir;
+  PetscReal *W;      /* v x (nkeep + ndir) */
+  PetscReal *weight; /* ndir: each direction's share of the snapshots (singular values) */
+} KFBodyDirections;
+PETSC_INTERN PetscErrorCode KFBodyCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], KFBodyDirections **);
+PETSC_INTERN PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **);
+PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyDirections[], const PetscInt counts[], KFReducedModel *);
 /* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */
 PETSC_INTERN PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis);
 PETSC_INTERN PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis, PetscInt body, Mat Pb, Mat X, PetscReal T[]);

@@ -271,3 +271,106 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
   *rows  = tab.rows;
   PetscFunctionReturn(0);
 }
+
+/* the size (reduced dofs summed) and error of model m compressed to counts, measured as the search measures its
+   candidates (every evaluation point; a model already worse than the target is not measured further) */
+static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], const PetscInt counts[], PetscInt *size, PetscReal *error)
+{
+  KFReducedModel c;
+  PetscInt       nb;
+
+  PetscFunctionBegin;
+  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  PetscCall(KFReducedModelCompress(m, d, counts, &c));
+  PetscCall(KFReducedModelGetInfo(c, &nb, NULL, NULL, NULL, NULL, NULL));
+  *size = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(c, b, NULL, NULL, &body, NULL));
+    *size += body.v;
+  }
+  *error = 0;
+  for (PetscInt e = 0; e < neval && *error <= r->accuracy; e++) {
+    KFReducedSystem rs;
+    PetscReal       hinf;
+
+    PetscCall(KFReducedModelReassemble(c, evals[e].angles, &rs));
+    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
+  }
+  PetscCall(KFReducedModelDestroy(&c));
+  PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
+  PetscFunctionReturn(0);
+}
+
+/*
+  Compression of the model the search chose (-kf_compress): each body's directions ordered by its share of the
+  model's response at every evaluation point (src/project/body_compress.c), then body by body the fewest leading
+  directions (bisection, the other bodies as found so far) with which the model still meets the target, each
+  candidate measured against the same reference as the search's. The smaller model replaces *model; *from and *to:
+  the sizes before and after (equal when nothing was gained).
+*/
+PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *model, PetscInt *from, PetscInt *to)
+{
+  KFBodyDirections *d;
+  PetscInt          nb, nrev, nrev1, *nw, *counts, size;
+  PetscReal        *angles, error;
+  const PetscReal **w;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(PetscMalloc4(neval * nrev1, &angles, neval, &nw, neval, &w, nb, &counts));
+  for (PetscInt e = 0; e < neval; e++) {
+    PetscCall(PetscArraycpy(&angles[e * nrev1], evals[e].angles, nrev1));
+    nw[e] = evals[e].nw;
+    w[e]  = evals[e].w;
+  }
+  PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, &d));
+  for (PetscInt b = 0; b < nb; b++) {
+    counts[b] = d[b].ndir;
+    PetscCall(PetscInfo(r, "compression: body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", b, d[b].v, d[b].nkeep, d[b].ndir));
+  }
+  *from = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(*model, b, NULL, NULL, &body, NULL));
+    *from += body.v;
+  }
+  *to = *from;
+  PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+  if (error <= r->accuracy) {
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscInt lo = -1, hi = counts[b];
+
+      while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+        const PetscInt mid = (lo + hi) / 2;
+
+        counts[b] = mid;
+        PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+        if (error <= r->accuracy) hi = mid;
+        else lo = mid;
+      }
+      counts[b] = hi;
+    }
+    PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+    if (size < *from && error <= r->accuracy) {
+      KFReducedModel c;
+
+      char text[32];
+
+      PetscCall(KFReducedModelCompress(*model, d, counts, &c));
+      PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
+      PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
+      PetscCall(KFReducedModelDestroy(model));
+      *model = c;
+      *to    = size;
+    }
+  }
+  PetscCall(KFBodyDirectionsDestroy(nb, &d));
+  PetscCall(PetscFree4(angles, nw, w, counts));
+  PetscFunctionReturn(0);
+}

@@ -894,6 +894,20 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
   if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
+  if (r->compress) { /* the chosen model, body by body, by what its response needs */
+    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+    PetscInt        from, to;
+    PetscLogDouble  c0, c1;
+
+    PetscCall(PetscTime(&c0));
+    PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to));
+    PetscCall(PetscTime(&c1));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)(c1 - c0)));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
+    if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (each body its leading directions of the response)", from, to));
+    else PetscCall(KFProgress(st.comm, "compression: no body can lose a direction and meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
+  }
   PetscCall(PetscTime(&t1));
   st.times[5] += t1 - t0;
   PetscCall(KFReducerSearchRecord_Private(r, &st, &single, &multi));

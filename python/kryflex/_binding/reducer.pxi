@@ -138,6 +138,9 @@ cdef class CReducer:
     def set_search(self, search, PetscInt moments_max=24):
         check(KFReducerSetSearch(self.r, PETSC_TRUE if search else PETSC_FALSE, moments_max))
 
+    def set_compress(self, compress):
+        check(KFReducerSetCompress(self.r, PETSC_TRUE if compress else PETSC_FALSE))
+
     def set_cluster_tolerance(self, PetscReal rtol):
         check(KFReducerSetClusterTolerance(self.r, rtol))
 

@@ -87,6 +87,10 @@ def _chosen_sentence(c):
         parts.append("expansion points inside the band at " + ", ".join(f"{f:.4g}" for f in points)
                      + f" Hz ({ch.expansion_point_factorizations or 0} factorizations of K - sigma M"
                      + " beside those at zero)")
+    before, after = ch.compressed_from_dofs, ch.compressed_to_dofs
+    if before is not None and after is not None:   # docs/guide/expansion-points.md, "Compression"
+        parts.append(f"compressed body by body from {before} to {after} reduced dofs" if after < before
+                     else f"compression tried, no body could lose a direction ({before} reduced dofs)")
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."
 
 

@@ -47,7 +47,7 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb"),
                ("time_reference_eigensolve", "reference_eigensolve_s"), ("time_reference_check", "reference_check_s"),
-               ("time_search", "search_s")]
+               ("time_search", "search_s"), ("time_compress", "compress_s")]
 PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
 
@@ -223,7 +223,10 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         moments = chosen.settings.get("moments")
         moments = moments if isinstance(moments, int) else None
     rows = _search_rows(reducer.result(-1, "search_table")) if "search_table" in whole else []
-    row = _chosen_row(rows, method, moments, sum(sizes))
+    # compression (-kf_compress): the search's row is the model before it, of compressed_from_dofs
+    before = _optional_scalar(reducer, -1, "compressed_from_dofs", whole, int)
+    after = _optional_scalar(reducer, -1, "compressed_to_dofs", whole, int)
+    row = _chosen_row(rows, method, moments, before if before and after and after < before else sum(sizes))
     expansion = chosen.settings.get("reduction_angles_deg")
     out["chosen"] = {
         "method": method, "moments": moments, "dofs_per_body": dict(zip(scene.body_names, [int(v) for v in sizes])),
@@ -239,6 +242,8 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     out["chosen"]["expansion_points_hz"] = [] if points is None else [float(f) for f in np.ravel(points)]
     out["chosen"]["expansion_point_factorizations"] = \
         _optional_scalar(reducer, -1, "expansion_point_factorizations", whole, int) or 0
+    if before is not None:
+        out["chosen"]["compressed_from_dofs"], out["chosen"]["compressed_to_dofs"] = before, after
     out["expansion_point_search"] = {
         "factorizations_spent": _optional_scalar(reducer, -1, "shift_factorizations_spent", whole, int) or 0,
         "rows": _shift_rows(_optional(reducer, -1, "shift_search", whole))}

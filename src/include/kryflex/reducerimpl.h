@@ -102,6 +102,7 @@ struct _p_KFReducer {
   PetscInt        max_factorizations; /* expansion points inside the band: factorizations the search may spend on them
                                          (-kf_max_factorizations, 0: moments at zero only) */
   PetscInt        shift_blocks;   /* Krylov blocks per expansion point inside the band (-kf_shift_blocks) */
+  PetscBool       compress;       /* the chosen model compressed body by body by its response (-kf_compress) */
   PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
@@ -224,6 +225,9 @@ PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], Pe
    candidate replaced when such a model is smaller */
 PETSC_INTERN PetscErrorCode KFReducerShareBodies_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *);
 PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, PetscInt *nvisit, KFVisit **visits, PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
+/* the chosen model compressed body by body by what its response needs (search.c, -kf_compress): replaced when smaller
+   and still meeting the target; its reduced dofs before and after */
+PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 

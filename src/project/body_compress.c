@@ -1,0 +1,361 @@
+/*
+  Body-wise compression of a reduced model by what its assembled response needs. A body basis holds every
+  direction its system vectors restrict to, whatever share of the response each carries; here each body's reduced
+  coordinates are ordered by that share:
+    - snapshots: the body's part q_b = N_b y(w) of the reassembled model's elastic response y(w) to every input (N: the
+      null space of the ties), at the given frequencies and configurations, under the model's damping;
+    - kept exactly: the body's 6 rigid motions and its part of the static elastic response y(0) at every
+      configuration, so that the static moment L^0 there is reproduced (a Galerkin projection whose space holds the
+      static solution returns it);
+    - ordered: the rest of the snapshots, M_b-orthogonal to the kept columns, by the eigenvectors of their M_b-weighted
+      Gram matrix (the left singular vectors of the snapshots, leading first).
+  KFReducedModelCompress then makes the model whose body b keeps its kept columns and its first counts[b] directions:
+  a Galerkin projection of each reduced body (M, K, C, G, H, interface rows, rigid motions and map). All dense and
+  replicated: every rank computes the same numbers.
+*/
+#include <kryflex/modelimpl.h>
+#include <petscblaslapack.h>
+
+/* C (m x n) = A^T B, A m' x m and B m' x n column-major (small: plain loops) */
+static void KFAtB(PetscInt mp, PetscInt m, PetscInt n, const PetscReal A[], PetscInt lda, const PetscReal B[], PetscInt ldb, PetscReal C[])
+{
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < m; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < mp; k++) d += A[k + i * lda] * B[k + j * ldb];
+      C[i + j * m] = d;
+    }
+}
+
+/* C (m x n) = A B, A m x k, B k x n */
+static void KFAB(PetscInt m, PetscInt k, PetscInt n, const PetscReal A[], PetscInt lda, const PetscReal B[], PetscInt ldb, PetscReal C[], PetscInt ldc)
+{
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < m; i++) {
+      PetscReal d = 0;
+      for (PetscInt l = 0; l < k; l++) d += A[i + l * lda] * B[l + j * ldb];
+      C[i + j * ldc] = d;
+    }
+}
+
+/* Gram-Schmidt twice of the n columns of X (v x n, in place, Euclidean): the kept ones first in X, their count in
+   *k; a column whose remainder falls below tol of its own norm is dependent and dropped */
+static void KFOrthonormalize(PetscInt v, PetscInt n, PetscReal X[], PetscReal tol, PetscInt *k)
+{
+  PetscInt kept = 0;
+
+  for (PetscInt j = 0; j < n; j++) {
+    PetscReal *x = &X[j * v], norm0 = 0, norm = 0;
+
+    for (PetscInt i = 0; i < v; i++) norm0 += x[i] * x[i];
+    norm0 = PetscSqrtReal(norm0);
+    if (norm0 == 0) continue;
+    for (int pass = 0; pass < 2; pass++)
+      for (PetscInt q = 0; q < kept; q++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < v; i++) d += X[i + q * v] * x[i];
+        for (PetscInt i = 0; i < v; i++) x[i] -= d * X[i + q * v];
+      }
+    for (PetscInt i = 0; i < v; i++) norm += x[i] * x[i];
+    norm = PetscSqrtReal(norm);
+    if (norm <= tol * norm0) continue;
+    for (PetscInt i = 0; i < v; i++) X[i + kept * v] = x[i] / norm;
+    kept++;
+  }
+  *k = kept;
+}
+
+/* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
+   column nS) and the Gram matrix of its dynamic response (added to Gq[b], v_b x v_b), in reduced body coordinates */
+static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], PetscInt nS, PetscReal *S[], PetscReal *Gq[])
+{
+  const PetscInt a = m->ninputs;
+  PetscInt       n = 0, h, rank, nrigid, *off;
+  KFReducedBody *bodies;
+  PetscReal     *Mh, *Kh, *Gh, *N, *Phir, *lambda, *Phi, *PG, *NP, *Hid, sratio, rtol = 1e-9;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc2(m->nb, &bodies, m->nb + 1, &off));
+  off[0] = 0;
+  for (PetscInt b = 0; b < m->nb; b++) {
+    PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
+    off[b + 1] = off[b] + bodies[b].v;
+  }
+  n = off[m->nb];
+  /* outputs H = I: the reassembled outputs are N itself (n x h) */
+  PetscCall(PetscCalloc1(n * n, &Hid));
+  for (PetscInt b = 0; b < m->nb; b++) {
+    for (PetscInt i = 0; i < bodies[b].v; i++) Hid[(off[b] + i) + (off[b] + i) * n] = 1;
+    bodies[b].H = Hid + off[b] * n; /* n x v_b, leading dimension n */
+    bodies[b].C = NULL;
+  }
+  for (PetscInt k = 0; k < m->nsettings; k++) {
+    PetscBool same;
+    PetscCall(PetscStrcmp(m->keys[k], "reassembly_rtol", &same));
+    if (same) rtol = (PetscReal)atof(m->values[k]);
+  }
+  PetscCall(PetscMalloc5(n * n, &Mh, n * n, &Kh, n * a, &Gh, n * n, &N, n * n, &Phir));
+  PetscCall(KFReassemble(m->nb, bodies, m->nj, m->joints, angles, a, n, rtol, &h, Mh, Kh, Gh, N, &rank, &sratio, &nrigid, Phir));
+  PetscCheck(nrigid >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "compression needs the bodies' rigid motions: the model has none recorded");
+  PetscCall(PetscMalloc4(h, &lambda, h * h, &Phi, h * a, &PG, n * h, &NP));
+  PetscCall(KFDenseEigRigid(h, Kh, Mh, nrigid, Phir, lambda, Phi));
+  {
+    const PetscInt nf = h - nrigid;
+    PetscReal     *Pf = Phi + nrigid * h, *y, *yi;
+
+    KFAtB(h, nf, a, Pf, h, Gh, h, PG);      /* Phi_f^T G (nf x a) */
+    KFAB(n, h, nf, N, n, Pf, h, NP, n);     /* N Phi_f (n x nf) */
+    PetscCall(PetscMalloc2(n * a, &y, n * a, &yi));
+    /* static: N K^+ G on the flexible subspace, by solves that keep the digits an eigendecomposition of a stiff model
+       loses (KFDenseMomentsRigid with the outputs N) */
+    PetscCall(KFDenseMomentsRigid(h, Kh, Mh, a, Gh, n, N, nrigid, Phir, 1, y));
+    for (PetscInt b = 0; b < m->nb; b++)
+      for (PetscInt j = 0; j < a; j++) PetscCall(PetscArraycpy(&S[b][(nS + j) * bodies[b].v], &y[off[b] + j * n], bodies[b].v));
+    for (PetscInt f = 0; f < nw; f++) {
+      PetscCall(PetscArrayzero(y, n * a));
+      PetscCall(PetscArrayzero(yi, n * a));
+      for (PetscInt k = 0; k < nf; k++) { /* 1 / (lambda (1 + i g) - w^2 + i w (2 zeta_k sqrt(lambda) + alpha + beta lambda)) */
+        const PetscReal lk = lambda[nrigid + k], sk = PetscSqrtReal(PetscMax(lk, 0)), zk = KFDampingModalRatio(&m->damping, sk / (2 * PETSC_PI));
+        const PetscReal re = lk - w[f] * w[f], im = lk * m->damping.g + w[f] * (2 * zk * sk + m->damping.alpha + m->damping.beta * lk), den = re * re + im * im;
+        for (PetscInt j = 0; j < a; j++) {
+          const PetscReal c = PG[k + j * nf], cr = c * re / den, ci = -c * im / den;
+          for (PetscInt i = 0; i < n; i++) {
+            y[i + j * n] += NP[i + k * n] * cr;
+            yi[i + j * n] += NP[i + k * n] * ci;
+          }
+        }
+      }
+      for (PetscInt b = 0; b < m->nb; b++) { /* Gq_b += Re q Re q^T + Im q Im q^T */
+        const PetscInt v = bodies[b].v;
+        for (PetscInt j = 0; j < a; j++)
+          for (PetscInt c = 0; c < v; c++)
+            for (PetscInt r = 0; r < v; r++) Gq[b][r + c * v] += y[off[b] + r + j * n] * y[off[b] + c + j * n] + yi[off[b] + r + j * n] * yi[off[b] + c + j * n];
+      }
+    }
+    PetscCall(PetscFree2(y, yi));
+  }
+  PetscCall(PetscFree4(lambda, Phi, PG, NP));
+  PetscCall(PetscFree5(Mh, Kh, Gh, N, Phir));
+  PetscCall(PetscFree(Hid));
+  PetscCall(PetscFree2(bodies, off));
+  PetscFunctionReturn(0);
+}
+
+/* body b's directions from its static columns S (v x ns) and snapshot Gram Gq (v x v, reduced coordinates): W (v x
+   (nkeep + ndir)) M_b-orthonormal, the kept columns first, then the others leading first, with their weights */
+static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const PetscReal S[], PetscReal Gq[], KFBodyDirections *d)
+{
+  const PetscInt v = B->v;
+  PetscBLASInt   bv, info, lwork;
+  PetscReal     *L, *X, *Gz, *T, *ev, *work;
+  PetscInt       nk;
+
+  PetscFunctionBegin;
+  d->v = v;
+  if (!v) { /* a body reduced to nothing keeps nothing */
+    PetscCall(PetscMalloc2(1, &d->W, 1, &d->weight));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscBLASIntCast(v, &bv));
+  lwork = PetscMax(3 * bv, 1) * 4;
+  PetscCall(PetscMalloc6(v * v, &L, v * (6 + ns + v), &X, v * v, &Gz, v * v, &T, v, &ev, lwork, &work));
+  /* M_b = L L^T; coordinates z = L^T q make the M_b inner product Euclidean */
+  for (PetscInt i = 0; i < v * v; i++) L[i] = 0.5 * (B->M[i] + B->M[(i % v) * v + i / v]);
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bv, L, &bv, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': its reduced mass matrix is not positive definite (potrf %d): compression needs a mass on every reduced coordinate; set -kf_compress false", B->name, (int)info);
+  for (PetscInt j = 0; j < v; j++)
+    for (PetscInt i = 0; i < j; i++) L[i + j * v] = 0;
+  /* kept: L^T [rigid, S] */
+  KFAtB(v, v, 6, L, v, B->rigid, v, X);
+  KFAtB(v, v, ns, L, v, S, v, X + 6 * v);
+  KFOrthonormalize(v, 6 + ns, X, 1e-8, &nk);
+  /* the snapshots' Gram in z: L^T Gq L, then with the kept span projected out: P Gz P, P = I - X X^T */
+  KFAtB(v, v, v, L, v, Gq, v, T);
+  KFAB(v, v, v, T, v, L, v, Gz, v);
+  for (PetscInt i = 0; i < v * v; i++) T[i] = (i % v == i / v) ? 1 : 0;
+  for (PetscInt j = 0; j < v; j++)
+    for (PetscInt i = 0; i < v; i++)
+      for (PetscInt q = 0; q < nk; q++) T[i + j * v] -= X[i + q * v] * X[j + q * v];
+  KFAB(v, v, v, T, v, Gz, v, Gq, v);
+  KFAB(v, v, v, Gq, v, T, v, Gz, v);
+  for (PetscInt j = 0; j < v; j++)
+    for (PetscInt i = 0; i < j; i++) Gz[i + j * v] = Gz[j + i * v] = 0.5 * (Gz[i + j * v] + Gz[j + i * v]);
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bv, Gz, &bv, ev, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': the eigensolve of its response snapshots failed (syev %d)", B->name, (int)info);
+  /* directions, leading first, after the kept ones; what the kept span already holds drops out. Each with its largest
+     entry positive: an eigenvector's sign is arbitrary, and 1 and 2 ranks must make the same model */
+  for (PetscInt q = 0; q < v; q++) {
+    PetscReal *x = X + (nk + q) * v, big = 0;
+
+    PetscCall(PetscArraycpy(x, Gz + (v - 1 - q) * v, v));
+    for (PetscInt i = 0; i < v; i++)
+      if (PetscAbsReal(x[i]) > PetscAbsReal(big) * (1 + 1e-8)) big = x[i];
+    if (big < 0)
+      for (PetscInt i = 0; i < v; i++) x[i] = -x[i];
+  }
+  {
+    PetscInt nall;
+    PetscReal top = ev[v - 1] > 0 ? ev[v - 1] : 0;
+    PetscInt  nd  = 0;
+
+    for (PetscInt q = 0; q < v; q++) nd += ev[v - 1 - q] > 1e-20 * top && top > 0;
+    KFOrthonormalize(v, nk + nd, X, 1e-6, &nall);
+    d->nkeep = nk;
+    d->ndir  = nall - nk;
+    PetscCall(PetscMalloc2(v * nall + 1, &d->W, d->ndir + 1, &d->weight));
+    for (PetscInt q = 0; q < d->ndir; q++) d->weight[q] = PetscSqrtReal(PetscMax(ev[v - 1 - q], 0));
+  }
+  /* W = L^-T X */
+  PetscCall(PetscArraycpy(d->W, X, v * (d->nkeep + d->ndir)));
+  {
+    PetscBLASInt nc;
+    PetscCall(PetscBLASIntCast(d->nkeep + d->ndir, &nc));
+    if (nc) PetscCallBLAS("LAPACKtrtrs", LAPACKtrtrs_("L", "T", "N", &bv, &nc, L, &bv, d->W, &bv, &info));
+  }
+  d->v = v;
+  PetscCall(PetscFree6(L, X, Gz, T, ev, work));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFBodyCompressDirections - every body's directions ordered by its share of the model's elastic response at nconf
+  configurations (angles: nconf x nrevolute, row by row, radians), configuration k at the nw[k] frequencies w[k]
+  (rad/s), under the model's damping (modal, Rayleigh and structural; the bodies' viscous matrices left out). dirs: nb of them, freed with KFBodyDirectionsDestroy.
+*/
+PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], KFBodyDirections **dirs)
+{
+  const PetscInt nrev1 = PetscMax(m->nrevolute, 1), a = m->ninputs;
+  PetscReal    **S, **Gq;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  PetscCheck(nconf >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "compression needs at least one configuration");
+  PetscCall(PetscCalloc1(m->nb, dirs));
+  PetscCall(PetscMalloc2(m->nb, &S, m->nb, &Gq));
+  for (PetscInt b = 0; b < m->nb; b++) {
+    const PetscInt v = m->bodies[b].v;
+    PetscCheck(m->bodies[b].rigid, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "body '%s' has no rigid motions recorded: compression keeps them exactly", m->bodies[b].name);
+    PetscCall(PetscCalloc1(v * a * nconf + 1, &S[b]));
+    PetscCall(PetscCalloc1(v * v + 1, &Gq[b]));
+  }
+  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], k * a, S, Gq));
+  for (PetscInt b = 0; b < m->nb; b++) {
+    PetscCall(KFCompressBody(&m->bodies[b], a * nconf, S[b], Gq[b], &(*dirs)[b]));
+    PetscCall(PetscFree(S[b]));
+    PetscCall(PetscFree(Gq[b]));
+  }
+  PetscCall(PetscFree2(S, Gq));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **dirs)
+{
+  PetscFunctionBegin;
+  if (!*dirs) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree2((*dirs)[b].W, (*dirs)[b].weight));
+  PetscCall(PetscFree(*dirs));
+  PetscFunctionReturn(0);
+}
+
+/* W^T A W (k x k) of A (v x v), W v x k, symmetric, accumulated in long double: a reduced body keeps its stiff
+   modes, and the static moment the compression promises to keep is read through K */
+static PetscErrorCode KFCongruence(PetscInt v, PetscInt k, const PetscReal A[], const PetscReal W[], PetscReal **out)
+{
+  long double *T;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(v * k + 1, &T));
+  PetscCall(PetscMalloc1(k * k + 1, out));
+  for (PetscInt j = 0; j < k; j++)
+    for (PetscInt i = 0; i < v; i++) {
+      long double d = 0;
+      for (PetscInt l = 0; l < v; l++) d += (long double)A[i + l * v] * W[l + j * v];
+      T[i + j * v] = d;
+    }
+  for (PetscInt j = 0; j < k; j++)
+    for (PetscInt i = 0; i <= j; i++) {
+      long double d = 0, e = 0;
+      for (PetscInt l = 0; l < v; l++) {
+        d += (long double)W[l + i * v] * T[l + j * v];
+        e += (long double)W[l + j * v] * T[l + i * v];
+      }
+      (*out)[i + j * k] = (*out)[j + i * k] = (PetscReal)(0.5L * (d + e));
+    }
+  PetscCall(PetscFree(T));
+  PetscFunctionReturn(0);
+}
+
+/* body R of the compressed model: body B projected on W (v x k, M_b-orthonormal, holding B's rigid motions) */
+static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t, PetscInt k, const PetscReal W[], KFModelBody *R)
+{
+  const PetscInt v = B->v, ni = B->ninterfaces;
+  PetscReal     *MR;
+
+  PetscFunctionBegin;
+  *R   = *B;
+  R->v = k;
+  PetscCall(PetscMalloc1(ni, &R->iface_names));
+  PetscCall(PetscArraycpy(R->iface_names, B->iface_names, ni));
+  PetscCall(KFCongruence(v, k, B->M, W, &R->M));
+  PetscCall(KFCongruence(v, k, B->K, W, &R->K));
+  R->C = NULL;
+  if (B->C) PetscCall(KFCongruence(v, k, B->C, W, &R->C));
+  /* one allocation each (the model frees them one by one), NULL when empty, as the model's own constructor */
+  PetscCall(PetscMalloc1(k * a, &R->G));
+  PetscCall(PetscMalloc1(t * k, &R->H));
+  PetscCall(PetscMalloc1(6 * ni * k, &R->iface));
+  PetscCall(PetscMalloc1(6 * k, &R->rigid));
+  KFAtB(v, k, a, W, v, B->G, v, R->G);
+  KFAB(t, v, k, B->H, t, W, v, R->H, t);
+  KFAB(6 * ni, v, k, B->iface, 6 * ni, W, v, R->iface, 6 * ni);
+  /* rigid motions in the new coordinates: W^T M_b rigid (exact: they lie in span W, which is M_b-orthonormal) */
+  PetscCall(PetscMalloc1(v * 6, &MR));
+  KFAB(v, v, 6, B->M, v, B->rigid, v, MR, v);
+  KFAtB(v, k, 6, W, v, MR, v, R->rigid);
+  PetscCall(PetscFree(MR));
+  R->map = NULL;
+  if (B->map) {
+    PetscCall(PetscMalloc1(B->full_dofs * k, &R->map));
+    KFAB(B->full_dofs, v, k, B->map, B->full_dofs, W, v, R->map, B->full_dofs);
+  }
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedModelCompress - the model whose body b keeps the kept columns of dirs[b] and its first counts[b] directions
+  (counts NULL: all of them): each reduced body projected on them; names, joints, damping, settings and reduction
+  angles as m's. The new model lives on m's communicator.
+*/
+PetscErrorCode KFReducedModelCompress(KFReducedModel m, const KFBodyDirections dirs[], const PetscInt counts[], KFReducedModel *out)
+{
+  KFReducedModel c;
+  const PetscInt nb = m->nb, nj = m->nj, a = m->ninputs, t = m->noutputs;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  PetscCall(KFReducedModelCreateEmpty_Private(PetscObjectComm((PetscObject)m), nb, nj, a, t, &c));
+  PetscCall(PetscStrncpy(c->scene_name, m->scene_name, sizeof(c->scene_name)));
+  PetscCall(PetscStrncpy(c->fingerprint, m->fingerprint, sizeof(c->fingerprint)));
+  PetscCall(PetscObjectSetName((PetscObject)c, ((PetscObject)m)->name));
+  c->nrevolute = m->nrevolute;
+  c->nrigid    = m->nrigid;
+  PetscCall(PetscArraycpy(c->joint_names, m->joint_names, nj));
+  PetscCall(PetscArraycpy(c->joints, m->joints, nj));
+  PetscCall(PetscArraycpy(c->input_names, m->input_names, a));
+  PetscCall(PetscArraycpy(c->output_names, m->output_names, t));
+  PetscCall(PetscArraycpy(c->quantity, m->quantity, t));
+  c->damping = m->damping;
+  c->nangles = m->nangles;
+  PetscCall(PetscMalloc1(m->nangles * m->nrevolute + 1, &c->angles));
+  PetscCall(PetscArraycpy(c->angles, m->angles, m->nangles * m->nrevolute));
+  for (PetscInt k = 0; k < m->nsettings; k++) PetscCall(KFReducedModelSetSetting(c, m->keys[k], m->values[k]));
+  for (PetscInt b = 0; b < nb; b++) {
+    const KFBodyDirections *d = &dirs[b];
+    const PetscInt          k = d->nkeep + (counts ? PetscMin(PetscMax(counts[b], 0), d->ndir) : d->ndir);
+
+    PetscCheck(d->v == m->bodies[b].v, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_INCOMP, "body '%s': directions of %" PetscInt_FMT " coordinates for a body of %" PetscInt_FMT ": make them from this model", m->bodies[b].name, d->v, m->bodies[b].v);
+    PetscCall(KFProjectBody(&m->bodies[b], a, t, k, d->W, &c->bodies[b]));
+  }
+  *out = c;
+  PetscFunctionReturn(0);
+}

@@ -46,14 +46,18 @@ def figure_jobs(summary, plot_names):
               for label in c.labels}
     jobs = []
 
-    def bode(label):        # one configuration's pairs, on one reused figure (plots.bode_pngs)
-        freq, full, red = arrays[label]
-        titles = [f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"
-                  for (o, i) in c.entries]
-        pngs = plots.bode_pngs(freq, [(full[:, o, i], red[:, o, i], t) for (o, i), t in zip(c.entries, titles)])
-        for (o, i), png in zip(c.entries, pngs):
-            yield plot_names["bode"][(label, (o, i))], png
-    jobs += [(1.0 + 0.75 * (len(c.entries) - 1), lambda label=label: bode(label)) for label in c.labels]
+    def bode(labels):       # the configurations' pairs on one reused figure (plots.bode_pngs_on_grids)
+        items, names = [], []
+        for label in labels:
+            freq, full, red = arrays[label]
+            for (o, i) in c.entries:
+                items.append((freq, full[:, o, i], red[:, o, i],
+                              f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"))
+                names.append(plot_names["bode"][(label, (o, i))])
+        yield from zip(names, plots.bode_pngs_on_grids(items))
+    # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them
+    halves = [c.labels[:(len(c.labels) + 1) // 2], c.labels[(len(c.labels) + 1) // 2:]]
+    jobs += [(0.2 + 0.75 * len(part) * len(c.entries), lambda part=part: bode(part)) for part in halves if part]
 
     def overview():
         o, i = c.dominant_entry

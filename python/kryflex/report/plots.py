@@ -207,19 +207,28 @@ def bode_pngs(freq_hz, pairs, dpi=DPI):
     on one figure whose curves, title and y-limits are replaced between pairs: the same pixels as a new figure per
     pair, without building the axes and their ticks again (most of a figure's drawing time). A pair whose response is
     identically zero gets a figure of its own (bode_figure notes it on the axes)."""
-    fig = None
-    for full, reduced, title in pairs:
+    return bode_pngs_on_grids([(freq_hz, full, reduced, title) for full, reduced, title in pairs], dpi)
+
+
+def bode_pngs_on_grids(items, dpi=DPI):
+    """bode_pngs for (freq_hz, full, reduced, title) items whose frequency grids may differ (one per configuration):
+    one figure for all whose grids span the same band (the curves' frequencies replaced too), a new one where the
+    band differs (its axis limits and ticks are laid out for it)."""
+    fig, span = None, None
+    for freq_hz, full, reduced, title in items:
+        freq = np.asarray(freq_hz, dtype=float)
         if all(not np.any(np.asarray(c) != 0) for c in (full, reduced)):
-            yield figure_png_bytes(bode_figure(freq_hz, full, reduced, title), dpi)
+            yield figure_png_bytes(bode_figure(freq, full, reduced, title), dpi)
             continue
-        if fig is None:
-            fig = bode_figure(freq_hz, full, reduced, title)
+        this = (float(freq.min()), float(freq.max())) if freq.size else None
+        if fig is None or this != span:
+            fig, span = bode_figure(freq, full, reduced, title), this
         else:
             ax_mag, ax_ph = fig.axes
             for line, y in zip(ax_mag.lines, (magnitude_db(full), magnitude_db(reduced))):
-                line.set_ydata(y)
+                line.set_data(freq, y)
             for line, y in zip(ax_ph.lines, phase_pair_deg(full, reduced)):
-                line.set_ydata(y)
+                line.set_data(freq, y)
             _set_title(ax_mag, title)
             for ax in (ax_mag, ax_ph):
                 ax.relim()

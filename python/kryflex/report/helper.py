@@ -68,7 +68,8 @@ class _Helper:
         env["PYTHONPATH"] = _package_root() + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         self.proc = subprocess.Popen([sys.executable, "-c", "from kryflex.report.helper import main; main()"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                     env=env)
+                                     env=env, start_new_session=True)   # a terminal's Ctrl-C is for the run: it
+                                                                         # stops the helper (stop() below)
         data = pickle.dumps((summary, plot_names, sorted(share)), protocol=pickle.HIGHEST_PROTOCOL)
         # written by a thread: the pipe holds less than the summary, and the helper reads it only once started
         self.writer = threading.Thread(target=self._write, args=(data,), daemon=True)
@@ -122,9 +123,14 @@ def render_plots(summary, plot_names, between=None):
                 if between is not None:
                     between()
         got = helper.result() if helper is not None else None
-        if helper is not None and got is None:      # the helper failed: its figures drawn here
-            got = [item for k in sorted(share) for item in jobs[k][1]()]
-        yield from got or ()
+        if got is not None:
+            yield from got
+            return
+        for k in sorted(share):         # the helper failed: its figures drawn here
+            for item in jobs[k][1]():
+                yield item
+                if between is not None:
+                    between()
     finally:
         if helper is not None:
             helper.stop()

@@ -91,5 +91,6 @@ def figure_jobs(summary, plot_names):
             curves, s.accuracy, f"Relative {s.verdict.accuracy_measure or 'total'}-response error of the chosen model "
                                 f"({c.model_name})"))
     jobs.append((1.2, frf_error))
-    jobs.append((2.0, lambda: paper_figures(c.s)))
+    if (c.s.get("paper") or {}).get("frf"):
+        jobs.append((2.0, lambda: paper_figures(c.s)))
     return jobs

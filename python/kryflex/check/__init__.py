@@ -43,7 +43,15 @@ class Finding:
 
 
 def _asymmetry(A):
+    """||A - A^T||_F / ||A||_F (0 for an exactly symmetric A)."""
     from petsc4py import PETSc
+    try:
+        if A.isSymmetric(0.0):
+            # exactly symmetric (most exports): the measure is 0, found without forming A^T and A - A^T, which cost
+            # 5 times as much (a fifth of kryflex reduce's model check at 57k dofs)
+            return 0.0
+    except PETSc.Error:     # a matrix type without the test: measured below
+        pass
     At = A.transpose(PETSc.Mat())
     D = A.copy()
     D.axpy(-1.0, At, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)

@@ -31,39 +31,66 @@ def plot_file_names(summary):
 
 def _render_plots(summary, plot_names):
     """Yield (file name, PNG bytes) for every figure of the report (summary: a Summary or its JSON dict)."""
+    for _, job in figure_jobs(summary, plot_names):
+        yield from job()
+
+
+def figure_jobs(summary, plot_names):
+    """The report's figures as [(weight, job)]: job() yields (file name, PNG bytes) of one or more figures, weight is
+    about its drawing time in units of one Bode plot. The same list, in the same order, for the same summary: the
+    figures can be shared among processes by their indices (report/helper.py)."""
     c = _Context(summary)
     s = c.summary
     threshold = s.settings.keep_threshold if s.settings is not None else None
     arrays = {label: (np.asarray(s.frf[label].freq_hz, float), s.frf[label].full(), s.frf[label].chosen())
               for label in c.labels}
-    for label in c.labels:
-        freq, full, red = arrays[label]
-        titles = [f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"
-                  for (o, i) in c.entries]
-        pngs = plots.bode_pngs(freq, [(full[:, o, i], red[:, o, i], t) for (o, i), t in zip(c.entries, titles)])
-        for (o, i), png in zip(c.entries, pngs):
-            yield plot_names["bode"][(label, (o, i))], png
-    o, i = c.dominant_entry
-    panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
-    yield "bode_overview.png", plots.figure_png_bytes(
-        plots.bode_overview_figure(panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
-    for label in c.labels:
+    jobs = []
+
+    def bode(labels):       # the configurations' pairs on one reused figure (plots.bode_pngs_on_grids)
+        items, names = [], []
+        for label in labels:
+            freq, full, red = arrays[label]
+            for (o, i) in c.entries:
+                items.append((freq, full[:, o, i], red[:, o, i],
+                              f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"))
+                names.append(plot_names["bode"][(label, (o, i))])
+        yield from zip(names, plots.bode_pngs_on_grids(items))
+    # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them
+    halves = [c.labels[:(len(c.labels) + 1) // 2], c.labels[(len(c.labels) + 1) // 2:]]
+    jobs += [(0.2 + 0.75 * len(part) * len(c.entries), lambda part=part: bode(part)) for part in halves if part]
+
+    def overview():
+        o, i = c.dominant_entry
+        panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
+        yield "bode_overview.png", plots.figure_png_bytes(
+            plots.bode_overview_figure(panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
+    jobs.append((2.0, overview))
+
+    def importance(label):
         kr = s.krylov[label]
         title = f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}"
         yield plot_names["importance"][label], plots.figure_png_bytes(plots.importance_figure(
             kr.frequency_hz, kr.importance, kr.kept, title, threshold=threshold, band_hz=s.band_hz))
-    series = [(f"single, {c.short_angle(l)}", s.reduced.moment_ratios[l], False) for l in c.labels]
-    multi = (s.multi_angle.moment_ratios if s.multi_angle is not None else None) or {}
-    series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
-    yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
+    jobs += [(1.5, lambda label=label: importance(label)) for label in c.labels]
+
+    def moments():
+        series = [(f"single, {c.short_angle(l)}", s.reduced.moment_ratios[l], False) for l in c.labels]
+        multi = (s.multi_angle.moment_ratios if s.multi_angle is not None else None) or {}
+        series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
+        yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
+    jobs.append((1.3, moments))
 
     def rigid(label):       # the elastic measure's rigid part of the full response, when the summary has it
         f = s.frf[label]
         return None if f.full_rigid_re is None else f._complex(f.full_rigid_re, f.full_rigid_im)
 
-    curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2], rigid(l)))
-              for l in c.labels]
-    yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
-        curves, s.accuracy, f"Relative {s.verdict.accuracy_measure or 'total'}-response error of the chosen model "
-                            f"({c.model_name})"))
-    yield from paper_figures(c.s)
+    def frf_error():
+        curves = [(c.short_angle(l), arrays[l][0], plots.frf_hinf_error_curve(arrays[l][1], arrays[l][2], rigid(l)))
+                  for l in c.labels]
+        yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
+            curves, s.accuracy, f"Relative {s.verdict.accuracy_measure or 'total'}-response error of the chosen model "
+                                f"({c.model_name})"))
+    jobs.append((1.2, frf_error))
+    if (c.s.get("paper") or {}).get("frf"):
+        jobs.append((2.0, lambda: paper_figures(c.s)))
+    return jobs

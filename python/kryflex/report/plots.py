@@ -9,15 +9,14 @@ Figures are built on matplotlib's Agg canvas directly, never through pyplot, so 
 a display nor changes the process-wide backend of a program that imports it.
 
 This module depends only on NumPy and matplotlib (no other kryflex module), so the report can be produced
-on a machine without the compiled extension.
+on a machine without the compiled extension. matplotlib is imported when the first figure is drawn, not with this
+module: the report's text and the data helpers below (which the reducer's summary and report.md use) do not need it,
+and importing it costs a run that draws no plot (verify.full_order: false) about half a second.
 """
 
 import io
 
 import numpy as np
-from matplotlib import ticker
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from ..io.files import atomic_path
 
@@ -139,6 +138,7 @@ def _frequency_axis(ax, freq, set_limits=True):
         ax.set_xlim(low, high)
     else:
         low, high = ax.get_xlim()
+    ticker = _ticker()
     plain = ticker.FuncFormatter(lambda x, _: f"{x:g}")
     ax.xaxis.set_major_formatter(plain)
     if high > 0 and low > 0 and np.log10(high / low) < 2.2:
@@ -156,19 +156,38 @@ def _note_zero_response(ax, *curves):
 
 # ----------------------------------------------------------------------------------------------- figures
 
+def _new_figure(figsize):
+    """An empty matplotlib Figure on its own Agg canvas (never pyplot: no display, the process's backend untouched)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _ticker():
+    from matplotlib import ticker
+    return ticker
+
+
+def _set_title(ax, title, **kwargs):
+    """The axes' title at its fixed height (y = 1, rcParams' default): matplotlib otherwise places it on every draw by
+    measuring the y axis's tick labels (a second tick layout per drawing) to move it above an x axis on top or an
+    offset text, which these figures do not have (their y axes are dB, degrees, importance or log scales)."""
+    ax.set_title(title, y=1.0, **kwargs)
+
 def bode_figure(freq_hz, full, reduced, title):
     """Magnitude (dB) and phase (deg) against frequency (Hz, log axis), full and reduced overlaid.
 
     full, reduced: complex arrays [nf] for one (output, input) pair.
     """
     freq = np.asarray(freq_hz, dtype=float)
-    fig = Figure(figsize=(7.0, 5.6))
-    FigureCanvasAgg(fig)
+    fig = _new_figure(figsize=(7.0, 5.6))
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     ax_mag.semilogx(freq, magnitude_db(full), **FULL_STYLE)
     ax_mag.semilogx(freq, magnitude_db(reduced), **REDUCED_STYLE)
     ax_mag.set_ylabel("magnitude (dB)")
-    ax_mag.set_title(title)
+    _set_title(ax_mag, title)
     ax_mag.legend(loc="best", fontsize="small")
     _note_zero_response(ax_mag, full, reduced)
     ph_full, ph_red = phase_pair_deg(full, reduced)
@@ -188,20 +207,29 @@ def bode_pngs(freq_hz, pairs, dpi=DPI):
     on one figure whose curves, title and y-limits are replaced between pairs: the same pixels as a new figure per
     pair, without building the axes and their ticks again (most of a figure's drawing time). A pair whose response is
     identically zero gets a figure of its own (bode_figure notes it on the axes)."""
-    fig = None
-    for full, reduced, title in pairs:
+    return bode_pngs_on_grids([(freq_hz, full, reduced, title) for full, reduced, title in pairs], dpi)
+
+
+def bode_pngs_on_grids(items, dpi=DPI):
+    """bode_pngs for (freq_hz, full, reduced, title) items whose frequency grids may differ (one per configuration):
+    one figure for all whose grids span the same band (the curves' frequencies replaced too), a new one where the
+    band differs (its axis limits and ticks are laid out for it)."""
+    fig, span = None, None
+    for freq_hz, full, reduced, title in items:
+        freq = np.asarray(freq_hz, dtype=float)
         if all(not np.any(np.asarray(c) != 0) for c in (full, reduced)):
-            yield figure_png_bytes(bode_figure(freq_hz, full, reduced, title), dpi)
+            yield figure_png_bytes(bode_figure(freq, full, reduced, title), dpi)
             continue
-        if fig is None:
-            fig = bode_figure(freq_hz, full, reduced, title)
+        this = (float(freq.min()), float(freq.max())) if freq.size else None
+        if fig is None or this != span:
+            fig, span = bode_figure(freq, full, reduced, title), this
         else:
             ax_mag, ax_ph = fig.axes
             for line, y in zip(ax_mag.lines, (magnitude_db(full), magnitude_db(reduced))):
-                line.set_ydata(y)
+                line.set_data(freq, y)
             for line, y in zip(ax_ph.lines, phase_pair_deg(full, reduced)):
-                line.set_ydata(y)
-            ax_mag.set_title(title)
+                line.set_data(freq, y)
+            _set_title(ax_mag, title)
             for ax in (ax_mag, ax_ph):
                 ax.relim()
                 ax.autoscale_view(scalex=False)
@@ -213,13 +241,12 @@ def bode_overview_figure(panels, suptitle):
     n = max(len(panels), 1)
     ncols = min(3, n)
     nrows = (n + ncols - 1) // ncols
-    fig = Figure(figsize=(4.2 * ncols, 3.2 * nrows + 0.6))
-    FigureCanvasAgg(fig)
+    fig = _new_figure(figsize=(4.2 * ncols, 3.2 * nrows + 0.6))
     axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
     for ax, (title, freq, full, reduced) in zip(axes, panels):
         ax.semilogx(freq, magnitude_db(full), **FULL_STYLE)
         ax.semilogx(freq, magnitude_db(reduced), **REDUCED_STYLE)
-        ax.set_title(title, fontsize="medium")
+        _set_title(ax, title, fontsize="medium")
         ax.grid(True, which="both", alpha=0.3)
         ax.set_xlabel("frequency (Hz)", fontsize="small")
         ax.set_ylabel("magnitude (dB)", fontsize="small")
@@ -243,8 +270,7 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
     freq = np.asarray(freq_hz, dtype=float)
     imp = np.asarray(importance, dtype=float)
     kept = np.asarray(kept, dtype=bool)
-    fig = Figure(figsize=(7.0, 4.0))
-    FigureCanvasAgg(fig)
+    fig = _new_figure(figsize=(7.0, 4.0))
     ax = fig.subplots()
     log_axis = freq.size > 0 and np.all(freq > 0)
     if log_axis:
@@ -264,7 +290,7 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
         _frequency_axis(ax, freq, set_limits=False)
     ax.set_xlabel("Krylov mode frequency (Hz)")
     ax.set_ylabel("normalized importance")
-    ax.set_title(title)
+    _set_title(ax, title)
     ax.grid(True, which="both", axis="x", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
     fig.subplots_adjust(**SINGLE_MARGINS)
@@ -286,8 +312,7 @@ def moment_ratio_figure(series, threshold, title="Moment ratios L_full / L_reduc
     series: [(legend label, ratios [k][t][a] with None where undefined, dashed: bool), ...].
     A ratio of exactly 1 sits on the axis floor (RATIO_FLOOR); threshold is the exact-match tolerance line.
     """
-    fig = Figure(figsize=(7.0, 4.4))
-    FigureCanvasAgg(fig)
+    fig = _new_figure(figsize=(7.0, 4.4))
     ax = fig.subplots()
     markers = "osD^v<>ph*"
     for index, (label, ratios, dashed) in enumerate(series):
@@ -300,10 +325,10 @@ def moment_ratio_figure(series, threshold, title="Moment ratios L_full / L_reduc
                     linewidth=1.0, markersize=4, label=label)
     ax.axhline(threshold, color="k", linestyle=":", linewidth=1.0, label=f"exact-match tolerance {threshold:g}")
     ax.set_ylim(bottom=RATIO_FLOOR / 3)
-    ax.xaxis.set_major_locator(ticker.MaxNLocator(integer=True))
+    ax.xaxis.set_major_locator(_ticker().MaxNLocator(integer=True))
     ax.set_xlabel("moment index k")
     ax.set_ylabel("|L_full / L_reduced - 1|  (worst I/O entry)")
-    ax.set_title(title + f"  (floor {RATIO_FLOOR:g} = exact)", fontsize="medium")
+    _set_title(ax, title + f"  (floor {RATIO_FLOOR:g} = exact)", fontsize="medium")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="x-small", ncol=2)
     fig.subplots_adjust(**SINGLE_MARGINS)
@@ -316,8 +341,7 @@ def frf_error_figure(curves, accuracy, title="Relative frequency-response error 
 
     curves: [(legend label, freq_hz [nf], error [nf]), ...]; accuracy: target drawn as a horizontal line (or None).
     """
-    fig = Figure(figsize=(7.0, 4.4))
-    FigureCanvasAgg(fig)
+    fig = _new_figure(figsize=(7.0, 4.4))
     ax = fig.subplots()
     for label, freq, err in curves:
         err = np.asarray(err, dtype=float)
@@ -328,7 +352,7 @@ def frf_error_figure(curves, accuracy, title="Relative frequency-response error 
         _frequency_axis(ax, np.concatenate([np.asarray(f, dtype=float) for _, f, _ in curves]))
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("|T_full - T_red| / max_w |T_full|  (worst pair)")
-    ax.set_title(title)
+    _set_title(ax, title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="x-small", ncol=2)
     fig.subplots_adjust(**SINGLE_MARGINS)

@@ -23,7 +23,8 @@ import os
 
 from ..io.files import Staging
 from ..io.scene_schema import NO_JOINT_LABEL
-from .figures import _render_plots, plot_file_names
+from .figures import plot_file_names
+from .helper import render_plots
 from .schema import _check_json_types, validate_summary
 from .context import _Context, as_summary
 from .sections import _section_accuracy, _section_choice, render_markdown
@@ -61,12 +62,10 @@ def write_report(summary, out_dir, between=None):
     markdown = render_markdown(summary, plot_names)
 
     def files():
-        for name, data in _render_plots(summary, plot_names):
-            yield name, data
-            if between is not None:
-                between()
         yield "summary.json", text_json.encode("utf-8")
         yield "report.md", markdown.encode("utf-8")
+        # the figures, a share of them drawn by a helper process where a second core is free (report/helper.py)
+        yield from render_plots(summary, plot_names, between)
 
     return _write_together(out_dir, files())
 

@@ -549,6 +549,7 @@ def test_failure_mid_way_keeps_the_previous_report(summary, written, tmp_path, m
         raise RuntimeError("plot failed on purpose")
 
     monkeypatch.setattr(plots, "frf_error_figure", failing_figure)
+    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "0")    # every figure drawn in this process, where the patch is
     with pytest.raises(RuntimeError, match="on purpose"):
         report.write_report(changed, str(out))
     after = {p.name: p.read_bytes() for p in out.iterdir()}

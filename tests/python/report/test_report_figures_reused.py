@@ -27,3 +27,21 @@ def test_reused_figure_gives_the_same_pngs():
     assert len(reused) == len(pairs)
     assert [a == b for a, b in zip(reused, fresh)] == [True] * len(pairs)
     assert len(set(fresh)) == len(fresh)     # the pairs' plots do differ: the comparison is not vacuous
+
+
+def test_one_figure_across_frequency_grids_gives_the_same_pngs():
+    """Configurations' grids differ (points across each one's resonances) but span the same band: one figure serves
+    them all, its curves' frequencies replaced; a grid over another band gets a figure of its own."""
+    f, pairs = responses()
+    g = np.sort(np.concatenate([f[::2], [0.79, 0.81, 3.09, 3.11]]))      # the same band, other points
+    h = np.geomspace(0.5, 12.0, 200)                                        # another band
+    items = [(f, full, red, title) for full, red, title in pairs]
+    items += [(g, np.interp(g, f, full.real) + 1j * np.interp(g, f, full.imag),
+               np.interp(g, f, red.real) + 1j * np.interp(g, f, red.imag), "g " + title) for full, red, title in pairs]
+    items += [(h, np.interp(h, f, full.real) + 0j, np.interp(h, f, red.real) + 0j, "h " + title)
+              for full, red, title in pairs[:2]]
+    reused = list(plots.bode_pngs_on_grids(items))
+    fresh = [plots.figure_png_bytes(plots.bode_figure(*item)) for item in items]
+    assert len(reused) == len(items)
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+    assert len(set(fresh)) == len(fresh)

@@ -2,8 +2,8 @@
 """The least deviation from Tables 1 and 4 that the bounds force over the whole physical envelope of a
 Galileo-class spacecraft: a rigorous bound over a continuum of masses, not a grid.
 
-    nice -n 15 /usr/bin/python3 meshes/galileo/envelope.py          # the envelope's bound, as Markdown
-    nice -n 15 /usr/bin/python3 meshes/galileo/envelope.py --hub-min 225 --cells 4000   # a lighter hub allowed
+    nice -n 15 /usr/bin/python3 meshes/galileo/envelope.py     # -> envelope.json, and the bound as Markdown
+    nice -n 15 /usr/bin/python3 meshes/galileo/envelope.py --hub-min 600 450 225 --out /tmp/e.json   # lighter hubs
 
 The envelope (ENVELOPE, README.md "The physical envelope" gives the sources) is a range for every lumped mass and
 inertia of the model: the stator's bearing node and point A, the rotor's hub and five tips. Each of the three
@@ -33,6 +33,7 @@ bounds at one set of masses) is how far the bounds could ever go (an upper bound
 """
 import argparse
 import heapq
+import json
 import os
 import sys
 
@@ -62,6 +63,7 @@ ENVELOPE = {
     "magnetometer_boom_tip mass": (8.0, 32.0), "rtg1 mass": (28.0, 120.0), "rtg2 mass": (28.0, 112.0),
     "high_gain_antenna mass": (26.0, 104.0), "lower_module mass": (90.0, 360.0),
 }
+SLACK = 1e-9
 COORDS = ("bearing node mass", "bearing node Jxx", "bearing node Jyy", "hub mass", "hub Jxx", "hub Jyy")
 
 
@@ -85,7 +87,7 @@ def envelope_box(hub_min=HUB_MIN_KG):
 def inside(lo, hi, hub_min=HUB_MIN_KG):
     """Whether the cell [lo, hi] (log coordinates) may meet the envelope (False only when it provably does not:
     some tilt inertia out of reach of the node's masses and radii of gyration, or the two out of AXIS_RATIO)."""
-    lo, hi = np.exp(lo), np.exp(hi)
+    lo, hi = np.exp(lo) * (1 - SLACK), np.exp(hi) * (1 + SLACK)     # round-off never drops a cell
     if hi[3] < hub_min or lo[3] > ENVELOPE["hub mass"][1]:
         return False
     for m, jx, jy, (k0, k1) in ((0, 1, 2, GYRATION["bearing node"]), (3, 4, 5, GYRATION["hub"])):
@@ -145,6 +147,22 @@ def corners(lo, hi):
             "trace rotor": _params(dict(heavy_b, **light_h))}
 
 
+def per_mode(lo, hi):
+    """{angle: per mode 8-28, the least deviation above the paper's that the clamped or the rotor-mode floors force
+    on that mode alone over the cell [lo, hi] (0: none), and the bound}: each floor at its own weakest corner."""
+    c = corners(lo, hi)
+    Ms, ts, Mr, tr = g.fitted_masses(c["clamped"])
+    floors = np.sort(np.r_[implied.clamped_floors(g.PAPER_STATOR_HZ, implied.clamped_ratios(Ms, ts, 1.0)),
+                           implied.clamped_floors(g.PAPER_ROTOR_HZ, implied.clamped_ratios(Mr, tr, 1.0))])
+    Ms, _, Mr, _ = g.fitted_masses(c["tau"])
+    out = {}
+    for alpha, paper in ((0.0, g.PAPER_SYSTEM_HZ), (60.0, fit.SYSTEM_60_HZ)):
+        clamped = np.maximum(floors / np.asarray(paper) - 1.0, 0.0)
+        rotor = topmodes.least_deviation(alpha, topmodes.tau(alpha, Ms, Mr))
+        out[f"{alpha:g}"] = [[float(max(x, y)), "clamped" if x >= y else "rotor modes"] for x, y in zip(clamped, rotor)]
+    return out
+
+
 def claim(lo, hi):
     """(the largest least deviation of Tables 1 and 4 that the three bounds force on every model in the cell,
     the bound that forces it)."""
@@ -200,27 +218,73 @@ def _fmt_cell(lo, hi):
     return ", ".join(f"{n} {x:.3g}-{y:.3g}" for n, x, y in zip(COORDS, a, b))
 
 
+def residue_cap():
+    """The least, over the envelope, of sqrt(h^T M^-1 h g^T M^-1 g) (tables.py: a model's sum |r_i| is at most
+    this): point A's Jyy, the bearing node's and the hub's Jzz at their largest."""
+    jzz_b = ENVELOPE["bearing node mass"][1] * GYRATION["bearing node"][1] ** 2
+    jzz_h = ENVELOPE["hub mass"][1] * GYRATION["hub"][1] ** 2
+    return float(np.sqrt(1.0 / ENVELOPE["point A Jyy"][1] * (1.0 / jzz_b + 1.0 / jzz_h)))
+
+
+def table5_account(least_sums):
+    """Table 5 against the envelope: the residue cap against the least sum |r_i| that meets each column
+    (tables.py's LP, {angle: sum}), and the static condition |L^0| <= cap / lambda_1 (lambda_1 the lowest flexible
+    eigenvalue, Table 1's or 4's first mode)."""
+    cap = residue_cap()
+    out = {"residue_cap": cap, "least_residue_sum": least_sums, "excluded": {}, "static_cap_over_L0": {}}
+    for a, least in least_sums.items():
+        lam1 = (2 * np.pi * (g.PAPER_SYSTEM_HZ if float(a) == 0 else fit.SYSTEM_60_HZ)[0]) ** 2
+        out["excluded"][a] = bool(least is not None and cap < least)
+        out["static_cap_over_L0"][a] = float(cap / lam1 / abs(fit.MOMENTS[0, fit.ANGLES.index(float(a))]))
+    return out
+
+
+def account(cells, hub_mins):
+    """The envelope, its least forced deviation for each least hub mass, and where the open layouts lie."""
+    rows = []
+    for hub_min in hub_mins:
+        proved, best, (lo, hi, _, name), point, kept = branch_and_bound(cells, hub_min)
+        rows.append({"hub_min_kg": hub_min, "proved": float(proved), "bound": name, "at_best": float(best),
+                     "at_best_bound": point[2], "at_best_masses": dict(zip(COORDS, np.exp(point[1]).tolist())),
+                     "weakest_cell": {n: [float(x), float(y)] for n, x, y in zip(COORDS, np.exp(lo), np.exp(hi))},
+                     "cells_evaluated": cells, "cells_kept": kept})
+    box = envelope_box(HUB_MIN_KG)
+    outside = {}
+    for label, values in (("light-hub", {n: STICK[n] * np.exp(q) for n, q in fit.LAYOUTS["light-hub"].items()}),
+                          ("committed fit", {n: STICK[n] * np.exp(q) for (_, _, n), q in
+                                             zip(g.MASS_PARAMETERS, g.load_fit()[:len(g.MASS_PARAMETERS)])})):
+        outside[label] = holds(values)[1]
+    return {"ranges": {n: list(r) for n, r in ENVELOPE.items()}, "hub_min_kg": HUB_MIN_KG,
+            "gyration_m": {n: list(k) for n, k in GYRATION.items()}, "axis_ratio": AXIS_RATIO,
+            "rows": rows, "outside": outside, "per_mode": per_mode(box[0], box[1])}
+
+
+OUT = os.path.join(HERE, "envelope.json")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--cells", type=int, default=3000, help="bound evaluations of the branch and bound")
-    ap.add_argument("--hub-min", type=float, nargs="+", default=[HUB_MIN_KG, 450.0, 225.0],
+    ap.add_argument("--cells", type=int, default=4000, help="bound evaluations of the branch and bound")
+    ap.add_argument("--hub-min", type=float, nargs="+", default=[HUB_MIN_KG, 450.0],
                     help="the hub's least mass (kg); the first is the envelope's, the others show what a lighter "
                          "hub allows")
+    ap.add_argument("--out", default=OUT, help="the account as JSON (tables.py and the report read it)")
     args = ap.parse_args()
+    acc = account(args.cells, args.hub_min)
+    with open(args.out, "w") as f:
+        json.dump(acc, f, indent=1)
+        f.write("\n")
     print("| hub at least (kg) | proved: least deviation over the envelope | the bounds reach at best "
           "| the weakest cell (kg, kg m²) |")
     print("|---|---|---|---|")
-    for hub_min in args.hub_min:
-        proved, best, (lo, hi, dev, name), point, kept = branch_and_bound(args.cells, hub_min)
-        print(f"| {hub_min:g} | {100 * proved:.2f} % ({name}) | {100 * best:.2f} % ({point[2]}) | "
-              f"{_fmt_cell(lo, hi)} |")
+    for r in acc["rows"]:
+        cell = ", ".join(f"{n} {x:.3g}-{y:.3g}" for n, (x, y) in r["weakest_cell"].items())
+        print(f"| {r['hub_min_kg']:g} | {100 * r['proved']:.2f} % ({r['bound']}) | {100 * r['at_best']:.2f} % "
+              f"({r['at_best_bound']}) | {cell} |")
     print()
-    for label, values in (("light-hub layout (fit.py)", {name: STICK[name] * np.exp(q) for name, q in
-                                                         fit.LAYOUTS["light-hub"].items()}),
-                          ("committed fit's masses", {name: STICK[name] * np.exp(q) for (_, _, name), q in
-                                                      zip(g.MASS_PARAMETERS, g.load_fit()[:len(g.MASS_PARAMETERS)])})):
-        ok, why = holds(values)
-        print(f"- {label}: " + ("inside the envelope" if ok else "outside: " + "; ".join(why)))
+    for label, why in acc["outside"].items():
+        print(f"- {label}: " + ("inside the envelope" if not why else "outside: " + "; ".join(why)))
+    print(f"\nTable 5: the residue cap over the envelope is at least {residue_cap():.3g}; wrote {args.out}")
 
 
 if __name__ == "__main__":

@@ -537,10 +537,10 @@ def test_family_with_a_bearing_assembly_stays_off(family, implied, sumrule, topm
 
 
 @pytest.fixture(scope="module")
-def tables(generate, implied, sumrule, topmodes, family):
+def tables(generate, implied, sumrule, topmodes, family, envelope):
     """meshes/galileo/tables.py, bound to meshes/galileo's generate, fit and the bound scripts."""
     return _load_bound("tables", generate=generate, fit=implied.fit, implied=implied, sumrule=sumrule,
-                       topmodes=topmodes, family=family)
+                       topmodes=topmodes, family=family, envelope=envelope)
 
 
 @pytest.fixture(scope="module")
@@ -613,7 +613,7 @@ def test_residue_cap_holds_on_sampled_models(generate, tables):
                 assert total <= own * (1 + 1e-9) and cap <= own * (1 + 1e-12), (layout, trial, alpha)
 
 
-def test_report_table7_names_each_entrys_bound(account, implied, sumrule, topmodes, family):
+def test_report_table7_names_each_entrys_bound(account, implied, sumrule, topmodes, family, envelope):
     """The report's Table P7, on the account tables.py computes: a mode the model misses is marked with what the
     bounds say at its own masses; each layout's cell names the larger floor where implied.py's or topmodes.py's
     is more than 0.5 % above the paper (its figure), ‡ on modes 18-28 where the trace bound excludes them, open
@@ -663,6 +663,20 @@ def test_report_table7_names_each_entrys_bound(account, implied, sumrule, topmod
         assert family.least_deviation(ring["mass_kg"], ring["inertia_kg_m2"], float(hub))[0] == pytest.approx(
             ring["least_deviation"], rel=1e-12, abs=1e-15)
     assert account["family"]["hub_scales"]["1"]["closest_ring"]["least_deviation"] > FREQ_TOL
+    # the envelope: its column per mode (from the floors at the envelope's corners, computed again here), its
+    # proved least deviation, what lies outside it, and Table 5 against its cap
+    env = account["envelope"]
+    box = envelope.envelope_box()
+    again = envelope.per_mode(box[0], box[1])
+    for m in rows:
+        cells = [f"≥ +{100 * again[a][m - 8][0]:.1f} % ({again[a][m - 8][1]})" if again[a][m - 8][0] > FREQ_TOL
+                 else "with the others" for a in ("0", "60")]
+        assert rows[m][-1] == (cells[0] if cells[0] == cells[1] else " / ".join(cells)), m
+    assert f"keeps some entry of Tables 1 and 4 at least {100 * env['rows'][0]['proved']:.2f} % off" in text
+    assert "Outside the envelope: light-hub (hub mass 225 outside 600.0-1800.0)" in text
+    assert "Outside the envelope: committed fit" in text
+    assert env["table5"]["residue_cap"] == pytest.approx(envelope.residue_cap(), rel=1e-12)
+    assert not any(env["table5"]["excluded"].values()) and "So Table 5 is excluded by nothing alone" in text
 
 
 # ---------------------------------------------------------------- the envelope: a bound over a continuum of masses
@@ -806,3 +820,47 @@ def test_envelope_keeps_out_the_open_layouts(generate, envelope):
     for name in ("light-bearing", "bearing-ring", "mid-bearing"):
         values = {n: envelope.STICK[n] * np.exp(q) for n, q in envelope.fit.LAYOUTS[name].items()}
         assert envelope.holds(values)[0], (name, envelope.holds(values)[1])
+
+
+def test_envelope_file_is_what_the_script_computes(envelope):
+    """envelope.json (committed; tables.py and the report read it): its weakest box's claim and its best centre's
+    bound computed again here, the proved figure no larger than the best (a proof cannot exceed what the bounds
+    reach), the envelope's own figure above 0.5 %, and per mode what the floors force at the envelope's corners.
+    The branch and bound itself takes minutes: it is re-run by the slow test below."""
+    with open(envelope.OUT) as f:
+        acc = json.load(f)
+    row = acc["rows"][0]
+    assert row["hub_min_kg"] == envelope.HUB_MIN_KG
+    lo, hi = (np.log([row["weakest_cell"][n][k] for n in envelope.COORDS]) for k in (0, 1))
+    dev, name = envelope.claim(lo, hi)
+    assert dev == pytest.approx(row["proved"], rel=1e-9) and name == row["bound"]
+    mid = np.log([row["at_best_masses"][n] for n in envelope.COORDS])
+    assert envelope.claim(mid, mid)[0] == pytest.approx(row["at_best"], rel=1e-9)
+    assert envelope.inside(mid, mid) and row["proved"] <= row["at_best"]
+    assert row["proved"] > FREQ_TOL
+    box = envelope.envelope_box()
+    assert json.loads(json.dumps(envelope.per_mode(box[0], box[1]))) == acc["per_mode"]
+
+
+def test_a_lighter_hub_lets_a_point_through(envelope):
+    """The exclusion rests on the hub's least mass: with 450 kg allowed, a bearing node of 20.4 kg (Jxx 56, Jyy
+    107 kg m^2) under a 450 kg hub of 112.5 kg m^2 is excluded by none of the three bounds; it is outside the
+    envelope (hub below 600 kg)."""
+    p = np.log([20.4, 56.0, 107.0, 450.0, 112.5, 112.5])
+    assert envelope.claim(p, p) == (0.0, "none")
+    assert envelope.inside(p, p, hub_min=450.0) and not envelope.inside(p, p)
+
+
+def test_envelope_refinement_only_tightens(envelope):
+    """A box inside another has each bound's weakest corner inside it too, so its claim is at least the larger
+    box's: a shorter branch and bound proves no more than the file's (4000 evaluations) and finds no lower centre.
+    (The full run takes minutes: meshes/galileo/envelope.py.)"""
+    with open(envelope.OUT) as f:
+        row = json.load(f)["rows"][0]
+    proved, best, (lo, hi, _, _), _, _ = envelope.branch_and_bound(150)
+    assert proved <= row["proved"] * (1 + 1e-12) and best >= row["at_best"] * (1 - 1e-12)
+    mid = 0.5 * (lo + hi)
+    for k in range(6):
+        half = hi.copy()
+        half[k] = mid[k]
+        assert envelope.claim(lo, half)[0] >= envelope.claim(lo, hi)[0] * (1 - 1e-12)

@@ -106,7 +106,8 @@ def holds(values, hub_min=HUB_MIN_KG):
     for name, (least, most) in ENVELOPE.items():
         least = hub_min if name == "hub mass" else least
         if (least is not None and v[name] < least) or v[name] > most:
-            out.append(f"{name} {v[name]:g} outside {least}-{most}")
+            out.append(f"{name} {v[name]:.4g} outside {least:g}-{most:g}" if least is not None
+                       else f"{name} {v[name]:.4g} above {most:g}")
     for node, (kmin, kmax) in GYRATION.items():
         for axis in ("Jxx", "Jyy", "Jzz"):
             k = np.sqrt(v[f"{node} {axis}"] / v[f"{node} mass"])

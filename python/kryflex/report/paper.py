@@ -387,6 +387,10 @@ def _family_lines(fam, band):
             "a Galileo-class spacecraft's masses: the envelope, next."]
 
 
+BOUND_NAMES = {"clamped": "the clamped floors", "rotor modes": "the rotor-mode floors", "trace": "the trace bound",
+               "none": "no bound"}
+
+
 def _envelope_lines(env, tol):
     """envelope.py's bound over the whole physical envelope, and where the open layouts lie."""
     if not env:
@@ -395,13 +399,15 @@ def _envelope_lines(env, tol):
     text = (f"Over the physical envelope of a Galileo-class spacecraft (meshes/galileo/envelope.py; its ranges and "
             f"sources in meshes/galileo/README.md; the hub at least {first['hub_min_kg']:g} kg) every model, "
             f"whatever its mode shapes, keeps some entry of Tables 1 and 4 at least {100 * first['proved']:.2f} % off "
-            f"(the {first['bound']} bound at the weakest of the cells that cover the envelope, each bound at its "
+            f"({BOUND_NAMES.get(first['bound'], first['bound'])} at the weakest of the boxes that cover the "
+            "envelope, each bound at its "
             f"least favourable corner; the bounds reach {100 * first['at_best']:.2f} % at best): Tables 1 and 4 "
             f"cannot all be met within {100 * tol:g} % inside the envelope. Column 'envelope': no entry is excluded "
             "alone over the whole envelope ('with the others': excluded together with the rest).")
     for r in rest:
-        text += (f" With a hub of {r['hub_min_kg']:g} kg or more allowed, the bounds force "
-                 f"{100 * r['proved']:.2f} % ({r['bound']}).")
+        text += (f" With a hub of {r['hub_min_kg']:g} kg or more allowed, the bounds prove "
+                 f"{100 * r['proved']:.2f} % ({BOUND_NAMES.get(r['bound'], r['bound'])}; at best "
+                 f"{100 * r['at_best']:.2f} %).")
     for label, why in env["outside"].items():
         text += f" Outside the envelope: {label} ({'; '.join(why[:2])})." if why else f" {label}: inside."
     return ["", text]

@@ -673,7 +673,7 @@ def test_report_table7_names_each_entrys_bound(account, implied, sumrule, topmod
                  else "with the others" for a in ("0", "60")]
         assert rows[m][-1] == (cells[0] if cells[0] == cells[1] else " / ".join(cells)), m
     assert f"keeps some entry of Tables 1 and 4 at least {100 * env['rows'][0]['proved']:.2f} % off" in text
-    assert "Outside the envelope: light-hub (hub mass 225 outside 600.0-1800.0)" in text
+    assert "Outside the envelope: light-hub (hub mass 225 outside 600-1800)" in text
     assert "Outside the envelope: committed fit" in text
     assert env["table5"]["residue_cap"] == pytest.approx(envelope.residue_cap(), rel=1e-12)
     assert not any(env["table5"]["excluded"].values()) and "So Table 5 is excluded by nothing alone" in text
@@ -840,6 +840,8 @@ def test_envelope_file_is_what_the_script_computes(envelope):
     assert row["proved"] > FREQ_TOL
     box = envelope.envelope_box()
     assert json.loads(json.dumps(envelope.per_mode(box[0], box[1]))) == acc["per_mode"]
+    light = {name: envelope.STICK[name] * np.exp(q) for name, q in envelope.fit.LAYOUTS["light-hub"].items()}
+    assert acc["outside"]["light-hub"] == envelope.holds(light)[1]
 
 
 def test_a_lighter_hub_lets_a_point_through(envelope):

@@ -264,13 +264,17 @@ OUT = os.path.join(HERE, "envelope.json")
 
 
 def main():
+    global AXIS_RATIO
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cells", type=int, default=4000, help="bound evaluations of the branch and bound")
     ap.add_argument("--hub-min", type=float, nargs="+", default=[HUB_MIN_KG, 450.0],
                     help="the hub's least mass (kg); the first is the envelope's, the others show what a lighter "
                          "hub allows")
+    ap.add_argument("--axis-ratio", type=float, default=AXIS_RATIO,
+                    help="the largest Jxx/Jyy of the bearing node and of the hub (a wider envelope: a sensitivity)")
     ap.add_argument("--out", default=OUT, help="the account as JSON (tables.py and the report read it)")
     args = ap.parse_args()
+    AXIS_RATIO = args.axis_ratio
     acc = account(args.cells, args.hub_min)
     with open(args.out, "w") as f:
         json.dump(acc, f, indent=1)

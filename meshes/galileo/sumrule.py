@@ -115,18 +115,27 @@ def _corner(center, band, light):
     return p
 
 
-def box_bound(alpha, layout, band):
-    """The bound on D over every mass and inertia within a factor band of the layout: the stator's term (P
-    relaxed) at the corner where its bearing node is lightest and the hub heaviest, plus the rotor's at the other."""
-    center = fit.layout_center(layout)
+def pair_bound(alpha, stator_term, rotor_term):
+    """The bound on D with the stator's term (P relaxed) at the masses stator_term and the rotor's at rotor_term
+    (generate.MASS_PARAMETERS log factors). The stator's term grows as its bearing node gets lighter and the hub
+    heavier (its nu are those of (I + A_s^-1 A_r)^-1, A = C_b M^-1 C_b^T of each side), the rotor's the other way
+    round, and nothing else enters: so over any box of masses the bound at its two corners (stator_term: bearing
+    node lightest, hub heaviest; rotor_term: the opposite) holds for every model in the box."""
     ls, lr = component_lambdas()
     total = 0.0
-    for light, lam in (("stator", ls), ("rotor", lr)):
-        Ms, ts, Mr, tr = g.fitted_masses(_corner(center, band, light))
+    for light, lam, p in (("stator", ls, stator_term), ("rotor", lr, rotor_term)):
+        Ms, ts, Mr, tr = g.fitted_masses(p)
         _, Cs, Cr = _split(alpha, Ms, Mr)
         As, Ar = Cs @ np.linalg.solve(Ms, Cs.T), Cr @ np.linalg.solve(Mr, Cr.T)
         total += _top_sum(lam, _weights(As + Ar, As if light == "stator" else Ar))
     return total
+
+
+def box_bound(alpha, layout, band):
+    """The bound on D over every mass and inertia within a factor band of the layout: the stator's term (P
+    relaxed) at the corner where its bearing node is lightest and the hub heaviest, plus the rotor's at the other."""
+    center = fit.layout_center(layout)
+    return pair_bound(alpha, _corner(center, band, "stator"), _corner(center, band, "rotor"))
 
 
 def paper_deficit(alpha):

@@ -303,8 +303,18 @@ def _allowed_rows(p, b, layouts):
             lay = dict(b["layouts"][name], first_mode_above_band=first_above)
             cells = {label: _bound_cell(lay, label, m, tol) for label in ("0", "60")}
             row.append(cells["0"] if cells["0"] == cells["60"] else f"{cells['0']} / {cells['60']}")
+        if b.get("envelope"):
+            cells = {label: _envelope_cell(b["envelope"], label, m, tol) for label in ("0", "60")}
+            row.append(cells["0"] if cells["0"] == cells["60"] else f"{cells['0']} / {cells['60']}")
         rows.append(row)
     return rows
+
+
+def _envelope_cell(env, label, m, tol):
+    """The envelope's verdict on one mode alone: the larger floor's least deviation over the whole envelope where
+    it exceeds tol, else 'with the others' (excluded only together with the rest of Tables 1 and 4)."""
+    dev, name = env["per_mode"][label][m]
+    return f"≥ +{100 * dev:.1f} % ({name})" if dev > tol else "with the others"
 
 
 def _allowed(p):
@@ -326,8 +336,11 @@ def _allowed(p):
              "following the hub, keep it there (meshes/galileo/topmodes.py: Courant-Fischer, the bearing node's "
              "mass against the hub's); ‡: the trace bound (meshes/galileo/sumrule.py) keeps modes above the band "
              "from all being within it; open: no bound excludes it. One cell for both angles where they agree, "
-             "else 0° / 60°.", "",
-             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts, rows), ""]
+             "else 0° / 60°." + (" Column envelope: the same floors over the whole physical envelope "
+                                 "(meshes/galileo/envelope.py), or 'with the others' where the entry is excluded "
+                                 "only together with the rest (below)." if b.get("envelope") else ""), "",
+             table(["Mode", "Table 1 (0°)", "kryflex", "Table 4 (60°)", "kryflex"] + layouts
+                   + (["envelope"] if b.get("envelope") else []), rows), ""]
     excluded = [name for col, name in enumerate(layouts, start=5) if any(r[col] != "open" for r in rows)]
     lines += [f"Excluded (some entry of Tables 1 and 4 provably outside {100 * tol:g} %, whatever the mode shapes): "
               + (", ".join(excluded) if excluded else "none") + f" of the {len(layouts)} layouts; open: "
@@ -340,6 +353,7 @@ def _allowed(p):
                          "the bodies lowers the sum of the squared frequencies by at most what the interface "
                          "masses allow, less than the paper's columns need.")
     lines += _family_lines(b.get("family"), band)
+    lines += _envelope_lines(b.get("envelope"), tol)
     failed = b["interlacing"]["failed"]
     lines += ["", f"Model-independent: {b['interlacing']['checks'] - len(failed)} of {b['interlacing']['checks']} "
               "interlacing checks hold (each system mode between the components' (k-5)-th and k-th, 5 ties; "
@@ -369,7 +383,34 @@ def _family_lines(fam, band):
             f"{min(fam['masses_kg']):g}-{max(fam['masses_kg']):g} kg and {min(fam['inertias_kg_m2']):g}-"
             f"{max(fam['inertias_kg_m2']):g} kg m², point A the rest of 1060 kg, every mass within {band:g}x; a "
             "grid, nothing claimed between its points): " + "; ".join(cells) + ". A layout the bounds do not "
-            "exclude is open: no fit has met Tables 1 and 4 there (meshes/galileo/README.md)."]
+            "exclude is open: no fit has met Tables 1 and 4 there (meshes/galileo/README.md); whether it lies inside "
+            "a Galileo-class spacecraft's masses: the envelope, next."]
+
+
+BOUND_NAMES = {"clamped": "the clamped floors", "rotor modes": "the rotor-mode floors", "trace": "the trace bound",
+               "none": "no bound"}
+
+
+def _envelope_lines(env, tol):
+    """envelope.py's bound over the whole physical envelope, and where the open layouts lie."""
+    if not env:
+        return []
+    first, rest = env["rows"][0], env["rows"][1:]
+    text = (f"Over the physical envelope of a Galileo-class spacecraft (meshes/galileo/envelope.py; its ranges and "
+            f"sources in meshes/galileo/README.md; the hub at least {first['hub_min_kg']:g} kg) every model, "
+            f"whatever its mode shapes, keeps some entry of Tables 1 and 4 at least {100 * first['proved']:.2f} % off "
+            f"({BOUND_NAMES.get(first['bound'], first['bound'])} at the weakest of the boxes that cover the "
+            "envelope, each bound at its "
+            f"least favourable corner; the bounds reach {100 * first['at_best']:.2f} % at best): Tables 1 and 4 "
+            f"cannot all be met within {100 * tol:g} % inside the envelope. Column 'envelope': no entry is excluded "
+            "alone over the whole envelope ('with the others': excluded together with the rest).")
+    for r in rest:
+        text += (f" With a hub of {r['hub_min_kg']:g} kg or more allowed, the bounds prove "
+                 f"{100 * r['proved']:.2f} % ({BOUND_NAMES.get(r['bound'], r['bound'])}; at best "
+                 f"{100 * r['at_best']:.2f} %).")
+    for label, why in env["outside"].items():
+        text += f" Outside the envelope: {label} ({'; '.join(why[:2])})." if why else f" {label}: inside."
+    return ["", text]
 
 
 def _table5_allowed(b, layouts):
@@ -384,6 +425,15 @@ def _table5_allowed(b, layouts):
     text += ("So no bound excludes Table 5 for any layout: its entries are open (the fits' local optima, "
              "meshes/galileo/README.md)." if not excluded else
              "Excluded for " + ", ".join(excluded) + ": the cap is below the least sum.")
+    env = (b.get("envelope") or {}).get("table5")
+    if env:
+        text += (f" Over the whole envelope the cap is at least {env['residue_cap']:.3g}, "
+                 + ", ".join(f"{env['residue_cap'] / v:.0f}x the least sum at {a}°"
+                             for a, v in env["least_residue_sum"].items() if v)
+                 + "; the static condition |L⁰| ≤ cap / λ₁ holds with a margin of "
+                 + ", ".join(f"{v:.0f}x at {a}°" for a, v in env["static_cap_over_L0"].items())
+                 + ". So Table 5 is excluded by nothing alone; the whole example (Tables 1, 4 and 5) cannot be met "
+                   "inside the envelope because Tables 1 and 4 cannot.")
     return [text, ""]
 
 

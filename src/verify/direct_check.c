@@ -414,8 +414,8 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_error", r->verify_check_worst));
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_rtol", r->verify_check_rtol));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_check", (PetscReal)r->verify_check_seconds));
-  PetscCall(KFProgress(comm, "reference check %s: %" PetscInt_FMT " direct solves of the full order, worst disagreement %.2e of the pair's peak at %.4g Hz (allowed %.0e)", label, p->nchk, (double)worst, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)r->verify_check_rtol));
-  PetscCheck(worst <= r->verify_check_rtol, comm, PETSC_ERR_NOT_CONVERGED, "the full-order reference %s disagrees with a direct solve of the full system at %.6g Hz by %.3e of the peak of output %" PetscInt_FMT " <- input %" PetscInt_FMT " (allowed %.1e): the verification's modes are wrong or incomplete there, so no verdict is given; raise -kf_verify_modes or -kf_verify_cover, or take the dense reference (-kf_verify_dense_max_dofs above the system size)",
-             label, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)worst, pw % t, pw / t, (double)r->verify_check_rtol);
+  PetscCall(KFProgress(comm, "reference check %s: %" PetscInt_FMT " %s solves of the full order, worst disagreement %.2e of the pair's peak at %.4g Hz (allowed %.0e)", label, p->nchk, p->chk_done ? "iterated" : "direct", (double)worst, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)r->verify_check_rtol));
+  PetscCheck(worst <= r->verify_check_rtol, comm, PETSC_ERR_NOT_CONVERGED, "the full-order reference %s disagrees with %s solve of the full system at %.6g Hz by %.3e of the peak of output %" PetscInt_FMT " <- input %" PetscInt_FMT " (allowed %.1e): the verification's modes are wrong or incomplete there, so no verdict is given; raise -kf_verify_modes or -kf_verify_cover, or take the dense reference (-kf_verify_dense_max_dofs above the system size)",
+             label, p->chk_done ? "an iterated" : "a direct", (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)worst, pw % t, pw / t, (double)r->verify_check_rtol);
   PetscFunctionReturn(0);
 }

@@ -13,7 +13,8 @@ dense solves (NumPy/SciPy, nothing from kryflex's numerics):
   by eigh, its static flexibility added) to 1e-9 of the peak;
 - Rayleigh and structural damping: test_damped_check.py runs both methods against its dense damped solve;
 - a reference missing modes (the sparse path with 2 modes): the iteration does not contract, the point falls back to
-  the direct solves, and the run fails with exit 3 naming the frequency and the angle, serially and on 2 ranks;
+  the direct solves, and the run fails with exit 3 naming the frequency and the angle, serially and on 2 ranks; a
+  tolerance below the iterated check's disagreement fails the same way, saying the solve was iterated;
 - 2 ranks give the serial truth.
 """
 import json
@@ -131,6 +132,19 @@ def test_summary_says_how_the_truth_was_solved(tmp_path):
     p = subprocess.run([td.KRYFLEX, "reduce", td.GALILEO, "-o", str(tmp_path / "bad"), "-quiet",
                         "-kf_verify_check_method", "newton"], env=td.ENV, capture_output=True, text=True, timeout=300)
     assert p.returncode == 2 and "-kf_verify_check_method" in p.stdout + p.stderr and "Traceback" not in p.stderr
+
+
+@pytest.mark.skipif(not os.path.exists(td.KRYFLEX), reason="build/kryflex not built")
+def test_iterated_disagreement_is_exit_3(tmp_path):
+    """A tolerance below the iterated check's disagreement: exit 3 naming the frequency, the angle and the pair, and
+    saying the truth was iterated; nothing fell back (the iteration converged: the disagreement is the reference's)."""
+    p = subprocess.run([td.KRYFLEX, "reduce", td.GALILEO, "-o", str(tmp_path / "out"), "-kf_verify_check_rtol",
+                        "1e-15"], env=td.ENV, capture_output=True, text=True, timeout=300)
+    print(p.returncode, p.stderr[-1500:])
+    assert p.returncode == 3 and "Traceback" not in p.stderr
+    assert "disagrees with an iterated solve of the full system" in p.stderr and "deg" in p.stderr
+    assert "output" in p.stderr and "input" in p.stderr
+    assert "did not contract" not in p.stdout and "numerical factorizations" not in p.stdout
 
 
 TWO_RANKS = r"""

@@ -75,8 +75,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   PetscCall(KFReferenceUsesSolver(r, solver, dense, &use));
-  PetscCall(KFReducerRefinedCheckWanted_Private(r, &keep));
-  keep = (PetscBool)(keep && solver && r->shift == 0 && !viscous); /* the check iterates with this solver's K+ */
+  /* the modes kept for the iterative reference check (src/verify/refined_check.c), which iterates with this
+     solver's K+: no shift, no damping matrices */
+  keep = (PetscBool)(r->verify && r->verify_check_iterative && r->verify_check_points > 0 && solver && r->shift == 0 && !viscous);
   /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own. Its zero rows are in it;
      the sparse path finds the rest with a factorization of M_S, needed only when the modes asked for could reach
      the flexible count (otherwise the residual is kept whatever the nullity: ref->complete is false) */

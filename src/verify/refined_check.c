@@ -29,15 +29,6 @@
 #define KF_REFINED_CONTRACTION 0.5  /* the largest ratio of successive corrections taken as convergence */
 #define KF_REFINED_MAX_STEPS  40
 
-/* whether the references should keep their modes for this check: verification with direct checks, the iterative
-   method asked for */
-PetscErrorCode KFReducerRefinedCheckWanted_Private(KFReducer r, PetscBool *want)
-{
-  PetscFunctionBegin;
-  *want = (PetscBool)(r->verify && r->verify_check_iterative && r->verify_check_points > 0);
-  PetscFunctionReturn(0);
-}
-
 typedef struct {
   KFSystem               sys;
   KFFlexSolver           solver;

@@ -207,7 +207,6 @@ PETSC_INTERN PetscErrorCode KFCheckDampingModel_Private(KFReducer, KFDamping *, 
 PETSC_INTERN PetscErrorCode KFCheckFrequencies_Private(KFReducer, PetscInt nf, const PetscReal f[], PetscInt npts, PetscReal w[]);
 /* the iterative check of one point's reference, while its flexible solver and its modes (ref.V) are alive */
 PETSC_INTERN PetscErrorCode KFEvalPointRefinedCheck_Private(KFReducer, KFSystem, KFFlexSolver, KFEvalPoint *);
-PETSC_INTERN PetscErrorCode KFReducerRefinedCheckWanted_Private(KFReducer, PetscBool *);
 PETSC_INTERN PetscErrorCode KFCheckRigidEnergy_Private(KFReducer, KFSystem, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDampedSolves_Private(KFReducer, KFSystem, KFEvalPoint *, const KFDamping *, PetscBool viscous);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per

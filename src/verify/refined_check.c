@@ -19,7 +19,10 @@
 
   All check frequencies (and the real and imaginary halves) of a point go through K+ as one block: a hand-written
   block iteration, since PETSc's KSP with a shell preconditioner solves one column at a time, each a single-vector
-  pass through the factor, where one block pass costs little more than one column's (benchmarks/proof_cost).
+  pass through the factor, where one block pass costs a fraction of its columns' one by one (the eigensolve's block
+  purification: benchmarks/proof_cost/README.md). K+ is applied without the solver's own refinement (the iteration
+  refines against K_S itself). The frequencies are chosen from this point's own resonances (no factorization to share
+  between points), and the backward error is taken against a lower bound of ||Z||_F (never too lenient).
 */
 #include <kryflex/reducerimpl.h>
 #include <kryflex/flexsolverimpl.h>

@@ -3,12 +3,15 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
+        [--direct-check]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
 verification split (eigensolves, direct solves, the rest), the search, the report and plots, and the ratio the goal
 is stated in: default wall / (factorization + block solves of the bare run), and the direct check's numerical
-factorizations (its progress line). --whole-check adds a third run, the default with the direct check factoring the
+factorizations (its progress line), and how many angles and midpoints the check iterated from the reference (steps,
+fallbacks: summary.json). --direct-check adds a run of the default with the check solved by factorizations
+(-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
 of runs taken together, and the CPU seconds beside the wall.
 """
@@ -71,6 +74,9 @@ def run(scene, out, extra):
                 model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
                 report=(wall - t_write) if t_write is not None else None,
                 check_factorizations=int(nfact.group(1)) if nfact else None,
+                iterated=((s.get("reference_check") or {}).get("iterative_points"),
+                          (s.get("reference_check") or {}).get("iterative_steps_max"),
+                          (s.get("reference_check") or {}).get("fallbacks")),
                 error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"))
 
 
@@ -83,7 +89,8 @@ def show(name, r, denom):
         name, fmt(r["wall"]), fmt(r["cpu"]), fmt(r["factorization"]), fmt(r["solves"]), fmt(r["model_check"]),
         fmt(r["verification"]), fmt(r["eigensolve"]), fmt(r["check"]), fmt(r["search"]), fmt(r["report"]),
         r["wall"] / denom, "%.4g%s" % (r["error"], " (est.)" if r["estimated"] else "") if r["error"] is not None else "-",
-        "  check factorizations %d" % r["check_factorizations"] if r["check_factorizations"] is not None else ""))
+        "  check factorizations %d" % r["check_factorizations"] if r["check_factorizations"] is not None else "")
+        + ("  iterated points %s (steps <= %s, fallbacks %s)" % r["iterated"] if r["iterated"][0] else ""))
 
 
 def main():
@@ -93,6 +100,9 @@ def main():
     ap.add_argument("--whole-check", action="store_true",
                     help="a third run: the default with the direct check factoring the whole system per angle and "
                          "frequency (-kf_verify_check_bodywise false), beside the body-wise one")
+    ap.add_argument("--direct-check", action="store_true",
+                    help="a run of the default with the check solved by factorizations (-kf_verify_check_method "
+                         "direct), beside the iterative one")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
@@ -107,6 +117,8 @@ def main():
             full = run(scene, os.path.join(args.work, "default_%s" % refine), [])
             whole = run(scene, os.path.join(args.work, "whole_%s" % refine), ["-kf_verify_check_bodywise", "false"]) \
                 if args.whole_check else None
+            direct = run(scene, os.path.join(args.work, "direct_%s" % refine), ["-kf_verify_check_method", "direct"]) \
+                if args.direct_check else None
             denom = bare["factorization"] + bare["solves"]
             print("\nrefine %s (%s dofs), run %d; bare factorization + solves %.2f s" % (refine, full["dofs"], rep + 1, denom))
             print("%-8s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
@@ -117,6 +129,10 @@ def main():
                 show("whole", whole, denom)
                 print("direct solves, body-wise / whole-system: %.2f (%s against %s factorizations)" % (
                     full["check"] / whole["check"], full["check_factorizations"], whole["check_factorizations"]))
+            if direct:
+                show("direct", direct, denom)
+                print("reference check, iterative / direct: %.2f s / %.2f s = %.2f; default wall, iterative / direct: %.2f" % (
+                    full["check"], direct["check"], full["check"] / direct["check"], full["wall"] / direct["wall"]))
             print("default / bare: wall %.2f, CPU %.2f; report and plots %.1f %% of the default wall" % (
                 full["wall"] / bare["wall"], full["cpu"] / bare["cpu"], 100 * (full["report"] or 0) / full["wall"]))
 

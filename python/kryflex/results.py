@@ -340,6 +340,11 @@ class ReferenceCheck(Record):
     """The full-order reference checked against direct solves of the full system (C reference_check_*)."""
     error: float = _value()
     rtol: float = _value()
+    factorizations: int = _value(doc="numerical factorizations the direct solves made (0 when every point iterated)")
+    iterative_points: int = _value(doc="angles and midpoints whose truth was iterated from the reference itself")
+    iterative_steps: int = _value(doc="their steps, summed (one block K+ application each)")
+    iterative_steps_max: int = _value()
+    fallbacks: int = _value(doc="points whose iteration did not contract, solved directly instead")
     per_angle: dict = _by_label(ReferencePoint)
 
 

@@ -78,6 +78,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->verify_check_points     = 3;
   r->verify_check_rtol       = 1e-6;
   r->verify_check_bodywise   = PETSC_TRUE;
+  r->verify_check_iterative  = PETSC_TRUE;
   r->frequency_points        = 400;
   r->frf_floor_db            = -60.0;
   PetscCall(PetscMalloc1(1, &r->alpha_g));

@@ -219,6 +219,13 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_check_points", r->verify_check_points, &r->verify_check_points, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_check_rtol", r->verify_check_rtol, &r->verify_check_rtol, NULL));
   PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify_check_bodywise", r->verify_check_bodywise, &r->verify_check_bodywise, NULL));
+  {
+    static const char *const methods[] = {"iterative", "direct"};
+    PetscInt                  m = r->verify_check_iterative ? 0 : 1;
+
+    PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_verify_check_method", methods, 2, methods[m], &m, NULL));
+    r->verify_check_iterative = (PetscBool)(m == 0);
+  }
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_frequency_points", npoints, &npoints, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_frf_floor_db", floor_db, &floor_db, NULL));
   PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));

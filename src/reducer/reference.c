@@ -16,6 +16,7 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *,
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[]);
+PETSC_INTERN PetscErrorCode KFSystemEigenWithModes_Private(KFSystem, KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -35,7 +36,7 @@ static PetscErrorCode KFReferenceUsesSolver(KFReducer r, KFFlexSolver solver, Pe
 /* The lowest nev flexible modes (w2, H Phi, Phi^T G; or the modes themselves with viscous damping), with the
    flexible solver's factor when it may serve: its block solves are the verification's, so the solver's own
    accounting (the reduction's solves) is left as it was */
-static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, Mat *keep)
 {
   KFFlexSolverPerf perf;
   PetscLogDouble   t0, t1;
@@ -47,6 +48,9 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
     PetscCall(MatDestroy(modes));
     if (solver) PetscCall(KFFlexSolverEigenModes(solver, nev, nconv, w2, modes));
     else PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
+  } else if (keep) { /* the modes kept for the iterative reference check (src/verify/refined_check.c) */
+    PetscCall(MatDestroy(keep));
+    PetscCall(KFSystemEigenWithModes_Private(sys, solver, nev, nconv, w2, HPhi, PhiG, keep));
   } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
   else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
@@ -61,7 +65,7 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
 {
   PetscInt   nrev, nsys, a, t, nflex, nev, nconv, nb, nrigid, nnull = 0, n0;
   PetscReal *w2, *HPhi, *PhiG, fmax = r->verify_cover * r->band[1];
-  PetscBool  dense, viscous = PETSC_FALSE, use = PETSC_FALSE, exact;
+  PetscBool  dense, viscous = PETSC_FALSE, use = PETSC_FALSE, exact, keep;
   Mat        modes = NULL;
 
   PetscFunctionBegin;
@@ -71,6 +75,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL)); /* the rigid count geometry and boundary conditions give */
   PetscCall(KFSystemEigenIsDense(sys, &dense));
   PetscCall(KFReferenceUsesSolver(r, solver, dense, &use));
+  /* the modes kept for the iterative reference check (src/verify/refined_check.c), which iterates with this
+     solver's K+: no shift, no damping matrices */
+  keep = (PetscBool)(r->verify && r->verify_check_iterative && r->verify_check_points > 0 && solver && r->shift == 0 && !viscous);
   /* the null space of the mass carries infinite eigenvalues: no flexible modes of its own. Its zero rows are in it;
      the sparse path finds the rest with a factorization of M_S, needed only when the modes asked for could reach
      the flexible count (otherwise the residual is kept whatever the nullity: ref->complete is false) */
@@ -90,7 +97,7 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes));
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes, keep ? &ref->V : NULL));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
@@ -169,6 +176,7 @@ PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *ref)
   PetscCall(PetscFree2(ref->HPr, ref->PrG));
   PetscCall(PetscFree(ref->Cm));
   PetscCall(PetscFree(ref->D));
+  PetscCall(MatDestroy(&ref->V));
   PetscCall(PetscMemzero(ref, sizeof(*ref)));
   PetscFunctionReturn(0);
 }

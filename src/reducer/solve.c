@@ -515,6 +515,7 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, KFFlexSolve
   p->nmom = L ? PetscMin(nmom, 2) : 2;
   if (L) PetscCall(PetscArraycpy(p->L0, L, p->nmom * t * a));
   else PetscCall(KFFlexSolverMoments(solver, 2, p->L0));
+  PetscCall(KFEvalPointRefinedCheck_Private(r, sys, solver, p)); /* while the solver is alive; no-op without ref.V */
   if (own) {
     PetscCall(KFReducerAddPerf_Private(r, own));
     PetscCall(KFFlexSolverDestroy(&own));
@@ -1011,6 +1012,11 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   r->verify_check_worst_hz = 0;
   r->verify_check_seconds  = 0;
   r->verify_eigen_seconds  = 0;
+  r->verify_check_iter_points    = 0;
+  r->verify_check_iter_steps     = 0;
+  r->verify_check_iter_steps_max = 0;
+  r->verify_check_fallbacks      = 0;
+  r->verify_check_iter_residual  = 0;
   PetscCall(PetscCalloc1(r->nconfig + 1, &r->results));
   PetscCall(PetscMemzero(&r->perf, sizeof(r->perf)));
   PetscCall(PetscTime(&tstart));

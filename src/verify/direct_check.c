@@ -45,7 +45,7 @@ static PetscErrorCode KFRigidEnergy(KFSystem sys, const KFFullReference *ref, Pe
    between the resonances f[] (Hz; every evaluation point's, and the slice's ends) in its slice: as far from a
    resonance of any point as the slice allows. One set for all points, so that the bodies' factorizations at a check
    frequency serve every angle (KFDirectSolvesBodywise). */
-static PetscErrorCode KFCheckFrequencies(KFReducer r, PetscInt nf, const PetscReal f[], PetscInt npts, PetscReal w[])
+PetscErrorCode KFCheckFrequencies_Private(KFReducer r, PetscInt nf, const PetscReal f[], PetscInt npts, PetscReal w[])
 {
   const PetscReal f0 = r->band[0] > 0 ? r->band[0] : 1e-3 * r->band[1], f1 = r->band[1];
   PetscReal      *pts;
@@ -217,18 +217,25 @@ static PetscErrorCode KFCheckPointAt(KFReducer r, KFSystem sys, KFBodyFactors bf
   PetscFunctionReturn(0);
 }
 
+/* the export's rigid energy at point p, the system at its angles (also the iterative check's: refined_check.c) */
+PetscErrorCode KFCheckRigidEnergy_Private(KFReducer r, KFSystem sys, KFEvalPoint *p)
+{
+  PetscReal e;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemComputeRigidModes(sys));
+  PetscCall(KFRigidEnergy(sys, &p->ref, &e));
+  if (p->interest >= 0) PetscCall(KFReducerResultScalar_Private(r, p->interest, "reference_check_rigid_energy", e));
+  PetscFunctionReturn(0);
+}
+
 /* the system at point p's angles, its rigid modes, and the export's rigid energy recorded there */
 static PetscErrorCode KFCheckConfigure(KFReducer r, KFSystem sys, KFEvalPoint *p, PetscBool energy)
 {
   PetscFunctionBegin;
   PetscCall(KFSystemSetAngles(sys, p->angles));
   PetscCall(KFSystemComputeRigidModes(sys));
-  if (energy) {
-    PetscReal e;
-
-    PetscCall(KFRigidEnergy(sys, &p->ref, &e));
-    if (p->interest >= 0) PetscCall(KFReducerResultScalar_Private(r, p->interest, "reference_check_rigid_energy", e));
-  }
+  if (energy) PetscCall(KFCheckRigidEnergy_Private(r, sys, p));
   PetscFunctionReturn(0);
 }
 
@@ -250,7 +257,7 @@ static PetscErrorCode KFDirectSolvesBodywise(KFReducer r, KFSystem sys, PetscInt
     *nfact += s->nb;
   }
   for (PetscInt e = 0; e < neval; e++) {
-    if (!evals[e].ref.w2) continue;
+    if (!evals[e].ref.w2 || evals[e].chk_done) continue;
     PetscCall(KFInterruptCheck(s->comm));
     PetscCall(KFCheckConfigure(r, sys, &evals[e], PETSC_TRUE));
     for (PetscInt k = 0; k < npts; k++) PetscCall(KFCheckPointAt(r, sys, bf[k], &evals[e], k, nfact, resmax));
@@ -260,13 +267,28 @@ static PetscErrorCode KFDirectSolvesBodywise(KFReducer r, KFSystem sys, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* the checks' accounting in the results: the direct solves' factorizations, the points the iteration solved
+   (refined_check.c: their steps, the points that fell back to direct solves), the worst backward error taken
+   (undamped direct solves and every iterative one) */
+static PetscErrorCode KFDirectChecksRecord(KFReducer r, PetscInt nfact, PetscReal resmax, PetscBool damped)
+{
+  PetscFunctionBegin;
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_factorizations", (PetscReal)nfact));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_iterative_points", (PetscReal)r->verify_check_iter_points));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_iterative_steps", (PetscReal)r->verify_check_iter_steps));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_iterative_steps_max", (PetscReal)r->verify_check_iter_steps_max));
+  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_fallbacks", (PetscReal)r->verify_check_fallbacks));
+  if (!damped || r->verify_check_iter_points) PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_residual", PetscMax(damped ? 0 : resmax, r->verify_check_iter_residual)));
+  PetscFunctionReturn(0);
+}
+
 /* Every evaluation point's direct solves, once all the references exist: the check frequencies are common to all
    points (KFCheckFrequencies), so that the undamped check shares the bodies' factorizations between the angles where
    the body-wise solve applies (KFBodywiseApplies; -kf_verify_check_bodywise); otherwise each point's system is
    factored at each frequency (MUMPS LDL^T), and the damped check takes the 2 x 2 block form (damped_check.c). */
 PetscErrorCode KFReducerDirectChecks_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[])
 {
-  PetscInt       a, t, npts = r->verify_check_points, nf, nfact = 0, npoints = 0;
+  PetscInt       a, t, npts = r->verify_check_points, nf = 0, nfact = 0, npoints = 0;
   PetscReal     *f, *w, resmax = 0;
   PetscLogDouble t0, t1;
   KFDamping      damp;
@@ -275,19 +297,24 @@ PetscErrorCode KFReducerDirectChecks_Private(KFReducer r, PetscInt neval, KFEval
 
   PetscFunctionBegin;
   for (PetscInt e = 0; e < neval; e++) {
+    if (evals[e].chk_done) continue; /* its truth taken by the iterative check (refined_check.c) */
     evals[e].nchk = 0;
     if (evals[e].ref.w2) npoints++;
   }
-  if (!npts || !npoints) PetscFunctionReturn(0);
+  if (!npts) PetscFunctionReturn(0);
+  if (!npoints) {
+    PetscCall(KFDirectChecksRecord(r, 0, 0, PETSC_FALSE));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscLogEventBegin(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   PetscCall(KFAllResonances(neval, evals, &nf, &f));
   PetscCall(PetscMalloc1(npts, &w));
-  PetscCall(KFCheckFrequencies(r, nf, f, npts, w));
+  PetscCall(KFCheckFrequencies_Private(r, nf, f, npts, w));
   PetscCall(PetscFree(f));
   for (PetscInt e = 0; e < neval; e++) {
-    if (!evals[e].ref.w2) continue;
+    if (!evals[e].ref.w2 || evals[e].chk_done) continue;
     PetscCall(PetscCalloc3(npts, &evals[e].chk_w, npts * t * a, &evals[e].chk_T, npts * t * a, &evals[e].chk_Ti));
     PetscCall(PetscArraycpy(evals[e].chk_w, w, npts));
     evals[e].nchk = npts;
@@ -300,7 +327,7 @@ PetscErrorCode KFReducerDirectChecks_Private(KFReducer r, PetscInt neval, KFEval
   if (bodywise) PetscCall(KFDirectSolvesBodywise(r, sys, neval, evals, npts, w, &nfact, &resmax));
   else
     for (PetscInt e = 0; e < neval; e++) {
-      if (!evals[e].ref.w2) continue;
+      if (!evals[e].ref.w2 || evals[e].chk_done) continue;
       PetscCall(KFInterruptCheck(r->scene->comm));
       PetscCall(KFCheckConfigure(r, sys, &evals[e], PETSC_TRUE));
       if (damped) {
@@ -313,8 +340,7 @@ PetscErrorCode KFReducerDirectChecks_Private(KFReducer r, PetscInt neval, KFEval
   PetscCall(PetscFree(w));
   PetscCall(PetscTime(&t1));
   r->verify_check_seconds += t1 - t0;
-  PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_factorizations", (PetscReal)nfact));
-  if (!damped) PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_residual", resmax));
+  PetscCall(KFDirectChecksRecord(r, nfact, resmax, damped));
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_VERIFY, r, 0, 0, 0));
   PetscCall(KFProgress(r->scene->comm, "reference checks: %" PetscInt_FMT " points x %" PetscInt_FMT " frequencies solved directly, %s, %" PetscInt_FMT " numerical factorizations, %.3g s", npoints, npts, bodywise ? "body-wise (the bodies factored once per frequency)" : (damped ? "damped 2 x 2 block form" : "the whole system factored per point and frequency"), nfact, (double)(t1 - t0)));
   PetscFunctionReturn(0);
@@ -388,8 +414,8 @@ PetscErrorCode KFEvalPointCheckReference_Private(KFReducer r, KFEvalPoint *p)
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_error", r->verify_check_worst));
   PetscCall(KFReducerResultScalar_Private(r, -1, "reference_check_rtol", r->verify_check_rtol));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_check", (PetscReal)r->verify_check_seconds));
-  PetscCall(KFProgress(comm, "reference check %s: %" PetscInt_FMT " direct solves of the full order, worst disagreement %.2e of the pair's peak at %.4g Hz (allowed %.0e)", label, p->nchk, (double)worst, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)r->verify_check_rtol));
-  PetscCheck(worst <= r->verify_check_rtol, comm, PETSC_ERR_NOT_CONVERGED, "the full-order reference %s disagrees with a direct solve of the full system at %.6g Hz by %.3e of the peak of output %" PetscInt_FMT " <- input %" PetscInt_FMT " (allowed %.1e): the verification's modes are wrong or incomplete there, so no verdict is given; raise -kf_verify_modes or -kf_verify_cover, or take the dense reference (-kf_verify_dense_max_dofs above the system size)",
-             label, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)worst, pw % t, pw / t, (double)r->verify_check_rtol);
+  PetscCall(KFProgress(comm, "reference check %s: %" PetscInt_FMT " %s solves of the full order, worst disagreement %.2e of the pair's peak at %.4g Hz (allowed %.0e)", label, p->nchk, p->chk_done ? "iterated" : "direct", (double)worst, (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)r->verify_check_rtol));
+  PetscCheck(worst <= r->verify_check_rtol, comm, PETSC_ERR_NOT_CONVERGED, "the full-order reference %s disagrees with %s solve of the full system at %.6g Hz by %.3e of the peak of output %" PetscInt_FMT " <- input %" PetscInt_FMT " (allowed %.1e): the verification's modes are wrong or incomplete there, so no verdict is given; raise -kf_verify_modes or -kf_verify_cover, or take the dense reference (-kf_verify_dense_max_dofs above the system size)",
+             label, p->chk_done ? "an iterated" : "a direct", (double)(p->chk_w[fw] / (2 * PETSC_PI)), (double)worst, pw % t, pw / t, (double)r->verify_check_rtol);
   PetscFunctionReturn(0);
 }

@@ -535,6 +535,15 @@ PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, Petsc
   PetscFunctionReturn(0);
 }
 
+/* KFSystemEigen and the modes themselves (solver: a flexible solver's factor as the shift-and-invert step, or NULL):
+   the iterative reference check applies the reference to whole vectors (src/verify/refined_check.c) */
+PETSC_INTERN PetscErrorCode KFSystemEigenWithModes_Private(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, HPhi, PhiG, modes));
+  PetscFunctionReturn(0);
+}
+
 /* Input and output participation of the rigid modes: H Phi_r (t x r) and Phi_r^T G (r x a). */
 PetscErrorCode KFSystemRigidIO(KFSystem sys, PetscInt *nrigid, PetscReal HPhi[], PetscReal PhiG[])
 {

@@ -203,7 +203,7 @@ def solves_inexact(s):
     if not bad:
         return
     check = s.verdict.reference_check
-    rests = ("the full-order reference, checked against direct solves (worst disagreement %.1e), measures the "
+    rests = ("the full-order reference, checked against solves of the full system (worst disagreement %.1e), measures the "
              "model" % check.error) if check is not None and check.error is not None else (
              "the error is estimated from inexact vectors: verify against the full order (verify.full_order: true)")
     say("kryflex: warning: %d block solves stayed above -kf_refine_rtol after refinement and escalation (largest "

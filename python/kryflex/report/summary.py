@@ -189,6 +189,13 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     out["reference_check"] = None if "reference_check_error" not in whole else {
         "error": _optional_scalar(reducer, -1, "reference_check_error", whole),
         "rtol": _optional_scalar(reducer, -1, "reference_check_rtol", whole),
+        # how the truth was solved: factorizations of the direct solves, points iterated from the reference
+        # (src/verify/refined_check.c), their steps, and the points that fell back to direct solves
+        "factorizations": _optional_scalar(reducer, -1, "reference_check_factorizations", whole, int),
+        "iterative_points": _optional_scalar(reducer, -1, "reference_check_iterative_points", whole, int),
+        "iterative_steps": _optional_scalar(reducer, -1, "reference_check_iterative_steps", whole, int),
+        "iterative_steps_max": _optional_scalar(reducer, -1, "reference_check_iterative_steps_max", whole, int),
+        "fallbacks": _optional_scalar(reducer, -1, "reference_check_fallbacks", whole, int),
         "per_angle": {lab: {"error": _optional_scalar(reducer, c, "reference_check_error", has[c]),
                             "frequency_hz": _optional_scalar(reducer, c, "reference_check_frequency_hz", has[c])}
                       for c, lab in enumerate(labels)}}

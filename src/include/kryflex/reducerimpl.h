@@ -87,6 +87,9 @@ struct _p_KFReducer {
   PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
   PetscReal       verify_check_rtol;   /* their allowed disagreement, a fraction of the pair's peak */
   PetscBool       verify_check_bodywise; /* the undamped check from the bodies' factorizations where it applies */
+  PetscBool       verify_check_iterative; /* the check iterated with the reference as preconditioner (refined_check.c) */
+  PetscInt        verify_check_iter_points, verify_check_iter_steps, verify_check_iter_steps_max, verify_check_fallbacks;
+  PetscReal       verify_check_iter_residual; /* the worst backward error the iterative check took */
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
@@ -133,6 +136,8 @@ typedef struct {
   PetscInt   nc;             /* modes coupled by the viscous damping (rigid first, then flexible), 0: none */
   PetscReal *Cm;             /* (r + n) x (r + n): [Phi_r Phi]^T C [Phi_r Phi] of the bodies' C_b, or NULL */
   PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
+  Mat        V;              /* e x n: the flexible modes themselves (M-orthonormal), kept only until the iterative
+                                reference check has used them (src/verify/refined_check.c), else NULL */
 } KFFullReference;
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFlexSolver, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);
@@ -192,6 +197,7 @@ typedef struct _KFEvalPoint {
   PetscInt        nchk;        /* direct solves of the full order (src/verify/direct_check.c) */
   PetscReal      *chk_w, *chk_T, *chk_Ti; /* their frequencies (rad/s) and responses (real, imaginary parts) under the
                                    damping without modal ratios (KFCheckDampingModel_Private), nchk x t x a */
+  PetscBool       chk_done;    /* the truth already taken by the iterative check (refined_check.c) */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
@@ -199,6 +205,10 @@ PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerDirectChecks_Private(KFReducer, PetscInt, KFEvalPoint[]);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFCheckDampingModel_Private(KFReducer, KFDamping *, PetscBool *viscous);
+PETSC_INTERN PetscErrorCode KFCheckFrequencies_Private(KFReducer, PetscInt nf, const PetscReal f[], PetscInt npts, PetscReal w[]);
+/* the iterative check of one point's reference, while its flexible solver and its modes (ref.V) are alive */
+PETSC_INTERN PetscErrorCode KFEvalPointRefinedCheck_Private(KFReducer, KFSystem, KFFlexSolver, KFEvalPoint *);
+PETSC_INTERN PetscErrorCode KFCheckRigidEnergy_Private(KFReducer, KFSystem, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFEvalPointDampedSolves_Private(KFReducer, KFSystem, KFEvalPoint *, const KFDamping *, PetscBool viscous);
 /* errors of the reassembled models at every evaluation point (results, notes): nfull moments of the full order per
    angle of interest in Lfull */

@@ -1,6 +1,7 @@
 """The verification's direct check solved body-wise (src/verify/direct_check.c).
 
-The check frequencies are common to every angle of interest and midpoint; undamped (or modal ratios only) on a
+With -kf_verify_check_method direct (the iterative check, the default, factors nothing: test_refined_check.py), the
+check frequencies are common to every angle of interest and midpoint; undamped (or modal ratios only) on a
 free-free jointed scene, each frequency's K_b - w^2 M_b is factored once per body and every angle's jointed system is
 solved from those factors with its own small interface problem (src/solve/impls/bodywise). Checked here against
 independent dense solves (NumPy/SciPy, nothing from kryflex's numerics):
@@ -38,6 +39,8 @@ PAIR_FLOOR = 1e-4   # KF_FRF_PAIR_FLOOR
 
 
 def reduce(spec, **options):
+    """The check by factorizations (the iterative one, the default, factors nothing: test_refined_check.py)."""
+    options.setdefault("verify_check_method", "direct")
     reducer = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, **options)
     reducer.reduce()
     return reducer
@@ -172,7 +175,8 @@ import json, sys
 sys.path.insert(0, %(here)r)
 import numpy as np, kryflex
 import test_damping as td
-r = kryflex.Reducer(kryflex.scene_from_dict(td.galileo_spec({"modal": 0.002})), quiet=True)
+r = kryflex.Reducer(kryflex.scene_from_dict(td.galileo_spec({"modal": 0.002})), quiet=True,
+                    verify_check_method="direct")
 r.reduce()
 T = np.concatenate([np.ravel(r.result(c, "reference_check_truth_re")) for c in range(r.nconfig)])
 e = [float(np.ravel(r.result(c, "reference_check_error"))[0]) for c in range(r.nconfig)]

@@ -195,7 +195,7 @@ def test_inexact_block_solves_are_said_under_quiet(tmp_path):
     last = p.stdout.strip().splitlines()[-1]
     assert "block solves inexact" in last and "measured against the full order" in last
     assert s["reference_check"]["error"] <= 1e-6
-    assert "direct solves" in (out / "report.md").read_text()
+    assert "checked against solves of the full system" in (out / "report.md").read_text()
 
 
 def test_reference_check_in_summary_and_report(tmp_path):

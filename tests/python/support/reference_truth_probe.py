@@ -68,6 +68,9 @@ def main():
         body = next(iter(spec["bodies"].values()))
         np.savez(out, M=body["mass"], K=body["stiffness"], f=f, Tfull=reducer.frf(0, "full"), Tred=Tred,
                  check=reducer.result(-1, "reference_check_error"), error_max=reducer.result(-1, "error_max"),
+                 check_f=reducer.result(0, "reference_check_frequencies_hz"),
+                 check_truth=reducer.result(0, "reference_check_truth_re") + 1j * reducer.result(0, "reference_check_truth_im"),
+                 check_iterated=reducer.result(-1, "reference_check_iterative_points"),
                  target_met=reducer.result(-1, "target_met"), accuracy=spec["accuracy"], zeta=spec["damping"],
                  band=spec["band"])
 

@@ -202,25 +202,25 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
 }
 
 /* The block w (nl x p) made M-orthogonal to the rigid modes and the basis, mw = M w with it; nrm0: each column's M-norm
-   before. Pass 1 takes its coefficients from the kept products, (M [Phi V])^T w, so that it needs no product of w with
-   M, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal). Pass 2 takes its coefficients from a
-   fresh product of the projected block, which is what makes it a refinement (a product updated through pass 1 would
-   carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Both passes are needed: a Krylov
-   block loses 35-99 % of its M-norm in pass 1 (DGKS's criterion asks for the second). */
+   before. Both passes take their coefficients from the kept products, (M [Phi V])^T w, applied to the block as it is
+   after the pass before: pass 2 sees pass 1's rounding in w itself, which is what makes it a refinement (DGKS: a Krylov
+   block loses 35-99 % of its M-norm in pass 1, so the second pass is needed). No product of w with M until the end:
+   mw is formed once from the final block, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal).
+   Each pass reads the basis twice (the kept products, then the columns). */
 static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[])
 {
   const PetscInt nl   = mb->nl;
   MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
-  PetscReal     *cn2;
+  PetscReal     *cn1, *cn2;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(p, &cn2));
-  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 1 */
+  PetscCall(PetscCalloc2(p, &cn1, p, &cn2));
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn1)); /* pass 1 */
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 2 */
   PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
   PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
-  PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE, NULL)); /* pass 2 */
-  PetscCall(PetscFree(cn2));
+  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn1[j] + cn2[j]);
+  PetscCall(PetscFree2(cn1, cn2));
   PetscFunctionReturn(0);
 }
 

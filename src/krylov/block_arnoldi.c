@@ -309,14 +309,15 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
 }
 
 /* What a chain (the input or the output Krylov process) needs of the basis for its next right-hand side, without an
-   orthonormal basis of its own: U, an M-orthonormal basis of the span of the basis minus the chain's own space (span V =
-   S_c + span U, M-orthogonally), and M U beside it. The chain's next block is its solve's block W made M-orthogonal to
-   S_c and normalized; W lies in span [Phi V] once the basis holds it, and its part M-orthogonal to S_c and Phi is its
-   part along [U, V_new] (V_new: the columns W brought into the basis). So the chain's block is [U, V_new] Q, Q from
-   the small coordinates [U, V_new]^T M W: no pass over the chain's columns (they were a second copy of most of the
-   basis, orthonormalized twice per block). For the other chain, the columns a block brings are part of the complement. */
+   orthonormal basis of its own: U, an M-orthonormal basis of the span of the basis minus the chain's own space (span V
+   = S_c + span U, M-orthogonally), of which only M U is kept (U itself is never needed). The chain's next block is its
+   solve's block W made M-orthogonal to S_c and normalized; W lies in span [Phi V] once the basis holds it, and its part
+   M-orthogonal to S_c and Phi is its part along [U, V_new] (V_new: the columns W brought into the basis). So the
+   chain's block is [U, V_new] Q, Q from the small coordinates (M [U, V_new])^T W, and M times it is [M U, M V_new] Q: no
+   pass over the chain's own columns (they were a second copy of most of the basis, orthonormalized twice per block).
+   For the other chain, the columns a block brings join the complement. */
 typedef struct {
-  PetscScalar *U, *MU; /* nl x m, leading dimension nl, room for cap columns */
+  PetscScalar *MU; /* nl x m, leading dimension nl, room for cap columns */
   PetscInt     m, cap, nl;
 } KFChainComplement;
 
@@ -327,7 +328,6 @@ static PetscErrorCode KFChainComplementReserve(KFChainComplement *cc, PetscInt m
   PetscFunctionBegin;
   if (cc->m + m <= cc->cap) PetscFunctionReturn(0);
   cc->cap = PetscMax(cc->m + m, 2 * cc->cap);
-  PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->U));
   PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->MU));
   PetscFunctionReturn(0);
 }
@@ -336,15 +336,11 @@ static PetscErrorCode KFChainComplementReserve(KFChainComplement *cc, PetscInt m
    whole basis before, so to this chain's space and its complement) */
 static PetscErrorCode KFChainComplementAdd(KFChainComplement *cc, KFMBasis *mb, PetscInt k0)
 {
-  const PetscScalar *v;
-  const PetscInt     nl = cc->nl, p = mb->k - k0;
+  const PetscInt nl = cc->nl, p = mb->k - k0;
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
   PetscCall(KFChainComplementReserve(cc, p));
-  PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(PetscArraycpy(cc->U + cc->m * nl, v + k0 * nl, p * nl));
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
   PetscCall(PetscArraycpy(cc->MU + cc->m * nl, mb->MV + k0 * nl, p * nl));
   cc->m += p;
   PetscFunctionReturn(0);
@@ -422,8 +418,8 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
 {
   const PetscInt     nl = cc->nl, mu = cc->m, pb = mb->k - k0, m = mu + pb;
   MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
-  const PetscScalar *w, *v;
-  PetscScalar       *g, *f, *my, *nu, *nmu;
+  const PetscScalar *w;
+  PetscScalar       *g, *f, *my, *nmu;
   PetscInt           ld, nq, N;
 
   PetscFunctionBegin;
@@ -447,14 +443,10 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
-    PetscCall(PetscMalloc2(nl * (m - nq) + 1, &nu, nl * (m - nq) + 1, &nmu));
-    PetscCall(BVGetArrayRead(mb->V, &v));
-    PetscCall(KFChainCombine(nl, mu, cc->U, pb, v + k0 * nl, m - nq, f, nu));
-    PetscCall(BVRestoreArrayRead(mb->V, &v));
+    PetscCall(PetscMalloc1(nl * (m - nq) + 1, &nmu));
     PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, nmu));
-    PetscCall(PetscArraycpy(cc->U, nu, nl * (m - nq)));
     PetscCall(PetscArraycpy(cc->MU, nmu, nl * (m - nq)));
-    PetscCall(PetscFree2(nu, nmu));
+    PetscCall(PetscFree(nmu));
     cc->m = m - nq;
   }
   PetscCall(PetscFree2(g, f));
@@ -668,7 +660,6 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   }
   PetscCall(MatDestroy(&Prev[0]));
   PetscCall(MatDestroy(&Prev[1]));
-  for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].U));
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].MU));
   PetscCall(PetscFree(basis.MV));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));

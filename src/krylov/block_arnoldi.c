@@ -317,7 +317,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
    pass over the chain's own columns (they were a second copy of most of the basis, orthonormalized twice per block).
    For the other chain, the columns a block brings join the complement. */
 typedef struct {
-  PetscScalar *MU; /* nl x m, leading dimension nl, room for cap columns */
+  PetscScalar *MU, *spare; /* nl x m, leading dimension nl, room for cap columns; spare: as much room, the rotation's target */
   PetscInt     m, cap, nl;
 } KFChainComplement;
 
@@ -329,6 +329,7 @@ static PetscErrorCode KFChainComplementReserve(KFChainComplement *cc, PetscInt m
   if (cc->m + m <= cc->cap) PetscFunctionReturn(0);
   cc->cap = PetscMax(cc->m + m, 2 * cc->cap);
   PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->MU));
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->spare));
   PetscFunctionReturn(0);
 }
 
@@ -443,10 +444,10 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
-    PetscCall(PetscMalloc1(nl * (m - nq) + 1, &nmu));
-    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, nmu));
-    PetscCall(PetscArraycpy(cc->MU, nmu, nl * (m - nq)));
-    PetscCall(PetscFree(nmu));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare));
+    nmu       = cc->MU; /* the rotated complement becomes the kept one: no copy back */
+    cc->MU    = cc->spare;
+    cc->spare = nmu;
     cc->m = m - nq;
   }
   PetscCall(PetscFree2(g, f));
@@ -661,6 +662,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(MatDestroy(&Prev[0]));
   PetscCall(MatDestroy(&Prev[1]));
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].MU));
+  for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].spare));
   PetscCall(PetscFree(basis.MV));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));

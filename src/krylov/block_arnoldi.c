@@ -104,11 +104,11 @@ static PetscErrorCode KFSkinnyTransposeMult(PetscInt nl, PetscInt nc, const Pets
   PetscFunctionReturn(0);
 }
 
-/* X (nl x p, ldx) -= A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
-static PetscErrorCode KFSkinnyMultSub(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+/* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
+static PetscErrorCode KFSkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
 {
   PetscBLASInt bc, bp, bm, bla, blx, blc;
-  PetscScalar  one = 1.0, mone = -1.0;
+  PetscScalar  one = 1.0;
 
   PetscFunctionBegin;
   if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
@@ -119,7 +119,7 @@ static PetscErrorCode KFSkinnyMultSub(PetscInt nl, PetscInt nc, const PetscScala
   PetscCall(PetscBLASIntCast(ldc, &blc));
   for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
     PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &mone, a + i0, &bla, c, &blc, &one, x + i0, &blx));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &one, x + i0, &blx));
   }
   PetscFunctionReturn(0);
 }
@@ -153,13 +153,13 @@ static PetscErrorCode KFMBasisSubtract(const KFRigidSpace *rs, const KFMBasis *m
 
   PetscFunctionBegin;
   if (r) {
-    PetscCall(KFSkinnyMultSub(nl, r, rs->phi, rs->ldp, p, c, r + k, w, nl));
-    if (mw) PetscCall(KFSkinnyMultSub(nl, r, rs->mphi, rs->ldmp, p, c, r + k, mw, nl));
+    PetscCall(KFSkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
+    if (mw) PetscCall(KFSkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
   }
   PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(KFSkinnyMultSub(nl, k, v, nl, p, c + r, r + k, w, nl));
+  PetscCall(KFSkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
   PetscCall(BVRestoreArrayRead(mb->V, &v));
-  if (mw) PetscCall(KFSkinnyMultSub(nl, k, mb->MV, nl, p, c + r, r + k, mw, nl));
+  if (mw) PetscCall(KFSkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
   PetscFunctionReturn(0);
 }
 
@@ -202,62 +202,39 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
 }
 
 /* The block w (nl x p) made M-orthogonal to the rigid modes and the basis, mw = M w with it; nrm0: each column's M-norm
-   before. With the block's product (have_mw) pass 1 takes its coefficients from it; when no column loses more than
-   half of its M-norm squared there (DGKS's criterion: the block was nearly orthogonal to the basis already, as a
-   chain's orthonormalized block is to a basis holding its chain) one pass is enough (Giraud, Langou, Rozloznik: the
-   result is orthogonal to rounding), and mw follows from the kept products, exact up to the rounding of the small
-   correction: no product with M and no second pass over the basis. Otherwise pass 2 takes its coefficients from a
-   fresh product of the projected block, which is what makes it a refinement (a product updated through pass 1 would
-   carry pass 1's rounding, relative eps |W| / |W - V c|, into the coefficients). Without the block's product, pass 1
-   takes them from the kept products, (M [Phi V])^T w, and the norm before follows by Pythagoras ([Phi V] being
-   M-orthonormal). */
-static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscBool have_mw, PetscReal nrm0[])
+   before. Both passes take their coefficients from the kept products, (M [Phi V])^T w, applied to the block as it is
+   after the pass before: pass 2 sees pass 1's rounding in w itself, which is what makes it a refinement (DGKS: a Krylov
+   block loses 35-99 % of its M-norm in pass 1, so the second pass is needed). No product of w with M until the end:
+   mw is formed once from the final block, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal).
+   Each pass reads the basis twice (the kept products, then the columns). */
+static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[])
 {
-  const PetscInt r = rs->r, k = mb->k, nl = mb->nl;
+  const PetscInt nl   = mb->nl;
   MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
-  PetscReal     *cn2;
-  PetscBool      once = PETSC_FALSE;
+  PetscReal     *cn1, *cn2;
 
   PetscFunctionBegin;
-  PetscCall(PetscCalloc1(p, &cn2));
-  if (have_mw) {
-    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-    if (r + k) {
-      PetscReal *c;
-
-      PetscCall(PetscMalloc1((r + k) * p, &c));
-      PetscCall(KFMBasisCoefficients(rs, mb, p, w, mw, c));
-      once = PETSC_TRUE;
-      for (PetscInt j = 0; j < p; j++) {
-        for (PetscInt i = 0; i < r + k; i++) cn2[j] += c[i + j * (r + k)] * c[i + j * (r + k)];
-        if (!(nrm0[j] > 0) || !(nrm0[j] * nrm0[j] - cn2[j] >= 0.5 * nrm0[j] * nrm0[j])) once = PETSC_FALSE;
-      }
-      PetscCall(KFMBasisSubtract(rs, mb, p, c, w, once ? mw : NULL)); /* pass 1 */
-      PetscCall(PetscFree(c));
-    } else once = PETSC_TRUE; /* nothing to be orthogonal to */
-    if (!once) PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
-  } else {
-    PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 1 */
-    PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
-    PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-    for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
-  }
-  if (!once) PetscCall(KFMBasisProjectOut(rs, mb, p, w, mw, PETSC_TRUE, NULL)); /* pass 2 */
-  PetscCall(PetscFree(cn2));
+  PetscCall(PetscCalloc2(p, &cn1, p, &cn2));
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn1)); /* pass 1 */
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 2 */
+  PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
+  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
+  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn1[j] + cn2[j]);
+  PetscCall(PetscFree2(cn1, cn2));
   PetscFunctionReturn(0);
 }
 
 /* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
    it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
-   is dropped (deflation). MW, when given, is M W (the caller has it).
+   is dropped (deflation). nrm0, when given, receives each column's M-norm before orthogonalization.
 
-   Block classical Gram-Schmidt (KFMBasisPasses: twice, or once where DGKS's criterion shows it is enough; DESIGN.md:
+   Block classical Gram-Schmidt (KFMBasisPasses: twice; DESIGN.md:
    rigid content creeps back through rounding, so the rigid modes are projected out of every block together with the
    basis). Then the block's own columns, in order, by Gram-Schmidt on the products; a column that loses more than half
    of its norm there gets a fresh product and one more pass against everything (DGKS's criterion), so that the
    near-dependent inputs of a block stay as orthogonal as the rest. At most one block product with M per append,
    whatever the basis size, instead of several mat-vecs per column. */
-static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, Mat MW, PetscReal tol, PetscInt *ndeflated)
+static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
 {
   const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
   MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
@@ -274,13 +251,8 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscCall(MatDenseGetArrayRead(W, &src));
   for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
   PetscCall(MatDenseRestoreArrayRead(W, &src));
-  if (MW) {
-    PetscCall(MatDenseGetLDA(MW, &ld));
-    PetscCall(MatDenseGetArrayRead(MW, &src));
-    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&mw[j * nl], &src[(j0 + j) * ld], nl));
-    PetscCall(MatDenseRestoreArrayRead(MW, &src));
-  }
-  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, MW ? PETSC_TRUE : PETSC_FALSE, nrm0));
+  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0));
+  if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
     PetscReal    nb, na;
@@ -336,30 +308,149 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscFunctionReturn(0);
 }
 
-/* the columns [k0, k) of the basis and of its M-product as two new dense Mats */
-static PetscErrorCode KFMBasisColumns(KFMBasis *mb, PetscInt k0, Mat *Q, Mat *MQ)
+/* What a chain (the input or the output Krylov process) needs of the basis for its next right-hand side, without an
+   orthonormal basis of its own: U, an M-orthonormal basis of the span of the basis minus the chain's own space (span V
+   = S_c + span U, M-orthogonally), of which only M U is kept (U itself is never needed). The chain's next block is its
+   solve's block W made M-orthogonal to S_c and normalized; W lies in span [Phi V] once the basis holds it, and its part
+   M-orthogonal to S_c and Phi is its part along [U, V_new] (V_new: the columns W brought into the basis). So the
+   chain's block is [U, V_new] Q, Q from the small coordinates (M [U, V_new])^T W, and M times it is [M U, M V_new] Q: no
+   pass over the chain's own columns (they were a second copy of most of the basis, orthonormalized twice per block).
+   For the other chain, the columns a block brings join the complement. */
+typedef struct {
+  PetscScalar *MU, *spare; /* nl x m, leading dimension nl, room for cap columns; spare: as much room, the rotation's target */
+  PetscInt     m, cap, nl;
+} KFChainComplement;
+
+/* room for m more columns (grown as needed: an input chain beside one output block keeps a few columns, not a copy of
+   the basis) */
+static PetscErrorCode KFChainComplementReserve(KFChainComplement *cc, PetscInt m)
 {
-  const PetscScalar *v;
-  PetscScalar       *q, *mq;
-  PetscInt           N, ldq, ldm, p = mb->k - k0;
-  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  PetscFunctionBegin;
+  if (cc->m + m <= cc->cap) PetscFunctionReturn(0);
+  cc->cap = PetscMax(cc->m + m, 2 * cc->cap);
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->MU));
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (cc->nl * cc->cap + 1), &cc->spare));
+  PetscFunctionReturn(0);
+}
+
+/* the basis columns [k0, k) join the complement (another chain's block brought them: they are M-orthogonal to the
+   whole basis before, so to this chain's space and its complement) */
+static PetscErrorCode KFChainComplementAdd(KFChainComplement *cc, KFMBasis *mb, PetscInt k0)
+{
+  const PetscInt nl = cc->nl, p = mb->k - k0;
 
   PetscFunctionBegin;
-  PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
-  PetscCall(KFDenseCreate(comm, mb->nl, N, p, Q));
-  PetscCall(KFDenseCreate(comm, mb->nl, N, p, MQ));
-  PetscCall(MatDenseGetLDA(*Q, &ldq));
-  PetscCall(MatDenseGetLDA(*MQ, &ldm));
-  PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(MatDenseGetArrayWrite(*Q, &q));
-  PetscCall(MatDenseGetArrayWrite(*MQ, &mq));
+  if (p <= 0) PetscFunctionReturn(0);
+  PetscCall(KFChainComplementReserve(cc, p));
+  PetscCall(PetscArraycpy(cc->MU + cc->m * nl, mb->MV + k0 * nl, p * nl));
+  cc->m += p;
+  PetscFunctionReturn(0);
+}
+
+/* out (nl x q, ld nl) = [A, B] F, A the complement's first mu columns, B the basis columns [k0, k), F (mu + k - k0) x q */
+static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar *a, PetscInt pb, const PetscScalar *b, PetscInt q, const PetscScalar *f, PetscScalar *out)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscArrayzero(out, nl * q));
+  PetscCall(KFSkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
+  PetscCall(KFSkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
+  PetscFunctionReturn(0);
+}
+
+/* The columns of g (m x p, column-major) M-orthonormalized in order in these Euclidean coordinates (the coordinates of
+   M-orthonormal vectors), twice each (classical Gram-Schmidt against the columns kept before it); a column whose norm
+   falls to tol nrm0[j] (its vector's M-norm before any orthogonalization) or below is dropped, as the chain's own
+   Gram-Schmidt dropped it. The kept columns are moved to the front; *kept: their number. */
+static PetscErrorCode KFSmallOrthonormalize(PetscInt m, PetscInt p, PetscScalar *g, const PetscReal nrm0[], PetscReal tol, PetscInt *kept)
+{
+  PetscInt n = 0;
+
+  PetscFunctionBegin;
   for (PetscInt j = 0; j < p; j++) {
-    PetscCall(PetscArraycpy(&q[j * ldq], &v[(k0 + j) * mb->nl], mb->nl));
-    PetscCall(PetscArraycpy(&mq[j * ldm], &mb->MV[(k0 + j) * mb->nl], mb->nl));
+    PetscScalar *x = g + j * m, *y = g + n * m;
+    PetscReal    nrm = 0;
+
+    for (int pass = 0; pass < 2; pass++)
+      for (PetscInt l = 0; l < n; l++) {
+        PetscReal d = 0;
+        for (PetscInt i = 0; i < m; i++) d += g[i + l * m] * x[i];
+        for (PetscInt i = 0; i < m; i++) x[i] -= d * g[i + l * m];
+      }
+    for (PetscInt i = 0; i < m; i++) nrm += x[i] * x[i];
+    nrm = PetscSqrtReal(nrm);
+    if (!(nrm0[j] > 0) || !(nrm > tol * nrm0[j])) continue;
+    for (PetscInt i = 0; i < m; i++) y[i] = x[i] / nrm;
+    n++;
   }
-  PetscCall(MatDenseRestoreArrayWrite(*MQ, &mq));
-  PetscCall(MatDenseRestoreArrayWrite(*Q, &q));
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  *kept = n;
+  PetscFunctionReturn(0);
+}
+
+/* f (m x (m - q)): an orthonormal basis of the complement of the orthonormal columns q (m x q) in R^m (the trailing
+   columns of the full orthogonal factor of q's Householder QR) */
+static PetscErrorCode KFSmallComplement(PetscInt m, PetscInt nq, const PetscScalar *q, PetscScalar *f)
+{
+  PetscScalar *a, *tau, *work, wq;
+  PetscBLASInt bm, bn, lwork = -1, info;
+
+  PetscFunctionBegin;
+  if (nq >= m) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(m, &bm));
+  PetscCall(PetscBLASIntCast(nq, &bn));
+  PetscCall(PetscCalloc2(m * m, &a, m + 1, &tau));
+  PetscCall(PetscArraycpy(a, q, m * nq));
+  PetscCallBLAS("LAPACKgeqrf", LAPACKgeqrf_(&bm, &bn, a, &bm, tau, &wq, &lwork, &info));
+  PetscCall(PetscBLASIntCast((PetscInt)PetscRealPart(wq) + m * m, &lwork));
+  PetscCall(PetscMalloc1(lwork, &work));
+  PetscCallBLAS("LAPACKgeqrf", LAPACKgeqrf_(&bm, &bn, a, &bm, tau, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK geqrf failed (info %d) on the chain's coordinates", (int)info);
+  PetscCallBLAS("LAPACKorgqr", LAPACKorgqr_(&bm, &bm, &bn, a, &bm, tau, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "LAPACK orgqr failed (info %d) on the chain's coordinates", (int)info);
+  PetscCall(PetscArraycpy(f, a + nq * m, m * (m - nq)));
+  PetscCall(PetscFree(work));
+  PetscCall(PetscFree2(a, tau));
+  PetscFunctionReturn(0);
+}
+
+/* After the chain's block W (columns j0.. of p) joined the basis as its columns [k0, k), with nrm0 the M-norms of W's
+   columns: *MY = M times the chain's next block (NULL when the chain's space is exhausted: every column depends on
+   it), and the complement rotated to span [U, V_new] minus the chain's new block. Replicated work: (mu + k - k0)^2 p. */
+static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt k0, Mat W, PetscInt j0, PetscInt p, const PetscReal nrm0[], PetscReal tol, Mat *MY)
+{
+  const PetscInt     nl = cc->nl, mu = cc->m, pb = mb->k - k0, m = mu + pb;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  const PetscScalar *w;
+  PetscScalar       *g, *f, *my, *nmu;
+  PetscInt           ld, nq, N;
+
+  PetscFunctionBegin;
+  *MY = NULL;
+  PetscCall(PetscCalloc2(m * p + 1, &g, m * m + 1, &f));
+  PetscCall(MatDenseGetLDA(W, &ld));
+  PetscCall(MatDenseGetArrayRead(W, &w));
+  PetscCall(KFSkinnyTransposeMult(nl, mu, cc->MU, nl, p, w + j0 * ld, ld, g, m));
+  PetscCall(KFSkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
+  PetscCall(MatDenseRestoreArrayRead(W, &w));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, g, (PetscMPIInt)(m * p), MPIU_SCALAR, MPIU_SUM, comm));
+  PetscCall(KFSmallOrthonormalize(m, p, g, nrm0, tol, &nq));
+  if (nq) {
+    PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
+    PetscCall(KFDenseCreate(comm, nl, N, nq, MY));
+    PetscCall(MatDenseGetLDA(*MY, &ld));
+    PetscCall(MatDenseGetArrayWrite(*MY, &my));
+    PetscCall(PetscArrayzero(my, ld * nq));
+    PetscCall(KFSkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
+    PetscCall(KFSkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
+    PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
+    PetscCall(KFSmallComplement(m, nq, g, f));
+    PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare));
+    nmu       = cc->MU; /* the rotated complement becomes the kept one: no copy back */
+    cc->MU    = cc->spare;
+    cc->spare = nmu;
+    cc->m = m - nq;
+  }
+  PetscCall(PetscFree2(g, f));
   PetscFunctionReturn(0);
 }
 
@@ -436,6 +527,13 @@ PetscErrorCode KFKrylovBasisWithInfo(KFFlexSolver solver, PetscInt nin, PetscInt
   PetscFunctionReturn(0);
 }
 
+/* whether chain c will make a next block after its next one in the basis, so needs its complement (the damped input
+   chain makes its own) */
+static PetscBool KFChainNeedsComplement(int c, const PetscInt appended[], const PetscInt want[], const PetscBool done[], const KFKrylovDamping *damp)
+{
+  return (PetscBool)(!done[c] && appended[c] + 1 < want[c] && !(damp && c == 0));
+}
+
 /* the same with the input chain of the damped second-order system (src/krylov/damped.c) when damp is not NULL */
 PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, PetscInt nout, PetscReal tol, const KFKrylovDamping *damp, BV *Vout, KFKrylovInfo *info)
 {
@@ -445,10 +543,12 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscInt a = s->ninputs, t = s->noutputs, maxcols = a * nin + t * nout, k = 0, ndefl = 0, progress_min;
   PetscInt made[2] = {0, 0}, want[2] = {nin, nout}, nblocks = nin + nout;
   PetscBool done[2] = {PETSC_FALSE, PETSC_FALSE};
+  PetscInt appended[2] = {0, 0}; /* per chain: its blocks in the basis */
   Mat      Prev[2] = {NULL, NULL}; /* per chain: M times its last orthonormalized block, the next right-hand side */
-  BV       V, chain[2] = {NULL, NULL};
-  KFMBasis     basis, mchain[2];
-  KFRigidSpace rs;
+  BV       V;
+  KFMBasis          basis;
+  KFChainComplement cc[2];
+  KFRigidSpace      rs;
 
   PetscFunctionBegin;
   PetscCheck(nin >= 1 && nout >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "the Krylov basis needs at least one input block (got %" PetscInt_FMT " input and %" PetscInt_FMT " output blocks)", nin, nout);
@@ -462,11 +562,8 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
   PetscCall(BVSetFromOptions(V));
   PetscCall(KFMBasisCreate(V, &basis));
-  for (int c = 0; c < 2; c++) {
-    PetscCall(BVDuplicateResize(V, PetscMax(c ? t * nout : a * nin, 1), &chain[c]));
-    PetscCall(BVSetActiveColumns(chain[c], 0, 0));
-    PetscCall(KFMBasisCreate(chain[c], &mchain[c]));
-  }
+  PetscCall(PetscMemzero(cc, sizeof(cc)));
+  cc[0].nl = cc[1].nl = basis.nl;
   PetscCall(KFRigidSpaceOpen(sys, &rs));
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
@@ -487,7 +584,8 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
       PetscCall(KFDampedChainNext_Private(solver, &dch, sys->G, tol, &U));
       if (U) {
         PetscCall(MatGetSize(U, NULL, &pu));
-        PetscCall(KFMBasisAppend(&rs, &basis, U, 0, pu, NULL, tol, &ndefl));
+        PetscCall(KFMBasisAppend(&rs, &basis, U, 0, pu, tol, &ndefl, NULL));
+        if (KFChainNeedsComplement(1, appended, want, done, damp)) PetscCall(KFChainComplementAdd(&cc[1], &basis, k0d));
         k = basis.k;
         PetscCall(MatDestroy(&U));
       } else done[0] = PETSC_TRUE;
@@ -530,22 +628,21 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
         PetscCall(PetscLogEventBegin(KF_EVENT_ORTHO, 0, 0, 0, 0));
         /* each chain is an Arnoldi process of its own (its next block starts from its own orthonormalized block, not
            from one the other chain has been taken out of, which would leave its Krylov space); the basis collects
-           both */
+           both, and each chain's next block follows from the basis (KFChainNext) */
         {
-          KFMBasis *mc  = &mchain[source];
-          PetscInt  kc0 = mc->k, dummy = 0;
+          const PetscBool next = KFChainNeedsComplement(source, appended, want, done, damp);
+          PetscReal      *nrm0;
 
-          PetscCall(KFMBasisAppend(&rs, mc, W, off[q], off[q + 1], NULL, tol, &dummy));
-          if (mc->k > kc0) { /* the chain's new columns join the basis with their products M Q (no product of its own for pass 1) */
-            Mat Q;
-
-            PetscCall(KFMBasisColumns(mc, kc0, &Q, &Prev[source]));
-            PetscCall(KFMBasisAppend(&rs, &basis, Q, 0, mc->k - kc0, Prev[source], tol, &ndefl));
-            PetscCall(MatDestroy(&Q));
-            k = basis.k;
+          PetscCall(PetscMalloc1(off[q + 1] - off[q], &nrm0));
+          PetscCall(KFMBasisAppend(&rs, &basis, W, off[q], off[q + 1], tol, &ndefl, nrm0));
+          if (KFChainNeedsComplement(1 - source, appended, want, done, damp)) PetscCall(KFChainComplementAdd(&cc[1 - source], &basis, k0));
+          if (next) {
+            PetscCall(KFChainNext(&cc[source], &basis, k0, W, off[q], off[q + 1] - off[q], nrm0, tol, &Prev[source]));
+            if (!Prev[source]) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
           }
-          ndefl += dummy;
-          if (mc->k == kc0) done[source] = PETSC_TRUE; /* the block deflated away: this chain's space is exhausted */
+          appended[source]++;
+          k = basis.k;
+          PetscCall(PetscFree(nrm0));
         }
         PetscCall(PetscLogEventEnd(KF_EVENT_ORTHO, 0, 0, 0, 0));
         if (s->nsys >= progress_min) PetscCall(KFProgress(s->comm, "Krylov %s block %" PetscInt_FMT "/%" PetscInt_FMT ": %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (basis %" PetscInt_FMT ")", source ? "output" : "input", made[source], want[source], k - k0, off[q + 1] - off[q], k));
@@ -564,10 +661,8 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   }
   PetscCall(MatDestroy(&Prev[0]));
   PetscCall(MatDestroy(&Prev[1]));
-  PetscCall(BVDestroy(&chain[0]));
-  PetscCall(BVDestroy(&chain[1]));
-  PetscCall(PetscFree(mchain[0].MV));
-  PetscCall(PetscFree(mchain[1].MV));
+  for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].MU));
+  for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].spare));
   PetscCall(PetscFree(basis.MV));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
@@ -606,7 +701,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
     PetscCall(BVGetActiveColumns(Vs[i], &l0, &k0));
     PetscCall(BVSetActiveColumns(Vs[i], 0, m[i]));
     PetscCall(BVGetMat(Vs[i], &A));
-    PetscCall(KFMBasisAppend(&rs, &basis, A, 0, m[i], NULL, tol, &ndefl));
+    PetscCall(KFMBasisAppend(&rs, &basis, A, 0, m[i], tol, &ndefl, NULL));
     PetscCall(BVRestoreMat(Vs[i], &A));
     PetscCall(BVSetActiveColumns(Vs[i], l0, k0));
   }

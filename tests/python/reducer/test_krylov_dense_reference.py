@@ -1,5 +1,8 @@
-"""The block Gram-Schmidt of the Krylov basis (src/krylov/block_arnoldi.c: row-chunked block products, one pass where
-DGKS's criterion allows it) against a dense NumPy reference on small models, serially and on 2 ranks.
+"""The block Gram-Schmidt of the Krylov basis (src/krylov/block_arnoldi.c: row-chunked block products, two passes on
+the kept M-products, each chain's next block from the basis's coordinates and the chain's complement) against a dense
+NumPy reference on small models, serially and on 2 ranks: chains of equal and of very different lengths (the panels'
+29 input blocks beside 1 output block; more output blocks than input ones), and an output collocated with an input,
+whose chain lies in the input chain's space (every output column deflates in the basis, not in its own chain).
 
 tests/python/support/krylov_dense_probe.py builds kryflex's basis and, with NumPy alone, the reference: K+ from a
 dense pseudo-inverse, each chain by block Arnoldi with full re-orthogonalization, the chains' union M-orthonormalized
@@ -39,10 +42,29 @@ def free_scene(tmp_path_factory):
                                      noutputs=2, seed=7)
 
 
-def probe(scene, out, nranks):
+@pytest.fixture(scope="module")
+def collocated_scene(free_scene, tmp_path_factory):
+    """the free scene with a third output equal to its first input: that output's Krylov chain is the input chain's"""
+    import yaml
+    with open(free_scene) as f:
+        scene = yaml.safe_load(f)
+    scene["outputs"]["at_in0"] = [dict(e) for e in scene["inputs"]["in0"]]
+    d = str(tmp_path_factory.mktemp("collocated"))
+    base = os.path.dirname(free_scene)
+    for body in scene["bodies"].values():
+        for key in ("mass", "stiffness", "nodes"):
+            if key in body and not os.path.isabs(body[key]):
+                body[key] = os.path.join(base, body[key])
+    path = os.path.join(d, "scene.yaml")
+    with open(path, "w") as f:
+        yaml.safe_dump(scene, f)
+    return path
+
+
+def probe(scene, out, nranks, blocks=(8, 2)):
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1",
                OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
-    cmd = [sys.executable, PROBE, scene, out, "--input-blocks", "8", "--output-blocks", "2"]
+    cmd = [sys.executable, PROBE, scene, out, "--input-blocks", str(blocks[0]), "--output-blocks", str(blocks[1])]
     if nranks > 1:
         cmd = ["mpiexec", "-n", str(nranks)] + cmd
     proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
@@ -73,5 +95,32 @@ def test_basis_spans_the_dense_reference(which, free_scene, tmp_path):
 def test_basis_spans_the_dense_reference_on_two_ranks(which, free_scene, tmp_path):
     serial = probe(free_scene if which == "free" else "bc:clamped", str(tmp_path / "serial.json"), 1)
     r = probe(free_scene if which == "free" else "bc:clamped", str(tmp_path / "np2.json"), 2)
+    check(r, 2)
+    assert (r["size"], r["deflated"]) == (serial["size"], serial["deflated"])
+
+
+# (input blocks, output blocks): the panels' shape (the output chain ends after its first block; the input chain's
+# complement holds only the output columns), and the reverse (the output chain's complement grows with the input
+# chain until that one ends)
+SHAPES = {"long_input": (12, 1), "long_output": (2, 6)}
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_chains_of_different_lengths_span_the_dense_reference(shape, free_scene, tmp_path):
+    check(probe(free_scene, str(tmp_path / "serial.json"), 1, SHAPES[shape]), 1)
+
+
+def test_output_collocated_with_an_input_spans_the_dense_reference(collocated_scene, tmp_path):
+    r = probe(collocated_scene, str(tmp_path / "serial.json"), 1)
+    check(r, 1)
+    assert r["deflated"] == 2   # one column of each output block: the collocated output's lies in the input chain
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("case", ["long_input", "long_output", "collocated"])
+def test_uneven_and_collocated_chains_on_two_ranks(case, free_scene, collocated_scene, tmp_path):
+    scene, blocks = (collocated_scene, (8, 2)) if case == "collocated" else (free_scene, SHAPES[case])
+    serial = probe(scene, str(tmp_path / "serial.json"), 1, blocks)
+    r = probe(scene, str(tmp_path / "np2.json"), 2, blocks)
     check(r, 2)
     assert (r["size"], r["deflated"]) == (serial["size"], serial["deflated"])

@@ -137,7 +137,6 @@ PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, cons
 PETSC_INTERN PetscErrorCode KFArrayTransposeMultGather(MPI_Comm, PetscInt nl, PetscInt p, const PetscScalar *A, PetscInt lda, PetscInt q, const PetscScalar *B, PetscInt ldb, PetscReal out[]); /* the same on local row blocks */
 PETSC_INTERN PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const PetscScalar *A, PetscInt lda, const PetscReal c[], PetscReal alpha, PetscScalar *X, PetscInt ldx);
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in double-double, rounded once */
-PETSC_INTERN PetscErrorCode KFMatMultDenseBound(Mat A, Mat X, Mat *Y, Mat *Z, PetscBool *aij); /* ... and Z = |A| |X|, its rounding's bound */
 PETSC_INTERN PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y);    /* Y = A X in double: MatMatMult's bits, faster */
 /* KFSystemProject with V^T M V given (NULL: formed) (src/project/reduced_system.c) */
 PETSC_INTERN PetscErrorCode KFSystemProjectGram_Private(KFSystem, BV V, const PetscReal gram[], PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);

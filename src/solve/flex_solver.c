@@ -283,89 +283,18 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
   PetscFunctionReturn(0);
 }
 
-/* gamma_n = n u / (1 - n u) for the longest row of K_S (n entries), u = eps / 2 the unit roundoff: a row's sum of
-   products in double, in any order, errs by at most gamma_n times the sum of its terms' magnitudes (Higham 3.1; the
-   ghost block's partial sum added last is one more such order). Once per K_S and state (a pass over its rows). */
-static PetscErrorCode KFFlexSolverRowGamma(KFFlexSolver solver, PetscReal *gamma)
-{
-  Mat              K = solver->sys->Ks;
-  PetscObjectState state;
-
-  PetscFunctionBegin;
-  PetscCall(PetscObjectStateGet((PetscObject)K, &state));
-  if (solver->ks_gamma_mat != K || solver->ks_gamma_state != state) {
-    PetscInt rstart, rend, nmax = 0, ncols;
-
-    PetscCall(MatGetOwnershipRange(K, &rstart, &rend));
-    for (PetscInt i = rstart; i < rend; i++) {
-      PetscCall(MatGetRow(K, i, &ncols, NULL, NULL));
-      nmax = PetscMax(nmax, ncols);
-      PetscCall(MatRestoreRow(K, i, &ncols, NULL, NULL));
-    }
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &nmax, 1, MPIU_INT, MPI_MAX, PetscObjectComm((PetscObject)K)));
-    solver->ks_gamma       = nmax * (PETSC_MACHINE_EPSILON / 2) / (1 - nmax * (PETSC_MACHINE_EPSILON / 2));
-    solver->ks_gamma_mat   = K;
-    solver->ks_gamma_state = state;
-  }
-  *gamma = solver->ks_gamma;
-  PetscFunctionReturn(0);
-}
-
-/* R = P B - K_S X from a double product, and whether it settles the test: K_S X in double errs by at most
-   gamma_n |K_S| |X| entrywise, so the true residual's norm is at most ||R||_F + gamma_n || |K_S| |X| ||_F (with
-   1e-8 relative room for the subtraction's and the norms' own roundings). *settled: that is at most half of
-   -kf_refine_rtol, rel then the double figure, within the bound of the extended one. */
-static PetscErrorCode KFFlexSolverResidualDouble(KFFlexSolver solver, Mat PB, PetscReal nb, Mat X, Mat *R, PetscReal *rel, PetscBool *settled)
-{
-  Mat       KX, Z;
-  PetscReal gamma, nr, nz;
-  PetscBool aij;
-
-  PetscFunctionBegin;
-  *settled = PETSC_FALSE;
-  PetscCall(KFMatMultDenseBound(solver->sys->Ks, X, &KX, &Z, &aij));
-  if (!aij) PetscFunctionReturn(0); /* no row sweep to bound by: the extended product decides */
-  PetscCall(KFFlexSolverRowGamma(solver, &gamma));
-  PetscCall(MatDuplicate(PB, MAT_COPY_VALUES, R));
-  PetscCall(MatAXPY(*R, -1.0, KX, SAME_NONZERO_PATTERN));
-  PetscCall(MatNorm(*R, NORM_FROBENIUS, &nr));
-  PetscCall(MatNorm(Z, NORM_FROBENIUS, &nz));
-  PetscCall(MatDestroy(&KX));
-  PetscCall(MatDestroy(&Z));
-  *settled = (nr + gamma * nz) * (1 + 1e-8) <= 0.5 * solver->refine_rtol * nb * (1 - 1e-8) ? PETSC_TRUE : PETSC_FALSE;
-  PetscCall(PetscInfo(solver, "double residual %g, its rounding bound %g: %s\n", (double)(nb > 0 ? nr / nb : 0), (double)(nb > 0 ? gamma * nz / nb : 0), *settled ? "accepted" : "the extended residual decides"));
-  if (*settled) *rel = nb > 0 ? nr / nb : 0;
-  else PetscCall(MatDestroy(R));
-  PetscFunctionReturn(0);
-}
-
-/* R = P B - K_S X with K_S X accumulated in double-double (the residual must be free of K's rounding); its relative
-   Frobenius norm against P B. For a soft vector of a stiff body K_S x is a small difference of large terms: its
-   double rounding, up to eps |K_S| |x|, can be far above the residual; that is why the extended product is here.
-   But it costs several double sweeps, and most blocks of a good factor sit far below -kf_refine_rtol (27 of the 29
-   of the 200k panel scene): the residual is first formed in double with its rigorous rounding bound, and a block
-   whose residual plus bound is below half the threshold is accepted, as the extended residual would accept it.
-   Otherwise (stiff bodies, near the threshold, -kf_refine_rtol 0) the extended residual decides as before: every
-   decision to refine is the same, and *R is the extended residual whenever it is used (rel above the threshold). */
+/* R = P B - K_S X with K_S X accumulated in long double (the residual must be free of K's rounding); its relative
+   Frobenius norm against P B */
 static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat B, Mat X, Mat *R, PetscReal *rel)
 {
   KFSystem  sys = solver->sys;
   Mat       KX;
   PetscReal nb, nr;
-  PetscBool settled = PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscCall(MatDuplicate(B, MAT_COPY_VALUES, R));
   PetscCall(KFProjectFlexible(sys, *R, PETSC_TRUE));
   PetscCall(MatNorm(*R, NORM_FROBENIUS, &nb));
-  if (solver->refine_rtol > 0) {
-    Mat PB = *R;
-
-    PetscCall(KFFlexSolverResidualDouble(solver, PB, nb, X, R, rel, &settled));
-    if (settled) PetscCall(MatDestroy(&PB));
-    else *R = PB;
-  }
-  if (settled) PetscFunctionReturn(0);
   PetscCall(KFMatMultExtended(sys->Ks, X, &KX));
   PetscCall(MatAXPY(*R, -1.0, KX, SAME_NONZERO_PATTERN));
   PetscCall(MatDestroy(&KX));

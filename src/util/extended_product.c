@@ -75,52 +75,11 @@ static inline __attribute__((always_inline)) void KFPlainKernel(const int W, Pet
   }
 }
 
-/* The plain sweep (the same sums, to the bit) and beside it z = |A| |x|, the sums of the magnitudes: gamma_n z bounds
-   the plain sum's rounding entry by entry (Higham, Accuracy and Stability of Numerical Algorithms, 3.1), so a
-   residual formed with it can be trusted where that bound is small (KFFlexSolverResidual). */
-static inline __attribute__((always_inline)) void KFBoundKernel(const int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy, PetscScalar *z)
-{
-  for (PetscInt i = 0; i < m; i++) {
-    double s[KF_EXT_CHUNK] = {0}, o[KF_EXT_CHUNK] = {0}, t[KF_EXT_CHUNK] = {0};
-
-    for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
-      const double  ak = a[k], abk = __builtin_fabs(ak);
-      const double *xk = xt + (size_t)ja[k] * W;
-
-      for (int j = 0; j < W; j++) {
-        s[j] += ak * xk[j];
-        t[j] += abk * __builtin_fabs(xk[j]);
-      }
-    }
-    if (ib) {
-      for (PetscInt k = ib[i]; k < ib[i + 1]; k++) {
-        const double  bk = b[k], abk = __builtin_fabs(bk);
-        const double *xk = xgt + (size_t)jb[k] * W;
-
-        for (int j = 0; j < W; j++) {
-          o[j] += bk * xk[j];
-          t[j] += abk * __builtin_fabs(xk[j]);
-        }
-      }
-      for (int j = 0; j < W; j++) s[j] += o[j];
-    }
-    for (PetscInt j = 0; j < nj; j++) {
-      y[i + j * ldy] = s[j];
-      z[i + j * ldy] = t[j];
-    }
-  }
-}
-
 /* One function per instruction set, kernel and width (the width a constant in each: one function holding every
    variant was not vectorized as well, 2.5x slower), and a table per instruction set: [plain, extended][8, 4, 2, 1]. */
 #define KF_KERNEL_ARGS PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy
 #define KF_KERNEL_PASS m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy
 typedef void (*KFKernelFn)(KF_KERNEL_ARGS);
-typedef void (*KFBoundFn)(KF_KERNEL_ARGS, PetscScalar *z);
-typedef struct {
-  KFKernelFn k[2][4]; /* [plain, extended][8, 4, 2, 1] */
-  KFBoundFn  b[4];    /* plain with |A| |x| beside */
-} KFKernelSet;
 #define KF_DEFINE_KERNELS(ATTR, SFX) \
   ATTR static void KFPlain8##SFX(KF_KERNEL_ARGS) { KFPlainKernel(8, KF_KERNEL_PASS); } \
   ATTR static void KFPlain4##SFX(KF_KERNEL_ARGS) { KFPlainKernel(4, KF_KERNEL_PASS); } \
@@ -130,14 +89,9 @@ typedef struct {
   ATTR static void KFExt4##SFX(KF_KERNEL_ARGS) { KFExtKernel(4, KF_KERNEL_PASS); } \
   ATTR static void KFExt2##SFX(KF_KERNEL_ARGS) { KFExtKernel(2, KF_KERNEL_PASS); } \
   ATTR static void KFExt1##SFX(KF_KERNEL_ARGS) { KFExtKernel(1, KF_KERNEL_PASS); } \
-  ATTR static void KFBound8##SFX(KF_KERNEL_ARGS, PetscScalar *z) { KFBoundKernel(8, KF_KERNEL_PASS, z); } \
-  ATTR static void KFBound4##SFX(KF_KERNEL_ARGS, PetscScalar *z) { KFBoundKernel(4, KF_KERNEL_PASS, z); } \
-  ATTR static void KFBound2##SFX(KF_KERNEL_ARGS, PetscScalar *z) { KFBoundKernel(2, KF_KERNEL_PASS, z); } \
-  ATTR static void KFBound1##SFX(KF_KERNEL_ARGS, PetscScalar *z) { KFBoundKernel(1, KF_KERNEL_PASS, z); } \
-  static const KFKernelSet KFKernels##SFX = { \
-    {{KFPlain8##SFX, KFPlain4##SFX, KFPlain2##SFX, KFPlain1##SFX}, \
-     {KFExt8##SFX,   KFExt4##SFX,   KFExt2##SFX,   KFExt1##SFX  }}, \
-    {KFBound8##SFX, KFBound4##SFX, KFBound2##SFX, KFBound1##SFX} \
+  static const KFKernelFn KFKernels##SFX[2][4] = { \
+    {KFPlain8##SFX, KFPlain4##SFX, KFPlain2##SFX, KFPlain1##SFX}, \
+    {KFExt8##SFX,   KFExt4##SFX,   KFExt2##SFX,   KFExt1##SFX  } \
   };
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -148,14 +102,14 @@ KF_DEFINE_KERNELS(__attribute__((target("avx2,fma"))), AVX2)
 KF_DEFINE_KERNELS(, Generic)
 
 /* the kernels this CPU runs: AVX-512, else AVX2 (both with FMA), else the generic ones */
-static const KFKernelSet *KFKernelTable(void)
+static const KFKernelFn (*KFKernelTable(void))[4]
 {
 #if defined(KF_EXT_DISPATCH)
   __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) return &KFKernelsAVX512;
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return &KFKernelsAVX2;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) return KFKernelsAVX512;
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return KFKernelsAVX2;
 #endif
-  return &KFKernelsGeneric;
+  return KFKernelsGeneric;
 }
 
 /* the chunk width for nj columns: the smallest of 1, 2, 4, 8 that holds them, and its place in the tables */
@@ -172,15 +126,14 @@ static void KFExtTransposeChunk(PetscInt nr, const PetscScalar *x, PetscInt ldx,
     for (PetscInt j = 0; j < W; j++) xt[r * W + j] = j < nj ? x[r + (j0 + j) * ldx] : 0.0;
 }
 
-/* ext: double-double sums; else plain ones, with |A| |x| in z when z is given (ext and z are not both given) */
-static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy, PetscScalar *z)
+static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy)
 {
   const PetscInt    *ia, *ja, *ib = NULL, *jb = NULL;
   const PetscScalar *a, *b = NULL;
   PetscScalar       *xt, *xgt;
   PetscInt           m, mb, nc, ng = 0;
   PetscBool          done;
-  const KFKernelSet *kernels = KFKernelTable();
+  const KFKernelFn(*kernels)[4] = KFKernelTable();
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(A, NULL, &nc));
@@ -202,8 +155,7 @@ static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, 
 
     KFExtTransposeChunk(nc, x, ldx, j0, nj, W, xt);
     if (B) KFExtTransposeChunk(ng, xg, ldg, j0, nj, W, xgt);
-    if (z) kernels->b[slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy, z + j0 * ldy);
-    else kernels->k[ext ? 1 : 0][slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
+    kernels[ext ? 1 : 0][slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
   }
   PetscCall(PetscFree2(xt, xgt));
   PetscCall(MatSeqAIJRestoreArrayRead(A, &a));
@@ -215,13 +167,13 @@ static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, 
   PetscFunctionReturn(0);
 }
 
-/* Y = A X by the chunked sweeps above, extended (double-double) or plain; Z (plain only, NULL: none) = |A| |X| */
-static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y, Mat *Z)
+/* Y = A X by the chunked sweeps above, extended (double-double) or plain */
+static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
 {
   PetscBool          mpi;
   PetscInt           nl, N, ncols, ldx, ldy;
   const PetscScalar *x;
-  PetscScalar       *y, *z = NULL;
+  PetscScalar       *y;
   MPI_Comm           comm;
 
   PetscFunctionBegin;
@@ -230,20 +182,12 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y, Mat 
   PetscCall(MatGetSize(A, &N, NULL));
   PetscCall(MatGetSize(X, NULL, &ncols));
   PetscCall(KFDenseCreate(comm, nl, N, ncols, Y));
-  if (Z) PetscCall(KFDenseCreate(comm, nl, N, ncols, Z));
   PetscCall(PetscObjectTypeCompare((PetscObject)A, MATMPIAIJ, &mpi));
   PetscCall(MatDenseGetLDA(X, &ldx));
   PetscCall(MatDenseGetLDA(*Y, &ldy));
   PetscCall(MatDenseGetArrayRead(X, &x));
   PetscCall(MatDenseGetArrayWrite(*Y, &y));
-  if (Z) {
-    PetscInt ldz;
-
-    PetscCall(MatDenseGetLDA(*Z, &ldz));
-    PetscCheck(ldz == ldy, comm, PETSC_ERR_PLIB, "the bound's dense matrix has leading dimension %" PetscInt_FMT ", the product's %" PetscInt_FMT, ldz, ldy);
-    PetscCall(MatDenseGetArrayWrite(*Z, &z));
-  }
-  if (!mpi) PetscCall(KFSeqAIJMultChunked(ext, A, ncols, x, ldx, NULL, 0, NULL, y, ldy, z));
+  if (!mpi) PetscCall(KFSeqAIJMultChunked(ext, A, ncols, x, ldx, NULL, 0, NULL, y, ldy));
   else {
     /* the diagonal block reads local rows of X, the off-process block reads the ghost rows listed in colmap */
     Mat             Ad, Ao;
@@ -273,25 +217,20 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y, Mat 
     PetscCall(VecDestroy(&gcol));
     PetscCall(ISDestroy(&from));
     PetscCall(MatDenseGetArrayRead(X, &x));
-    PetscCall(KFSeqAIJMultChunked(ext, Ad, ncols, x, ldx, xg, ng, Ao, y, ldy, z));
+    PetscCall(KFSeqAIJMultChunked(ext, Ad, ncols, x, ldx, xg, ng, Ao, y, ldy));
     PetscCall(PetscFree(xg));
   }
   PetscCall(MatDenseRestoreArrayRead(X, &x));
   PetscCall(MatDenseRestoreArrayWrite(*Y, &y));
   PetscCall(MatAssemblyBegin(*Y, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*Y, MAT_FINAL_ASSEMBLY));
-  if (Z) {
-    PetscCall(MatDenseRestoreArrayWrite(*Z, &z));
-    PetscCall(MatAssemblyBegin(*Z, MAT_FINAL_ASSEMBLY));
-    PetscCall(MatAssemblyEnd(*Z, MAT_FINAL_ASSEMBLY));
-  }
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y)
 {
   PetscFunctionBegin;
-  PetscCall(KFMatMultChunked(PETSC_TRUE, A, X, Y, NULL));
+  PetscCall(KFMatMultChunked(PETSC_TRUE, A, X, Y));
   PetscFunctionReturn(0);
 }
 
@@ -304,17 +243,7 @@ PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y)
 
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompareAny((PetscObject)A, &aij, MATSEQAIJ, MATMPIAIJ, ""));
-  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y, NULL));
+  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y));
   else PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Y));
-  PetscFunctionReturn(0);
-}
-
-/* Y = A X in double (KFMatMultDense's bits) and Z = |A| |X| from the same sweep, for AIJ A (*aij false, nothing
-   formed, for other types): |Y - A X| <= gamma_n Z entrywise, n the most entries in a row of A */
-PetscErrorCode KFMatMultDenseBound(Mat A, Mat X, Mat *Y, Mat *Z, PetscBool *aij)
-{
-  PetscFunctionBegin;
-  PetscCall(PetscObjectTypeCompareAny((PetscObject)A, aij, MATSEQAIJ, MATMPIAIJ, ""));
-  if (*aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y, Z));
   PetscFunctionReturn(0);
 }

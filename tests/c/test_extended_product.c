@@ -130,53 +130,6 @@ int main(int argc, char **argv)
     PetscCall(MatDestroy(&Yp));
     PetscCall(CheckTrue("KFMatMultDense gives MatMatMult's bits (11 columns: chunks of 8 and 4)", same));
   }
-  { /* KFMatMultDenseBound: the plain product's bits again, and Z = |A| |X| (against the sums of magnitudes formed
-       here) bounds the plain product's error against quadruple precision: |Yd - A X| <= gamma_n Z, n the row's length */
-    Mat                Yb, Z;
-    const PetscScalar *yb, *z, *yd;
-    PetscInt           ldb, ldd;
-    PetscBool          aij, same = PETSC_TRUE, within = PETSC_TRUE;
-    PetscReal          zerr = 0, used = 0;
-    PetscCall(KFMatMultDenseBound(A, X, &Yb, &Z, &aij));
-    PetscCall(MatDenseGetLDA(Yb, &ldb));
-    PetscCall(MatDenseGetLDA(Yd, &ldd));
-    PetscCall(MatDenseGetArrayRead(Yb, &yb));
-    PetscCall(MatDenseGetArrayRead(Z, &z));
-    PetscCall(MatDenseGetArrayRead(Yd, &yd));
-    for (PetscInt i = rstart; i < rend; i++) {
-      PetscInt           nz;
-      const PetscInt    *cols;
-      const PetscScalar *vals;
-      PetscCall(MatGetRow(A, i, &nz, &cols, &vals));
-      for (PetscInt j = 0; j < ncols; j++) {
-        const PetscInt  e     = (i - rstart) + j * ldb;
-        const PetscReal gamma = nz * PETSC_MACHINE_EPSILON / 2 / (1 - nz * PETSC_MACHINE_EPSILON / 2);
-        quad            sq = 0, aq = 0;
-        for (PetscInt k = 0; k < nz; k++) {
-          sq += (quad)vals[k] * (quad)xall[cols[k] + j * n];
-          aq += (quad)PetscAbsReal(vals[k]) * (quad)PetscAbsReal(xall[cols[k] + j * n]);
-        }
-        same   = (PetscBool)(same && yb[e] == yd[(i - rstart) + j * ldd]);
-        zerr   = PetscMax(zerr, PetscAbsReal(z[e] - (PetscReal)aq) / (PetscReal)aq);
-        within = (PetscBool)(within && PetscAbsReal((PetscReal)((quad)yb[e] - sq)) <= gamma * z[e] * (1 + 1e-12));
-        used   = PetscMax(used, PetscAbsReal((PetscReal)((quad)yb[e] - sq)) / (gamma * z[e]));
-      }
-      PetscCall(MatRestoreRow(A, i, &nz, &cols, &vals));
-    }
-    PetscCall(MatDenseRestoreArrayRead(Yb, &yb));
-    PetscCall(MatDenseRestoreArrayRead(Z, &z));
-    PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
-    PetscCall(MatDestroy(&Yb));
-    PetscCall(MatDestroy(&Z));
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &same, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &within, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &zerr, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
-    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &used, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
-    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  the plain product's error uses up to %.2g of its bound gamma_n |A||x|\n", (double)used));
-    PetscCall(CheckTrue("KFMatMultDenseBound: an AIJ matrix, and MatMatMult's bits for A X", (PetscBool)(aij && same)));
-    PetscCall(Check("KFMatMultDenseBound: |A||X| vs quadruple precision, max relative error", zerr, 1e-13));
-    PetscCall(CheckTrue("the plain product's error against quadruple precision within gamma_n |A||X| everywhere", within));
-  }
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  cancellation |A||x| / |Ax| up to %.1e\n", (double)cancel));
   PetscCall(CheckTrue("the data cancel (|A||x| / |Ax| > 1e8): a test the plain product fails", (PetscBool)(cancel > 1e8)));
   PetscCall(CheckTrue("the plain double product is off by more than 1e-6 relative here", (PetscBool)(errd > 1e-6)));
@@ -206,14 +159,14 @@ int main(int argc, char **argv)
     for (PetscInt r = 0; r < ng; r++)
       for (PetscInt j = 0; j < 8; j++) xgt[r * 8 + j] = xall[colmap[r] + j * n];
     PetscCall(MatDenseRestoreArrayRead(X, &x));
-    KFKernelsGeneric.k[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
+    KFKernelsGeneric[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y0, m);
     __builtin_cpu_init();
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-      KFKernelsAVX2.k[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFKernelsAVX2[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) {
-      KFKernelsAVX512.k[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
+      KFKernelsAVX512[1][0](m, ia, ja, a, xt, ib, jb, b, xgt, 8, y1, m);
       for (PetscInt e = 0; e < m * 8; e++) same &= y0[e] == y1[e];
     }
     for (int slot = 1, W = 4; slot < 4; slot++, W /= 2) { /* the narrower chunks: each column's sums as in the chunk of 8 */
@@ -222,7 +175,7 @@ int main(int argc, char **argv)
       PetscCall(MatDenseRestoreArrayRead(X, &x));
       for (PetscInt r = 0; r < ng; r++)
         for (PetscInt j = 0; j < W; j++) xgt[r * W + j] = xall[colmap[r] + j * n];
-      KFKernelsGeneric.k[1][slot](m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
+      KFKernelsGeneric[1][slot](m, ia, ja, a, xt, ib, jb, b, xgt, W, y1, m);
       for (PetscInt e = 0; e < m * W; e++) same &= y0[e] == y1[e];
     }
     PetscCall(PetscFree4(xt, xgt, y0, y1));

@@ -30,12 +30,6 @@ struct _p_KFFlexSolver {
   PetscInt  refine;          /* at most this many iterative refinement steps against K_S per block */
   PetscBool refine_set;      /* -kf_refine given: no default by the factor (KFFlexSolverRefineSteps) */
   PetscReal refine_rtol;     /* ... taken only while ||P B - K_S X||_F / ||P B||_F exceeds it */
-  PetscReal        ks_gamma;       /* gamma_n of K_S's longest row (n entries): KFFlexSolverResidual's rounding bound */
-  Mat              ks_gamma_mat;   /* ... for this K_S (not referenced) in this state */
-  PetscObjectState ks_gamma_state;
-  PetscReal ks_round;        /* gamma_n sqrt(||K_S||_1 ||K_S||_inf): bounds ||fl(K_S X) - K_S X||_F / ||X||_F */
-  Mat              ks_round_mat;   /* ... for this K_S (not referenced) */
-  PetscObjectState ks_round_state; /* ... in this state */
   PetscBool setfromoptionscalled, setup;
   const char *handoff;       /* set by an implementation's setup that does not apply: the type to set up instead */
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */

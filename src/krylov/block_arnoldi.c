@@ -455,9 +455,14 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
 }
 
 /* max |Phi^T M V| and max |V^T M V - I| of the finished basis: what the user is told about its numerical health; the
-   Gram matrix V^T M V (k x k, allocated here) is also the reduced mass the projection needs */
-static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *rigid, PetscReal *orth, PetscReal **gram)
+   Gram matrix V^T M V (k x k, allocated here) is also the reduced mass the projection needs. M V is the basis' kept
+   products (mb->MV: each column's product with M formed fresh from the final block, then carried through the block's
+   own Gram-Schmidt and the normalization, so within a few roundings of a fresh M V): forming it again was one more
+   sparse product over the whole basis. */
+static PetscErrorCode KFKrylovHealth(KFSystem sys, const KFMBasis *mb, PetscReal *rigid, PetscReal *orth, PetscReal **gram)
 {
+  BV       V = mb->V;
+  PetscInt k = mb->k, N;
   Mat        A, MA;
   PetscInt   r;
   PetscReal *c, *g;
@@ -469,7 +474,8 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, BV V, PetscInt k, PetscReal *
   PetscCall(MatGetSize(sys->Phi, NULL, &r));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(BVGetMat(V, &A));
-  PetscCall(KFMatMultDense(sys->Ms, A, &MA));
+  PetscCall(MatGetSize(A, &N, NULL));
+  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)A), mb->nl, PETSC_DECIDE, N, k, mb->MV, &MA));
   PetscCall(PetscMalloc1(PetscMax(r * k, 1), &c));
   PetscCall(PetscMalloc1(k * k, &g));
   if (r) PetscCall(KFMatTransposeMatMultGather(sys->Phi, MA, c));
@@ -663,10 +669,10 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(MatDestroy(&Prev[1]));
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].MU));
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].spare));
-  PetscCall(PetscFree(basis.MV));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
-  PetscCall(KFKrylovHealth(sys, V, k, &info->rigid_content, &info->orthogonality, &info->gram));
+  PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
+  PetscCall(PetscFree(basis.MV));
   PetscCall(BVSetActiveColumns(V, 0, k));
   info->ndeflated = ndefl;
   *Vout           = V;
@@ -705,9 +711,9 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
     PetscCall(BVRestoreMat(Vs[i], &A));
     PetscCall(BVSetActiveColumns(Vs[i], l0, k0));
   }
-  PetscCall(PetscFree(basis.MV));
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
-  PetscCall(KFKrylovHealth(sys, V, basis.k, &info->rigid_content, &info->orthogonality, &info->gram));
+  PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
+  PetscCall(PetscFree(basis.MV));
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   info->ndeflated = ndefl;
   *Vout           = V;

@@ -15,7 +15,8 @@
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[]);
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
+PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -34,8 +35,9 @@ static PetscErrorCode KFReferenceUsesSolver(KFReducer r, KFFlexSolver solver, Pe
 
 /* The lowest nev flexible modes (w2, H Phi, Phi^T G; or the modes themselves with viscous damping), with the
    flexible solver's factor when it may serve: its block solves are the verification's, so the solver's own
-   accounting (the reduction's solves) is left as it was */
-static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+   accounting (the reduction's solves) is left as it was. With the automatic count the sparse eigensolve stops once
+   its modes reach fmax, sized by the count the previous reference took to reach it. */
+static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscReal fmax, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFFlexSolverPerf perf;
   PetscLogDouble   t0, t1;
@@ -43,12 +45,17 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
   PetscFunctionBegin;
   PetscCall(PetscTime(&t0));
   if (solver) PetscCall(KFFlexSolverGetPerf(solver, &perf));
-  if (viscous) {
-    PetscCall(MatDestroy(modes));
-    if (solver) PetscCall(KFFlexSolverEigenModes(solver, nev, nconv, w2, modes));
-    else PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
-  } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
-  else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
+  if (viscous) PetscCall(MatDestroy(modes));
+  {
+    const PetscReal wcut = 2 * PETSC_PI * fmax;
+    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count};
+    PetscInt        c    = 0;
+
+    if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : NULL));
+    else PetscCall(KFSystemEigen_Private(sys, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : NULL));
+    while (c < *nconv && w2[c] < hint.cut2) c++;
+    if (hint.cut2 > 0) r->verify_count = PetscMin(c + 1, *nconv);
+  }
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));
   r->verify_eigen_seconds += t1 - t0;
@@ -90,7 +97,7 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes));
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, fmax, nev, &nconv, w2, HPhi, PhiG, &modes));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);

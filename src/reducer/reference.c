@@ -35,8 +35,8 @@ static PetscErrorCode KFReferenceUsesSolver(KFReducer r, KFFlexSolver solver, Pe
 
 /* The lowest nev flexible modes (w2, H Phi, Phi^T G; or the modes themselves with viscous damping), with the
    flexible solver's factor when it may serve: its block solves are the verification's, so the solver's own
-   accounting (the reduction's solves) is left as it was. With the automatic count the sparse eigensolve stops once
-   its modes reach fmax, sized by the count the previous reference took to reach it. */
+   accounting (the reduction's solves) is left as it was. With the automatic count and fmax > 0 (the sparse path)
+   the eigensolve stops once its modes reach fmax, sized by the count the previous reference took to reach it. */
 static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscReal fmax, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFFlexSolverPerf perf;
@@ -54,7 +54,9 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
     if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : NULL));
     else PetscCall(KFSystemEigen_Private(sys, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : NULL));
     while (c < *nconv && w2[c] < hint.cut2) c++;
-    if (hint.cut2 > 0) r->verify_count = PetscMin(c + 1, *nconv);
+    /* the modes to the first at or above the cut, whatever the last restart cycle converged beyond it: the same
+       reference on any number of ranks */
+    if (hint.cut2 > 0) *nconv = r->verify_count = PetscMin(c + 1, *nconv);
   }
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));
@@ -97,7 +99,8 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, fmax, nev, &nconv, w2, HPhi, PhiG, &modes));
+    /* the cut stops a sparse eigensolve early; asked for every flexible mode it computes them all (exact, no residual) */
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, dense || nev >= nflex ? 0 : fmax, nev, &nconv, w2, HPhi, PhiG, &modes));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
@@ -231,6 +234,7 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
     const PetscBool keep0 = (PetscBool)!ref->complete;
     const PetscBool keep1 = (PetscBool)(keep0 && nmom > 1 && n1 > 1e-16 * l1 && PetscSqrtReal(n1) * wmax * wmax <= 0.25 * PetscSqrtReal(n0));
 
+    PetscCall(PetscInfo(NULL, "full-order reference's residual: %" PetscInt_FMT " modes, ||R0|| %g, ||R1|| w_max^2 %g, ||L1|| %g: static term %s, mass-weighted term %s\n", ref->n, (double)PetscSqrtReal(n0), (double)(PetscSqrtReal(n1) * wmax * wmax), (double)PetscSqrtReal(l1), keep0 ? "kept" : "dropped", keep1 ? "kept" : "dropped"));
     for (PetscInt e = 0; e < t * a; e++) {
       if (!keep0) resid[e] = 0;
       if (!keep1) resid[t * a + e] = 0;

@@ -99,8 +99,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    /* the cut stops a sparse eigensolve early; asked for every flexible mode it computes them all (exact, no residual) */
-    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, dense || nev >= nflex ? 0 : fmax, nev, &nconv, w2, HPhi, PhiG, &modes));
+    /* the cut stops a sparse eigensolve early; asked for every flexible mode it computes them all (exact, no residual).
+       With damping matrices the modes beyond the cut are coupled too (KF_COUPLED_ALL): the count asked is kept */
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, dense || viscous || nev >= nflex ? 0 : fmax, nev, &nconv, w2, HPhi, PhiG, &modes));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);

@@ -52,7 +52,7 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_negligible_moment", TR, "1e-08", "[0, 1)", NULL, "A moment below this fraction of its largest value over the angles counts as zero", NULL, "KFReducer", "KFMomentErrors"},
   {"-kf_verify", TB, "true", NULL, NULL, "Verify the reduced model against the full order (SLEPc eigensolve) at every angle of interest", "verify.full_order", "KFReducer", "KFReducerSetVerification"},
   {"-kf_verify_modes", TI, "auto", "[1, inf)", "auto", "Full-order modes for verification (-1: cover -kf_verify_cover x the band's top)", "verify.modes", "KFReducer", "KFReducerSetVerification"},
-  {"-kf_verify_cover", TR, "3", "(0, inf)", NULL, "Automatic verification modes cover this multiple of the band's top frequency", NULL, "KFReducer", "KFReducerSetVerification"},
+  {"-kf_verify_cover", TR, "3", "(0, inf)", NULL, "Automatic verification modes cover this multiple of the band's top frequency (the sparse eigensolve stops at the first mode there)", NULL, "KFReducer", "KFReducerSetVerification"},
   {"-kf_verify_check_points", TI, "3", "[0, inf)", NULL, "Direct solves of the full-order system per angle checking the verification's reference, off resonance (0: no check)", NULL, "KFReducer", "KFReducerSolve"},
   {"-kf_verify_check_bodywise", TB, "true", NULL, NULL, "Undamped reference check: factor the bodies once per check frequency and solve every angle from them (where the body-wise solve applies); false: the whole system factored per angle and frequency", NULL, "KFReducer", "KFReducerSolve"},
   {"-kf_verify_check_rtol", TR, "1e-06", "(0, 1)", NULL, "Largest disagreement allowed between the reference and a direct solve, a fraction of the pair's peak (beyond it the run fails, exit 3)", NULL, "KFReducer", "KFReducerSolve"},

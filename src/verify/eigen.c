@@ -570,7 +570,7 @@ PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscIn
 
 /* KFSystemEigen with a flexible solver's factor: K+ is the shift-and-invert step (target 0), so the verification's
    reference at a configuration the reduction has factored needs no factorization of its own. hint (or NULL): the
-   cut to cover, the count expected and a start (KFEPSApplyHint); modes (or NULL): the M-normalized modes */
+   cut to cover and the count expected (KFEPSApplyHint); modes (or NULL): the M-normalized modes */
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   PetscFunctionBegin;

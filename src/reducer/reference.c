@@ -87,8 +87,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
   exact = dense;
   if (dense) PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
   nflex = nsys - nrigid - PetscMax(nnull, n0);
-  /* dense: every mode (no residual to approximate); sparse: start at 20 */
-  nev = r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes;
+  /* dense: every mode (no residual to approximate) */
+  /* sparse: twice the count the previous reference took to reach the cut (its eigensolve stops there), at least 20 */
+  nev = r->verify_modes == PETSC_DECIDE ? (dense ? nflex : PetscMax(20, 2 * r->verify_count)) : r->verify_modes;
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
     if (!exact && 2 * nev >= nflex) {
       PetscCall(KFSystemMassNullity(sys, PETSC_FALSE, &nnull, &n0));

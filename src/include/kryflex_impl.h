@@ -126,6 +126,12 @@ PETSC_INTERN PetscErrorCode KFFlexSolverSetPerf_Private(KFFlexSolver, const KFFl
 PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm, const char prefix[]); /* every option of the flexible solve, before any work */
 PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm, PetscReal *tol); /* src/rigid/rigid.c */
 PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm, PetscInt *progress_min); /* src/krylov/block_arnoldi.c */
+/* What is known of the modes before a verification eigensolve (src/verify/eigen.c, KFEPSApplyHint): cut2, the
+   omega^2 its modes must reach (0: none, the count asked); count, the modes expected to reach it (0: unknown) */
+typedef struct {
+  PetscReal cut2;
+  PetscInt  count;
+} KFEigenHint;
 PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, PetscReal *target, PetscBool *has_target); /* src/verify/eigen.c */
 
 /* utilities (src/util) */

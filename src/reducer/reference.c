@@ -15,8 +15,8 @@
 PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[]);
-PETSC_INTERN PetscErrorCode KFSystemEigenWithModes_Private(KFSystem, KFFlexSolver, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
+PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -35,8 +35,10 @@ static PetscErrorCode KFReferenceUsesSolver(KFReducer r, KFFlexSolver solver, Pe
 
 /* The lowest nev flexible modes (w2, H Phi, Phi^T G; or the modes themselves with viscous damping), with the
    flexible solver's factor when it may serve: its block solves are the verification's, so the solver's own
-   accounting (the reduction's solves) is left as it was */
-static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, Mat *keep)
+   accounting (the reduction's solves) is left as it was. With the automatic count and fmax > 0 (the sparse path)
+   the eigensolve stops once its modes reach fmax, sized by the count the previous reference took to reach it.
+   keep (or NULL): the modes themselves, for the iterative reference check (src/verify/refined_check.c). */
+static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver solver, PetscBool viscous, PetscReal fmax, PetscInt nev, PetscInt *nconv, PetscReal w2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, Mat *keep)
 {
   KFFlexSolverPerf perf;
   PetscLogDouble   t0, t1;
@@ -44,15 +46,20 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
   PetscFunctionBegin;
   PetscCall(PetscTime(&t0));
   if (solver) PetscCall(KFFlexSolverGetPerf(solver, &perf));
-  if (viscous) {
-    PetscCall(MatDestroy(modes));
-    if (solver) PetscCall(KFFlexSolverEigenModes(solver, nev, nconv, w2, modes));
-    else PetscCall(KFSystemEigenModes(sys, nev, nconv, w2, modes));
-  } else if (keep) { /* the modes kept for the iterative reference check (src/verify/refined_check.c) */
-    PetscCall(MatDestroy(keep));
-    PetscCall(KFSystemEigenWithModes_Private(sys, solver, nev, nconv, w2, HPhi, PhiG, keep));
-  } else if (solver) PetscCall(KFFlexSolverEigen_Private(solver, nev, nconv, w2, HPhi, PhiG));
-  else PetscCall(KFSystemEigen(sys, nev, nconv, w2, HPhi, PhiG));
+  if (viscous) PetscCall(MatDestroy(modes));
+  if (keep) PetscCall(MatDestroy(keep));
+  {
+    const PetscReal wcut = 2 * PETSC_PI * fmax;
+    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count};
+    PetscInt        c    = 0;
+
+    if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
+    else PetscCall(KFSystemEigen_Private(sys, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
+    while (c < *nconv && w2[c] < hint.cut2) c++;
+    /* the modes to the first at or above the cut, whatever the last restart cycle converged beyond it: the same
+       reference on any number of ranks */
+    if (hint.cut2 > 0) *nconv = r->verify_count = PetscMin(c + 1, *nconv);
+  }
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));
   r->verify_eigen_seconds += t1 - t0;
@@ -85,8 +92,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
   exact = dense;
   if (dense) PetscCall(KFSystemMassNullity(sys, dense, &nnull, &n0));
   nflex = nsys - nrigid - PetscMax(nnull, n0);
-  /* dense: every mode (no residual to approximate); sparse: start at 20 */
-  nev = r->verify_modes == PETSC_DECIDE ? (dense ? nflex : 20) : r->verify_modes;
+  /* dense: every mode (no residual to approximate) */
+  /* sparse: twice the count the previous reference took to reach the cut (its eigensolve stops there), at least 20 */
+  nev = r->verify_modes == PETSC_DECIDE ? (dense ? nflex : PetscMax(20, 2 * r->verify_count)) : r->verify_modes;
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
     if (!exact && 2 * nev >= nflex) {
       PetscCall(KFSystemMassNullity(sys, PETSC_FALSE, &nnull, &n0));
@@ -97,7 +105,9 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     nev = PetscMin(nev, nflex);
     PetscCall(PetscMalloc3(nev, &w2, t * nev, &HPhi, nev * a, &PhiG));
     /* with viscous damping matrices the modes themselves are needed: their damping Phi^T C Phi couples them */
-    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, nev, &nconv, w2, HPhi, PhiG, &modes, keep ? &ref->V : NULL));
+    /* the cut stops a sparse eigensolve early; asked for every flexible mode it computes them all (exact, no residual).
+       With damping matrices the modes beyond the cut are coupled too (KF_COUPLED_ALL): the count asked is kept */
+    PetscCall(KFReferenceEigen(r, sys, use ? solver : NULL, viscous, dense || viscous || nev >= nflex ? 0 : fmax, nev, &nconv, w2, HPhi, PhiG, &modes, keep ? &ref->V : NULL));
     if (r->verify_modes != PETSC_DECIDE || nev >= nflex || (nconv && PetscSqrtReal(w2[nconv - 1]) / (2 * PETSC_PI) >= fmax)) break;
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
@@ -232,6 +242,7 @@ PetscErrorCode KFFullFRF_Private(const KFFullReference *ref, PetscInt t, PetscIn
     const PetscBool keep0 = (PetscBool)!ref->complete;
     const PetscBool keep1 = (PetscBool)(keep0 && nmom > 1 && n1 > 1e-16 * l1 && PetscSqrtReal(n1) * wmax * wmax <= 0.25 * PetscSqrtReal(n0));
 
+    PetscCall(PetscInfo(NULL, "full-order reference's residual: %" PetscInt_FMT " modes, ||R0|| %g, ||R1|| w_max^2 %g, ||L1|| %g: static term %s, mass-weighted term %s\n", ref->n, (double)PetscSqrtReal(n0), (double)(PetscSqrtReal(n1) * wmax * wmax), (double)PetscSqrtReal(l1), keep0 ? "kept" : "dropped", keep1 ? "kept" : "dropped"));
     for (PetscInt e = 0; e < t * a; e++) {
       if (!keep0) resid[e] = 0;
       if (!keep1) resid[t * a + e] = 0;

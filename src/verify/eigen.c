@@ -1,5 +1,6 @@
 #include <kryflex_impl.h>
 #include <slepceps.h>
+#include <slepc/private/epsimpl.h> /* the Ritz values at a stopping test: SLEPc passes the test only their count */
 #include "../dense/dense_impl.h"
 #include <petscblaslapack.h>
 
@@ -374,7 +375,44 @@ static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solve
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+/* Stop once the converged modes reach cut2 (omega_cut^2): every mode below it is then computed, and the modes asked
+   beyond it would only cost K+ applications. Shift-and-invert about 0 converges the Ritz values nearest 0 first and
+   locks them in order, so the nconv converged are the lowest. */
+static PetscErrorCode KFEPSStopCovered(EPS eps, PetscInt its, PetscInt max_it, PetscInt nconv, PetscInt nev, EPSConvergedReason *reason, void *ctx)
+{
+  const PetscReal cut2 = *(PetscReal *)ctx;
+
+  PetscFunctionBegin;
+  PetscCall(EPSStoppingBasic(eps, its, max_it, nconv, nev, reason, NULL));
+  if (*reason != EPS_CONVERGED_ITERATING || cut2 <= 0) PetscFunctionReturn(0);
+  for (PetscInt i = 0; i < nconv; i++) {
+    PetscScalar re = eps->eigr[i], im = 0;
+
+    PetscCall(STBackTransform(eps->st, 1, &re, &im));
+    if (PetscRealPart(re) >= cut2) *reason = EPS_CONVERGED_USER;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The eigensolve's size from what is known of the modes (KFEigenHint): SLEPc's default Krylov dimension for the count
+   expected to cover the cut, max(2c, c + 15) (one restart cycle converges them on the solid; smaller dimensions
+   restart more and apply K+ more often), more than nev; and the cover test above, so that the modes asked beyond the
+   cut are not computed. A neighbouring configuration's modes as the start vector were measured no cheaper (the
+   single-vector Lanczos still takes about 2c steps), so the start stays SLEPc's. */
+static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const KFEigenHint *hint)
+{
+  PetscInt c, ncv;
+
+  PetscFunctionBegin;
+  if (!hint) PetscFunctionReturn(0);
+  c   = hint->count > 0 ? hint->count : nev;
+  ncv = PetscMin(PetscMax(nev + 1, PetscMax(2 * c, c + 15)), sys->scene->nsys);
+  PetscCall(EPSSetDimensions(eps, nev, ncv > nev ? ncv : PETSC_DEFAULT, PETSC_DEFAULT));
+  PetscCall(EPSSetStoppingTestFunction(eps, KFEPSStopCovered, (void *)&hint->cut2, NULL));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
   EPS       eps;
@@ -405,7 +443,9 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     }
   }
   PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
-  PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
+  if (hint && hint->cut2 > 0 && !dense)
+    PetscCall(KFProgress(s->comm, "verification eigensolve: the flexible modes of the %" PetscInt_FMT "-dof system up to %.4g Hz, at most %" PetscInt_FMT " (Krylov-Schur, shift-and-invert with %s)", s->nsys, (double)(PetscSqrtReal(hint->cut2) / (2 * PETSC_PI)), nev, solver ? "the flexible solver's factor" : "MUMPS"));
+  else PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));
   /* before the operators are set: the factorization holds dofs of K_S in place, which would change its state */
   if (solver && !dense) PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(EPSCreate(s->comm, &eps));
@@ -422,6 +462,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
+    PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
   } else {
     PetscReal nK, nM;
     if (!has_target) {
@@ -442,6 +483,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
     PetscCall(PCSetType(pc, PCCHOLESKY));
     PetscCall(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
+    PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
   }
   if (solver && !dense) PetscCall(EPSSetPurify(eps, PETSC_FALSE)); /* purified below, in one block solve */
   PetscCall(EPSSetOptionsPrefix(eps, "kf_verify_"));
@@ -504,14 +546,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, Pets
 PetscErrorCode KFSystemEigen(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, HPhi, PhiG, NULL));
   PetscFunctionReturn(0);
 }
 
 PetscErrorCode KFSystemEigenModes(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, NULL, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, NULL, NULL, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
@@ -522,25 +564,26 @@ PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver solver, PetscInt nev, PetscIn
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverGetSystem(solver, &sys));
-  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, NULL, NULL, modes));
+  PetscCall(KFSystemEigenSolve(sys, solver, NULL, nev, nconv, omega2, NULL, NULL, modes));
   PetscFunctionReturn(0);
 }
 
 /* KFSystemEigen with a flexible solver's factor: K+ is the shift-and-invert step (target 0), so the verification's
-   reference at a configuration the reduction has factored needs no factorization of its own */
-PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[])
+   reference at a configuration the reduction has factored needs no factorization of its own. hint (or NULL): the
+   cut to cover and the count expected (KFEPSApplyHint); modes (or NULL): the M-normalized modes */
+PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, nev, nconv, omega2, HPhi, PhiG, NULL));
+  PetscCall(KFSystemEigenSolve(KFFlexSolverSystem_Private(solver), solver, hint, nev, nconv, omega2, HPhi, PhiG, modes));
   PetscFunctionReturn(0);
 }
 
-/* KFSystemEigen and the modes themselves (solver: a flexible solver's factor as the shift-and-invert step, or NULL):
-   the iterative reference check applies the reference to whole vectors (src/verify/refined_check.c) */
-PETSC_INTERN PetscErrorCode KFSystemEigenWithModes_Private(KFSystem sys, KFFlexSolver solver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+/* KFSystemEigen with a hint (KFEPSApplyHint) and, optionally, the M-normalized modes: the verification's own
+   factorization of K_S - target M_S */
+PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem sys, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   PetscFunctionBegin;
-  PetscCall(KFSystemEigenSolve(sys, solver, nev, nconv, omega2, HPhi, PhiG, modes));
+  PetscCall(KFSystemEigenSolve(sys, NULL, hint, nev, nconv, omega2, HPhi, PhiG, modes));
   PetscFunctionReturn(0);
 }
 

@@ -93,6 +93,8 @@ struct _p_KFReducer {
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
+  PetscInt        verify_count;   /* the modes the last sparse reference took to cover its cut (0: none yet): the next
+                                     eigensolve's size (KFEigenHint) */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */

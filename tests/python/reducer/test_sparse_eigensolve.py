@@ -121,3 +121,51 @@ def test_sparse_eigensolve_two_ranks_agree_with_one(tmp_path):
         assert np.allclose(f2, f1, rtol=1e-9, atol=0)
         assert np.abs(f2 / f_dense[:f2.size] - 1).max() <= 1e-8
         assert np.abs(T2 - T1).max() <= 1e-8 * np.abs(T1).max()
+
+
+def cut_scene(tmp_path):
+    """The frame with the cover's cut between its 6th and 7th flexible modes at the first angle (from dense SciPy):
+    (scene path, -kf_verify_cover value, the dense frequencies per configuration)."""
+    path = frames.write_random_scene(str(tmp_path), 360, nbodies=3, ninputs=2, noutputs=2, seed=5, nangles=2)
+    scene, dense = kryflex.load_scene(path), ref.load_scene(path)
+    f_dense = [dense_flexible_frequencies(*ref.assemble(dense, a)[:2]) for a in scene.configurations]
+    cut = np.sqrt(f_dense[0][5] * f_dense[0][6])
+    return path, cut / scene.band[1], f_dense
+
+
+def test_sparse_eigensolve_stops_at_the_cut(tmp_path):
+    """The automatic count: the eigensolve stops once its modes reach cover x the band's top, and the reference keeps
+    the modes up to the first at or above the cut (the rest by its residual), each against dense SciPy; its response
+    against the dense modal one to the reference's 1e-6 of the peak."""
+    path, cover, f_dense = cut_scene(tmp_path)
+    scene = kryflex.load_scene(path)
+    red = reduce_sparse(scene, kf_verify_cover=cover)
+    cut = cover * scene.band[1]
+    dense = ref.load_scene(path)
+    for c, angles in enumerate(red.configurations):
+        f = np.ravel(red.result(c, "full_frequencies_hz"))
+        below = int(np.sum(f_dense[c] < cut))
+        w = 2 * np.pi * np.ravel(red.result(c, "frf_frequencies_hz"))
+        exact = ref.modal_frf(*ref.assemble(dense, angles), w, scene.damping)
+        err = np.abs(red.frf(c, "full") - exact).max() / np.abs(exact).max()
+        print("configuration %d: cut %.4g Hz, %d modes (dense SciPy: %d below the cut), reference vs dense %.1e of "
+              "the peak" % (c, cut, f.size, below, err))
+        assert f.size == below + 1 and f[-1] >= cut > f[-2]
+        assert np.abs(f / f_dense[c][:f.size] - 1).max() <= 1e-8
+        assert err <= 1e-6
+
+
+@pytest.mark.mpi
+def test_sparse_eigensolve_stops_at_the_cut_two_ranks(tmp_path):
+    path, cover, _ = cut_scene(tmp_path)
+    serial = reduce_sparse(kryflex.load_scene(path), kf_verify_cover=cover)
+    out = tmp_path / "two.npz"
+    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, str(out), "-kf_verify_cover", repr(cover)],
+                       env=ENV, capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    two = np.load(out)
+    for c in range(len(serial.configurations)):
+        f1, f2 = np.ravel(serial.result(c, "full_frequencies_hz")), two["f%d" % c]
+        T1, T2 = serial.frf(c, "full"), two["T%d" % c]
+        assert f1.size == f2.size and np.allclose(f2, f1, rtol=1e-9, atol=0)
+        assert np.abs(T2 - T1).max() <= 1e-8 * np.abs(T1).max()

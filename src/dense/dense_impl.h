@@ -34,4 +34,14 @@ PETSC_INTERN PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal 
 /* two unit vectors spanning the plane perpendicular to a unit joint axis (joint_rotation.c) */
 PETSC_INTERN void           KFPerpendicularPair_Private(const PetscReal k[3], PetscReal e1[3], PetscReal e2[3]);
 
+/* Gram-Schmidt twice (classical, against the columns kept before it) of the p columns of X (m x p, column-major, in
+   place, Euclidean), in order; a column is dropped when its remainder's norm is not above tol n0, n0 its norm before
+   any orthogonalization: nrm0[j] when given (the caller measured it in another inner product), else computed here.
+   Zero columns are dropped. The kept columns are moved to the front; *kept: their number. (small_kernels.c) */
+PETSC_INTERN PetscErrorCode KFDenseOrthonormalizeSmall_Private(PetscInt m, PetscInt p, PetscReal X[], const PetscReal nrm0[], PetscReal tol, PetscInt *kept);
+/* T = A^T S B (l x l, leading dimension l) accumulated in long double, S v x v, A and B v x l with leading dimensions
+   lda, ldb; X: v x l of long double workspace (holds S B after). A reduced body keeps its stiff modes, and its soft
+   directions' stiffness is a small difference of their large terms. (small_kernels.c) */
+PETSC_INTERN void KFDenseCongruenceL_Private(PetscInt v, PetscInt l, const PetscReal S[], const PetscReal A[], PetscInt lda, const PetscReal B[], PetscInt ldb, long double X[], long double T[]);
+
 #endif

@@ -57,26 +57,6 @@ static PetscErrorCode CheckInputs(PetscInt nbodies, const KFReducedBody bodies[]
   PetscFunctionReturn(0);
 }
 
-/* Kh += Nb^T K Nb accumulated in long double (W: v hh of workspace): a reduced body keeps its stiff modes, and the soft
-   system modes' stiffness is a small difference of their large terms (the same reason the body stiffness is formed
-   that way). */
-static void CongruenceExtended(PetscInt v, PetscInt hh, const PetscReal K[], const PetscReal Nb[], PetscInt ldn, PetscReal Kh[], long double W[])
-{
-  for (PetscInt j = 0; j < hh; j++)
-    for (PetscInt i = 0; i < v; i++) {
-      long double s = 0;
-      for (PetscInt k = 0; k < v; k++) s += (long double)K[i + k * v] * Nb[k + j * ldn];
-      W[i + j * v] = s;
-    }
-  for (PetscInt j = 0; j < hh; j++)
-    for (PetscInt i = 0; i < hh; i++) {
-      long double s = 0;
-      for (PetscInt k = 0; k < v; k++) s += (long double)Nb[k + i * ldn] * W[k + j * v];
-      Kh[i + j * hh] += (PetscReal)s;
-    }
-}
-
-
 /* The system's rigid motions R = blkdiag(R_b) (n x nr), without the columns a body does not have and with dependent
    motions combined: depends on the bodies only, not on the angles. */
 static PetscErrorCode KFReassemblyRigidMotions(KFReassembly r, PetscReal **Rout, PetscInt *nrout)
@@ -213,7 +193,7 @@ static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReduc
   r->lsvd = PetscMax(r->lsvd_D, r->lsvd_E);
   PetscCall(PetscMalloc4(m * n + 1, &r->D, n * n + 1, &r->N, ldm * PetscMax(n, nrc) + 1, &r->A, PetscMin(m, PetscMax(n, nrc)) + 1, &r->s));
   PetscCall(PetscMalloc3(PetscMax(n, nrc) * PetscMax(n, nrc) + 1, &r->VT, r->lsvd, &r->svdwork, r->vmax * n + 1, &r->W));
-  PetscCall(PetscMalloc1(r->vmax * n + 1, &r->WL));
+  PetscCall(PetscMalloc1(r->vmax * n + n * n + 1, &r->WL)); /* S B (v x hh) then B^T S B (hh x hh), hh <= n */
   PetscCall(PetscMalloc3(ldm * nrc + 1, &r->E, nrc * nrc + 1, &r->Z, n * nrc + 1, &r->Y));
   /* the eigensolver at the largest size, n dofs, with any rigid count r <= min(nr, n) (a smaller pencil needs less;
      KFReassemblyEig checks) */
@@ -391,7 +371,10 @@ PetscErrorCode KFReassemblyApply(KFReassembly r, const PetscReal angles[], Petsc
     if (!v) continue;
     PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->M, v, Nb, n, 0.0, r->W, v));
     PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, r->W, v, 1.0, Mh, hh));
-    CongruenceExtended(v, hh, B->K, Nb, n, Kh, r->WL);
+    /* K in long double: a reduced body keeps its stiff modes, and the soft system modes' stiffness is a small
+       difference of their large terms (the same reason the body stiffness is formed that way) */
+    KFDenseCongruenceL_Private(v, hh, B->K, Nb, n, Nb, n, r->WL, r->WL + r->vmax * n);
+    for (PetscInt e = 0; e < hh * hh; e++) Kh[e] += (PetscReal)r->WL[r->vmax * n + e];
     if (Ch && B->C) {
       PetscCall(KFDenseGemm_Private('N', 'N', v, hh, v, 1.0, B->C, v, Nb, n, 0.0, r->W, v));
       PetscCall(KFDenseGemm_Private('T', 'N', hh, hh, v, 1.0, Nb, n, r->W, v, 1.0, Ch, hh));

@@ -207,23 +207,6 @@ done:
   PetscFunctionReturn(0);
 }
 
-/* T = A^T S B (l x l) in long double, A, B: v x l, S: v x v; X: v x l of workspace */
-static void CongruenceL(PetscInt v, PetscInt l, const PetscReal S[], const PetscReal A[], const PetscReal B[], long double X[], long double T[])
-{
-  for (PetscInt j = 0; j < l; j++)
-    for (PetscInt i = 0; i < v; i++) {
-      long double sum = 0;
-      for (PetscInt k = 0; k < v; k++) sum += (long double)S[i + k * v] * B[k + j * v];
-      X[i + j * v] = sum;
-    }
-  for (PetscInt j = 0; j < l; j++)
-    for (PetscInt i = 0; i < l; i++) {
-      long double sum = 0;
-      for (PetscInt k = 0; k < v; k++) sum += (long double)A[k + i * v] * X[k + j * v];
-      T[i + j * l] = sum;
-    }
-}
-
 /* The nt terms of S (v x v) on L_0..L_2 (v x l each): weights 1, c, s, s^2, c s (c^2 = 1 - s^2) */
 static PetscErrorCode BodyTerms(PetscInt v, PetscInt l, PetscInt nt, const PetscReal S[], PetscReal *const L[3], long double out[])
 {
@@ -233,7 +216,7 @@ static PetscErrorCode BodyTerms(PetscInt v, PetscInt l, PetscInt nt, const Petsc
   PetscFunctionBegin;
   PetscCall(PetscMalloc2(v * l + 1, &X, 9 * ll + 1, &T));
   for (PetscInt a = 0; a < (nt > 1 ? 3 : 1); a++)
-    for (PetscInt c = 0; c < (nt > 1 ? 3 : 1); c++) CongruenceL(v, l, S, L[a], L[c], X, T + (3 * a + c) * ll);
+    for (PetscInt c = 0; c < (nt > 1 ? 3 : 1); c++) KFDenseCongruenceL_Private(v, l, S, L[a], v, L[c], v, X, T + (3 * a + c) * ll);
   for (PetscInt e = 0; e < ll; e++) {
     const long double *T00 = T, *T01 = T + 1 * ll, *T02 = T + 2 * ll, *T10 = T + 3 * ll, *T11 = T + 4 * ll, *T12 = T + 5 * ll, *T20 = T + 6 * ll, *T21 = T + 7 * ll, *T22 = T + 8 * ll;
     out[e] = T00[e];

@@ -1,5 +1,6 @@
 #include <kryflex/krylovimpl.h>
 #include <petscblaslapack.h>
+#include "../dense/dense_impl.h"
 
 /* A growing M-orthonormal basis: its columns in a BV and, beside them, M times each column (MV: local rows,
    column-major, leading dimension nl), computed when the column was made, so that no column's product with M is
@@ -357,35 +358,6 @@ static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar
   PetscFunctionReturn(0);
 }
 
-/* The columns of g (m x p, column-major) M-orthonormalized in order in these Euclidean coordinates (the coordinates of
-   M-orthonormal vectors), twice each (classical Gram-Schmidt against the columns kept before it); a column whose norm
-   falls to tol nrm0[j] (its vector's M-norm before any orthogonalization) or below is dropped, as the chain's own
-   Gram-Schmidt dropped it. The kept columns are moved to the front; *kept: their number. */
-static PetscErrorCode KFSmallOrthonormalize(PetscInt m, PetscInt p, PetscScalar *g, const PetscReal nrm0[], PetscReal tol, PetscInt *kept)
-{
-  PetscInt n = 0;
-
-  PetscFunctionBegin;
-  for (PetscInt j = 0; j < p; j++) {
-    PetscScalar *x = g + j * m, *y = g + n * m;
-    PetscReal    nrm = 0;
-
-    for (int pass = 0; pass < 2; pass++)
-      for (PetscInt l = 0; l < n; l++) {
-        PetscReal d = 0;
-        for (PetscInt i = 0; i < m; i++) d += g[i + l * m] * x[i];
-        for (PetscInt i = 0; i < m; i++) x[i] -= d * g[i + l * m];
-      }
-    for (PetscInt i = 0; i < m; i++) nrm += x[i] * x[i];
-    nrm = PetscSqrtReal(nrm);
-    if (!(nrm0[j] > 0) || !(nrm > tol * nrm0[j])) continue;
-    for (PetscInt i = 0; i < m; i++) y[i] = x[i] / nrm;
-    n++;
-  }
-  *kept = n;
-  PetscFunctionReturn(0);
-}
-
 /* f (m x (m - q)): an orthonormal basis of the complement of the orthonormal columns q (m x q) in R^m (the trailing
    columns of the full orthogonal factor of q's Householder QR) */
 static PetscErrorCode KFSmallComplement(PetscInt m, PetscInt nq, const PetscScalar *q, PetscScalar *f)
@@ -432,7 +404,9 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
   PetscCall(KFSkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
   PetscCall(MatDenseRestoreArrayRead(W, &w));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, g, (PetscMPIInt)(m * p), MPIU_SCALAR, MPIU_SUM, comm));
-  PetscCall(KFSmallOrthonormalize(m, p, g, nrm0, tol, &nq));
+  /* M-orthonormal in these coordinates (those of M-orthonormal vectors), a column dropped as the chain's own
+     Gram-Schmidt dropped it: its remainder at tol times its vector's M-norm before any orthogonalization */
+  PetscCall(KFDenseOrthonormalizeSmall_Private(m, p, g, nrm0, tol, &nq));
   if (nq) {
     PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
     PetscCall(KFDenseCreate(comm, nl, N, nq, MY));

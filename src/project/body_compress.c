@@ -15,6 +15,7 @@
 */
 #include <kryflex/modelimpl.h>
 #include <petscblaslapack.h>
+#include "../dense/dense_impl.h"
 
 /* C (m x n) = A^T B, A m' x m and B m' x n column-major (small: plain loops) */
 static void KFAtB(PetscInt mp, PetscInt m, PetscInt n, const PetscReal A[], PetscInt lda, const PetscReal B[], PetscInt ldb, PetscReal C[])
@@ -36,33 +37,6 @@ static void KFAB(PetscInt m, PetscInt k, PetscInt n, const PetscReal A[], PetscI
       for (PetscInt l = 0; l < k; l++) d += A[i + l * lda] * B[l + j * ldb];
       C[i + j * ldc] = d;
     }
-}
-
-/* Gram-Schmidt twice of the n columns of X (v x n, in place, Euclidean): the kept ones first in X, their count in
-   *k; a column whose remainder falls below tol of its own norm is dependent and dropped */
-static void KFOrthonormalize(PetscInt v, PetscInt n, PetscReal X[], PetscReal tol, PetscInt *k)
-{
-  PetscInt kept = 0;
-
-  for (PetscInt j = 0; j < n; j++) {
-    PetscReal *x = &X[j * v], norm0 = 0, norm = 0;
-
-    for (PetscInt i = 0; i < v; i++) norm0 += x[i] * x[i];
-    norm0 = PetscSqrtReal(norm0);
-    if (norm0 == 0) continue;
-    for (int pass = 0; pass < 2; pass++)
-      for (PetscInt q = 0; q < kept; q++) {
-        PetscReal d = 0;
-        for (PetscInt i = 0; i < v; i++) d += X[i + q * v] * x[i];
-        for (PetscInt i = 0; i < v; i++) x[i] -= d * X[i + q * v];
-      }
-    for (PetscInt i = 0; i < v; i++) norm += x[i] * x[i];
-    norm = PetscSqrtReal(norm);
-    if (norm <= tol * norm0) continue;
-    for (PetscInt i = 0; i < v; i++) X[i + kept * v] = x[i] / norm;
-    kept++;
-  }
-  *k = kept;
 }
 
 /* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
@@ -168,7 +142,7 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
   /* kept: L^T [rigid, S] */
   KFAtB(v, v, 6, L, v, B->rigid, v, X);
   KFAtB(v, v, ns, L, v, S, v, X + 6 * v);
-  KFOrthonormalize(v, 6 + ns, X, 1e-8, &nk);
+  PetscCall(KFDenseOrthonormalizeSmall_Private(v, 6 + ns, X, NULL, 1e-8, &nk));
   /* the snapshots' Gram in z: L^T Gq L, then with the kept span projected out: P Gz P, P = I - X X^T */
   KFAtB(v, v, v, L, v, Gq, v, T);
   KFAB(v, v, v, T, v, L, v, Gz, v);
@@ -199,7 +173,7 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
     PetscInt  nd  = 0;
 
     for (PetscInt q = 0; q < v; q++) nd += ev[v - 1 - q] > 1e-20 * top && top > 0;
-    KFOrthonormalize(v, nk + nd, X, 1e-6, &nall);
+    PetscCall(KFDenseOrthonormalizeSmall_Private(v, nk + nd, X, NULL, 1e-6, &nall));
     d->nkeep = nk;
     d->ndir  = nall - nk;
     PetscCall(PetscMalloc2(v * nall + 1, &d->W, d->ndir + 1, &d->weight));
@@ -261,27 +235,15 @@ PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **dirs)
    modes, and the static moment the compression promises to keep is read through K */
 static PetscErrorCode KFCongruence(PetscInt v, PetscInt k, const PetscReal A[], const PetscReal W[], PetscReal **out)
 {
-  long double *T;
+  long double *X, *T;
 
   PetscFunctionBegin;
-  PetscCall(PetscMalloc1(v * k + 1, &T));
+  PetscCall(PetscMalloc2(v * k + 1, &X, k * k + 1, &T));
   PetscCall(PetscMalloc1(k * k + 1, out));
+  KFDenseCongruenceL_Private(v, k, A, W, v, W, v, X, T);
   for (PetscInt j = 0; j < k; j++)
-    for (PetscInt i = 0; i < v; i++) {
-      long double d = 0;
-      for (PetscInt l = 0; l < v; l++) d += (long double)A[i + l * v] * W[l + j * v];
-      T[i + j * v] = d;
-    }
-  for (PetscInt j = 0; j < k; j++)
-    for (PetscInt i = 0; i <= j; i++) {
-      long double d = 0, e = 0;
-      for (PetscInt l = 0; l < v; l++) {
-        d += (long double)W[l + i * v] * T[l + j * v];
-        e += (long double)W[l + j * v] * T[l + i * v];
-      }
-      (*out)[i + j * k] = (*out)[j + i * k] = (PetscReal)(0.5L * (d + e));
-    }
-  PetscCall(PetscFree(T));
+    for (PetscInt i = 0; i <= j; i++) (*out)[i + j * k] = (*out)[j + i * k] = (PetscReal)(0.5L * (T[i + j * k] + T[j + i * k]));
+  PetscCall(PetscFree2(X, T));
   PetscFunctionReturn(0);
 }
 

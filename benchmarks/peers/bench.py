@@ -208,19 +208,23 @@ def pymor_methods(so, band, with_bt):
     return methods
 
 
-def kryflex_run(scene_path, angle, beta, target, options):
-    import kryflex
+def kryflex_spec(scene_path, angle, beta, target):
+    """The scene file as a dict for kryflex.scene_from_dict: its files by absolute path, the bench's one angle, accuracy
+    target and Rayleigh damping (beta K only), its own reduction settings dropped (the runs give theirs)."""
     with open(scene_path) as f:
         spec = yaml.safe_load(f)
     base = os.path.dirname(scene_path)
     for b in spec["bodies"].values():
         for k in ("mass", "stiffness", "nodes"):
             b[k] = os.path.join(base, b[k])
-    spec["angles"] = [angle]
-    spec["accuracy"] = target
-    spec["damping"] = {"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": beta}}
+    spec.update(angles=[angle], accuracy=target, damping={"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": beta}})
     spec.pop("reduction", None)
-    scene = kryflex.scene_from_dict(spec)
+    return spec
+
+
+def kryflex_run(scene_path, angle, beta, target, options):
+    import kryflex
+    scene = kryflex.scene_from_dict(kryflex_spec(scene_path, angle, beta, target))
     t0 = time.perf_counter()
     reducer = kryflex.Reducer(scene, quiet=True, **options)
     model = reducer.reduce().model

@@ -225,15 +225,7 @@ def main():
 def kryflex_model(scene_path, angle, beta, target, options):
     """bench.py's kryflex run, with the model itself: (system at the angle, seconds, model)"""
     import kryflex
-    import yaml
-    with open(scene_path) as f:
-        spec = yaml.safe_load(f)
-    base = os.path.dirname(scene_path)
-    for b in spec["bodies"].values():
-        for k in ("mass", "stiffness", "nodes"):
-            b[k] = os.path.join(base, b[k])
-    spec.update(angles=[angle], accuracy=target, damping={"modal": 0.0, "rayleigh": {"alpha": 0.0, "beta": beta}})
-    spec.pop("reduction", None)
+    spec = B.kryflex_spec(scene_path, angle, beta, target)
     t0 = time.perf_counter()
     model = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, **options).reduce().model
     return model.at([angle]), time.perf_counter() - t0, model

@@ -175,10 +175,9 @@ static PetscErrorCode KFCheckSolveMonolithic(KFSystem sys, Mat A, Mat Gd, Mat X,
   PetscFunctionReturn(0);
 }
 
-/* a refined solve whose backward error stays above this is not taken as the truth: the body-wise way is then redone
-   by the monolithic factorization (a check frequency near a body's own fixed-interface frequency makes its interior
-   factor nearly singular, which refinement against A may not repair) */
-#define KF_CHECK_RESIDUAL 1e-13
+/* a refined solve whose backward error stays above KF_CHECK_RESIDUAL is not taken as the truth: the body-wise way is
+   then redone by the monolithic factorization (a check frequency near a body's own fixed-interface frequency makes its
+   interior factor nearly singular, which refinement against A may not repair) */
 
 /* One evaluation point at one check frequency s, the system at its configuration: the truth into p->chk_T. bf NULL:
    the monolithic way; else the body-wise one, its interface problem made here at the point's angles. *nfact counts

@@ -27,7 +27,6 @@
 #include <kryflex/reducerimpl.h>
 #include <kryflex/flexsolverimpl.h>
 
-#define KF_CHECK_RESIDUAL     1e-13 /* the backward error the direct check accepts (direct_check.c) */
 #define KF_REFINED_STEP_RTOL  1e-12 /* the last correction against the solution, Frobenius, per frequency */
 #define KF_REFINED_CONTRACTION 0.5  /* the largest ratio of successive corrections taken as convergence */
 #define KF_REFINED_MAX_STEPS  40

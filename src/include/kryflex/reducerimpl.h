@@ -170,6 +170,8 @@ PETSC_INTERN PetscErrorCode KFVisitModes_Private(KFReducer, KFVisit *, PetscInt 
 #define KF_MAX_BODY_SHARE 64 /* scenes with more bodies keep one kept set for all */
 /* Ritz values at or below this fraction of the largest are rigid content, not modes (spurious near-zero modes) */
 #define KF_SPURIOUS_RTOL 1e-12
+/* the backward error at which a check's solve of the full system is taken as the truth (direct and iterated alike) */
+#define KF_CHECK_RESIDUAL 1e-13
 typedef struct {
   PetscInt  family;     /* KF_METHOD_SINGLE_ANGLE or KF_METHOD_MULTI_ANGLE */
   PetscInt  c;          /* moments (blocks) */

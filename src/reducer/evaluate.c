@@ -85,6 +85,7 @@ PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *p)
   PetscCall(PetscFree2(p->Tgre, p->Tgim));
   PetscCall(PetscFree3(p->chk_w, p->chk_T, p->chk_Ti));
   PetscCall(PetscFree(p->angles));
+  PetscCall(MatDestroy(&p->kg));
   PetscCall(PetscMemzero(p, sizeof(*p)));
   PetscFunctionReturn(0);
 }

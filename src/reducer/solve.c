@@ -9,7 +9,8 @@
 */
 #include <kryflex/reducerimpl.h>
 
-/* full-order moments by solves: for the verification (its reference needs the first two), or when asked for */
+/* full-order moments (by solves, or from the configuration's basis where it matches them: full_moments.c): for the
+   verification (its reference needs the first two), or when asked for */
 static PetscBool KFReducerFullMoments_Private(KFReducer r)
 {
   return (PetscBool)(r->verify || (r->full_moments_set && r->full_moments));
@@ -350,7 +351,7 @@ static PetscErrorCode KFReducerFixedConfig_Private(KFReducer r, KFFixed *fx, Pet
 
   if (cfg->interest >= 0 && KFReducerFullMoments_Private(r)) { /* full-order moments where the models are compared */
     t0 = t1;
-    PetscCall(KFFlexSolverMoments(solver, fx->nmom, &Lfull[cfg->interest * tam]));
+    PetscCall(KFReducerPointMoments_Private(r, &basis, solver, fx->nmom, &Lfull[cfg->interest * tam], r->verify ? &evals[cfg->interest].kg : NULL));
     PetscCall(PetscTime(&t1));
     fx->times[4] += t1 - t0;
   } else if (cfg->interest >= 0) { /* not asked for: the moment checks say "not computed" (NaN) */
@@ -514,7 +515,7 @@ PetscErrorCode KFReducerReference_Private(KFReducer r, KFSystem sys, KFFlexSolve
   PetscCall(PetscMalloc1(PetscMax(2 * t * a, 1), &p->L0));
   p->nmom = L ? PetscMin(nmom, 2) : 2;
   if (L) PetscCall(PetscArraycpy(p->L0, L, p->nmom * t * a));
-  else PetscCall(KFFlexSolverMoments(solver, 2, p->L0));
+  else PetscCall(KFReducerPointMoments_Private(r, NULL, solver, 2, p->L0, &p->kg));
   PetscCall(KFEvalPointRefinedCheck_Private(r, sys, solver, p)); /* while the solver is alive; no-op without ref.V */
   if (own) {
     PetscCall(KFReducerAddPerf_Private(r, own));
@@ -610,7 +611,7 @@ static PetscErrorCode KFReducerSearchVisitRecord_Private(KFReducer r, KFSearch *
 
     if (KFReducerFullMoments_Private(r)) {
       t0 = t1;
-      PetscCall(KFFlexSolverMoments(solver, nfull, &Lfull[ci * nfull * t * a]));
+      PetscCall(KFReducerPointMoments_Private(r, &v->basis, solver, nfull, &Lfull[ci * nfull * t * a], r->verify ? &evals[ci].kg : NULL));
       PetscCall(PetscTime(&t1));
       times[4] += t1 - t0;
       PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, &Lfull[ci * nfull * t * a]));

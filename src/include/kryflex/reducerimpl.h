@@ -22,6 +22,9 @@ typedef struct {
   PetscReal *Kr, *Mr;      /* size x size */
   PetscInt   nblocks, *block_end;
   PetscReal  rigid_content, orthogonality;
+  /* the full-order moments its projected pencil matches exactly (the plain block recurrence, nothing deflated: the
+     span holds every input and output block), 0 when not known: src/reducer/full_moments.c */
+  PetscInt   nmoments;
 } KFReducerBasis;
 
 struct _KFReducerOps {
@@ -202,9 +205,14 @@ typedef struct _KFEvalPoint {
   PetscReal      *chk_w, *chk_T, *chk_Ti; /* their frequencies (rad/s) and responses (real, imaginary parts) under the
                                    damping without modal ratios (KFCheckDampingModel_Private), nchk x t x a */
   PetscBool       chk_done;    /* the truth already taken by the iterative check (refined_check.c) */
+  Mat             kg;          /* K+ P^T G (e x a) left by the moments (full_moments.c) for the iterative check's first
+                                  step, NULL when not left; released by the check */
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
+/* the full-order moments at the system's configuration: from its basis (NULL: none) where it matches them, else by
+   solves; kg (or NULL): K+ P^T G for the reference check */
+PETSC_INTERN PetscErrorCode KFReducerPointMoments_Private(KFReducer, const KFReducerBasis *, KFFlexSolver, PetscInt nmom, PetscReal L[], Mat *kg);
 PETSC_INTERN PetscErrorCode KFEvalPointDestroy_Private(KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerDirectChecks_Private(KFReducer, PetscInt, KFEvalPoint[]);
 PETSC_INTERN PetscErrorCode KFEvalPointCheckReference_Private(KFReducer, KFEvalPoint *);

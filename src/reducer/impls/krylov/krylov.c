@@ -42,6 +42,8 @@ static PetscErrorCode KFReducerBuildBasis_Krylov(KFReducer r, KFSystem sys, KFFl
     basis->rigid_content = info.rigid_content;
     basis->orthogonality = info.orthogonality;
     gram                 = info.gram; /* the health check's V^T M V: the reduced mass below, no second product */
+    /* undeflated, the plain recurrence spans every block: its pencil has the full order's first nblk moments */
+    basis->nmoments = !kr->damped && info.ndeflated == 0 ? nblk : 0;
   }
   PetscCall(BVGetActiveColumns(V, &l, &k));
   c           = k - l;

@@ -1,0 +1,113 @@
+"""The full-order moments at an angle of interest taken from its own Krylov basis (src/reducer/full_moments.c).
+
+With verification on, the moments L^k = H (K+ M)^k K+ G at each angle of interest (the reference's residual takes
+L^0 and L^1, the moment checks all of them) come from the projected pencil of that angle's undeflated Krylov basis,
+which matches the full order's first moments exactly (Galerkin), instead of one block solve per moment;
+-kf_full_moments asks for the solves. Checked on Galileo with the sparse reference path (which uses L^0 and L^1):
+
+- the basis's moments are the solved ones to 1e-8 (every moment the search builds), and both are the dense NumPy
+  moments of tests/python/support/reference.py (assembled from the files) to 1e-6;
+- the same model and error, the same reference check, fewer columns through the factor;
+- 2 ranks give the serial moments and error.
+"""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import kryflex
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+sys.path.insert(0, SUPPORT)
+import reference as ref  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("quiet_library")
+
+SAME_RTOL = 1e-8     # basis against solves: both carry the block solves' error (Galileo: 1e-10 to 1e-9 measured)
+DENSE_RTOL = 1e-6    # against the dense NumPy moments of another assembly (2e-8 to 5e-8 measured, either way)
+
+
+def scalar(reducer, name, config=-1):
+    return float(np.ravel(reducer.result(config, name))[0])
+
+
+def reduce(**opts):
+    scene = kryflex.load_scene(GALILEO)
+    reducer = kryflex.Reducer(scene, quiet=True, verify_dense_max_dofs=0, **opts)
+    reducer.reduce()
+    return scene, reducer
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {"basis": reduce(), "solved": reduce(full_moments=True)}
+
+
+def rel(a, b):
+    return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+@pytest.mark.fast
+def test_basis_moments_are_the_solved_and_dense_ones(runs):
+    scene, rb = runs["basis"]
+    _, rs = runs["solved"]
+    rscene = ref.load_scene(GALILEO)
+    for c, angles in enumerate(scene.configurations):
+        Lb, Ls = rb.moments(c, "full_moments"), rs.moments(c, "full_moments")
+        assert Lb.shape == Ls.shape and Lb.shape[0] >= 2
+        Ms, Ks, Gs, Hs = ref.assemble(rscene, angles)
+        Lr = ref.moments(Ms, Ks, Gs, Hs, Lb.shape[0])
+        for k in range(Lb.shape[0]):
+            print(c, k, "basis vs solved %.1e, basis vs dense %.1e, solved vs dense %.1e" % (
+                rel(Lb[k], Ls[k]), rel(Lb[k], Lr[k]), rel(Ls[k], Lr[k])))
+            assert rel(Lb[k], Ls[k]) <= SAME_RTOL, (c, k)
+            assert rel(Lb[k], Lr[k]) <= DENSE_RTOL, (c, k)
+
+
+@pytest.mark.fast
+def test_same_verdict_fewer_solves(runs):
+    _, rb = runs["basis"]
+    _, rs = runs["solved"]
+    assert scalar(rb, "error_max") == pytest.approx(scalar(rs, "error_max"), rel=1e-9)
+    assert scalar(rb, "reference_check_error") <= 1e-9 and scalar(rs, "reference_check_error") <= 1e-9
+    assert scalar(rb, "reference_check_fallbacks") == scalar(rs, "reference_check_fallbacks") == 0
+    # every block of the moments at the angles of interest is gone (K+ G, the reference check's first step, is the
+    # basis's V Kr^-1 Gr): nfull blocks of a columns per angle; the midpoints solve theirs in both runs
+    nfull, _, a = rb.moments(0, "full_moments").shape
+    saved = scalar(rs, "solve_columns") - scalar(rb, "solve_columns")
+    assert saved == len(rb.configurations) * nfull * a, saved
+
+
+TWO_RANKS = r"""
+import json, numpy as np, kryflex
+r = kryflex.Reducer(kryflex.load_scene(%(galileo)r), quiet=True, verify_dense_max_dofs=0)
+r.reduce()
+L = np.concatenate([np.ravel(r.moments(c, "full_moments")) for c in range(len(r.configurations))])
+from mpi4py import MPI
+if MPI.COMM_WORLD.rank == 0:
+    print("RESULT " + json.dumps({"L": L.tolist(), "error": float(np.ravel(r.result(-1, "error_max"))[0])}))
+"""
+
+
+@pytest.mark.mpi
+def test_two_ranks_same_moments(tmp_path):
+    script = tmp_path / "two.py"
+    script.write_text(TWO_RANKS % {"galileo": GALILEO})
+    results = []
+    for n in (1, 2):
+        p = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script)], env=ENV, capture_output=True,
+                           text=True, timeout=300)
+        assert p.returncode == 0, p.stderr[-2000:]
+        results.append(json.loads([x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0][7:]))
+    one, two = (np.array(r["L"]) for r in results)
+    print("2 ranks vs 1: moments %.2e" % (np.abs(one - two).max() / np.abs(one).max()))
+    assert np.abs(one - two).max() <= SAME_RTOL * np.abs(one).max()
+    assert results[1]["error"] == pytest.approx(results[0]["error"], rel=1e-6)

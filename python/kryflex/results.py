@@ -342,7 +342,7 @@ class ReferenceCheck(Record):
     rtol: float = _value()
     factorizations: int = _value(doc="numerical factorizations the direct solves made (0 when every point iterated)")
     iterative_points: int = _value(doc="angles and midpoints whose truth was iterated from the reference itself")
-    iterative_steps: int = _value(doc="their steps, summed (one block K+ application each)")
+    iterative_steps: int = _value(doc="their steps, summed (one block K+ application each, but the first: the moments' K+ G)")
     iterative_steps_max: int = _value()
     fallbacks: int = _value(doc="points whose iteration did not contract, solved directly instead")
     per_angle: dict = _by_label(ReferencePoint)

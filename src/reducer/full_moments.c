@@ -88,7 +88,7 @@ PetscErrorCode KFReducerPointMoments_Private(KFReducer r, const KFReducerBasis *
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
   if (kg) PetscCall(MatDestroy(kg));
   /* -kf_full_moments asked for explicitly: the solves, the moment checks' independent reference */
-  if (basis && basis->data && basis->nmoments >= nmom && !r->full_moments_set) PetscCall(KFBasisMoments(basis, t, a, nmom, L, kg, &done));
+  if (basis && basis->data && basis->nmoments >= nmom && !(r->full_moments_set && r->full_moments)) PetscCall(KFBasisMoments(basis, t, a, nmom, L, kg, &done));
   if (!done) PetscCall(KFSolvedMoments(solver, t, a, nmom, L, kg));
   PetscCall(PetscInfo(r, "full-order moments (%" PetscInt_FMT ") %s\n", nmom, done ? "from the configuration's Krylov basis (no solve)" : "by block solves"));
   PetscFunctionReturn(0);

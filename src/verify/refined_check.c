@@ -203,9 +203,10 @@ static PetscErrorCode KFRefinedOperatorNorms(const KFRefined *c, PetscReal nz[])
    most KF_CHECK_RESIDUAL: the last iterate is certified by its residual, no correction computed only to be measured.
    The error left after a correction d of a contraction q is at most d q / (1 - q); q is taken as KF_REFINED_Q_SAFETY
    times the largest ratio of successive corrections seen (at least two corrections), at most KF_REFINED_CONTRACTION,
-   where every step must contract anyway (q 1/2: the error left below d itself). On the 57k-dof solid the ratios are
-   steady at about 1e-3 per step: 4 corrections instead of 5 at the top check frequency. *steps: the corrections made; *ok: converged at every
-   frequency (else X is not the truth); *berr: the worst backward error taken. */
+   where every step must contract anyway (q 1/2: the error left below d itself, as a correction below the tolerance
+   at the rounding floor is taken). On the 57k-dof solid the ratios are steady at about 1e-3 per step: 4 corrections
+   instead of 5 at the top check frequency. *steps: the corrections made; *ok: converged at every frequency (else X
+   is not the truth); *berr: the worst backward error taken. */
 static PetscErrorCode KFRefinedIterate(const KFRefined *c, Mat X, PetscInt *steps, PetscBool *ok, PetscReal *berr)
 {
   Mat        Rb, dX;
@@ -259,11 +260,12 @@ static PetscErrorCode KFRefinedIterate(const KFRefined *c, Mat X, PetscInt *step
       PetscCall(PetscInfo(NULL, "reference check, step %" PetscInt_FMT ", %g Hz: correction %.2e of the solution, backward error of the iterate it corrected %.2e\n", *steps, (double)(c->w[s] / (2 * PETSC_PI)), (double)(nd[s] / nx[s]), (double)(nr[s] / (nz[s] * nx[s] + ng))));
       if (done[s]) continue;
       contracted[s] = (PetscBool)(nd[s] <= KF_REFINED_CONTRACTION * prev[s]); /* NaN: false */
+      near[s] = (PetscBool)(nd[s] <= KF_REFINED_STEP_RTOL * nx[s]); /* q 1/2, or the rounding floor */
       if (*steps > 1 && contracted[s]) {
         const PetscReal q = PetscMin(KF_REFINED_CONTRACTION, KF_REFINED_Q_SAFETY * (qmax[s] = PetscMax(qmax[s], nd[s] / prev[s])));
 
-        near[s] = (PetscBool)(nd[s] * q / (1 - q) <= KF_REFINED_STEP_RTOL * nx[s]);
-      } else near[s] = PETSC_FALSE;
+        near[s] = (PetscBool)(near[s] || nd[s] * q / (1 - q) <= KF_REFINED_STEP_RTOL * nx[s]);
+      }
       if (!near[s] && !contracted[s]) stall = PETSC_TRUE;
       prev[s] = nd[s];
     }

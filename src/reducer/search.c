@@ -305,62 +305,132 @@ static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint eva
   PetscFunctionReturn(0);
 }
 
+/* each evaluation point's weight of each input's snapshots, inw (neval x a): 1 / the largest peak of that input's
+   pairs in the reference (the measured part: elastic or total), so that every input's directions are ranked by their
+   share of the relative error the target is stated on, not by the size of the input's response. Replicated. */
+static PetscErrorCode KFCompressInputWeights(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal inw[])
+{
+  PetscInt   a, t;
+  PetscReal *scale;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscMalloc1(t * a + 1, &scale));
+  for (PetscInt e = 0; e < neval; e++) {
+    const KFEvalPoint *p = &evals[e];
+
+    for (PetscInt j = 0; j < a; j++) inw[e * a + j] = 1;
+    if (!p->nw || !t) continue;
+    PetscCall(KFFRFPairScales(p->nw, t, a, p->Tre, p->Tim, p->Tgre, p->Tgim, scale, NULL));
+    for (PetscInt j = 0; j < a; j++) {
+      PetscReal big = 0;
+
+      for (PetscInt i = 0; i < t; i++) big = PetscMax(big, scale[i + j * t]);
+      inw[e * a + j] = 1 / big; /* KFFRFPairScales floors every pair above 0 */
+    }
+  }
+  PetscCall(PetscFree(scale));
+  PetscFunctionReturn(0);
+}
+
+/* body by body, the fewest leading directions that still meet the target (bisection, the other bodies as found so
+   far); counts: every direction on entry (a passing model), the counts found on return; *nevals += models measured */
+static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt nb, PetscInt counts[], PetscInt *nevals)
+{
+  PetscInt  size;
+  PetscReal error;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt lo = -1, hi = counts[b];
+
+    while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+      const PetscInt mid = (lo + hi) / 2;
+
+      counts[b] = mid;
+      PetscCall(KFCompressTry(r, neval, evals, m, d, counts, &size, &error));
+      ++*nevals;
+      if (error <= r->accuracy) hi = mid;
+      else lo = mid;
+    }
+    counts[b] = hi;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Two bodies: every pair of counts, searched along its frontier. With more directions in one body the other needs
+   no more (the error falls as directions are added), so from the bisection's pair (c0, c1) the fewest c1(i) for each
+   i > c0 is found by walking c1 down: about d0 + d1 models, the smallest total wins (ties: the earlier). Body-by-body
+   bisection favours the body it reduces first; this finds the best split of the directions between the two. */
+static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt counts[], PetscInt *nevals)
+{
+  PetscInt  best[2] = {counts[0], counts[1]}, c[2] = {counts[0], counts[1]}, size;
+  PetscReal error;
+
+  PetscFunctionBegin;
+  for (c[0] = counts[0] + 1; c[0] <= d[0].ndir && c[0] < best[0] + best[1]; c[0]++) {
+    while (c[1] > 0) { /* c[1] passes with c[0] - 1 directions, so with c[0]: try one fewer */
+      const PetscInt one[2] = {c[0], c[1] - 1};
+
+      PetscCall(KFCompressTry(r, neval, evals, m, d, one, &size, &error));
+      ++*nevals;
+      if (error > r->accuracy) break;
+      c[1]--;
+    }
+    if (c[0] + c[1] < best[0] + best[1]) {
+      best[0] = c[0];
+      best[1] = c[1];
+    }
+    if (!c[1]) break; /* more directions in body 0 cannot help */
+  }
+  counts[0] = best[0];
+  counts[1] = best[1];
+  PetscFunctionReturn(0);
+}
+
 /*
   Compression of the model the search chose (-kf_compress): each body's directions ordered by its share of the
-  model's response at every evaluation point (src/project/body_compress.c), then body by body the fewest leading
-  directions (bisection, the other bodies as found so far) with which the model still meets the target, each
-  candidate measured against the same reference as the search's. The smaller model replaces *model; *from and *to:
-  the sizes before and after (equal when nothing was gained).
+  model's response at every evaluation point, each input weighted by its pairs' peaks (src/project/body_compress.c),
+  then the fewest leading directions per body with which the model still meets the target: body by body by bisection,
+  and with two bodies along the frontier of the pairs of counts. Each candidate is measured against the same reference
+  as the search's. The smaller model replaces *model; *from and *to: the sizes before and after (equal when nothing
+  was gained).
 */
 PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *model, PetscInt *from, PetscInt *to)
 {
   KFBodyDirections *d;
-  PetscInt          nb, nrev, nrev1, *nw, *counts, size;
-  PetscReal        *angles, error;
-  const PetscReal **w;
+  PetscInt          nb, nrev, nrev1, a, *nw, *counts, size, nevals = 1;
+  PetscReal        *angles, *inw, error;
+  const PetscReal **w, **inwk;
 
   PetscFunctionBegin;
-  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, &a, NULL));
   nrev1 = PetscMax(nrev, 1);
-  PetscCall(PetscMalloc4(neval * nrev1, &angles, neval, &nw, neval, &w, nb, &counts));
+  PetscCall(PetscMalloc6(neval * nrev1, &angles, neval, &nw, neval, &w, nb, &counts, neval * a + 1, &inw, neval, &inwk));
+  PetscCall(KFCompressInputWeights(r, neval, evals, inw));
   for (PetscInt e = 0; e < neval; e++) {
     PetscCall(PetscArraycpy(&angles[e * nrev1], evals[e].angles, nrev1));
-    nw[e] = evals[e].nw;
-    w[e]  = evals[e].w;
+    nw[e]   = evals[e].nw;
+    w[e]    = evals[e].w;
+    inwk[e] = &inw[e * a];
   }
-  PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, &d));
-  for (PetscInt b = 0; b < nb; b++) {
-    counts[b] = d[b].ndir;
-    PetscCall(PetscInfo(r, "compression: body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", b, d[b].v, d[b].nkeep, d[b].ndir));
-  }
+  PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, inwk, &d));
   *from = 0;
   for (PetscInt b = 0; b < nb; b++) {
-    KFReducedBody body;
-
-    PetscCall(KFReducedModelGetBody(*model, b, NULL, NULL, &body, NULL));
-    *from += body.v;
+    counts[b] = d[b].ndir;
+    *from += d[b].v;
+    PetscCall(PetscInfo(r, "compression: body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", b, d[b].v, d[b].nkeep, d[b].ndir));
   }
   *to = *from;
   PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
   if (error <= r->accuracy) {
-    for (PetscInt b = 0; b < nb; b++) {
-      PetscInt lo = -1, hi = counts[b];
-
-      while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
-        const PetscInt mid = (lo + hi) / 2;
-
-        counts[b] = mid;
-        PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
-        if (error <= r->accuracy) hi = mid;
-        else lo = mid;
-      }
-      counts[b] = hi;
-    }
+    PetscCall(KFCompressBisect(r, neval, evals, *model, d, nb, counts, &nevals));
+    if (nb == 2) PetscCall(KFCompressFrontier(r, neval, evals, *model, d, counts, &nevals));
     PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+    nevals++;
     if (size < *from && error <= r->accuracy) {
       KFReducedModel c;
-
-      char text[32];
+      char           text[32];
 
       PetscCall(KFReducedModelCompress(*model, d, counts, &c));
       PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
@@ -370,7 +440,8 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
       *to    = size;
     }
   }
+  PetscCall(PetscInfo(r, "compression: %" PetscInt_FMT " models measured\n", nevals));
   PetscCall(KFBodyDirectionsDestroy(nb, &d));
-  PetscCall(PetscFree4(angles, nw, w, counts));
+  PetscCall(PetscFree6(angles, nw, w, counts, inw, inwk));
   PetscFunctionReturn(0);
 }

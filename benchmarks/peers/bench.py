@@ -3,7 +3,8 @@
     .venv/bin/python benchmarks/peers/bench.py [--refine 0.5] [--angle 0] [--targets 1e-2 1e-3 1e-4]
         [--kryflex-options default: damped:krylov_damped=1 ...] [--orders 2 4 6 8 12 16 20 24 32 40] [--with-bt]
 
-The scene is the solid spacecraft of meshes/solid (generate.py --refine R: 0.5 gives 2,760 dofs, 1.55 57k).
+The scene is the solid spacecraft of meshes/solid (generate.py --refine R: 0.5 gives 2,760 dofs, 1.55 57k), or any
+scene file given by --scene (meshes/galileo/galileo.yaml: Galileo's 28 dofs), at the one angle --angle.
 
 - Full order at the angle: the bodies' sparse M, K and the joint ties, with the tied child dofs eliminated (sparse).
 - Damping: stiffness-proportional Rayleigh, C = beta K, with beta = 2 zeta / omega_1. This gives zeta (the scene's
@@ -247,6 +248,8 @@ def parse_options(items):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--refine", type=float, default=0.5)
+    ap.add_argument("--scene", help="a scene file instead of the generated solid spacecraft (its angles, damping "
+                    "and reduction settings are replaced by the bench's)")
     ap.add_argument("--angle", type=float, default=0.0)
     ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
     ap.add_argument("--orders", type=int, nargs="+", default=[2, 4, 6, 8, 12, 16, 20, 24, 32, 40])
@@ -261,12 +264,16 @@ def main():
                     help="direct: a sparse LU per grid point; modal: modal_reference.py (sizes of 57k dofs and up)")
     args = ap.parse_args()
     ensure_pymor()
-    print("peers bench, %s UTC, solid spacecraft --refine %g at %g deg, 1 rank" %
-          (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.refine, args.angle), flush=True)
+    print("peers bench, %s UTC, %s at %g deg, 1 rank" %
+          (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene or "solid spacecraft --refine %g" % args.refine,
+           args.angle), flush=True)
     with tempfile.TemporaryDirectory() as folder:
-        subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine",
-                        str(args.refine), "-o", folder], check=True, capture_output=True)
-        scene_path = os.path.join(folder, "spacecraft.yaml")
+        if args.scene:
+            scene_path = os.path.abspath(args.scene)
+        else:
+            subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "solid", "generate.py"), "--refine",
+                            str(args.refine), "-o", folder], check=True, capture_output=True)
+            scene_path = os.path.join(folder, "spacecraft.yaml")
         scene = ref.load_scene(scene_path)
         band, zeta = scene.raw["band"], float(scene.raw["damping"])
         M, K, G, H, PhiR = full_order(scene, args.angle)

@@ -388,18 +388,89 @@ static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoin
   PetscFunctionReturn(0);
 }
 
+/* the directions d restricted to a selection: body b's kept columns and its directions sel[b][0 .. n[b]) (in that
+   order), as directions of their own (freed with KFBodyDirectionsDestroy) */
+static PetscErrorCode KFCompressSelect(PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], KFBodyDirections **out)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(nb, out));
+  for (PetscInt b = 0; b < nb; b++) {
+    const PetscInt    v = d[b].v, nk = d[b].nkeep;
+    KFBodyDirections *o = &(*out)[b];
+
+    o->v     = v;
+    o->nkeep = nk;
+    o->ndir  = n[b];
+    PetscCall(PetscMalloc2(v * (nk + n[b]) + 1, &o->W, n[b] + 1, &o->weight));
+    PetscCall(PetscArraycpy(o->W, d[b].W, v * nk));
+    for (PetscInt i = 0; i < n[b]; i++) {
+      PetscCall(PetscArraycpy(o->W + (nk + i) * v, d[b].W + (nk + sel[b][i]) * v, v));
+      o->weight[i] = d[b].weight[sel[b][i]];
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* KFCompressTry for a selection of the directions */
+static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], PetscInt *size, PetscReal *error)
+{
+  KFBodyDirections *ds;
+
+  PetscFunctionBegin;
+  PetscCall(KFCompressSelect(nb, d, sel, n, &ds));
+  PetscCall(KFCompressTry(r, neval, evals, m, ds, NULL, size, error));
+  PetscCall(KFBodyDirectionsDestroy(nb, &ds));
+  PetscFunctionReturn(0);
+}
+
+/* Backward elimination over every body's directions: from a passing selection (sel, n), drop the one direction, of
+   any body and not only the last of its order, whose removal leaves the smallest measured error, while the target
+   holds. The SVD orders each body's directions by its own share of the response, which is not the share of the
+   error: a leading direction may be one the other body's directions already make up for. Ties within 1 % of the
+   target go to the first found (body, then direction order), so that 1 and 2 ranks drop the same direction. */
+static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *sel[], PetscInt n[], PetscInt *nevals)
+{
+  PetscFunctionBegin;
+  for (;;) {
+    PetscInt  bb = -1, ib = -1, size;
+    PetscReal eb = PETSC_MAX_REAL, error;
+
+    for (PetscInt b = 0; b < nb; b++)
+      for (PetscInt i = 0; i < n[b]; i++) {
+        const PetscInt x = sel[b][i];
+
+        for (PetscInt k = i; k + 1 < n[b]; k++) sel[b][k] = sel[b][k + 1]; /* without direction x */
+        n[b]--;
+        PetscCall(KFCompressTrySelection(r, neval, evals, m, nb, d, sel, n, &size, &error));
+        ++*nevals;
+        n[b]++;
+        for (PetscInt k = n[b] - 1; k > i; k--) sel[b][k] = sel[b][k - 1];
+        sel[b][i] = x;
+        if (error <= r->accuracy && error < eb - 0.01 * r->accuracy) {
+          eb = error;
+          bb = b;
+          ib = i;
+        }
+      }
+    if (bb < 0) break;
+    for (PetscInt k = ib; k + 1 < n[bb]; k++) sel[bb][k] = sel[bb][k + 1];
+    n[bb]--;
+  }
+  PetscFunctionReturn(0);
+}
+
 /*
   Compression of the model the search chose (-kf_compress): each body's directions ordered by its share of the
   model's response at every evaluation point, each input weighted by its pairs' peaks (src/project/body_compress.c),
-  then the fewest leading directions per body with which the model still meets the target: body by body by bisection,
-  and with two bodies along the frontier of the pairs of counts. Each candidate is measured against the same reference
-  as the search's. The smaller model replaces *model; *from and *to: the sizes before and after (equal when nothing
-  was gained).
+  then the fewest leading directions per body with which the model still meets the target (body by body by bisection,
+  and with two bodies along the frontier of the pairs of counts), then any direction whose removal keeps the target
+  (backward elimination). Each candidate is measured against the same reference as the search's. The smaller model
+  replaces *model; *from and *to: the sizes before and after (equal when nothing was gained).
 */
 PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *model, PetscInt *from, PetscInt *to)
 {
   KFBodyDirections *d;
-  PetscInt          nb, nrev, nrev1, a, *nw, *counts, size, nevals = 1;
+  PetscInt          nb, nrev, nrev1, a, *nw, *counts, size, nevals = 1, **sel;
   PetscReal        *angles, *inw, error;
   const PetscReal **w, **inwk;
 
@@ -423,23 +494,35 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
   }
   *to = *from;
   PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+  PetscCall(PetscCalloc1(nb, &sel));
   if (error <= r->accuracy) {
+    KFBodyDirections *ds;
+
     PetscCall(KFCompressBisect(r, neval, evals, *model, d, nb, counts, &nevals));
     if (nb == 2) PetscCall(KFCompressFrontier(r, neval, evals, *model, d, counts, &nevals));
-    PetscCall(KFCompressTry(r, neval, evals, *model, d, counts, &size, &error));
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscCall(PetscMalloc1(counts[b] + 1, &sel[b]));
+      for (PetscInt i = 0; i < counts[b]; i++) sel[b][i] = i;
+    }
+    PetscCall(KFCompressEliminate(r, neval, evals, *model, nb, d, sel, counts, &nevals));
+    PetscCall(KFCompressSelect(nb, d, sel, counts, &ds));
+    PetscCall(KFCompressTry(r, neval, evals, *model, ds, NULL, &size, &error));
     nevals++;
     if (size < *from && error <= r->accuracy) {
       KFReducedModel c;
       char           text[32];
 
-      PetscCall(KFReducedModelCompress(*model, d, counts, &c));
+      PetscCall(KFReducedModelCompress(*model, ds, NULL, &c));
       PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
       PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
       PetscCall(KFReducedModelDestroy(model));
       *model = c;
       *to    = size;
     }
+    PetscCall(KFBodyDirectionsDestroy(nb, &ds));
   }
+  for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(sel[b]));
+  PetscCall(PetscFree(sel));
   PetscCall(PetscInfo(r, "compression: %" PetscInt_FMT " models measured\n", nevals));
   PetscCall(KFBodyDirectionsDestroy(nb, &d));
   PetscCall(PetscFree6(angles, nw, w, counts, inw, inwk));

@@ -333,6 +333,35 @@ static PetscErrorCode KFCompressInputWeights(KFReducer r, PetscInt neval, KFEval
   PetscFunctionReturn(0);
 }
 
+/* An evaluation point's snapshot frequencies (rad/s, *w allocated here): the grid's log-spaced points and each of the
+   reference's resonances in the band once. The evaluation grid has 7 points across each resonance so that the measure
+   resolves its peak; as snapshots those 7 would weigh each resonance's shape 7 times against the response between
+   resonances, which the projection needs as well (measured on the solid spacecraft at 1e-3: 24 states with each
+   resonance once, 26 with the 7 points). */
+static PetscErrorCode KFCompressSnapshotGrid(KFReducer r, const KFEvalPoint *p, PetscInt *n, PetscReal **w)
+{
+  PetscInt   nres = 0;
+  PetscReal *fres;
+
+  PetscFunctionBegin;
+  if (p->rich) {
+    const PetscReal *f;
+
+    PetscCall(KFReducedSystemGetFrequencies(p->rich, &nres, &f));
+    PetscCall(PetscMalloc1(nres + 1, &fres));
+    PetscCall(PetscArraycpy(fres, f, nres));
+  } else {
+    nres = p->ref.n;
+    PetscCall(PetscMalloc1(nres + 1, &fres));
+    for (PetscInt k = 0; k < nres; k++) fres[k] = PetscSqrtReal(PetscMax(p->ref.w2[k], 0)) / (2 * PETSC_PI);
+  }
+  PetscCall(PetscMalloc1(r->frequency_points + 7 * nres + 1, w)); /* the grid writes 7 per resonance before merging */
+  PetscCall(KFFrequencyGrid(r->band[0], r->band[1], r->frequency_points, nres, fres, 0, n, *w)); /* zeta 0: each once */
+  for (PetscInt f = 0; f < *n; f++) (*w)[f] *= 2 * PETSC_PI;
+  PetscCall(PetscFree(fres));
+  PetscFunctionReturn(0);
+}
+
 /* body by body, the fewest leading directions that still meet the target (bisection, the other bodies as found so
    far); counts: every direction on entry (a passing model), the counts found on return; *nevals += models measured */
 static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt nb, PetscInt counts[], PetscInt *nevals)
@@ -480,12 +509,15 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
   PetscCall(PetscMalloc6(neval * nrev1, &angles, neval, &nw, neval, &w, nb, &counts, neval * a + 1, &inw, neval, &inwk));
   PetscCall(KFCompressInputWeights(r, neval, evals, inw));
   for (PetscInt e = 0; e < neval; e++) {
+    PetscReal *we;
+
     PetscCall(PetscArraycpy(&angles[e * nrev1], evals[e].angles, nrev1));
-    nw[e]   = evals[e].nw;
-    w[e]    = evals[e].w;
+    PetscCall(KFCompressSnapshotGrid(r, &evals[e], &nw[e], &we));
+    w[e]    = we;
     inwk[e] = &inw[e * a];
   }
   PetscCall(KFBodyCompressDirections(*model, neval, angles, nw, w, inwk, &d));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(PetscFree(w[e]));
   *from = 0;
   for (PetscInt b = 0; b < nb; b++) {
     counts[b] = d[b].ndir;

@@ -18,6 +18,9 @@ For each kryflex model (the search's, at each target):
   pair of counts along the frontier (for each count of the first body the fewest of the second), each candidate's
   elastic error measured against the bench's full-order reference. The static moment L^0 of the compressed model is
   checked against the uncompressed one's.
+kryflex's C step goes further than this prototype: after the frontier it drops single directions of any body by
+backward elimination, and it orders the directions on two snapshot grids and keeps the smaller result (the README's
+14:03 section); the prototype's snapshots are on the bench's grid only.
 Sizes are first-order states of the elastic part, 2 x (system dofs - rigid modes), as in bench.py.
 """
 import argparse

@@ -4,16 +4,23 @@ kept as an independent check of the C step's sizes.
 
     .venv/bin/python benchmarks/peers/compress.py [--refine 0.5] [--targets 1e-2 1e-3 1e-4]
             [--kryflex-options "default:" "points:max_factorizations=6"] [--source-factor 0.01] [--cache ref.npz]
+            [--weight peak|none]
 
 For each kryflex model (the search's, at each target):
 - snapshots of each body's share of the assembled reduced model's elastic response: the reduced displacement
   q_b(w) = N_b y(w) for every input, at the bench's grid (points across every resonance), in the body's reduced
   coordinates (N: the reassembly's null space of the ties, read as the outputs of an identity H);
 - per body the rigid motions (6) and the static elastic response N_b y(0) kept exactly, the rest of the snapshots
-  M_b-orthogonal to them and ordered by an SVD in the M_b norm (how much of the response each direction carries);
-- body by body, the fewest leading directions (bisection) that still meet the target, each candidate's elastic
-  error measured against the bench's full-order reference. The static moment L^0 of the compressed model is checked
-  against the uncompressed one's.
+  M_b-orthogonal to them and ordered by an SVD in the M_b norm (how much of the response each direction carries),
+  each input's snapshots weighted by 1 / the largest elastic peak of its pairs in the reference (--weight peak, as
+  kryflex does; none: unweighted, kryflex until 2026-11-29 13:30);
+- body by body, the fewest leading directions (bisection) that still meet the target, then with two bodies every
+  pair of counts along the frontier (for each count of the first body the fewest of the second), each candidate's
+  elastic error measured against the bench's full-order reference. The static moment L^0 of the compressed model is
+  checked against the uncompressed one's.
+kryflex's C step goes further than this prototype: after the frontier it drops single directions of any body by
+backward elimination, and it orders the directions on two snapshot grids and keeps the smaller result (the README's
+14:03 section); the prototype's snapshots are on the bench's grid only.
 Sizes are first-order states of the elastic part, 2 x (system dofs - rigid modes), as in bench.py.
 """
 import argparse
@@ -38,7 +45,8 @@ def reassemble(bodies, joints, angles_rad, a, t):
 class Compressor:
     """Body-wise compression of one reduced model at the angles of interest (snapshots and measure at each)."""
 
-    def __init__(self, model, angles_deg, beta, freqs, measure):
+    def __init__(self, model, angles_deg, beta, freqs, measure, input_weights=None):
+        self.inw = np.ones(model.bodies[0]["G"].shape[1]) if input_weights is None else np.asarray(input_weights)
         self.bodies = [dict(b) for b in model.bodies]
         self.joints = [model.joint(j) for j in range(len(model.joints))]
         self.a, self.t = self.bodies[0]["G"].shape[1], self.bodies[0]["H"].shape[0]
@@ -75,7 +83,7 @@ class Compressor:
                 den = lam * (1 + 1j * f * self.beta) - f * f
                 y = Phi @ (PG / den[:, None])
                 for i in range(len(v)):
-                    q = N[off[i]:off[i + 1]] @ y
+                    q = (N[off[i]:off[i + 1]] @ y) * self.inw[None, :]
                     snap[i] += [q.real, q.imag]
             for i in range(len(v)):
                 stat[i].append(N[off[i]:off[i + 1]] @ y0)
@@ -131,7 +139,22 @@ class Compressor:
                 else:
                     lo = mid
             c[i] = hi
-        return c
+        return self.frontier(target, c) if len(c) == 2 else c
+
+    def frontier(self, target, c):
+        """two bodies: from the bisection's pair, for each larger count of body 0 the fewest of body 1 (the error falls
+        as directions are added), the smallest total kept (ties: the earlier)"""
+        best, j = list(c), c[1]
+        for i in range(c[0] + 1, len(self.directions[0][2]) + 1):
+            if i >= sum(best):
+                break
+            while j > 0 and self.error(self.bodies_for([i, j - 1]))[0] <= target:
+                j -= 1
+            if i + j < sum(best):
+                best = [i, j]
+            if j == 0:
+                break
+        return best
 
 
 def mgs(L, X, tol=1e-10):
@@ -152,6 +175,8 @@ def main():
                     help="compress the model kryflex makes for target x this factor (a richer model: < 1)")
     ap.add_argument("--cache", help="an .npz file keeping the full-order reference between runs")
     ap.add_argument("--kryflex-options", nargs="+", default=["default:", "points:max_factorizations=6"])
+    ap.add_argument("--weight", choices=["peak", "none"], default="peak",
+                    help="each input's snapshots: 1 / its pairs' largest elastic peak (kryflex's), or unweighted")
     args = ap.parse_args()
     print("compression prototype, %s UTC, solid --refine %g at %g deg, 1 rank" %
           (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.refine, args.angle), flush=True)
@@ -204,7 +229,10 @@ def main():
                 e0 = B.elastic_error(T_full, s.frf(freqs), T_el)
                 st0 = 2 * (s.dofs - s.rigid_modes.shape[1])
                 t1 = time.perf_counter()
-                cp = Compressor(model, [args.angle], beta, freqs, measure)
+                peak = np.abs(T_el).max(axis=0)
+                peak = np.maximum(peak, 1e-4 * peak.max())
+                cp = Compressor(model, [args.angle], beta, freqs, measure,
+                                1 / peak.max(axis=0) if args.weight == "peak" else None)
                 e_chk, _ = cp.error(cp.bodies)
                 c = cp.search(target)
                 if c is None:

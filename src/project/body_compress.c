@@ -8,7 +8,9 @@
       configuration, so that the static moment L^0 there is reproduced (a Galerkin projection whose space holds the
       static solution returns it);
     - ordered: the rest of the snapshots, M_b-orthogonal to the kept columns, by the eigenvectors of their M_b-weighted
-      Gram matrix (the left singular vectors of the snapshots, leading first).
+      Gram matrix (the left singular vectors of the snapshots, leading first). Each input's snapshots may be weighted
+      (the caller's inw): the accuracy is relative per input/output pair, so an input whose response is small counts
+      as much as one whose response is large only when its snapshots are scaled up to match.
   KFReducedModelCompress then makes the model whose body b keeps its kept columns and its first counts[b] directions:
   a Galerkin projection of each reduced body (M, K, C, G, H, interface rows, rigid motions and map). All dense and
   replicated: every rank computes the same numbers.
@@ -40,8 +42,9 @@ static void KFAB(PetscInt m, PetscInt k, PetscInt n, const PetscReal A[], PetscI
 }
 
 /* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
-   column nS) and the Gram matrix of its dynamic response (added to Gq[b], v_b x v_b), in reduced body coordinates */
-static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], PetscInt nS, PetscReal *S[], PetscReal *Gq[])
+   column nS) and the Gram matrix of its dynamic response, input j weighted by inw[j] (NULL: 1), added to Gq[b]
+   (v_b x v_b), in reduced body coordinates */
+static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], const PetscReal inw[], PetscInt nS, PetscReal *S[], PetscReal *Gq[])
 {
   const PetscInt a = m->ninputs;
   PetscInt       n = 0, h, rank, nrigid, *off;
@@ -101,9 +104,12 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
       }
       for (PetscInt b = 0; b < m->nb; b++) { /* Gq_b += Re q Re q^T + Im q Im q^T */
         const PetscInt v = bodies[b].v;
-        for (PetscInt j = 0; j < a; j++)
+        for (PetscInt j = 0; j < a; j++) {
+          const PetscReal s2 = inw ? inw[j] * inw[j] : 1;
+
           for (PetscInt c = 0; c < v; c++)
-            for (PetscInt r = 0; r < v; r++) Gq[b][r + c * v] += y[off[b] + r + j * n] * y[off[b] + c + j * n] + yi[off[b] + r + j * n] * yi[off[b] + c + j * n];
+            for (PetscInt r = 0; r < v; r++) Gq[b][r + c * v] += s2 * (y[off[b] + r + j * n] * y[off[b] + c + j * n] + yi[off[b] + r + j * n] * yi[off[b] + c + j * n]);
+        }
       }
     }
     PetscCall(PetscFree2(y, yi));
@@ -194,9 +200,10 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
 /*
   KFBodyCompressDirections - every body's directions ordered by its share of the model's elastic response at nconf
   configurations (angles: nconf x nrevolute, row by row, radians), configuration k at the nw[k] frequencies w[k]
-  (rad/s), under the model's damping (modal, Rayleigh and structural; the bodies' viscous matrices left out). dirs: nb of them, freed with KFBodyDirectionsDestroy.
+  (rad/s), its input j's snapshots weighted by inw[k][j] (inw NULL: all 1), under the model's damping (modal, Rayleigh
+  and structural; the bodies' viscous matrices left out). dirs: nb of them, freed with KFBodyDirectionsDestroy.
 */
-PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], KFBodyDirections **dirs)
+PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], KFBodyDirections **dirs)
 {
   const PetscInt nrev1 = PetscMax(m->nrevolute, 1), a = m->ninputs;
   PetscReal    **S, **Gq;
@@ -212,7 +219,7 @@ PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const 
     PetscCall(PetscCalloc1(v * a * nconf + 1, &S[b]));
     PetscCall(PetscCalloc1(v * v + 1, &Gq[b]));
   }
-  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], k * a, S, Gq));
+  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, k * a, S, Gq));
   for (PetscInt b = 0; b < m->nb; b++) {
     PetscCall(KFCompressBody(&m->bodies[b], a * nconf, S[b], Gq[b], &(*dirs)[b]));
     PetscCall(PetscFree(S[b]));

@@ -213,8 +213,9 @@ def bode_pngs(freq_hz, pairs, dpi=DPI):
 def bode_pngs_on_grids(items, dpi=DPI):
     """bode_pngs for (freq_hz, full, reduced, title) items whose frequency grids may differ (one per configuration):
     one figure for all whose grids span the same band (the curves' frequencies replaced too), a new one where the
-    band differs (its axis limits and ticks are laid out for it)."""
-    fig, span = None, None
+    band differs (its axis limits and ticks are laid out for it). The figure's fixed layer (_FixedLayer: the frequency
+    axes, their grid and labels) is drawn once per band."""
+    fig, span, layer = None, None, None
     for freq_hz, full, reduced, title in items:
         freq = np.asarray(freq_hz, dtype=float)
         if all(not np.any(np.asarray(c) != 0) for c in (full, reduced)):
@@ -223,6 +224,7 @@ def bode_pngs_on_grids(items, dpi=DPI):
         this = (float(freq.min()), float(freq.max())) if freq.size else None
         if fig is None or this != span:
             fig, span = bode_figure(freq, full, reduced, title), this
+            layer = _FixedLayer(fig, dpi, [ax.xaxis for ax in fig.axes])
         else:
             ax_mag, ax_ph = fig.axes
             for line, y in zip(ax_mag.lines, (magnitude_db(full), magnitude_db(reduced))):
@@ -233,7 +235,39 @@ def bode_pngs_on_grids(items, dpi=DPI):
             for ax in (ax_mag, ax_ph):
                 ax.relim()
                 ax.autoscale_view(scalex=False)
-        yield figure_png_bytes(fig, dpi)
+        yield layer.png_bytes()
+
+
+class _FixedLayer:
+    """A figure drawn as two layers: the fixed one (the figure's and axes' backgrounds and the artists given, e.g. a
+    shared frequency axis with its grid, ticks and labels: most of a drawing's time) rendered once and kept as pixels;
+    the rest (y axes, curves, spines, titles, legends) drawn over a copy of those pixels for each PNG. The PNGs are
+    byte for byte what figure_png_bytes gives: the same artists drawn in the same order on the same pixels, provided
+    an axes' changing artists never reach into a later axes' rectangle (true of figures whose axes do not overlap)."""
+
+    def __init__(self, fig, dpi, fixed):
+        fig.set_dpi(dpi)       # what savefig(dpi=) does for the time of its drawing
+        self.fig = fig
+        keep = set(map(id, fixed))
+        # each axes' changing artists in its drawing order (Axes.draw: its children but the patch, by zorder)
+        self.moving = [(ax, sorted((a for a in ax.get_children() if a is not ax.patch and id(a) not in keep),
+                                   key=lambda a: a.get_zorder())) for ax in fig.axes]
+        for _, artists in self.moving:
+            for a in artists:
+                a.set_animated(True)           # left out of canvas.draw(): the fixed layer alone
+        fig.canvas.draw()
+        self.background = fig.canvas.copy_from_bbox(fig.bbox)
+
+    def png_bytes(self):
+        canvas = self.fig.canvas
+        canvas.restore_region(self.background)
+        renderer = canvas.get_renderer()
+        for ax, artists in self.moving:
+            ax.apply_aspect()
+            for a in artists:
+                if a.get_visible():
+                    a.draw(renderer)
+        return _encode_png(canvas, self.fig.dpi)
 
 
 def bode_overview_figure(panels, suptitle):
@@ -365,6 +399,16 @@ def figure_png_bytes(fig, dpi=DPI):
     """The figure rendered as PNG bytes (nothing written to disk)."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
+    return buffer.getvalue()
+
+
+def _encode_png(canvas, dpi):
+    """The canvas's pixels as it holds them (not drawn again) encoded as savefig would (matplotlib's imsave: the same
+    metadata and compression)."""
+    from matplotlib import image
+    buffer = io.BytesIO()
+    image.imsave(buffer, canvas.buffer_rgba(), format="png", origin="upper", dpi=dpi,
+                 pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     return buffer.getvalue()
 
 

@@ -45,3 +45,27 @@ def test_one_figure_across_frequency_grids_gives_the_same_pngs():
     assert len(reused) == len(items)
     assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
     assert len(set(fresh)) == len(fresh)
+
+
+def test_png_encoding_keeps_savefigs_pixels():
+    """plots' own PNG encoder (one PNG filter, zlib) gives the pixels and resolution matplotlib's savefig (Pillow)
+    gives for the same figure, on every kind of the report's figures."""
+    import io
+
+    from PIL import Image
+
+    f, pairs = responses()
+    full, red, title = pairs[0]
+    figures = [lambda: plots.bode_figure(f, full, red, title),
+               lambda: plots.bode_overview_figure([("a", f, full, red), ("b", f, red, full)], "overview"),
+               lambda: plots.importance_figure([0.5, 3.1, 40.0], [1.0, 0.2, 1e-3], [True, True, False], "importance",
+                                               threshold=0.01, band_hz=[0.1, 30.0]),
+               lambda: plots.frf_error_figure([("a", f, plots.frf_hinf_error_curve(full, red))], 0.05)]
+    for make in figures:
+        ours = Image.open(io.BytesIO(plots.figure_png_bytes(make())))
+        buffer = io.BytesIO()
+        make().savefig(buffer, format="png", dpi=plots.DPI)
+        theirs = Image.open(io.BytesIO(buffer.getvalue()))
+        assert ours.mode == theirs.mode == "RGBA" and ours.size == theirs.size
+        assert np.array_equal(np.asarray(ours), np.asarray(theirs))
+        assert np.allclose(ours.info["dpi"], theirs.info["dpi"]) and ours.info["Software"] == theirs.info["Software"]

@@ -6,8 +6,8 @@ in a fresh Python (the cost kryflex reduce pays: matplotlib's import included), 
 - ahead:   this tree only: the helpers started first (report.helper.start_helpers, as kryflex reduce does when the run
            starts) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
 
-Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs compared byte for byte
-with the other tree's alone run. Run on an idle machine for the wall figures; on a shared one read the CPU columns.
+Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs' pixels (decoded) compared
+with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall figures; on a shared one read the CPU columns.
 
     .venv/bin/python benchmarks/proof_cost/report_cost.py OUTDIR_OF_A_DEFAULT_RUN --against /work/main [--repeat 3]
 """
@@ -50,8 +50,12 @@ def run(tree, summary_dir, out, mode, settle):
     return r
 
 
-def pngs(folder):
-    return {n: open(os.path.join(folder, n), "rb").read() for n in os.listdir(folder) if n.endswith(".png")}
+def contents(folder):
+    """{file: its pixels (PNG, decoded) or bytes (summary.json, report.md)}."""
+    import numpy as np
+    from PIL import Image
+    return {n: np.asarray(Image.open(os.path.join(folder, n))).tobytes() if n.endswith(".png")
+            else open(os.path.join(folder, n), "rb").read() for n in os.listdir(folder)}
 
 
 def main():
@@ -77,13 +81,16 @@ def main():
                 best[key] = min(best.get(key, r["wall"]), r["wall"])
                 print("%-8s %-8s %8.2f %8.2f %8.2f %8.2f   %.1f" % (name, mode, r["wall"], r["cpu"], r["helpers"],
                       r["cpu"] + r["helpers"], os.getloadavg()[0]), flush=True)
-    ref = pngs(os.path.join(args.work, "against_alone"))
+    ref = contents(os.path.join(args.work, "against_alone"))
     for name, _, modes in trees:
         for mode in modes:
-            got = pngs(os.path.join(args.work, "%s_%s" % (name, mode.replace(" ", "_"))))
+            folder = os.path.join(args.work, "%s_%s" % (name, mode.replace(" ", "_")))
+            got = contents(folder)
             same = sorted(got) == sorted(ref) and all(got[n] == ref[n] for n in ref)
-            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d PNGs, byte for byte the against tree's: %s"
-                  % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")], len(got), same))
+            size = sum(os.path.getsize(os.path.join(folder, n)) for n in got if n.endswith(".png"))
+            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files, the against tree's pixels and text: %s; "
+                  "PNGs %.2f MB" % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")],
+                                    len(got), same, size / 1e6))
 
 
 if __name__ == "__main__":

@@ -68,12 +68,13 @@ def figure_jobs(summary, plot_names):
             plots.bode_overview_figure(panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
     jobs.append((1.0 + 2.0 * len(c.labels), overview))     # its panels' ticks, laid out twice (tight_layout)
 
-    def importance(label):
-        kr = s.krylov[label]
-        title = f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}"
-        yield plot_names["importance"][label], plots.figure_png_bytes(plots.importance_figure(
-            kr.frequency_hz, kr.importance, kr.kept, title, threshold=threshold, band_hz=s.band_hz))
-    jobs += [(2.5, lambda label=label: importance(label)) for label in c.labels]
+    def importance(labels):     # the configurations' figures on one reused figure (plots.importance_pngs)
+        items = [(s.krylov[label].frequency_hz, s.krylov[label].importance, s.krylov[label].kept,
+                  f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}", threshold, s.band_hz)
+                 for label in labels]
+        yield from zip([plot_names["importance"][label] for label in labels], plots.importance_pngs(items))
+    # in two jobs as the Bode plots; a job's first figure builds its ticks
+    jobs += [(1.0 + 1.5 * len(part), lambda part=part: importance(part)) for part in halves if part]
 
     def moments():
         series = [(f"single, {c.short_angle(l)}", s.reduced.moment_ratios[l], False) for l in c.labels]

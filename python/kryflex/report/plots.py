@@ -301,11 +301,16 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
     Drawn as vertical bars on a log frequency axis (linear if a frequency is not positive), each labelled with
     its 1-based mode number so the figure can be read beside the report's importance tables.
     """
+    fig = _new_figure(figsize=(7.0, 4.0))
+    _draw_importance(fig.subplots(), freq_hz, importance, kept, title, threshold, band_hz)
+    fig.subplots_adjust(**SINGLE_MARGINS)
+    return fig
+
+
+def _draw_importance(ax, freq_hz, importance, kept, title, threshold, band_hz):
     freq = np.asarray(freq_hz, dtype=float)
     imp = np.asarray(importance, dtype=float)
     kept = np.asarray(kept, dtype=bool)
-    fig = _new_figure(figsize=(7.0, 4.0))
-    ax = fig.subplots()
     log_axis = freq.size > 0 and np.all(freq > 0)
     if log_axis:
         ax.set_xscale("log")
@@ -327,8 +332,35 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
     _set_title(ax, title)
     ax.grid(True, which="both", axis="x", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    fig.subplots_adjust(**SINGLE_MARGINS)
-    return fig
+
+
+def importance_pngs(items, dpi=DPI):
+    """PNG bytes of importance_figure(*item) for each item, in order, drawn on one figure whose axes are emptied and
+    drawn again between items: the same pixels as a new figure per item, without building the ticks of its axes
+    again (a log axis over the Krylov modes' decades has some fifty, most of a new figure's drawing time). A figure
+    on a linear axis (a frequency not positive) is drawn on its own."""
+    fig = None
+    for item in items:
+        freq = np.asarray(item[0], dtype=float)
+        if not (freq.size > 0 and np.all(freq > 0)):
+            yield figure_png_bytes(importance_figure(*item), dpi)
+            continue
+        if fig is None:
+            fig = importance_figure(*item)
+        else:
+            ax = fig.axes[0]
+            for artist in ax.lines[:] + ax.collections[:] + ax.texts[:] + ax.patches[:] + [ax.get_legend()]:
+                artist.remove()
+            ax.dataLim.set_points(_bbox_null())      # as a new axes': the next artists' extent alone
+            ax.ignore_existing_data_limits = True
+            ax.set_autoscalex_on(True)
+            _draw_importance(ax, *item)
+        yield figure_png_bytes(fig, dpi)
+
+
+def _bbox_null():
+    from matplotlib.transforms import Bbox
+    return Bbox.null().get_points()
 
 
 def _worst_deviation_per_k(ratios):

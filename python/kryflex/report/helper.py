@@ -215,7 +215,12 @@ class PlotRendering:
             yield from self._draw([k for k in range(len(self.jobs)) if k not in theirs], between)
             for h, share in zip(self.helpers, self.shares):
                 got = h.result()
-                yield from got if got is not None else self._draw(sorted(share), between)
+                if got is None:
+                    yield from self._draw(sorted(share), between)
+                    continue
+                yield from got
+                if between is not None:
+                    between()
         finally:
             self.stop()
 

@@ -48,37 +48,45 @@ def _write_together(out_dir, files):
 
 class PendingReport:
     """A report begun (begin_report): its summary validated, its figures' shares sent to the helper processes that
-    draw them meanwhile, its text rendered. finish() draws what is left here and writes every file into out_dir
-    together (returning their paths); stop() abandons it (the helpers stopped, nothing written)."""
+    draw them meanwhile, summary.json and report.md written into its staging folder. finish() draws what is left
+    here, writes the figures and moves every file into out_dir together (returning their paths); stop() abandons it
+    (the helpers stopped, the staging folder removed, out_dir as it was)."""
 
     def __init__(self, summary, out_dir, between):
         if not isinstance(summary, dict):
             summary = as_summary(summary).to_json()
         validate_summary(summary)
         summary = as_summary(summary)
-        self.out_dir, self.between = out_dir, between
+        self.between, self.staging = between, None
         plot_names = plot_file_names(summary)
-        # the helpers first, so that they draw while the text below is rendered and the caller writes its files
+        # the helpers first, so that they draw while the text below is written and the caller writes its files
         self.rendering = PlotRendering(summary, plot_names).start()
         try:
-            self.text_json = summary.dumps()
-            self.markdown = render_markdown(summary, plot_names)
+            os.makedirs(out_dir, exist_ok=True)
+            self.staging = Staging(out_dir)
+            self.staging.create()
+            self._write("summary.json", summary.dumps().encode("utf-8"))
+            self._write("report.md", render_markdown(summary, plot_names).encode("utf-8"))
         except BaseException:
-            self.rendering.stop()
+            self.stop()
             raise
 
+    def _write(self, name, data):
+        with open(self.staging.file(name), "wb") as handle:
+            handle.write(data)
+
     def finish(self):
-        def files():
-            yield "summary.json", self.text_json.encode("utf-8")
-            yield "report.md", self.markdown.encode("utf-8")
-            yield from self.rendering.items(self.between)
         try:
-            return _write_together(self.out_dir, files())
+            for name, data in self.rendering.items(self.between):
+                self._write(name, data)
+            return self.staging.commit()
         finally:
-            self.rendering.stop()
+            self.stop()
 
     def stop(self):
         self.rendering.stop()
+        if self.staging is not None:
+            self.staging.discard()
 
 
 def begin_report(summary, out_dir, between=None):

@@ -7,7 +7,8 @@ in a fresh Python (the cost kryflex reduce pays: matplotlib's import included), 
            starts) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
 
 Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs' pixels (decoded) compared
-with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall figures; on a shared one read the CPU columns.
+with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall
+figures; on a shared one read the CPU columns.
 
     .venv/bin/python benchmarks/proof_cost/report_cost.py OUTDIR_OF_A_DEFAULT_RUN --against /work/main [--repeat 3]
 """
@@ -88,8 +89,8 @@ def main():
             got = contents(folder)
             same = sorted(got) == sorted(ref) and all(got[n] == ref[n] for n in ref)
             size = sum(os.path.getsize(os.path.join(folder, n)) for n in got if n.endswith(".png"))
-            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files, the against tree's pixels and text: %s; "
-                  "PNGs %.2f MB" % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")],
+            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files, the against tree's pixels and "
+                  "text: %s; PNGs %.2f MB" % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")],
                                     len(got), same, size / 1e6))
 
 

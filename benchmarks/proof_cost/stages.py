@@ -54,7 +54,12 @@ def late():
         wrap(w, "write_report", "write_report (all)"); wrap(w, "write_unverified", "write_unverified (all)")
         r = m["kryflex.report"]; r.write_report = w.write_report; r.write_unverified = w.write_unverified
     if "kryflex.report.plots" in m and "pl" not in patched and hasattr(m["kryflex.report.plots"], "save_figure"):
-        patched.add("pl"); wrap(m["kryflex.report.plots"], "figure_png_bytes", "  png (each)")
+        patched.add("pl"); pl = m["kryflex.report.plots"]
+        # the PNGs encoded in this process (helpers' not counted): figure_png_bytes before plots had its own encoder
+        wrap(pl, "_encode_png" if hasattr(pl, "_encode_png") else "figure_png_bytes", "  png encoded here (each)")
+    if "kryflex.report.writer" in m and "bg" not in patched and hasattr(m["kryflex.report.writer"], "PendingReport"):
+        patched.add("bg"); pr = m["kryflex.report.writer"].PendingReport
+        wrap(pr, "__init__", "report begun (text written, helpers given work)"); wrap(pr, "finish", "report finished (figures)")
 def imp(name, *a, **k):
     w0, c0 = clock()
     mod = _orig_import(name, *a, **k)

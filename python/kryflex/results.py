@@ -560,7 +560,8 @@ class Summary(Record):
 
     def dumps(self):
         """summary.json's text."""
-        return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"
+        from .io.json_text import dumps_indented
+        return dumps_indented(self.to_json()) + "\n"
 
     # ------------------------------------------------------------------ views
 

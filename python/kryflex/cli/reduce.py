@@ -58,9 +58,14 @@ def run(argv):
     staging, created, clean_up = staged_output(out)
     ooc_folder_default(staging.path)
     committed = False
+    pending = []        # the report begun, finished after the model file is written
     try:
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
+        if rank() == 0 and draws_figures(scene):
+            # its helper processes, where cores are free, load matplotlib while the reduction runs (report/helper.py)
+            from ..report.helper import start_helpers
+            start_helpers()
 
         # the model check (kryflex check): its warnings before any work, also under -quiet
         health = collective(lambda: model_check(scene))
@@ -89,26 +94,37 @@ def run(argv):
         cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
         cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: cannot_write(out, e, created))
 
-        def write_report_files():
+        def begin_report_files():
             # rank 0 alone: the report and the NumPy export (the model file below is written by every rank together)
             if rank() == 0:
-                from ..report import write_report, write_unverified
+                from ..report import begin_report, write_unverified
                 # the full report compares with the full order; without it (verify.full_order: false, errors
                 # estimated against the richest candidate) the short report with the estimated verdict
                 if s.frf and not s.verdict.error_estimated:
-                    write_report(s, staging.path, between=common.raise_if_interrupted)
+                    # its figures drawn by the helpers while the model file is written, then finished below
+                    pending.append(begin_report(s, staging.path, between=common.raise_if_interrupted))
                 else:
                     write_unverified(s, staging.path)
+
+        def finish_report_files():
+            if rank() == 0:
+                if pending:
+                    pending.pop().finish()
                 if health:
                     append_check_section(staging.file("report.md"), health[1])
                 if args.npz:
                     result.model.export_npz(staging.file("reduced.npz"))
-        collective(write_report_files, cannot)
+        collective(begin_report_files, cannot)
         collective(lambda: result.model.save(staging.file("reduced.h5")), cannot, cannot_c)
+        collective(finish_report_files, cannot)
         # the results are complete: a signal from here on no longer undoes them
         collective(lambda: staging.commit() if rank() == 0 else None, cannot, interruptible=False)
         committed = True
     finally:
+        if rank() == 0 and "kryflex.report.helper" in sys.modules:
+            for report in pending:
+                report.stop()
+            sys.modules["kryflex.report.helper"].stop_helpers()     # those no report took
         if not committed and rank() == 0:
             clean_up()
     say("kryflex: reduced '%s': %s" % (s.scene, chosen_text(result)))
@@ -149,6 +165,13 @@ def model_check(scene):
         return check_scene(scene, factor=False)
     except _core.Error:
         return None
+
+
+def draws_figures(scene):
+    """Whether the run will draw the report's figures: the scene verifies against the full order and -kf_verify does
+    not turn it off."""
+    from petsc4py import PETSc
+    return bool(PETSc.Options().getBool("kf_verify", bool(scene.verify["full_order"])))
 
 
 def append_check_section(path, findings):

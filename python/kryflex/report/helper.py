@@ -1,15 +1,20 @@
-"""The report's figures drawn by two processes: this one and a helper Python started for them.
+"""The report's figures drawn by helper processes beside this one.
 
-Drawing the PNGs (matplotlib's Agg) is most of the report's time, about 0.1 s of one core per figure, and the run
-is single-threaded by then: where a second core is free (the load average of the last minute at least 0.9 below the
-cores this process may use), a helper process draws part of the figures (by
-their indices in figures.figure_jobs) while this one draws the rest. The helper is a fresh interpreter (not a fork:
-the process holds MPI, PETSc and MUMPS state that a child must not inherit); it imports only NumPy, matplotlib and
-kryflex.report (no compiled kryflex code, no PETSc, no MPI), reads the summary from its standard input and writes the
-PNG bytes to its standard output. Its figures are the very bytes this process would draw (the same code on the same
-data). If it cannot start or fails, this process draws its figures too: the report is the same, only slower.
+Drawing the PNGs (matplotlib's Agg) is most of the report's time and the run is single-threaded by then: where a
+second core is free (the load average of the last minute at least 0.9 below the cores this process may use, and at
+least two of them), helper processes draw the figures (by their indices in figures.figure_jobs) while this one
+writes summary.json, report.md and the model file, and draws what the helpers' share leaves.
 
-KRYFLEX_REPORT_HELPER=0 turns the helper off (every figure drawn here); =1 starts it whatever the load.
+A helper is a fresh interpreter (not a fork: the process holds MPI, PETSc and MUMPS state that a child must not
+inherit); it imports only NumPy, matplotlib and kryflex.report (no compiled kryflex code, no PETSc, no MPI), draws
+one small figure to load its fonts, then waits for its work: the summary and its share on its standard input; it
+writes the PNG bytes to its standard output. kryflex reduce starts its helpers when the run starts
+(start_helpers), so their start-up (about half a second of a core each) overlaps the reduction instead of
+delaying the report; write_report without them starts one when it is called. A helper's figures are the very bytes
+this process would draw (the same code on the same data). If a helper cannot start or fails, this process draws
+its figures: the report is the same, only slower. A helper whose parent ends reads the end of its input and exits.
+
+KRYFLEX_REPORT_HELPER=0 turns the helpers off (every figure drawn here); =1 starts them whatever the load.
 """
 import os
 import pickle
@@ -19,41 +24,44 @@ import threading
 
 from .figures import figure_jobs
 
-# the helper's start (an interpreter importing NumPy and matplotlib, about 0.5 s of a core), in Bode-plot units: it
-# gets that much less work, and no helper is started for a report lighter than HELPER_MIN_WEIGHT
-HELPER_START_WEIGHT = 5.0
-HELPER_MIN_WEIGHT = 12.0
+# weights in figures.figure_jobs' units (about one Bode plot's drawing, 40 ms at 57k dofs): a helper started by the
+# report itself (an interpreter importing NumPy and matplotlib, about half a second) gets that much less work; this
+# process's own share of the report besides the figures (summary.json, report.md), and its import of matplotlib
+# when it has not drawn a figure yet, count against it the same way
+HELPER_START_WEIGHT = 12.0
+MAIN_WRITE_WEIGHT = 4.0
+MAIN_IMPORT_WEIGHT = 10.0
+HELPER_MIN_WEIGHT = 12.0     # no helper for a lighter report: its start would cost more than it saves
+HELPERS_AHEAD = 2            # helpers started ahead of the report (start_helpers)
+
+_ahead = []                  # the helpers start_helpers started, waiting for their work
 
 
 def _idle_cores():
-    """The cores this process may run on less the load average of the last minute (this process counts in it)."""
+    """(the cores this process may run on, those less the load average of the last minute: this process counts in
+    it)."""
     try:
         cpus = len(os.sched_getaffinity(0))
     except (AttributeError, OSError):
         cpus = os.cpu_count() or 1
     try:
-        return cpus - os.getloadavg()[0]
+        return cpus, cpus - os.getloadavg()[0]
     except OSError:
-        return cpus - 1.0
+        return cpus, cpus - 1.0
 
 
-def helper_share(jobs):
-    """The indices of the jobs the helper draws (an empty set: no helper), about half the weight less its start-up:
-    the heaviest jobs first to whichever side is lighter."""
+def _wanted():
+    """'off', 'on' (KRYFLEX_REPORT_HELPER=1: whatever the load) or 'auto'."""
     wanted = os.environ.get("KRYFLEX_REPORT_HELPER", "auto").strip().lower()
-    if wanted in ("0", "no", "false", "off"):
-        return set()
-    total = sum(w for w, _ in jobs)
-    if total < HELPER_MIN_WEIGHT or (wanted != "1" and _idle_cores() < 0.9):   # no core free: only its start added
-        return set()
-    here, there, share = 0.0, HELPER_START_WEIGHT, set()
-    for k in sorted(range(len(jobs)), key=lambda k: -jobs[k][0]):
-        if there < here:
-            share.add(k)
-            there += jobs[k][0]
-        else:
-            here += jobs[k][0]
-    return share
+    return "off" if wanted in ("0", "no", "false", "off") else "on" if wanted in ("1", "yes", "true", "on") else "auto"
+
+
+def _core_free():
+    wanted = _wanted()
+    if wanted != "auto":
+        return wanted == "on"
+    cpus, idle = _idle_cores()
+    return cpus >= 2 and idle >= 0.9
 
 
 def _package_root():
@@ -61,16 +69,20 @@ def _package_root():
 
 
 class _Helper:
-    """The helper process drawing the jobs of share; result() is its [(name, bytes)], None if it failed."""
+    """One helper process: started at once (it imports and warms up, then waits); send() gives it its share,
+    result() is its [(name, bytes)], None if it failed."""
 
-    def __init__(self, summary, plot_names, share):
+    def __init__(self, start_weight):
+        self.start_weight = start_weight       # what its start still costs when it is given work (figures' units)
         env = dict(os.environ, KRYFLEX_MUMPS="plain")
         env["PYTHONPATH"] = _package_root() + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         self.proc = subprocess.Popen([sys.executable, "-c", "from kryflex.report.helper import main; main()"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                      env=env, start_new_session=True)   # a terminal's Ctrl-C is for the run: it
                                                                          # stops the helper (stop() below)
-        data = pickle.dumps((summary, plot_names, sorted(share)), protocol=pickle.HIGHEST_PROTOCOL)
+        self.writer = None
+
+    def send(self, data):
         # written by a thread: the pipe holds less than the summary, and the helper reads it only once started
         self.writer = threading.Thread(target=self._write, args=(data,), daemon=True)
         self.writer.start()
@@ -87,7 +99,8 @@ class _Helper:
             out = self.proc.stdout.read()
         except OSError:
             return None
-        self.writer.join()
+        if self.writer is not None:
+            self.writer.join()
         if self.proc.wait() != 0:
             return None
         try:
@@ -99,47 +112,150 @@ class _Helper:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
-        self.proc.stdout.close()
+        for pipe in (self.proc.stdin, self.proc.stdout):
+            try:
+                pipe.close()
+            except OSError:
+                pass
+
+
+def start_helpers():
+    """Start the report's helpers now (kryflex reduce, as the run starts), where cores are free: they load NumPy and
+    matplotlib while the reduction runs and wait for the figures. Returns how many were started."""
+    stop_helpers()
+    if _core_free():
+        for _ in range(HELPERS_AHEAD):
+            try:
+                _ahead.append(_Helper(start_weight=0.0))
+            except OSError:
+                break
+    return len(_ahead)
+
+
+def stop_helpers():
+    """Stop the helpers start_helpers started and no report took (a run that failed or wrote no figures)."""
+    while _ahead:
+        _ahead.pop().stop()
+
+
+def _take_helpers():
+    """The helpers started ahead, else one started now where a core is free."""
+    if _ahead:
+        taken, dead = [h for h in _ahead if h.proc.poll() is None], [h for h in _ahead if h.proc.poll() is not None]
+        _ahead.clear()
+        for h in dead:
+            h.stop()
+        return taken
+    if _wanted() != "off" and _core_free():
+        try:
+            return [_Helper(start_weight=HELPER_START_WEIGHT)]
+        except OSError:
+            return []
+    return []
+
+
+def helper_shares(jobs, helpers):
+    """The indices of the jobs each helper draws ([set] per helper; the rest are this process's): the heaviest jobs
+    first to whichever process has the least so far, this process starting with its writing (and its import of
+    matplotlib when it has drawn nothing yet), each helper with what its start still costs. With a helper per core
+    this process draws nothing (it writes the rest meanwhile). No helper for a report lighter than
+    HELPER_MIN_WEIGHT."""
+    total = sum(w for w, _ in jobs)
+    if not helpers or total < HELPER_MIN_WEIGHT:
+        return [set() for _ in helpers]
+    if len(helpers) >= _idle_cores()[0]:
+        loads = [float("inf")]
+    else:
+        loads = [MAIN_WRITE_WEIGHT + (0.0 if "matplotlib.backends.backend_agg" in sys.modules else MAIN_IMPORT_WEIGHT)]
+    loads += [h.start_weight for h in helpers]
+    shares = [set() for _ in helpers]
+    for k in sorted(range(len(jobs)), key=lambda k: -jobs[k][0]):
+        who = min(range(len(loads)), key=lambda p: (loads[p], -p))      # a tie to a helper
+        loads[who] += jobs[k][0]
+        if who:
+            shares[who - 1].add(k)
+    return shares
+
+
+class PlotRendering:
+    """The report's figures being drawn: started (start()) with the helpers' shares sent to them, so that they draw
+    while this process writes the rest; items() then yields every (file name, PNG bytes), this process's share drawn
+    as it goes (between() after each), then the helpers' (a failed helper's drawn here)."""
+
+    def __init__(self, summary, plot_names):
+        self.summary, self.plot_names = summary, plot_names
+        self.jobs = figure_jobs(summary, plot_names)
+        self.helpers, self.shares = [], []
+
+    def start(self):
+        helpers = _take_helpers()
+        shares = helper_shares(self.jobs, helpers)
+        data = None
+        for h, share in zip(helpers, shares):
+            if not share:
+                h.stop()
+                continue
+            if data is None:
+                data = pickle.dumps((self.summary, self.plot_names), protocol=pickle.HIGHEST_PROTOCOL)
+            h.send(pickle.dumps(sorted(share), protocol=pickle.HIGHEST_PROTOCOL) + data)
+            self.helpers.append(h)
+            self.shares.append(share)
+        return self
+
+    def _draw(self, indices, between):
+        for k in indices:
+            for item in self.jobs[k][1]():
+                yield item
+                if between is not None:
+                    between()
+
+    def items(self, between=None):
+        theirs = set().union(*self.shares) if self.shares else set()
+        try:
+            yield from self._draw([k for k in range(len(self.jobs)) if k not in theirs], between)
+            for h, share in zip(self.helpers, self.shares):
+                got = h.result()
+                if got is None:
+                    yield from self._draw(sorted(share), between)
+                    continue
+                yield from got
+                if between is not None:
+                    between()
+        finally:
+            self.stop()
+
+    def stop(self):
+        for h in self.helpers:
+            h.stop()
+        self.helpers = []
 
 
 def render_plots(summary, plot_names, between=None):
-    """Yield (file name, PNG bytes) of every figure of the report, as figures._render_plots, a share of them drawn by
-    a helper process where a second core is free. between() is called after each figure drawn here (the command
-    stops there when it was interrupted; the helper is then stopped)."""
-    jobs = figure_jobs(summary, plot_names)
-    share = helper_share(jobs)
-    helper = None
-    if share:
-        try:
-            helper = _Helper(summary, plot_names, share)
-        except OSError:
-            share = set()
-    try:
-        for k, (_, job) in enumerate(jobs):
-            if k in share:
-                continue
-            for item in job():
-                yield item
-                if between is not None:
-                    between()
-        got = helper.result() if helper is not None else None
-        if got is not None:
-            yield from got
-            return
-        for k in sorted(share):         # the helper failed: its figures drawn here
-            for item in jobs[k][1]():
-                yield item
-                if between is not None:
-                    between()
-    finally:
-        if helper is not None:
-            helper.stop()
+    """Yield (file name, PNG bytes) of every figure of the report, as figures._render_plots, shares of them drawn by
+    helper processes where a core is free. between() is called after each figure drawn here (the command stops there
+    when it was interrupted; the helpers are then stopped)."""
+    yield from PlotRendering(summary, plot_names).start().items(between)
+
+
+def _warm_up():
+    """Load matplotlib's Agg canvas and its font (the first text drawn reads it) before any work arrives."""
+    from . import plots
+    fig = plots._new_figure(figsize=(1.0, 1.0))
+    ax = fig.subplots()
+    ax.set_xscale("log")
+    ax.set_title("0")
+    fig.canvas.draw()
 
 
 def main():
-    """The helper: (summary, plot names, job indices) pickled on standard input; [(name, PNG bytes)] pickled on
-    standard output."""
-    summary, plot_names, share = pickle.load(sys.stdin.buffer)
+    """The helper: loads what it draws with, then reads its job indices and (summary, plot names), pickled, on
+    standard input; [(name, PNG bytes)] pickled on standard output."""
+    _warm_up()
+    try:
+        share = pickle.load(sys.stdin.buffer)
+        summary, plot_names = pickle.load(sys.stdin.buffer)
+    except EOFError:         # the run ended (failed, or drew no figures) before sending work
+        sys.exit(0)
     jobs = figure_jobs(summary, plot_names)
     out = [item for k in share for item in jobs[k][1]()]
     sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))

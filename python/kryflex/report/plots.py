@@ -14,7 +14,8 @@ module: the report's text and the data helpers below (which the reducer's summar
 and importing it costs a run that draws no plot (verify.full_order: false) about half a second.
 """
 
-import io
+import struct
+import zlib
 
 import numpy as np
 
@@ -23,8 +24,7 @@ from ..io.files import atomic_path
 FULL_STYLE = {"color": "tab:blue", "linewidth": 1.6, "label": "full order"}
 REDUCED_STYLE = {"color": "tab:red", "linewidth": 1.2, "linestyle": "--", "label": "reduced (Krylov)"}
 DPI = 110
-# zlib level of the PNGs: 1 encodes several times faster than matplotlib's default 6, the same pixels, files ~30 %
-# larger
+# zlib level of the PNGs: 1 encodes several times faster than 6, files ~20 % larger
 PNG_COMPRESS_LEVEL = 1
 # the Bode figure's margins (fractions of 7 x 5.6 in), fixed: tight_layout lays it out by drawing it once more, and
 # drawing is most of the report's time; these fit a one-line title and tick labels of up to 5 characters
@@ -213,8 +213,9 @@ def bode_pngs(freq_hz, pairs, dpi=DPI):
 def bode_pngs_on_grids(items, dpi=DPI):
     """bode_pngs for (freq_hz, full, reduced, title) items whose frequency grids may differ (one per configuration):
     one figure for all whose grids span the same band (the curves' frequencies replaced too), a new one where the
-    band differs (its axis limits and ticks are laid out for it)."""
-    fig, span = None, None
+    band differs (its axis limits and ticks are laid out for it). The figure's fixed layer (_FixedLayer: the frequency
+    axes, their grid and labels) is drawn once per band."""
+    fig, span, layer = None, None, None
     for freq_hz, full, reduced, title in items:
         freq = np.asarray(freq_hz, dtype=float)
         if all(not np.any(np.asarray(c) != 0) for c in (full, reduced)):
@@ -223,6 +224,7 @@ def bode_pngs_on_grids(items, dpi=DPI):
         this = (float(freq.min()), float(freq.max())) if freq.size else None
         if fig is None or this != span:
             fig, span = bode_figure(freq, full, reduced, title), this
+            layer = _FixedLayer(fig, dpi, [ax.xaxis for ax in fig.axes])
         else:
             ax_mag, ax_ph = fig.axes
             for line, y in zip(ax_mag.lines, (magnitude_db(full), magnitude_db(reduced))):
@@ -233,7 +235,39 @@ def bode_pngs_on_grids(items, dpi=DPI):
             for ax in (ax_mag, ax_ph):
                 ax.relim()
                 ax.autoscale_view(scalex=False)
-        yield figure_png_bytes(fig, dpi)
+        yield layer.png_bytes()
+
+
+class _FixedLayer:
+    """A figure drawn as two layers: the fixed one (the figure's and axes' backgrounds and the artists given, e.g. a
+    shared frequency axis with its grid, ticks and labels: most of a drawing's time) rendered once and kept as pixels;
+    the rest (y axes, curves, spines, titles, legends) drawn over a copy of those pixels for each PNG. The PNGs are
+    byte for byte what figure_png_bytes gives: the same artists drawn in the same order on the same pixels, provided
+    an axes' changing artists never reach into a later axes' rectangle (true of figures whose axes do not overlap)."""
+
+    def __init__(self, fig, dpi, fixed):
+        fig.set_dpi(dpi)       # what savefig(dpi=) does for the time of its drawing
+        self.fig = fig
+        keep = set(map(id, fixed))
+        # each axes' changing artists in its drawing order (Axes.draw: its children but the patch, by zorder)
+        self.moving = [(ax, sorted((a for a in ax.get_children() if a is not ax.patch and id(a) not in keep),
+                                   key=lambda a: a.get_zorder())) for ax in fig.axes]
+        for _, artists in self.moving:
+            for a in artists:
+                a.set_animated(True)           # left out of canvas.draw(): the fixed layer alone
+        fig.canvas.draw()
+        self.background = fig.canvas.copy_from_bbox(fig.bbox)
+
+    def png_bytes(self):
+        canvas = self.fig.canvas
+        canvas.restore_region(self.background)
+        renderer = canvas.get_renderer()
+        for ax, artists in self.moving:
+            ax.apply_aspect()
+            for a in artists:
+                if a.get_visible():
+                    a.draw(renderer)
+        return _encode_png(canvas, self.fig.dpi)
 
 
 def bode_overview_figure(panels, suptitle):
@@ -267,11 +301,16 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
     Drawn as vertical bars on a log frequency axis (linear if a frequency is not positive), each labelled with
     its 1-based mode number so the figure can be read beside the report's importance tables.
     """
+    fig = _new_figure(figsize=(7.0, 4.0))
+    _draw_importance(fig.subplots(), freq_hz, importance, kept, title, threshold, band_hz)
+    fig.subplots_adjust(**SINGLE_MARGINS)
+    return fig
+
+
+def _draw_importance(ax, freq_hz, importance, kept, title, threshold, band_hz):
     freq = np.asarray(freq_hz, dtype=float)
     imp = np.asarray(importance, dtype=float)
     kept = np.asarray(kept, dtype=bool)
-    fig = _new_figure(figsize=(7.0, 4.0))
-    ax = fig.subplots()
     log_axis = freq.size > 0 and np.all(freq > 0)
     if log_axis:
         ax.set_xscale("log")
@@ -293,8 +332,35 @@ def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=
     _set_title(ax, title)
     ax.grid(True, which="both", axis="x", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    fig.subplots_adjust(**SINGLE_MARGINS)
-    return fig
+
+
+def importance_pngs(items, dpi=DPI):
+    """PNG bytes of importance_figure(*item) for each item, in order, drawn on one figure whose axes are emptied and
+    drawn again between items: the same pixels as a new figure per item, without building the ticks of its axes
+    again (a log axis over the Krylov modes' decades has some fifty, most of a new figure's drawing time). A figure
+    on a linear axis (a frequency not positive) is drawn on its own."""
+    fig = None
+    for item in items:
+        freq = np.asarray(item[0], dtype=float)
+        if not (freq.size > 0 and np.all(freq > 0)):
+            yield figure_png_bytes(importance_figure(*item), dpi)
+            continue
+        if fig is None:
+            fig = importance_figure(*item)
+        else:
+            ax = fig.axes[0]
+            for artist in ax.lines[:] + ax.collections[:] + ax.texts[:] + ax.patches[:] + [ax.get_legend()]:
+                artist.remove()
+            ax.dataLim.set_points(_bbox_null())      # as a new axes': the next artists' extent alone
+            ax.ignore_existing_data_limits = True
+            ax.set_autoscalex_on(True)
+            _draw_importance(ax, *item)
+        yield figure_png_bytes(fig, dpi)
+
+
+def _bbox_null():
+    from matplotlib.transforms import Bbox
+    return Bbox.null().get_points()
 
 
 def _worst_deviation_per_k(ratios):
@@ -362,10 +428,38 @@ def frf_error_figure(curves, accuracy, title="Relative frequency-response error 
 # ----------------------------------------------------------------------------------------------- output
 
 def figure_png_bytes(fig, dpi=DPI):
-    """The figure rendered as PNG bytes (nothing written to disk)."""
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=dpi, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
-    return buffer.getvalue()
+    """The figure rendered as PNG bytes (nothing written to disk): drawn at dpi on its Agg canvas (what savefig(dpi=)
+    draws), then encoded by _encode_png."""
+    fig.set_dpi(dpi)
+    fig.canvas.draw()
+    return _encode_png(fig.canvas, dpi)
+
+
+def _encode_png(canvas, dpi):
+    """The canvas's pixels as it holds them (not drawn again), encoded as PNG: 8-bit RGBA, every row filtered by
+    PNG's "Up" filter (its difference from the row above, vectorized) and compressed by zlib at level 1. Pillow,
+    which savefig uses, tries all five filters on every row (most of a figure's encoding time, 4x this one's) for
+    files about 2 % smaller; the pixels are the same. The image's resolution (pHYs) and the software that drew it
+    (tEXt) are recorded as matplotlib records them."""
+    import matplotlib
+    rgba = np.asarray(canvas.buffer_rgba())
+    height, width = rgba.shape[:2]
+    rows = rgba.reshape(height, width * 4)
+    filtered = np.empty((height, width * 4 + 1), dtype=np.uint8)
+    filtered[:, 0] = 2                          # the filter type of each row: Up
+    filtered[0, 1:] = rows[0]                   # the row above the first is zero
+    np.subtract(rows[1:], rows[:-1], out=filtered[1:, 1:])      # modulo 256, as PNG's filters are
+    per_metre = int(dpi / 0.0254 + 0.5)
+    software = "Matplotlib version%s, https://matplotlib.org/" % matplotlib.__version__
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+    return b"".join((b"\x89PNG\r\n\x1a\n",
+                     chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)),
+                     chunk(b"pHYs", struct.pack(">IIB", per_metre, per_metre, 1)),
+                     chunk(b"tEXt", b"Software\x00" + software.encode("latin-1")),
+                     chunk(b"IDAT", zlib.compress(filtered.tobytes(), PNG_COMPRESS_LEVEL)),
+                     chunk(b"IEND", b"")))
 
 
 def save_figure(fig, path, dpi=DPI):

@@ -24,7 +24,7 @@ import os
 from ..io.files import Staging
 from ..io.scene_schema import NO_JOINT_LABEL
 from .figures import plot_file_names
-from .helper import render_plots
+from .helper import PlotRendering
 from .schema import _check_json_types, validate_summary
 from .context import _Context, as_summary
 from .sections import _section_accuracy, _section_choice, render_markdown
@@ -46,28 +46,64 @@ def _write_together(out_dir, files):
         staging.discard()
 
 
+class PendingReport:
+    """A report begun (begin_report): its summary validated, its figures' shares sent to the helper processes that
+    draw them meanwhile, summary.json and report.md written into its staging folder. finish() draws what is left
+    here, writes the figures and moves every file into out_dir together (returning their paths); stop() abandons it
+    (the helpers stopped, the staging folder removed, out_dir as it was)."""
+
+    def __init__(self, summary, out_dir, between):
+        if not isinstance(summary, dict):
+            summary = as_summary(summary).to_json()
+        validate_summary(summary)
+        summary = as_summary(summary)
+        self.between, self.staging = between, None
+        plot_names = plot_file_names(summary)
+        # the helpers first, so that they draw while the text below is written and the caller writes its files
+        self.rendering = PlotRendering(summary, plot_names).start()
+        try:
+            os.makedirs(out_dir, exist_ok=True)
+            self.staging = Staging(out_dir)
+            self.staging.create()
+            self._write("summary.json", summary.dumps().encode("utf-8"))
+            self._write("report.md", render_markdown(summary, plot_names).encode("utf-8"))
+        except BaseException:
+            self.stop()
+            raise
+
+    def _write(self, name, data):
+        with open(self.staging.file(name), "wb") as handle:
+            handle.write(data)
+
+    def finish(self):
+        try:
+            for name, data in self.rendering.items(self.between):
+                self._write(name, data)
+            return self.staging.commit()
+        finally:
+            self.stop()
+
+    def stop(self):
+        self.rendering.stop()
+        if self.staging is not None:
+            self.staging.discard()
+
+
+def begin_report(summary, out_dir, between=None):
+    """write_report in two steps, so that the caller can write its own files while the figures are drawn: returns a
+    PendingReport whose finish() writes the report (stop() abandons it). Raises as write_report."""
+    return PendingReport(summary, out_dir, between)
+
+
 def write_report(summary, out_dir, between=None):
     """Write summary.json, report.md and the PNG plots into out_dir; return the written paths.
 
     Raises ReportError (a ValueError) naming the offending key when the summary is incomplete or not plain JSON;
     on any failure no file of this report is left in out_dir (earlier files there are untouched). between: called
-    after each plot (the command stops there when it was interrupted: rendering the plots is the long part).
+    after each plot drawn in this process (the command stops there when it was interrupted: rendering the plots is
+    the long part). The figures are shared with helper processes where cores are free (report/helper.py).
     """
-    if not isinstance(summary, dict):
-        summary = as_summary(summary).to_json()
-    validate_summary(summary)
-    summary = as_summary(summary)
-    text_json = summary.dumps()
-    plot_names = plot_file_names(summary)
-    markdown = render_markdown(summary, plot_names)
-
-    def files():
-        yield "summary.json", text_json.encode("utf-8")
-        yield "report.md", markdown.encode("utf-8")
-        # the figures, a share of them drawn by a helper process where a second core is free (report/helper.py)
-        yield from render_plots(summary, plot_names, between)
-
-    return _write_together(out_dir, files())
+    return begin_report(summary, out_dir, between).finish()
 
 
 def write_unverified(summary, out_dir):

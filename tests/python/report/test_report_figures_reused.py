@@ -45,3 +45,43 @@ def test_one_figure_across_frequency_grids_gives_the_same_pngs():
     assert len(reused) == len(items)
     assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
     assert len(set(fresh)) == len(fresh)
+
+
+def test_png_encoding_keeps_savefigs_pixels():
+    """plots' own PNG encoder (one PNG filter, zlib) gives the pixels and resolution matplotlib's savefig (Pillow)
+    gives for the same figure, on every kind of the report's figures."""
+    import io
+
+    from PIL import Image
+
+    f, pairs = responses()
+    full, red, title = pairs[0]
+    figures = [lambda: plots.bode_figure(f, full, red, title),
+               lambda: plots.bode_overview_figure([("a", f, full, red), ("b", f, red, full)], "overview"),
+               lambda: plots.importance_figure([0.5, 3.1, 40.0], [1.0, 0.2, 1e-3], [True, True, False], "importance",
+                                               threshold=0.01, band_hz=[0.1, 30.0]),
+               lambda: plots.frf_error_figure([("a", f, plots.frf_hinf_error_curve(full, red))], 0.05)]
+    for make in figures:
+        ours = Image.open(io.BytesIO(plots.figure_png_bytes(make())))
+        buffer = io.BytesIO()
+        make().savefig(buffer, format="png", dpi=plots.DPI)
+        theirs = Image.open(io.BytesIO(buffer.getvalue()))
+        assert ours.mode == theirs.mode == "RGBA" and ours.size == theirs.size
+        assert np.array_equal(np.asarray(ours), np.asarray(theirs))
+        assert np.allclose(ours.info["dpi"], theirs.info["dpi"]) and ours.info["Software"] == theirs.info["Software"]
+
+
+def test_reused_importance_figure_gives_the_same_pngs():
+    """The importance figures of several configurations drawn on one figure (plots.importance_pngs) are the PNGs a new
+    figure per configuration gives: modes over other decades (the x limits follow), with and without a threshold,
+    none kept, and one on a linear axis (a zero frequency) in between."""
+    items = [([0.05, 0.9, 3.0, 45.0, 700.0], [1.0, 0.3, 0.02, 1e-4, 0.5], [True, True, False, False, True],
+              "first", 0.01, [0.1, 30.0]),
+             ([2.0, 8.0, 3000.0], [0.2, 1.0, 0.9], [False, True, True], "second", None, [1.0, 10.0]),
+             ([0.0, 2.0, 5.0], [1.0, 0.5, 0.1], [True, False, False], "linear", 0.01, None),
+             ([0.3, 0.4], [0.7, 1.2], [False, False], "none kept", 0.5, [0.2, 0.5])]
+    reused = list(plots.importance_pngs(items))
+    fresh = [plots.figure_png_bytes(plots.importance_figure(*item)) for item in items]
+    assert len(reused) == len(items)
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+    assert len(set(fresh)) == len(fresh)

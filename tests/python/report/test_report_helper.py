@@ -22,13 +22,68 @@ def written(summary, out, monkeypatch, mode):
     return {p.name: p.read_bytes() for p in out.iterdir()}
 
 
-def test_helper_share_splits_the_figures(summary, monkeypatch):
+class _Started:
+    """A stand-in for a helper process in the share computation: what its start still costs."""
+    def __init__(self, start_weight=0.0):
+        self.start_weight = start_weight
+
+
+def test_helper_shares_split_the_figures(summary, monkeypatch):
     jobs = figures.figure_jobs(summary, figures.plot_file_names(summary))
-    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "1")
-    share = helper.helper_share(jobs)
-    assert share and len(share) < len(jobs)             # the helper draws some of the figures, this process the rest
+    everything = set(range(len(jobs)))
+    # 4 cores, one helper: it and this process both draw
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (4, 3.5))
+    (share,) = helper.helper_shares(jobs, [_Started()])
+    assert share and share < everything
+    # as many helpers as cores: they draw every figure between them, this process none (it writes the rest)
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (2, 1.5))
+    a, b = helper.helper_shares(jobs, [_Started(), _Started()])
+    assert a and b and not a & b and a | b == everything
+    weight = {k: jobs[k][0] for k in everything}
+    assert abs(sum(weight[k] for k in a) - sum(weight[k] for k in b)) <= max(weight.values())
+    assert helper.helper_shares(jobs, []) == []
+
+
+def test_helpers_are_not_started_when_turned_off(monkeypatch):
     monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "0")
-    assert helper.helper_share(jobs) == set()
+    assert helper.start_helpers() == 0
+    assert helper._take_helpers() == []
+
+
+def test_helpers_started_ahead_give_the_same_files(summary, tmp_path, monkeypatch):
+    """kryflex reduce starts the helpers as the run starts; the report takes them (none left afterwards)."""
+    alone = written(summary, tmp_path / "alone", monkeypatch, "0")
+    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "1")
+    assert helper.start_helpers() == helper.HELPERS_AHEAD
+    started = [h.proc for h in helper._ahead]
+    pending = report.begin_report(summary, str(tmp_path / "ahead"))
+    assert helper._ahead == [] and len(pending.rendering.helpers) >= 1      # taken, and given work
+    pending.finish()
+    assert {p.name: p.read_bytes() for p in (tmp_path / "ahead").iterdir()} == alone
+    assert all(p.poll() is not None for p in started)                      # ended: done, or stopped unused
+
+
+def test_unused_helpers_end(monkeypatch):
+    """A run that draws no figure (it failed, or estimated its error) stops the helpers it started; a helper whose
+    parent died reads the end of its input and exits by itself."""
+    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "1")
+    helper.start_helpers()
+    procs = [h.proc for h in helper._ahead]
+    helper.stop_helpers()
+    assert helper._ahead == [] and all(p.poll() is not None for p in procs)
+    lone = helper._Helper(start_weight=0.0)
+    lone.proc.stdin.close()                                                # what the parent's exit does
+    assert lone.proc.wait(timeout=60) == 0
+    lone.stop()
+
+
+def test_a_stopped_report_writes_nothing(summary, tmp_path, monkeypatch):
+    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "1")
+    pending = report.begin_report(summary, str(tmp_path / "stopped"))
+    procs = [h.proc for h in pending.rendering.helpers]
+    pending.stop()
+    assert not (tmp_path / "stopped").exists() or not list((tmp_path / "stopped").iterdir())
+    assert all(p.poll() is not None for p in procs)
 
 
 @pytest.mark.fast

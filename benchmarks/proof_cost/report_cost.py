@@ -1,0 +1,98 @@
+"""The report of one summary.json written by two trees side by side (another checkout, e.g. main, and this one), each
+in a fresh Python (the cost kryflex reduce pays: matplotlib's import included), alternating:
+
+- alone:   KRYFLEX_REPORT_HELPER=0, every figure drawn by the process itself;
+- on call: KRYFLEX_REPORT_HELPER=1, write_report starting its helper when called (both trees);
+- ahead:   this tree only: the helpers started first (report.helper.start_helpers, as kryflex reduce does when the run
+           starts) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
+
+Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs' pixels (decoded) compared
+with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall
+figures; on a shared one read the CPU columns.
+
+    .venv/bin/python benchmarks/proof_cost/report_cost.py OUTDIR_OF_A_DEFAULT_RUN --against /work/main [--repeat 3]
+"""
+import argparse, json, os, shutil, subprocess, sys, tempfile, time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+CHILD = r"""
+import json, os, resource, sys, time
+w0 = time.perf_counter()
+from kryflex.results import Summary
+from kryflex import report
+s = Summary.load(sys.argv[1])
+if sys.argv[3] == "ahead":
+    from kryflex.report.helper import start_helpers, _ahead
+    start_helpers()
+    time.sleep(float(sys.argv[4]))          # the reduction's time, during which the helpers load matplotlib
+k0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+c0, t0 = time.process_time(), time.perf_counter()
+report.write_report(s, sys.argv[2])
+c1, t1 = time.process_time(), time.perf_counter()
+k1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps(dict(wall=t1 - t0, cpu=c1 - c0, helpers=(k1.ru_utime - k0.ru_utime) + (k1.ru_stime - k0.ru_stime),
+                      whole_cpu=time.process_time())))
+"""
+
+
+def run(tree, summary_dir, out, mode, settle):
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg", PYTHONPATH=os.path.join(tree, "python"),
+               KRYFLEX_REPORT_HELPER="0" if mode == "alone" else "1")
+    shutil.rmtree(out, ignore_errors=True)
+    t0 = time.perf_counter()
+    p = subprocess.run([os.path.join(tree, ".venv", "bin", "python"), "-c", CHILD, summary_dir, out, mode, str(settle)],
+                       env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if p.returncode:
+        sys.exit("%s %s failed: %s" % (tree, mode, p.stderr[-2000:]))
+    r = json.loads(p.stdout.strip().splitlines()[-1])
+    r["process_wall"] = time.perf_counter() - t0
+    return r
+
+
+def contents(folder):
+    """{file: its pixels (PNG, decoded) or bytes (summary.json, report.md)}."""
+    import numpy as np
+    from PIL import Image
+    return {n: np.asarray(Image.open(os.path.join(folder, n))).tobytes() if n.endswith(".png")
+            else open(os.path.join(folder, n), "rb").read() for n in os.listdir(folder)}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("summary", help="the output folder of a default kryflex reduce (its summary.json)")
+    ap.add_argument("--against", required=True, help="the other checkout's root (its python/ and .venv)")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--settle", type=float, default=3.0, help="seconds the helpers started ahead get to load")
+    ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "kryflex_report_cost"))
+    args = ap.parse_args()
+    trees = [("against", os.path.abspath(args.against), ("alone", "on call")),
+             ("this", ROOT, ("alone", "on call", "ahead"))]
+    print("report of %s, %s UTC, load average %s" % (args.summary, time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+                                                    " ".join("%.1f" % x for x in os.getloadavg())), flush=True)
+    print("%-8s %-8s %8s %8s %8s %8s   load" % ("tree", "mode", "wall", "cpu", "helpers", "cpu sum"))
+    best = {}
+    for rep in range(args.repeat):
+        for name, tree, modes in trees:
+            for mode in modes:
+                out = os.path.join(args.work, "%s_%s" % (name, mode.replace(" ", "_")))
+                r = run(tree, args.summary, out, mode, args.settle)
+                key = (name, mode)
+                best[key] = min(best.get(key, r["wall"]), r["wall"])
+                print("%-8s %-8s %8.2f %8.2f %8.2f %8.2f   %.1f" % (name, mode, r["wall"], r["cpu"], r["helpers"],
+                      r["cpu"] + r["helpers"], os.getloadavg()[0]), flush=True)
+    ref = contents(os.path.join(args.work, "against_alone"))
+    for name, _, modes in trees:
+        for mode in modes:
+            folder = os.path.join(args.work, "%s_%s" % (name, mode.replace(" ", "_")))
+            got = contents(folder)
+            same = sorted(got) == sorted(ref) and all(got[n] == ref[n] for n in ref)
+            size = sum(os.path.getsize(os.path.join(folder, n)) for n in got if n.endswith(".png"))
+            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files, the against tree's pixels and "
+                  "text: %s; PNGs %.2f MB" % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")],
+                                    len(got), same, size / 1e6))
+
+
+if __name__ == "__main__":
+    main()

@@ -560,8 +560,7 @@ class Summary(Record):
 
     def dumps(self):
         """summary.json's text."""
-        from .io.json_text import dumps_indented
-        return dumps_indented(self.to_json()) + "\n"
+        return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"
 
     # ------------------------------------------------------------------ views
 

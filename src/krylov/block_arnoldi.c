@@ -79,52 +79,6 @@ static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x,
   PetscFunctionReturn(0);
 }
 
-/* Row chunk of the skinny products below: a chunk of the block (ROWS x p) stays in cache while every basis column
-   meets it, and each operand is read once from memory in order. A whole-height BLAS gemm of a tall basis with a block
-   of 1-8 columns copies (packs) the basis into a buffer before using it for 2-16 flops per entry: on this
-   bandwidth-bound product the copy was half of the Gram-Schmidt's time (perf, 200k-dof panel scene). */
-#define KF_SKINNY_ROWS 2048
-
-/* out (nc x p, leading dimension ldo) += A^T X over local rows, A nl x nc (lda), X nl x p (ldx), chunk by chunk */
-static PetscErrorCode KFSkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *x, PetscInt ldx, PetscScalar *out, PetscInt ldo)
-{
-  PetscBLASInt bc, bp, bm, bla, blx, blo;
-  PetscScalar  one = 1.0;
-
-  PetscFunctionBegin;
-  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscBLASIntCast(nc, &bc));
-  PetscCall(PetscBLASIntCast(p, &bp));
-  PetscCall(PetscBLASIntCast(lda, &bla));
-  PetscCall(PetscBLASIntCast(ldx, &blx));
-  PetscCall(PetscBLASIntCast(ldo, &blo));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
-    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bc, &bp, &bm, &one, a + i0, &bla, x + i0, &blx, &one, out, &blo));
-  }
-  PetscFunctionReturn(0);
-}
-
-/* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
-static PetscErrorCode KFSkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
-{
-  PetscBLASInt bc, bp, bm, bla, blx, blc;
-  PetscScalar  one = 1.0;
-
-  PetscFunctionBegin;
-  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscBLASIntCast(nc, &bc));
-  PetscCall(PetscBLASIntCast(p, &bp));
-  PetscCall(PetscBLASIntCast(lda, &bla));
-  PetscCall(PetscBLASIntCast(ldx, &blx));
-  PetscCall(PetscBLASIntCast(ldc, &blc));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
-    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &one, x + i0, &blx));
-  }
-  PetscFunctionReturn(0);
-}
-
 /* The coefficients c ((r + k) x p, column-major, rigid rows first, replicated) of the block w (nl x p) against the
    rigid modes and the basis columns: [Phi V]^T (M w) from mw = M w, or with mw NULL from the kept products,
    (M [Phi V])^T w: a first pass needs no product of w with M. One reduction over the ranks. */
@@ -136,9 +90,9 @@ static PetscErrorCode KFMBasisCoefficients(const KFRigidSpace *rs, const KFMBasi
 
   PetscFunctionBegin;
   PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
-  if (r) PetscCall(KFSkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
+  if (r) PetscCall(KFArraySkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
   PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(KFSkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
+  PetscCall(KFArraySkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
   PetscCall(BVRestoreArrayRead(mb->V, &v));
   PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)mb->V)));
   PetscCall(PetscFree(loc));
@@ -154,13 +108,13 @@ static PetscErrorCode KFMBasisSubtract(const KFRigidSpace *rs, const KFMBasis *m
 
   PetscFunctionBegin;
   if (r) {
-    PetscCall(KFSkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
-    if (mw) PetscCall(KFSkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
+    PetscCall(KFArraySkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
+    if (mw) PetscCall(KFArraySkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
   }
   PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(KFSkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
   PetscCall(BVRestoreArrayRead(mb->V, &v));
-  if (mw) PetscCall(KFSkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
+  if (mw) PetscCall(KFArraySkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
   PetscFunctionReturn(0);
 }
 
@@ -353,8 +307,8 @@ static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar
 {
   PetscFunctionBegin;
   PetscCall(PetscArrayzero(out, nl * q));
-  PetscCall(KFSkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
-  PetscCall(KFSkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
   PetscFunctionReturn(0);
 }
 
@@ -400,8 +354,8 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
   PetscCall(PetscCalloc2(m * p + 1, &g, m * m + 1, &f));
   PetscCall(MatDenseGetLDA(W, &ld));
   PetscCall(MatDenseGetArrayRead(W, &w));
-  PetscCall(KFSkinnyTransposeMult(nl, mu, cc->MU, nl, p, w + j0 * ld, ld, g, m));
-  PetscCall(KFSkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
+  PetscCall(KFArraySkinnyTransposeMult(nl, mu, cc->MU, nl, p, w + j0 * ld, ld, g, m));
+  PetscCall(KFArraySkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
   PetscCall(MatDenseRestoreArrayRead(W, &w));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, g, (PetscMPIInt)(m * p), MPIU_SCALAR, MPIU_SUM, comm));
   /* M-orthonormal in these coordinates (those of M-orthonormal vectors), a column dropped as the chain's own
@@ -413,8 +367,8 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
     PetscCall(MatDenseGetLDA(*MY, &ld));
     PetscCall(MatDenseGetArrayWrite(*MY, &my));
     PetscCall(PetscArrayzero(my, ld * nq));
-    PetscCall(KFSkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
-    PetscCall(KFSkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
+    PetscCall(KFArraySkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
+    PetscCall(KFArraySkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));

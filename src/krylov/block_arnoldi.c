@@ -9,6 +9,9 @@ typedef struct {
   BV           V;
   PetscScalar *MV;
   PetscInt     k, nl;
+  PetscScalar *work; /* the appended block and its product (2 x nl x wcap): kept from block to block, since a fresh
+                        allocation of that size is fresh pages, faulted in and zeroed by the system at every block */
+  PetscInt     wcap;
 } KFMBasis;
 
 /* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
@@ -51,10 +54,21 @@ static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
 
   PetscFunctionBegin;
   PetscCall(BVGetSizes(V, &nl, NULL, &m));
-  mb->V  = V;
-  mb->k  = 0;
-  mb->nl = nl;
+  mb->V    = V;
+  mb->k    = 0;
+  mb->nl   = nl;
+  mb->work = NULL;
+  mb->wcap = 0;
   PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFMBasisDestroy(KFMBasis *mb)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(mb->MV));
+  PetscCall(PetscFree(mb->work));
+  mb->wcap = 0;
   PetscFunctionReturn(0);
 }
 
@@ -161,8 +175,9 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
    after the pass before: pass 2 sees pass 1's rounding in w itself, which is what makes it a refinement (DGKS: a Krylov
    block loses 35-99 % of its M-norm in pass 1, so the second pass is needed). No product of w with M until the end:
    mw is formed once from the final block, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal).
+   nrm: each column's M-norm after the passes.
    Each pass reads the basis twice (the kept products, then the columns). */
-static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[])
+static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[], PetscReal nrm[])
 {
   const PetscInt nl   = mb->nl;
   MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
@@ -173,8 +188,8 @@ static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, Petsc
   PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn1)); /* pass 1 */
   PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 2 */
   PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
-  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn1[j] + cn2[j]);
+  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm));
+  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm[j] * nrm[j] + cn1[j] + cn2[j]);
   PetscCall(PetscFree2(cn1, cn2));
   PetscFunctionReturn(0);
 }
@@ -197,16 +212,23 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscScalar       *w, *mw;
   const PetscScalar *src;
   PetscInt           ld;
-  PetscReal         *nrm0, mnorm = rs->mnorm;
+  PetscReal         *nrm0, *nrm, mnorm = rs->mnorm;
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscMalloc3(nl * p + 1, &w, nl * p + 1, &mw, p, &nrm0));
+  if (p > mb->wcap) {
+    PetscCall(PetscFree(mb->work));
+    PetscCall(PetscMalloc1(2 * nl * p + 1, &mb->work));
+    mb->wcap = p;
+  }
+  w  = mb->work;
+  mw = mb->work + nl * p;
+  PetscCall(PetscMalloc2(p, &nrm0, p, &nrm));
   PetscCall(MatDenseGetLDA(W, &ld));
   PetscCall(MatDenseGetArrayRead(W, &src));
   for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
   PetscCall(MatDenseRestoreArrayRead(W, &src));
-  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0));
+  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0, nrm));
   if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
@@ -216,7 +238,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       (*ndeflated)++;
       continue;
     }
-    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &nb));
+    nb = na = nrm[j]; /* as the passes left it: the block's own columns not yet taken out */
     if (mb->k > k0) { /* the block's columns kept so far: the trailing columns of the basis */
       const PetscInt kb = mb->k - k0;
       PetscReal     *c;
@@ -229,8 +251,8 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       PetscCall(BVRestoreArrayRead(mb->V, &vb));
       PetscCall(KFArrayMultSmall(nl, kb, 1, mb->MV + k0 * nl, nl, c, -1.0, mwj, nl));
       PetscCall(PetscFree(c));
+      PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     }
-    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     if (na > tol * nrm0[j] && na < PETSC_SQRT2 / 2 * nb) { /* cancellation within the block: refine with a fresh product */
       PetscCall(KFMProduct(Ms, nl, 1, wj, mwj));
       PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE, NULL));
@@ -259,7 +281,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     mb->k++;
   }
   PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
-  PetscCall(PetscFree3(w, mw, nrm0));
+  PetscCall(PetscFree2(nrm0, nrm));
   PetscFunctionReturn(0);
 }
 
@@ -600,7 +622,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
-  PetscCall(PetscFree(basis.MV));
+  PetscCall(KFMBasisDestroy(&basis));
   PetscCall(BVSetActiveColumns(V, 0, k));
   info->ndeflated = ndefl;
   *Vout           = V;
@@ -641,7 +663,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   }
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
-  PetscCall(PetscFree(basis.MV));
+  PetscCall(KFMBasisDestroy(&basis));
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   info->ndeflated = ndefl;
   *Vout           = V;

@@ -66,23 +66,24 @@ static void KFRigidCandidateMotion(KFSystem y, PetscInt b, PetscInt m, PetscReal
   }
 }
 
-/* Value at (node, component comp) of body B of the body-frame motion (tb, wb): that combination of the body's 6
-   motions (KFBodyRigidValue; scalar points included) */
-static PetscReal KFRigidMotionValue(const KFBodyData *B, PetscInt node, PetscInt comp, const PetscReal tb[3], const PetscReal wb[3])
+/* Value at one dof of the body-frame motion (tb, wb), from the values R[0..5] of the body's 6 motions there
+   (KFBodyRigidValue; scalar points included) */
+static PetscReal KFRigidMotionValue(const PetscReal R[6], const PetscReal tb[3], const PetscReal wb[3])
 {
   PetscReal val = 0;
 
-  for (int c = 0; c < 3; c++) val += tb[c] * KFBodyRigidValue(B, node, comp, c) + wb[c] * KFBodyRigidValue(B, node, comp, 3 + c);
+  for (int c = 0; c < 3; c++) val += tb[c] * R[c] + wb[c] * R[3 + c];
   return val;
 }
 
 /* Value at (body b, node, component comp) of candidate m */
 static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, PetscInt comp, PetscInt m)
 {
-  PetscReal tb[3], wb[3];
+  PetscReal tb[3], wb[3], R[6];
 
   KFRigidCandidateMotion(y, b, m, tb, wb);
-  return KFRigidMotionValue(&y->scene->bodies[b], node, comp, tb, wb);
+  for (PetscInt c = 0; c < 6; c++) R[c] = KFBodyRigidValue(&y->scene->bodies[b], node, comp, c);
+  return KFRigidMotionValue(R, tb, wb);
 }
 
 /* The independent combinations of the columns of C (a dof layout without some components sees some candidates not
@@ -142,10 +143,12 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
     KFBodyData *B = &s->bodies[b];
     for (PetscInt m = 0; m < ncand; m++) KFRigidCandidateMotion(y, b, m, &motion[6 * m], &motion[6 * m + 3]);
     for (PetscInt i = B->rstart; i < B->rend; i++) {
-      PetscInt sys = B->sysidx[i - B->rstart], node, comp;
+      PetscInt  sys = B->sysidx[i - B->rstart], node, comp;
+      PetscReal R[6];
       if (sys < 0) continue;
       PetscCall(KFBodyDofComponent(B, i, &node, &comp));
-      for (PetscInt m = 0; m < ncand; m++) a[(sys - s->sys_rstart) + m * lda] = KFRigidMotionValue(B, node, comp, &motion[6 * m], &motion[6 * m + 3]);
+      for (PetscInt c = 0; c < 6; c++) R[c] = KFBodyRigidValue(B, node, comp, c);
+      for (PetscInt m = 0; m < ncand; m++) a[(sys - s->sys_rstart) + m * lda] = KFRigidMotionValue(R, &motion[6 * m], &motion[6 * m + 3]);
     }
   }
   PetscCall(PetscFree(motion));
@@ -366,7 +369,7 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscFunctionBegin;
   *res = 0;
   if (!y->nrigid) PetscFunctionReturn(0);
-  PetscCall(MatMatMult(y->Ks, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KP));
+  PetscCall(KFMatMultDense(y->Ks, y->Phi, &KP)); /* MatMatMult's sums, one read of K per 8 columns */
   PetscCall(MatNorm(KP, NORM_FROBENIUS, &nKP));
   PetscCall(MatNorm(y->Ks, NORM_FROBENIUS, &nK));
   PetscCall(MatNorm(y->Phi, NORM_FROBENIUS, &nP));

@@ -246,8 +246,9 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
 
 /* One pass: X = K+ B with the factor: loads made self-equilibrated, held dofs at zero, a block solve, the result
    projected onto the flexible subspace (M-orthogonal to the rigid modes). PB, when asked for, receives the
-   self-equilibrated loads P B (the residual's right-hand side: formed once per block, not again per residual). */
-static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, Mat *PB)
+   self-equilibrated loads P B (the residual's right-hand side: formed once per block, not again per residual).
+   consume: B is the caller's scratch (a residual about to be destroyed), projected and held in place, not copied. */
+static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, Mat *PB, PetscBool consume)
 {
   KFSystem     sys = solver->sys;
   Mat          W;
@@ -255,7 +256,8 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, M
   PetscInt     rstart, rend, p, lda;
 
   PetscFunctionBegin;
-  PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &W));
+  if (consume) W = B;
+  else PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &W));
   PetscCall(KFProjectFlexible(sys, W, PETSC_TRUE));
   PetscCall(MatGetSize(W, NULL, &p));
   if (solver->nheld) { /* the held rows at zero for the solve, their values kept for P B */
@@ -295,7 +297,7 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, M
   }
   PetscCall(PetscFree(held));
   if (PB) *PB = W;
-  else PetscCall(MatDestroy(&W));
+  else if (!consume) PetscCall(MatDestroy(&W));
   PetscFunctionReturn(0);
 }
 
@@ -324,7 +326,7 @@ static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat PB, PetscReal 
   PetscFunctionBegin;
   for (PetscInt it = 0; it < maxit && *rel > solver->refine_rtol && *rel < shrink * before; it++) {
     PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
-    PetscCall(KFFlexSolverSolveOnce(solver, *R, dX, NULL));
+    PetscCall(KFFlexSolverSolveOnce(solver, *R, dX, NULL, PETSC_TRUE));
     solver->perf.refinement_solves++;
     PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
     PetscCall(MatDestroy(&dX));
@@ -357,7 +359,7 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(PetscLogEventBegin(KF_EVENT_SOLVE, 0, 0, 0, 0));
   check = (PetscBool)(solver->refine > 0 && solver->shift == 0);
-  PetscCall(KFFlexSolverSolveOnce(solver, B, X, check ? &PB : NULL));
+  PetscCall(KFFlexSolverSolveOnce(solver, B, X, check ? &PB : NULL, PETSC_FALSE));
   solver->perf.blocks++;
   if (check) {
     PetscCall(MatNorm(PB, NORM_FROBENIUS, &nb));
@@ -374,7 +376,7 @@ PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
       else refactored = PETSC_FALSE;
       if (refactored) {
         PetscCall(MatDestroy(&R));
-        PetscCall(KFFlexSolverSolveOnce(solver, B, X, NULL));
+        PetscCall(KFFlexSolverSolveOnce(solver, B, X, NULL, PETSC_FALSE));
         PetscCall(KFFlexSolverResidual(solver, PB, nb, X, &R, &rel));
         PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, 4 * solver->refine + 10, 0.9));
       }

@@ -9,6 +9,9 @@ typedef struct {
   BV           V;
   PetscScalar *MV;
   PetscInt     k, nl;
+  PetscScalar *work; /* the appended block and its product (2 x nl x wcap): kept from block to block, since a fresh
+                        allocation of that size is fresh pages, faulted in and zeroed by the system at every block */
+  PetscInt     wcap;
 } KFMBasis;
 
 /* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
@@ -51,10 +54,21 @@ static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
 
   PetscFunctionBegin;
   PetscCall(BVGetSizes(V, &nl, NULL, &m));
-  mb->V  = V;
-  mb->k  = 0;
-  mb->nl = nl;
+  mb->V    = V;
+  mb->k    = 0;
+  mb->nl   = nl;
+  mb->work = NULL;
+  mb->wcap = 0;
   PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFMBasisDestroy(KFMBasis *mb)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(mb->MV));
+  PetscCall(PetscFree(mb->work));
+  mb->wcap = 0;
   PetscFunctionReturn(0);
 }
 
@@ -79,52 +93,6 @@ static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x,
   PetscFunctionReturn(0);
 }
 
-/* Row chunk of the skinny products below: a chunk of the block (ROWS x p) stays in cache while every basis column
-   meets it, and each operand is read once from memory in order. A whole-height BLAS gemm of a tall basis with a block
-   of 1-8 columns copies (packs) the basis into a buffer before using it for 2-16 flops per entry: on this
-   bandwidth-bound product the copy was half of the Gram-Schmidt's time (perf, 200k-dof panel scene). */
-#define KF_SKINNY_ROWS 2048
-
-/* out (nc x p, leading dimension ldo) += A^T X over local rows, A nl x nc (lda), X nl x p (ldx), chunk by chunk */
-static PetscErrorCode KFSkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *x, PetscInt ldx, PetscScalar *out, PetscInt ldo)
-{
-  PetscBLASInt bc, bp, bm, bla, blx, blo;
-  PetscScalar  one = 1.0;
-
-  PetscFunctionBegin;
-  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscBLASIntCast(nc, &bc));
-  PetscCall(PetscBLASIntCast(p, &bp));
-  PetscCall(PetscBLASIntCast(lda, &bla));
-  PetscCall(PetscBLASIntCast(ldx, &blx));
-  PetscCall(PetscBLASIntCast(ldo, &blo));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
-    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bc, &bp, &bm, &one, a + i0, &bla, x + i0, &blx, &one, out, &blo));
-  }
-  PetscFunctionReturn(0);
-}
-
-/* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
-static PetscErrorCode KFSkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
-{
-  PetscBLASInt bc, bp, bm, bla, blx, blc;
-  PetscScalar  one = 1.0;
-
-  PetscFunctionBegin;
-  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscBLASIntCast(nc, &bc));
-  PetscCall(PetscBLASIntCast(p, &bp));
-  PetscCall(PetscBLASIntCast(lda, &bla));
-  PetscCall(PetscBLASIntCast(ldx, &blx));
-  PetscCall(PetscBLASIntCast(ldc, &blc));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
-    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &one, x + i0, &blx));
-  }
-  PetscFunctionReturn(0);
-}
-
 /* The coefficients c ((r + k) x p, column-major, rigid rows first, replicated) of the block w (nl x p) against the
    rigid modes and the basis columns: [Phi V]^T (M w) from mw = M w, or with mw NULL from the kept products,
    (M [Phi V])^T w: a first pass needs no product of w with M. One reduction over the ranks. */
@@ -136,9 +104,9 @@ static PetscErrorCode KFMBasisCoefficients(const KFRigidSpace *rs, const KFMBasi
 
   PetscFunctionBegin;
   PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
-  if (r) PetscCall(KFSkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
+  if (r) PetscCall(KFArraySkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
   PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(KFSkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
+  PetscCall(KFArraySkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
   PetscCall(BVRestoreArrayRead(mb->V, &v));
   PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)mb->V)));
   PetscCall(PetscFree(loc));
@@ -154,13 +122,13 @@ static PetscErrorCode KFMBasisSubtract(const KFRigidSpace *rs, const KFMBasis *m
 
   PetscFunctionBegin;
   if (r) {
-    PetscCall(KFSkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
-    if (mw) PetscCall(KFSkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
+    PetscCall(KFArraySkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
+    if (mw) PetscCall(KFArraySkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
   }
   PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(KFSkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
   PetscCall(BVRestoreArrayRead(mb->V, &v));
-  if (mw) PetscCall(KFSkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
+  if (mw) PetscCall(KFArraySkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
   PetscFunctionReturn(0);
 }
 
@@ -207,8 +175,9 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
    after the pass before: pass 2 sees pass 1's rounding in w itself, which is what makes it a refinement (DGKS: a Krylov
    block loses 35-99 % of its M-norm in pass 1, so the second pass is needed). No product of w with M until the end:
    mw is formed once from the final block, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal).
+   nrm: each column's M-norm after the passes.
    Each pass reads the basis twice (the kept products, then the columns). */
-static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[])
+static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[], PetscReal nrm[])
 {
   const PetscInt nl   = mb->nl;
   MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
@@ -219,8 +188,8 @@ static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, Petsc
   PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn1)); /* pass 1 */
   PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 2 */
   PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
-  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm0));
-  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn1[j] + cn2[j]);
+  PetscCall(KFMNorms(comm, nl, p, w, mw, nrm));
+  for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm[j] * nrm[j] + cn1[j] + cn2[j]);
   PetscCall(PetscFree2(cn1, cn2));
   PetscFunctionReturn(0);
 }
@@ -243,16 +212,23 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscScalar       *w, *mw;
   const PetscScalar *src;
   PetscInt           ld;
-  PetscReal         *nrm0, mnorm = rs->mnorm;
+  PetscReal         *nrm0, *nrm, mnorm = rs->mnorm;
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscMalloc3(nl * p + 1, &w, nl * p + 1, &mw, p, &nrm0));
+  if (p > mb->wcap) {
+    PetscCall(PetscFree(mb->work));
+    PetscCall(PetscMalloc1(2 * nl * p + 1, &mb->work));
+    mb->wcap = p;
+  }
+  w  = mb->work;
+  mw = mb->work + nl * p;
+  PetscCall(PetscMalloc2(p, &nrm0, p, &nrm));
   PetscCall(MatDenseGetLDA(W, &ld));
   PetscCall(MatDenseGetArrayRead(W, &src));
   for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
   PetscCall(MatDenseRestoreArrayRead(W, &src));
-  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0));
+  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0, nrm));
   if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
@@ -262,7 +238,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       (*ndeflated)++;
       continue;
     }
-    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &nb));
+    nb = na = nrm[j]; /* as the passes left it: the block's own columns not yet taken out */
     if (mb->k > k0) { /* the block's columns kept so far: the trailing columns of the basis */
       const PetscInt kb = mb->k - k0;
       PetscReal     *c;
@@ -275,8 +251,8 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       PetscCall(BVRestoreArrayRead(mb->V, &vb));
       PetscCall(KFArrayMultSmall(nl, kb, 1, mb->MV + k0 * nl, nl, c, -1.0, mwj, nl));
       PetscCall(PetscFree(c));
+      PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     }
-    PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     if (na > tol * nrm0[j] && na < PETSC_SQRT2 / 2 * nb) { /* cancellation within the block: refine with a fresh product */
       PetscCall(KFMProduct(Ms, nl, 1, wj, mwj));
       PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE, NULL));
@@ -305,7 +281,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     mb->k++;
   }
   PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
-  PetscCall(PetscFree3(w, mw, nrm0));
+  PetscCall(PetscFree2(nrm0, nrm));
   PetscFunctionReturn(0);
 }
 
@@ -353,8 +329,8 @@ static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar
 {
   PetscFunctionBegin;
   PetscCall(PetscArrayzero(out, nl * q));
-  PetscCall(KFSkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
-  PetscCall(KFSkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
+  PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
   PetscFunctionReturn(0);
 }
 
@@ -400,8 +376,8 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
   PetscCall(PetscCalloc2(m * p + 1, &g, m * m + 1, &f));
   PetscCall(MatDenseGetLDA(W, &ld));
   PetscCall(MatDenseGetArrayRead(W, &w));
-  PetscCall(KFSkinnyTransposeMult(nl, mu, cc->MU, nl, p, w + j0 * ld, ld, g, m));
-  PetscCall(KFSkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
+  PetscCall(KFArraySkinnyTransposeMult(nl, mu, cc->MU, nl, p, w + j0 * ld, ld, g, m));
+  PetscCall(KFArraySkinnyTransposeMult(nl, pb, mb->MV + k0 * nl, nl, p, w + j0 * ld, ld, g + mu, m));
   PetscCall(MatDenseRestoreArrayRead(W, &w));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, g, (PetscMPIInt)(m * p), MPIU_SCALAR, MPIU_SUM, comm));
   /* M-orthonormal in these coordinates (those of M-orthonormal vectors), a column dropped as the chain's own
@@ -413,8 +389,8 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
     PetscCall(MatDenseGetLDA(*MY, &ld));
     PetscCall(MatDenseGetArrayWrite(*MY, &my));
     PetscCall(PetscArrayzero(my, ld * nq));
-    PetscCall(KFSkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
-    PetscCall(KFSkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
+    PetscCall(KFArraySkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
+    PetscCall(KFArraySkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
@@ -646,7 +622,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
-  PetscCall(PetscFree(basis.MV));
+  PetscCall(KFMBasisDestroy(&basis));
   PetscCall(BVSetActiveColumns(V, 0, k));
   info->ndeflated = ndefl;
   *Vout           = V;
@@ -687,7 +663,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   }
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
-  PetscCall(PetscFree(basis.MV));
+  PetscCall(KFMBasisDestroy(&basis));
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   info->ndeflated = ndefl;
   *Vout           = V;

@@ -23,16 +23,17 @@ static PetscBool InSubtree(KFScene s, PetscInt b, PetscInt j)
   return PETSC_FALSE;
 }
 
-/* Value at (body b, node, component comp) of candidate m: 0-2 translations, 3-5 rotations about the root frame's
-   axes, 6+ the rotation of revolute joint m-6's child subtree about the joint axis. On body b the candidate is a
-   body-frame rigid motion, translation t_b at the body origin and rotation w_b: its value at any dof (scalar points
-   included) is that combination of the body's 6 motions (KFBodyRigidValue). */
-static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, PetscInt comp, PetscInt m)
+/* Candidate m on body b as a body-frame rigid motion: translation tb at the body origin and rotation wb (0-2
+   translations, 3-5 rotations about the root frame's axes, 6+ the rotation of revolute joint m-6's child subtree
+   about the joint axis; zero when body b is not in that subtree). It depends on the body and the candidate only,
+   so it is formed once per pair, not once per dof. */
+static void KFRigidCandidateMotion(KFSystem y, PetscInt b, PetscInt m, PetscReal tb[3], PetscReal wb[3])
 {
   KFScene   s = y->scene;
   PetscReal *Q = y->Q[b], *o = y->o[b];
-  PetscReal  t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, anchor[3] = {0, 0, 0}, d[3], disp[3], val = 0;
+  PetscReal  t[3] = {0, 0, 0}, w[3] = {0, 0, 0}, anchor[3] = {0, 0, 0}, d[3], disp[3];
 
+  for (int c = 0; c < 3; c++) tb[c] = wb[c] = 0;
   if (m < 3) t[m] = 1;
   else if (m < 6) w[m - 3] = 1;
   else {
@@ -40,7 +41,7 @@ static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, Pe
     PetscInt j;
     for (j = 0; j < s->nj; j++)
       if (s->joints[j].revolute == m - 6) break;
-    if (!InSubtree(s, b, j)) return 0;
+    if (!InSubtree(s, b, j)) return;
     {
       KFJointData *J  = &s->joints[j];
       KFBodyData  *Pb = &s->bodies[J->parent];
@@ -58,14 +59,31 @@ static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, Pe
   Cross(w, d, disp);
   for (int c = 0; c < 3; c++) disp[c] += t[c]; /* the motion of the body origin */
   for (int c = 0; c < 3; c++) { /* in the body frame: Q^T */
-    PetscReal tb = 0, wb = 0;
     for (int k = 0; k < 3; k++) {
-      tb += Q[k + 3 * c] * disp[k];
-      wb += Q[k + 3 * c] * w[k];
+      tb[c] += Q[k + 3 * c] * disp[k];
+      wb[c] += Q[k + 3 * c] * w[k];
     }
-    val += tb * KFBodyRigidValue(&s->bodies[b], node, comp, c) + wb * KFBodyRigidValue(&s->bodies[b], node, comp, 3 + c);
   }
+}
+
+/* Value at one dof of the body-frame motion (tb, wb), from the values R[0..5] of the body's 6 motions there
+   (KFBodyRigidValue; scalar points included) */
+static PetscReal KFRigidMotionValue(const PetscReal R[6], const PetscReal tb[3], const PetscReal wb[3])
+{
+  PetscReal val = 0;
+
+  for (int c = 0; c < 3; c++) val += tb[c] * R[c] + wb[c] * R[3 + c];
   return val;
+}
+
+/* Value at (body b, node, component comp) of candidate m */
+static PetscReal KFRigidCandidateValue(KFSystem y, PetscInt b, PetscInt node, PetscInt comp, PetscInt m)
+{
+  PetscReal tb[3], wb[3], R[6];
+
+  KFRigidCandidateMotion(y, b, m, tb, wb);
+  for (PetscInt c = 0; c < 6; c++) R[c] = KFBodyRigidValue(&y->scene->bodies[b], node, comp, c);
+  return KFRigidMotionValue(R, tb, wb);
 }
 
 /* The independent combinations of the columns of C (a dof layout without some components sees some candidates not
@@ -111,7 +129,7 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
   KFScene      s = y->scene;
   PetscInt     ncand = 6 + s->nrevolute, lda, nbc = 0, r, row = 0;
   PetscScalar *a;
-  PetscReal   *D, *Z, scale2;
+  PetscReal   *D, *Z, scale2, *motion;
   Mat          C;
 
   PetscFunctionBegin;
@@ -120,15 +138,20 @@ static PetscErrorCode KFSystemRigidFromGeometry(KFSystem y, Mat *Phi)
   PetscCall(MatDenseGetArrayWrite(C, &a));
   for (PetscInt m = 0; m < ncand; m++)
     for (PetscInt i = 0; i < s->nsys_local; i++) a[i + m * lda] = 0;
+  PetscCall(PetscMalloc1(6 * ncand, &motion));
   for (PetscInt b = 0; b < s->nb; b++) {
     KFBodyData *B = &s->bodies[b];
+    for (PetscInt m = 0; m < ncand; m++) KFRigidCandidateMotion(y, b, m, &motion[6 * m], &motion[6 * m + 3]);
     for (PetscInt i = B->rstart; i < B->rend; i++) {
-      PetscInt sys = B->sysidx[i - B->rstart], node, comp;
+      PetscInt  sys = B->sysidx[i - B->rstart], node, comp;
+      PetscReal R[6];
       if (sys < 0) continue;
       PetscCall(KFBodyDofComponent(B, i, &node, &comp));
-      for (PetscInt m = 0; m < ncand; m++) a[(sys - s->sys_rstart) + m * lda] = KFRigidCandidateValue(y, b, node, comp, m);
+      for (PetscInt c = 0; c < 6; c++) R[c] = KFBodyRigidValue(B, node, comp, c);
+      for (PetscInt m = 0; m < ncand; m++) a[(sys - s->sys_rstart) + m * lda] = KFRigidMotionValue(R, &motion[6 * m], &motion[6 * m + 3]);
     }
   }
+  PetscCall(PetscFree(motion));
   for (PetscInt j = 0; j < s->nj; j++) {
     PetscInt beta = s->joints[j].beta;
     if (beta >= s->sys_rstart && beta < s->sys_rstart + s->nsys_local) a[(beta - s->sys_rstart) + (6 + s->joints[j].revolute) * lda] = 1.0;
@@ -346,7 +369,7 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscFunctionBegin;
   *res = 0;
   if (!y->nrigid) PetscFunctionReturn(0);
-  PetscCall(MatMatMult(y->Ks, y->Phi, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &KP));
+  PetscCall(KFMatMultDense(y->Ks, y->Phi, &KP)); /* MatMatMult's sums, one read of K per 8 columns */
   PetscCall(MatNorm(KP, NORM_FROBENIUS, &nKP));
   PetscCall(MatNorm(y->Ks, NORM_FROBENIUS, &nK));
   PetscCall(MatNorm(y->Phi, NORM_FROBENIUS, &nP));
@@ -501,23 +524,32 @@ PetscErrorCode KFSystemGetMPhi(KFSystem y, Mat *MPhi)
 
 PetscErrorCode KFProjectFlexible(KFSystem y, Mat X, PetscBool left)
 {
-  Mat        MPhi;
-  PetscInt   r, p;
-  PetscReal *c;
+  Mat                MPhi;
+  PetscInt           r, p, nl, ldx, ldp, ldmp;
+  PetscReal         *c;
+  PetscScalar       *x;
+  const PetscScalar *phi, *mphi;
 
   PetscFunctionBegin;
   PetscCall(KFSystemGetMPhi(y, &MPhi));
   if (!MPhi) PetscFunctionReturn(0); /* clamped: every motion is flexible */
   PetscCall(MatGetSize(y->Phi, NULL, &r));
   PetscCall(MatGetSize(X, NULL, &p));
-  PetscCall(PetscMalloc1(r * p, &c));
-  if (!left) {
-    PetscCall(KFMatTransposeMatMultGather(y->MPhi, X, c)); /* Phi^T M X */
-    PetscCall(KFDenseMultSmall(y->Phi, r, p, c, -1.0, X)); /* X -= Phi c */
-  } else {
-    PetscCall(KFMatTransposeMatMultGather(y->Phi, X, c));   /* Phi^T X */
-    PetscCall(KFDenseMultSmall(y->MPhi, r, p, c, -1.0, X)); /* X -= M Phi c */
-  }
+  PetscCall(MatGetLocalSize(X, &nl, NULL));
+  PetscCall(PetscCalloc1(r * p + 1, &c));
+  PetscCall(MatDenseGetLDA(X, &ldx));
+  PetscCall(MatDenseGetLDA(y->Phi, &ldp));
+  PetscCall(MatDenseGetLDA(MPhi, &ldmp));
+  PetscCall(MatDenseGetArray(X, &x));
+  PetscCall(MatDenseGetArrayRead(y->Phi, &phi));
+  PetscCall(MatDenseGetArrayRead(MPhi, &mphi));
+  /* a block of a few columns against r rigid modes: row chunk by row chunk (no packing of the tall Phi, M Phi) */
+  PetscCall(KFArraySkinnyTransposeMult(nl, r, left ? phi : mphi, left ? ldp : ldmp, p, x, ldx, c, r)); /* Phi^T X or Phi^T M X */
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, c, (PetscMPIInt)(r * p), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)X)));
+  PetscCall(KFArraySkinnyMultAdd(nl, r, left ? mphi : phi, left ? ldmp : ldp, p, -1.0, c, r, x, ldx)); /* X -= M Phi c or Phi c */
+  PetscCall(MatDenseRestoreArrayRead(MPhi, &mphi));
+  PetscCall(MatDenseRestoreArrayRead(y->Phi, &phi));
+  PetscCall(MatDenseRestoreArray(X, &x));
   PetscCall(PetscFree(c));
   PetscFunctionReturn(0);
 }

@@ -245,32 +245,39 @@ PetscErrorCode KFFlexSolverSetUp(KFFlexSolver solver)
 }
 
 /* One pass: X = K+ B with the factor: loads made self-equilibrated, held dofs at zero, a block solve, the result
-   projected onto the flexible subspace (M-orthogonal to the rigid modes). */
-static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
+   projected onto the flexible subspace (M-orthogonal to the rigid modes). PB, when asked for, receives the
+   self-equilibrated loads P B (the residual's right-hand side: formed once per block, not again per residual).
+   consume: B is the caller's scratch (a residual about to be destroyed), projected and held in place, not copied. */
+static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, Mat *PB, PetscBool consume)
 {
-  KFSystem sys = solver->sys;
-  Mat      W;
+  KFSystem     sys = solver->sys;
+  Mat          W;
+  PetscScalar *held = NULL;
+  PetscInt     rstart, rend, p, lda;
 
   PetscFunctionBegin;
-  PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &W));
+  if (consume) W = B;
+  else PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &W));
   PetscCall(KFProjectFlexible(sys, W, PETSC_TRUE));
-  if (solver->nheld) {
-    PetscInt     rstart, rend, p, lda;
+  PetscCall(MatGetSize(W, NULL, &p));
+  if (solver->nheld) { /* the held rows at zero for the solve, their values kept for P B */
     PetscScalar *w;
+
+    PetscCall(PetscMalloc1(solver->nheld * p + 1, &held));
     PetscCall(MatGetOwnershipRange(W, &rstart, &rend));
-    PetscCall(MatGetSize(W, NULL, &p));
     PetscCall(MatDenseGetLDA(W, &lda));
     PetscCall(MatDenseGetArray(W, &w));
     for (PetscInt k = 0; k < solver->nheld; k++)
       if (solver->held[k] >= rstart && solver->held[k] < rend)
-        for (PetscInt j = 0; j < p; j++) w[(solver->held[k] - rstart) + j * lda] = 0;
+        for (PetscInt j = 0; j < p; j++) {
+          held[k + j * solver->nheld]              = w[(solver->held[k] - rstart) + j * lda];
+          w[(solver->held[k] - rstart) + j * lda] = 0;
+        }
     PetscCall(MatDenseRestoreArray(W, &w));
   }
   {
     PetscLogDouble t0, t1;
-    PetscInt       p;
 
-    PetscCall(MatGetSize(W, NULL, &p));
     PetscCall(PetscTime(&t0));
     PetscCall((*solver->ops->solve)(solver, W, X));
     PetscCall(PetscTime(&t1));
@@ -278,26 +285,32 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X)
     solver->perf.solve_calls++;
     solver->perf.solve_columns += p;
   }
-  PetscCall(MatDestroy(&W));
   PetscCall(KFProjectFlexible(sys, X, PETSC_FALSE));
+  if (PB && solver->nheld) {
+    PetscScalar *w;
+
+    PetscCall(MatDenseGetArray(W, &w));
+    for (PetscInt k = 0; k < solver->nheld; k++)
+      if (solver->held[k] >= rstart && solver->held[k] < rend)
+        for (PetscInt j = 0; j < p; j++) w[(solver->held[k] - rstart) + j * lda] = held[k + j * solver->nheld];
+    PetscCall(MatDenseRestoreArray(W, &w));
+  }
+  PetscCall(PetscFree(held));
+  if (PB) *PB = W;
+  else if (!consume) PetscCall(MatDestroy(&W));
   PetscFunctionReturn(0);
 }
 
-/* R = P B - K_S X with K_S X accumulated in long double (the residual must be free of K's rounding); its relative
-   Frobenius norm against P B */
-static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat B, Mat X, Mat *R, PetscReal *rel)
+/* R = P B - K_S X with K_S X accumulated in extended precision (the residual must be free of K's rounding); its
+   relative Frobenius norm against P B (PB: the self-equilibrated loads, nb: their norm) */
+static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat PB, PetscReal nb, Mat X, Mat *R, PetscReal *rel)
 {
   KFSystem  sys = solver->sys;
-  Mat       KX;
-  PetscReal nb, nr;
+  PetscReal nr;
 
   PetscFunctionBegin;
-  PetscCall(MatDuplicate(B, MAT_COPY_VALUES, R));
-  PetscCall(KFProjectFlexible(sys, *R, PETSC_TRUE));
-  PetscCall(MatNorm(*R, NORM_FROBENIUS, &nb));
-  PetscCall(KFMatMultExtended(sys->Ks, X, &KX));
-  PetscCall(MatAXPY(*R, -1.0, KX, SAME_NONZERO_PATTERN));
-  PetscCall(MatDestroy(&KX));
+  PetscCall(KFMatMultExtended(sys->Ks, X, R));
+  PetscCall(MatAYPX(*R, -1.0, PB, SAME_NONZERO_PATTERN)); /* in place: P B - K_S X */
   PetscCall(MatNorm(*R, NORM_FROBENIUS, &nr));
   *rel = nb > 0 ? nr / nb : 0;
   PetscFunctionReturn(0);
@@ -305,7 +318,7 @@ static PetscErrorCode KFFlexSolverResidual(KFFlexSolver solver, Mat B, Mat X, Ma
 
 /* Refinement steps X += K+ R while the residual is above -kf_refine_rtol, at most maxit, ending when a step does not
    bring it below shrink x the one before (the factor's floor). R: the current residual (replaced), rel its norm. */
-static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat B, Mat X, Mat *R, PetscReal *rel, PetscInt maxit, PetscReal shrink)
+static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat PB, PetscReal nb, Mat X, Mat *R, PetscReal *rel, PetscInt maxit, PetscReal shrink)
 {
   PetscReal before = PETSC_MAX_REAL;
   Mat       dX;
@@ -313,13 +326,13 @@ static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat B, Mat X, Mat 
   PetscFunctionBegin;
   for (PetscInt it = 0; it < maxit && *rel > solver->refine_rtol && *rel < shrink * before; it++) {
     PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
-    PetscCall(KFFlexSolverSolveOnce(solver, *R, dX));
+    PetscCall(KFFlexSolverSolveOnce(solver, *R, dX, NULL, PETSC_TRUE));
     solver->perf.refinement_solves++;
     PetscCall(MatAXPY(X, 1.0, dX, SAME_NONZERO_PATTERN));
     PetscCall(MatDestroy(&dX));
     PetscCall(MatDestroy(R));
     before = *rel;
-    PetscCall(KFFlexSolverResidual(solver, B, X, R, rel));
+    PetscCall(KFFlexSolverResidual(solver, PB, nb, X, R, rel));
   }
   PetscFunctionReturn(0);
 }
@@ -338,34 +351,38 @@ static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat B, Mat X, Mat 
    its summary, report and last line, and the verification's direct solves decide the verdict. */
 PetscErrorCode KFFlexSolverApply(KFFlexSolver solver, Mat B, Mat X)
 {
-  Mat       R;
-  PetscReal rel = 0;
+  Mat       R, PB = NULL;
+  PetscReal rel = 0, nb = 0;
+  PetscBool check;
 
   PetscFunctionBegin;
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(PetscLogEventBegin(KF_EVENT_SOLVE, 0, 0, 0, 0));
-  PetscCall(KFFlexSolverSolveOnce(solver, B, X));
+  check = (PetscBool)(solver->refine > 0 && solver->shift == 0);
+  PetscCall(KFFlexSolverSolveOnce(solver, B, X, check ? &PB : NULL, PETSC_FALSE));
   solver->perf.blocks++;
-  if (solver->refine > 0 && solver->shift == 0) {
-    PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
+  if (check) {
+    PetscCall(MatNorm(PB, NORM_FROBENIUS, &nb));
+    PetscCall(KFFlexSolverResidual(solver, PB, nb, X, &R, &rel));
     solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
     if (rel > solver->refine_rtol) solver->perf.blocks_refined++;
-    PetscCall(KFFlexSolverRefine(solver, B, X, &R, &rel, solver->refine, 0.5));
+    PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, solver->refine, 0.5));
     if (rel > solver->refine_rtol && solver->refine_rtol > 0) { /* escalation (-kf_refine_rtol 0 asks for the steps, not a residual) */
       PetscBool refactored;
 
       solver->perf.blocks_escalated++;
-      PetscCall(KFFlexSolverRefine(solver, B, X, &R, &rel, 4 * solver->refine + 10, 0.9));
+      PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, 4 * solver->refine + 10, 0.9));
       if (rel > solver->refine_rtol && solver->ops->refactor) PetscCall((*solver->ops->refactor)(solver, &refactored));
       else refactored = PETSC_FALSE;
       if (refactored) {
         PetscCall(MatDestroy(&R));
-        PetscCall(KFFlexSolverSolveOnce(solver, B, X));
-        PetscCall(KFFlexSolverResidual(solver, B, X, &R, &rel));
-        PetscCall(KFFlexSolverRefine(solver, B, X, &R, &rel, 4 * solver->refine + 10, 0.9));
+        PetscCall(KFFlexSolverSolveOnce(solver, B, X, NULL, PETSC_FALSE));
+        PetscCall(KFFlexSolverResidual(solver, PB, nb, X, &R, &rel));
+        PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, 4 * solver->refine + 10, 0.9));
       }
     }
     PetscCall(MatDestroy(&R));
+    PetscCall(MatDestroy(&PB));
     solver->perf.residual_final_max = PetscMax(solver->perf.residual_final_max, rel);
     if (rel > solver->refine_rtol) solver->perf.blocks_unconverged++;
   }

@@ -75,6 +75,53 @@ PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const Petsc
   PetscFunctionReturn(0);
 }
 
+/* Row chunk of the skinny products below: a chunk of the block (ROWS x p) stays in cache while every basis column
+   meets it, and each operand is read once from memory in order. A whole-height BLAS gemm of a tall basis with a block
+   of 1-8 columns copies (packs) the basis into a buffer before using it for 2-16 flops per entry: on this
+   bandwidth-bound product the copy was half of the Gram-Schmidt's time (perf, 200k-dof panel scene). For the Krylov basis' Gram-Schmidt and the projections onto
+   the flexible subspace (a few rigid modes against a block). */
+#define KF_SKINNY_ROWS 2048
+
+/* out (nc x p, leading dimension ldo) += A^T X over local rows, A nl x nc (lda), X nl x p (ldx), chunk by chunk */
+PetscErrorCode KFArraySkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, const PetscScalar *x, PetscInt ldx, PetscScalar *out, PetscInt ldo)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blo;
+  PetscScalar  one = 1.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldo, &blo));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bc, &bp, &bm, &one, a + i0, &bla, x + i0, &blx, &one, out, &blo));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
+PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blc;
+  PetscScalar  one = 1.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldc, &blc));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &one, x + i0, &blx));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* A^T B for tall dense A (N x p) and B (N x q) with the same row layout: local products (BLAS) summed over ranks. */
 PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[])
 {

@@ -453,7 +453,8 @@ PetscErrorCode KFReducerReset(KFReducer r)
   for (PetscInt i = 0; i < r->verify_nseen; i++) PetscCall(MatDestroy(&r->verify_seen[i]));
   PetscCall(PetscFree(r->verify_seen));
   PetscCall(PetscFree(r->verify_seen_angles));
-  r->verify_nseen = 0;
+  r->verify_nseen   = 0;
+  r->verify_nseeded = 0;
   if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
   PetscFunctionReturn(0);
 }

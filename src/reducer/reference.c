@@ -114,6 +114,7 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
       PetscCall(KFReferenceSeeds(r, sys, &ns, seeds));
       if (ns) PetscCall(KFFlexSolverEigenSeeded_Private(solver, hint.cut2, ns, seeds, nev, nconv, w2, HPhi, PhiG, &got, &nseed, &done));
     }
+    if (done) PetscCall(KFReducerResultScalar_Private(r, -1, "reference_eigensolves_seeded", (PetscReal)++r->verify_nseeded));
     if (done) PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system up to %.4g Hz, seeded by the references nearest in angle (block solves with the flexible solver's factor, Krylov-Schur deflated by them to confirm the count)", *nconv, sys->scene->nsys, (double)fmax));
     else if (solver) {
       PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : (seedable || keep ? &got : NULL)));

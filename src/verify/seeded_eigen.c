@@ -222,7 +222,7 @@ static PetscErrorCode KFSeedOptions(MPI_Comm comm, PetscBool *use, PetscReal *to
 static PetscErrorCode KFSeedRefine(KFSeedBasis *b, KFSystem sys, KFFlexSolver solver, PetscInt nseeds, const Mat seeds[], PetscReal cut2, PetscReal tol, PetscInt steps, PetscReal theta[], PetscInt *c, PetscInt *kk, Mat *X, PetscInt *nblock)
 {
   PetscInt   want = 0;
-  PetscReal *res;
+  PetscReal *res, prev = 0;
 
   PetscFunctionBegin;
   *c = 0;
@@ -262,10 +262,13 @@ static PetscErrorCode KFSeedRefine(KFSeedBasis *b, KFSystem sys, KFFlexSolver so
       *kk = k;
       break;
     }
-    if (it >= steps) {
+    /* given up when the steps left, at the rate of the last one, would not reach tol: a slow start (modes that change
+       much between the neighbouring angles) costs two block steps, not all of them */
+    if (it >= steps || (it && worst * PetscPowReal(PetscMin(worst / prev, 1.0), (PetscReal)(steps - it)) > tol)) {
       PetscCall(MatDestroy(&A));
       break;
     }
+    prev = worst;
     b->m = k;
     PetscCall(KFSeedAppend(b, sys, solver, A));
     (*nblock)++;

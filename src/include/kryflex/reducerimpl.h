@@ -98,6 +98,7 @@ struct _p_KFReducer {
   PetscInt        verify_nseen;   /* sparse references made so far whose modes seed the next ones (reference.c) */
   Mat            *verify_seen;    /* their M-normalized modes */
   PetscReal      *verify_seen_angles; /* their joint angles, one row of max(nrev, 1) each */
+  PetscInt        verify_nseeded; /* references whose eigensolve the seeds made (the rest solved from scratch) */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */

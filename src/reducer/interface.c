@@ -450,11 +450,6 @@ PetscErrorCode KFReducerReset(KFReducer r)
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCall(KFReducerResultsReset_Private(r));
   r->verify_count = 0;
-  for (PetscInt i = 0; i < r->verify_nseen; i++) PetscCall(MatDestroy(&r->verify_seen[i]));
-  PetscCall(PetscFree(r->verify_seen));
-  PetscCall(PetscFree(r->verify_seen_angles));
-  r->verify_nseen   = 0;
-  r->verify_nseeded = 0;
   if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
   PetscFunctionReturn(0);
 }

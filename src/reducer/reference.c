@@ -17,57 +17,6 @@ PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
-PETSC_INTERN PetscErrorCode KFFlexSolverEigenSeeded_Private(KFFlexSolver, PetscReal, PetscInt, const Mat[], PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *, PetscInt *, PetscBool *);
-
-/* the seeds of a reference's eigensolve: the modes of the two references made so far nearest in joint angles
-   (the sum over the joints of the shorter way round), which span this configuration's band modes well */
-static PetscErrorCode KFReferenceSeeds(KFReducer r, KFSystem sys, PetscInt *ns, Mat seeds[2])
-{
-  const PetscInt nrev = r->scene->nrevolute, nrev1 = PetscMax(nrev, 1);
-  PetscReal      best[2] = {PETSC_MAX_REAL, PETSC_MAX_REAL};
-
-  PetscFunctionBegin;
-  *ns = 0;
-  for (PetscInt i = 0; i < r->verify_nseen; i++) {
-    PetscReal d = 0;
-
-    for (PetscInt j = 0; j < nrev; j++) {
-      PetscReal e = PetscFmodReal(PetscAbsReal(sys->angles[j] - r->verify_seen_angles[i * nrev1 + j]), 2 * PETSC_PI);
-      d += PetscMin(e, 2 * PETSC_PI - e);
-    }
-    if (d < best[0]) {
-      best[1]  = best[0];
-      seeds[1] = seeds[0];
-      best[0]  = d;
-      seeds[0] = r->verify_seen[i];
-    } else if (d < best[1]) {
-      best[1]  = d;
-      seeds[1] = r->verify_seen[i];
-    }
-  }
-  /* one neighbour alone did not make it on the 57k solid (30 deg from 0 deg: the residual 0.07 after the first step,
-     the seeds given up after 3 block steps): seeded only between two */
-  *ns = r->verify_nseen >= 2 ? 2 : 0;
-  PetscFunctionReturn(0);
-}
-
-/* this reference's n modes kept to seed the next ones */
-static PetscErrorCode KFReferenceSeedsAdd(KFReducer r, KFSystem sys, Mat modes, PetscInt n)
-{
-  const PetscInt nrev1 = PetscMax(r->scene->nrevolute, 1);
-  Mat            sub;
-
-  PetscFunctionBegin;
-  if (!n) PetscFunctionReturn(0);
-  PetscCall(PetscRealloc(sizeof(Mat) * (r->verify_nseen + 1), &r->verify_seen));
-  PetscCall(PetscRealloc(sizeof(PetscReal) * nrev1 * (r->verify_nseen + 1), &r->verify_seen_angles));
-  for (PetscInt j = 0; j < nrev1; j++) r->verify_seen_angles[r->verify_nseen * nrev1 + j] = r->scene->nrevolute ? sys->angles[j] : 0;
-  PetscCall(MatDenseGetSubMatrix(modes, PETSC_DECIDE, PETSC_DECIDE, 0, n, &sub));
-  PetscCall(MatDuplicate(sub, MAT_COPY_VALUES, &r->verify_seen[r->verify_nseen]));
-  PetscCall(MatDenseRestoreSubMatrix(modes, &sub));
-  r->verify_nseen++;
-  PetscFunctionReturn(0);
-}
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -104,30 +53,12 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
     KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count};
     PetscInt        c    = 0;
 
-    /* with the reduction's K+ and a cut: seeded by the references made so far, their modes kept to seed the next */
-    const PetscBool seedable = (PetscBool)(solver && hint.cut2 > 0 && !viscous);
-    PetscBool       done     = PETSC_FALSE;
-    Mat             got      = NULL, seeds[2];
-    PetscInt        ns, nseed = 0;
-
-    if (seedable) {
-      PetscCall(KFReferenceSeeds(r, sys, &ns, seeds));
-      if (ns) PetscCall(KFFlexSolverEigenSeeded_Private(solver, hint.cut2, ns, seeds, nev, nconv, w2, HPhi, PhiG, &got, &nseed, &done));
-    }
-    if (done) PetscCall(KFReducerResultScalar_Private(r, -1, "reference_eigensolves_seeded", (PetscReal)++r->verify_nseeded));
-    if (done) PetscCall(KFProgress(PetscObjectComm((PetscObject)r), "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system up to %.4g Hz, seeded by the references nearest in angle (block solves with the flexible solver's factor, Krylov-Schur deflated by them to confirm the count)", *nconv, sys->scene->nsys, (double)fmax));
-    else if (solver) {
-      PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : (seedable || keep ? &got : NULL)));
-      nseed = *nconv; /* every converged mode, beyond the cut too */
-    }
+    if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
     else PetscCall(KFSystemEigen_Private(sys, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
     while (c < *nconv && w2[c] < hint.cut2) c++;
     /* the modes to the first at or above the cut, whatever the last restart cycle converged beyond it: the same
        reference on any number of ranks */
     if (hint.cut2 > 0) *nconv = r->verify_count = PetscMin(c + 1, *nconv);
-    if (seedable && got) PetscCall(KFReferenceSeedsAdd(r, sys, got, nseed));
-    if (keep && solver) *keep = got;
-    else PetscCall(MatDestroy(&got));
   }
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));

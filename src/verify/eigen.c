@@ -328,7 +328,7 @@ static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, 
 /* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor (PCSHELL in a preonly KSP): the eigensolve
    shares the reduction's factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
    maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space. */
-PETSC_INTERN PetscErrorCode KFFlexPCApply_Private(PC pc, Vec b, Vec x)
+static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
 {
   KFFlexSolver       solver;
   Mat                B, X;
@@ -370,29 +370,6 @@ static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solve
   PetscCall(KFMatMultDense(sys->Ms, X, &MX));
   PetscCall(KFDenseCreate(sys->scene->comm, sys->scene->nsys_local, sys->scene->nsys, m, P));
   PetscCall(KFFlexSolverApply(solver, MX, *P));
-  if (PetscLogPrintInfo) { /* the shift-and-invert residual ||theta K+ M x - x||_M, which the purification gives */
-    PetscReal worst = 0;
-    Vec       d, md;
-    PetscCall(MatCreateVecs(sys->Ms, &d, &md));
-    for (PetscInt i = 0; i < m; i++) {
-      Vec         p, xi;
-      PetscScalar kr, dd, nx;
-      PetscCall(EPSGetEigenvalue(eps, i, &kr, NULL));
-      PetscCall(MatDenseGetColumnVecRead(*P, i, &p));
-      PetscCall(MatDenseGetColumnVecRead(X, i, &xi));
-      PetscCall(VecWAXPY(d, -PetscRealPart(kr), p, xi));
-      PetscCall(MatMult(sys->Ms, xi, md));
-      PetscCall(VecDot(xi, md, &nx));
-      PetscCall(MatMult(sys->Ms, d, md));
-      PetscCall(VecDot(d, md, &dd));
-      PetscCall(MatDenseRestoreColumnVecRead(X, i, &xi));
-      PetscCall(MatDenseRestoreColumnVecRead(*P, i, &p));
-      worst = PetscMax(worst, PetscSqrtReal(PetscAbsReal(PetscRealPart(dd) / PetscRealPart(nx))));
-    }
-    PetscCall(PetscInfo(NULL, "Krylov-Schur's %" PetscInt_FMT " vectors: worst shift-and-invert residual %g\n", m, (double)worst));
-    PetscCall(VecDestroy(&d));
-    PetscCall(VecDestroy(&md));
-  }
   PetscCall(MatDestroy(&MX));
   PetscCall(MatDestroy(&X));
   PetscFunctionReturn(0);
@@ -401,7 +378,7 @@ static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solve
 /* Stop once the converged modes reach cut2 (omega_cut^2): every mode below it is then computed, and the modes asked
    beyond it would only cost K+ applications. Shift-and-invert about 0 converges the Ritz values nearest 0 first and
    locks them in order, so the nconv converged are the lowest. */
-PETSC_INTERN PetscErrorCode KFEPSStopCovered_Private(EPS eps, PetscInt its, PetscInt max_it, PetscInt nconv, PetscInt nev, EPSConvergedReason *reason, void *ctx)
+static PetscErrorCode KFEPSStopCovered(EPS eps, PetscInt its, PetscInt max_it, PetscInt nconv, PetscInt nev, EPSConvergedReason *reason, void *ctx)
 {
   const PetscReal cut2 = *(PetscReal *)ctx;
 
@@ -431,45 +408,7 @@ static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const 
   c   = hint->count > 0 ? hint->count : nev;
   ncv = PetscMin(PetscMax(nev + 1, PetscMax(2 * c, c + 15)), sys->scene->nsys);
   PetscCall(EPSSetDimensions(eps, nev, ncv > nev ? ncv : PETSC_DEFAULT, PETSC_DEFAULT));
-  PetscCall(EPSSetStoppingTestFunction(eps, KFEPSStopCovered_Private, (void *)&hint->cut2, NULL));
-  PetscFunctionReturn(0);
-}
-
-/* Mode number got of an eigensolve asking nev: x M-normalized (y: work), its output and input participation
-   (HPhi, t x nev; PhiG, nev x a; either may be NULL) and its column of modes (or NULL) */
-PETSC_INTERN PetscErrorCode KFEigenRecordVector_Private(KFSystem sys, Vec x, Vec y, PetscInt got, PetscInt nev, PetscReal HPhi[], PetscReal PhiG[], Mat modes)
-{
-  PetscInt    a = sys->scene->ninputs, t = sys->scene->noutputs;
-  PetscReal   nrm2;
-  PetscScalar dot;
-
-  PetscFunctionBegin;
-  if (!HPhi && !PhiG && !modes) PetscFunctionReturn(0);
-  /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure) */
-  PetscCall(MatMult(sys->Ms, x, y));
-  PetscCall(VecDot(x, y, &dot));
-  nrm2 = PetscSqrtReal(PetscRealPart(dot));
-  PetscCall(VecScale(x, 1.0 / nrm2));
-  for (PetscInt k = 0; k < t && HPhi; k++) {
-    Vec h;
-    PetscCall(MatDenseGetColumnVecRead(sys->Ht, k, &h));
-    PetscCall(VecDot(x, h, &dot));
-    PetscCall(MatDenseRestoreColumnVecRead(sys->Ht, k, &h));
-    HPhi[k + got * t] = PetscRealPart(dot);
-  }
-  for (PetscInt k = 0; k < a && PhiG; k++) {
-    Vec g;
-    PetscCall(MatDenseGetColumnVecRead(sys->G, k, &g));
-    PetscCall(VecDot(x, g, &dot));
-    PetscCall(MatDenseRestoreColumnVecRead(sys->G, k, &g));
-    PhiG[got + k * nev] = PetscRealPart(dot);
-  }
-  if (modes) {
-    Vec col;
-    PetscCall(MatDenseGetColumnVecWrite(modes, got, &col));
-    PetscCall(VecCopy(x, col));
-    PetscCall(MatDenseRestoreColumnVecWrite(modes, got, &col));
-  }
+  PetscCall(EPSSetStoppingTestFunction(eps, KFEPSStopCovered, (void *)&hint->cut2, NULL));
   PetscFunctionReturn(0);
 }
 
@@ -479,7 +418,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   EPS       eps;
   PC        pc;
   Vec      *defl, x, y;
-  PetscInt  r, nflex, nc, got = 0;
+  PetscInt  r, nflex, nc, a = s->ninputs, t = s->noutputs, got = 0;
   PetscReal target;
   PetscInt  dense_max;
   PetscBool dense, has_target;
@@ -520,7 +459,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     PetscCall(KFEPSShiftInvert(eps, nev, 0.0, &pc));
     PetscCall(PCSetType(pc, PCSHELL));
     PetscCall(PCShellSetContext(pc, solver));
-    PetscCall(PCShellSetApply(pc, KFFlexPCApply_Private));
+    PetscCall(PCShellSetApply(pc, KFFlexPCApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
     PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
@@ -565,7 +504,35 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
       PetscCall(MatDenseRestoreColumnVecRead(P, i, &p));
     } else PetscCall(EPSGetEigenpair(eps, i, &kr, NULL, x, NULL));
     omega2[got] = PetscRealPart(kr);
-    PetscCall(KFEigenRecordVector_Private(sys, x, y, got, nev, HPhi, PhiG, modes ? *modes : NULL));
+    if (HPhi || PhiG || modes) {
+      PetscReal nrm2;
+      PetscScalar dot;
+      /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure) */
+      PetscCall(MatMult(sys->Ms, x, y));
+      PetscCall(VecDot(x, y, &dot));
+      nrm2 = PetscSqrtReal(PetscRealPart(dot));
+      PetscCall(VecScale(x, 1.0 / nrm2));
+      for (PetscInt k = 0; k < t && HPhi; k++) {
+        Vec h;
+        PetscCall(MatDenseGetColumnVecRead(sys->Ht, k, &h));
+        PetscCall(VecDot(x, h, &dot));
+        PetscCall(MatDenseRestoreColumnVecRead(sys->Ht, k, &h));
+        HPhi[k + got * t] = PetscRealPart(dot);
+      }
+      for (PetscInt k = 0; k < a && PhiG; k++) {
+        Vec g;
+        PetscCall(MatDenseGetColumnVecRead(sys->G, k, &g));
+        PetscCall(VecDot(x, g, &dot));
+        PetscCall(MatDenseRestoreColumnVecRead(sys->G, k, &g));
+        PhiG[got + k * nev] = PetscRealPart(dot);
+      }
+      if (modes) {
+        Vec col;
+        PetscCall(MatDenseGetColumnVecWrite(*modes, got, &col));
+        PetscCall(VecCopy(x, col));
+        PetscCall(MatDenseRestoreColumnVecWrite(*modes, got, &col));
+      }
+    }
   }
   PetscCall(VecDestroy(&x));
   PetscCall(VecDestroy(&y));

@@ -95,10 +95,6 @@ struct _p_KFReducer {
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
   PetscInt        verify_count;   /* the modes the last sparse reference took to cover its cut (0: none yet): the next
                                      eigensolve's size (KFEigenHint) */
-  PetscInt        verify_nseen;   /* sparse references made so far whose modes seed the next ones (reference.c) */
-  Mat            *verify_seen;    /* their M-normalized modes */
-  PetscReal      *verify_seen_angles; /* their joint angles, one row of max(nrev, 1) each */
-  PetscInt        verify_nseeded; /* references whose eigensolve the seeds made (the rest solved from scratch) */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */

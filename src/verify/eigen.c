@@ -394,8 +394,8 @@ static PetscErrorCode KFEPSStopCovered(EPS eps, PetscInt its, PetscInt max_it, P
   PetscFunctionReturn(0);
 }
 
-/* The eigensolve's size from what is known of the modes (KFEigenHint): a Krylov dimension for the count expected to
-   cover the cut (c + 8 with a cut, below; one restart cycle converges them on the solid; much smaller dimensions
+/* The eigensolve's size from what is known of the modes (KFEigenHint): SLEPc's default Krylov dimension for the count
+   expected to cover the cut, max(2c, c + 15) (one restart cycle converges them on the solid; smaller dimensions
    restart more and apply K+ more often), more than nev; and the cover test above, so that the modes asked beyond the
    cut are not computed. A neighbouring configuration's modes as the start vector were measured no cheaper (the
    single-vector Lanczos still takes about 2c steps), so the start stays SLEPc's. */
@@ -406,13 +406,7 @@ static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const 
   PetscFunctionBegin;
   if (!hint) PetscFunctionReturn(0);
   c   = hint->count > 0 ? hint->count : nev;
-  /* with a cut, c + 8 (nev + 8 while no count is known), not SLEPc's max(2c, c + 15): the cover test ends the
-     eigensolve once its modes reach the cut, on the 57k solid within the first cycle, so the dimension beyond the
-     modes needed is spent for nothing. There 185 applications of K+ for the 7 references instead of 209 (the first
-     29 instead of 41), the same modes to 2e-15 and the same response to 4e-17 of the peak; on the 4,988-dof panels,
-     whose count doubles to 640, 4,636 instead of 4,628. Without a cut every mode asked must converge: SLEPc's. */
-  ncv = hint->cut2 > 0 ? PetscMax(nev + 1, c + 8) : PetscMax(nev + 1, PetscMax(2 * c, c + 15));
-  ncv = PetscMin(ncv, sys->scene->nsys);
+  ncv = PetscMin(PetscMax(nev + 1, PetscMax(2 * c, c + 15)), sys->scene->nsys);
   PetscCall(EPSSetDimensions(eps, nev, ncv > nev ? ncv : PETSC_DEFAULT, PETSC_DEFAULT));
   PetscCall(EPSSetStoppingTestFunction(eps, KFEPSStopCovered, (void *)&hint->cut2, NULL));
   PetscFunctionReturn(0);

@@ -334,13 +334,16 @@ static PetscErrorCode KFReducedModelWriteFile_Private(KFReducedModel m, hid_t f,
   PetscFunctionReturn(0);
 }
 
-/* the file image to disk under tmp: every write(2) checked, then fsync; errno is left for the message */
-static PetscBool WriteImage(const char tmp[], const char *image, size_t size)
+/* the file image to disk under tmp: every write(2) checked, then fsync. Returns 0 when done, PETSC_ERR_FILE_OPEN
+   when tmp cannot be created, PETSC_ERR_FILE_WRITE when it cannot be written; errno is left for the message */
+static PetscErrorCode WriteImage(const char tmp[], const char *image, size_t size)
 {
-  int    fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666), saved;
-  size_t done = 0;
+  int       fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666), saved;
+  size_t    done = 0;
+  PetscBool ok;
 
-  if (fd < 0) return PETSC_FALSE;
+  if (fd < 0) return PETSC_ERR_FILE_OPEN;
+  errno = 0;
   while (done < size) {
     ssize_t n = write(fd, image + done, size - done);
     if (n < 0 && errno == EINTR) continue;
@@ -348,11 +351,15 @@ static PetscBool WriteImage(const char tmp[], const char *image, size_t size)
     done += (size_t)n;
   }
   /* on disk before it takes the final name: a crash then leaves the old file or the new one, never half of one */
-  if (done == size && fsync(fd) == 0) return (PetscBool)(close(fd) == 0);
-  saved = errno ? errno : EIO;
-  (void)close(fd);
-  errno = saved;
-  return PETSC_FALSE;
+  ok    = (PetscBool)(done == size && fsync(fd) == 0);
+  saved = errno;
+  if (close(fd) != 0 && ok) { /* a file system that reports a failed write only here (NFS) */
+    ok    = PETSC_FALSE;
+    saved = errno;
+  }
+  if (ok) return 0;
+  errno = saved ? saved : EIO;
+  return PETSC_ERR_FILE_WRITE;
 }
 
 /* rank 0's part of KFReducedModelSave. HDF5 builds the file in memory (the core driver, no backing store) and
@@ -385,7 +392,11 @@ static PetscErrorCode KFReducedModelWrite_Private(KFReducedModel m, const char p
   if (!st->code) PetscCall(PetscMalloc1((size_t)size + 1, &image));
   if (!st->code && H5Fget_file_image(f, image, (size_t)size) != size) PetscCall(WriteFail(&w, "the file (its image)"));
   if (H5Fclose(f) < 0) PetscCall(WriteFail(&w, "the file (closing it)"));
-  if (!st->code && !WriteImage(tmp, image, (size_t)size)) PetscCall(IOFail(st, PETSC_ERR_FILE_WRITE, "%s: cannot write the model file (%s); the previous file, if any, is unchanged: free space on its disk or write it to another folder", path, strerror(errno)));
+  if (!st->code) {
+    PetscErrorCode fail = WriteImage(tmp, image, (size_t)size);
+    if (fail == PETSC_ERR_FILE_OPEN) PetscCall(IOFail(st, fail, "%s: cannot create the model file (%s); the previous file, if any, is unchanged: check that the folder exists and is writable", path, strerror(errno)));
+    else if (fail) PetscCall(IOFail(st, fail, "%s: cannot write the model file (%s); the previous file, if any, is unchanged: free space on its disk or write it to another folder", path, strerror(errno)));
+  }
   PetscCall(PetscFree(image));
   if (!st->code && rename(tmp, path) != 0) PetscCall(IOFail(st, PETSC_ERR_FILE_WRITE, "%s: cannot move the new model file into place (%s); the previous file, if any, is unchanged: check that the path is not a folder and the folder is writable", path, strerror(errno)));
   if (st->code) (void)remove(tmp);

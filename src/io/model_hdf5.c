@@ -334,31 +334,70 @@ static PetscErrorCode KFReducedModelWriteFile_Private(KFReducedModel m, hid_t f,
   PetscFunctionReturn(0);
 }
 
-/* rank 0's part of KFReducedModelSave: the whole file under a temporary name, then rename(2), which replaces the
-   previous file in one step; on any failure the temporary is removed and the previous file is untouched */
+/* the file image to disk under tmp: every write(2) checked, then fsync. Returns 0 when done, PETSC_ERR_FILE_OPEN
+   when tmp cannot be created, PETSC_ERR_FILE_WRITE when it cannot be written; errno is left for the message */
+static PetscErrorCode WriteImage(const char tmp[], const char *image, size_t size)
+{
+  int       fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666), saved;
+  size_t    done = 0;
+  PetscBool ok;
+
+  if (fd < 0) return PETSC_ERR_FILE_OPEN;
+  errno = 0;
+  while (done < size) {
+    ssize_t n = write(fd, image + done, size - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    done += (size_t)n;
+  }
+  /* on disk before it takes the final name: a crash then leaves the old file or the new one, never half of one */
+  ok    = (PetscBool)(done == size && fsync(fd) == 0);
+  saved = errno;
+  if (close(fd) != 0 && ok) { /* a file system that reports a failed write only here (NFS) */
+    ok    = PETSC_FALSE;
+    saved = errno;
+  }
+  if (ok) return 0;
+  errno = saved ? saved : EIO;
+  return PETSC_ERR_FILE_WRITE;
+}
+
+/* rank 0's part of KFReducedModelSave. HDF5 builds the file in memory (the core driver, no backing store) and
+   kryflex writes its image itself: HDF5 1.10 never sees a failing disk. A write that fails inside HDF5 (a full disk
+   found while a dataset or the file is closed) leaves a file id whose close at exit (MPI_Finalize) crashes the
+   process (HDF5 bug HDFFV-11052, fixed in 1.14.1). Then rename(2) replaces the previous file in one step; on any
+   failure the temporary is removed and the previous file is untouched. Costs memory: the image and its copy. */
 static PetscErrorCode KFReducedModelWrite_Private(KFReducedModel m, const char path[], KFIOStatus *st)
 {
-  char     tmp[PETSC_MAX_PATH_LEN + 32];
-  hid_t    f;
+  char     tmp[PETSC_MAX_PATH_LEN + 32], *image = NULL;
+  hid_t    f = -1, fapl;
+  ssize_t  size = -1;
   KFWriter w = {path, st};
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(tmp, sizeof(tmp), "%s.tmp-%d", path, (int)getpid()));
-  f = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl >= 0 && H5Pset_fapl_core(fapl, 4 << 20, 0) >= 0) f = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   if (f < 0) {
     H5Diagnosis d;
     H5Diagnose(&d);
-    PetscCall(IOFail(st, PETSC_ERR_FILE_OPEN, "%s: cannot create the model file (%s); the previous file, if any, is unchanged: check that the folder exists and is writable", path, d.detail[0] ? d.detail : "HDF5 error"));
+    PetscCall(IOFail(st, PETSC_ERR_FILE_OPEN, "%s: cannot create the model file in memory (%s); the previous file, if any, is unchanged: check the memory available and write it again", path, d.detail[0] ? d.detail : "HDF5 error"));
     PetscFunctionReturn(0);
   }
   PetscCall(KFReducedModelWriteFile_Private(m, f, &w));
+  if (!st->code && H5Fflush(f, H5F_SCOPE_GLOBAL) < 0) PetscCall(WriteFail(&w, "the file (flushing it)"));
+  if (!st->code) size = H5Fget_file_image(f, NULL, 0);
+  if (!st->code && size < 0) PetscCall(WriteFail(&w, "the file (its size)"));
+  if (!st->code) PetscCall(PetscMalloc1((size_t)size + 1, &image));
+  if (!st->code && H5Fget_file_image(f, image, (size_t)size) != size) PetscCall(WriteFail(&w, "the file (its image)"));
   if (H5Fclose(f) < 0) PetscCall(WriteFail(&w, "the file (closing it)"));
   if (!st->code) {
-    /* on disk before it takes the final name: a crash then leaves the old file or the new one, never half of one */
-    int fd = open(tmp, O_RDONLY);
-    if (fd < 0 || fsync(fd) != 0) PetscCall(IOFail(st, PETSC_ERR_FILE_WRITE, "%s: cannot flush the new model file to disk (%s); the previous file, if any, is unchanged: check the disk and write it again", path, strerror(errno)));
-    if (fd >= 0) close(fd);
+    PetscErrorCode fail = WriteImage(tmp, image, (size_t)size);
+    if (fail == PETSC_ERR_FILE_OPEN) PetscCall(IOFail(st, fail, "%s: cannot create the model file (%s); the previous file, if any, is unchanged: check that the folder exists and is writable", path, strerror(errno)));
+    else if (fail) PetscCall(IOFail(st, fail, "%s: cannot write the model file (%s); the previous file, if any, is unchanged: free space on its disk or write it to another folder", path, strerror(errno)));
   }
+  PetscCall(PetscFree(image));
   if (!st->code && rename(tmp, path) != 0) PetscCall(IOFail(st, PETSC_ERR_FILE_WRITE, "%s: cannot move the new model file into place (%s); the previous file, if any, is unchanged: check that the path is not a folder and the folder is writable", path, strerror(errno)));
   if (st->code) (void)remove(tmp);
   PetscFunctionReturn(0);

@@ -92,7 +92,7 @@ def run(argv):
         s.verdict.target_met = met
         _core.progress("writing the results to %s" % out)
         cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
-        cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: cannot_write(out, e, created))
+        cannot_c = (_core.Error, EXIT_OUTPUT, lambda e: cannot_write(out, model_write_error(e, staging.path), created))
 
         def begin_report_files():
             # rank 0 alone: the report and the NumPy export (the model file below is written by every rank together)
@@ -329,6 +329,13 @@ def cannot_write(out, why, created):
     """The message of a failed write of the results: nothing of this run is left, earlier results are as they were."""
     return "cannot write the results to %s: %s: free space on its disk or choose another -o (%s)" % (
         out, why, "nothing was left there" if created else "its earlier contents are left as they were")
+
+
+def model_write_error(e, staging):
+    """The C writer's message, as said of the output folder: the file by its name in it (not in the staging folder
+    that is removed), without the writer's own advice (cannot_write gives the command's)."""
+    text = str(e).replace(os.path.join(staging, ""), "")
+    return text.split("; the previous file, if any, is unchanged")[0]
 
 
 def _remove_if_empty(out):

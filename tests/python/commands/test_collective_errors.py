@@ -357,6 +357,60 @@ def test_disk_full_leaves_the_earlier_results(previous, tmp_path, limit):
     assert snapshot(out) == before
 
 
+def model_file_disk_full(tmp_path, nbytes):
+    """An environment in which every file but the model file is written: RLIMIT_FSIZE (nbytes) is set when the command
+    starts writing reduced.h5 (ReducedModel.save), as on a disk that fills during the model file. The model file is
+    written after report.md and summary.json, so the earlier files never meet the limit."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text(
+        "import resource, kryflex, kryflex._runtime as rt\n"
+        "start, done = rt.init, []\n"
+        "def init(argv=None):\n"
+        "    start(argv)\n"
+        "    if done:\n"
+        "        return\n"                      # the binding's own import calls init again
+        "    done.append(1)\n"
+        "    import kryflex.api as api\n"
+        "    save = api.ReducedModel.save\n"
+        "    def limited(self, path):\n"
+        "        resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
+        "        return save(self, path)\n"
+        "    api.ReducedModel.save = limited\n"
+        "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
+    return dict(ENV, PYTHONPATH=str(site))
+
+
+def model_file_left(folder):
+    """Model files under any name kryflex gives them while writing (reduced.h5.tmp-PID), here or in a staging folder."""
+    return [os.path.join(d, n) for d, _, names in os.walk(folder) for n in names if ".h5" in n]
+
+
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+def test_disk_full_while_writing_the_model_file(previous, tmp_path, ranks):
+    """A disk that fills while reduced.h5 is written (20 kB: the Galileo model file is about 70 kB): exit 4 with one
+    message naming the file and the fix, every rank ends (HDF5 1.10 left a file id behind a failed write that crashed
+    the process at MPI_Finalize, exit 139 after the message), the earlier results byte-identical."""
+    out, before = previous
+    launch = [KRYFLEX] if ranks == 1 else ["mpiexec", "-n", "2", "-x", "PYTHONPATH", KRYFLEX]
+    p = run(*launch, "reduce", GALILEO, "-o", out, "-quiet", "-scene.angles", "0,30", *FAST,
+            env=model_file_disk_full(tmp_path, 20_000))
+    assert p.returncode == EXIT_OUTPUT, p.stderr
+    assert error_lines(p.stderr) == ["kryflex: error: cannot write the results to %s: reduced.h5: cannot write the "
+                                     "model file (File too large): free space on its disk or choose another -o (its "
+                                     "earlier contents are left as they were)" % out], p.stderr
+    assert "Traceback" not in p.stderr and "Segmentation" not in p.stderr, p.stderr
+    assert snapshot(out) == before and not staging_left(out)
+    assert model_file_left(out) == [os.path.join(out, "reduced.h5")]
+
+
+def test_disk_full_while_writing_the_model_file_into_a_new_folder(tmp_path):
+    out = tmp_path / "new"
+    p = kryflex("reduce", GALILEO, "-o", out, "-quiet", "-scene.angles", "0,30", env=model_file_disk_full(tmp_path, 20_000))
+    assert p.returncode == EXIT_OUTPUT and "reduced.h5: cannot write the model file (File too large)" in p.stderr, p.stderr
+    assert "nothing was left there" in p.stderr and not out.exists()
+
+
 @pytest.mark.parametrize("target", ["/proc/kryflex_out", "/sys/kryflex_out"])
 def test_read_only_places(earlier, tmp_path, target):
     if not os.path.isdir(os.path.dirname(target)):

@@ -145,14 +145,16 @@ def test_bench_scaling_panel_race(tmp_path):
     reference, the ratio printed, the CSV and charts written (figures are measured by running it, not here)."""
     r = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "scaling", "bench-scaling"), "--sizes", "p3k", "--ranks", "1",
                         "--baseline", "none", "--tradeoff", "none", "--verify", "p3k", "--race", "p3k",
-                        "--variant-size", "none", "--bodywise", "none", "--moments", "100", "--out", str(tmp_path)],
+                        "--variant-size", "none", "--bodywise", "none", "--moments", "90", "--out", str(tmp_path)],
                        capture_output=True, text=True, env=ENV, timeout=900)
     assert r.returncode == 0, r.stdout + r.stderr
     rows = list(csv.DictReader(open(tmp_path / "bench-scaling.csv")))
     kr = [row for row in rows if row["method"] == "krylov"]
     race = [row for row in rows if row["variant"] == "race"]
     assert len(kr) == 1 and race and all(row["size"] == "p3k" for row in rows)
-    assert float(kr[0]["frf_error"]) < 1e-3
+    # 90 moments: an error well above the reference's floor (~8e-6 on p3k, where 100 moments and the largest covers
+    # all sit, so that which is "as accurate" there is rounding)
+    assert float(kr[0]["frf_error"]) < 1e-2
     assert float(race[-1]["frf_error"]) <= float(kr[0]["frf_error"])        # the race stops once it is as accurate
     assert all(float(row["frf_error"]) > float(kr[0]["frf_error"]) for row in race[:-1])
     assert "modal baseline at equal accuracy" in r.stdout

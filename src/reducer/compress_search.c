@@ -1,0 +1,343 @@
+/*
+  Compression of the search's model: each body's reduced basis cut to its leading directions of the in-band response
+  (src/project/body_compress.c orders them) while the model still meets the scene's accuracy at every evaluation point.
+  The counts are searched by bisection body by body, then (two bodies) along the frontier of count pairs, then by
+  backward elimination of single directions; every model tried is measured as the search measures its candidates.
+*/
+#include <kryflex/reducerimpl.h>
+
+/* the size (reduced dofs summed) and error of model m compressed to counts, measured as the search measures its
+   candidates (every evaluation point; a model already worse than the target is not measured further) */
+static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], const PetscInt counts[], PetscInt *size, PetscReal *error)
+{
+  KFReducedModel c;
+  PetscInt       nb;
+
+  PetscFunctionBegin;
+  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  PetscCall(KFReducedModelCompress(m, d, counts, &c));
+  PetscCall(KFReducedModelGetInfo(c, &nb, NULL, NULL, NULL, NULL, NULL));
+  *size = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(c, b, NULL, NULL, &body, NULL));
+    *size += body.v;
+  }
+  *error = 0;
+  for (PetscInt e = 0; e < neval && *error <= r->accuracy; e++) {
+    KFReducedSystem rs;
+    PetscReal       hinf;
+
+    PetscCall(KFReducedModelReassemble(c, evals[e].angles, &rs));
+    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
+  }
+  PetscCall(KFReducedModelDestroy(&c));
+  PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
+  PetscFunctionReturn(0);
+}
+
+/* each evaluation point's weight of each input's snapshots, inw (neval x a): 1 / the largest peak of that input's
+   pairs in the reference (the measured part: elastic or total), so that every input's directions are ranked by their
+   share of the relative error the target is stated on, not by the size of the input's response. Replicated. */
+static PetscErrorCode KFCompressInputWeights(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal inw[])
+{
+  PetscInt   a, t;
+  PetscReal *scale;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
+  PetscCall(PetscMalloc1(t * a + 1, &scale));
+  for (PetscInt e = 0; e < neval; e++) {
+    const KFEvalPoint *p = &evals[e];
+
+    for (PetscInt j = 0; j < a; j++) inw[e * a + j] = 1;
+    if (!p->nw || !t) continue;
+    PetscCall(KFFRFPairScales(p->nw, t, a, p->Tre, p->Tim, p->Tgre, p->Tgim, scale, NULL));
+    for (PetscInt j = 0; j < a; j++) {
+      PetscReal big = 0;
+
+      for (PetscInt i = 0; i < t; i++) big = PetscMax(big, scale[i + j * t]);
+      inw[e * a + j] = 1 / big; /* KFFRFPairScales floors every pair above 0 */
+    }
+  }
+  PetscCall(PetscFree(scale));
+  PetscFunctionReturn(0);
+}
+
+/* An evaluation point's snapshot frequencies (rad/s, *w allocated here): the grid's log-spaced points and each of the
+   reference's resonances in the band once. The evaluation grid has 7 points across each resonance so that the measure
+   resolves its peak; as snapshots those 7 would weigh each resonance's shape 7 times against the response between
+   resonances, which the projection needs as well (measured on the solid spacecraft at 1e-3: 24 states with each
+   resonance once, 26 with the 7 points). */
+static PetscErrorCode KFCompressSnapshotGrid(KFReducer r, const KFEvalPoint *p, PetscInt *n, PetscReal **w)
+{
+  PetscInt   nres = 0;
+  PetscReal *fres;
+
+  PetscFunctionBegin;
+  if (p->rich) {
+    const PetscReal *f;
+
+    PetscCall(KFReducedSystemGetFrequencies(p->rich, &nres, &f));
+    PetscCall(PetscMalloc1(nres + 1, &fres));
+    PetscCall(PetscArraycpy(fres, f, nres));
+  } else {
+    nres = p->ref.n;
+    PetscCall(PetscMalloc1(nres + 1, &fres));
+    for (PetscInt k = 0; k < nres; k++) fres[k] = PetscSqrtReal(PetscMax(p->ref.w2[k], 0)) / (2 * PETSC_PI);
+  }
+  PetscCall(PetscMalloc1(r->frequency_points + 7 * nres + 1, w)); /* the grid writes 7 per resonance before merging */
+  PetscCall(KFFrequencyGrid(r->band[0], r->band[1], r->frequency_points, nres, fres, 0, n, *w)); /* zeta 0: each once */
+  for (PetscInt f = 0; f < *n; f++) (*w)[f] *= 2 * PETSC_PI;
+  PetscCall(PetscFree(fres));
+  PetscFunctionReturn(0);
+}
+
+/* body by body, the fewest leading directions that still meet the target (bisection, the other bodies as found so
+   far); counts: every direction on entry (a passing model), the counts found on return; *nevals += models measured */
+static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt nb, PetscInt counts[], PetscInt *nevals)
+{
+  PetscInt  size;
+  PetscReal error;
+
+  PetscFunctionBegin;
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt lo = -1, hi = counts[b];
+
+    while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+      const PetscInt mid = (lo + hi) / 2;
+
+      counts[b] = mid;
+      PetscCall(KFCompressTry(r, neval, evals, m, d, counts, &size, &error));
+      ++*nevals;
+      if (error <= r->accuracy) hi = mid;
+      else lo = mid;
+    }
+    counts[b] = hi;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* Two bodies: every pair of counts, searched along its frontier. With more directions in one body the other needs
+   no more (the error falls as directions are added), so from the bisection's pair (c0, c1) the fewest c1(i) for each
+   i > c0 is found by walking c1 down: about d0 + d1 models, the smallest total wins (ties: the earlier). Body-by-body
+   bisection favours the body it reduces first; this finds the best split of the directions between the two. */
+static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt counts[], PetscInt *nevals)
+{
+  PetscInt  best[2] = {counts[0], counts[1]}, c[2] = {counts[0], counts[1]}, size;
+  PetscReal error;
+
+  PetscFunctionBegin;
+  for (c[0] = counts[0] + 1; c[0] <= d[0].ndir && c[0] < best[0] + best[1]; c[0]++) {
+    while (c[1] > 0) { /* c[1] passes with c[0] - 1 directions, so with c[0]: try one fewer */
+      const PetscInt one[2] = {c[0], c[1] - 1};
+
+      PetscCall(KFCompressTry(r, neval, evals, m, d, one, &size, &error));
+      ++*nevals;
+      if (error > r->accuracy) break;
+      c[1]--;
+    }
+    if (c[0] + c[1] < best[0] + best[1]) {
+      best[0] = c[0];
+      best[1] = c[1];
+    }
+    if (!c[1]) break; /* more directions in body 0 cannot help */
+  }
+  counts[0] = best[0];
+  counts[1] = best[1];
+  PetscFunctionReturn(0);
+}
+
+/* the directions d restricted to a selection: body b's kept columns and its directions sel[b][0 .. n[b]) (in that
+   order), as directions of their own (freed with KFBodyDirectionsDestroy) */
+static PetscErrorCode KFCompressSelect(PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], KFBodyDirections **out)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscCalloc1(nb, out));
+  for (PetscInt b = 0; b < nb; b++) {
+    const PetscInt    v = d[b].v, nk = d[b].nkeep;
+    KFBodyDirections *o = &(*out)[b];
+
+    o->v     = v;
+    o->nkeep = nk;
+    o->ndir  = n[b];
+    PetscCall(PetscMalloc2(v * (nk + n[b]) + 1, &o->W, n[b] + 1, &o->weight));
+    PetscCall(PetscArraycpy(o->W, d[b].W, v * nk));
+    for (PetscInt i = 0; i < n[b]; i++) {
+      PetscCall(PetscArraycpy(o->W + (nk + i) * v, d[b].W + (nk + sel[b][i]) * v, v));
+      o->weight[i] = d[b].weight[sel[b][i]];
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* KFCompressTry for a selection of the directions */
+static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], PetscInt *size, PetscReal *error)
+{
+  KFBodyDirections *ds;
+
+  PetscFunctionBegin;
+  PetscCall(KFCompressSelect(nb, d, sel, n, &ds));
+  PetscCall(KFCompressTry(r, neval, evals, m, ds, NULL, size, error));
+  PetscCall(KFBodyDirectionsDestroy(nb, &ds));
+  PetscFunctionReturn(0);
+}
+
+/* Backward elimination over every body's directions: from a passing selection (sel, n), drop the one direction, of
+   any body and not only the last of its order, whose removal leaves the smallest measured error, while the target
+   holds. The SVD orders each body's directions by its own share of the response, which is not the share of the
+   error: a leading direction may be one the other body's directions already make up for. Ties within 1 % of the
+   target go to the first found (body, then direction order), so that 1 and 2 ranks drop the same direction. */
+static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *sel[], PetscInt n[], PetscInt *nevals)
+{
+  PetscFunctionBegin;
+  for (;;) {
+    PetscInt  bb = -1, ib = -1, size;
+    PetscReal eb = PETSC_MAX_REAL, error;
+
+    for (PetscInt b = 0; b < nb; b++)
+      for (PetscInt i = 0; i < n[b]; i++) {
+        const PetscInt x = sel[b][i];
+
+        for (PetscInt k = i; k + 1 < n[b]; k++) sel[b][k] = sel[b][k + 1]; /* without direction x */
+        n[b]--;
+        PetscCall(KFCompressTrySelection(r, neval, evals, m, nb, d, sel, n, &size, &error));
+        ++*nevals;
+        n[b]++;
+        for (PetscInt k = n[b] - 1; k > i; k--) sel[b][k] = sel[b][k - 1];
+        sel[b][i] = x;
+        if (error <= r->accuracy && error < eb - 0.01 * r->accuracy) {
+          eb = error;
+          bb = b;
+          ib = i;
+        }
+      }
+    if (bb < 0) break;
+    for (PetscInt k = ib; k + 1 < n[bb]; k++) sel[bb][k] = sel[bb][k + 1];
+    n[bb]--;
+  }
+  PetscFunctionReturn(0);
+}
+
+/* body b's directions of the model m ordered by its response on snapshot grids: each resonance once (once), or the
+   evaluation grid (the measure's 7 points across each resonance) */
+static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscBool once, KFBodyDirections **d)
+{
+  PetscInt         nrev, nrev1, a, *nw;
+  PetscReal       *angles, *inw, **w;
+  const PetscReal **wk, **inwk;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  PetscCall(PetscMalloc6(neval * nrev1, &angles, neval, &nw, neval, &w, neval, &wk, neval * a + 1, &inw, neval, &inwk));
+  PetscCall(KFCompressInputWeights(r, neval, evals, inw));
+  for (PetscInt e = 0; e < neval; e++) {
+    PetscCall(PetscArraycpy(&angles[e * nrev1], evals[e].angles, nrev1));
+    if (once) PetscCall(KFCompressSnapshotGrid(r, &evals[e], &nw[e], &w[e]));
+    else {
+      nw[e] = evals[e].nw;
+      PetscCall(PetscMalloc1(nw[e] + 1, &w[e]));
+      PetscCall(PetscArraycpy(w[e], evals[e].w, nw[e]));
+    }
+    wk[e]   = w[e];
+    inwk[e] = &inw[e * a];
+  }
+  PetscCall(KFBodyCompressDirections(m, neval, angles, nw, wk, inwk, d));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(PetscFree(w[e]));
+  PetscCall(PetscFree6(angles, nw, w, wk, inw, inwk));
+  PetscFunctionReturn(0);
+}
+
+/* The smallest selection of d's directions found (bisection, frontier, elimination) as directions of their own, *ds
+   (NULL when every direction together misses the target), its size and error; *nevals += models measured */
+static PetscErrorCode KFCompressSearch(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], KFBodyDirections **ds, PetscInt *size, PetscReal *error, PetscInt *nevals)
+{
+  PetscInt *counts, **sel;
+
+  PetscFunctionBegin;
+  *ds = NULL;
+  PetscCall(PetscMalloc1(nb, &counts));
+  PetscCall(PetscCalloc1(nb, &sel));
+  for (PetscInt b = 0; b < nb; b++) counts[b] = d[b].ndir;
+  PetscCall(KFCompressTry(r, neval, evals, m, d, counts, size, error));
+  ++*nevals;
+  if (*error <= r->accuracy) {
+    PetscCall(KFCompressBisect(r, neval, evals, m, d, nb, counts, nevals));
+    if (nb == 2) PetscCall(KFCompressFrontier(r, neval, evals, m, d, counts, nevals));
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscCall(PetscMalloc1(counts[b] + 1, &sel[b]));
+      for (PetscInt i = 0; i < counts[b]; i++) sel[b][i] = i;
+    }
+    PetscCall(KFCompressEliminate(r, neval, evals, m, nb, d, sel, counts, nevals));
+    PetscCall(KFCompressSelect(nb, d, sel, counts, ds));
+    PetscCall(KFCompressTry(r, neval, evals, m, *ds, NULL, size, error));
+    ++*nevals;
+  }
+  for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(sel[b]));
+  PetscCall(PetscFree(sel));
+  PetscCall(PetscFree(counts));
+  PetscFunctionReturn(0);
+}
+
+/*
+  Compression of the model the search chose (-kf_compress): each body's directions ordered by its share of the
+  model's response at every evaluation point, each input weighted by its pairs' peaks (src/project/body_compress.c),
+  then the fewest leading directions per body with which the model still meets the target (body by body by bisection,
+  and with two bodies along the frontier of the pairs of counts), then any direction whose removal keeps the target
+  (backward elimination). Each candidate is measured against the same reference as the search's. The directions are
+  ordered twice, on two snapshot grids (each resonance once; the evaluation grid), and the smaller result is kept
+  (ties: the first): which ordering compresses further differs between scenes and sizes of one scene (measured on
+  the solid spacecraft at 1e-3: 24 against 26 states at 2,760 dofs, 30 against 28 at 57k). The smaller model replaces
+  *model; *from and *to: the sizes before and after (equal when nothing was gained).
+*/
+PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *model, PetscInt *from, PetscInt *to)
+{
+  KFBodyDirections *best = NULL;
+  PetscInt          nb, nevals = 0, bsize = 0;
+  PetscReal         berror = 0;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  *from = 0;
+  for (PetscInt b = 0; b < nb; b++) {
+    KFReducedBody body;
+
+    PetscCall(KFReducedModelGetBody(*model, b, NULL, NULL, &body, NULL));
+    *from += body.v;
+  }
+  *to = *from;
+  for (PetscInt pass = 0; pass < 2; pass++) {
+    KFBodyDirections *d, *ds;
+    PetscInt          size;
+    PetscReal         error;
+
+    PetscCall(KFCompressDirections(r, neval, evals, *model, (PetscBool)(pass == 0), &d));
+    for (PetscInt b = 0; b < nb; b++) PetscCall(PetscInfo(r, "compression, ordering %" PetscInt_FMT ": body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", pass, b, d[b].v, d[b].nkeep, d[b].ndir));
+    PetscCall(KFCompressSearch(r, neval, evals, *model, nb, d, &ds, &size, &error, &nevals));
+    PetscCall(KFBodyDirectionsDestroy(nb, &d));
+    if (ds && error <= r->accuracy && (!best || size < bsize)) {
+      PetscCall(KFBodyDirectionsDestroy(nb, &best));
+      best   = ds;
+      bsize  = size;
+      berror = error;
+    } else PetscCall(KFBodyDirectionsDestroy(nb, &ds));
+  }
+  if (best && bsize < *from) {
+    KFReducedModel c;
+    char           text[32];
+
+    PetscCall(KFReducedModelCompress(*model, best, NULL, &c));
+    PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
+    PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
+    PetscCall(KFReducedModelDestroy(model));
+    *model = c;
+    *to    = bsize;
+  }
+  PetscCall(PetscInfo(r, "compression: %" PetscInt_FMT " models measured, %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (error %g)\n", nevals, *from, *to, (double)berror));
+  PetscCall(KFBodyDirectionsDestroy(nb, &best));
+  PetscFunctionReturn(0);
+}

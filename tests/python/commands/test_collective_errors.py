@@ -334,15 +334,20 @@ def test_info_with_a_bad_scene_on_one_rank(tmp_path):
 def disk_full(tmp_path, nbytes):
     """An environment whose kryflex processes cannot write files beyond nbytes (RLIMIT_FSIZE, set through a
     sitecustomize once MPI has started: its shared-memory files need more)."""
-    site = tmp_path / "site"
-    site.mkdir()
-    (site / "sitecustomize.py").write_text(
+    return site_env(tmp_path,
         "import resource, kryflex, kryflex._runtime as rt\n"
         "start = rt.init\n"
         "def init(argv=None):\n"
         "    start(argv)\n"
         "    resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
         "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
+
+
+def site_env(tmp_path, source):
+    """An environment whose Python processes run source first (a sitecustomize on PYTHONPATH)."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text(source)
     return dict(ENV, PYTHONPATH=str(site))
 
 
@@ -361,9 +366,7 @@ def model_file_disk_full(tmp_path, nbytes):
     """An environment in which every file but the model file is written: RLIMIT_FSIZE (nbytes) is set when the command
     starts writing reduced.h5 (ReducedModel.save), as on a disk that fills during the model file. The model file is
     written after report.md and summary.json, so the earlier files never meet the limit."""
-    site = tmp_path / "site"
-    site.mkdir()
-    (site / "sitecustomize.py").write_text(
+    return site_env(tmp_path,
         "import resource, kryflex, kryflex._runtime as rt\n"
         "start, done = rt.init, []\n"
         "def init(argv=None):\n"
@@ -378,7 +381,6 @@ def model_file_disk_full(tmp_path, nbytes):
         "        return save(self, path)\n"
         "    api.ReducedModel.save = limited\n"
         "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
-    return dict(ENV, PYTHONPATH=str(site))
 
 
 def model_file_left(folder):

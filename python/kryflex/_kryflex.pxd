@@ -235,6 +235,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool, PetscInt)
     PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetCompress(KFReducer, PetscBool)
+    PetscErrorCode KFReducerSetStaticExact(KFReducer, PetscBool)
     PetscErrorCode KFReducerSetImportance(KFReducer, KFImportance, PetscReal)
     PetscErrorCode KFReducerSetStaticCorrection(KFReducer, PetscBool)
     PetscErrorCode KFReducerSetTolerances(KFReducer, PetscReal, PetscReal, PetscReal)

@@ -106,6 +106,7 @@ class Reducer:
         r.set_search(bool(red["search"]), int(red["moments_max"]))
         r.set_cluster_tolerance(float(red["cluster_rtol"]))
         r.set_compress(bool(red["compress"]))
+        r.set_static_exact(bool(red["static_exact"]))
         r.set_importance(red["importance"], float(red["keep_threshold"]))
         r.set_static_correction(bool(red["static_correction"]))
         r.set_tolerances(float(red["deflation_tol"]), float(red["body_tol"]), float(red["reassembly_rtol"]))

@@ -468,6 +468,9 @@ PETSC_EXTERN PetscErrorCode KFReducerSetSearch(KFReducer, PetscBool search, Pets
    (ordered by their share of the reassembled model's response, rigid motions and static response kept exactly) that
    still meet the accuracy, when that is smaller (-kf_compress) */
 PETSC_EXTERN PetscErrorCode KFReducerSetCompress(KFReducer, PetscBool compress);
+/* Whether the compression keeps the static moment L^0 exact (default) or truncates the static response like the rest
+   of the response, L^0 then measured (-kf_static_exact) */
+PETSC_EXTERN PetscErrorCode KFReducerSetStaticExact(KFReducer, PetscBool exact);
 /* Krylov modes whose frequencies lie within rtol (relative) of each other form a cluster, kept or dropped whole
    (-kf_cluster_rtol, 1e-3) */
 PETSC_EXTERN PetscErrorCode KFReducerSetClusterTolerance(KFReducer, PetscReal rtol);

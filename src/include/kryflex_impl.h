@@ -159,7 +159,7 @@ typedef struct {
   PetscReal *W;      /* v x (nkeep + ndir) */
   PetscReal *weight; /* ndir: each direction's share of the snapshots (singular values) */
 } KFBodyDirections;
-PETSC_INTERN PetscErrorCode KFBodyCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], KFBodyDirections **);
+PETSC_INTERN PetscErrorCode KFBodyCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **);
 PETSC_INTERN PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **);
 PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyDirections[], const PetscInt counts[], KFReducedModel *);
 /* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */

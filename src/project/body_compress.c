@@ -4,9 +4,10 @@
   coordinates are ordered by that share:
     - snapshots: the body's part q_b = N_b y(w) of the reassembled model's elastic response y(w) to every input (N: the
       null space of the ties), at the given frequencies and configurations, under the model's damping;
-    - kept exactly: the body's 6 rigid motions and its part of the static elastic response y(0) at every
+    - kept exactly: the body's 6 rigid motions and (static_exact) its part of the static elastic response y(0) at every
       configuration, so that the static moment L^0 there is reproduced (a Galerkin projection whose space holds the
-      static solution returns it);
+      static solution returns it). Without static_exact y(0) is one more snapshot, ordered and truncated like the
+      others: L^0 is then approximated, and a body needs no direction for each of its static columns;
     - ordered: the rest of the snapshots, M_b-orthogonal to the kept columns, by the eigenvectors of their M_b-weighted
       Gram matrix (the left singular vectors of the snapshots, leading first). Each input's snapshots may be weighted
       (the caller's inw): the accuracy is relative per input/output pair, so an input whose response is small counts
@@ -41,10 +42,17 @@ static void KFAB(PetscInt m, PetscInt k, PetscInt n, const PetscReal A[], PetscI
     }
 }
 
+/* Gq (v x v) += s2 (re re^T + im im^T) of one snapshot column (re, im: v entries; im NULL: real) */
+static void KFGramAdd(PetscInt v, PetscReal s2, const PetscReal re[], const PetscReal im[], PetscReal Gq[])
+{
+  for (PetscInt c = 0; c < v; c++)
+    for (PetscInt r = 0; r < v; r++) Gq[r + c * v] += s2 * (re[r] * re[c] + (im ? im[r] * im[c] : 0));
+}
+
 /* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
-   column nS) and the Gram matrix of its dynamic response, input j weighted by inw[j] (NULL: 1), added to Gq[b]
-   (v_b x v_b), in reduced body coordinates */
-static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], const PetscReal inw[], PetscInt nS, PetscReal *S[], PetscReal *Gq[])
+   column nS; also added to the Gram as a snapshot when !static_exact) and the Gram matrix of its dynamic response,
+   input j weighted by inw[j] (NULL: 1), added to Gq[b] (v_b x v_b), in reduced body coordinates */
+static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], const PetscReal inw[], PetscBool static_exact, PetscInt nS, PetscReal *S[], PetscReal *Gq[])
 {
   const PetscInt a = m->ninputs;
   PetscInt       n = 0, h, rank, nrigid, *off;
@@ -87,7 +95,10 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
        loses (KFDenseMomentsRigid with the outputs N) */
     PetscCall(KFDenseMomentsRigid(h, Kh, Mh, a, Gh, n, N, nrigid, Phir, 1, y));
     for (PetscInt b = 0; b < m->nb; b++)
-      for (PetscInt j = 0; j < a; j++) PetscCall(PetscArraycpy(&S[b][(nS + j) * bodies[b].v], &y[off[b] + j * n], bodies[b].v));
+      for (PetscInt j = 0; j < a; j++) {
+        PetscCall(PetscArraycpy(&S[b][(nS + j) * bodies[b].v], &y[off[b] + j * n], bodies[b].v));
+        if (!static_exact) KFGramAdd(bodies[b].v, inw ? inw[j] * inw[j] : 1, &y[off[b] + j * n], NULL, Gq[b]);
+      }
     for (PetscInt f = 0; f < nw; f++) {
       PetscCall(PetscArrayzero(y, n * a));
       PetscCall(PetscArrayzero(yi, n * a));
@@ -104,12 +115,7 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
       }
       for (PetscInt b = 0; b < m->nb; b++) { /* Gq_b += Re q Re q^T + Im q Im q^T */
         const PetscInt v = bodies[b].v;
-        for (PetscInt j = 0; j < a; j++) {
-          const PetscReal s2 = inw ? inw[j] * inw[j] : 1;
-
-          for (PetscInt c = 0; c < v; c++)
-            for (PetscInt r = 0; r < v; r++) Gq[b][r + c * v] += s2 * (y[off[b] + r + j * n] * y[off[b] + c + j * n] + yi[off[b] + r + j * n] * yi[off[b] + c + j * n]);
-        }
+        for (PetscInt j = 0; j < a; j++) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[off[b] + j * n], &yi[off[b] + j * n], Gq[b]);
       }
     }
     PetscCall(PetscFree2(y, yi));
@@ -201,9 +207,11 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
   KFBodyCompressDirections - every body's directions ordered by its share of the model's elastic response at nconf
   configurations (angles: nconf x nrevolute, row by row, radians), configuration k at the nw[k] frequencies w[k]
   (rad/s), its input j's snapshots weighted by inw[k][j] (inw NULL: all 1), under the model's damping (modal, Rayleigh
-  and structural; the bodies' viscous matrices left out). dirs: nb of them, freed with KFBodyDirectionsDestroy.
+  and structural; the bodies' viscous matrices left out). static_exact: each body's share of the static response is
+  kept exactly (L^0 reproduced at the configurations); false: it is one more snapshot. dirs: nb of them, freed with
+  KFBodyDirectionsDestroy.
 */
-PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], KFBodyDirections **dirs)
+PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **dirs)
 {
   const PetscInt nrev1 = PetscMax(m->nrevolute, 1), a = m->ninputs;
   PetscReal    **S, **Gq;
@@ -219,9 +227,9 @@ PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const 
     PetscCall(PetscCalloc1(v * a * nconf + 1, &S[b]));
     PetscCall(PetscCalloc1(v * v + 1, &Gq[b]));
   }
-  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, k * a, S, Gq));
+  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, static_exact, k * a, S, Gq));
   for (PetscInt b = 0; b < m->nb; b++) {
-    PetscCall(KFCompressBody(&m->bodies[b], a * nconf, S[b], Gq[b], &(*dirs)[b]));
+    PetscCall(KFCompressBody(&m->bodies[b], static_exact ? a * nconf : 0, S[b], Gq[b], &(*dirs)[b]));
     PetscCall(PetscFree(S[b]));
     PetscCall(PetscFree(Gq[b]));
   }

@@ -246,7 +246,7 @@ static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPo
     wk[e]   = w[e];
     inwk[e] = &inw[e * a];
   }
-  PetscCall(KFBodyCompressDirections(m, neval, angles, nw, wk, inwk, d));
+  PetscCall(KFBodyCompressDirections(m, neval, angles, nw, wk, inwk, r->static_exact, d));
   for (PetscInt e = 0; e < neval; e++) PetscCall(PetscFree(w[e]));
   PetscCall(PetscFree6(angles, nw, w, wk, inw, inwk));
   PetscFunctionReturn(0);

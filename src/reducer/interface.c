@@ -56,6 +56,7 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->sub_bases               = PETSC_TRUE;
   r->cluster_rtol            = 1e-3;
   r->max_factorizations      = 0;
+  r->static_exact            = PETSC_TRUE; /* L^0 exact: the compression keeps the static response's columns */
   r->compress                = PETSC_TRUE; /* measured: never loses the target (only a measured passing model replaces
                                              the chosen one), about 0.1 s; solid 32 -> 28 states at 1e-3 */
   r->shift_blocks            = 3; /* the solid spacecraft at 1e-4 (elastic): 23 system dofs with 3 blocks per point, no win with 2 */
@@ -306,6 +307,16 @@ PetscErrorCode KFReducerSetCompress(KFReducer r, PetscBool compress)
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   r->compress = compress;
+  PetscFunctionReturn(0);
+}
+
+/* whether the compression keeps each body's share of the static elastic response exactly, so that L^0 stays exact
+   (true), or orders and truncates it like the other snapshots, L^0 then measured, not exact (-kf_static_exact) */
+PetscErrorCode KFReducerSetStaticExact(KFReducer r, PetscBool exact)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  r->static_exact = exact;
   PetscFunctionReturn(0);
 }
 

@@ -141,6 +141,9 @@ cdef class CReducer:
     def set_compress(self, compress):
         check(KFReducerSetCompress(self.r, PETSC_TRUE if compress else PETSC_FALSE))
 
+    def set_static_exact(self, exact):
+        check(KFReducerSetStaticExact(self.r, PETSC_TRUE if exact else PETSC_FALSE))
+
     def set_cluster_tolerance(self, PetscReal rtol):
         check(KFReducerSetClusterTolerance(self.r, rtol))
 

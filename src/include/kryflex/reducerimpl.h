@@ -111,6 +111,7 @@ struct _p_KFReducer {
                                          (-kf_max_factorizations, 0: moments at zero only) */
   PetscInt        shift_blocks;   /* Krylov blocks per expansion point inside the band (-kf_shift_blocks) */
   PetscBool       compress;       /* the chosen model compressed body by body by its response (-kf_compress) */
+  PetscBool       static_exact;   /* compression keeps each body's share of the static response exactly (-kf_static_exact) */
   PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */

@@ -384,6 +384,9 @@ class ChosenModel(Record):
     expansion_point_factorizations: int = _value()
     compressed_from_dofs: int = _value(doc="-kf_compress: reduced dofs before the compression (None: not run)")
     compressed_to_dofs: int = _value(doc="-kf_compress: reduced dofs after it (equal: no body could lose a direction)")
+    static_exact: bool = _value(True, doc="L^0 kept as the search made it (false: compressed with -kf_static_exact "
+                                          "false, L^0 approximated: see static_moment_error)")
+    static_moment_error: dict = _value({}, doc="{label: ||L^0_full - L^0_red|| / ||L^0_full||}, measured")
 
 
 @dataclass(kw_only=True)

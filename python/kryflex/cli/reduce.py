@@ -129,6 +129,9 @@ def run(argv):
             clean_up()
     say("kryflex: reduced '%s': %s" % (s.scene, chosen_text(result)))
     say("kryflex: results in %s (reduced.h5, report.md, summary.json, plots)" % out)
+    if s.chosen is not None and s.chosen.static_exact is False:
+        from ..report.sections import static_moment_text
+        say("kryflex: %s" % static_moment_text(s.chosen))
     trim = s.reduced.trimming if s.reduced else None
     if trim is not None and trim.top_frequency_hz_max:
         say("kryflex: highest reduced frequency %.4g Hz (%s), stable explicit step %.3g s (2 / omega_max)"

@@ -91,7 +91,18 @@ def _chosen_sentence(c):
     if before is not None and after is not None:   # docs/guide/expansion-points.md, "Compression"
         parts.append(f"compressed body by body from {before} to {after} reduced dofs" if after < before
                      else f"compression tried, no body could lose a direction ({before} reduced dofs)")
+    if ch.static_exact is False:
+        parts.append(static_moment_text(ch))
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."
+
+
+def static_moment_text(ch):
+    """The chosen model's static moment in words when the compression did not keep it exact (-kf_static_exact
+    false): its measured error, never "exact"."""
+    errors = [e for e in (ch.static_moment_error or {}).values() if e is not None]
+    worst = f"{max(errors):.2g}" if errors else "not measured"
+    return ("the static moment L⁰ not kept exact (reduction.static_exact: false), its largest relative error at the "
+            f"angles of interest {worst}, measured")
 
 
 def _row_name(c, label):
@@ -582,6 +593,9 @@ def _mismatch_sentence(c, found, model):
     if len(found) > MAX_MISMATCHES_LISTED:
         text += f"; and {len(found) - MAX_MISMATCHES_LISTED} more (see summary.json)"
     text += "."
+    if not (c.s.get("chosen") or {}).get("static_exact", True):
+        return text + (" The compression truncated the static response (reduction.static_exact: false), so L⁰ is "
+                       "approximated, its error measured (summary.json: chosen.static_moment_error).")
     if any(label == c.label_g for label, _, _, _ in found) and model.startswith("single"):
         text += (" This includes " + ("the structure's own expansion point" if c.single else "α_G itself") +
                  ", where the match is exact by construction: "

@@ -100,6 +100,17 @@ def _optional_scalar(reducer, config, name, has, kind=float):
     return _scalar(reducer, config, name, kind) if name in has else None
 
 
+def _static_moment(reducer, labels, has, whole, prefix):
+    """static_exact: whether the chosen model keeps L^0 as the search made it (false only after a compression with
+    -kf_static_exact false, docs/guide/expansion-points.md); static_moment_error: {label: the chosen model's measured
+    ||L^0_full - L^0_red|| / ||L^0_full||} at the angles of interest, reported either way."""
+    flag = _optional_scalar(reducer, -1, "static_exact", whole, int)
+    name = prefix + "moment_error"
+    errors = {lab: _none(np.ravel(reducer.result(c, name))[0]) if name in has[c] else None
+              for c, lab in enumerate(labels)}
+    return {"static_exact": flag is None or bool(flag), "static_moment_error": errors}
+
+
 def _degrees(angles_rad):
     """Degrees with the 12 digits a user gives (30, not 29.999999999999996)."""
     return [float("%.12g" % d) for d in np.degrees(np.asarray(angles_rad, dtype=float))]
@@ -251,6 +262,7 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         _optional_scalar(reducer, -1, "expansion_point_factorizations", whole, int) or 0
     if before is not None:
         out["chosen"]["compressed_from_dofs"], out["chosen"]["compressed_to_dofs"] = before, after
+    out["chosen"].update(_static_moment(reducer, labels, has, whole, prefix))
     out["expansion_point_search"] = {
         "factorizations_spent": _optional_scalar(reducer, -1, "shift_factorizations_spent", whole, int) or 0,
         "rows": _shift_rows(_optional(reducer, -1, "shift_search", whole))}

@@ -900,15 +900,16 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
     PetscInt        from, to;
     PetscLogDouble  c0, c1;
+    PetscBool       kept;
 
     PetscCall(PetscTime(&c0));
-    PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to));
+    PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to, &kept));
     PetscCall(PetscTime(&c1));
     PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)(c1 - c0)));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
     /* a compression without the static columns changes L^0: the summary reports its measured error, not "exact" */
-    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", (r->static_exact || to >= from) ? 1.0 : 0.0));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", kept ? 1.0 : 0.0));
     if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (each body its leading directions of the response)", from, to));
     else PetscCall(KFProgress(st.comm, "compression: no body can lose a direction and meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
   }

@@ -249,7 +249,7 @@ PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], Pe
 PETSC_INTERN PetscErrorCode KFReducerShareBodies_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *);
 PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, PetscInt *nvisit, KFVisit **visits, PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 /* the chosen model compressed body by body by what its response needs (compress_search.c, -kf_compress): replaced when smaller
-   and still meeting the target; its reduced dofs before and after */
+   and still meeting the target; its reduced dofs before and after, and whether it keeps the static response (-kf_static_exact) */
 PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);

@@ -228,6 +228,7 @@ def test_the_command_reports_the_L0_error(tmp_path):
     assert "where the match is exact by construction" not in report
 
 
+@pytest.mark.fast
 @pytest.mark.parametrize("how", ["scene", "option"])
 def test_a_bad_value_is_a_clean_error(tmp_path, how):
     extra = ["-scene.reduction.static_exact", "maybe"] if how == "scene" else ["-kf_static_exact", "maybe"]

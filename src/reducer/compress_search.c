@@ -342,6 +342,7 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     PetscCall(KFReducedModelCompress(*model, best, NULL, &c));
     PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
     PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
+    if (!bkept) PetscCall(KFReducedModelSetSetting(c, "static_exact", "false")); /* a saved model says its L^0 is approximated */
     PetscCall(KFReducedModelDestroy(model));
     *model       = c;
     *to          = bsize;

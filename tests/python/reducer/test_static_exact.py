@@ -200,6 +200,7 @@ def test_L0_error_is_measured_not_claimed(both, dense):
     # smaller than with the static columns kept: an ordering that truncated them won (those that keep them are the
     # same as with true), and the summary says so
     assert ch.static_exact is (not truncated)
+    assert free.model.settings.get("static_exact", True) is (not truncated)     # the saved model says so
     labels = list(ch.static_moment_error)
     assert len(labels) == len(configurations)
     for label, angles in zip(labels, configurations):

@@ -137,6 +137,8 @@ PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */
 PETSC_INTERN PetscErrorCode KFDenseCreate(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *);
+PETSC_INTERN PetscErrorCode KFDenseCreateUninitialized(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *); /* no zero fill: the caller writes every entry */
+PETSC_INTERN PetscErrorCode KFDenseCopyCreate(Mat A, Mat *B); /* a copy of dense A, without the zero fill first */
 PETSC_INTERN PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X); /* [A, B]: two tall dense Mats, same row layout */
 PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[]); /* A^T B replicated (A, B tall dense) */
 PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */

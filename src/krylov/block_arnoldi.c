@@ -385,7 +385,7 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
   PetscCall(KFDenseOrthonormalizeSmall_Private(m, p, g, nrm0, tol, &nq));
   if (nq) {
     PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
-    PetscCall(KFDenseCreate(comm, nl, N, nq, MY));
+    PetscCall(KFDenseCreateUninitialized(comm, nl, N, nq, MY));
     PetscCall(MatDenseGetLDA(*MY, &ld));
     PetscCall(MatDenseGetArrayWrite(*MY, &my));
     PetscCall(PetscArrayzero(my, ld * nq));
@@ -572,7 +572,13 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
       }
       if (nsrc == 1) B = Bs[0];
       else PetscCall(KFDenseHStack(Bs[0], Bs[1], &B));
-      PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
+      { /* W: written whole by the solve */
+        PetscInt nlw, Nw, pw;
+
+        PetscCall(MatGetLocalSize(B, &nlw, NULL));
+        PetscCall(MatGetSize(B, &Nw, &pw));
+        PetscCall(KFDenseCreateUninitialized(s->comm, nlw, Nw, pw, &W));
+      }
       PetscCall(KFFlexSolverApply(solver, B, W));
       if (nsrc == 2) PetscCall(MatDestroy(&B));
       for (int q = 0; q < nsrc; q++)

@@ -11,6 +11,43 @@ PetscErrorCode KFDenseCreate(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* The same without the zero fill, for a matrix the caller overwrites entirely (products, solves, copies): PETSc
+   zero-fills a dense matrix it allocates, and on the 200k-dof panels those fills of fresh pages were about 1 GB per
+   reduction, written once more right after. The array is PETSc's (freed with the matrix). */
+PetscErrorCode KFDenseCreateUninitialized(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *A)
+{
+  PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(nlocal * ncols + 1, &a));
+  PetscCall(MatCreateDense(comm, nlocal, PETSC_DECIDE, N, ncols, a, A));
+  PetscCall(MatDenseReplaceArray(*A, a)); /* a caller's array becomes the matrix' own */
+  PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* A copy of the dense matrix A (its layout, its values), without PETSc's zero fill before the copy */
+PetscErrorCode KFDenseCopyCreate(Mat A, Mat *B)
+{
+  PetscInt           nl, N, p, lda, ldb;
+  const PetscScalar *a;
+  PetscScalar       *b;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatGetSize(A, &N, &p));
+  PetscCall(KFDenseCreateUninitialized(PetscObjectComm((PetscObject)A), nl, N, p, B));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(*B, &ldb));
+  PetscCall(MatDenseGetArrayRead(A, &a));
+  PetscCall(MatDenseGetArrayWrite(*B, &b));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(b + j * ldb, a + j * lda, nl));
+  PetscCall(MatDenseRestoreArrayRead(A, &a));
+  PetscCall(MatDenseRestoreArrayWrite(*B, &b));
+  PetscFunctionReturn(0);
+}
+
 /* Every rank gets the whole (small) matrix, column-major: its rows are spread over the ranks. */
 PetscErrorCode KFDenseGather(Mat A, PetscReal out[])
 {

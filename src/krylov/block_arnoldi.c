@@ -324,13 +324,15 @@ static PetscErrorCode KFChainComplementAdd(KFChainComplement *cc, KFMBasis *mb, 
   PetscFunctionReturn(0);
 }
 
-/* out (nl x q, ld nl) = [A, B] F, A the complement's first mu columns, B the basis columns [k0, k), F (mu + k - k0) x q */
-static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar *a, PetscInt pb, const PetscScalar *b, PetscInt q, const PetscScalar *f, PetscScalar *out)
+/* out (nl x q, ld ldo) = [A, B] F, A the complement's first mu columns, B the basis columns [k0, k), F (mu + k - k0) x q
+   (ld mu + k - k0); out is written, not read (no zero fill first) */
+static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar *a, PetscInt pb, const PetscScalar *b, PetscInt q, const PetscScalar *f, PetscScalar *out, PetscInt ldo)
 {
   PetscFunctionBegin;
-  PetscCall(PetscArrayzero(out, nl * q));
-  PetscCall(KFArraySkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
-  PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
+  if (mu) {
+    PetscCall(KFArraySkinnyMultSet(nl, mu, a, nl, q, 1.0, f, mu + pb, out, ldo));
+    PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, ldo));
+  } else PetscCall(KFArraySkinnyMultSet(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, ldo));
   PetscFunctionReturn(0);
 }
 
@@ -388,13 +390,11 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
     PetscCall(KFDenseCreateUninitialized(comm, nl, N, nq, MY));
     PetscCall(MatDenseGetLDA(*MY, &ld));
     PetscCall(MatDenseGetArrayWrite(*MY, &my));
-    PetscCall(PetscArrayzero(my, ld * nq));
-    PetscCall(KFArraySkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
-    PetscCall(KFArraySkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, nq, g, my, ld));
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
-    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare, nl));
     nmu       = cc->MU; /* the rotated complement becomes the kept one: no copy back */
     cc->MU    = cc->spare;
     cc->spare = nmu;

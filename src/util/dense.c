@@ -139,6 +139,30 @@ PetscErrorCode KFArraySkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscS
   PetscFunctionReturn(0);
 }
 
+/* X (nl x p, ldx) = alpha A c over local rows (X's values before are not read: no zero fill needed), chunk by chunk */
+PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blc;
+  PetscScalar  zero = 0.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || p <= 0) PetscFunctionReturn(0);
+  if (nc <= 0) {
+    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArrayzero(x + j * ldx, nl));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldc, &blc));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &zero, x + i0, &blx));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
 PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
 {

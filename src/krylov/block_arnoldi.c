@@ -2,9 +2,6 @@
 #include <petscblaslapack.h>
 #include "../dense/dense_impl.h"
 
-/* single-precision BLAS (the basis' float copy, KFMBasisSubtractSmall) */
-extern void sgemm_(const char *, const char *, const PetscBLASInt *, const PetscBLASInt *, const PetscBLASInt *, const float *, const float *, const PetscBLASInt *, const float *, const PetscBLASInt *, const float *, float *, const PetscBLASInt *);
-
 /* A growing M-orthonormal basis: its columns in a BV and, beside them, M times each column (MV: local rows,
    column-major, leading dimension nl), computed when the column was made, so that no column's product with M is
    formed twice. */
@@ -15,8 +12,6 @@ typedef struct {
   PetscScalar *work; /* the appended block and its product (2 x nl x wcap): kept from block to block, since a fresh
                         allocation of that size is fresh pages, faulted in and zeroed by the system at every block */
   PetscInt     wcap;
-  float       *V32;   /* the columns rounded to single precision (nl x m): the second pass' correction, KFMBasisSubtractSmall */
-  PetscReal   *vnrm;  /* each column's Euclidean norm (global): that correction's error bound */
 } KFMBasis;
 
 /* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
@@ -65,7 +60,6 @@ static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
   mb->work = NULL;
   mb->wcap = 0;
   PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
-  PetscCall(PetscMalloc2(nl * m + 1, &mb->V32, m + 1, &mb->vnrm));
   PetscFunctionReturn(0);
 }
 
@@ -73,7 +67,6 @@ static PetscErrorCode KFMBasisDestroy(KFMBasis *mb)
 {
   PetscFunctionBegin;
   PetscCall(PetscFree(mb->MV));
-  PetscCall(PetscFree2(mb->V32, mb->vnrm));
   PetscCall(PetscFree(mb->work));
   mb->wcap = 0;
   PetscFunctionReturn(0);
@@ -162,84 +155,6 @@ static PetscErrorCode KFMBasisProjectOut(const KFRigidSpace *rs, KFMBasis *mb, P
   PetscFunctionReturn(0);
 }
 
-/* w -= V c for the basis part of a second pass whose coefficients are small against w (nl x p), by the float copy of
-   the basis: half the bytes of V, read in the pass that is all memory traffic. The float path is taken only when its
-   extra error, at most k 2^-24 sum_l |c_lj| |v_l| per column (V's entries and the products rounded to single), is
-   below the double subtraction's own rounding 2^-53 |w_j| for every column j: after a first pass the coefficients are
-   at the rounding of that pass (1e-14 of |w| and less), far inside it; otherwise the double product. *done says which. */
-static PetscErrorCode KFMBasisSubtractSmall(const KFMBasis *mb, PetscInt p, const PetscReal c[], PetscInt ldc, PetscScalar *w, PetscBool *done)
-{
-  const PetscInt nl = mb->nl, k = mb->k;
-  MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
-  PetscReal     *wn;
-  PetscBool      small = PETSC_TRUE;
-
-  PetscFunctionBegin;
-  *done = PETSC_FALSE;
-  if (!k) PetscFunctionReturn(0);
-  PetscCall(PetscCalloc1(p, &wn));
-  for (PetscInt j = 0; j < p; j++)
-    for (PetscInt i = 0; i < nl; i++) wn[j] += PetscRealPart(w[i + j * nl] * w[i + j * nl]);
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, wn, (PetscMPIInt)p, MPIU_REAL, MPIU_SUM, comm));
-  for (PetscInt j = 0; j < p; j++) {
-    PetscReal b = 0;
-
-    for (PetscInt l = 0; l < k; l++) b += PetscAbsReal(c[l + j * ldc]) * mb->vnrm[l];
-    small = (PetscBool)(small && (PetscReal)k * b * PetscPowReal(2.0, -24) <= PetscPowReal(2.0, -53) * PetscSqrtReal(wn[j]));
-  }
-  PetscCall(PetscFree(wn));
-  PetscCall(PetscInfo(mb->V, "second pass of %" PetscInt_FMT " columns against %" PetscInt_FMT ": %s\n", p, k, small ? "float copy" : "double (coefficients too large)"));
-  if (!small) PetscFunctionReturn(0); /* the same decision on every rank: replicated data */
-  {
-    const PetscInt chunk = 2048;
-    float         *cf, *t, one = 1.0f, zero = 0.0f;
-    PetscBLASInt   bk, bp, bm, bnl, bc;
-
-    PetscCall(PetscMalloc2(k * p, &cf, chunk * p, &t));
-    for (PetscInt j = 0; j < p; j++)
-      for (PetscInt l = 0; l < k; l++) cf[l + j * k] = (float)c[l + j * ldc];
-    PetscCall(PetscBLASIntCast(k, &bk));
-    PetscCall(PetscBLASIntCast(p, &bp));
-    PetscCall(PetscBLASIntCast(nl, &bnl));
-    for (PetscInt i0 = 0; i0 < nl; i0 += chunk) {
-      const PetscInt m = PetscMin(chunk, nl - i0);
-
-      PetscCall(PetscBLASIntCast(m, &bm));
-      bc = bm;
-      PetscCallBLAS("sgemm", sgemm_("N", "N", &bm, &bp, &bk, &one, mb->V32 + i0, &bnl, cf, &bk, &zero, t, &bc));
-      for (PetscInt j = 0; j < p; j++)
-        for (PetscInt i = 0; i < m; i++) w[i0 + i + j * nl] -= (PetscScalar)t[i + j * m];
-    }
-    PetscCall(PetscFree2(cf, t));
-  }
-  *done = PETSC_TRUE;
-  PetscFunctionReturn(0);
-}
-
-/* The second pass of KFMBasisPasses: the coefficients of w against [Phi V] from the kept products (in double: they are
-   what this pass removes), cnorm2 each column's |c|^2, the correction by the float copy where it is as accurate
-   (KFMBasisSubtractSmall), else as the first pass */
-static PetscErrorCode KFMBasisSecondPass(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscReal cnorm2[])
-{
-  const PetscInt r = rs->r, k = mb->k, nl = mb->nl;
-  PetscReal     *c;
-  PetscBool      done;
-
-  PetscFunctionBegin;
-  for (PetscInt j = 0; j < p; j++) cnorm2[j] = 0;
-  if (!r && !k) PetscFunctionReturn(0);
-  PetscCall(PetscMalloc1((r + k) * p + 1, &c));
-  PetscCall(KFMBasisCoefficients(rs, mb, p, w, NULL, c));
-  for (PetscInt j = 0; j < p; j++)
-    for (PetscInt i = 0; i < r + k; i++) cnorm2[j] += PetscRealPart(c[i + j * (r + k)] * c[i + j * (r + k)]);
-  PetscCall(KFMBasisSubtractSmall(mb, p, c + r, r + k, w, &done));
-  if (done) {
-    if (r) PetscCall(KFArraySkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
-  } else PetscCall(KFMBasisSubtract(rs, mb, p, c, w, NULL));
-  PetscCall(PetscFree(c));
-  PetscFunctionReturn(0);
-}
-
 /* the M-norms sqrt(w_j^T M w_j) of p local columns from their products; each local sum in long double: the columns
    are normalized by these, and a plain running sum's rounding (~sqrt(n) eps) showed in |V^T M V - I| */
 static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const PetscScalar *w, const PetscScalar *mw, PetscReal nrm[])
@@ -261,9 +176,7 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
    block loses 35-99 % of its M-norm in pass 1, so the second pass is needed). No product of w with M until the end:
    mw is formed once from the final block, and the norm before follows by Pythagoras ([Phi V] being M-orthonormal).
    nrm: each column's M-norm after the passes.
-   Each pass reads the basis twice (the kept products, then the columns); the second pass' correction reads the
-   columns' float copy where that is as accurate (KFMBasisSubtractSmall): three and a half reads of the basis per
-   block instead of four. */
+   Each pass reads the basis twice (the kept products, then the columns). */
 static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[], PetscReal nrm[])
 {
   const PetscInt nl   = mb->nl;
@@ -273,7 +186,7 @@ static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, Petsc
   PetscFunctionBegin;
   PetscCall(PetscCalloc2(p, &cn1, p, &cn2));
   PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn1)); /* pass 1 */
-  PetscCall(KFMBasisSecondPass(rs, mb, p, w, cn2));
+  PetscCall(KFMBasisProjectOut(rs, mb, p, w, NULL, PETSC_FALSE, cn2)); /* pass 2 */
   PetscCall(KFMProduct(rs->sys->Ms, nl, p, w, mw));
   PetscCall(KFMNorms(comm, nl, p, w, mw, nrm));
   for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm[j] * nrm[j] + cn1[j] + cn2[j]);
@@ -360,17 +273,9 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       }
     }
     PetscCall(BVGetArray(mb->V, &v));
-    {
-      PetscReal e2v = 0;
-
-      for (PetscInt i = 0; i < nl; i++) {
-        v[i + mb->k * nl]      = wj[i] / na;
-        mb->MV[i + mb->k * nl] = mwj[i] / na;
-        mb->V32[i + mb->k * nl] = (float)v[i + mb->k * nl];
-        e2v += PetscRealPart(v[i + mb->k * nl] * v[i + mb->k * nl]);
-      }
-      PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &e2v, 1, MPIU_REAL, MPIU_SUM, comm));
-      mb->vnrm[mb->k] = PetscSqrtReal(e2v);
+    for (PetscInt i = 0; i < nl; i++) {
+      v[i + mb->k * nl]      = wj[i] / na;
+      mb->MV[i + mb->k * nl] = mwj[i] / na;
     }
     PetscCall(BVRestoreArray(mb->V, &v));
     mb->k++;

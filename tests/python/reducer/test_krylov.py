@@ -421,36 +421,6 @@ def test_many_moments_basis_stays_m_orthonormal_and_free_of_rigid_content(tmp_pa
     assert orth <= HEALTH and rigid <= HEALTH
 
 
-@pytest.mark.fast
-def test_second_pass_float_copy_and_its_double_fallback_keep_the_basis_healthy(tmp_path):
-    """The second Gram-Schmidt pass subtracts its (small) coefficients with a float copy of the basis only where that
-    adds less than the double subtraction's rounding; a column near the span of the basis (the 120-dof scene's Krylov
-    space runs out within 40 blocks, and its last columns deflate) has coefficients too large for it and takes the
-    double product. Both decisions are taken in one run (-info), and the basis is M-orthonormal and free of rigid
-    content to 20 eps, measured against the dense matrices here."""
-    path = frames.write_random_scene(str(tmp_path), 120, nbodies=2, ninputs=3, noutputs=2, seed=3)
-    with open(path) as f:
-        spec = yaml.safe_load(f)
-    spec["reduction"] = dict(moments=40, output_blocks=1, search=False, method="single-angle", save_maps=False)
-    with open(path, "w") as f:
-        yaml.safe_dump(spec, f)
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=os.path.join(ROOT, "python"))
-    r = subprocess.run([sys.executable, "-m", "kryflex", "reduce", path, "-o", str(tmp_path / "out"), "-kf_verify",
-                        "false", "-kf_quiet", "-info", ":bv"], capture_output=True, text=True, env=env, timeout=300)
-    assert r.returncode == 0, r.stdout + r.stderr
-    nfloat, ndouble = r.stdout.count(": float copy"), r.stdout.count(": double (coefficients too large)")
-    print(f"second passes: {nfloat} by the float copy, {ndouble} in double")
-    assert nfloat > 0 and ndouble > 0
-    scene = kryflex.load_scene(path)
-    system = _core.CSystem(scene.cscene)
-    system.set_angles(scene.angles_rad(scene.configurations[0]))
-    basis, ndeflated = _core.FlexSolver(system).krylov_basis(40, 1)
-    orth, rigid, _, _ = basis_health(system, basis)
-    print(f"basis {basis.size} ({ndeflated} deflated): |V^T M V - I| = {orth:.1e}, |Phi^T M V| = {rigid:.1e}")
-    assert ndeflated > 0 and orth <= HEALTH and rigid <= HEALTH
-
-
 def test_nearly_parallel_inputs_keep_their_difference_and_the_basis_its_health(block_scene):
     """in1 replaced by in0 + 1e-5 in1: the first block's second column keeps 1e-5 of its norm after the first is taken
     out (the within-block refinement's case, far above the deflation tolerance): nothing deflates, the basis is as

@@ -1,3 +1,6 @@
+/* Diagnostic only (not a benchmark): logs every memset over 2 MB with its backtrace to stderr.
+   gcc -O2 -fPIC -shared -fno-builtin -o ms.so memset-trace.c; LD_PRELOAD=./ms.so build/kryflex reduce ... 2>&1 | grep MEMSET
+   Its own memset is a byte loop: timings taken under it mean nothing. */
 #define _GNU_SOURCE
 #include <string.h>
 #include <execinfo.h>

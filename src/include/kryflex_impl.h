@@ -137,12 +137,15 @@ PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */
 PETSC_INTERN PetscErrorCode KFDenseCreate(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *);
+PETSC_INTERN PetscErrorCode KFDenseCreateUninitialized(MPI_Comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *); /* no zero fill: the caller writes every entry */
+PETSC_INTERN PetscErrorCode KFDenseCopyCreate(Mat A, Mat *B); /* a copy of dense A, without the zero fill first */
 PETSC_INTERN PetscErrorCode KFDenseHStack(Mat A, Mat B, Mat *X); /* [A, B]: two tall dense Mats, same row layout */
 PETSC_INTERN PetscErrorCode KFMatTransposeMatMultGather(Mat A, Mat B, PetscReal out[]); /* A^T B replicated (A, B tall dense) */
 PETSC_INTERN PetscErrorCode KFDenseMultSmall(Mat A, PetscInt r, PetscInt p, const PetscReal c[], PetscReal alpha, Mat X); /* X += alpha A c, c replicated r x p */
 PETSC_INTERN PetscErrorCode KFArrayTransposeMultGather(MPI_Comm, PetscInt nl, PetscInt p, const PetscScalar *A, PetscInt lda, PetscInt q, const PetscScalar *B, PetscInt ldb, PetscReal out[]); /* the same on local row blocks */
 PETSC_INTERN PetscErrorCode KFArrayMultSmall(PetscInt nl, PetscInt r, PetscInt p, const PetscScalar *A, PetscInt lda, const PetscReal c[], PetscReal alpha, PetscScalar *X, PetscInt ldx);
 PETSC_INTERN PetscErrorCode KFArraySkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscScalar *A, PetscInt lda, PetscInt p, const PetscScalar *X, PetscInt ldx, PetscScalar *out, PetscInt ldo); /* out += A^T X, local rows, chunked: no packing of a tall A */
+PETSC_INTERN PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar *A, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *X, PetscInt ldx); /* X = alpha A c, X not read */
 PETSC_INTERN PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *A, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *X, PetscInt ldx); /* X += alpha A c, local rows, chunked */
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in double-double, rounded once */
 PETSC_INTERN PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y);    /* Y = A X in double: MatMatMult's bits, faster */

@@ -324,13 +324,15 @@ static PetscErrorCode KFChainComplementAdd(KFChainComplement *cc, KFMBasis *mb, 
   PetscFunctionReturn(0);
 }
 
-/* out (nl x q, ld nl) = [A, B] F, A the complement's first mu columns, B the basis columns [k0, k), F (mu + k - k0) x q */
-static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar *a, PetscInt pb, const PetscScalar *b, PetscInt q, const PetscScalar *f, PetscScalar *out)
+/* out (nl x q, ld ldo) = [A, B] F, A the complement's first mu columns, B the basis columns [k0, k), F (mu + k - k0) x q
+   (ld mu + k - k0); out is written, not read (no zero fill first) */
+static PetscErrorCode KFChainCombine(PetscInt nl, PetscInt mu, const PetscScalar *a, PetscInt pb, const PetscScalar *b, PetscInt q, const PetscScalar *f, PetscScalar *out, PetscInt ldo)
 {
   PetscFunctionBegin;
-  PetscCall(PetscArrayzero(out, nl * q));
-  PetscCall(KFArraySkinnyMultAdd(nl, mu, a, nl, q, 1.0, f, mu + pb, out, nl));
-  PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, nl));
+  if (mu) {
+    PetscCall(KFArraySkinnyMultSet(nl, mu, a, nl, q, 1.0, f, mu + pb, out, ldo));
+    PetscCall(KFArraySkinnyMultAdd(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, ldo));
+  } else PetscCall(KFArraySkinnyMultSet(nl, pb, b, nl, q, 1.0, f + mu, mu + pb, out, ldo));
   PetscFunctionReturn(0);
 }
 
@@ -385,16 +387,14 @@ static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt 
   PetscCall(KFDenseOrthonormalizeSmall_Private(m, p, g, nrm0, tol, &nq));
   if (nq) {
     PetscCall(BVGetSizes(mb->V, NULL, &N, NULL));
-    PetscCall(KFDenseCreate(comm, nl, N, nq, MY));
+    PetscCall(KFDenseCreateUninitialized(comm, nl, N, nq, MY));
     PetscCall(MatDenseGetLDA(*MY, &ld));
     PetscCall(MatDenseGetArrayWrite(*MY, &my));
-    PetscCall(PetscArrayzero(my, ld * nq));
-    PetscCall(KFArraySkinnyMultAdd(nl, mu, cc->MU, nl, nq, 1.0, g, m, my, ld));
-    PetscCall(KFArraySkinnyMultAdd(nl, pb, mb->MV + k0 * nl, nl, nq, 1.0, g + mu, m, my, ld));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, nq, g, my, ld));
     PetscCall(MatDenseRestoreArrayWrite(*MY, &my));
     PetscCall(KFSmallComplement(m, nq, g, f));
     PetscCall(KFChainComplementReserve(cc, PetscMax(m - nq - mu, 0)));
-    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare));
+    PetscCall(KFChainCombine(nl, mu, cc->MU, pb, mb->MV + k0 * nl, m - nq, f, cc->spare, nl));
     nmu       = cc->MU; /* the rotated complement becomes the kept one: no copy back */
     cc->MU    = cc->spare;
     cc->spare = nmu;
@@ -435,6 +435,7 @@ static PetscErrorCode KFKrylovHealth(KFSystem sys, const KFMBasis *mb, PetscReal
   for (PetscInt i = 0; i < r * k; i++) *rigid = PetscMax(*rigid, PetscAbsReal(c[i]));
   for (PetscInt j = 0; j < k; j++)
     for (PetscInt i = 0; i < k; i++) *orth = PetscMax(*orth, PetscAbsReal(g[i + j * k] - (i == j)));
+  PetscCall(PetscInfo(V, "Krylov basis of %" PetscInt_FMT " columns: rigid content %.3e, orthogonality %.3e\n", k, (double)*rigid, (double)*orth));
   PetscCall(PetscFree(c));
   *gram = g;
   PetscFunctionReturn(0);
@@ -572,7 +573,13 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
       }
       if (nsrc == 1) B = Bs[0];
       else PetscCall(KFDenseHStack(Bs[0], Bs[1], &B));
-      PetscCall(MatDuplicate(B, MAT_DO_NOT_COPY_VALUES, &W));
+      { /* W: written whole by the solve */
+        PetscInt nlw, Nw, pw;
+
+        PetscCall(MatGetLocalSize(B, &nlw, NULL));
+        PetscCall(MatGetSize(B, &Nw, &pw));
+        PetscCall(KFDenseCreateUninitialized(s->comm, nlw, Nw, pw, &W));
+      }
       PetscCall(KFFlexSolverApply(solver, B, W));
       if (nsrc == 2) PetscCall(MatDestroy(&B));
       for (int q = 0; q < nsrc; q++)

@@ -257,7 +257,7 @@ static PetscErrorCode KFFlexSolverSolveOnce(KFFlexSolver solver, Mat B, Mat X, M
 
   PetscFunctionBegin;
   if (consume) W = B;
-  else PetscCall(MatDuplicate(B, MAT_COPY_VALUES, &W));
+  else PetscCall(KFDenseCopyCreate(B, &W));
   PetscCall(KFProjectFlexible(sys, W, PETSC_TRUE));
   PetscCall(MatGetSize(W, NULL, &p));
   if (solver->nheld) { /* the held rows at zero for the solve, their values kept for P B */

@@ -11,6 +11,43 @@ PetscErrorCode KFDenseCreate(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* The same without the zero fill, for a matrix the caller overwrites entirely (products, solves, copies): PETSc
+   zero-fills a dense matrix it allocates, and on the 200k-dof panels those fills of fresh pages were about 1 GB per
+   reduction, written once more right after. The array is PETSc's (freed with the matrix). */
+PetscErrorCode KFDenseCreateUninitialized(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *A)
+{
+  PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(nlocal * ncols + 1, &a));
+  PetscCall(MatCreateDense(comm, nlocal, PETSC_DECIDE, N, ncols, a, A));
+  PetscCall(MatDenseReplaceArray(*A, a)); /* a caller's array becomes the matrix' own */
+  PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
+/* A copy of the dense matrix A (its layout, its values), without PETSc's zero fill before the copy */
+PetscErrorCode KFDenseCopyCreate(Mat A, Mat *B)
+{
+  PetscInt           nl, N, p, lda, ldb;
+  const PetscScalar *a;
+  PetscScalar       *b;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatGetSize(A, &N, &p));
+  PetscCall(KFDenseCreateUninitialized(PetscObjectComm((PetscObject)A), nl, N, p, B));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(*B, &ldb));
+  PetscCall(MatDenseGetArrayRead(A, &a));
+  PetscCall(MatDenseGetArrayWrite(*B, &b));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(b + j * ldb, a + j * lda, nl));
+  PetscCall(MatDenseRestoreArrayRead(A, &a));
+  PetscCall(MatDenseRestoreArrayWrite(*B, &b));
+  PetscFunctionReturn(0);
+}
+
 /* Every rank gets the whole (small) matrix, column-major: its rows are spread over the ranks. */
 PetscErrorCode KFDenseGather(Mat A, PetscReal out[])
 {
@@ -98,6 +135,30 @@ PetscErrorCode KFArraySkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscS
   for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
     PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
     PetscCallBLAS("BLASgemm", BLASgemm_("T", "N", &bc, &bp, &bm, &one, a + i0, &bla, x + i0, &blx, &one, out, &blo));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* X (nl x p, ldx) = alpha A c over local rows (X's values before are not read: no zero fill needed), chunk by chunk */
+PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+{
+  PetscBLASInt bc, bp, bm, bla, blx, blc;
+  PetscScalar  zero = 0.0;
+
+  PetscFunctionBegin;
+  if (nl <= 0 || p <= 0) PetscFunctionReturn(0);
+  if (nc <= 0) {
+    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArrayzero(x + j * ldx, nl));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(PetscBLASIntCast(nc, &bc));
+  PetscCall(PetscBLASIntCast(p, &bp));
+  PetscCall(PetscBLASIntCast(lda, &bla));
+  PetscCall(PetscBLASIntCast(ldx, &blx));
+  PetscCall(PetscBLASIntCast(ldc, &blc));
+  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
+    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &zero, x + i0, &blx));
   }
   PetscFunctionReturn(0);
 }

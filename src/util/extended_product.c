@@ -181,7 +181,7 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
   PetscCall(MatGetLocalSize(A, &nl, NULL));
   PetscCall(MatGetSize(A, &N, NULL));
   PetscCall(MatGetSize(X, NULL, &ncols));
-  PetscCall(KFDenseCreate(comm, nl, N, ncols, Y));
+  PetscCall(KFDenseCreateUninitialized(comm, nl, N, ncols, Y)); /* every entry written below */
   PetscCall(PetscObjectTypeCompare((PetscObject)A, MATMPIAIJ, &mpi));
   PetscCall(MatDenseGetLDA(X, &ldx));
   PetscCall(MatDenseGetLDA(*Y, &ldy));

@@ -15,6 +15,22 @@ PetscErrorCode KFDenseCreate(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* the library's creates it without a zero fill (the product writes every entry); here it is filled with NaN, so an
+   entry the product missed shows in the comparisons below */
+PetscErrorCode KFDenseCreateUninitialized(MPI_Comm comm, PetscInt nlocal, PetscInt N, PetscInt ncols, Mat *A)
+{
+  PetscScalar *a;
+  PetscInt     lda;
+
+  PetscFunctionBegin;
+  PetscCall(KFDenseCreate(comm, nlocal, N, ncols, A));
+  PetscCall(MatDenseGetLDA(*A, &lda));
+  PetscCall(MatDenseGetArrayWrite(*A, &a));
+  for (PetscInt i = 0; i < lda * ncols; i++) a[i] = NAN;
+  PetscCall(MatDenseRestoreArrayWrite(*A, &a));
+  PetscFunctionReturn(0);
+}
+
 #if defined(__SIZEOF_FLOAT128__)
 typedef __float128 quad;
 #else

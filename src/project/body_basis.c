@@ -161,91 +161,108 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
   }
 }
 
-/* One Gram-Schmidt pass over columns j of (W, MW) (nl rows, leading dimension nl) with skip[j] false: w_j -= c_j q,
-   mw_j -= c_j mq with c_j = d[j], and then d[j] = mq^T w_j (first pass: the next pass's coefficient) or w_j^T mw_j
-   (second pass: the remaining M-norm), local sums. A column with c_j = 0 is not updated. Four columns per sweep:
-   each column's sum still runs over i in order (the same numbers as one sweep per column), but the four sums are
-   independent, so the loop is no longer bound by one running sum's latency (it was, at 28k rows per body). */
-static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool second, PetscReal d[])
+/* One Gram-Schmidt pass over n columns (1 to 4) of (W, MW) (nl rows, leading dimension nl): w -= c q, mw -= c mq for
+   each, and its local sum t = mq^T w (first pass: the next pass's coefficient) or w^T mw (second pass: the remaining
+   M-norm). Four columns per sweep: each column's sum still runs over i in order (the same numbers as one sweep per
+   column), but the four sums are independent, so the loop is no longer bound by one running sum's latency (it was,
+   at 28k rows per body). */
+static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const PetscReal c[], const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, PetscBool second, PetscReal t[])
 {
-  PetscInt cols[4], n = 0;
+  if (n == 4) {
+    PetscReal *w0 = &W[cols[0] * nl], *w1 = &W[cols[1] * nl], *w2 = &W[cols[2] * nl], *w3 = &W[cols[3] * nl];
+    PetscReal *m0 = &MW[cols[0] * nl], *m1 = &MW[cols[1] * nl], *m2 = &MW[cols[2] * nl], *m3 = &MW[cols[3] * nl];
+    const PetscReal c0 = c[0], c1 = c[1], c2 = c[2], c3 = c[3];
+    PetscReal       s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+
+    if (!second)
+      for (PetscInt i = 0; i < nl; i++) {
+        w0[i] -= c0 * q[i];
+        m0[i] -= c0 * mq[i];
+        s0 += mq[i] * w0[i];
+        w1[i] -= c1 * q[i];
+        m1[i] -= c1 * mq[i];
+        s1 += mq[i] * w1[i];
+        w2[i] -= c2 * q[i];
+        m2[i] -= c2 * mq[i];
+        s2 += mq[i] * w2[i];
+        w3[i] -= c3 * q[i];
+        m3[i] -= c3 * mq[i];
+        s3 += mq[i] * w3[i];
+      }
+    else
+      for (PetscInt i = 0; i < nl; i++) {
+        w0[i] -= c0 * q[i];
+        m0[i] -= c0 * mq[i];
+        s0 += w0[i] * m0[i];
+        w1[i] -= c1 * q[i];
+        m1[i] -= c1 * mq[i];
+        s1 += w1[i] * m1[i];
+        w2[i] -= c2 * q[i];
+        m2[i] -= c2 * mq[i];
+        s2 += w2[i] * m2[i];
+        w3[i] -= c3 * q[i];
+        m3[i] -= c3 * mq[i];
+        s3 += w3[i] * m3[i];
+      }
+    t[0] = s0;
+    t[1] = s1;
+    t[2] = s2;
+    t[3] = s3;
+    return;
+  }
+  for (PetscInt k = 0; k < n; k++) {
+    PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], s = 0;
+    const PetscReal ck = c[k];
+
+    if (!second)
+      for (PetscInt i = 0; i < nl; i++) {
+        w[i] -= ck * q[i];
+        mw[i] -= ck * mq[i];
+        s += mq[i] * w[i];
+      }
+    else
+      for (PetscInt i = 0; i < nl; i++) {
+        w[i] -= ck * q[i];
+        mw[i] -= ck * mq[i];
+        s += w[i] * mw[i];
+      }
+    t[k] = s;
+  }
+}
+
+/* A Gram-Schmidt pass (KFGroupPass) over the columns j of (W, MW) with skip[j] false, with c_j = d[j], its sums back
+   in d[j]. A column with c_j = 0 is not updated, only summed. fused (one rank, where a local sum is the global one):
+   each group of columns makes the second pass right after the first, with the first's sums as coefficients, while
+   its columns are still in cache (the same numbers as two passes over every column; d[j] then holds the second's). */
+static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool second, PetscBool fused, PetscReal d[])
+{
+  PetscInt  cols[4], n = 0;
+  PetscReal c[4], t[4];
 
   for (PetscInt j = 0; j <= m; j++) {
     if (j < m) {
       if (skip[j]) continue;
       if (d[j] == 0) { /* nothing to remove: the sum only */
         const PetscReal *w = &W[j * nl], *mw = &MW[j * nl];
-        PetscReal        t = 0;
+        PetscReal        s = 0;
 
         if (!second)
-          for (PetscInt i = 0; i < nl; i++) t += mq[i] * w[i];
+          for (PetscInt i = 0; i < nl; i++) s += mq[i] * w[i];
         else
-          for (PetscInt i = 0; i < nl; i++) t += w[i] * mw[i];
-        d[j] = t;
+          for (PetscInt i = 0; i < nl; i++) s += w[i] * mw[i];
+        d[j] = s;
+        if (fused) KFGroupPass(nl, 1, &j, &d[j], q, mq, W, MW, PETSC_TRUE, &d[j]);
         continue;
       }
+      c[n]      = d[j];
       cols[n++] = j;
     }
-    if (n == 4) {
-      PetscReal *w0 = &W[cols[0] * nl], *w1 = &W[cols[1] * nl], *w2 = &W[cols[2] * nl], *w3 = &W[cols[3] * nl];
-      PetscReal *m0 = &MW[cols[0] * nl], *m1 = &MW[cols[1] * nl], *m2 = &MW[cols[2] * nl], *m3 = &MW[cols[3] * nl];
-      const PetscReal c0 = d[cols[0]], c1 = d[cols[1]], c2 = d[cols[2]], c3 = d[cols[3]];
-      PetscReal       s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-
-      if (!second)
-        for (PetscInt i = 0; i < nl; i++) {
-          w0[i] -= c0 * q[i];
-          m0[i] -= c0 * mq[i];
-          s0 += mq[i] * w0[i];
-          w1[i] -= c1 * q[i];
-          m1[i] -= c1 * mq[i];
-          s1 += mq[i] * w1[i];
-          w2[i] -= c2 * q[i];
-          m2[i] -= c2 * mq[i];
-          s2 += mq[i] * w2[i];
-          w3[i] -= c3 * q[i];
-          m3[i] -= c3 * mq[i];
-          s3 += mq[i] * w3[i];
-        }
-      else
-        for (PetscInt i = 0; i < nl; i++) {
-          w0[i] -= c0 * q[i];
-          m0[i] -= c0 * mq[i];
-          s0 += w0[i] * m0[i];
-          w1[i] -= c1 * q[i];
-          m1[i] -= c1 * mq[i];
-          s1 += w1[i] * m1[i];
-          w2[i] -= c2 * q[i];
-          m2[i] -= c2 * mq[i];
-          s2 += w2[i] * m2[i];
-          w3[i] -= c3 * q[i];
-          m3[i] -= c3 * mq[i];
-          s3 += w3[i] * m3[i];
-        }
-      d[cols[0]] = s0;
-      d[cols[1]] = s1;
-      d[cols[2]] = s2;
-      d[cols[3]] = s3;
-      n          = 0;
-    } else if (j == m)
-      for (PetscInt k = 0; k < n; k++) { /* the last one to three columns, one at a time */
-        PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], t = 0;
-        const PetscReal c = d[cols[k]];
-
-        if (!second)
-          for (PetscInt i = 0; i < nl; i++) {
-            w[i] -= c * q[i];
-            mw[i] -= c * mq[i];
-            t += mq[i] * w[i];
-          }
-        else
-          for (PetscInt i = 0; i < nl; i++) {
-            w[i] -= c * q[i];
-            mw[i] -= c * mq[i];
-            t += w[i] * mw[i];
-          }
-        d[cols[k]] = t;
-      }
+    if (n == 4 || (j == m && n > 0)) {
+      KFGroupPass(nl, n, cols, c, q, mq, W, MW, second, t);
+      if (fused) KFGroupPass(nl, n, cols, t, q, mq, W, MW, PETSC_TRUE, t);
+      for (PetscInt k = 0; k < n; k++) d[cols[k]] = t[k];
+      n = 0;
+    }
   }
 }
 
@@ -260,10 +277,12 @@ static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const P
 
 static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, PetscReal *W, PetscReal *MW, PetscReal tol, PetscInt *v, PetscReal *Q)
 {
-  PetscReal *res, *dots, *MQ;
-  PetscBool *used;
+  PetscReal  *res, *dots, *MQ;
+  PetscBool  *used;
+  PetscMPIInt size;
 
   PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscMalloc4(m, &res, m, &dots, m, &used, nl * m + 1, &MQ));
   for (PetscInt j = 0; j < m; j++) {
     PetscReal d = 0;
@@ -305,12 +324,13 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
          update also sums the second pass's dot products (each column's sum in the same order as a sweep of its
          own: the same numbers, one sweep over W fewer per chosen column) */
       KFColumnDots(nl, m, mq, W, used, dots);
-      for (int pass = 0; pass < 2; pass++) {
-        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
-        KFColumnUpdates(nl, m, q, mq, W, MW, used, (PetscBool)(pass == 1), dots);
-        if (pass == 1)
-          for (PetscInt j = 0; j < m; j++) res[j] = used[j] ? 0 : dots[j];
-      }
+      if (size == 1) KFColumnUpdates(nl, m, q, mq, W, MW, used, PETSC_FALSE, PETSC_TRUE, dots);
+      else
+        for (int pass = 0; pass < 2; pass++) {
+          PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
+          KFColumnUpdates(nl, m, q, mq, W, MW, used, (PetscBool)(pass == 1), PETSC_FALSE, dots);
+        }
+      for (PetscInt j = 0; j < m; j++) res[j] = used[j] ? 0 : dots[j];
     }
     (*v)++;
   }

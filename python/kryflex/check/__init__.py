@@ -18,6 +18,8 @@ import dataclasses
 import numpy as np
 
 DENSE_MAX = 3000          # dofs: dense spectra (rank of M, null pivots, condition, verification modes) up to this
+REDUCE_DENSE_MAX = 600    # dofs: the same inside kryflex reduce (cubic: 14 s of a 17 s bare reduction at 2,760 dofs,
+                          # 0.3 s at 1,000; every dense finding there is a note or one the reduction refuses itself)
 SYMMETRY_WARN = 1e-10     # relative Frobenius asymmetry reported above this
 RIGID_ENERGY_RTOL = 1e-11 # a rigid mode's Rayleigh quotient above this x ||K||_F / ||M||_F is reported: round-off
                           # leaves ~1e-16 of it, a stiffness rounded to 8 digits ~1e-9
@@ -160,9 +162,10 @@ def _rigid_findings(where, f_hz, scale, f_ref, findings):
     return worst
 
 
-def check_scene(scene, system=None, factor=True):
+def check_scene(scene, system=None, factor=True, dense_max=DENSE_MAX):
     """The health report of a loaded Scene: (facts: dict for JSON, findings: [Finding]). Collective. factor=False
-    leaves out the MUMPS factorization of K (kryflex reduce: its own factorizations follow)."""
+    leaves out the MUMPS factorization of K (kryflex reduce: its own factorizations follow); the dense spectra are
+    computed up to dense_max system dofs (kryflex reduce: REDUCE_DENSE_MAX)."""
     from .. import _core
     band = list(scene.band)
     if system is None:
@@ -200,17 +203,19 @@ def check_scene(scene, system=None, factor=True):
     kr, mr = _quotients(Ks, Ms, Phi if nrigid else None)
     f_sys = rigid_hz(kr, mr)
     facts = dict(system_dofs=n_sys, rigid_modes=nrigid, rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
-                 bodies=bodies, band_hz=band, dense=n_sys <= DENSE_MAX)
+                 bodies=bodies, band_hz=band, dense=n_sys <= dense_max)
     dense = []
     pivots = factor_pivots(Ks) if factor else None
     if pivots is not None:
         facts.update(factor_null_pivots=pivots[0], factor_negative_pivots=pivots[1])
-    if n_sys <= DENSE_MAX:
+    if n_sys <= dense_max:
         lam_r = float(np.max(np.abs(2 * np.pi * f_sys) ** 2)) if len(f_sys) else 0.0
         _dense_findings(_dense(Ms), _dense(Ks), nrigid, lam_r, band, facts, dense)
     else:
         facts["dense_skipped"] = "the system has %d dofs > %d: M's rank, K's spectrum (its condition) and the " \
-                                 "verification's mode count were not computed" % (n_sys, DENSE_MAX)
+                                 "verification's mode count were not computed%s" % (
+                                     n_sys, dense_max, " (kryflex check computes them up to %d dofs)" % DENSE_MAX
+                                     if dense_max < DENSE_MAX and n_sys <= DENSE_MAX else "")
         # no finding from the factorization's counts alone: MUMPS' null-pivot detection depends on its threshold and
         # ordering (a mechanism's soft pivot may or may not count; measured on a 20k-dof frame: 6 of 7 on 1 rank,
         # 7 on 2), so they are reported as facts, a cross-check of the geometric count

@@ -31,6 +31,28 @@ class SummaryError(ValueError):
     """A summary that cannot be read: the message names the key and the fix."""
 
 
+def _json_leaf(value):
+    """Whether a value holds no object: written on one line."""
+    if isinstance(value, dict):
+        return False
+    if isinstance(value, (list, tuple)):
+        return all(_json_leaf(v) for v in value)
+    return True
+
+
+def _json_text(value, level=0):
+    """json.dumps(value, indent=1, allow_nan=False) but for lists without objects, each on one line."""
+    if _json_leaf(value) or (isinstance(value, dict) and not all(isinstance(k, str) for k in value)):
+        return json.dumps(value, allow_nan=False) if _json_leaf(value) else json.dumps(value, indent=1, allow_nan=False)
+    if not value:
+        return json.dumps(value)
+    pad = "\n" + " " * (level + 1)
+    if isinstance(value, dict):
+        body = ",".join(pad + json.dumps(k) + ": " + _json_text(v, level + 1) for k, v in value.items())
+        return "{" + body + "\n" + " " * level + "}"
+    return "[" + ",".join(pad + _json_text(v, level + 1) for v in value) + "\n" + " " * level + "]"
+
+
 # =============================================================================================== how a field is stored
 
 class _Plain:
@@ -562,8 +584,10 @@ class Summary(Record):
             raise SummaryError("%s: %s" % (path, e)) from None
 
     def dumps(self):
-        """summary.json's text."""
-        return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"
+        """summary.json's text: objects indented one space per level, a list of numbers (or of lists of them) on one
+        line (JSON's C encoder; the pure-Python one that indents every number took 0.8 s of a 57k-dof reduction's
+        summary)."""
+        return _json_text(self.to_json()) + "\n"
 
     # ------------------------------------------------------------------ views
 

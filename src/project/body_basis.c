@@ -129,6 +129,81 @@ PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X)
   PetscFunctionReturn(0);
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+  #include <immintrin.h>
+  #define KF_GS_AVX2 1
+/* KFGroupPass on four columns with AVX2, the same numbers: the updates w -= c q and mw -= c mq four rows at a time
+   (a product and a difference, each rounded, as the scalar code's: no fused multiply-add), the products of the sums
+   four rows at a time, and each column's sum added from them one row after another, in order. */
+__attribute__((target("avx2"))) static void KFGroupPass4AVX2(PetscInt nl, PetscReal *w[4], PetscReal *mw[4], const PetscReal c[4], const PetscReal *q, const PetscReal *mq, PetscBool second, PetscReal t[4])
+{
+  PetscReal s[4] = {0, 0, 0, 0};
+  PetscInt  i    = 0;
+
+  for (; i + 4 <= nl; i += 4) {
+    const __m256d qv = _mm256_loadu_pd(q + i), mqv = _mm256_loadu_pd(mq + i);
+
+    for (int k = 0; k < 4; k++) {
+      const __m256d ck = _mm256_set1_pd(c[k]);
+      __m256d       wv = _mm256_sub_pd(_mm256_loadu_pd(w[k] + i), _mm256_mul_pd(ck, qv));
+      __m256d       mv = _mm256_sub_pd(_mm256_loadu_pd(mw[k] + i), _mm256_mul_pd(ck, mqv));
+      double        p[4];
+
+      _mm256_storeu_pd(w[k] + i, wv);
+      _mm256_storeu_pd(mw[k] + i, mv);
+      _mm256_storeu_pd(p, second ? _mm256_mul_pd(wv, mv) : _mm256_mul_pd(mqv, wv));
+      s[k] += p[0];
+      s[k] += p[1];
+      s[k] += p[2];
+      s[k] += p[3];
+    }
+  }
+  for (; i < nl; i++)
+    for (int k = 0; k < 4; k++) {
+      w[k][i] -= c[k] * q[i];
+      mw[k][i] -= c[k] * mq[i];
+      s[k] += second ? w[k][i] * mw[k][i] : mq[i] * w[k][i];
+    }
+  for (int k = 0; k < 4; k++) t[k] = s[k];
+}
+
+/* KFColumnDots on four columns with AVX2, the same numbers: the products four rows at a time, each column's sum
+   added from them one row after another, in order */
+__attribute__((target("avx2"))) static void KFColumnDots4AVX2(PetscInt nl, const PetscReal *x, const PetscReal *a[4], PetscReal t[4])
+{
+  PetscReal s[4] = {0, 0, 0, 0};
+  PetscInt  i    = 0;
+
+  for (; i + 4 <= nl; i += 4) {
+    const __m256d xv = _mm256_loadu_pd(x + i);
+
+    for (int k = 0; k < 4; k++) {
+      double p[4];
+
+      _mm256_storeu_pd(p, _mm256_mul_pd(xv, _mm256_loadu_pd(a[k] + i)));
+      s[k] += p[0];
+      s[k] += p[1];
+      s[k] += p[2];
+      s[k] += p[3];
+    }
+  }
+  for (; i < nl; i++)
+    for (int k = 0; k < 4; k++) s[k] += x[i] * a[k][i];
+  for (int k = 0; k < 4; k++) t[k] = s[k];
+}
+
+static PetscBool KFHaveAVX2(void)
+{
+  static int have = -1;
+
+  if (have < 0) {
+    __builtin_cpu_init();
+    have = __builtin_cpu_supports("avx2") ? 1 : 0;
+  }
+  return (PetscBool)have;
+}
+#endif
+
 /* d[j] = x^T A_j for the columns j of A (nl x m, leading dimension nl) with skip[j] false, d[j] = 0 otherwise. Four
    columns per sweep: x is read once per four columns and the four sums are independent (a single running sum's
    latency bounded the loop); each sum still runs over i in order, so the values are those of one column at a time. */
@@ -146,6 +221,17 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
       const PetscReal *a0 = &A[cols[0] * nl], *a1 = &A[cols[n > 1 ? 1 : 0] * nl], *a2 = &A[cols[n > 2 ? 2 : 0] * nl], *a3 = &A[cols[n > 3 ? 3 : 0] * nl];
       PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
 
+#if defined(KF_GS_AVX2)
+      if (n == 4 && KFHaveAVX2()) {
+        const PetscReal *a[4] = {a0, a1, a2, a3};
+        PetscReal        t[4];
+
+        KFColumnDots4AVX2(nl, x, a, t);
+        for (int k = 0; k < 4; k++) d[cols[k]] = t[k];
+        n = 0;
+        continue;
+      }
+#endif
       for (PetscInt i = 0; i < nl; i++) {
         s0 += x[i] * a0[i];
         s1 += x[i] * a1[i];
@@ -161,18 +247,141 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
   }
 }
 
+
+/* One Gram-Schmidt pass over n columns (1 to 4) of (W, MW) (nl rows, leading dimension nl): w -= c q, mw -= c mq for
+   each, and its local sum t = mq^T w (first pass: the next pass's coefficient) or w^T mw (second pass: the remaining
+   M-norm). Four columns per sweep: each column's sum still runs over i in order (the same numbers as one sweep per
+   column), but the four sums are independent, so the loop is no longer bound by one running sum's latency (it was,
+   at 28k rows per body). */
+static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const PetscReal c[], const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, PetscBool second, PetscReal t[])
+{
+#if defined(KF_GS_AVX2)
+  if (n == 4 && KFHaveAVX2()) {
+    PetscReal *w[4], *mw[4];
+
+    for (int k = 0; k < 4; k++) {
+      w[k]  = &W[cols[k] * nl];
+      mw[k] = &MW[cols[k] * nl];
+    }
+    KFGroupPass4AVX2(nl, w, mw, c, q, mq, second, t);
+    return;
+  }
+#endif
+  if (n == 4) {
+    PetscReal *w0 = &W[cols[0] * nl], *w1 = &W[cols[1] * nl], *w2 = &W[cols[2] * nl], *w3 = &W[cols[3] * nl];
+    PetscReal *m0 = &MW[cols[0] * nl], *m1 = &MW[cols[1] * nl], *m2 = &MW[cols[2] * nl], *m3 = &MW[cols[3] * nl];
+    const PetscReal c0 = c[0], c1 = c[1], c2 = c[2], c3 = c[3];
+    PetscReal       s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+
+    if (!second)
+      for (PetscInt i = 0; i < nl; i++) {
+        w0[i] -= c0 * q[i];
+        m0[i] -= c0 * mq[i];
+        s0 += mq[i] * w0[i];
+        w1[i] -= c1 * q[i];
+        m1[i] -= c1 * mq[i];
+        s1 += mq[i] * w1[i];
+        w2[i] -= c2 * q[i];
+        m2[i] -= c2 * mq[i];
+        s2 += mq[i] * w2[i];
+        w3[i] -= c3 * q[i];
+        m3[i] -= c3 * mq[i];
+        s3 += mq[i] * w3[i];
+      }
+    else
+      for (PetscInt i = 0; i < nl; i++) {
+        w0[i] -= c0 * q[i];
+        m0[i] -= c0 * mq[i];
+        s0 += w0[i] * m0[i];
+        w1[i] -= c1 * q[i];
+        m1[i] -= c1 * mq[i];
+        s1 += w1[i] * m1[i];
+        w2[i] -= c2 * q[i];
+        m2[i] -= c2 * mq[i];
+        s2 += w2[i] * m2[i];
+        w3[i] -= c3 * q[i];
+        m3[i] -= c3 * mq[i];
+        s3 += w3[i] * m3[i];
+      }
+    t[0] = s0;
+    t[1] = s1;
+    t[2] = s2;
+    t[3] = s3;
+    return;
+  }
+  for (PetscInt k = 0; k < n; k++) {
+    PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], s = 0;
+    const PetscReal ck = c[k];
+
+    if (!second)
+      for (PetscInt i = 0; i < nl; i++) {
+        w[i] -= ck * q[i];
+        mw[i] -= ck * mq[i];
+        s += mq[i] * w[i];
+      }
+    else
+      for (PetscInt i = 0; i < nl; i++) {
+        w[i] -= ck * q[i];
+        mw[i] -= ck * mq[i];
+        s += w[i] * mw[i];
+      }
+    t[k] = s;
+  }
+}
+
+/* A Gram-Schmidt pass (KFGroupPass) over the columns j of (W, MW) with skip[j] false, with c_j = d[j], its sums back
+   in d[j]. A column with c_j = 0 is not updated, only summed. fused (one rank, where a local sum is the global one):
+   each group of columns makes the second pass right after the first, with the first's sums as coefficients, while
+   its columns are still in cache (the same numbers as two passes over every column; d[j] then holds the second's). */
+static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool second, PetscBool fused, PetscReal d[])
+{
+  PetscInt  cols[4], n = 0;
+  PetscReal c[4], t[4];
+
+  for (PetscInt j = 0; j <= m; j++) {
+    if (j < m) {
+      if (skip[j]) continue;
+      if (d[j] == 0) { /* nothing to remove: the sum only */
+        const PetscReal *w = &W[j * nl], *mw = &MW[j * nl];
+        PetscReal        s = 0;
+
+        if (!second)
+          for (PetscInt i = 0; i < nl; i++) s += mq[i] * w[i];
+        else
+          for (PetscInt i = 0; i < nl; i++) s += w[i] * mw[i];
+        d[j] = s;
+        if (fused) KFGroupPass(nl, 1, &j, &d[j], q, mq, W, MW, PETSC_TRUE, &d[j]);
+        continue;
+      }
+      c[n]      = d[j];
+      cols[n++] = j;
+    }
+    if (n == 4 || (j == m && n > 0)) {
+      KFGroupPass(nl, n, cols, c, q, mq, W, MW, second, t);
+      if (fused) KFGroupPass(nl, n, cols, t, q, mq, W, MW, PETSC_TRUE, t);
+      for (PetscInt k = 0; k < n; k++) d[cols[k]] = t[k];
+      n = 0;
+    }
+  }
+}
+
 /* Pivoted Gram-Schmidt in the M-inner product on local arrays (W, MW: nl x m, column-major). Returns the chosen
    columns' count and the orthonormal basis in Q (nl x v). The remaining M-norms of the next step are summed in the
-   sweep of the second update (the same sums in the same order as a sweep of their own), and the dot products run
-   four columns at a time (KFColumnDots): the same numbers as one loop per column, with a third of the sweeps. */
+   sweep of the second update (the same sums in the same order as a sweep of their own), and the dot products and
+   the updates run four columns at a time (KFColumnDots, KFColumnUpdates): the same numbers as one loop per column.
+   A column whose remaining M-norm is below the tolerance is dead: no later step can raise it above (each only
+   removes a component), so it is neither updated nor summed again (the pivots and the basis are those of the
+   sweeps over every column: its norm only falls further below the tolerance). */
 #define KF_PIVOT_TIE 1e-8
 
 static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, PetscReal *W, PetscReal *MW, PetscReal tol, PetscInt *v, PetscReal *Q)
 {
-  PetscReal *res, *dots, *MQ;
-  PetscBool *used;
+  PetscReal  *res, *dots, *MQ;
+  PetscBool  *used;
+  PetscMPIInt size;
 
   PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscMalloc4(m, &res, m, &dots, m, &used, nl * m + 1, &MQ));
   for (PetscInt j = 0; j < m; j++) {
     PetscReal d = 0;
@@ -201,7 +410,9 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
         break;
       }
     used[jmax] = PETSC_TRUE;
-    nrm        = PetscSqrtReal(rmax);
+    for (PetscInt j = 0; j < m; j++) /* dead columns (the residuals are global sums: every rank agrees) */
+      if (!used[j] && !(PetscSqrtReal(PetscMax(res[j], 0)) > tol)) used[j] = PETSC_TRUE;
+    nrm = PetscSqrtReal(rmax);
     {
       PetscReal *q = &Q[*v * nl], *mq = &MQ[*v * nl];
       for (PetscInt i = 0; i < nl; i++) {
@@ -212,35 +423,13 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
          update also sums the second pass's dot products (each column's sum in the same order as a sweep of its
          own: the same numbers, one sweep over W fewer per chosen column) */
       KFColumnDots(nl, m, mq, W, used, dots);
-      for (int pass = 0; pass < 2; pass++) {
-        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
-        for (PetscInt j = 0; j < m; j++) {
-          PetscReal *w = &W[j * nl], *mw = &MW[j * nl], d = 0;
-
-          if (used[j]) continue;
-          if (dots[j] != 0) {
-            const PetscReal c = dots[j];
-
-            if (pass == 0)
-              for (PetscInt i = 0; i < nl; i++) {
-                w[i] -= c * q[i];
-                mw[i] -= c * mq[i];
-                d += mq[i] * w[i];
-              }
-            else
-              for (PetscInt i = 0; i < nl; i++) {
-                w[i] -= c * q[i];
-                mw[i] -= c * mq[i];
-                d += w[i] * mw[i];
-              }
-          } else if (pass == 0)
-            for (PetscInt i = 0; i < nl; i++) d += mq[i] * w[i];
-          else
-            for (PetscInt i = 0; i < nl; i++) d += w[i] * mw[i];
-          if (pass == 0) dots[j] = d; /* the second pass's coefficient (local part) */
-          else res[j] = d;
+      if (size == 1) KFColumnUpdates(nl, m, q, mq, W, MW, used, PETSC_FALSE, PETSC_TRUE, dots);
+      else
+        for (int pass = 0; pass < 2; pass++) {
+          PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
+          KFColumnUpdates(nl, m, q, mq, W, MW, used, (PetscBool)(pass == 1), PETSC_FALSE, dots);
         }
-      }
+      for (PetscInt j = 0; j < m; j++) res[j] = used[j] ? 0 : dots[j];
     }
     (*v)++;
   }
@@ -425,6 +614,7 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     PetscCall(MatDestroy(&MWm));
     PetscCall(KFPivotedMGS(s->comm, nl, m, W, MW, tol, &v, Q));
     PetscCheck(v > 0, s->comm, PETSC_ERR_ARG_WRONG, "body '%s' gets no basis vector: the modes do not move it", B->name);
+    PetscCall(PetscInfo(NULL, "body '%s': %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (%" PetscInt_FMT " rows here)\n", B->name, v, m, nl));
     bb->v[b]     = v;
     bb->ndefl[b] = m - v;
     PetscCall(KFDenseCreate(s->comm, nl, B->n, v, &bb->Psi[b]));

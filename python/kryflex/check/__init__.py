@@ -18,6 +18,8 @@ import dataclasses
 import numpy as np
 
 DENSE_MAX = 3000          # dofs: dense spectra (rank of M, null pivots, condition, verification modes) up to this
+REDUCE_DENSE_MAX = 600    # dofs: the same inside kryflex reduce (cubic: 14 s of a 17 s bare reduction at 2,760 dofs,
+                          # 0.3 s at 1,000; every dense finding there is a note or one the reduction refuses itself)
 SYMMETRY_WARN = 1e-10     # relative Frobenius asymmetry reported above this
 RIGID_ENERGY_RTOL = 1e-11 # a rigid mode's Rayleigh quotient above this x ||K||_F / ||M||_F is reported: round-off
                           # leaves ~1e-16 of it, a stiffness rounded to 8 digits ~1e-9
@@ -62,16 +64,19 @@ def _asymmetry(A):
     return float(nd / na) if na > 0 else 0.0
 
 
-def _quotients(K, M, cols):
-    """Phi^T K Phi and Phi^T M Phi for the columns (PETSc Vecs): small dense, the same on every rank."""
-    r = len(cols)
-    kr, mr = np.zeros((r, r)), np.zeros((r, r))
-    for j, v in enumerate(cols):
-        Kv, Mv = K.createVecLeft(), M.createVecLeft()
-        K.mult(v, Kv)
-        M.mult(v, Mv)
-        for i, u in enumerate(cols):
-            kr[i, j], mr[i, j] = u.dot(Kv), u.dot(Mv)
+def _quotients(K, M, X):
+    """X^T K X and X^T M X for the columns of a dense PETSc Mat X (None: no column), small dense, the same on every
+    rank: two sparse-dense products and the local blocks' products summed over ranks (a product and a dot per pair of
+    vectors, from Python, took 0.1 s of kryflex reduce's model check at 57k dofs)."""
+    if X is None or X.getSize()[1] == 0:
+        return np.zeros((0, 0)), np.zeros((0, 0))
+    comm = X.getComm().tompi4py()
+    x = X.getDenseArray()
+    KX, MX = K.matMult(X), M.matMult(X)
+    kr = comm.allreduce(x.T @ KX.getDenseArray())
+    mr = comm.allreduce(x.T @ MX.getDenseArray())
+    KX.destroy()
+    MX.destroy()
     return 0.5 * (kr + kr.T), 0.5 * (mr + mr.T)
 
 
@@ -136,10 +141,6 @@ def factor_pivots(K):
         A.destroy()
 
 
-def _columns(Phi):
-    return [Phi.getColumnVector(j) for j in range(Phi.getSize()[1])] if Phi is not None else []
-
-
 def _scale(K, M):
     from petsc4py import PETSc
     nm = M.norm(PETSc.NormType.FROBENIUS)
@@ -161,29 +162,27 @@ def _rigid_findings(where, f_hz, scale, f_ref, findings):
     return worst
 
 
-def check_scene(scene, system=None, factor=True):
+def check_scene(scene, system=None, factor=True, dense_max=DENSE_MAX):
     """The health report of a loaded Scene: (facts: dict for JSON, findings: [Finding]). Collective. factor=False
-    leaves out the MUMPS factorization of K (kryflex reduce: its own factorizations follow)."""
+    leaves out the MUMPS factorization of K (kryflex reduce: its own factorizations follow); the dense spectra are
+    computed up to dense_max system dofs (kryflex reduce: REDUCE_DENSE_MAX)."""
     from .. import _core
     band = list(scene.band)
     if system is None:
         system = _core.CSystem(scene.cscene)
         system.set_angles(scene.angles_rad(scene.configurations[0]))
     Phi, residual = system.rigid_modes()[:2]
-    cols = _columns(Phi)
+    nrigid = Phi.getSize()[1] if Phi is not None and Phi.handle else 0
     Ms, Ks = system.matrices()[:2]
     findings, bodies, rigid_b = [], [], []
     n_sys = Ks.getSize()[0]
     for b, name in enumerate(scene.body_names):
         where = "body '%s'" % name
         M, K = scene.cscene.body_matrices(b)[:2]
-        P = system.body_map(b)
-        bcols = []
-        for v in cols:
-            w = P.createVecLeft()
-            P.mult(v, w)
-            bcols.append(w)
-        kr, mr = _quotients(K, M, bcols)
+        Xb = system.body_map(b).matMult(Phi) if nrigid else None
+        kr, mr = _quotients(K, M, Xb)
+        if Xb is not None:
+            Xb.destroy()
         f_b = rigid_hz(kr, mr)
         asym = {"K": _asymmetry(K), "M": _asymmetry(M)}
         zeros = _diagonal_zeros(M)
@@ -201,20 +200,22 @@ def check_scene(scene, system=None, factor=True):
                 "accepted: the Krylov recurrence does not need them; the verification condenses them statically",
                 "nothing to do, unless a dof should carry mass (rotary inertia, a lumped mass)", "note"))
         bodies.append(fact)
-    kr, mr = _quotients(Ks, Ms, cols)
+    kr, mr = _quotients(Ks, Ms, Phi if nrigid else None)
     f_sys = rigid_hz(kr, mr)
-    facts = dict(system_dofs=n_sys, rigid_modes=len(cols), rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
-                 bodies=bodies, band_hz=band, dense=n_sys <= DENSE_MAX)
+    facts = dict(system_dofs=n_sys, rigid_modes=nrigid, rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
+                 bodies=bodies, band_hz=band, dense=n_sys <= dense_max)
     dense = []
     pivots = factor_pivots(Ks) if factor else None
     if pivots is not None:
         facts.update(factor_null_pivots=pivots[0], factor_negative_pivots=pivots[1])
-    if n_sys <= DENSE_MAX:
+    if n_sys <= dense_max:
         lam_r = float(np.max(np.abs(2 * np.pi * f_sys) ** 2)) if len(f_sys) else 0.0
-        _dense_findings(_dense(Ms), _dense(Ks), len(cols), lam_r, band, facts, dense)
+        _dense_findings(_dense(Ms), _dense(Ks), nrigid, lam_r, band, facts, dense)
     else:
         facts["dense_skipped"] = "the system has %d dofs > %d: M's rank, K's spectrum (its condition) and the " \
-                                 "verification's mode count were not computed" % (n_sys, DENSE_MAX)
+                                 "verification's mode count were not computed%s" % (
+                                     n_sys, dense_max, " (kryflex check computes them up to %d dofs)" % DENSE_MAX
+                                     if dense_max < DENSE_MAX and n_sys <= DENSE_MAX else "")
         # no finding from the factorization's counts alone: MUMPS' null-pivot detection depends on its threshold and
         # ordering (a mechanism's soft pivot may or may not count; measured on a 20k-dof frame: 6 of 7 on 1 rank,
         # 7 on 2), so they are reported as facts, a cross-check of the geometric count

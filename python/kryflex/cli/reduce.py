@@ -163,9 +163,9 @@ def model_check(scene):
     """(facts, findings) of kryflex check on the loaded scene, or None when the check itself cannot run (a model the
     reducer will refuse with its own message: the rigid modes or the assembly fail)."""
     from .. import _core
-    from ..check import check_scene
+    from ..check import REDUCE_DENSE_MAX, check_scene
     try:
-        return check_scene(scene, factor=False)
+        return check_scene(scene, factor=False, dense_max=REDUCE_DENSE_MAX)
     except _core.Error:
         return None
 

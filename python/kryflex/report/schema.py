@@ -50,6 +50,8 @@ def _check_json_types(node, path):
             raise ReportError(f"{_key_text(path)} is {node}: JSON has no NaN/inf; use None for an undefined number")
         return
     if isinstance(node, (list, tuple)):
+        if all(type(item) is float for item in node) and all(map(math.isfinite, node)):
+            return  # a list of finite floats (most of a summary: the FRF blocks), checked in one pass
         for index, item in enumerate(node):
             _check_json_types(item, path + (index,))
         return

@@ -62,10 +62,13 @@ def _performance(reducer, whole):
 
 
 def _list(a):
-    """Nested lists of floats (None for NaN) of an array."""
+    """Nested lists of floats (None for NaN) of an array: NumPy's tolist, NaN replaced where there is one (an element
+    at a time took 0.1 s of a 57k-dof reduction's FRF blocks)."""
     a = np.asarray(a, dtype=float)
     if a.ndim == 0:
         return _none(a)
+    if not np.isnan(a).any():
+        return a.tolist()
     return [_list(x) for x in a]
 
 

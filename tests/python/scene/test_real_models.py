@@ -175,6 +175,32 @@ def test_check_per_body_on_two_bodies():
         assert b["asymmetry"] == {"K": 0.0, "M": 0.0} and np.abs(b["rigid_hz"]).max() < 1e-3
 
 
+@pytest.mark.fast
+def test_reduce_model_check_limits_the_dense_spectra():
+    """kryflex reduce's model check computes the dense spectra up to REDUCE_DENSE_MAX system dofs (below: the same
+    facts as kryflex check's, M's rank against a dense NumPy rank), above it says they were skipped and where they are
+    computed, and the rest of the check (rigid modes, their energy, symmetry) is unchanged."""
+    from kryflex.check import DENSE_MAX, REDUCE_DENSE_MAX, _dense
+    from kryflex.cli.reduce import model_check
+    scene = kryflex.load_scene(os.path.join(ROOT, "meshes", "galileo", "galileo.yaml"))
+    full, found = kryflex.check_scene(scene, factor=False)
+    n = full["system_dofs"]
+    assert n <= REDUCE_DENSE_MAX < DENSE_MAX and full["dense"] and "dense_skipped" not in full
+    inside, _ = model_check(scene)
+    assert inside == full
+    from kryflex import _core
+    system = _core.CSystem(scene.cscene)
+    system.set_angles(scene.angles_rad(scene.configurations[0]))
+    assert full["mass_rank"] == np.linalg.matrix_rank(_dense(system.matrices()[0]))
+    skipped, found_skipped = kryflex.check_scene(scene, factor=False, dense_max=n - 1)
+    assert not skipped["dense"] and "mass_rank" not in skipped and "verification_modes" not in skipped
+    assert "%d dofs > %d" % (n, n - 1) in skipped["dense_skipped"]
+    assert "kryflex check computes them up to %d dofs" % DENSE_MAX in skipped["dense_skipped"]
+    for key in ("rigid_modes", "rigid_hz", "bodies", "system_dofs"):
+        assert skipped[key] == full[key], key
+    assert found_skipped == found == []
+
+
 @needs_cli
 @pytest.mark.mpi
 def test_check_command_serial_and_two_ranks(tmp_path):

@@ -129,81 +129,6 @@ PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X)
   PetscFunctionReturn(0);
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-  #include <immintrin.h>
-  #define KF_GS_AVX2 1
-/* KFGroupPass on four columns with AVX2, the same numbers: the updates w -= c q and mw -= c mq four rows at a time
-   (a product and a difference, each rounded, as the scalar code's: no fused multiply-add), the products of the sums
-   four rows at a time, and each column's sum added from them one row after another, in order. */
-__attribute__((target("avx2"))) static void KFGroupPass4AVX2(PetscInt nl, PetscReal *w[4], PetscReal *mw[4], const PetscReal c[4], const PetscReal *q, const PetscReal *mq, PetscBool second, PetscReal t[4])
-{
-  PetscReal s[4] = {0, 0, 0, 0};
-  PetscInt  i    = 0;
-
-  for (; i + 4 <= nl; i += 4) {
-    const __m256d qv = _mm256_loadu_pd(q + i), mqv = _mm256_loadu_pd(mq + i);
-
-    for (int k = 0; k < 4; k++) {
-      const __m256d ck = _mm256_set1_pd(c[k]);
-      __m256d       wv = _mm256_sub_pd(_mm256_loadu_pd(w[k] + i), _mm256_mul_pd(ck, qv));
-      __m256d       mv = _mm256_sub_pd(_mm256_loadu_pd(mw[k] + i), _mm256_mul_pd(ck, mqv));
-      double        p[4];
-
-      _mm256_storeu_pd(w[k] + i, wv);
-      _mm256_storeu_pd(mw[k] + i, mv);
-      _mm256_storeu_pd(p, second ? _mm256_mul_pd(wv, mv) : _mm256_mul_pd(mqv, wv));
-      s[k] += p[0];
-      s[k] += p[1];
-      s[k] += p[2];
-      s[k] += p[3];
-    }
-  }
-  for (; i < nl; i++)
-    for (int k = 0; k < 4; k++) {
-      w[k][i] -= c[k] * q[i];
-      mw[k][i] -= c[k] * mq[i];
-      s[k] += second ? w[k][i] * mw[k][i] : mq[i] * w[k][i];
-    }
-  for (int k = 0; k < 4; k++) t[k] = s[k];
-}
-
-/* KFColumnDots on four columns with AVX2, the same numbers: the products four rows at a time, each column's sum
-   added from them one row after another, in order */
-__attribute__((target("avx2"))) static void KFColumnDots4AVX2(PetscInt nl, const PetscReal *x, const PetscReal *a[4], PetscReal t[4])
-{
-  PetscReal s[4] = {0, 0, 0, 0};
-  PetscInt  i    = 0;
-
-  for (; i + 4 <= nl; i += 4) {
-    const __m256d xv = _mm256_loadu_pd(x + i);
-
-    for (int k = 0; k < 4; k++) {
-      double p[4];
-
-      _mm256_storeu_pd(p, _mm256_mul_pd(xv, _mm256_loadu_pd(a[k] + i)));
-      s[k] += p[0];
-      s[k] += p[1];
-      s[k] += p[2];
-      s[k] += p[3];
-    }
-  }
-  for (; i < nl; i++)
-    for (int k = 0; k < 4; k++) s[k] += x[i] * a[k][i];
-  for (int k = 0; k < 4; k++) t[k] = s[k];
-}
-
-static PetscBool KFHaveAVX2(void)
-{
-  static int have = -1;
-
-  if (have < 0) {
-    __builtin_cpu_init();
-    have = __builtin_cpu_supports("avx2") ? 1 : 0;
-  }
-  return (PetscBool)have;
-}
-#endif
-
 /* d[j] = x^T A_j for the columns j of A (nl x m, leading dimension nl) with skip[j] false, d[j] = 0 otherwise. Four
    columns per sweep: x is read once per four columns and the four sums are independent (a single running sum's
    latency bounded the loop); each sum still runs over i in order, so the values are those of one column at a time. */
@@ -221,17 +146,6 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
       const PetscReal *a0 = &A[cols[0] * nl], *a1 = &A[cols[n > 1 ? 1 : 0] * nl], *a2 = &A[cols[n > 2 ? 2 : 0] * nl], *a3 = &A[cols[n > 3 ? 3 : 0] * nl];
       PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
 
-#if defined(KF_GS_AVX2)
-      if (n == 4 && KFHaveAVX2()) {
-        const PetscReal *a[4] = {a0, a1, a2, a3};
-        PetscReal        t[4];
-
-        KFColumnDots4AVX2(nl, x, a, t);
-        for (int k = 0; k < 4; k++) d[cols[k]] = t[k];
-        n = 0;
-        continue;
-      }
-#endif
       for (PetscInt i = 0; i < nl; i++) {
         s0 += x[i] * a0[i];
         s1 += x[i] * a1[i];
@@ -247,7 +161,6 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
   }
 }
 
-
 /* One Gram-Schmidt pass over n columns (1 to 4) of (W, MW) (nl rows, leading dimension nl): w -= c q, mw -= c mq for
    each, and its local sum t = mq^T w (first pass: the next pass's coefficient) or w^T mw (second pass: the remaining
    M-norm). Four columns per sweep: each column's sum still runs over i in order (the same numbers as one sweep per
@@ -255,18 +168,6 @@ static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const Pets
    at 28k rows per body). */
 static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const PetscReal c[], const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, PetscBool second, PetscReal t[])
 {
-#if defined(KF_GS_AVX2)
-  if (n == 4 && KFHaveAVX2()) {
-    PetscReal *w[4], *mw[4];
-
-    for (int k = 0; k < 4; k++) {
-      w[k]  = &W[cols[k] * nl];
-      mw[k] = &MW[cols[k] * nl];
-    }
-    KFGroupPass4AVX2(nl, w, mw, c, q, mq, second, t);
-    return;
-  }
-#endif
   if (n == 4) {
     PetscReal *w0 = &W[cols[0] * nl], *w1 = &W[cols[1] * nl], *w2 = &W[cols[2] * nl], *w3 = &W[cols[3] * nl];
     PetscReal *m0 = &MW[cols[0] * nl], *m1 = &MW[cols[1] * nl], *m2 = &MW[cols[2] * nl], *m3 = &MW[cols[3] * nl];

@@ -352,6 +352,18 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
   PetscFunctionReturn(0);
 }
 
+/* The same step on a block of vectors in one block solve (STApplyMat, KSPMatSolve: the block eigensolvers), the
+   flexible solver's own block K+ as for the Krylov basis */
+static PetscErrorCode KFFlexPCMatApply(PC pc, Mat B, Mat X)
+{
+  KFFlexSolver solver;
+
+  PetscFunctionBegin;
+  PetscCall(PCShellGetContext(pc, &solver));
+  PetscCall(KFFlexSolverApply(solver, B, X));
+  PetscFunctionReturn(0);
+}
+
 /* The first m eigenvectors purified in one block solve: P = K+ M X. SLEPc purifies shift-and-invert vectors the same
    way (EPSSetPurify), one K+ application per vector: a third of a 20-mode eigensolve's applications, where a block
    solve costs a fraction of that (benchmarks/proof_cost/README.md) */
@@ -412,6 +424,43 @@ static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const 
   PetscFunctionReturn(0);
 }
 
+/* The sparse eigensolve's method (-kf_verify_eps_type): Krylov-Schur (the default: one K+ application per Krylov
+   vector) or another SLEPc solver that works with shift-and-invert; subspace iteration applies K+ to whole blocks
+   (STApplyMat, the flexible solver's block solve) and selects by magnitude of the transformed eigenvalues. A solver
+   that needs a preconditioner instead of the operator (lobpcg, gd, jd, ...) is refused by name. */
+static PetscErrorCode KFEPSCheckType(EPS eps, PetscBool dense)
+{
+  EPSType   type;
+  PetscBool ok, sub;
+
+  PetscFunctionBegin;
+  if (dense) PetscFunctionReturn(0);
+  PetscCall(EPSGetType(eps, &type));
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)eps, &ok, EPSKRYLOVSCHUR, EPSSUBSPACE, EPSARNOLDI, EPSLANCZOS, ""));
+  PetscCheck(ok, PetscObjectComm((PetscObject)eps), PETSC_ERR_SUP, "-kf_verify_eps_type %s: the sparse verification eigensolve applies shift-and-invert with K+; give krylovschur (the default), subspace (K+ applied to blocks), arnoldi or lanczos", type);
+  PetscCall(PetscObjectTypeCompare((PetscObject)eps, EPSSUBSPACE, &sub));
+  if (sub) PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
+  PetscFunctionReturn(0);
+}
+
+/* The K+ work of one eigensolve (-info): applications, columns and seconds, and the seconds per column, which tell a
+   block method's amortized solve from Krylov-Schur's single vectors */
+static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const KFFlexSolverPerf *before)
+{
+  KFFlexSolverPerf after;
+  PetscInt         its, calls, cols;
+  PetscReal        sec;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverGetPerf(solver, &after));
+  PetscCall(EPSGetIterationNumber(eps, &its));
+  calls = after.blocks - before->blocks;
+  cols  = after.solve_columns - before->solve_columns;
+  sec   = after.solve_seconds - before->solve_seconds;
+  PetscCall(PetscInfo(eps, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (%g s per column, %g s per application)\n", its, calls, cols, (double)sec, cols ? (double)(sec / cols) : 0.0, calls ? (double)(sec / calls) : 0.0));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
@@ -423,6 +472,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   PetscInt  dense_max;
   PetscBool dense, has_target;
   Mat       P = NULL; /* the purified eigenvectors (with the flexible solver's factor) */
+  KFFlexSolverPerf before;
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -460,6 +510,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     PetscCall(PCSetType(pc, PCSHELL));
     PetscCall(PCShellSetContext(pc, solver));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
+    PetscCall(PCShellSetMatApply(pc, KFFlexPCMatApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
     PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
@@ -488,8 +539,11 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   if (solver && !dense) PetscCall(EPSSetPurify(eps, PETSC_FALSE)); /* purified below, in one block solve */
   PetscCall(EPSSetOptionsPrefix(eps, "kf_verify_"));
   PetscCall(EPSSetFromOptions(eps));
+  PetscCall(KFEPSCheckType(eps, dense));
+  if (solver && !dense) PetscCall(KFFlexSolverGetPerf(solver, &before));
   PetscCall(EPSSolve(eps));
   PetscCall(EPSGetConverged(eps, &nc));
+  if (solver && !dense) PetscCall(KFEPSInfoApplications(eps, solver, &before));
   if (solver && !dense && PetscMin(nc, nev)) PetscCall(KFEPSPurifyBlock(eps, sys, solver, PetscMin(nc, nev), &P));
   PetscCall(MatCreateVecs(sys->Ks, &x, &y));
   if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));

@@ -427,14 +427,18 @@ static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const 
 /* The sparse eigensolve's method (-kf_verify_eps_type): Krylov-Schur (the default: one K+ application per Krylov
    vector) or another SLEPc solver that works with shift-and-invert; subspace iteration applies K+ to whole blocks
    (STApplyMat, the flexible solver's block solve) and selects by magnitude of the transformed eigenvalues. A solver
-   that needs a preconditioner instead of the operator (lobpcg, gd, jd, ...) is refused by name. */
+   that needs a preconditioner instead of the operator (lobpcg, gd, jd, ...) is refused by name. A system small enough
+   for the dense path stays with LAPACK whatever the option says: it takes every mode at once. */
 static PetscErrorCode KFEPSCheckType(EPS eps, PetscBool dense)
 {
   EPSType   type;
   PetscBool ok, sub;
 
   PetscFunctionBegin;
-  if (dense) PetscFunctionReturn(0);
+  if (dense) {
+    PetscCall(EPSSetType(eps, EPSLAPACK));
+    PetscFunctionReturn(0);
+  }
   PetscCall(EPSGetType(eps, &type));
   PetscCall(PetscObjectTypeCompareAny((PetscObject)eps, &ok, EPSKRYLOVSCHUR, EPSSUBSPACE, EPSARNOLDI, EPSLANCZOS, ""));
   PetscCheck(ok, PetscObjectComm((PetscObject)eps), PETSC_ERR_SUP, "-kf_verify_eps_type %s: the sparse verification eigensolve applies shift-and-invert with K+; give krylovschur (the default), subspace (K+ applied to blocks), arnoldi or lanczos", type);

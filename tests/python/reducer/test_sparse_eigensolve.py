@@ -234,3 +234,12 @@ def test_block_eigensolve_two_ranks(tmp_path):
           % (np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
     assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
     assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+
+
+def test_eigensolver_needing_a_preconditioner_is_refused(tmp_path):
+    """A SLEPc solver that would take K+ as a preconditioner instead of the shift-and-invert operator (LOBPCG: its
+    residual K x - lambda M x has a rounding floor above the reference's tolerance, and its block Gram matrix broke
+    down with the exact K+ on the 57k solid) is refused by name with the types that work."""
+    scene, _ = case("frame", tmp_path)
+    with pytest.raises(Exception, match=r"-kf_verify_eps_type lobpcg: .*krylovschur.*subspace"):
+        reduce_sparse(scene, kf_verify_eps_type="lobpcg")

@@ -2,6 +2,7 @@
 #include <slepceps.h>
 #include <slepc/private/epsimpl.h> /* the Ritz values at a stopping test: SLEPc passes the test only their count */
 #include "../dense/dense_impl.h"
+#include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
 #include <petscblaslapack.h>
 
 /* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
@@ -327,24 +328,56 @@ static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, 
    small negative target, so that K - target M is positive definite. */
 /* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor (PCSHELL in a preonly KSP): the eigensolve
    shares the reduction's factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
-   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space. */
+   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space.
+   The flexible solver measures the residual of every block it solves (an extended-precision K_S product) to decide
+   its refinement; for an eigensolve's one-vector applications that product costs a fifth of the factor's solve. A
+   factor whose solves need no refinement is accurate to rounding whatever the right-hand side, so the residual is
+   sampled: the first application and every KF_EPS_CHECK_EVERY-th after it are checked (and refined if above
+   -kf_refine_rtol), the others solved once; a sampled one that needed refinement turns the check on for every
+   application left. The purification block (KFEPSPurifyBlock) is always checked, and the reference itself is
+   checked against direct solves of the full system (src/verify/direct_check.c). */
+#define KF_EPS_CHECK_EVERY 8
+
+typedef struct {
+  KFFlexSolver solver;
+  PetscInt     applications; /* one-vector applications so far in this eigensolve */
+  PetscBool    check_all;    /* a sampled application needed refinement: check every one */
+} KFFlexPCCtx;
+
+/* X = K+ B with the residual checked or not (KFFlexPCApply's sampling) */
+static PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *ctx, Mat B, Mat X)
+{
+  KFFlexSolver solver = ctx->solver;
+  PetscInt     refined, refine = solver->refine;
+  PetscBool    check = (PetscBool)(ctx->check_all || ctx->applications % KF_EPS_CHECK_EVERY == 0);
+
+  PetscFunctionBegin;
+  refined = solver->perf.blocks_refined;
+  if (!check) solver->refine = 0; /* one solve, no residual (KFFlexSolverApply checks only with refinement steps) */
+  PetscCall(KFFlexSolverApply(solver, B, X));
+  solver->refine = refine;
+  if (check && solver->perf.blocks_refined > refined) ctx->check_all = PETSC_TRUE;
+  ctx->applications++;
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
 {
-  KFFlexSolver       solver;
+  KFFlexPCCtx       *ctx;
   Mat                B, X;
   const PetscScalar *pb;
   PetscScalar       *px;
   PetscInt           n, N;
 
   PetscFunctionBegin;
-  PetscCall(PCShellGetContext(pc, &solver));
+  PetscCall(PCShellGetContext(pc, &ctx));
   PetscCall(VecGetLocalSize(b, &n));
   PetscCall(VecGetSize(b, &N));
   PetscCall(VecGetArrayRead(b, &pb));
   PetscCall(VecGetArrayWrite(x, &px));
   PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, (PetscScalar *)pb, &B));
   PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, px, &X));
-  PetscCall(KFFlexSolverApply(solver, B, X));
+  PetscCall(KFFlexPCApplySampled(ctx, B, X));
   PetscCall(MatDestroy(&B));
   PetscCall(MatDestroy(&X));
   PetscCall(VecRestoreArrayWrite(x, &px));
@@ -356,17 +389,52 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
    flexible solver's own block K+ as for the Krylov basis */
 static PetscErrorCode KFFlexPCMatApply(PC pc, Mat B, Mat X)
 {
-  KFFlexSolver solver;
+  KFFlexPCCtx *ctx;
 
   PetscFunctionBegin;
-  PetscCall(PCShellGetContext(pc, &solver));
-  PetscCall(KFFlexSolverApply(solver, B, X));
+  PetscCall(PCShellGetContext(pc, &ctx));
+  PetscCall(KFFlexSolverApply(ctx->solver, B, X));
+  PetscFunctionReturn(0);
+}
+
+/* The columns of P scaled to unit M-norm, with one block product M P (a sparse product per column would read M once
+   per mode) */
+static PetscErrorCode KFEPSNormalizeBlock(KFSystem sys, Mat P)
+{
+  Mat       MP;
+  PetscInt  m;
+  PetscReal *nrm;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(P, NULL, &m));
+  PetscCall(KFMatMultDense(sys->Ms, P, &MP));
+  PetscCall(PetscMalloc1(m, &nrm));
+  for (PetscInt i = 0; i < m; i++) {
+    Vec         p, q;
+    PetscScalar dot;
+
+    PetscCall(MatDenseGetColumnVecRead(P, i, &p));
+    PetscCall(MatDenseGetColumnVecRead(MP, i, &q));
+    PetscCall(VecDot(p, q, &dot));
+    PetscCall(MatDenseRestoreColumnVecRead(MP, i, &q));
+    PetscCall(MatDenseRestoreColumnVecRead(P, i, &p));
+    nrm[i] = PetscSqrtReal(PetscRealPart(dot));
+  }
+  for (PetscInt i = 0; i < m; i++) {
+    Vec p;
+
+    PetscCall(MatDenseGetColumnVecWrite(P, i, &p));
+    PetscCall(VecScale(p, 1.0 / nrm[i]));
+    PetscCall(MatDenseRestoreColumnVecWrite(P, i, &p));
+  }
+  PetscCall(PetscFree(nrm));
+  PetscCall(MatDestroy(&MP));
   PetscFunctionReturn(0);
 }
 
 /* The first m eigenvectors purified in one block solve: P = K+ M X. SLEPc purifies shift-and-invert vectors the same
    way (EPSSetPurify), one K+ application per vector: a third of a 20-mode eigensolve's applications, where a block
-   solve costs a fraction of that (benchmarks/proof_cost/README.md) */
+   solve costs a fraction of that (benchmarks/proof_cost/README.md). The columns come out M-normalized. */
 static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solver, PetscInt m, Mat *P)
 {
   Mat X, MX;
@@ -384,6 +452,7 @@ static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solve
   PetscCall(KFFlexSolverApply(solver, MX, *P));
   PetscCall(MatDestroy(&MX));
   PetscCall(MatDestroy(&X));
+  PetscCall(KFEPSNormalizeBlock(sys, *P));
   PetscFunctionReturn(0);
 }
 
@@ -477,6 +546,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   PetscBool dense, has_target;
   Mat       P = NULL; /* the purified eigenvectors (with the flexible solver's factor) */
   KFFlexSolverPerf before;
+  KFFlexPCCtx      pcctx = {solver, 0, PETSC_FALSE};
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -512,7 +582,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   } else if (solver) { /* the flexible solver's factor: target 0, no deflation space (K+ removes the rigid modes) */
     PetscCall(KFEPSShiftInvert(eps, nev, 0.0, &pc));
     PetscCall(PCSetType(pc, PCSHELL));
-    PetscCall(PCShellSetContext(pc, solver));
+    PetscCall(PCShellSetContext(pc, &pcctx));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
     PetscCall(PCShellSetMatApply(pc, KFFlexPCMatApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
@@ -563,13 +633,12 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     } else PetscCall(EPSGetEigenpair(eps, i, &kr, NULL, x, NULL));
     omega2[got] = PetscRealPart(kr);
     if (HPhi || PhiG || modes) {
-      PetscReal nrm2;
       PetscScalar dot;
-      /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure) */
-      PetscCall(MatMult(sys->Ms, x, y));
-      PetscCall(VecDot(x, y, &dot));
-      nrm2 = PetscSqrtReal(PetscRealPart(dot));
-      PetscCall(VecScale(x, 1.0 / nrm2));
+      if (!P) { /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure); P's columns are */
+        PetscCall(MatMult(sys->Ms, x, y));
+        PetscCall(VecDot(x, y, &dot));
+        PetscCall(VecScale(x, 1.0 / PetscSqrtReal(PetscRealPart(dot))));
+      }
       for (PetscInt k = 0; k < t && HPhi; k++) {
         Vec h;
         PetscCall(MatDenseGetColumnVecRead(sys->Ht, k, &h));

@@ -534,22 +534,6 @@ static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const 
   PetscFunctionReturn(0);
 }
 
-/* Gram-Schmidt in the M-inner product, each pass costing an M product: SLEPc reorthogonalizes a new Krylov vector
-   when one classical pass shrinks its norm below eta times what it was (0.7071 by default), which with
-   shift-and-invert's fast-falling spectrum is almost every vector. A pass that keeps a tenth of the norm loses at
-   most one digit of orthogonality (rounding 10 eps against the eigensolve's 1e-10 tolerance): eta 0.1 leaves 7
-   reorthogonalizations of 209 on the 57k-dof solid and its reference within 2e-11 of the frequencies
-   (benchmarks/proof_cost/README.md). -kf_verify_bv_orthog_eta and the other BV options still apply. */
-static PetscErrorCode KFEPSOrthogonalization(EPS eps)
-{
-  BV bv;
-
-  PetscFunctionBegin;
-  PetscCall(EPSGetBV(eps, &bv));
-  PetscCall(BVSetOrthogonalization(bv, BV_ORTHOG_CGS, BV_ORTHOG_REFINE_IFNEEDED, 0.1, BV_ORTHOG_BLOCK_GS));
-  PetscFunctionReturn(0);
-}
-
 static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
@@ -627,7 +611,6 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
   }
   if (solver && !dense) PetscCall(EPSSetPurify(eps, PETSC_FALSE)); /* purified below, in one block solve */
-  if (!dense) PetscCall(KFEPSOrthogonalization(eps));
   PetscCall(EPSSetOptionsPrefix(eps, "kf_verify_"));
   PetscCall(EPSSetFromOptions(eps));
   PetscCall(KFEPSCheckType(eps, dense));

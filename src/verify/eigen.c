@@ -341,6 +341,7 @@ static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, 
 typedef struct {
   KFFlexSolver solver;
   PetscInt     applications; /* one-vector applications so far in this eigensolve */
+  PetscInt     checked;      /* ... of them with the residual checked */
   PetscBool    check_all;    /* a sampled application needed refinement: check every one */
 } KFFlexPCCtx;
 
@@ -357,6 +358,7 @@ static PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *ctx, Mat B, Mat X)
   PetscCall(KFFlexSolverApply(solver, B, X));
   solver->refine = refine;
   if (check && solver->perf.blocks_refined > refined) ctx->check_all = PETSC_TRUE;
+  ctx->checked += check;
   ctx->applications++;
   PetscFunctionReturn(0);
 }
@@ -518,7 +520,7 @@ static PetscErrorCode KFEPSCheckType(EPS eps, PetscBool dense)
 
 /* The K+ work of one eigensolve (-info): applications, columns and seconds, and the seconds per column, which tell a
    block method's amortized solve from Krylov-Schur's single vectors */
-static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const KFFlexSolverPerf *before)
+static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const KFFlexSolverPerf *before, PetscInt checked)
 {
   KFFlexSolverPerf after;
   PetscInt         its, calls, cols;
@@ -530,7 +532,7 @@ static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const 
   calls = after.blocks - before->blocks;
   cols  = after.solve_columns - before->solve_columns;
   sec   = after.solve_seconds - before->solve_seconds;
-  PetscCall(PetscInfo(eps, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (%g s per column, %g s per application)\n", its, calls, cols, (double)sec, cols ? (double)(sec / cols) : 0.0, calls ? (double)(sec / calls) : 0.0));
+  PetscCall(PetscInfo(eps, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (%g s per column, %g s per application), %" PetscInt_FMT " one-vector applications with the residual checked\n", its, calls, cols, (double)sec, cols ? (double)(sec / cols) : 0.0, calls ? (double)(sec / calls) : 0.0, checked));
   PetscFunctionReturn(0);
 }
 
@@ -546,7 +548,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   PetscBool dense, has_target;
   Mat       P = NULL; /* the purified eigenvectors (with the flexible solver's factor) */
   KFFlexSolverPerf before;
-  KFFlexPCCtx      pcctx = {solver, 0, PETSC_FALSE};
+  KFFlexPCCtx      pcctx = {solver, 0, 0, PETSC_FALSE};
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -617,7 +619,7 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   if (solver && !dense) PetscCall(KFFlexSolverGetPerf(solver, &before));
   PetscCall(EPSSolve(eps));
   PetscCall(EPSGetConverged(eps, &nc));
-  if (solver && !dense) PetscCall(KFEPSInfoApplications(eps, solver, &before));
+  if (solver && !dense) PetscCall(KFEPSInfoApplications(eps, solver, &before, pcctx.checked));
   if (solver && !dense && PetscMin(nc, nev)) PetscCall(KFEPSPurifyBlock(eps, sys, solver, PetscMin(nc, nev), &P));
   PetscCall(MatCreateVecs(sys->Ks, &x, &y));
   if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));

@@ -100,6 +100,32 @@ def test_sparse_eigensolve_against_dense_scipy(tmp_path, name):
         assert d_dense <= 1e-8
 
 
+@pytest.mark.parametrize("name", ["frame", "clustered"])
+def test_sampled_residual_check_matches_checking_every_application(tmp_path, name):
+    """The eigensolve checks the residual of only some one-vector K+ applications; with -kf_refine_rtol 0 every
+    sampled one is refined, which turns the check (and a refinement step) on for every application: both must give
+    the reference of dense SciPy, and the same one."""
+    scene, systems = case(name, tmp_path)
+    sampled = reduce_sparse(scene)
+    every = reduce_sparse(scene, kf_refine_rtol=0)
+    for c, (Ms, Ks) in enumerate(systems):
+        f1, f2 = np.ravel(sampled.result(c, "full_frequencies_hz")), np.ravel(every.result(c, "full_frequencies_hz"))
+        f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+        # the grids hold each reduced model's resonances too: compare at the frequencies both have
+        w1, w2 = np.ravel(sampled.result(c, "frf_frequencies_hz")), np.ravel(every.result(c, "frf_frequencies_hz"))
+        _, i1, i2 = np.intersect1d(w1, w2, return_indices=True)
+        assert i1.size > 100
+        T1, T2 = sampled.frf(c, "full")[i1], every.frf(c, "full")[i2]
+        print("%s, configuration %d: sampled vs every application checked: frequencies %.1e, reference %.1e of the "
+              "peak; sampled vs dense SciPy %.1e" % (name, c, np.abs(f1 / f2 - 1).max(),
+                                                    np.abs(T1 - T2).max() / np.abs(T2).max(),
+                                                    np.abs(f1 / f_dense[:f1.size] - 1).max()))
+        assert f1.size == f2.size > 0
+        assert np.abs(f1 / f_dense[:f1.size] - 1).max() <= 1e-8
+        assert np.allclose(f1, f2, rtol=1e-9, atol=0)
+        assert np.abs(T1 - T2).max() <= 1e-8 * np.abs(T2).max()
+
+
 @pytest.mark.mpi
 def test_sparse_eigensolve_two_ranks_agree_with_one(tmp_path):
     path = frames.write_random_scene(str(tmp_path), 360, nbodies=3, ninputs=2, noutputs=2, seed=5, nangles=2)

@@ -3,14 +3,15 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check]
+        [--direct-check] [--block-eigen]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
 verification split (eigensolves, direct solves, the rest), the search, the report and plots, and the ratio the goal
 is stated in: default wall / (factorization + block solves of the bare run), and the direct check's numerical
 factorizations (its progress line), and how many angles and midpoints the check iterated from the reference (steps,
-fallbacks: summary.json). --direct-check adds a run of the default with the check solved by factorizations
+fallbacks: summary.json). --block-eigen adds a run of the default with the eigensolves by SLEPc's subspace iteration
+(K+ applied to blocks) and prints both runs' K+ applications, columns and seconds per column. --direct-check adds a run of the default with the check solved by factorizations
 (-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
 of runs taken together, and the CPU seconds beside the wall.
@@ -27,6 +28,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 STAMP = re.compile(r"^\[kryflex\s+([0-9.]+) s\] (.*)$")
+# -info :eps, one line per sparse eigensolve (src/verify/eigen.c)
+EIGEN_INFO = re.compile(r"kryflex verification eigensolve: (\d+) iterations, (\d+) K\+ applications, (\d+) columns, "
+                        r"([0-9.e+-]+) s in the factor's solves")
 
 
 def scene_of(refine, work):
@@ -77,7 +81,19 @@ def run(scene, out, extra):
                 iterated=((s.get("reference_check") or {}).get("iterative_points"),
                           (s.get("reference_check") or {}).get("iterative_steps_max"),
                           (s.get("reference_check") or {}).get("fallbacks")),
-                error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"))
+                error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"),
+                eigen_info=[(int(a), int(b), int(c), float(d)) for a, b, c, d in EIGEN_INFO.findall(proc.stdout)])
+
+
+def show_eigen(name, r):
+    """The K+ work of a run's sparse eigensolves (-info :eps): iterations, applications, columns, the factor's seconds."""
+    e = r["eigen_info"]
+    if not e:
+        return
+    its, calls, cols, sec = (sum(x[i] for x in e) for i in range(4))
+    print("%-8s %d eigensolves: %d iterations, %d K+ applications, %d columns, factor's solves %.2f s (%.4f s per "
+          "column, %.3f s per application); eigensolves %.2f s, of which outside the factor's solves %.2f s" % (
+              name, len(e), its, calls, cols, sec, sec / cols, sec / calls, r["eigensolve"], r["eigensolve"] - sec))
 
 
 def fmt(x):
@@ -103,6 +119,10 @@ def main():
     ap.add_argument("--direct-check", action="store_true",
                     help="a run of the default with the check solved by factorizations (-kf_verify_check_method "
                          "direct), beside the iterative one")
+    ap.add_argument("--block-eigen", action="store_true",
+                    help="a run of the default with the eigensolves by subspace iteration, K+ applied to blocks "
+                         "(-kf_verify_eps_type subspace), beside Krylov-Schur's single vectors; both with -info :eps "
+                         "for their K+ applications and columns")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
@@ -114,7 +134,10 @@ def main():
         scene = scene_of(refine, args.work)
         for rep in range(args.repeat):
             bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
-            full = run(scene, os.path.join(args.work, "default_%s" % refine), [])
+            info = ["-info", ":eps"] if args.block_eigen else []
+            full = run(scene, os.path.join(args.work, "default_%s" % refine), info)
+            block = run(scene, os.path.join(args.work, "block_%s" % refine), info + ["-kf_verify_eps_type", "subspace"]) \
+                if args.block_eigen else None
             whole = run(scene, os.path.join(args.work, "whole_%s" % refine), ["-kf_verify_check_bodywise", "false"]) \
                 if args.whole_check else None
             direct = run(scene, os.path.join(args.work, "direct_%s" % refine), ["-kf_verify_check_method", "direct"]) \
@@ -125,6 +148,12 @@ def main():
                                                                 "verify", "eigen", "direct", "search", "report"))
             show("bare", bare, denom)
             show("default", full, denom)
+            if block:
+                show("block", block, denom)
+                show_eigen("default", full)
+                show_eigen("block", block)
+                print("eigensolves, block / Krylov-Schur: %.2f s / %.2f s = %.2f" % (
+                    block["eigensolve"], full["eigensolve"], block["eigensolve"] / full["eigensolve"]))
             if whole:
                 show("whole", whole, denom)
                 print("direct solves, body-wise / whole-system: %.2f (%s against %s factorizations)" % (

@@ -2,6 +2,7 @@
 #include <slepceps.h>
 #include <slepc/private/epsimpl.h> /* the Ritz values at a stopping test: SLEPc passes the test only their count */
 #include "../dense/dense_impl.h"
+#include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
 #include <petscblaslapack.h>
 
 /* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
@@ -327,24 +328,58 @@ static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, 
    small negative target, so that K - target M is positive definite. */
 /* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor (PCSHELL in a preonly KSP): the eigensolve
    shares the reduction's factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
-   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space. */
+   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space.
+   The flexible solver measures the residual of every block it solves (an extended-precision K_S product) to decide
+   its refinement; for an eigensolve's one-vector applications that product costs a fifth of the factor's solve. A
+   factor whose solves need no refinement is accurate to rounding whatever the right-hand side, so the residual is
+   sampled: the first application and every KF_EPS_CHECK_EVERY-th after it are checked (and refined if above
+   -kf_refine_rtol), the others solved once; a sampled one that needed refinement turns the check on for every
+   application left. The purification block (KFEPSPurifyBlock) is always checked, and the reference itself is
+   checked against direct solves of the full system (src/verify/direct_check.c). */
+#define KF_EPS_CHECK_EVERY 8
+
+typedef struct {
+  KFFlexSolver solver;
+  PetscInt     applications; /* one-vector applications so far in this eigensolve */
+  PetscInt     checked;      /* ... of them with the residual checked */
+  PetscBool    check_all;    /* a sampled application needed refinement: check every one */
+} KFFlexPCCtx;
+
+/* X = K+ B with the residual checked or not (KFFlexPCApply's sampling) */
+static PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *ctx, Mat B, Mat X)
+{
+  KFFlexSolver solver = ctx->solver;
+  PetscInt     refined, refine = solver->refine;
+  PetscBool    check = (PetscBool)(ctx->check_all || ctx->applications % KF_EPS_CHECK_EVERY == 0);
+
+  PetscFunctionBegin;
+  refined = solver->perf.blocks_refined;
+  if (!check) solver->refine = 0; /* one solve, no residual (KFFlexSolverApply checks only with refinement steps) */
+  PetscCall(KFFlexSolverApply(solver, B, X));
+  solver->refine = refine;
+  if (check && solver->perf.blocks_refined > refined) ctx->check_all = PETSC_TRUE;
+  ctx->checked += check;
+  ctx->applications++;
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
 {
-  KFFlexSolver       solver;
+  KFFlexPCCtx       *ctx;
   Mat                B, X;
   const PetscScalar *pb;
   PetscScalar       *px;
   PetscInt           n, N;
 
   PetscFunctionBegin;
-  PetscCall(PCShellGetContext(pc, &solver));
+  PetscCall(PCShellGetContext(pc, &ctx));
   PetscCall(VecGetLocalSize(b, &n));
   PetscCall(VecGetSize(b, &N));
   PetscCall(VecGetArrayRead(b, &pb));
   PetscCall(VecGetArrayWrite(x, &px));
   PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, (PetscScalar *)pb, &B));
   PetscCall(MatCreateDense(PetscObjectComm((PetscObject)b), n, PETSC_DECIDE, N, 1, px, &X));
-  PetscCall(KFFlexSolverApply(solver, B, X));
+  PetscCall(KFFlexPCApplySampled(ctx, B, X));
   PetscCall(MatDestroy(&B));
   PetscCall(MatDestroy(&X));
   PetscCall(VecRestoreArrayWrite(x, &px));
@@ -352,9 +387,56 @@ static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
   PetscFunctionReturn(0);
 }
 
+/* The same step on a block of vectors in one block solve (STApplyMat, KSPMatSolve: the block eigensolvers), the
+   flexible solver's own block K+ as for the Krylov basis */
+static PetscErrorCode KFFlexPCMatApply(PC pc, Mat B, Mat X)
+{
+  KFFlexPCCtx *ctx;
+
+  PetscFunctionBegin;
+  PetscCall(PCShellGetContext(pc, &ctx));
+  PetscCall(KFFlexSolverApply(ctx->solver, B, X));
+  PetscFunctionReturn(0);
+}
+
+/* The columns of P scaled to unit M-norm, with one block product M P (a sparse product per column would read M once
+   per mode) */
+static PetscErrorCode KFEPSNormalizeBlock(KFSystem sys, Mat P)
+{
+  Mat       MP;
+  PetscInt  m;
+  PetscReal *nrm;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(P, NULL, &m));
+  PetscCall(KFMatMultDense(sys->Ms, P, &MP));
+  PetscCall(PetscMalloc1(m, &nrm));
+  for (PetscInt i = 0; i < m; i++) {
+    Vec         p, q;
+    PetscScalar dot;
+
+    PetscCall(MatDenseGetColumnVecRead(P, i, &p));
+    PetscCall(MatDenseGetColumnVecRead(MP, i, &q));
+    PetscCall(VecDot(p, q, &dot));
+    PetscCall(MatDenseRestoreColumnVecRead(MP, i, &q));
+    PetscCall(MatDenseRestoreColumnVecRead(P, i, &p));
+    nrm[i] = PetscSqrtReal(PetscRealPart(dot));
+  }
+  for (PetscInt i = 0; i < m; i++) {
+    Vec p;
+
+    PetscCall(MatDenseGetColumnVecWrite(P, i, &p));
+    PetscCall(VecScale(p, 1.0 / nrm[i]));
+    PetscCall(MatDenseRestoreColumnVecWrite(P, i, &p));
+  }
+  PetscCall(PetscFree(nrm));
+  PetscCall(MatDestroy(&MP));
+  PetscFunctionReturn(0);
+}
+
 /* The first m eigenvectors purified in one block solve: P = K+ M X. SLEPc purifies shift-and-invert vectors the same
    way (EPSSetPurify), one K+ application per vector: a third of a 20-mode eigensolve's applications, where a block
-   solve costs a fraction of that (benchmarks/proof_cost/README.md) */
+   solve costs a fraction of that (benchmarks/proof_cost/README.md). The columns come out M-normalized. */
 static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solver, PetscInt m, Mat *P)
 {
   Mat X, MX;
@@ -372,6 +454,7 @@ static PetscErrorCode KFEPSPurifyBlock(EPS eps, KFSystem sys, KFFlexSolver solve
   PetscCall(KFFlexSolverApply(solver, MX, *P));
   PetscCall(MatDestroy(&MX));
   PetscCall(MatDestroy(&X));
+  PetscCall(KFEPSNormalizeBlock(sys, *P));
   PetscFunctionReturn(0);
 }
 
@@ -412,6 +495,47 @@ static PetscErrorCode KFEPSApplyHint(EPS eps, KFSystem sys, PetscInt nev, const 
   PetscFunctionReturn(0);
 }
 
+/* The sparse eigensolve's method (-kf_verify_eps_type): Krylov-Schur (the default: one K+ application per Krylov
+   vector) or another SLEPc solver that works with shift-and-invert; subspace iteration applies K+ to whole blocks
+   (STApplyMat, the flexible solver's block solve) and selects by magnitude of the transformed eigenvalues. A solver
+   that needs a preconditioner instead of the operator (lobpcg, gd, jd, ...) is refused by name. A system small enough
+   for the dense path stays with LAPACK whatever the option says: it takes every mode at once. */
+static PetscErrorCode KFEPSCheckType(EPS eps, PetscBool dense)
+{
+  EPSType   type;
+  PetscBool ok, sub;
+
+  PetscFunctionBegin;
+  if (dense) {
+    PetscCall(EPSSetType(eps, EPSLAPACK));
+    PetscFunctionReturn(0);
+  }
+  PetscCall(EPSGetType(eps, &type));
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)eps, &ok, EPSKRYLOVSCHUR, EPSSUBSPACE, EPSARNOLDI, EPSLANCZOS, ""));
+  PetscCheck(ok, PetscObjectComm((PetscObject)eps), PETSC_ERR_SUP, "-kf_verify_eps_type %s: the sparse verification eigensolve applies shift-and-invert with K+; give krylovschur (the default), subspace (K+ applied to blocks), arnoldi or lanczos", type);
+  PetscCall(PetscObjectTypeCompare((PetscObject)eps, EPSSUBSPACE, &sub));
+  if (sub) PetscCall(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
+  PetscFunctionReturn(0);
+}
+
+/* The K+ work of one eigensolve (-info): applications, columns and seconds, and the seconds per column, which tell a
+   block method's amortized solve from Krylov-Schur's single vectors */
+static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const KFFlexSolverPerf *before, PetscInt checked)
+{
+  KFFlexSolverPerf after;
+  PetscInt         its, calls, cols;
+  PetscReal        sec;
+
+  PetscFunctionBegin;
+  PetscCall(KFFlexSolverGetPerf(solver, &after));
+  PetscCall(EPSGetIterationNumber(eps, &its));
+  calls = after.blocks - before->blocks;
+  cols  = after.solve_columns - before->solve_columns;
+  sec   = after.solve_seconds - before->solve_seconds;
+  PetscCall(PetscInfo(eps, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (%g s per column, %g s per application), %" PetscInt_FMT " one-vector applications with the residual checked\n", its, calls, cols, (double)sec, cols ? (double)(sec / cols) : 0.0, calls ? (double)(sec / calls) : 0.0, checked));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
@@ -423,6 +547,8 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   PetscInt  dense_max;
   PetscBool dense, has_target;
   Mat       P = NULL; /* the purified eigenvectors (with the flexible solver's factor) */
+  KFFlexSolverPerf before;
+  KFFlexPCCtx      pcctx = {solver, 0, 0, PETSC_FALSE};
 
   PetscFunctionBegin;
   PetscCall(KFSystemComputeRigidModes(sys));
@@ -458,8 +584,9 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   } else if (solver) { /* the flexible solver's factor: target 0, no deflation space (K+ removes the rigid modes) */
     PetscCall(KFEPSShiftInvert(eps, nev, 0.0, &pc));
     PetscCall(PCSetType(pc, PCSHELL));
-    PetscCall(PCShellSetContext(pc, solver));
+    PetscCall(PCShellSetContext(pc, &pcctx));
     PetscCall(PCShellSetApply(pc, KFFlexPCApply));
+    PetscCall(PCShellSetMatApply(pc, KFFlexPCMatApply));
     PetscCall(PCShellSetName(pc, "kryflex K+ (the flexible solver's factor)"));
     PetscCall(EPSSetTolerances(eps, 1e-10, PETSC_DEFAULT));
     PetscCall(KFEPSApplyHint(eps, sys, nev, hint));
@@ -488,8 +615,11 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
   if (solver && !dense) PetscCall(EPSSetPurify(eps, PETSC_FALSE)); /* purified below, in one block solve */
   PetscCall(EPSSetOptionsPrefix(eps, "kf_verify_"));
   PetscCall(EPSSetFromOptions(eps));
+  PetscCall(KFEPSCheckType(eps, dense));
+  if (solver && !dense) PetscCall(KFFlexSolverGetPerf(solver, &before));
   PetscCall(EPSSolve(eps));
   PetscCall(EPSGetConverged(eps, &nc));
+  if (solver && !dense) PetscCall(KFEPSInfoApplications(eps, solver, &before, pcctx.checked));
   if (solver && !dense && PetscMin(nc, nev)) PetscCall(KFEPSPurifyBlock(eps, sys, solver, PetscMin(nc, nev), &P));
   PetscCall(MatCreateVecs(sys->Ks, &x, &y));
   if (modes) PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));
@@ -505,13 +635,12 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     } else PetscCall(EPSGetEigenpair(eps, i, &kr, NULL, x, NULL));
     omega2[got] = PetscRealPart(kr);
     if (HPhi || PhiG || modes) {
-      PetscReal nrm2;
       PetscScalar dot;
-      /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure) */
-      PetscCall(MatMult(sys->Ms, x, y));
-      PetscCall(VecDot(x, y, &dot));
-      nrm2 = PetscSqrtReal(PetscRealPart(dot));
-      PetscCall(VecScale(x, 1.0 / nrm2));
+      if (!P) { /* M-normalize (EPS normalizes GHEP vectors in the M-norm; make sure); P's columns are */
+        PetscCall(MatMult(sys->Ms, x, y));
+        PetscCall(VecDot(x, y, &dot));
+        PetscCall(VecScale(x, 1.0 / PetscSqrtReal(PetscRealPart(dot))));
+      }
       for (PetscInt k = 0; k < t && HPhi; k++) {
         Vec h;
         PetscCall(MatDenseGetColumnVecRead(sys->Ht, k, &h));

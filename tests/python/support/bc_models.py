@@ -163,6 +163,24 @@ def clamped_beam():
             "band": BAND, "damping": ZETA, "accuracy": 0.01}
 
 
+def free_clustered_beam():
+    """The cantilever's beam left free, with equal section inertias: 6 rigid modes, the bending frequencies in y and z
+    in pairs (double eigenvalues)."""
+    pts = [(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 11)]
+    n = len(pts)
+    K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
+    for e in range(n - 1):
+        k, m = beam_element(pts[e], pts[e + 1], Iy=3e-7, Iz=3e-7)
+        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += k
+        M[6 * e:6 * e + 12, 6 * e:6 * e + 12] += m
+    M[6 * (n - 1):6 * (n - 1) + 3, 6 * (n - 1):6 * (n - 1) + 3] += 0.5 * np.eye(3)
+    spec = clamped_beam()
+    del spec["bodies"]["beam"]["constraints"]
+    spec["bodies"]["beam"].update(mass=M, stiffness=K)
+    spec["name"] = "free_clustered"
+    return spec
+
+
 def sprung_beam():
     """A free beam along x on vertical (uz) springs at both ends: 4 rigid modes (ux, uy, rx, rz) remain."""
     K, M, nodes = beam([(x, 0.0, 0.0) for x in np.linspace(0, 2.0, 11)])

@@ -139,16 +139,17 @@ PetscErrorCode KFArraySkinnyTransposeMult(PetscInt nl, PetscInt nc, const PetscS
   PetscFunctionReturn(0);
 }
 
-/* X (nl x p, ldx) = alpha A c over local rows (X's values before are not read: no zero fill needed), chunk by chunk */
-PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+/* X (nl x p, ldx) = alpha A c + beta X over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk; with beta 0
+   X's values before are not read (no zero fill needed) */
+static PetscErrorCode KFArraySkinnyMult_Private(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar beta, PetscScalar *x, PetscInt ldx)
 {
   PetscBLASInt bc, bp, bm, bla, blx, blc;
-  PetscScalar  zero = 0.0;
 
   PetscFunctionBegin;
   if (nl <= 0 || p <= 0) PetscFunctionReturn(0);
   if (nc <= 0) {
-    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArrayzero(x + j * ldx, nl));
+    if (beta == 0.0)
+      for (PetscInt j = 0; j < p; j++) PetscCall(PetscArrayzero(x + j * ldx, nl));
     PetscFunctionReturn(0);
   }
   PetscCall(PetscBLASIntCast(nc, &bc));
@@ -158,28 +159,24 @@ PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar 
   PetscCall(PetscBLASIntCast(ldc, &blc));
   for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
     PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &zero, x + i0, &blx));
+    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &beta, x + i0, &blx));
   }
+  PetscFunctionReturn(0);
+}
+
+/* X (nl x p, ldx) = alpha A c over local rows (X's values before are not read: no zero fill needed) */
+PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
+{
+  PetscFunctionBegin;
+  PetscCall(KFArraySkinnyMult_Private(nl, nc, a, lda, p, alpha, c, ldc, 0.0, x, ldx));
   PetscFunctionReturn(0);
 }
 
 /* X (nl x p, ldx) += alpha A c over local rows, A nl x nc (lda), c nc x p (ldc), chunk by chunk */
 PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *a, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *x, PetscInt ldx)
 {
-  PetscBLASInt bc, bp, bm, bla, blx, blc;
-  PetscScalar  one = 1.0;
-
   PetscFunctionBegin;
-  if (nl <= 0 || nc <= 0 || p <= 0) PetscFunctionReturn(0);
-  PetscCall(PetscBLASIntCast(nc, &bc));
-  PetscCall(PetscBLASIntCast(p, &bp));
-  PetscCall(PetscBLASIntCast(lda, &bla));
-  PetscCall(PetscBLASIntCast(ldx, &blx));
-  PetscCall(PetscBLASIntCast(ldc, &blc));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_SKINNY_ROWS) {
-    PetscCall(PetscBLASIntCast(PetscMin(KF_SKINNY_ROWS, nl - i0), &bm));
-    PetscCallBLAS("BLASgemm", BLASgemm_("N", "N", &bm, &bp, &bc, &alpha, a + i0, &bla, c, &blc, &one, x + i0, &blx));
-  }
+  PetscCall(KFArraySkinnyMult_Private(nl, nc, a, lda, p, alpha, c, ldc, 1.0, x, ldx));
   PetscFunctionReturn(0);
 }
 

@@ -174,36 +174,23 @@ static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const Pe
     const PetscReal c0 = c[0], c1 = c[1], c2 = c[2], c3 = c[3];
     PetscReal       s0 = 0, s1 = 0, s2 = 0, s3 = 0;
 
-    if (!second)
-      for (PetscInt i = 0; i < nl; i++) {
-        w0[i] -= c0 * q[i];
-        m0[i] -= c0 * mq[i];
-        s0 += mq[i] * w0[i];
-        w1[i] -= c1 * q[i];
-        m1[i] -= c1 * mq[i];
-        s1 += mq[i] * w1[i];
-        w2[i] -= c2 * q[i];
-        m2[i] -= c2 * mq[i];
-        s2 += mq[i] * w2[i];
-        w3[i] -= c3 * q[i];
-        m3[i] -= c3 * mq[i];
-        s3 += mq[i] * w3[i];
-      }
-    else
-      for (PetscInt i = 0; i < nl; i++) {
-        w0[i] -= c0 * q[i];
-        m0[i] -= c0 * mq[i];
-        s0 += w0[i] * m0[i];
-        w1[i] -= c1 * q[i];
-        m1[i] -= c1 * mq[i];
-        s1 += w1[i] * m1[i];
-        w2[i] -= c2 * q[i];
-        m2[i] -= c2 * mq[i];
-        s2 += w2[i] * m2[i];
-        w3[i] -= c3 * q[i];
-        m3[i] -= c3 * mq[i];
-        s3 += w3[i] * m3[i];
-      }
+    /* the sum's left factor: mq (first pass) or the column's own mw (second pass) */
+    const PetscReal *d0 = second ? m0 : mq, *d1 = second ? m1 : mq, *d2 = second ? m2 : mq, *d3 = second ? m3 : mq;
+
+    for (PetscInt i = 0; i < nl; i++) {
+      w0[i] -= c0 * q[i];
+      m0[i] -= c0 * mq[i];
+      s0 += d0[i] * w0[i];
+      w1[i] -= c1 * q[i];
+      m1[i] -= c1 * mq[i];
+      s1 += d1[i] * w1[i];
+      w2[i] -= c2 * q[i];
+      m2[i] -= c2 * mq[i];
+      s2 += d2[i] * w2[i];
+      w3[i] -= c3 * q[i];
+      m3[i] -= c3 * mq[i];
+      s3 += d3[i] * w3[i];
+    }
     t[0] = s0;
     t[1] = s1;
     t[2] = s2;
@@ -214,18 +201,13 @@ static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const Pe
     PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], s = 0;
     const PetscReal ck = c[k];
 
-    if (!second)
-      for (PetscInt i = 0; i < nl; i++) {
-        w[i] -= ck * q[i];
-        mw[i] -= ck * mq[i];
-        s += mq[i] * w[i];
-      }
-    else
-      for (PetscInt i = 0; i < nl; i++) {
-        w[i] -= ck * q[i];
-        mw[i] -= ck * mq[i];
-        s += w[i] * mw[i];
-      }
+    const PetscReal *d = second ? mw : mq;
+
+    for (PetscInt i = 0; i < nl; i++) {
+      w[i] -= ck * q[i];
+      mw[i] -= ck * mq[i];
+      s += d[i] * w[i];
+    }
     t[k] = s;
   }
 }

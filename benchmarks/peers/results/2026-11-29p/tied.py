@@ -7,6 +7,7 @@ is, at each point, the reassembled model restricted to range(N(theta)) and range
 the k stacked directions]: the joint ties and the shared coordinates together. Measured by bench.py's independent
 elastic error at every point (angles.py's references). Not a kryflex model: a measure of what one would gain.
     python tied.py --scene meshes/galileo/galileo.yaml [--single 0] --targets 1e-2 1e-3 1e-4
+    python tied.py --large DIR --targets 1e-3      # large.py's scene and modal reference (after large.py reference DIR)
 """
 import sys, os, argparse
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
@@ -15,24 +16,32 @@ import bench as B
 from compress import reassemble
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--scene", required=True)
+ap.add_argument("--scene")
+ap.add_argument("--large", help="a large.py folder: its scene at 0 deg and its reference.npz")
 ap.add_argument("--single", type=float, help="one angle only (the scene's angles otherwise, with their midpoints)")
 ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
 args = ap.parse_args()
+if args.large:
+    args.scene, args.single = os.path.join(args.large, "scene", "spacecraft.yaml"), 0.0
 path = os.path.abspath(args.scene)
 scene = B.ref.load_scene(path)
 angles = [args.single] if args.single is not None else [float(a) for a in scene.raw["angles"]]
 points = sorted(set(angles) | {0.5 * (a + b) for a, b in zip(angles, angles[1:])})
 band, zeta = scene.raw["band"], float(scene.raw["damping"])
 full = {}
-for a in points:
+for a in ([] if args.large else points):
     M, K, G, H, R = B.full_order(scene, a)
     lam, _ = B.modes(M, K, band[1], R.shape[1])
     full[a] = (M, K, G, H, R, lam)
-_, _, _, _, R0, lam0 = full[angles[0]]
-beta = 2 * zeta / np.sqrt(lam0[R0.shape[1]])
 ref_at = {}
-for a in points:
+if args.large:
+    with np.load(os.path.join(args.large, "reference.npz")) as z:
+        beta, w = float(z["beta"]), 2 * np.pi * z["freqs"]
+        ref_at[0.0] = (w, z["T_el"], z["T_el"] + z["T_rigid"])
+else:
+    _, _, _, _, R0, lam0 = full[angles[0]]
+    beta = 2 * zeta / np.sqrt(lam0[R0.shape[1]])
+for a in ([] if args.large else points):
     M, K, G, H, R, lam = full[a]
     f_res = np.sqrt(np.maximum(lam[R.shape[1]:], 0)) / (2 * np.pi)
     f_res = f_res[f_res <= band[1]]

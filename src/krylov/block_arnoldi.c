@@ -432,7 +432,9 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
    passes are bound by the memory they stream: the basis and its products are read once each per block). Its columns
    join the basis M-orthonormal to the first pass' rounding, and the chain's next right-hand side is formed from them
    (the Krylov space is the same in exact arithmetic; the next block is taken out of these columns, then their second
-   pass comes, and its own second pass later removes what that moved). KFMBasisFinishLag completes the last block. */
+   pass comes, and its own second pass later removes what that moved). KFMBasisFinishLag completes the last block.
+   The other chain's complement keeps the block's M-products as they are here, within its first pass' rounding of
+   the final ones. */
 static PetscErrorCode KFMBasisAppendLagged(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
 {
   const PetscInt     p = j1 - j0, nl = mb->nl, pp = mb->k - mb->kf, q = pp + p, lc = rs->r + mb->kf;

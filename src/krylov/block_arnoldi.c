@@ -273,7 +273,9 @@ static PetscErrorCode KFMBasisLaggedSweeps(const KFRigidSpace *rs, KFMBasis *mb,
     PetscReal cn = 0;
 
     for (PetscInt i = 0; i < lc; i++) cn += c[i + j * lc] * c[i + j * lc];
-    mb->lscale[j] = cn < 0.5 ? 1.0 / PetscSqrtReal(1.0 - cn) : 1.0;
+    /* a column's first pass leaves about loss x eps along the basis (loss <= KF_LAG_MAX_LOSS): cn is near eps^2 */
+    if (cn > 1e-8) PetscCall(PetscInfo(mb->V, "lagged pass of column %" PetscInt_FMT ": %.3e of its M-norm squared along the basis\n", kf + j, (double)cn));
+    mb->lscale[j] = cn < 1 ? 1.0 / PetscSqrtReal(1.0 - cn) : 1.0;
   }
   PetscCall(PetscArraycpy(mb->lag, c, lc * pp));
   /* the new block's coefficients against the pending columns as they will be after their pass: P'' = (P' - [Phi V] c_P)

@@ -22,6 +22,8 @@ import time
 
 import pytest
 
+from disk_full import after_init, at_model_save, write_site  # support/, on sys.path (tests/python/conftest.py)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")
@@ -331,24 +333,15 @@ def test_info_with_a_bad_scene_on_one_rank(tmp_path):
 
 # ====================================================================== failed writes
 
-def disk_full(tmp_path, nbytes):
-    """An environment whose kryflex processes cannot write files beyond nbytes (RLIMIT_FSIZE, set through a
-    sitecustomize once MPI has started: its shared-memory files need more)."""
-    return site_env(tmp_path,
-        "import resource, kryflex, kryflex._runtime as rt\n"
-        "start = rt.init\n"
-        "def init(argv=None):\n"
-        "    start(argv)\n"
-        "    resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
-        "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
-
-
 def site_env(tmp_path, source):
-    """An environment whose Python processes run source first (a sitecustomize on PYTHONPATH)."""
-    site = tmp_path / "site"
-    site.mkdir()
-    (site / "sitecustomize.py").write_text(source)
-    return dict(ENV, PYTHONPATH=str(site))
+    """An environment whose Python processes run source first (a sitecustomize on PYTHONPATH: support/disk_full.py)."""
+    return dict(ENV, PYTHONPATH=write_site(tmp_path / "site", source))
+
+
+def disk_full(tmp_path, nbytes):
+    """An environment whose kryflex processes cannot write files beyond nbytes (RLIMIT_FSIZE, set once MPI has
+    started: its shared-memory files need more)."""
+    return site_env(tmp_path, after_init(nbytes))
 
 
 @pytest.mark.parametrize("limit", [20_000, 200_000])
@@ -366,21 +359,7 @@ def model_file_disk_full(tmp_path, nbytes):
     """An environment in which every file but the model file is written: RLIMIT_FSIZE (nbytes) is set when the command
     starts writing reduced.h5 (ReducedModel.save), as on a disk that fills during the model file. The model file is
     written after report.md and summary.json, so the earlier files never meet the limit."""
-    return site_env(tmp_path,
-        "import resource, kryflex, kryflex._runtime as rt\n"
-        "start, done = rt.init, []\n"
-        "def init(argv=None):\n"
-        "    start(argv)\n"
-        "    if done:\n"
-        "        return\n"                      # the binding's own import calls init again
-        "    done.append(1)\n"
-        "    import kryflex.api as api\n"
-        "    save = api.ReducedModel.save\n"
-        "    def limited(self, path):\n"
-        "        resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
-        "        return save(self, path)\n"
-        "    api.ReducedModel.save = limited\n"
-        "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
+    return site_env(tmp_path, at_model_save(nbytes))
 
 
 def model_file_left(folder):

@@ -9,13 +9,11 @@ before, its bodies are the Galerkin projections of the bodies' own mass and stif
 choose the same model.
 """
 import os
-import subprocess
 import sys
 
 import numpy as np
 import pytest
 import scipy.io
-import yaml
 
 import kryflex
 
@@ -25,13 +23,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
+import galileo_pairs as gp  # noqa: E402
+from galileo_pairs import GALILEO, TARGETS  # noqa: E402
 
-GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
-TARGETS = (1e-3, 1e-4)
 STATIC_SAME = 2e-10   # L^0 of the compressed model against the uncompressed one's (relative). Galerkin keeps it exactly
                       # (the static response is in every compressed body's span); what is left is the rounding of
                       # L^0's own solves with Galileo's stiff reduced K, measured 3e-12 .. 1.7e-10 over the 6 angles
@@ -41,26 +35,12 @@ SAME_FREQ = 1e-8     # 1 against 2 ranks: the reassembled frequencies (relative)
 pytestmark = pytest.mark.usefixtures("quiet_library")
 
 
+both = gp.pair_fixture("compress", (False, True))      # Galileo uncompressed and compressed at each target
+dense = gp.dense_fixture("compress_dense")
+
+
 def reduce(compress, accuracy):
-    return kryflex.reduce(kryflex.load_scene(GALILEO), quiet=True, accuracy=accuracy, compress=compress)
-
-
-@pytest.fixture(scope="module", params=TARGETS, ids=lambda t: "%g" % t)
-def both(request):
-    out = {c: reduce(c, request.param) for c in (False, True)}
-    out["target"] = request.param
-    return out
-
-
-@pytest.fixture(scope="module")
-def dense(tmp_path_factory):
-    return acc.DenseReference(GALILEO, str(tmp_path_factory.mktemp("compress_dense")))
-
-
-def scene_settings():
-    with open(GALILEO) as f:
-        raw = yaml.safe_load(f)
-    return [[float(a)] for a in raw["angles"]], raw["band"], float(raw["damping"])
+    return gp.reduce_galileo(accuracy, compress=compress)
 
 
 def test_compressed_model_is_smaller_and_recorded(both):
@@ -77,7 +57,7 @@ def test_compressed_model_is_smaller_and_recorded(both):
 
 
 def test_compressed_model_meets_the_target_independently(both, dense):
-    configurations, band, zeta = scene_settings()
+    configurations, band, zeta = gp.galileo_settings()
     el, tot = em.errors(both[True].model, dense, configurations, band, zeta)
     el0, _ = em.errors(both[False].model, dense, configurations, band, zeta)
     print("elastic error %.3g compressed, %.3g before; kryflex's %.3g" % (el, el0, both[True].summary.verdict.error_max))
@@ -85,7 +65,7 @@ def test_compressed_model_meets_the_target_independently(both, dense):
 
 
 def test_static_moment_stays_exact(both, dense):
-    configurations, _, _ = scene_settings()
+    configurations, _, _ = gp.galileo_settings()
     for angles in configurations:
         L0c = both[True].model.at(angles).moments(1)[0]
         L0p = both[False].model.at(angles).moments(1)[0]
@@ -127,14 +107,10 @@ def test_a_model_that_cannot_lose_a_direction_is_kept():
 
 @pytest.mark.mpi
 def test_two_ranks_choose_the_same_compressed_model(both, tmp_path):
-    path = str(tmp_path / "m.h5")
-    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, GALILEO, path, str(tmp_path / "s.json"),
-                    "-kf_compress", "true", "-kf_accuracy", str(both["target"])],
-                   env=ENV, check=True, timeout=600, capture_output=True)
-    two = kryflex.ReducedModel.load(path)
+    two = gp.on_two_ranks(GALILEO, tmp_path, "-kf_compress", "true", "-kf_accuracy", str(both["target"]))
     one = both[True].model
     assert two.sizes == one.sizes
-    configurations, band, _ = scene_settings()
+    configurations, band, _ = gp.galileo_settings()
     for angles in configurations:
         f1, f2 = one.at(angles).frequencies_hz, two.at(angles).frequencies_hz
         inband = f1 <= band[1]
@@ -191,10 +167,7 @@ def test_solid_spacecraft_two_ranks_choose_the_same_compressed_model(tmp_path_fa
     angles, band = [[0.0]], [0.01, 15.0]
     path = acc.write_variant(base, os.path.join(work, "one.yaml"), angles=angles, band=band, reduction=None)
     one = kryflex.reduce(kryflex.load_scene(path), quiet=True, accuracy=1e-3).model
-    out = os.path.join(work, "m.h5")
-    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, out, os.path.join(work, "s.json"),
-                    "-kf_accuracy", "1e-3"], env=ENV, check=True, timeout=600, capture_output=True)
-    two = kryflex.ReducedModel.load(out)
+    two = gp.on_two_ranks(path, work, "-kf_accuracy", "1e-3")
     print("1 rank %s, 2 ranks %s" % (one.sizes, two.sizes))
     assert two.sizes == one.sizes
     f1, f2 = one.at(angles[0]).frequencies_hz, two.at(angles[0]).frequencies_hz

@@ -30,25 +30,15 @@ sys.path.insert(0, SUPPORT)
 sys.path.insert(0, os.path.join(ROOT, "benchmarks", "peers"))
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
+import galileo_pairs as gp  # noqa: E402
+from galileo_pairs import ENV, GALILEO  # noqa: E402
 
-GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
-TARGETS = (1e-3, 1e-4)
 STATIC_FLOOR_RTOL = 1e-10   # "exact": the static gain's relative Frobenius error the floor is stated for
 DENSE_L0 = 1e-7             # a kept L0_el against the dense eigh reference: the modal sum over Galileo's stiff modes
                             # loses digits (its floor ~2e-8, test_compress.py)
 SAME_L0 = 1e-6              # kryflex's own measured L0 error against the dense one's (relative, or 1e-9 absolute)
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
-
-
-def galileo_angles():
-    with open(GALILEO) as f:
-        raw = yaml.safe_load(f)
-    return [[float(a)] for a in raw["angles"]], raw["band"], float(raw["damping"])
 
 
 def dense_L0(full):
@@ -98,7 +88,7 @@ def test_static_floor_script_agrees_with_the_dense_reference(mimo):
     from bench import ref
     path, dense = mimo
     scene = ref.load_scene(path)
-    configurations, _, _ = galileo_angles()
+    configurations, _, _ = gp.galileo_settings()
     for angles, _ in acc.with_midpoints(configurations):
         got = static_floor.at_angle(scene, angles[0], STATIC_FLOOR_RTOL, 1e-8)
         sv = np.linalg.svd(dense_L0(dense.at(angles)), compute_uv=False)
@@ -119,7 +109,7 @@ def test_a_model_with_exact_static_gain_is_no_smaller_than_its_rank(mimo, target
     model, ch = out.model, out.summary.chosen
     assert ch.static_exact is True
     scene = ref.load_scene(path)
-    configurations, _, _ = galileo_angles()
+    configurations, _, _ = gp.galileo_settings()
     exact_somewhere = False
     for angles, kind in acc.with_midpoints(configurations):
         L0f = dense_L0(dense.at(angles))
@@ -148,7 +138,7 @@ def test_static_exact_false_respects_the_floor(mimo, target):
     path, dense = mimo
     out = kryflex.reduce(kryflex.load_scene(path), quiet=True, accuracy=target, static_exact=False)
     model, ch = out.model, out.summary.chosen
-    configurations, _, _ = galileo_angles()
+    configurations, _, _ = gp.galileo_settings()
     if target == 0.3:       # the bound is exercised: fewer elastic dofs than the rank somewhere
         assert min(elastic_dofs(model, a) for a in configurations) < 4
     for angles in configurations:
@@ -165,24 +155,12 @@ def test_static_exact_false_respects_the_floor(mimo, target):
 
 # ------------------------------------------------------------------ static_exact false on Galileo, every angle
 
-def reduce_galileo(static_exact, accuracy):
-    return kryflex.reduce(kryflex.load_scene(GALILEO), quiet=True, accuracy=accuracy, static_exact=static_exact)
-
-
-@pytest.fixture(scope="module", params=TARGETS, ids=lambda t: "%g" % t)
-def both(request):
-    out = {s: reduce_galileo(s, request.param) for s in (True, False)}
-    out["target"] = request.param
-    return out
-
-
-@pytest.fixture(scope="module")
-def dense(tmp_path_factory):
-    return acc.DenseReference(GALILEO, str(tmp_path_factory.mktemp("static_dense")))
+both = gp.pair_fixture("static_exact", (True, False))   # Galileo with L0 kept and not, at each target
+dense = gp.dense_fixture("static_dense")
 
 
 def test_no_larger_and_meets_the_target_independently(both, dense):
-    configurations, band, zeta = galileo_angles()
+    configurations, band, zeta = gp.galileo_settings()
     exact, free = both[True], both[False]
     el, _ = em.errors(free.model, dense, configurations, band, zeta)
     print("sizes %s (static kept) %s (static_exact false), elastic error %.3g" % (exact.model.sizes,
@@ -193,7 +171,7 @@ def test_no_larger_and_meets_the_target_independently(both, dense):
 
 
 def test_L0_error_is_measured_not_claimed(both, dense):
-    configurations, _, _ = galileo_angles()
+    configurations, _, _ = gp.galileo_settings()
     free = both[False]
     ch = free.summary.chosen
     truncated = sum(free.model.sizes) < sum(both[True].model.sizes)
@@ -247,13 +225,10 @@ def test_a_bad_value_is_a_clean_error(tmp_path, how):
 
 @pytest.mark.mpi
 def test_two_ranks_choose_the_same_model(both, tmp_path):
-    path = str(tmp_path / "m.h5")
-    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, GALILEO, path, str(tmp_path / "s.json"),
-                    "-kf_static_exact", "false", "-kf_accuracy", str(both["target"])],
-                   env=ENV, check=True, timeout=600, capture_output=True)
-    two, one = kryflex.ReducedModel.load(path), both[False].model
+    two = gp.on_two_ranks(GALILEO, tmp_path, "-kf_static_exact", "false", "-kf_accuracy", str(both["target"]))
+    one = both[False].model
     assert two.sizes == one.sizes
-    configurations, band, _ = galileo_angles()
+    configurations, band, _ = gp.galileo_settings()
     for angles in configurations:
         f1, f2 = one.at(angles).frequencies_hz, two.at(angles).frequencies_hz
         inband = f1 <= band[1]
@@ -278,11 +253,7 @@ def test_solid_spacecraft_two_ranks_choose_the_same_truncated_model(tmp_path_fac
     out = kryflex.reduce(kryflex.load_scene(path), quiet=True, accuracy=1e-2, static_exact=False)
     one = out.model
     assert out.summary.chosen.static_exact is False
-    model_path = os.path.join(work, "m.h5")
-    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, model_path, os.path.join(work, "s.json"),
-                    "-kf_accuracy", "1e-2", "-kf_static_exact", "false"], env=ENV, check=True, timeout=600,
-                   capture_output=True)
-    two = kryflex.ReducedModel.load(model_path)
+    two = gp.on_two_ranks(path, work, "-kf_accuracy", "1e-2", "-kf_static_exact", "false")
     print("1 rank %s, 2 ranks %s" % (one.sizes, two.sizes))
     assert two.sizes == one.sizes
     f1, f2 = one.at(angles[0]).frequencies_hz, two.at(angles[0]).frequencies_hz

@@ -21,6 +21,8 @@ import threading
 import time
 from typing import Callable, Optional
 
+import disk_full  # support/, on sys.path from tests/python/conftest.py
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(HERE))))
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
@@ -199,19 +201,9 @@ def command_line(case, ctx, ranks):
 
 
 def disk_full_site(folder, nbytes):
-    """A sitecustomize (in folder: for PYTHONPATH) that limits the files a kryflex process writes to nbytes
-    (RLIMIT_FSIZE) right after kryflex.init: the disk is full for kryflex, not for MPI's start-up (PMIx and the
-    shared-memory transport size their files with ftruncate, and a limit set before MPI_Init, e.g. by preexec_fn,
-    makes MPI_Init fail or mpiexec's helpers die of SIGXFSZ). As tests/python/commands/test_collective_errors.py does."""
-    os.makedirs(folder, exist_ok=True)
-    with open(os.path.join(folder, "sitecustomize.py"), "w") as f:
-        f.write("import resource, kryflex, kryflex._runtime as rt\n"
-                "start = rt.init\n"
-                "def init(argv=None):\n"
-                "    start(argv)\n"
-                "    resource.setrlimit(resource.RLIMIT_FSIZE, (%d, %d))\n"
-                "rt.init = kryflex.init = init\n" % (nbytes, nbytes))
-    return folder
+    """A sitecustomize (in folder: for PYTHONPATH) that limits the files a kryflex process writes to nbytes once MPI
+    has started (support/disk_full.py says why then)."""
+    return disk_full.write_site(folder, disk_full.after_init(nbytes))
 
 
 def _kill_group(proc):

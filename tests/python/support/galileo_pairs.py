@@ -1,0 +1,69 @@
+"""Galileo reduced with one reducer keyword at two values, at each of two targets, beside its independent dense
+reference: the module-scoped fixtures reducer/test_compress.py (compress) and reducer/test_static_exact.py
+(static_exact) share, and the same reduction run on 2 MPI ranks for comparison with the serial one.
+
+A test module makes its fixtures by assigning what the factories return to module names:
+
+    both = galileo_pairs.pair_fixture("compress", (False, True))      # {False: result, True: result, "target": t}
+    dense = galileo_pairs.dense_fixture("compress_dense")             # accuracy_scenes.DenseReference of Galileo
+"""
+import os
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+import kryflex
+
+import accuracy_scenes as acc
+
+SUPPORT = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(SUPPORT)))
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1",
+           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+TARGETS = (1e-3, 1e-4)
+
+
+def galileo_settings():
+    """Galileo's configurations of interest ([[angle]] each), band (Hz) and modal damping ratio, from its scene file."""
+    with open(GALILEO) as f:
+        raw = yaml.safe_load(f)
+    return [[float(a)] for a in raw["angles"]], raw["band"], float(raw["damping"])
+
+
+def reduce_galileo(accuracy, **keyword):
+    """kryflex.reduce on Galileo at accuracy, quiet, with the reducer keyword(s) given."""
+    return kryflex.reduce(kryflex.load_scene(GALILEO), quiet=True, accuracy=accuracy, **keyword)
+
+
+def pair_fixture(keyword, values, targets=TARGETS, name="both"):
+    """A module-scoped fixture, parametrized by target (ids "%g"): Galileo reduced with keyword=value for each value
+    (in the order given), as {value: reduction, "target": target}."""
+    @pytest.fixture(scope="module", params=targets, ids=lambda t: "%g" % t, name=name)
+    def pair(request):
+        out = {v: reduce_galileo(request.param, **{keyword: v}) for v in values}
+        out["target"] = request.param
+        return out
+    return pair
+
+
+def dense_fixture(folder, name="dense"):
+    """A module-scoped fixture: Galileo's dense full-order reference (accuracy_scenes.DenseReference) cached in a
+    temporary folder named after folder."""
+    @pytest.fixture(scope="module", name=name)
+    def dense(tmp_path_factory):
+        return acc.DenseReference(GALILEO, str(tmp_path_factory.mktemp(folder)))
+    return dense
+
+
+def on_two_ranks(scene, folder, *options):
+    """The scene reduced by kryflex.Reducer on 2 MPI ranks with the -kf_ options given (mpi_reducer_probe.py); the
+    model it saved under folder, loaded."""
+    path = os.path.join(str(folder), "m.h5")
+    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, scene, path, os.path.join(str(folder), "s.json")]
+                   + list(options), env=ENV, check=True, timeout=600, capture_output=True)
+    return kryflex.ReducedModel.load(path)

@@ -54,6 +54,8 @@ typedef struct {
   PetscLogDouble t_apply, t_orth, t_proj, t_res; /* seconds: the block solves (residual checks included), Gram-Schmidt, H, the Ritz residuals */
 } KFBlockEig;
 
+static PetscErrorCode KFBlockEigRotate(KFBlockEig *, Mat);
+
 /* a uniform number in [-1, 1) from the global row, the column and nothing else: the same start on any rank count */
 static PetscReal KFBlockRandom(PetscInt row, PetscInt col)
 {
@@ -93,9 +95,61 @@ static PetscErrorCode KFBlockEigStart(KFBlockEig *be, PetscInt nrand)
   PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, be->b, &X));
   PetscCall(KFFlexPCApplySampled(&be->pc, S, X));
   be->solved += be->b;
+  PetscCall(KFBlockEigRotate(be, X));
   PetscCall(KFMOrthBasisAppend(be->basis, X, KF_BLOCK_EIGEN_DEFL, &ndefl));
   PetscCall(MatDestroy(&X));
   PetscCall(MatDestroy(&S));
+  PetscFunctionReturn(0);
+}
+
+/* X (p columns) rotated so that its parts M-orthogonal to the basis (k columns, V and M V) are M-orthogonal to each
+   other, the largest first: their Gram matrix X^T M X - C^T C (C = V^T M X) diagonalized. The basis's own append
+   (KFMBasisAppend) then finds no cancellation within the block: a Krylov block of K+ M, whose columns lean the same
+   way once the converging modes are taken out, otherwise costs it a fresh M product and a pass against the whole
+   basis per column (measured: most columns of every block on the solid). */
+static PetscErrorCode KFBlockEigRotate(KFBlockEig *be, Mat X)
+{
+  KFScene            s = be->sys->scene;
+  const PetscScalar *v, *mv;
+  PetscScalar       *x, *y;
+  PetscInt           k, nl, p, ldx;
+  PetscReal         *G, *C, *U, *ev, *work;
+  PetscBLASInt       bp, lwork, info;
+  Mat                MX;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(X, NULL, &p));
+  PetscCall(KFMOrthBasisGetArrays(be->basis, &k, &nl, &v, &mv));
+  PetscCall(PetscMalloc5(p * p, &G, k * p + 1, &C, p * p, &U, p, &ev, nl * p + 1, &y));
+  PetscCall(KFMatMultDense(be->sys->Ms, X, &MX));
+  PetscCall(KFMatTransposeMatMultGather(X, MX, G));
+  PetscCall(MatDestroy(&MX));
+  PetscCall(MatDenseGetLDA(X, &ldx));
+  PetscCall(MatDenseGetArray(X, &x));
+  PetscCall(KFArrayTransposeMultGather(s->comm, nl, k, mv, nl, p, x, ldx, C));
+  for (PetscInt j = 0; j < p; j++)
+    for (PetscInt i = 0; i <= j; i++) {
+      PetscReal d = G[i + j * p];
+      for (PetscInt l = 0; l < k; l++) d -= C[l + i * k] * C[l + j * k];
+      U[i + j * p] = U[j + i * p] = d;
+    }
+  PetscCall(PetscBLASIntCast(p, &bp));
+  lwork = PetscMax(3 * bp, 1) * 8;
+  PetscCall(PetscMalloc1(lwork, &work));
+  PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bp, U, &bp, ev, work, &lwork, &info));
+  PetscCall(PetscFree(work));
+  if (!info) { /* descending: the columns reversed */
+    for (PetscInt j = 0; j < p / 2; j++)
+      for (PetscInt i = 0; i < p; i++) {
+        PetscReal t            = U[i + j * p];
+        U[i + j * p]           = U[i + (p - 1 - j) * p];
+        U[i + (p - 1 - j) * p] = t;
+      }
+    PetscCall(KFArraySkinnyMultSet(nl, p, x, ldx, p, 1.0, U, p, y, nl));
+    for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&x[j * ldx], &y[j * nl], nl));
+  } /* else the block as it is: the append's own refinement takes the cancellation */
+  PetscCall(MatDenseRestoreArray(X, &x));
+  PetscCall(PetscFree5(G, C, U, ev, y));
   PetscFunctionReturn(0);
 }
 
@@ -132,6 +186,7 @@ static PetscErrorCode KFBlockEigStep(KFBlockEig *be, PetscBool *grew)
   for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&be->W[(k0 + j) * nl], &w[j * ldx], nl));
   PetscCall(MatDenseRestoreArrayRead(X, &w));
   be->kw = k1;
+  PetscCall(KFBlockEigRotate(be, X));
   PetscCall(KFMOrthBasisAppend(be->basis, X, KF_BLOCK_EIGEN_DEFL, &ndefl));
   PetscCall(PetscTime(&t0));
   be->t_orth += t0 - t1;

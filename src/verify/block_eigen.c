@@ -18,13 +18,14 @@
 #include <petscblaslapack.h>
 #include "eigen_impl.h"
 
-const char *const KFVerifyEigenMethods[] = {"block", "slepc", "KFVerifyEigenMethod", "KF_VERIFY_EIGEN_", NULL};
+const char *const KFVerifyEigenMethods[] = {"auto", "block", "slepc", "KFVerifyEigenMethod", "KF_VERIFY_EIGEN_", NULL};
 
 #define KF_BLOCK_EIGEN_RTOL 1e-10 /* SLEPc's tolerance in the Krylov-Schur path (EPSSetTolerances) */
 #define KF_BLOCK_EIGEN_DEFL 1e-10
 #define KF_CLUSTER_RTOL     1e-8 /* omega^2 this close (relative): one multiple mode */ /* a column of a new block that keeps less of its M-norm depends on the space */
 
-/* -kf_verify_eigen_method (0 block, 1 slepc), -kf_verify_eigen_random (random columns per block),
+/* -kf_verify_eigen_method (0 auto: block from KF_BLOCK_EIGEN_MIN_DOFS system dofs on, else slepc; 1 block; 2 slepc),
+   -kf_verify_eigen_random (random columns per block),
    -kf_verify_eigen_max_blocks (blocks before the fall back to SLEPc's Krylov-Schur), read and checked */
 PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks)
 {
@@ -33,7 +34,7 @@ PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nr
   *nrand     = 3;
   *maxblocks = 12;
   PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (block Krylov)", "KFSystemEigen");
-  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_verify_eigen_method", KFVerifyEigenMethods, 2, KFVerifyEigenMethods[*method], method, NULL));
+  PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_verify_eigen_method", KFVerifyEigenMethods, 3, KFVerifyEigenMethods[*method], method, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_random", *nrand, nrand, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_max_blocks", *maxblocks, maxblocks, NULL));
   PetscOptionsEnd();

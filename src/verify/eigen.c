@@ -566,8 +566,13 @@ static PetscErrorCode KFEigenModesOut(KFSystem sys, Mat P, PetscInt m, PetscInt 
   PetscFunctionReturn(0);
 }
 
-/* The block Krylov path (src/verify/block_eigen.c) for a reference with the flexible solver's factor, the default
-   (-kf_verify_eigen_method block); *done false when it is not taken or did not converge: SLEPc's Krylov-Schur then */
+/* The block Krylov path (src/verify/block_eigen.c) for a reference with the flexible solver's factor
+   (-kf_verify_eigen_method block, or auto from KF_BLOCK_EIGEN_MIN_DOFS system dofs on); *done false when it is not
+   taken or did not converge: SLEPc's Krylov-Schur then. auto's threshold: the block path took 0.55 of Krylov-Schur's
+   eigensolve time on the 57,031-dof solid and 1.3 times it on the 2,755-dof one, where the factor's solves are cheap
+   and its Gram-Schmidt over blocks is not (benchmarks/proof_cost/README.md, 2026-11-29p); between the two sizes the
+   crossing is not measured */
+#define KF_BLOCK_EIGEN_MIN_DOFS 20000
 static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, PetscBool *done)
 {
   KFScene   s = sys->scene;
@@ -578,7 +583,8 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, cons
   PetscFunctionBegin;
   *done = PETSC_FALSE;
   PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks));
-  if (method != 0 || !hint) PetscFunctionReturn(0);
+  if (method == 0) method = s->nsys >= KF_BLOCK_EIGEN_MIN_DOFS ? 1 : 2;
+  if (method != 1 || !hint) PetscFunctionReturn(0);
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(KFBlockEigenSolve(sys, solver, hint->cut2, nev, nconv, omega2, &P, done, &nblocks, &b));
   if (!*done) {

@@ -588,7 +588,8 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, cons
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(KFBlockEigenSolve(sys, solver, hint->cut2, nev, nconv, omega2, &P, done, &nblocks, &b));
   if (!*done) {
-    PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the modes%s%.4g Hz in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", fcut > 0 ? " to " : " (count) ", fcut > 0 ? (double)fcut : (double)nev, nblocks, b));
+    if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the modes to %.4g Hz in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", (double)fcut, nblocks, b));
+    else PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the %" PetscInt_FMT " lowest modes in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", nev, nblocks, b));
     PetscFunctionReturn(0);
   }
   if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system to %.4g Hz (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns)", *nconv, s->nsys, (double)fcut, nblocks, b));

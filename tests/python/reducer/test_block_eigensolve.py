@@ -145,7 +145,7 @@ def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
     line says so, and the reference is Krylov-Schur's."""
     scene, systems, _ = model("frame", tmp_path)
     opts = PETSc.Options()
-    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_max_blocks=1, kf_quiet=False)
+    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_method="block", kf_verify_eigen_max_blocks=1, kf_quiet=False)
     for k, v in values.items():
         opts.setValue(k, v)
     log = tmp_path / "progress.txt"
@@ -159,7 +159,7 @@ def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
         os.dup2(saved, fd)
         os.close(saved)
         opts.setValue("kf_quiet", True)
-        for k in ("kf_verify_dense_max_dofs", "kf_verify_eigen_max_blocks"):
+        for k in ("kf_verify_dense_max_dofs", "kf_verify_eigen_method", "kf_verify_eigen_max_blocks"):
             opts.delValue(k)
     text = log.read_text()
     slepc = reduce_sparse(scene, "slepc")

@@ -568,9 +568,9 @@ static PetscErrorCode KFEigenModesOut(KFSystem sys, Mat P, PetscInt m, PetscInt 
 
 /* The block Krylov path (src/verify/block_eigen.c) for a reference with the flexible solver's factor
    (-kf_verify_eigen_method block, or auto from KF_BLOCK_EIGEN_MIN_DOFS system dofs on); *done false when it is not
-   taken or did not converge: SLEPc's Krylov-Schur then. auto's threshold: the block path took 0.55 of Krylov-Schur's
-   eigensolve time on the 57,031-dof solid and 1.3 times it on the 2,755-dof one, where the factor's solves are cheap
-   and its Gram-Schmidt over blocks is not (benchmarks/proof_cost/README.md, 2026-11-29p); between the two sizes the
+   taken or did not converge: SLEPc's Krylov-Schur then. auto's threshold: the block path took 0.46 to 0.74 of
+   Krylov-Schur's eigensolve time on the 57,031-dof solid and 1.05 to 1.3 times it on the 2,755-dof one, where the
+   factor's solves are cheap and its Gram-Schmidt over blocks is not (benchmarks/proof_cost/README.md, 2026-11-29p); between the two sizes the
    crossing is not measured */
 #define KF_BLOCK_EIGEN_MIN_DOFS 20000
 static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, PetscBool *done)

@@ -1,15 +1,17 @@
 /*
   The verification's reference modes from a BLOCK Krylov space of K+ M (the flexible solver's K+: shift-and-invert
-  about 0, the rigid modes mapped to zero), the default sparse path. The space starts from K+ [G, H^T, R] (the
-  configuration's inputs and outputs, R a few random columns: damping matrices couple modes the inputs and outputs do
-  not reach) and grows block by block, each block one block solve of the flexible solver (a block of b columns costs
-  little more than one column: the bodies' factors are read once per block), M-orthonormalized with the Krylov basis's
-  own numerics (src/krylov/block_arnoldi.c: rigid modes projected out, two classical Gram-Schmidt passes, deflation).
+  about 0, the rigid modes mapped to zero), the default sparse path from 20,000 system dofs on (src/verify/eigen.c).
+  The space starts from K+ [G, H^T, R] (the configuration's inputs and outputs, R a few random columns: damping
+  matrices couple modes the inputs and outputs do not reach) and grows block by block, each block one block solve of
+  the flexible solver (8 columns cost about twice one on the 57k solid: the bodies' factors are read once per block),
+  rotated (KFBlockEigRotate) and M-orthonormalized with the Krylov basis's own numerics (src/krylov/block_arnoldi.c:
+  rigid modes projected out, two classical Gram-Schmidt passes, deflation).
   Rayleigh-Ritz on V^T M K+ M V (LAPACK), the residual of every Ritz pair measured from the vectors themselves,
   ||theta K+ M x - x||_M for x = V y, ||x||_M = 1, with K+ M V kept from the solves: the quantity SLEPc's
   Krylov-Schur estimates from its recurrence and stops on (relative error of the shift-and-invert eigenvalue, 1e-10),
   here computed, not estimated. The stop is KFEPSStopCovered's: the Ritz pairs in order, every one converged, up to
-  the first at or above the cut. The modes returned are purified for free: theta K+ M x = theta W y.
+  the first at or above the cut and the rest of its multiple mode. The modes returned are purified for free:
+  theta K+ M x = theta W y.
   Why not a SLEPc block solver: subspace iteration on block solves took 3x Krylov-Schur's time and LOBPCG broke down
   (benchmarks/proof_cost/README.md); the projected problem here is small and exact.
 */
@@ -21,8 +23,8 @@
 const char *const KFVerifyEigenMethods[] = {"auto", "block", "slepc", "KFVerifyEigenMethod", "KF_VERIFY_EIGEN_", NULL};
 
 #define KF_BLOCK_EIGEN_RTOL 1e-10 /* SLEPc's tolerance in the Krylov-Schur path (EPSSetTolerances) */
-#define KF_BLOCK_EIGEN_DEFL 1e-10
-#define KF_CLUSTER_RTOL     1e-8 /* omega^2 this close (relative): one multiple mode */ /* a column of a new block that keeps less of its M-norm depends on the space */
+#define KF_BLOCK_EIGEN_DEFL 1e-10 /* a column of a new block that keeps less of its M-norm depends on the space */
+#define KF_CLUSTER_RTOL     1e-8  /* omega^2 this close (relative): one multiple mode */
 
 /* -kf_verify_eigen_method (0 auto: block from KF_BLOCK_EIGEN_MIN_DOFS system dofs on, else slepc; 1 block; 2 slepc),
    -kf_verify_eigen_random (random columns per block),

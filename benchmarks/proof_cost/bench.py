@@ -3,14 +3,16 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check] [--block-eigen]
+        [--direct-check] [--block-eigen] [--slepc-eigen]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
 verification split (eigensolves, direct solves, the rest), the search, the report and plots, and the ratio the goal
 is stated in: default wall / (factorization + block solves of the bare run), and the direct check's numerical
 factorizations (its progress line), and how many angles and midpoints the check iterated from the reference (steps,
-fallbacks: summary.json). --block-eigen adds a run of the default with the eigensolves by SLEPc's subspace iteration
+fallbacks: summary.json). The default's eigensolves are the block Krylov path's: their blocks per configuration and columns per block
+are printed. --slepc-eigen adds a run of the default with SLEPc's Krylov-Schur (-kf_verify_eigen_method slepc) and
+the two's ratio. --block-eigen adds a run of the default with the eigensolves by SLEPc's subspace iteration
 (K+ applied to blocks) and prints both runs' K+ applications, columns and seconds per column. --direct-check adds a run of the default with the check solved by factorizations
 (-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
@@ -29,6 +31,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 STAMP = re.compile(r"^\[kryflex\s+([0-9.]+) s\] (.*)$")
 # -info :eps, one line per sparse eigensolve (src/verify/eigen.c)
+# the block Krylov eigensolve's progress line, one per configuration (src/verify/eigen.c), and its fall back
+BLOCK_LINE = re.compile(r"block Krylov of K\+ M with the flexible solver's factor: (\d+) blocks of (\d+) columns\)")
+BLOCK_FALLBACK = "the block Krylov space did not converge"
 EIGEN_INFO = re.compile(r"kryflex verification eigensolve: (\d+) iterations, (\d+) K\+ applications, (\d+) columns, "
                         r"([0-9.e+-]+) s in the factor's solves")
 
@@ -82,7 +87,20 @@ def run(scene, out, extra):
                           (s.get("reference_check") or {}).get("iterative_steps_max"),
                           (s.get("reference_check") or {}).get("fallbacks")),
                 error=s.get("error_max"), estimated=s.get("error_estimated"), dofs=(s.get("full") or {}).get("system_dofs"),
-                eigen_info=[(int(a), int(b), int(c), float(d)) for a, b, c, d in EIGEN_INFO.findall(proc.stdout)])
+                eigen_info=[(int(a), int(b), int(c), float(d)) for a, b, c, d in EIGEN_INFO.findall(proc.stdout)],
+                blocks=[(int(a), int(b)) for a, b in BLOCK_LINE.findall(proc.stdout)],
+                fallbacks=proc.stdout.count(BLOCK_FALLBACK))
+
+
+def show_blocks(name, r):
+    """The block Krylov eigensolves of a run: blocks per configuration, columns per block, fall backs to SLEPc."""
+    b = r["blocks"]
+    if not b and not r["fallbacks"]:
+        return
+    print("%-8s %d eigensolves by block Krylov: blocks per eigensolve %s, columns per block %s, %d block solves "
+          "(%d columns); %d fell back to Krylov-Schur; eigensolves %.2f s" % (
+              name, len(b), ",".join(str(x[0]) for x in b), ",".join(sorted({str(x[1]) for x in b})),
+              sum(x[0] + 1 for x in b), sum((x[0] + 1) * x[1] for x in b), r["fallbacks"], r["eigensolve"]))
 
 
 def show_eigen(name, r):
@@ -123,6 +141,9 @@ def main():
                     help="a run of the default with the eigensolves by subspace iteration, K+ applied to blocks "
                          "(-kf_verify_eps_type subspace), beside Krylov-Schur's single vectors; both with -info :eps "
                          "for their K+ applications and columns")
+    ap.add_argument("--slepc-eigen", action="store_true",
+                    help="a run of the default with SLEPc's Krylov-Schur eigensolves (-kf_verify_eigen_method slepc, "
+                         "the method before the block Krylov one), beside the block path, and the two's ratio")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
@@ -136,8 +157,11 @@ def main():
             bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
             info = ["-info", ":eps"] if args.block_eigen else []
             full = run(scene, os.path.join(args.work, "default_%s" % refine), info)
-            block = run(scene, os.path.join(args.work, "block_%s" % refine), info + ["-kf_verify_eps_type", "subspace"]) \
+            block = run(scene, os.path.join(args.work, "block_%s" % refine),
+                        info + ["-kf_verify_eigen_method", "slepc", "-kf_verify_eps_type", "subspace"]) \
                 if args.block_eigen else None
+            slepc = run(scene, os.path.join(args.work, "slepc_%s" % refine), ["-kf_verify_eigen_method", "slepc"]) \
+                if args.slepc_eigen else None
             whole = run(scene, os.path.join(args.work, "whole_%s" % refine), ["-kf_verify_check_bodywise", "false"]) \
                 if args.whole_check else None
             direct = run(scene, os.path.join(args.work, "direct_%s" % refine), ["-kf_verify_check_method", "direct"]) \
@@ -148,6 +172,13 @@ def main():
                                                                 "verify", "eigen", "direct", "search", "report"))
             show("bare", bare, denom)
             show("default", full, denom)
+            show_blocks("default", full)
+            if slepc:
+                show("slepc", slepc, denom)
+                print("eigensolves, block Krylov (default) / Krylov-Schur: %.2f s / %.2f s = %.2f; default wall / "
+                      "Krylov-Schur's: %.2f; errors %.12g and %.12g" % (
+                          full["eigensolve"], slepc["eigensolve"], full["eigensolve"] / slepc["eigensolve"],
+                          full["wall"] / slepc["wall"], full["error"], slepc["error"]))
             if block:
                 show("block", block, denom)
                 show_eigen("default", full)

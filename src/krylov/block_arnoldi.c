@@ -885,3 +885,62 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   *Vout           = V;
   PetscFunctionReturn(0);
 }
+
+/* The M-orthonormal basis above (rigid modes projected out, two Gram-Schmidt passes, deflation) for another user of
+   the same numerics: the verification's block eigensolve (src/verify/block_eigen.c) grows its Krylov space with it */
+struct _n_KFMOrthBasis {
+  BV           V;
+  KFMBasis     mb;
+  KFRigidSpace rs;
+};
+
+PETSC_INTERN PetscErrorCode KFMOrthBasisCreate(KFSystem sys, PetscInt maxcols, KFMOrthBasis *ob)
+{
+  KFScene s = sys->scene;
+
+  PetscFunctionBegin;
+  PetscCall(PetscNew(ob));
+  PetscCall(BVCreate(s->comm, &(*ob)->V));
+  PetscCall(BVSetSizes((*ob)->V, s->nsys_local, s->nsys, PetscMax(maxcols, 1)));
+  PetscCall(BVSetType((*ob)->V, BVSVEC)); /* the columns read as one array, leading dimension nl */
+  PetscCall(BVSetMatrix((*ob)->V, sys->Ms, PETSC_FALSE));
+  PetscCall(KFMBasisCreate((*ob)->V, &(*ob)->mb));
+  PetscCall(KFRigidSpaceOpen(sys, &(*ob)->rs));
+  PetscFunctionReturn(0);
+}
+
+/* the columns of W appended (KFMBasisAppend); ndeflated counts the columns dropped */
+PETSC_INTERN PetscErrorCode KFMOrthBasisAppend(KFMOrthBasis ob, Mat W, PetscReal tol, PetscInt *ndeflated)
+{
+  PetscInt p;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(W, NULL, &p));
+  PetscCall(KFMBasisAppend(&ob->rs, &ob->mb, W, 0, p, tol, ndeflated, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* the columns so far (k), local rows (nl, the leading dimension), V and M V: valid until the next append */
+PETSC_INTERN PetscErrorCode KFMOrthBasisGetArrays(KFMOrthBasis ob, PetscInt *k, PetscInt *nl, const PetscScalar **V, const PetscScalar **MV)
+{
+  const PetscScalar *v;
+
+  PetscFunctionBegin;
+  *k  = ob->mb.k;
+  *nl = ob->mb.nl;
+  PetscCall(BVGetArrayRead(ob->V, &v));
+  *V = v; /* the restore clears its argument, not the array */
+  PetscCall(BVRestoreArrayRead(ob->V, &v));
+  *MV = ob->mb.MV;
+  PetscFunctionReturn(0);
+}
+
+PETSC_INTERN PetscErrorCode KFMOrthBasisDestroy(KFMOrthBasis *ob)
+{
+  PetscFunctionBegin;
+  if (!*ob) PetscFunctionReturn(0);
+  PetscCall(KFMBasisDestroy(&(*ob)->mb));
+  PetscCall(BVDestroy(&(*ob)->V));
+  PetscCall(PetscFree(*ob));
+  PetscFunctionReturn(0);
+}

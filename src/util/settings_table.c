@@ -88,6 +88,9 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_rigid_tol", TR, "1e-08", "(0, 1)", NULL, "Largest ||K Phi|| / (||K|| ||Phi||) accepted for rigid-body modes from node coordinates or supplied (default 1e-8)", NULL, "KFSystem (rigid modes)", "KFSystemComputeRigidModes"},
   {"-kf_progress_min_dofs", TI, "50000", "[0, inf)", NULL, "Print a progress line per Krylov block from this many system dofs on (default 50000)", NULL, "KFKrylovBasis", "KFKrylovBasis"},
   {"-kf_verify_dense_max_dofs", TI, "600", "[0, inf)", NULL, "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_eigen_method", TE, "auto", NULL, "auto block slepc", "Sparse verification eigensolve with the flexible solver's factor: block (a block Krylov space of K+ M from the inputs, outputs and random columns, Rayleigh-Ritz), slepc (Krylov-Schur, one K+ application per vector) or auto (block from 20,000 system dofs on, slepc below; the default)", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_eigen_random", TI, "3", "[0, inf)", NULL, "Random columns in the block Krylov eigensolve's blocks, beside the inputs and outputs (default 3)", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_eigen_max_blocks", TI, "12", "[1, inf)", NULL, "Blocks of the block Krylov eigensolve before it falls back to Krylov-Schur (default 12)", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_verify_target", TR, "auto", NULL, NULL, "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_quiet", TB, "false", NULL, NULL, "Silence the progress lines with elapsed time on rank 0 (default false)", NULL, "KFProgress", "KFProgress"},
   /* viewers, and the command's own */

@@ -4,6 +4,7 @@
 #include "../dense/dense_impl.h"
 #include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
 #include <petscblaslapack.h>
+#include "eigen_impl.h"
 
 /* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
    eigenvalues, which a dense generalized eigensolver cannot take (LAPACK sygv needs M positive definite) */
@@ -327,42 +328,8 @@ static PetscErrorCode KFEPSShiftInvert(EPS eps, PetscInt nev, PetscReal target, 
    space. Small systems go to LAPACK through EPS; larger ones use Krylov-Schur with shift-and-invert (MUMPS) about a
    small negative target, so that K - target M is positive definite. */
 /* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor (PCSHELL in a preonly KSP): the eigensolve
-   shares the reduction's factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
-   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space.
-   The flexible solver measures the residual of every block it solves (an extended-precision K_S product) to decide
-   its refinement; for an eigensolve's one-vector applications that product costs a fifth of the factor's solve. A
-   factor whose solves need no refinement is accurate to rounding whatever the right-hand side, so the residual is
-   sampled: the first application and every KF_EPS_CHECK_EVERY-th after it are checked (and refined if above
-   -kf_refine_rtol), the others solved once; a sampled one that needed refinement turns the check on for every
-   application left. The purification block (KFEPSPurifyBlock) is always checked, and the reference itself is
-   checked against direct solves of the full system (src/verify/direct_check.c). */
-#define KF_EPS_CHECK_EVERY 8
-
-typedef struct {
-  KFFlexSolver solver;
-  PetscInt     applications; /* one-vector applications so far in this eigensolve */
-  PetscInt     checked;      /* ... of them with the residual checked */
-  PetscBool    check_all;    /* a sampled application needed refinement: check every one */
-} KFFlexPCCtx;
-
-/* X = K+ B with the residual checked or not (KFFlexPCApply's sampling) */
-static PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *ctx, Mat B, Mat X)
-{
-  KFFlexSolver solver = ctx->solver;
-  PetscInt     refined, refine = solver->refine;
-  PetscBool    check = (PetscBool)(ctx->check_all || ctx->applications % KF_EPS_CHECK_EVERY == 0);
-
-  PetscFunctionBegin;
-  refined = solver->perf.blocks_refined;
-  if (!check) solver->refine = 0; /* one solve, no residual (KFFlexSolverApply checks only with refinement steps) */
-  PetscCall(KFFlexSolverApply(solver, B, X));
-  solver->refine = refine;
-  if (check && solver->perf.blocks_refined > refined) ctx->check_all = PETSC_TRUE;
-  ctx->checked += check;
-  ctx->applications++;
-  PetscFunctionReturn(0);
-}
-
+   shares the reduction's factorization instead of making its own, its applications' residual sampled
+   (src/verify/eigen_apply.c, KFFlexPCApplySampled). */
 static PetscErrorCode KFFlexPCApply(PC pc, Vec b, Vec x)
 {
   KFFlexPCCtx       *ctx;
@@ -396,41 +363,6 @@ static PetscErrorCode KFFlexPCMatApply(PC pc, Mat B, Mat X)
   PetscFunctionBegin;
   PetscCall(PCShellGetContext(pc, &ctx));
   PetscCall(KFFlexSolverApply(ctx->solver, B, X));
-  PetscFunctionReturn(0);
-}
-
-/* The columns of P scaled to unit M-norm, with one block product M P (a sparse product per column would read M once
-   per mode) */
-static PetscErrorCode KFEPSNormalizeBlock(KFSystem sys, Mat P)
-{
-  Mat       MP;
-  PetscInt  m;
-  PetscReal *nrm;
-
-  PetscFunctionBegin;
-  PetscCall(MatGetSize(P, NULL, &m));
-  PetscCall(KFMatMultDense(sys->Ms, P, &MP));
-  PetscCall(PetscMalloc1(m, &nrm));
-  for (PetscInt i = 0; i < m; i++) {
-    Vec         p, q;
-    PetscScalar dot;
-
-    PetscCall(MatDenseGetColumnVecRead(P, i, &p));
-    PetscCall(MatDenseGetColumnVecRead(MP, i, &q));
-    PetscCall(VecDot(p, q, &dot));
-    PetscCall(MatDenseRestoreColumnVecRead(MP, i, &q));
-    PetscCall(MatDenseRestoreColumnVecRead(P, i, &p));
-    nrm[i] = PetscSqrtReal(PetscRealPart(dot));
-  }
-  for (PetscInt i = 0; i < m; i++) {
-    Vec p;
-
-    PetscCall(MatDenseGetColumnVecWrite(P, i, &p));
-    PetscCall(VecScale(p, 1.0 / nrm[i]));
-    PetscCall(MatDenseRestoreColumnVecWrite(P, i, &p));
-  }
-  PetscCall(PetscFree(nrm));
-  PetscCall(MatDestroy(&MP));
   PetscFunctionReturn(0);
 }
 
@@ -536,6 +468,75 @@ static PetscErrorCode KFEPSInfoApplications(EPS eps, KFFlexSolver solver, const 
   PetscFunctionReturn(0);
 }
 
+
+/* What the callers take from M-normalized modes P (m columns): H P (t x m into HPhi, leading dimension t), P^T G
+   (into PhiG, leading dimension nev) and the modes themselves (nsys x nev, the first m columns) */
+static PetscErrorCode KFEigenModesOut(KFSystem sys, Mat P, PetscInt m, PetscInt nev, PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
+{
+  KFScene    s = sys->scene;
+  PetscInt   a = s->ninputs, t = s->noutputs;
+  PetscReal *ph;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(m * PetscMax(a, t) + 1, &ph));
+  if (HPhi) {
+    PetscCall(KFMatTransposeMatMultGather(P, sys->Ht, ph)); /* m x t */
+    for (PetscInt k = 0; k < m; k++)
+      for (PetscInt q = 0; q < t; q++) HPhi[q + k * t] = ph[k + q * m];
+  }
+  if (PhiG) {
+    PetscCall(KFMatTransposeMatMultGather(P, sys->G, ph)); /* m x a */
+    for (PetscInt q = 0; q < a; q++)
+      for (PetscInt k = 0; k < m; k++) PhiG[k + q * nev] = ph[k + q * m];
+  }
+  PetscCall(PetscFree(ph));
+  if (modes) {
+    PetscCall(KFDenseCreate(s->comm, s->nsys_local, s->nsys, nev, modes));
+    for (PetscInt k = 0; k < m; k++) {
+      Vec p, col;
+      PetscCall(MatDenseGetColumnVecRead(P, k, &p));
+      PetscCall(MatDenseGetColumnVecWrite(*modes, k, &col));
+      PetscCall(VecCopy(p, col));
+      PetscCall(MatDenseRestoreColumnVecWrite(*modes, k, &col));
+      PetscCall(MatDenseRestoreColumnVecRead(P, k, &p));
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
+/* The block Krylov path (src/verify/block_eigen.c) for a reference with the flexible solver's factor
+   (-kf_verify_eigen_method block, or auto from KF_BLOCK_EIGEN_MIN_DOFS system dofs on); *done false when it is not
+   taken or did not converge: SLEPc's Krylov-Schur then. auto's threshold: the block path took 0.46 to 0.74 of
+   Krylov-Schur's eigensolve time on the 57,031-dof solid and 1.05 to 1.3 times it on the 2,755-dof one, where the
+   factor's solves are cheap and its Gram-Schmidt over blocks is not (benchmarks/proof_cost/README.md, 2026-11-29p); between the two sizes the
+   crossing is not measured */
+#define KF_BLOCK_EIGEN_MIN_DOFS 20000
+static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, PetscBool *done)
+{
+  KFScene   s = sys->scene;
+  PetscInt  method, nrand, maxblocks, nblocks, b;
+  PetscReal fcut = hint && hint->cut2 > 0 ? PetscSqrtReal(hint->cut2) / (2 * PETSC_PI) : 0;
+  Mat       P;
+
+  PetscFunctionBegin;
+  *done = PETSC_FALSE;
+  PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks));
+  if (method == 0) method = s->nsys >= KF_BLOCK_EIGEN_MIN_DOFS ? 1 : 2;
+  if (method != 1 || !hint) PetscFunctionReturn(0);
+  PetscCall(KFFlexSolverSetUp(solver));
+  PetscCall(KFBlockEigenSolve(sys, solver, hint->cut2, nev, nconv, omega2, &P, done, &nblocks, &b));
+  if (!*done) {
+    if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the modes to %.4g Hz in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", (double)fcut, nblocks, b));
+    else PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the %" PetscInt_FMT " lowest modes in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", nev, nblocks, b));
+    PetscFunctionReturn(0);
+  }
+  if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system to %.4g Hz (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns)", *nconv, s->nsys, (double)fcut, nblocks, b));
+  else PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns)", *nconv, s->nsys, nblocks, b));
+  PetscCall(KFEigenModesOut(sys, P, *nconv, nev, HPhi, PhiG, modes));
+  PetscCall(MatDestroy(&P));
+  PetscFunctionReturn(0);
+}
+
 static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene   s = sys->scene;
@@ -569,6 +570,15 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     }
   }
   PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
+  if (solver && !dense) {
+    PetscBool done;
+
+    PetscCall(KFSystemEigenBlock(sys, solver, hint, nev, nconv, omega2, HPhi, PhiG, modes, &done));
+    if (done) {
+      PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
+      PetscFunctionReturn(0);
+    }
+  }
   if (hint && hint->cut2 > 0 && !dense)
     PetscCall(KFProgress(s->comm, "verification eigensolve: the flexible modes of the %" PetscInt_FMT "-dof system up to %.4g Hz, at most %" PetscInt_FMT " (Krylov-Schur, shift-and-invert with %s)", s->nsys, (double)(PetscSqrtReal(hint->cut2) / (2 * PETSC_PI)), nev, solver ? "the flexible solver's factor" : "MUMPS"));
   else PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (%s)", nev, s->nsys, dense ? "dense LAPACK" : (solver ? "Krylov-Schur, shift-and-invert with the flexible solver's factor" : "Krylov-Schur, shift-and-invert with MUMPS")));

@@ -1,5 +1,6 @@
-"""The sparse verification eigensolve (SLEPc's Krylov-Schur on the reduction's factor, its vectors purified in one
-block solve). Small models forced through the sparse path (-kf_verify_dense_max_dofs 0): the full-order frequencies
+"""The sparse verification eigensolve (the block Krylov path by default, SLEPc's Krylov-Schur on the reduction's
+factor with -kf_verify_eigen_method slepc, its vectors purified in one block solve; tests/python/reducer/
+test_block_eigensolve.py compares the two). Small models forced through the sparse path (-kf_verify_dense_max_dofs 0): the full-order frequencies
 against a dense SciPy eigensolve (M's null space condensed), on a free-free frame with rigid and mechanism modes at
 two joint angles, a clamped beam, a beam with double bending frequencies (equal section inertias) and a frame whose
 rotations are massless (M singular). Serially and on 2 ranks (which must agree with the serial run)."""
@@ -84,10 +85,11 @@ def reduce_sparse(scene, **options):
     return reducer
 
 
+@pytest.mark.parametrize("method", ["block", "slepc"])
 @pytest.mark.parametrize("name", ["frame", "clamped", "clustered", "lumped"])
-def test_sparse_eigensolve_against_dense_scipy(tmp_path, name):
+def test_sparse_eigensolve_against_dense_scipy(tmp_path, name, method):
     scene, systems = case(name, tmp_path)
-    slepc = reduce_sparse(scene)
+    slepc = reduce_sparse(scene, kf_verify_eigen_method=method)
     for c, (Ms, Ks) in enumerate(systems):
         f_slepc = np.ravel(slepc.result(c, "full_frequencies_hz"))
         f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
@@ -96,7 +98,7 @@ def test_sparse_eigensolve_against_dense_scipy(tmp_path, name):
         if name == "clustered":      # the pairs are there, each frequency twice
             assert np.sum(np.isclose(f_dense[1:n], f_dense[:n - 1], rtol=1e-9)) >= 3
         d_dense = np.abs(f_slepc / f_dense[:n] - 1).max()
-        print("%s, configuration %d: %d modes; Krylov-Schur vs dense SciPy %.1e" % (name, c, n, d_dense))
+        print("%s, configuration %d: %d modes; %s vs dense SciPy %.1e" % (name, c, n, method, d_dense))
         assert d_dense <= 1e-8
 
 
@@ -200,8 +202,8 @@ def test_sparse_eigensolve_stops_at_the_cut_two_ranks(tmp_path):
 def block_and_single(scene, **options):
     """The same scene's reference by Krylov-Schur (single K+ applications) and by subspace iteration (K+ applied to
     blocks through the flexible solver's block solve)."""
-    return (reduce_sparse(scene, kf_verify_eps_type="krylovschur", **options),
-            reduce_sparse(scene, kf_verify_eps_type="subspace", **options))
+    return (reduce_sparse(scene, kf_verify_eigen_method="slepc", kf_verify_eps_type="krylovschur", **options),
+            reduce_sparse(scene, kf_verify_eigen_method="slepc", kf_verify_eps_type="subspace", **options))
 
 
 # the free beam's modes are all pairs: the cut's rule (the modes up to the first at or above the cut) keeps one of a
@@ -246,11 +248,11 @@ def test_block_eigensolve_matches_krylov_schur(tmp_path, name):
 @pytest.mark.mpi
 def test_block_eigensolve_two_ranks(tmp_path):
     """Subspace iteration on 2 ranks against Krylov-Schur on 1: the same modes and reference response (1e-9)."""
-    serial = reduce_sparse(kryflex.scene_from_dict(bc_models.free_clustered_beam()), kf_verify_eps_type="krylovschur",
-                           kf_verify_modes=8)
+    serial = reduce_sparse(kryflex.scene_from_dict(bc_models.free_clustered_beam()), kf_verify_eigen_method="slepc",
+                           kf_verify_eps_type="krylovschur", kf_verify_modes=8)
     out = tmp_path / "two.npz"
     p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:free_clustered_beam", str(out),
-                        "-kf_verify_eps_type", "subspace", "-kf_verify_modes", "8"],
+                        "-kf_verify_eigen_method", "slepc", "-kf_verify_eps_type", "subspace", "-kf_verify_modes", "8"],
                        env=ENV, capture_output=True, text=True, timeout=240)
     assert p.returncode == 0, p.stdout + p.stderr[-3000:]
     two = np.load(out)
@@ -268,4 +270,4 @@ def test_eigensolver_needing_a_preconditioner_is_refused(tmp_path):
     down with the exact K+ on the 57k solid) is refused by name with the types that work."""
     scene, _ = case("frame", tmp_path)
     with pytest.raises(Exception, match=r"-kf_verify_eps_type lobpcg: .*krylovschur.*subspace"):
-        reduce_sparse(scene, kf_verify_eps_type="lobpcg")
+        reduce_sparse(scene, kf_verify_eigen_method="slepc", kf_verify_eps_type="lobpcg")

@@ -1,0 +1,70 @@
+/* What the verification's eigensolves with a flexible solver's factor share (src/verify/eigen.c, Krylov-Schur;
+   src/verify/block_eigen.c, block Krylov): K+ applications with their residual sampled, and modes M-normalized. */
+#include <kryflex_impl.h>
+#include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
+#include "eigen_impl.h"
+
+/* The shift-and-invert step x -> K+ (M x) with a flexible solver's factor: the eigensolve shares the reduction's
+   factorization instead of making its own. K+ is M-self-adjoint on the flexible subspace and
+   maps the rigid modes to zero, so with target 0 the rigid modes never come out and need no deflation space.
+   The flexible solver measures the residual of every block it solves (an extended-precision K_S product) to decide
+   its refinement; for an eigensolve's one-vector applications that product costs a fifth of the factor's solve. A
+   factor whose solves need no refinement is accurate to rounding whatever the right-hand side, so the residual is
+   sampled: the first application and every KF_EPS_CHECK_EVERY-th after it are checked (and refined if above
+   -kf_refine_rtol), the others solved once; a sampled one that needed refinement turns the check on for every
+   application left. The purification block (KFEPSPurifyBlock) is always checked, and the reference itself is
+   checked against direct solves of the full system (src/verify/direct_check.c). */
+#define KF_EPS_CHECK_EVERY 8
+
+/* X = K+ B with the residual checked or not (KFFlexPCApply's sampling; the block eigensolve's blocks the same) */
+PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *ctx, Mat B, Mat X)
+{
+  KFFlexSolver solver = ctx->solver;
+  PetscInt     refined, refine = solver->refine;
+  PetscBool    check = (PetscBool)(ctx->check_all || ctx->applications % KF_EPS_CHECK_EVERY == 0);
+
+  PetscFunctionBegin;
+  refined = solver->perf.blocks_refined;
+  if (!check) solver->refine = 0; /* one solve, no residual (KFFlexSolverApply checks only with refinement steps) */
+  PetscCall(KFFlexSolverApply(solver, B, X));
+  solver->refine = refine;
+  if (check && solver->perf.blocks_refined > refined) ctx->check_all = PETSC_TRUE;
+  ctx->checked += check;
+  ctx->applications++;
+  PetscFunctionReturn(0);
+}
+
+/* The columns of P scaled to unit M-norm, with one block product M P (a sparse product per column would read M once
+   per mode) */
+PetscErrorCode KFEPSNormalizeBlock(KFSystem sys, Mat P)
+{
+  Mat       MP;
+  PetscInt  m;
+  PetscReal *nrm;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(P, NULL, &m));
+  PetscCall(KFMatMultDense(sys->Ms, P, &MP));
+  PetscCall(PetscMalloc1(m, &nrm));
+  for (PetscInt i = 0; i < m; i++) {
+    Vec         p, q;
+    PetscScalar dot;
+
+    PetscCall(MatDenseGetColumnVecRead(P, i, &p));
+    PetscCall(MatDenseGetColumnVecRead(MP, i, &q));
+    PetscCall(VecDot(p, q, &dot));
+    PetscCall(MatDenseRestoreColumnVecRead(MP, i, &q));
+    PetscCall(MatDenseRestoreColumnVecRead(P, i, &p));
+    nrm[i] = PetscSqrtReal(PetscRealPart(dot));
+  }
+  for (PetscInt i = 0; i < m; i++) {
+    Vec p;
+
+    PetscCall(MatDenseGetColumnVecWrite(P, i, &p));
+    PetscCall(VecScale(p, 1.0 / nrm[i]));
+    PetscCall(MatDenseRestoreColumnVecWrite(P, i, &p));
+  }
+  PetscCall(PetscFree(nrm));
+  PetscCall(MatDestroy(&MP));
+  PetscFunctionReturn(0);
+}

@@ -1,0 +1,181 @@
+"""The verification's block Krylov eigensolve (-kf_verify_eigen_method block, the default on the sparse path: Ritz
+pairs of a block Krylov space of K+ M started from the inputs, outputs and random columns), against dense SciPy and
+against SLEPc's Krylov-Schur (-kf_verify_eigen_method slepc): on a free-free beam with double bending frequencies, a
+clamped beam, a clamped beam with paired frequencies and a free frame with a mechanism at two angles; on 2 ranks
+against 1; with damping matrices (Galileo) against the dense damped direct solve; and its fall back to Krylov-Schur
+when it has not converged within its cap of blocks."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from petsc4py import PETSc
+
+import kryflex
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+sys.path.insert(0, SUPPORT)
+sys.path.insert(0, HERE)
+import bc_models  # noqa: E402
+import reference as ref  # noqa: E402
+from test_sparse_eigensolve import ENV, PROBE, case, common_grid, dense_flexible_frequencies  # noqa: E402
+
+pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
+
+
+def reduce_sparse(scene, method, **options):
+    """The scene reduced with the sparse verification path and the eigensolve method named."""
+    opts = PETSc.Options()
+    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_method=method)
+    values.update(options)
+    for k, v in values.items():
+        opts.setValue(k, v)
+    try:
+        reducer = kryflex.Reducer(scene, quiet=True, search=False)
+        reducer.reduce()
+    finally:
+        for k in values:
+            opts.delValue(k)
+    return reducer
+
+
+def model(name, tmp_path):
+    """(scene, [(M_S, K_S) per configuration], options): the free beam keeps 8 modes (4 whole pairs: the cut's rule
+    would keep one vector of a pair, which two solvers may pick differently)."""
+    if name == "free_clustered":
+        spec = bc_models.free_clustered_beam()
+        return kryflex.scene_from_dict(spec), [bc_models.single_body_reference(spec)[:2]], dict(kf_verify_modes=8)
+    scene, systems = case(name, tmp_path)
+    return scene, systems, {}
+
+
+@pytest.mark.parametrize("name", ["free_clustered", "clamped", "clustered", "frame"])
+def test_block_eigensolve_against_slepc_and_dense(tmp_path, name):
+    """The block path's frequencies against dense SciPy (1e-9) and Krylov-Schur's (1e-9), its reference response
+    against Krylov-Schur's (1e-9 of the peak); on the paired models the pairs are all there."""
+    scene, systems, options = model(name, tmp_path)
+    block, slepc = reduce_sparse(scene, "block", **options), reduce_sparse(scene, "slepc", **options)
+    for c, (Ms, Ks) in enumerate(systems):
+        fb, fs = np.ravel(block.result(c, "full_frequencies_hz")), np.ravel(slepc.result(c, "full_frequencies_hz"))
+        f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+        Tb, Ts = common_grid(np.ravel(block.result(c, "frf_frequencies_hz")), block.frf(c, "full"),
+                             np.ravel(slepc.result(c, "frf_frequencies_hz")), slepc.frf(c, "full"))
+        dT = np.abs(Tb - Ts).max() / np.abs(Ts).max()
+        d_dense = np.abs(fb / f_dense[:fb.size] - 1).max()
+        print("%s, configuration %d: %d modes (Krylov-Schur %d); block vs dense SciPy %.1e, vs Krylov-Schur: "
+              "frequencies %.1e, response %.1e of the peak" % (name, c, fb.size, fs.size, d_dense,
+                                                               np.abs(fb[:fs.size] / fs - 1).max(), dT))
+        assert fb.size == fs.size > 0
+        if name in ("free_clustered", "clustered"):
+            assert np.sum(np.isclose(f_dense[1:fb.size], f_dense[:fb.size - 1], rtol=1e-9)) >= 3
+        assert d_dense <= 1e-9
+        assert np.abs(fb / fs - 1).max() <= 1e-9
+        assert dT <= 1e-9
+
+
+@pytest.mark.parametrize("name", ["free_clustered", "clamped"])
+def test_block_reference_against_dense_response(tmp_path, name):
+    """The block path's reference response (its modes, the rigid ones, the residual of the modes not computed) against
+    the dense modal response with every mode (SciPy) to 1e-9 of the peak where every flexible mode is asked for,
+    so that no residual is approximated."""
+    spec = bc_models.free_clustered_beam() if name == "free_clustered" else bc_models.clamped_beam()
+    scene = kryflex.scene_from_dict(spec)
+    Ms, Ks, G, H = bc_models.single_body_reference(spec)[:4]
+    f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+    red = reduce_sparse(scene, "block", kf_verify_modes=f_dense.size)
+    w = 2 * np.pi * np.ravel(red.result(0, "frf_frequencies_hz"))
+    exact = ref.modal_frf(np.asarray(Ms), np.asarray(Ks), np.asarray(G), np.asarray(H), w, scene.damping)
+    T = red.frf(0, "full")
+    err = np.abs(T - exact).max() / np.abs(exact).max()
+    f = np.ravel(red.result(0, "full_frequencies_hz"))
+    print("%s: %d of %d modes, frequencies vs dense %.1e, reference response vs dense modal %.1e of the peak"
+          % (name, f.size, f_dense.size, np.abs(f / f_dense[:f.size] - 1).max(), err))
+    assert f.size == f_dense.size
+    assert np.abs(f / f_dense - 1).max() <= 1e-9
+    assert err <= 1e-9
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("name", ["free_clustered", "clamped"])
+def test_block_eigensolve_two_ranks(tmp_path, name):
+    """The block path on 2 ranks (its random columns the same on any rank count) against Krylov-Schur on 1."""
+    scene, _, options = model(name, tmp_path)
+    serial = reduce_sparse(scene, "slepc", **options)
+    out = tmp_path / "two.npz"
+    builder = "free_clustered_beam" if name == "free_clustered" else "clamped_beam"
+    extra = [x for k, v in options.items() for x in ("-" + k, str(v))]
+    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:" + builder, str(out),
+                        "-kf_verify_eigen_method", "block"] + extra,
+                       env=ENV, capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    two = np.load(out)
+    f1, f2 = np.ravel(serial.result(0, "full_frequencies_hz")), two["f0"]
+    T1, T2 = common_grid(np.ravel(serial.result(0, "frf_frequencies_hz")), serial.frf(0, "full"), two["w0"], two["T0"])
+    print("%s: 2 ranks block vs 1 rank Krylov-Schur: frequencies %.1e, response %.1e of the peak"
+          % (name, np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
+    assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
+    assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+
+
+def test_block_eigensolve_with_damping_matrices():
+    """Galileo with damping matrices forced through the sparse path: the block path's modes coupled by [Phi_r Phi]^T C
+    [Phi_r Phi] against the dense damped direct solve, as the Krylov-Schur path (test_damping.py), and against it."""
+    import test_damping as td
+    mats = td.damping_matrices()
+    damping = {"modal": 0.002, "rayleigh": {"alpha": 0.01, "beta": 0.0}, "structural": 0.003}
+    errs = {}
+    for method in ("block", "slepc"):
+        opts = PETSc.Options()
+        opts.setValue("kf_verify_eigen_method", method)
+        try:
+            _, _, err_red, err_full = td.reduce_and_check(td.galileo_spec(damping, mats), damping, mats,
+                                                         verify_dense_max_dofs=0)
+        finally:
+            opts.delValue("kf_verify_eigen_method")
+        errs[method] = err_full
+    print("damping matrices, reference vs dense damped direct solve: block %.2e, Krylov-Schur %.2e" % (
+        errs["block"], errs["slepc"]))
+    assert errs["block"] <= 1e-5
+
+
+def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
+    """Capped at one block the block path does not converge: Krylov-Schur takes the configuration, the progress
+    line says so, and the reference is Krylov-Schur's."""
+    scene, systems, _ = model("frame", tmp_path)
+    opts = PETSc.Options()
+    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_method="block", kf_verify_eigen_max_blocks=1, kf_quiet=False)
+    for k, v in values.items():
+        opts.setValue(k, v)
+    log = tmp_path / "progress.txt"
+    fd, saved = sys.stdout.fileno(), os.dup(sys.stdout.fileno())
+    try:
+        with open(log, "w") as f:  # the progress lines are printed by the C library on rank 0's stdout
+            os.dup2(f.fileno(), fd)
+            capped = kryflex.Reducer(scene, quiet=False, search=False)
+            capped.reduce()
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+        opts.setValue("kf_quiet", True)
+        for k in ("kf_verify_dense_max_dofs", "kf_verify_eigen_method", "kf_verify_eigen_max_blocks"):
+            opts.delValue(k)
+    text = log.read_text()
+    slepc = reduce_sparse(scene, "slepc")
+    # every configuration's reference (the angles and the midpoint) fell back, and only those
+    assert text.count("did not converge") == text.count("(Krylov-Schur, shift-and-invert") >= len(systems), text[-2000:]
+    assert "Krylov-Schur (SLEPc) instead" in text and "block Krylov of K+ M" not in text
+    for c in range(len(systems)):
+        f1, f2 = np.ravel(capped.result(c, "full_frequencies_hz")), np.ravel(slepc.result(c, "full_frequencies_hz"))
+        assert f1.size == f2.size and np.allclose(f1, f2, rtol=1e-12, atol=0)
+
+
+def test_bad_block_options(tmp_path):
+    """A bad method or count is refused before any work, naming the option."""
+    scene, _, _ = model("clamped", tmp_path)
+    for k, v, msg in (("kf_verify_eigen_method", "lanczos", "kf_verify_eigen_method"),
+                      ("kf_verify_eigen_random", -1, "kf_verify_eigen_random"),
+                      ("kf_verify_eigen_max_blocks", 0, "kf_verify_eigen_max_blocks")):
+        with pytest.raises(Exception, match=msg):
+            reduce_sparse(scene, "block", **{k: v})

@@ -28,5 +28,6 @@ def _end(code):
     os._exit(code)
 
 
-code = main()
-_end(code if isinstance(code, int) else (0 if code is None else 1))
+if __name__ == "__main__":
+    code = main()
+    _end(code if isinstance(code, int) else (0 if code is None else 1))

@@ -3,7 +3,7 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check] [--block-eigen] [--slepc-eigen]
+        [--direct-check] [--block-eigen] [--slepc-eigen] [--other TREE]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
@@ -16,7 +16,9 @@ the two's ratio. --block-eigen adds a run of the default with the eigensolves by
 (K+ applied to blocks) and prints both runs' K+ applications, columns and seconds per column. --direct-check adds a run of the default with the check solved by factorizations
 (-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
-of runs taken together, and the CPU seconds beside the wall.
+of runs taken together, and the CPU seconds beside the wall. --other TREE runs that tree's build (e.g. /work/main)
+and this one's alternately, bare then default, and prints each beside the other with its ratios. The report's seconds
+run from the arrival of its progress line to the process's end (run()).
 """
 import argparse
 import json
@@ -57,14 +59,26 @@ def first(lines, prefix):
     return next((t for t, text in lines if text.startswith(prefix)), None)
 
 
-def run(scene, out, extra):
-    """One kryflex reduce: its figures from the clock, the progress lines and summary.json."""
+def run(scene, out, extra, root=ROOT):
+    """One kryflex reduce (of the tree root): its figures from the clock, the progress lines and summary.json. The
+    report's time runs from the moment its line ("writing the results") arrives to the process's end: the lines'
+    stamps start when the C library does, about half a second after the process (Python and its imports), so the wall
+    less the line's stamp counted that half second as the report's too (this bench did before 2026-11-29p; it is
+    printed beside, as report_stamp)."""
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
-    cmd = [os.path.join(ROOT, "build", "kryflex"), "reduce", scene, "-o", out] + extra
+    cmd = [os.path.join(root, "build", "kryflex"), "reduce", scene, "-o", out] + extra
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # the progress lines are flushed as written (PetscPrintf): read as they come, each line's arrival timed
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+    text, t_write_seen = [], None
+    for line in proc.stdout:
+        if t_write_seen is None and "] writing the results" in line:
+            t_write_seen = time.perf_counter()
+        text.append(line)
+    proc.wait()
     wall = time.perf_counter() - t0
+    proc.stdout = "".join(text)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode:
         sys.exit("kryflex reduce exited %d:\n%s" % (proc.returncode, proc.stdout[-3000:]))
@@ -81,7 +95,8 @@ def run(scene, out, extra):
                 eigensolve=perf.get("reference_eigensolve_s"), check=perf.get("reference_check_s"),
                 search=perf.get("search_s"),
                 model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
-                report=(wall - t_write) if t_write is not None else None,
+                report=(t0 + wall - t_write_seen) if t_write_seen is not None else None,
+                report_stamp=(wall - t_write) if t_write is not None else None,
                 check_factorizations=int(nfact.group(1)) if nfact else None,
                 iterated=((s.get("reference_check") or {}).get("iterative_points"),
                           (s.get("reference_check") or {}).get("iterative_steps_max"),
@@ -119,12 +134,40 @@ def fmt(x):
 
 
 def show(name, r, denom):
-    print("%-8s %s %s %s %s %s %s %s %s %s %s  ratio %5.2f  error %s%s" % (
+    print("%-13s %s %s %s %s %s %s %s %s %s %s  ratio %5.2f  error %s%s" % (
         name, fmt(r["wall"]), fmt(r["cpu"]), fmt(r["factorization"]), fmt(r["solves"]), fmt(r["model_check"]),
         fmt(r["verification"]), fmt(r["eigensolve"]), fmt(r["check"]), fmt(r["search"]), fmt(r["report"]),
         r["wall"] / denom, "%.4g%s" % (r["error"], " (est.)" if r["estimated"] else "") if r["error"] is not None else "-",
         "  check factorizations %d" % r["check_factorizations"] if r["check_factorizations"] is not None else "")
         + ("  iterated points %s (steps <= %s, fallbacks %s)" % r["iterated"] if r["iterated"][0] else ""))
+
+
+def compare_trees(scene, refine, rep, args):
+    """One repeat of --other: that tree's bare and default runs, then this tree's (the order alternating between
+    repeats), each tree's ratio to its own bare run, and the report's share of each default wall."""
+    trees = [("other", os.path.abspath(args.other)), ("this", ROOT)]
+    if rep % 2:
+        trees.reverse()
+    got = {}
+    for name, root in trees:
+        bare = run(scene, os.path.join(args.work, "bare_%s_%s" % (name, refine)), ["-kf_verify", "false"], root)
+        full = run(scene, os.path.join(args.work, "default_%s_%s" % (name, refine)), [], root)
+        got[name] = (bare, full)
+    print("\nrefine %s (%s dofs), run %d (%s first)" % (refine, got["this"][1]["dofs"], rep + 1, trees[0][0]))
+    print("%-13s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
+                                                             "verify", "eigen", "direct", "search", "report"))
+    for name, _ in trees:
+        bare, full = got[name]
+        denom = bare["factorization"] + bare["solves"]
+        show("%s bare" % name, bare, denom)
+        show("%s default" % name, full, denom)
+        print("%s: default / bare wall %.2f; report and plots %.2f s = %.1f %% of the default wall (by the line's "
+              "stamp, as before: %.2f s, %.1f %%)" % (
+                  name, full["wall"] / bare["wall"], full["report"], 100 * full["report"] / full["wall"],
+                  full["report_stamp"], 100 * full["report_stamp"] / full["wall"]))
+    print("this / other: default wall %.3f, default CPU %.3f, report %.3f" % (
+        got["this"][1]["wall"] / got["other"][1]["wall"], got["this"][1]["cpu"] / got["other"][1]["cpu"],
+        got["this"][1]["report"] / got["other"][1]["report"]))
 
 
 def main():
@@ -145,6 +188,9 @@ def main():
                     help="a run of the default with SLEPc's Krylov-Schur eigensolves (-kf_verify_eigen_method slepc, "
                          "the method before the block Krylov one), beside the block path, and the two's ratio")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
+    ap.add_argument("--other", metavar="TREE",
+                    help="another kryflex tree (its build/kryflex) run alternately with this one, bare and default, "
+                         "in each repeat: the two builds timed side by side (e.g. --other /work/main)")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
     print("proof cost, %s UTC, load average %s" % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
@@ -154,6 +200,9 @@ def main():
     for refine in args.refine:
         scene = scene_of(refine, args.work)
         for rep in range(args.repeat):
+            if args.other:
+                compare_trees(scene, refine, rep, args)
+                continue
             bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
             info = ["-info", ":eps"] if args.block_eigen else []
             full = run(scene, os.path.join(args.work, "default_%s" % refine), info)

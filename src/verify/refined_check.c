@@ -47,12 +47,74 @@ typedef struct {
   const PetscReal       *w;
   Mat                    Gp;     /* P^T G, e x a */
   Mat                    kg;     /* K+ P^T G, e x a, left by the moments: the first step's K+ (NULL: solved) */
+  const PetscBool       *done;   /* per frequency: certified, its columns of X final (KFRefinedIterate's) */
+  PetscInt              *pos;    /* ncol: a column's place among those of the frequencies not done, -1 if done */
 } KFRefined;
 
 /* column c of X: its frequency */
 static inline PetscInt KFRefinedFreq(const KFRefined *c, PetscInt col)
 {
   return (col % c->nca) / c->a;
+}
+
+/* the places of the columns still iterated (c->pos) and their count: a frequency certified is left as it was
+   certified, its columns out of the products and the block K+ that the others still need */
+static PetscInt KFRefinedActive(const KFRefined *c)
+{
+  PetscInt n = 0;
+
+  for (PetscInt col = 0; col < c->ncol; col++) c->pos[col] = c->done[KFRefinedFreq(c, col)] ? -1 : n++;
+  return n;
+}
+
+/* S = the columns of A still iterated (nact of them, in order), or A itself (a reference) when every column is */
+static PetscErrorCode KFRefinedPick(const KFRefined *c, PetscInt nact, Mat A, Mat *S)
+{
+  const PetscScalar *a;
+  PetscScalar       *s;
+  PetscInt           nl, N, lda, lds;
+
+  PetscFunctionBegin;
+  if (nact == c->ncol) {
+    PetscCall(PetscObjectReference((PetscObject)A));
+    *S = A;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatGetSize(A, &N, NULL));
+  PetscCall(KFDenseCreateUninitialized(PetscObjectComm((PetscObject)A), nl, N, nact, S));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(*S, &lds));
+  PetscCall(MatDenseGetArrayRead(A, &a));
+  PetscCall(MatDenseGetArrayWrite(*S, &s));
+  for (PetscInt col = 0; col < c->ncol; col++)
+    if (c->pos[col] >= 0) PetscCall(PetscArraycpy(s + c->pos[col] * lds, a + col * lda, nl));
+  PetscCall(MatDenseRestoreArrayWrite(*S, &s));
+  PetscCall(MatDenseRestoreArrayRead(A, &a));
+  PetscFunctionReturn(0);
+}
+
+/* A = S in the columns still iterated, zero in the others (S from KFRefinedPick's layout; nothing when S is A) */
+static PetscErrorCode KFRefinedPut(const KFRefined *c, Mat S, Mat A)
+{
+  const PetscScalar *s;
+  PetscScalar       *a;
+  PetscInt           nl, lda, lds;
+
+  PetscFunctionBegin;
+  if (S == A) PetscFunctionReturn(0);
+  PetscCall(MatGetLocalSize(A, &nl, NULL));
+  PetscCall(MatDenseGetLDA(A, &lda));
+  PetscCall(MatDenseGetLDA(S, &lds));
+  PetscCall(MatDenseGetArrayRead(S, &s));
+  PetscCall(MatDenseGetArrayWrite(A, &a));
+  for (PetscInt col = 0; col < c->ncol; col++) {
+    if (c->pos[col] >= 0) PetscCall(PetscArraycpy(a + col * lda, s + c->pos[col] * lds, nl));
+    else PetscCall(PetscArrayzero(a + col * lda, nl));
+  }
+  PetscCall(MatDenseRestoreArrayWrite(A, &a));
+  PetscCall(MatDenseRestoreArrayRead(S, &s));
+  PetscFunctionReturn(0);
 }
 
 /* Y = S (e x a) in every frequency's real columns, the imaginary ones zero: the residual of X = 0 (S = P^T G), and
@@ -79,14 +141,16 @@ static PetscErrorCode KFRefinedFill(const KFRefined *c, Mat S, Mat Y)
 /* the residual Rb = [P^T G; 0] - Z X, column block per frequency: Z = K (1 + i h) - w^2 M + i w alpha M */
 static PetscErrorCode KFRefinedResidual(const KFRefined *c, Mat X, Mat Rb)
 {
-  Mat                KX, MX;
+  Mat                KX, MX, Xa;
   const PetscScalar *kx, *mx, *g;
   PetscScalar       *rb;
   PetscInt           nl, ldk, ldm, ldg, ldr;
 
   PetscFunctionBegin;
-  PetscCall(KFMatMultExtended(c->sys->Ks, X, &KX));
-  PetscCall(KFMatMultDense(c->sys->Ms, X, &MX));
+  PetscCall(KFRefinedPick(c, KFRefinedActive(c), X, &Xa)); /* the products of the columns still iterated */
+  PetscCall(KFMatMultExtended(c->sys->Ks, Xa, &KX));
+  PetscCall(KFMatMultDense(c->sys->Ms, Xa, &MX));
+  PetscCall(MatDestroy(&Xa));
   PetscCall(MatGetLocalSize(X, &nl, NULL));
   PetscCall(MatDenseGetLDA(KX, &ldk));
   PetscCall(MatDenseGetLDA(MX, &ldm));
@@ -97,15 +161,21 @@ static PetscErrorCode KFRefinedResidual(const KFRefined *c, Mat X, Mat Rb)
   PetscCall(MatDenseGetArrayRead(c->Gp, &g));
   PetscCall(MatDenseGetArrayWrite(Rb, &rb));
   for (PetscInt col = 0; col < c->nca; col++) {
-    const PetscInt  s = KFRefinedFreq(c, col), j = col % c->a, im = c->nca + col;
+    const PetscInt  s = KFRefinedFreq(c, col), j = col % c->a, im = c->nca + col, pr = c->pos[col];
+    const PetscInt  pi = c->cplx ? c->pos[im] : -1;
     const PetscReal w2 = c->w[s] * c->w[s], h = c->d.g + c->w[s] * c->d.beta, wa = c->w[s] * c->d.alpha;
 
+    if (pr < 0) { /* certified: no residual needed, and a zero one adds nothing to the modal sums */
+      PetscCall(PetscArrayzero(rb + col * ldr, nl));
+      if (c->cplx) PetscCall(PetscArrayzero(rb + im * ldr, nl));
+      continue;
+    }
     for (PetscInt i = 0; i < nl; i++) {
-      PetscReal re = g[i + j * ldg] - kx[i + col * ldk] + w2 * mx[i + col * ldm];
+      PetscReal re = g[i + j * ldg] - kx[i + pr * ldk] + w2 * mx[i + pr * ldm];
 
       if (c->cplx) {
-        re += h * kx[i + im * ldk] + wa * mx[i + im * ldm];
-        rb[i + im * ldr] = -kx[i + im * ldk] + w2 * mx[i + im * ldm] - h * kx[i + col * ldk] - wa * mx[i + col * ldm];
+        re += h * kx[i + pi * ldk] + wa * mx[i + pi * ldm];
+        rb[i + im * ldr] = -kx[i + pi * ldk] + w2 * mx[i + pi * ldm] - h * kx[i + pr * ldk] - wa * mx[i + pr * ldm];
       }
       rb[i + col * ldr] = re;
     }
@@ -128,10 +198,21 @@ static PetscErrorCode KFRefinedApply(const KFRefined *c, Mat Rb, PetscBool first
   PetscReal             *q, *e;
   PetscScalar           *y;
   PetscInt               nl, ldy;
+  const PetscInt         nact = KFRefinedActive(c);
 
   PetscFunctionBegin;
   if (first && c->kg) PetscCall(KFRefinedFill(c, c->kg, Y));
-  else PetscCall(KFFlexSolverApply(c->solver, Rb, Y));
+  else { /* K+ of the columns still iterated; a certified frequency's correction is zero */
+    Mat Ra, Ya;
+
+    PetscCall(KFRefinedPick(c, nact, Rb, &Ra));
+    if (Ra == Rb) Ya = Y;
+    else PetscCall(MatDuplicate(Ra, MAT_DO_NOT_COPY_VALUES, &Ya));
+    PetscCall(KFFlexSolverApply(c->solver, Ra, Ya));
+    PetscCall(KFRefinedPut(c, Ya, Y));
+    if (Ya != Y) PetscCall(MatDestroy(&Ya));
+    PetscCall(MatDestroy(&Ra));
+  }
   PetscCall(PetscMalloc2(c->nev * c->ncol, &q, c->nev * c->ncol, &e));
   PetscCall(KFMatTransposeMatMultGather(ref->V, Rb, q)); /* nev x ncol */
   PetscCall(PetscArrayzero(e, c->nev * c->ncol));
@@ -142,6 +223,7 @@ static PetscErrorCode KFRefinedApply(const KFRefined *c, Mat Rb, PetscBool first
     const PetscInt  s = KFRefinedFreq(c, col), im = c->nca + col;
     const PetscReal w = c->w[s], h = c->cplx ? c->d.g + w * c->d.beta : 0, den = 1 + h * h, sr = 1 / den, si = -h / den;
 
+    if (c->pos[col] < 0) continue; /* certified: no correction (e stays zero, Y's columns are) */
     if (c->cplx) /* s K+ Rb, column by column */
       for (PetscInt i = 0; i < nl; i++) {
         const PetscReal yr = y[i + col * ldy], yi = y[i + im * ldy];
@@ -207,7 +289,7 @@ static PetscErrorCode KFRefinedOperatorNorms(const KFRefined *c, PetscReal nz[])
    at the rounding floor is taken). On the 57k-dof solid the ratios are steady at about 1e-3 per step: 4 corrections
    instead of 5 at the top check frequency. *steps: the corrections made; *ok: converged at every frequency (else X
    is not the truth); *berr: the worst backward error taken. */
-static PetscErrorCode KFRefinedIterate(const KFRefined *c, Mat X, PetscInt *steps, PetscBool *ok, PetscReal *berr)
+static PetscErrorCode KFRefinedIterate(KFRefined *c, Mat X, PetscInt *steps, PetscBool *ok, PetscReal *berr)
 {
   Mat        Rb, dX;
   PetscReal *nz, *nr, *nx, *nd, *prev, *qmax, ng;
@@ -220,6 +302,7 @@ static PetscErrorCode KFRefinedIterate(const KFRefined *c, Mat X, PetscInt *step
   PetscCall(MatNorm(c->Gp, NORM_FROBENIUS, &ng));
   PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &Rb));
   PetscCall(MatDuplicate(X, MAT_DO_NOT_COPY_VALUES, &dX));
+  c->done = done;
   for (PetscInt s = 0; s < c->npts; s++) {
     prev[s] = PETSC_MAX_REAL;
     qmax[s] = 0;
@@ -369,6 +452,7 @@ PetscErrorCode KFEvalPointRefinedCheck_Private(KFReducer r, KFSystem sys, KFFlex
   PetscCall(MatGetLocalSize(Ms, &nl, NULL));
   PetscCall(KFDenseCreate(comm, nl, r->scene->nsys, c.ncol, &X));
   PetscCall(MatZeroEntries(X));
+  PetscCall(PetscMalloc1(c.ncol, &c.pos));
   PetscCall(KFFlexSolverGetPerf(solver, &perf)); /* the verification's solves are not the reduction's */
   refine         = solver->refine;
   solver->refine = 0; /* the iteration is itself a refinement against K_S: the solver's own would be wasted solves */
@@ -391,6 +475,7 @@ PetscErrorCode KFEvalPointRefinedCheck_Private(KFReducer r, KFSystem sys, KFFlex
     PetscCall(KFProgress(comm, "reference check %s: the iteration from the reference did not contract in %" PetscInt_FMT " steps (a mode the reference lacks, or one near a check frequency): solved directly instead", label, steps));
   }
   PetscCall(MatDestroy(&X));
+  PetscCall(PetscFree(c.pos));
   PetscCall(MatDestroy(&c.Gp));
   PetscCall(MatDestroy(&p->ref.V)); /* the modes served their one purpose */
   PetscCall(MatDestroy(&p->kg));

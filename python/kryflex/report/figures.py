@@ -46,6 +46,9 @@ def figure_jobs(summary, plot_names):
     arrays = {label: (np.asarray(s.frf[label].freq_hz, float), s.frf[label].full(), s.frf[label].chosen())
               for label in c.labels}
     jobs = []
+    # the Bode and importance figures left by one share for the next: a process that draws both shares (no helper, or
+    # a helper's failure) builds each figure once
+    reuse = {}
 
     def bode(labels):       # the configurations' pairs on one reused figure (plots.bode_pngs_on_grids)
         items, names = [], []
@@ -55,7 +58,7 @@ def figure_jobs(summary, plot_names):
                 items.append((freq, full[:, o, i], red[:, o, i],
                               f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"))
                 names.append(plot_names["bode"][(label, (o, i))])
-        yield from zip(names, plots.bode_pngs_on_grids(items))
+        yield from zip(names, plots.bode_pngs_on_grids(items, reuse=reuse))
     # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them; a job's
     # first figure draws the fixed layer too
     halves = [c.labels[:(len(c.labels) + 1) // 2], c.labels[(len(c.labels) + 1) // 2:]]
@@ -72,7 +75,7 @@ def figure_jobs(summary, plot_names):
         items = [(s.krylov[label].frequency_hz, s.krylov[label].importance, s.krylov[label].kept,
                   f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}", threshold, s.band_hz)
                  for label in labels]
-        yield from zip([plot_names["importance"][label] for label in labels], plots.importance_pngs(items))
+        yield from zip([plot_names["importance"][label] for label in labels], plots.importance_pngs(items, reuse=reuse))
     # in two jobs as the Bode plots; a job's first figure builds its ticks
     jobs += [(1.0 + 1.5 * len(part), lambda part=part: importance(part)) for part in halves if part]
 

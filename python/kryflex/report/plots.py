@@ -32,6 +32,10 @@ BODE_MARGINS = dict(left=0.12, right=0.97, top=0.93, bottom=0.09, hspace=0.08)
 # the same for the one-axes figures (importance 7 x 4 in, moment ratios and FRF error 7 x 4.4 in): tight_layout was a
 # fifth of a 57k-dof run's report (seven figures, each drawn twice)
 SINGLE_MARGINS = dict(left=0.11, right=0.97, top=0.91, bottom=0.12)
+# the overview's margins and gaps between panels in inches (its size grows with the panels), fixed for the same
+# reason: tight_layout drew its every panel's ticks once more, two fifths of the figure's time; these are what
+# tight_layout gave for a one-line suptitle, panel titles, small axis labels and tick labels of up to 5 characters
+OVERVIEW_INCHES = dict(left=0.82, right=0.15, top=0.65, bottom=0.58, wgap=0.81, hgap=0.77)
 
 # Values of |ratio - 1| below this are drawn on the floor of the log axis: a ratio that is exactly 1
 # (difference 0) cannot be shown on a log scale otherwise.
@@ -210,12 +214,14 @@ def bode_pngs(freq_hz, pairs, dpi=DPI):
     return bode_pngs_on_grids([(freq_hz, full, reduced, title) for full, reduced, title in pairs], dpi)
 
 
-def bode_pngs_on_grids(items, dpi=DPI):
+def bode_pngs_on_grids(items, dpi=DPI, reuse=None):
     """bode_pngs for (freq_hz, full, reduced, title) items whose frequency grids may differ (one per configuration):
     one figure for all whose grids span the same band (the curves' frequencies replaced too), a new one where the
     band differs (its axis limits and ticks are laid out for it). The figure's fixed layer (_FixedLayer: the frequency
-    axes, their grid and labels) is drawn once per band."""
-    fig, span, layer = None, None, None
+    axes, their grid and labels) is drawn once per band. reuse: a dict kept between calls (figures.figure_jobs: the
+    two shares of one process) in which the last figure is left for the next call to draw on."""
+    reuse = {} if reuse is None else reuse
+    fig, span, layer = reuse.get("bode", (None, None, None))
     for freq_hz, full, reduced, title in items:
         freq = np.asarray(freq_hz, dtype=float)
         if all(not np.any(np.asarray(c) != 0) for c in (full, reduced)):
@@ -235,6 +241,7 @@ def bode_pngs_on_grids(items, dpi=DPI):
             for ax in (ax_mag, ax_ph):
                 ax.relim()
                 ax.autoscale_view(scalex=False)
+        reuse["bode"] = (fig, span, layer)
         yield layer.png_bytes()
 
 
@@ -291,8 +298,17 @@ def bode_overview_figure(panels, suptitle):
     if panels:
         axes[0].legend(loc="best", fontsize="x-small")
     fig.suptitle(suptitle)
-    fig.tight_layout()
+    fig.subplots_adjust(**_overview_margins(ncols, nrows, *fig.get_size_inches()))
     return fig
+
+
+def _overview_margins(ncols, nrows, width, height):
+    """subplots_adjust's fractions for OVERVIEW_INCHES on a width x height (inches) figure of nrows x ncols panels."""
+    m = OVERVIEW_INCHES
+    panel_w = (width - m["left"] - m["right"] - (ncols - 1) * m["wgap"]) / ncols
+    panel_h = (height - m["top"] - m["bottom"] - (nrows - 1) * m["hgap"]) / nrows
+    return dict(left=m["left"] / width, right=1.0 - m["right"] / width, top=1.0 - m["top"] / height,
+                bottom=m["bottom"] / height, wspace=m["wgap"] / panel_w, hspace=m["hgap"] / panel_h)
 
 
 def importance_figure(freq_hz, importance, kept, title, threshold=None, band_hz=None):
@@ -334,12 +350,13 @@ def _draw_importance(ax, freq_hz, importance, kept, title, threshold, band_hz):
     ax.legend(loc="best", fontsize="small")
 
 
-def importance_pngs(items, dpi=DPI):
+def importance_pngs(items, dpi=DPI, reuse=None):
     """PNG bytes of importance_figure(*item) for each item, in order, drawn on one figure whose axes are emptied and
     drawn again between items: the same pixels as a new figure per item, without building the ticks of its axes
     again (a log axis over the Krylov modes' decades has some fifty, most of a new figure's drawing time). A figure
-    on a linear axis (a frequency not positive) is drawn on its own."""
-    fig = None
+    on a linear axis (a frequency not positive) is drawn on its own. reuse: as bode_pngs_on_grids'."""
+    reuse = {} if reuse is None else reuse
+    fig = reuse.get("importance")
     for item in items:
         freq = np.asarray(item[0], dtype=float)
         if not (freq.size > 0 and np.all(freq > 0)):
@@ -355,6 +372,7 @@ def importance_pngs(items, dpi=DPI):
             ax.ignore_existing_data_limits = True
             ax.set_autoscalex_on(True)
             _draw_importance(ax, *item)
+        reuse["importance"] = fig
         yield figure_png_bytes(fig, dpi)
 
 

@@ -2,6 +2,7 @@
 (plots.bode_figure): the speed-up changes no pixel. Responses of a small damped modal model computed here, with a
 pair identically zero and pairs whose magnitudes differ by decades (the y-limits must follow)."""
 import numpy as np
+import pytest
 
 from kryflex.report import plots
 
@@ -85,3 +86,44 @@ def test_reused_importance_figure_gives_the_same_pngs():
     assert len(reused) == len(items)
     assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
     assert len(set(fresh)) == len(fresh)
+
+
+def test_figures_reused_across_calls_give_the_same_pngs():
+    """figures.figure_jobs draws a process's two shares of Bode and importance figures on the figure the first share
+    left (reuse=): the PNGs are those of a new figure per plot."""
+    f, pairs = responses()
+    items = [(f, full, red, title) for full, red, title in pairs]
+    kept = {}
+    reused = list(plots.bode_pngs_on_grids(items[:2], reuse=kept)) + list(plots.bode_pngs_on_grids(items[2:], reuse=kept))
+    assert "bode" in kept
+    fresh = [plots.figure_png_bytes(plots.bode_figure(*item)) for item in items]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+    imp = [([0.05, 0.9, 3.0, 45.0], [1.0, 0.3, 0.02, 1e-4], [True, True, False, False], "first", 0.01, [0.1, 30.0]),
+           ([2.0, 8.0, 3000.0], [0.2, 1.0, 0.9], [False, True, True], "second", None, [1.0, 10.0])]
+    kept = {}
+    reused = list(plots.importance_pngs(imp[:1], reuse=kept)) + list(plots.importance_pngs(imp[1:], reuse=kept))
+    assert "importance" in kept
+    fresh = [plots.figure_png_bytes(plots.importance_figure(*item)) for item in imp]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(imp)
+
+
+@pytest.mark.parametrize("npanels", [1, 2, 4, 7])
+def test_overview_margins_hold_its_labels(npanels):
+    """The overview's fixed margins (no tight_layout) keep every panel's tick labels, axis labels and title inside the
+    figure and clear of the other panels and of the suptitle, with five-character tick labels (-1000 dB)."""
+    f, pairs = responses()
+    full = pairs[0][0] * 1e-50 / np.abs(pairs[0][0]).max()          # magnitudes down to about -1000 dB
+    panels = [("%d°" % (30 * k), f, full, full * 1.01) for k in range(npanels)]
+    fig = plots.bode_overview_figure(panels, "a scene's name: full vs reduced (single-angle model), out <- in")
+    fig.set_dpi(plots.DPI)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    page = fig.bbox
+    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_visible()]
+    title = fig._suptitle.get_window_extent(renderer)
+    assert len(boxes) == npanels
+    assert any(len(t.get_text()) >= 5 for t in fig.axes[0].get_yticklabels())    # the widest labels are drawn
+    for k, box in enumerate(boxes):
+        assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1
+        assert not box.overlaps(title)
+        assert not any(box.overlaps(other) for other in boxes[k + 1:])

@@ -21,24 +21,14 @@ sys.path.insert(0, HERE)
 import bc_models  # noqa: E402
 import reference as ref  # noqa: E402
 from test_sparse_eigensolve import ENV, PROBE, case, common_grid, dense_flexible_frequencies  # noqa: E402
+from test_sparse_eigensolve import reduce_sparse as sparse_reduction  # noqa: E402
 
 pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
 
 
 def reduce_sparse(scene, method, **options):
     """The scene reduced with the sparse verification path and the eigensolve method named."""
-    opts = PETSc.Options()
-    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_method=method)
-    values.update(options)
-    for k, v in values.items():
-        opts.setValue(k, v)
-    try:
-        reducer = kryflex.Reducer(scene, quiet=True, search=False)
-        reducer.reduce()
-    finally:
-        for k in values:
-            opts.delValue(k)
-    return reducer
+    return sparse_reduction(scene, kf_verify_eigen_method=method, **options)
 
 
 def model(name, tmp_path):

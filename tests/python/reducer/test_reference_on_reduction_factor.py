@@ -7,7 +7,6 @@ import sys
 
 import numpy as np
 import pytest
-from petsc4py import PETSc
 
 import kryflex
 
@@ -16,25 +15,12 @@ SUPPORT = os.path.join(os.path.dirname(HERE), "support")
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
+sys.path.insert(0, HERE)
 import frames  # noqa: E402
 import reference as ref  # noqa: E402
+from test_sparse_eigensolve import reduce_sparse  # noqa: E402
 
 pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
-
-
-def reduce_sparse(scene, **options):
-    """The fixed recipe with the sparse reference path forced on a small scene; extra -kf_ options as given."""
-    opts = PETSc.Options()
-    values = dict(kf_verify_dense_max_dofs=0, **options)
-    for k, v in values.items():
-        opts.setValue(k, v)
-    try:
-        reducer = kryflex.Reducer(scene, quiet=True, search=False)
-        reducer.reduce()
-    finally:
-        for k in values:
-            opts.delValue(k)
-    return reducer
 
 
 def test_reference_on_the_reduction_factor_equals_its_own_factorization(tmp_path):

@@ -12,11 +12,6 @@ typedef struct {
   PetscScalar *work; /* the appended block and its product (2 x nl x wcap): kept from block to block, since a fresh
                         allocation of that size is fresh pages, faulted in and zeroed by the system at every block */
   PetscInt     wcap;
-  /* Lagged second pass (KFMBasisAppendLagged): columns [kf, k) are the last block's after its first pass; their second
-     pass comes with the next block's first. MV[la, lb) then still awaits MV[la, lb) = (MV[la, lb) - [M Phi, MV[0, la)]
-     lag) diag(lscale), lag (r + la) x (lb - la): applied in the next sweep over MV. */
-  PetscInt   kf, la, lb;
-  PetscReal *lag, *lscale;
 } KFMBasis;
 
 /* The rigid modes the blocks are kept M-orthogonal to, with M Phi formed once for the whole basis. */
@@ -64,8 +59,6 @@ static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
   mb->nl   = nl;
   mb->work = NULL;
   mb->wcap = 0;
-  mb->kf = mb->la = mb->lb = 0;
-  mb->lag = mb->lscale = NULL;
   PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
   PetscFunctionReturn(0);
 }
@@ -75,7 +68,6 @@ static PetscErrorCode KFMBasisDestroy(KFMBasis *mb)
   PetscFunctionBegin;
   PetscCall(PetscFree(mb->MV));
   PetscCall(PetscFree(mb->work));
-  PetscCall(PetscFree2(mb->lag, mb->lscale));
   mb->wcap = 0;
   PetscFunctionReturn(0);
 }
@@ -202,140 +194,42 @@ static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, Petsc
   PetscFunctionReturn(0);
 }
 
-/* room for ncols columns of n in the work array (the block, its product, and in a lagged append the pending columns) */
-static PetscErrorCode KFMBasisReserve(KFMBasis *mb, PetscInt ncols)
-{
-  PetscFunctionBegin;
-  if (ncols <= mb->wcap) PetscFunctionReturn(0);
-  PetscCall(PetscFree(mb->work));
-  PetscCall(PetscMalloc1(mb->nl * ncols + 1, &mb->work));
-  mb->wcap = ncols;
-  PetscFunctionReturn(0);
-}
+/* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
+   it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
+   is dropped (deflation). nrm0, when given, receives each column's M-norm before orthogonalization.
 
-#define KF_LAG_ROWS 2048
-/* A column whose M-norm after the first pass is below 1/KF_LAG_MAX_LOSS of its norm before takes its second pass at
-   once: what the first pass leaves along the basis (about loss x eps relative) would otherwise go into the chain's next
-   right-hand side. The panels' Krylov blocks lose a factor 2-30; a chain whose space is nearly exhausted, far more. */
-#define KF_LAG_MAX_LOSS 64.0 /* rows per chunk of the lagged sweeps: the chunk of the block and its coefficients stay in cache */
-
-/* the pending update of MV[la, lb) (KFMBasis) on rows i0 .. i0 + bm - 1 */
-static PetscErrorCode KFMBasisLagChunk(const KFRigidSpace *rs, KFMBasis *mb, PetscInt i0, PetscInt bm)
+   Block classical Gram-Schmidt (KFMBasisPasses: twice; DESIGN.md:
+   rigid content creeps back through rounding, so the rigid modes are projected out of every block together with the
+   basis). Then the block's own columns, in order, by Gram-Schmidt on the products; a column that loses more than half
+   of its norm there gets a fresh product and one more pass against everything (DGKS's criterion), so that the
+   near-dependent inputs of a block stay as orthogonal as the rest. At most one block product with M per append,
+   whatever the basis size, instead of several mat-vecs per column. */
+static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
 {
-  const PetscInt r = rs->r, la = mb->la, nb = mb->lb - mb->la, nl = mb->nl;
-  PetscScalar   *t = mb->MV + la * nl + i0;
+  const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
+  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  Mat                Ms   = rs->sys->Ms;
+  PetscScalar       *w, *mw;
+  const PetscScalar *src;
+  PetscInt           ld;
+  PetscReal         *nrm0, *nrm, mnorm = rs->mnorm;
 
   PetscFunctionBegin;
-  if (nb <= 0) PetscFunctionReturn(0);
-  if (r) PetscCall(KFArraySkinnyMultAdd(bm, r, rs->mphi + i0, rs->ldmp, nb, -1.0, mb->lag, r + la, t, nl));
-  PetscCall(KFArraySkinnyMultAdd(bm, la, mb->MV + i0, nl, nb, -1.0, mb->lag + r, r + la, t, nl));
-  for (PetscInt j = 0; j < nb; j++)
-    if (mb->lscale[j] != 1.0)
-      for (PetscInt i = 0; i < bm; i++) t[i + j * nl] *= mb->lscale[j];
-  PetscFunctionReturn(0);
-}
-
-/* the pending update of MV applied now (one sweep), where no sweep over MV follows to carry it */
-static PetscErrorCode KFMBasisLagApply(const KFRigidSpace *rs, KFMBasis *mb)
-{
-  PetscFunctionBegin;
-  if (mb->lb > mb->la)
-    for (PetscInt i0 = 0; i0 < mb->nl; i0 += KF_LAG_ROWS) PetscCall(KFMBasisLagChunk(rs, mb, i0, PetscMin(KF_LAG_ROWS, mb->nl - i0)));
-  mb->la = mb->lb = 0;
-  PetscFunctionReturn(0);
-}
-
-/* The lagged passes over w (nl x q, leading dimension nl): its first pp columns the pending ones (a copy of V[kf, k),
-   their second pass), the rest a new block (its first pass, against [Phi V[0, k)]). Two sweeps over the basis for both,
-   instead of two per pass: the coefficients [M Phi, MV[0, kf)]^T w and MV[kf, k)^T of the new block (MV's pending update
-   applied in the same sweep, chunk by chunk, before it is read), one reduction, then w -= [Phi V[0, kf)] c and the new
-   block -= V[kf, k) cp, the pending columns written back to V. c: (r + kf) x q, cp: pp x (q - pp), both replicated. */
-static PetscErrorCode KFMBasisLaggedSweeps(const KFRigidSpace *rs, KFMBasis *mb, PetscInt q, PetscScalar *w, PetscReal c[], PetscReal cp[])
-{
-  const PetscInt r = rs->r, kf = mb->kf, pp = mb->k - mb->kf, nl = mb->nl, lc = r + kf;
-  PetscScalar   *v, *MV = mb->MV;
-
-  PetscFunctionBegin;
-  PetscCall(PetscArrayzero(c, lc * q + pp * (q - pp)));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_LAG_ROWS) {
-    const PetscInt bm = PetscMin(KF_LAG_ROWS, nl - i0);
-
-    PetscCall(KFMBasisLagChunk(rs, mb, i0, bm));
-    if (r) PetscCall(KFArraySkinnyTransposeMult(bm, r, rs->mphi + i0, rs->ldmp, q, w + i0, nl, c, lc));
-    PetscCall(KFArraySkinnyTransposeMult(bm, kf, MV + i0, nl, q, w + i0, nl, c + r, lc));
-    if (pp && q > pp) PetscCall(KFArraySkinnyTransposeMult(bm, pp, MV + kf * nl + i0, nl, q - pp, w + pp * nl + i0, nl, cp, pp));
+  if (p <= 0) PetscFunctionReturn(0);
+  if (p > mb->wcap) {
+    PetscCall(PetscFree(mb->work));
+    PetscCall(PetscMalloc1(2 * nl * p + 1, &mb->work));
+    mb->wcap = p;
   }
-  mb->la = mb->lb = 0;
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, c, (PetscMPIInt)(lc * q + pp * (q - pp)), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)mb->V)));
-  PetscCall(PetscFree2(mb->lag, mb->lscale));
-  PetscCall(PetscMalloc2(lc * pp + 1, &mb->lag, pp + 1, &mb->lscale));
-  for (PetscInt j = 0; j < pp; j++) { /* a pending column was M-normalized: its norm after the pass by Pythagoras */
-    PetscReal cn = 0;
-
-    for (PetscInt i = 0; i < lc; i++) cn += c[i + j * lc] * c[i + j * lc];
-    /* a column's first pass leaves about loss x eps along the basis (loss <= KF_LAG_MAX_LOSS): cn is near eps^2 */
-    if (cn > 1e-8) PetscCall(PetscInfo(mb->V, "lagged pass of column %" PetscInt_FMT ": %.3e of its M-norm squared along the basis\n", kf + j, (double)cn));
-    mb->lscale[j] = cn < 1 ? 1.0 / PetscSqrtReal(1.0 - cn) : 1.0;
-  }
-  PetscCall(PetscArraycpy(mb->lag, c, lc * pp));
-  /* the new block's coefficients against the pending columns as they will be after their pass: P'' = (P' - [Phi V] c_P)
-     s gives P''^T M x = s (P'^T M x - c_P^T [Phi V]^T M x), both at hand; against P' instead, the error of each lagged
-     pass would pass into the next block's first pass and grow from block to block */
-  for (PetscInt jx = 0; jx < q - pp; jx++)
-    for (PetscInt i = 0; i < pp; i++) {
-      PetscReal d = cp[i + jx * pp];
-
-      for (PetscInt l = 0; l < lc; l++) d -= c[l + i * lc] * c[l + (pp + jx) * lc];
-      cp[i + jx * pp] = mb->lscale[i] * d;
-    }
-  PetscCall(BVGetArray(mb->V, &v));
-  for (PetscInt i0 = 0; i0 < nl; i0 += KF_LAG_ROWS) {
-    const PetscInt bm = PetscMin(KF_LAG_ROWS, nl - i0);
-
-    if (r) PetscCall(KFArraySkinnyMultAdd(bm, r, rs->phi + i0, rs->ldp, q, -1.0, c, lc, w + i0, nl));
-    PetscCall(KFArraySkinnyMultAdd(bm, kf, v + i0, nl, q, -1.0, c + r, lc, w + i0, nl));
-    for (PetscInt j = 0; j < pp; j++)
-      for (PetscInt i = 0; i < bm; i++) v[i0 + i + (kf + j) * nl] = w[i0 + i + j * nl] * mb->lscale[j];
-    if (pp && q > pp) PetscCall(KFArraySkinnyMultAdd(bm, pp, v + kf * nl + i0, nl, q - pp, -1.0, cp, pp, w + pp * nl + i0, nl));
-  }
-  PetscCall(BVRestoreArray(mb->V, &v));
-  mb->la = kf; /* MV of the pending columns follows in the next sweep over MV */
-  mb->lb = mb->k;
-  mb->kf = mb->k;
-  PetscFunctionReturn(0);
-}
-
-/* the pending columns' second pass and their products' update, where no next block comes to share the sweeps */
-static PetscErrorCode KFMBasisFinishLag(const KFRigidSpace *rs, KFMBasis *mb)
-{
-  const PetscInt pp = mb->k - mb->kf, nl = mb->nl;
-  PetscReal     *c;
-  const PetscScalar *v;
-
-  PetscFunctionBegin;
-  if (pp > 0) {
-    PetscCall(KFMBasisReserve(mb, pp));
-    PetscCall(BVGetArrayRead(mb->V, &v));
-    PetscCall(PetscArraycpy(mb->work, v + mb->kf * nl, pp * nl));
-    PetscCall(BVRestoreArrayRead(mb->V, &v));
-    PetscCall(PetscMalloc1((rs->r + mb->kf) * pp + 1, &c));
-    PetscCall(KFMBasisLaggedSweeps(rs, mb, pp, mb->work, c, NULL));
-    PetscCall(PetscFree(c));
-  }
-  PetscCall(KFMBasisLagApply(rs, mb));
-  PetscFunctionReturn(0);
-}
-
-/* The columns w (nl x p, mw = M w) after the passes against the basis, nrm0 / nrm their M-norms before and after,
-   kept: each M-orthonormalized against the block's columns kept before it, or dropped when it depends on the basis. */
-static PetscErrorCode KFMBasisKeep(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, const PetscReal nrm0[], const PetscReal nrm[], PetscReal tol, PetscInt *ndeflated)
-{
-  const PetscInt nl = mb->nl, k0 = mb->k;
-  MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
-  Mat            Ms   = rs->sys->Ms;
-  PetscReal      mnorm = rs->mnorm;
-
-  PetscFunctionBegin;
+  w  = mb->work;
+  mw = mb->work + nl * p;
+  PetscCall(PetscMalloc2(p, &nrm0, p, &nrm));
+  PetscCall(MatDenseGetLDA(W, &ld));
+  PetscCall(MatDenseGetArrayRead(W, &src));
+  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
+  PetscCall(MatDenseRestoreArrayRead(W, &src));
+  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0, nrm));
+  if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
   for (PetscInt j = 0; j < p; j++) {
     PetscScalar *wj = &w[j * nl], *mwj = &mw[j * nl], *v;
     PetscReal    nb, na;
@@ -360,7 +254,6 @@ static PetscErrorCode KFMBasisKeep(const KFRigidSpace *rs, KFMBasis *mb, PetscIn
       PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
     }
     if (na > tol * nrm0[j] && na < PETSC_SQRT2 / 2 * nb) { /* cancellation within the block: refine with a fresh product */
-      PetscCall(KFMBasisLagApply(rs, mb)); /* the pass updates mw through the kept products */
       PetscCall(KFMProduct(Ms, nl, 1, wj, mwj));
       PetscCall(KFMBasisProjectOut(rs, mb, 1, wj, mwj, PETSC_TRUE, NULL));
       PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
@@ -388,108 +281,7 @@ static PetscErrorCode KFMBasisKeep(const KFRigidSpace *rs, KFMBasis *mb, PetscIn
     mb->k++;
   }
   PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
-  PetscFunctionReturn(0);
-}
-
-/* Appends columns j0..j1-1 of W to the basis, each M-orthonormalized against the rigid modes and all columns before
-   it; a column whose M-norm falls to tol times its M-norm before orthogonalization (or below) depends on the basis and
-   is dropped (deflation). nrm0, when given, receives each column's M-norm before orthogonalization.
-
-   Block classical Gram-Schmidt (KFMBasisPasses: twice; DESIGN.md:
-   rigid content creeps back through rounding, so the rigid modes are projected out of every block together with the
-   basis). Then the block's own columns, in order, by Gram-Schmidt on the products; a column that loses more than half
-   of its norm there gets a fresh product and one more pass against everything (DGKS's criterion), so that the
-   near-dependent inputs of a block stay as orthogonal as the rest. At most one block product with M per append,
-   whatever the basis size, instead of several mat-vecs per column. A lagged block's pending pass is done first. */
-static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
-{
-  const PetscInt     p = j1 - j0, nl = mb->nl;
-  PetscScalar       *w, *mw;
-  const PetscScalar *src;
-  PetscInt           ld;
-  PetscReal         *nrm0, *nrm;
-
-  PetscFunctionBegin;
-  if (p <= 0) PetscFunctionReturn(0);
-  PetscCall(KFMBasisFinishLag(rs, mb));
-  PetscCall(KFMBasisReserve(mb, 2 * p));
-  w  = mb->work;
-  mw = mb->work + nl * p;
-  PetscCall(PetscMalloc2(p, &nrm0, p, &nrm));
-  PetscCall(MatDenseGetLDA(W, &ld));
-  PetscCall(MatDenseGetArrayRead(W, &src));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&w[j * nl], &src[(j0 + j) * ld], nl));
-  PetscCall(MatDenseRestoreArrayRead(W, &src));
-  PetscCall(KFMBasisPasses(rs, mb, p, w, mw, nrm0, nrm));
-  if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
-  PetscCall(KFMBasisKeep(rs, mb, p, w, mw, nrm0, nrm, tol, ndeflated));
-  mb->kf = mb->k;
   PetscCall(PetscFree2(nrm0, nrm));
-  PetscFunctionReturn(0);
-}
-
-/* KFMBasisAppend with the second pass lagged (DCGS2, delayed classical Gram-Schmidt with reorthogonalization: Bielich,
-   Langou, Thomas, Swirydowicz, Yamazaki and Boman, Parallel Computing 112, 2022): the block gets its first pass here,
-   together with the second pass of the block appended before it, in two sweeps over the basis instead of four (the
-   passes are bound by the memory they stream: the basis and its products are read once each per block). Its columns
-   join the basis M-orthonormal to the first pass' rounding, and the chain's next right-hand side is formed from them
-   (the Krylov space is the same in exact arithmetic; the next block is taken out of these columns, then their second
-   pass comes, and its own second pass later removes what that moved). KFMBasisFinishLag completes the last block.
-   The other chain's complement keeps the block's M-products as they are here, within its first pass' rounding of
-   the final ones. */
-static PetscErrorCode KFMBasisAppendLagged(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
-{
-  const PetscInt     p = j1 - j0, nl = mb->nl, pp = mb->k - mb->kf, q = pp + p, lc = rs->r + mb->kf;
-  PetscScalar       *w, *x, *mw;
-  const PetscScalar *src, *v;
-  PetscInt           ld;
-  PetscReal         *nrm0, *nrm, *c;
-
-  PetscFunctionBegin;
-  if (p <= 0) PetscFunctionReturn(0);
-  PetscCall(KFMBasisReserve(mb, q + p));
-  w  = mb->work;
-  x  = w + pp * nl;
-  mw = w + q * nl;
-  PetscCall(BVGetArrayRead(mb->V, &v));
-  PetscCall(PetscArraycpy(w, v + mb->kf * nl, pp * nl));
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
-  PetscCall(MatDenseGetLDA(W, &ld));
-  PetscCall(MatDenseGetArrayRead(W, &src));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&x[j * nl], &src[(j0 + j) * ld], nl));
-  PetscCall(MatDenseRestoreArrayRead(W, &src));
-  PetscCall(PetscMalloc3(p, &nrm0, p, &nrm, lc * q + pp * p + 1, &c));
-  PetscCall(KFMBasisLaggedSweeps(rs, mb, q, w, c, c + lc * q));
-  PetscCall(KFMProduct(rs->sys->Ms, nl, p, x, mw));
-  PetscCall(KFMNorms(PetscObjectComm((PetscObject)mb->V), nl, p, x, mw, nrm));
-  for (PetscInt j = 0; j < p; j++) { /* the norm before by Pythagoras, [Phi V] being M-orthonormal */
-    PetscReal cn = nrm[j] * nrm[j];
-
-    for (PetscInt i = 0; i < lc; i++) cn += c[i + (pp + j) * lc] * c[i + (pp + j) * lc];
-    for (PetscInt i = 0; i < pp; i++) cn += c[lc * q + i + j * pp] * c[lc * q + i + j * pp];
-    nrm0[j] = PetscSqrtReal(cn);
-  }
-  {
-    PetscBool now = PETSC_FALSE;
-
-    for (PetscInt j = 0; j < p; j++)
-      if (!(nrm0[j] <= KF_LAG_MAX_LOSS * nrm[j])) now = PETSC_TRUE;
-    if (now) { /* a column lost most of its norm: its second pass now, before the chain's next block is formed from it */
-      PetscReal *cn2;
-
-      PetscCall(PetscMalloc1(p, &cn2));
-      PetscCall(KFMBasisLagApply(rs, mb));
-      PetscCall(KFMBasisProjectOut(rs, mb, p, x, NULL, PETSC_FALSE, cn2));
-      PetscCall(KFMProduct(rs->sys->Ms, nl, p, x, mw));
-      PetscCall(KFMNorms(PetscObjectComm((PetscObject)mb->V), nl, p, x, mw, nrm));
-      for (PetscInt j = 0; j < p; j++) nrm0[j] = PetscSqrtReal(nrm0[j] * nrm0[j] + cn2[j]);
-      PetscCall(PetscFree(cn2));
-    }
-    if (nrm0out) PetscCall(PetscArraycpy(nrm0out, nrm0, p));
-    PetscCall(KFMBasisKeep(rs, mb, p, x, mw, nrm0, nrm, tol, ndeflated));
-    if (now) mb->kf = mb->k;
-  }
-  PetscCall(PetscFree3(nrm0, nrm, c));
   PetscFunctionReturn(0);
 }
 
@@ -805,7 +597,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
           PetscReal      *nrm0;
 
           PetscCall(PetscMalloc1(off[q + 1] - off[q], &nrm0));
-          PetscCall(KFMBasisAppendLagged(&rs, &basis, W, off[q], off[q + 1], tol, &ndefl, nrm0));
+          PetscCall(KFMBasisAppend(&rs, &basis, W, off[q], off[q + 1], tol, &ndefl, nrm0));
           if (KFChainNeedsComplement(1 - source, appended, want, done, damp)) PetscCall(KFChainComplementAdd(&cc[1 - source], &basis, k0));
           if (next) {
             PetscCall(KFChainNext(&cc[source], &basis, k0, W, off[q], off[q + 1] - off[q], nrm0, tol, &Prev[source]));
@@ -835,7 +627,6 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].MU));
   for (int c = 0; c < 2; c++) PetscCall(PetscFree(cc[c].spare));
   if (damp) PetscCall(KFDampedChainDestroy_Private(&dch));
-  PetscCall(KFMBasisFinishLag(&rs, &basis));
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
   PetscCall(KFMBasisDestroy(&basis));

@@ -5,7 +5,6 @@ clamped beam, a clamped beam with paired frequencies and a free frame with a mec
 against 1; with damping matrices (Galileo) against the dense damped direct solve; and its fall back to Krylov-Schur
 when it has not converged within its cap of blocks."""
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -20,7 +19,7 @@ sys.path.insert(0, SUPPORT)
 sys.path.insert(0, HERE)
 import bc_models  # noqa: E402
 import reference as ref  # noqa: E402
-from test_sparse_eigensolve import ENV, PROBE, case, common_grid, dense_flexible_frequencies  # noqa: E402
+from test_sparse_eigensolve import assert_two_ranks_agree, case, common_grid, dense_flexible_frequencies  # noqa: E402
 from test_sparse_eigensolve import reduce_sparse as sparse_reduction  # noqa: E402
 
 pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
@@ -93,20 +92,10 @@ def test_block_eigensolve_two_ranks(tmp_path, name):
     """The block path on 2 ranks (its random columns the same on any rank count) against Krylov-Schur on 1."""
     scene, _, options = model(name, tmp_path)
     serial = reduce_sparse(scene, "slepc", **options)
-    out = tmp_path / "two.npz"
     builder = "free_clustered_beam" if name == "free_clustered" else "clamped_beam"
     extra = [x for k, v in options.items() for x in ("-" + k, str(v))]
-    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:" + builder, str(out),
-                        "-kf_verify_eigen_method", "block"] + extra,
-                       env=ENV, capture_output=True, text=True, timeout=240)
-    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
-    two = np.load(out)
-    f1, f2 = np.ravel(serial.result(0, "full_frequencies_hz")), two["f0"]
-    T1, T2 = common_grid(np.ravel(serial.result(0, "frf_frequencies_hz")), serial.frf(0, "full"), two["w0"], two["T0"])
-    print("%s: 2 ranks block vs 1 rank Krylov-Schur: frequencies %.1e, response %.1e of the peak"
-          % (name, np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
-    assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
-    assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+    assert_two_ranks_agree(serial, builder, tmp_path / "two.npz", ["-kf_verify_eigen_method", "block"] + extra,
+                           "%s: 2 ranks block vs 1 rank Krylov-Schur" % name)
 
 
 def test_block_eigensolve_with_damping_matrices():
@@ -198,15 +187,6 @@ def test_block_eigensolve_wide_blocks_two_ranks(tmp_path):
     """The wide blocks above on 2 ranks against 1: the rotation's Gram matrix and the dropped columns the same."""
     scene, _, options = model("clamped", tmp_path)
     serial = reduce_sparse(scene, "block", kf_verify_eigen_random=12, **options)
-    out = tmp_path / "two.npz"
-    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:clamped_beam", str(out),
-                        "-kf_verify_eigen_method", "block", "-kf_verify_eigen_random", "12"],
-                       env=ENV, capture_output=True, text=True, timeout=240)
-    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
-    two = np.load(out)
-    f1, f2 = np.ravel(serial.result(0, "full_frequencies_hz")), two["f0"]
-    T1, T2 = common_grid(np.ravel(serial.result(0, "frf_frequencies_hz")), serial.frf(0, "full"), two["w0"], two["T0"])
-    print("clamped, 12 random columns: 2 ranks vs 1: frequencies %.1e, response %.1e of the peak"
-          % (np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
-    assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
-    assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+    assert_two_ranks_agree(serial, "clamped_beam", tmp_path / "two.npz",
+                           ["-kf_verify_eigen_method", "block", "-kf_verify_eigen_random", "12"],
+                           "clamped, 12 random columns: 2 ranks vs 1")

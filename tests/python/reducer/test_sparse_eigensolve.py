@@ -218,6 +218,21 @@ def common_grid(fa, Ta, fb, Tb):
     return Ta[ia], Tb[ib]
 
 
+def assert_two_ranks_agree(serial, builder, out, options, label):
+    """bc_models.<builder> reduced on 2 ranks with the -kf_ options given (a list of words) against the serial
+    reduction: the same modes (1e-9) and reference response (1e-9 of the peak)."""
+    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:" + builder, str(out)] + list(options),
+                       env=ENV, capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    two = np.load(out)
+    f1, f2 = np.ravel(serial.result(0, "full_frequencies_hz")), two["f0"]
+    T1, T2 = common_grid(np.ravel(serial.result(0, "frf_frequencies_hz")), serial.frf(0, "full"), two["w0"], two["T0"])
+    print("%s: frequencies %.1e, response %.1e of the peak"
+          % (label, np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
+    assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
+    assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+
+
 @pytest.mark.parametrize("name", sorted(BLOCK_CASES))
 def test_block_eigensolve_matches_krylov_schur(tmp_path, name):
     """Subspace iteration with block K+ applications gives Krylov-Schur's modes and reference response (1e-9), both
@@ -250,18 +265,9 @@ def test_block_eigensolve_two_ranks(tmp_path):
     """Subspace iteration on 2 ranks against Krylov-Schur on 1: the same modes and reference response (1e-9)."""
     serial = reduce_sparse(kryflex.scene_from_dict(bc_models.free_clustered_beam()), kf_verify_eigen_method="slepc",
                            kf_verify_eps_type="krylovschur", kf_verify_modes=8)
-    out = tmp_path / "two.npz"
-    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, "bc_models:free_clustered_beam", str(out),
-                        "-kf_verify_eigen_method", "slepc", "-kf_verify_eps_type", "subspace", "-kf_verify_modes", "8"],
-                       env=ENV, capture_output=True, text=True, timeout=240)
-    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
-    two = np.load(out)
-    f1, f2 = np.ravel(serial.result(0, "full_frequencies_hz")), two["f0"]
-    T1, T2 = common_grid(np.ravel(serial.result(0, "frf_frequencies_hz")), serial.frf(0, "full"), two["w0"], two["T0"])
-    print("2 ranks subspace vs 1 rank Krylov-Schur: frequencies %.1e, response %.1e of the peak"
-          % (np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
-    assert f1.size == f2.size > 0 and np.allclose(f2, f1, rtol=1e-9, atol=0)
-    assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+    assert_two_ranks_agree(serial, "free_clustered_beam", tmp_path / "two.npz",
+                           ["-kf_verify_eigen_method", "slepc", "-kf_verify_eps_type", "subspace", "-kf_verify_modes", "8"],
+                           "2 ranks subspace vs 1 rank Krylov-Schur")
 
 
 def test_eigensolver_needing_a_preconditioner_is_refused(tmp_path):

@@ -326,9 +326,12 @@ def bode_overview_png(panels, suptitle, dpi=DPI, reuse=None):
     return figure_png_bytes(fig, dpi)
 
 
-def prepared_figures(band_hz, configurations, points=449, dpi=DPI):
-    """A reuse dict (bode_pngs_on_grids, bode_overview_png, importance_pngs) holding a Bode figure and an overview of
-    `configurations` panels over band_hz, and an importance figure, each drawn once on placeholder data: their
+PREPARED_KINDS = ("bode", "overview", "importance")
+
+
+def prepared_figures(band_hz, configurations, kinds=PREPARED_KINDS, points=449, dpi=DPI):
+    """A reuse dict (bode_pngs_on_grids, bode_overview_png, importance_pngs) holding, of kinds, a Bode figure, an
+    overview of `configurations` panels over band_hz and an importance figure, each drawn once on placeholder data: their
     frequency axes' ticks built (the importance axis's over seven decades from the band's bottom, more than the Krylov
     modes usually span, so that their figures find their ticks made), the Bode figure's fixed layer rendered, the
     fonts loaded, before the report's data exist (report/helper.py draws them while the reduction runs). A figure
@@ -339,10 +342,13 @@ def prepared_figures(band_hz, configurations, points=449, dpi=DPI):
     corner = np.sqrt(low * high) if low > 0 else max(high, 1.0)
     curve = 1.0 / (1.0 + 1j * freq / corner)           # any response that is not zero: the curves are replaced
     reuse = {}
-    for _ in bode_pngs_on_grids([(freq, curve, 1.01 * curve, "prepared")], dpi, reuse):
-        pass
-    bode_overview_png([("prepared", freq, curve, 1.01 * curve)] * max(int(configurations), 1), "prepared", dpi, reuse)
-    if low > 0:
+    if "bode" in kinds:
+        for _ in bode_pngs_on_grids([(freq, curve, 1.01 * curve, "prepared")], dpi, reuse):
+            pass
+    if "overview" in kinds:
+        bode_overview_png([("prepared", freq, curve, 1.01 * curve)] * max(int(configurations), 1), "prepared", dpi,
+                          reuse)
+    if "importance" in kinds and low > 0:
         modes = np.geomspace(low, low * 1e7, 24)
         for _ in importance_pngs([(modes, np.linspace(1.0, 0.01, modes.size), modes < high, "prepared", 0.01,
                                    [low, high])], dpi, reuse):

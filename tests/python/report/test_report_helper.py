@@ -23,9 +23,10 @@ def written(summary, out, monkeypatch, mode):
 
 
 class _Started:
-    """A stand-in for a helper process in the share computation: what its start still costs."""
-    def __init__(self, start_weight=0.0):
+    """A stand-in for a helper process in the share computation: what its start still costs, what it prepared."""
+    def __init__(self, start_weight=0.0, prepared=()):
         self.start_weight = start_weight
+        self.prepared = set(prepared)
 
 
 def test_helper_shares_split_the_figures(summary, monkeypatch):
@@ -42,6 +43,13 @@ def test_helper_shares_split_the_figures(summary, monkeypatch):
     weight = {k: jobs[k][0] for k in everything}
     assert abs(sum(weight[k] for k in a) - sum(weight[k] for k in b)) <= max(weight.values())
     assert helper.helper_shares(jobs, []) == []
+    # the figures a helper prepared (start_helpers' roles) go to it, the rest by weight
+    kinds = {k: jobs[k][2] for k in everything}
+    a, b = helper.helper_shares(jobs, [_Started(prepared=r) for r in helper.PREPARED_ROLES])
+    assert a and b and not a & b and a | b == everything
+    assert "overview" in {kinds[k] for k in a} and "importance" not in {kinds[k] for k in a}
+    assert "importance" in {kinds[k] for k in b} and "overview" not in {kinds[k] for k in b}
+    assert abs(sum(weight[k] for k in a) - sum(weight[k] for k in b)) <= max(weight.values())
 
 
 def test_helpers_are_not_started_when_turned_off(monkeypatch):

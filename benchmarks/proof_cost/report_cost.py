@@ -3,8 +3,9 @@ in a fresh Python (the cost kryflex reduce pays: matplotlib's import included), 
 
 - alone:   KRYFLEX_REPORT_HELPER=0, every figure drawn by the process itself;
 - on call: KRYFLEX_REPORT_HELPER=1, write_report starting its helper when called (both trees);
-- ahead:   this tree only: the helpers started first (report.helper.start_helpers, as kryflex reduce does when the run
-           starts) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
+- ahead:   the helpers started first (report.helper.start_helpers, as kryflex reduce does when the run starts: told
+           the band and the configurations where the tree's start_helpers takes them, so that they prepare their
+           figures) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
 
 Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs' pixels (decoded) compared
 with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall
@@ -24,16 +25,30 @@ from kryflex.results import Summary
 from kryflex import report
 s = Summary.load(sys.argv[1])
 if sys.argv[3] == "ahead":
+    import inspect
     from kryflex.report.helper import start_helpers, _ahead
-    start_helpers()
+    if "prepare" in inspect.signature(start_helpers).parameters:
+        start_helpers(prepare={"band_hz": s.band_hz, "configurations": len(s.frf)})
+    else:
+        start_helpers()
     time.sleep(float(sys.argv[4]))          # the reduction's time, during which the helpers load matplotlib
+def before():      # the helpers' CPU so far (their start and preparation), from /proc: not the report's
+    if sys.argv[3] != "ahead":
+        return 0.0
+    ticks = 0
+    for h in _ahead:
+        with open("/proc/%d/stat" % h.proc.pid) as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        ticks += int(fields[11]) + int(fields[12])
+    return ticks / os.sysconf("SC_CLK_TCK")
+ahead_cpu = before()
 k0 = resource.getrusage(resource.RUSAGE_CHILDREN)
 c0, t0 = time.process_time(), time.perf_counter()
 report.write_report(s, sys.argv[2])
 c1, t1 = time.process_time(), time.perf_counter()
 k1 = resource.getrusage(resource.RUSAGE_CHILDREN)
 print(json.dumps(dict(wall=t1 - t0, cpu=c1 - c0, helpers=(k1.ru_utime - k0.ru_utime) + (k1.ru_stime - k0.ru_stime),
-                      whole_cpu=time.process_time())))
+                      ahead=ahead_cpu, whole_cpu=time.process_time())))
 """
 
 
@@ -67,11 +82,13 @@ def main():
     ap.add_argument("--settle", type=float, default=3.0, help="seconds the helpers started ahead get to load")
     ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "kryflex_report_cost"))
     args = ap.parse_args()
-    trees = [("against", os.path.abspath(args.against), ("alone", "on call")),
+    trees = [("against", os.path.abspath(args.against), ("alone", "on call", "ahead")),
              ("this", ROOT, ("alone", "on call", "ahead"))]
     print("report of %s, %s UTC, load average %s" % (args.summary, time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
                                                     " ".join("%.1f" % x for x in os.getloadavg())), flush=True)
-    print("%-8s %-8s %8s %8s %8s %8s   load" % ("tree", "mode", "wall", "cpu", "helpers", "cpu sum"))
+    print("%-8s %-8s %8s %8s %8s %8s %8s   load" % ("tree", "mode", "wall", "cpu", "helpers", "of it", "cpu sum"))
+    print("(helpers: their whole CPU; of it: before write_report was called, their start and preparation while the "
+          "reduction would run; cpu sum: the report's own, this process's and the helpers' less that)")
     best = {}
     for rep in range(args.repeat):
         for name, tree, modes in trees:
@@ -80,8 +97,8 @@ def main():
                 r = run(tree, args.summary, out, mode, args.settle)
                 key = (name, mode)
                 best[key] = min(best.get(key, r["wall"]), r["wall"])
-                print("%-8s %-8s %8.2f %8.2f %8.2f %8.2f   %.1f" % (name, mode, r["wall"], r["cpu"], r["helpers"],
-                      r["cpu"] + r["helpers"], os.getloadavg()[0]), flush=True)
+                print("%-8s %-8s %8.2f %8.2f %8.2f %8.2f %8.2f   %.1f" % (name, mode, r["wall"], r["cpu"], r["helpers"],
+                      r["ahead"], r["cpu"] + r["helpers"] - r["ahead"], os.getloadavg()[0]), flush=True)
     ref = contents(os.path.join(args.work, "against_alone"))
     for name, _, modes in trees:
         for mode in modes:

@@ -49,6 +49,11 @@ def rank():
     return PETSc.COMM_WORLD.getRank()
 
 
+def size():
+    from petsc4py import PETSc
+    return PETSc.COMM_WORLD.getSize()
+
+
 def say(msg, stream=sys.stdout):
     """A line on rank 0. A reader that went away (kryflex info ... | head) silences the rest of the standard output
     instead of stopping rank 0 alone: the other ranks may still need it in collective calls."""

@@ -65,7 +65,8 @@ def run(argv):
         if rank() == 0 and draws_figures(scene):
             # its helper processes, where cores are free, load matplotlib while the reduction runs (report/helper.py)
             from ..report.helper import start_helpers
-            start_helpers()
+            start_helpers(ranks=common.size(), prepare={"band_hz": list(scene.band),
+                                                        "configurations": len(scene.configurations)})
 
         # the model check (kryflex check): its warnings before any work, also under -quiet
         health = collective(lambda: model_check(scene))

@@ -31,15 +31,18 @@ def plot_file_names(summary):
 
 def _render_plots(summary, plot_names):
     """Yield (file name, PNG bytes) for every figure of the report (summary: a Summary or its JSON dict)."""
-    for _, job in figure_jobs(summary, plot_names):
+    for _, job, _ in figure_jobs(summary, plot_names):
         yield from job()
 
 
-def figure_jobs(summary, plot_names):
-    """The report's figures as [(weight, job)]: job() yields (file name, PNG bytes) of one or more figures, weight is
+def figure_jobs(summary, plot_names, prepared=None):
+    """The report's figures as [(weight, job, kind)]: job() yields (file name, PNG bytes) of one or more figures, kind
+    names them as plots.prepared_figures does ("bode", "overview", "importance"; "moments", "frf_error", "paper"), weight is
     about its drawing time in units of one Bode plot drawn over its figure's fixed layer (plots._FixedLayer: about
-    40 ms for 450 frequencies). The same list, in the same order, for the same summary: the
-    figures can be shared among processes by their indices (report/helper.py)."""
+    25 ms for 450 frequencies on an idle core), as a helper draws them with its figures prepared (the Bode, overview
+    and importance figures: plots.prepared_figures, given as prepared, the reuse dict the jobs then draw on; without
+    it the first Bode plot and the overview cost about 5 units more each). The same list, in the same order, for the same summary: the figures can be shared among
+    processes by their indices (report/helper.py)."""
     c = _Context(summary)
     s = c.summary
     threshold = s.settings.keep_threshold if s.settings is not None else None
@@ -48,7 +51,7 @@ def figure_jobs(summary, plot_names):
     jobs = []
     # the Bode and importance figures left by one share for the next: a process that draws both shares (no helper, or
     # a helper's failure) builds each figure once
-    reuse = {}
+    reuse = {} if prepared is None else prepared
 
     def bode(labels):       # the configurations' pairs on one reused figure (plots.bode_pngs_on_grids)
         items, names = [], []
@@ -59,32 +62,32 @@ def figure_jobs(summary, plot_names):
                               f"{c.angle(label)}{c.g_mark(label)}: {c.entry_name((o, i))}, {c.model_name}"))
                 names.append(plot_names["bode"][(label, (o, i))])
         yield from zip(names, plots.bode_pngs_on_grids(items, reuse=reuse))
-    # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them; a job's
-    # first figure draws the fixed layer too
+    # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them; a process's
+    # first figure draws the fixed layer too, unless prepared
     halves = [c.labels[:(len(c.labels) + 1) // 2], c.labels[(len(c.labels) + 1) // 2:]]
-    jobs += [(1.5 + len(part) * len(c.entries), lambda part=part: bode(part)) for part in halves if part]
+    jobs += [(float(len(part) * len(c.entries)), lambda part=part: bode(part), "bode") for part in halves if part]
 
     def overview():
         o, i = c.dominant_entry
         panels = [(c.short_angle(l), arrays[l][0], arrays[l][1][:, o, i], arrays[l][2][:, o, i]) for l in c.labels]
-        yield "bode_overview.png", plots.figure_png_bytes(
-            plots.bode_overview_figure(panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}"))
-    jobs.append((1.0 + 2.0 * len(c.labels), overview))     # its panels' ticks, laid out twice (tight_layout)
+        yield "bode_overview.png", plots.bode_overview_png(
+            panels, f"{s.scene}: full vs reduced ({c.model_name}), {c.entry_name((o, i))}", reuse=reuse)
+    jobs.append((1.0 + 0.8 * len(c.labels), overview, "overview"))
 
     def importance(labels):     # the configurations' figures on one reused figure (plots.importance_pngs)
         items = [(s.krylov[label].frequency_hz, s.krylov[label].importance, s.krylov[label].kept,
                   f"Krylov mode importance, {c.angle(label)}{c.g_mark(label)}", threshold, s.band_hz)
                  for label in labels]
         yield from zip([plot_names["importance"][label] for label in labels], plots.importance_pngs(items, reuse=reuse))
-    # in two jobs as the Bode plots; a job's first figure builds its ticks
-    jobs += [(1.0 + 1.5 * len(part), lambda part=part: importance(part)) for part in halves if part]
+    # in two jobs as the Bode plots; a process's first figure builds its ticks, unless prepared
+    jobs += [(1.5 + 2.2 * len(part), lambda part=part: importance(part), "importance") for part in halves if part]
 
     def moments():
         series = [(f"single, {c.short_angle(l)}", s.reduced.moment_ratios[l], False) for l in c.labels]
         multi = (s.multi_angle.moment_ratios if s.multi_angle is not None else None) or {}
         series += [(f"multi, {c.short_angle(l)}", multi[l], True) for l in c.labels if l in multi]
         yield "moment_ratios.png", plots.figure_png_bytes(plots.moment_ratio_figure(series, RATIO_EXACT_TOL))
-    jobs.append((3.0, moments))
+    jobs.append((4.0, moments, "moments"))
 
     def rigid(label):       # the elastic measure's rigid part of the full response, when the summary has it
         f = s.frf[label]
@@ -96,8 +99,8 @@ def figure_jobs(summary, plot_names):
         yield "frf_error.png", plots.figure_png_bytes(plots.frf_error_figure(
             curves, s.accuracy, f"Relative {s.verdict.accuracy_measure or 'total'}-response error of the chosen model "
                                 f"({c.model_name})"))
-    jobs.append((2.5, frf_error))
+    jobs.append((4.0, frf_error, "frf_error"))
     paper = (c.s.get("paper") or {}).get("frf")
     if paper:
-        jobs.append((1.0 + 2.0 * len(paper), lambda: paper_figures(c.s)))      # an overview of its angles
+        jobs.append((1.0 + 2.0 * len(paper), lambda: paper_figures(c.s), "paper"))      # an overview of its angles
     return jobs

@@ -10,11 +10,20 @@ inherit); it imports only NumPy, matplotlib and kryflex.report (no compiled kryf
 one small figure to load its fonts, then waits for its work: the summary and its share on its standard input; it
 writes the PNG bytes to its standard output. kryflex reduce starts its helpers when the run starts
 (start_helpers), so their start-up (about half a second of a core each) overlaps the reduction instead of
-delaying the report; write_report without them starts one when it is called. A helper's figures are the very bytes
-this process would draw (the same code on the same data). If a helper cannot start or fails, this process draws
-its figures: the report is the same, only slower. A helper whose parent ends reads the end of its input and exits.
+delaying the report; it also tells them the scene's band and configurations, from which they build, on placeholder
+data while the reduction runs, the figures that need only those (plots.prepared_figures: the frequency axes' ticks and
+the Bode figure's fixed layer, most of what those figures cost when drawn first): each the Bode figure, one the
+overview and the other the importance figure (PREPARED_ROLES), and the figures of those kinds go to the helper that
+prepared them. write_report without them starts one when it is called, where a core is free (the load average of
+the last minute at least 0.9 below the cores this process may use). A helper's figures are the very bytes this
+process would draw (the same code on the same data). If a helper cannot start or fails, this process draws its
+figures: the report is the same, only slower. A helper whose parent ends reads the end of its input and exits.
 
-KRYFLEX_REPORT_HELPER=0 turns the helpers off (every figure drawn here); =1 starts them whatever the load.
+kryflex reduce starts its helpers whenever the cores this process may use outnumber the run's ranks, whatever the
+load average: a rule on the load average made the report's time depend on the minute before the run (its own
+previous run counts in it), and the helpers take little CPU that this process would not spend drawing (their start
+and the prepared figures, during the reduction). KRYFLEX_REPORT_HELPER=0 turns the helpers off (every figure drawn
+here); =1 starts them whatever the cores.
 """
 import os
 import pickle
@@ -24,15 +33,18 @@ import threading
 
 from .figures import figure_jobs
 
-# weights in figures.figure_jobs' units (about one Bode plot's drawing, 40 ms at 57k dofs): a helper started by the
-# report itself (an interpreter importing NumPy and matplotlib, about half a second) gets that much less work; this
-# process's own share of the report besides the figures (summary.json, report.md), and its import of matplotlib
+# weights in figures.figure_jobs' units (about one Bode plot's drawing, 25 ms on an idle core): a helper started by
+# the report itself (an interpreter importing NumPy and matplotlib, about half a second) gets that much less work;
+# this process's own share of the report besides the figures (summary.json, report.md), and its import of matplotlib
 # when it has not drawn a figure yet, count against it the same way
-HELPER_START_WEIGHT = 12.0
-MAIN_WRITE_WEIGHT = 4.0
-MAIN_IMPORT_WEIGHT = 10.0
-HELPER_MIN_WEIGHT = 12.0     # no helper for a lighter report: its start would cost more than it saves
+HELPER_START_WEIGHT = 20.0
+MAIN_WRITE_WEIGHT = 6.0
+MAIN_IMPORT_WEIGHT = 16.0
+HELPER_MIN_WEIGHT = 20.0     # no helper for a lighter report: its start would cost more than it saves
 HELPERS_AHEAD = 2            # helpers started ahead of the report (start_helpers)
+# what each helper started ahead prepares (plots.prepared_figures' kinds), in turn: both the Bode figure (each draws
+# Bode plots), one the overview and the other the importance figures, which helper_shares then gives to it
+PREPARED_ROLES = (("bode", "overview"), ("bode", "importance"))
 
 _ahead = []                  # the helpers start_helpers started, waiting for their work
 
@@ -72,8 +84,9 @@ class _Helper:
     """One helper process: started at once (it imports and warms up, then waits); send() gives it its share,
     result() is its [(name, bytes)], None if it failed."""
 
-    def __init__(self, start_weight):
+    def __init__(self, start_weight, prepare=None):
         self.start_weight = start_weight       # what its start still costs when it is given work (figures' units)
+        self.prepared = set(prepare.get("kinds", ())) if prepare is not None else set()   # the kinds it prepares
         env = dict(os.environ, KRYFLEX_MUMPS="plain")
         env["PYTHONPATH"] = _package_root() + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         self.proc = subprocess.Popen([sys.executable, "-c", "from kryflex.report.helper import main; main()"],
@@ -81,6 +94,13 @@ class _Helper:
                                      env=env, start_new_session=True)   # a terminal's Ctrl-C is for the run: it
                                                                          # stops the helper (stop() below)
         self.writer = None
+        if prepare is not None:
+            # a few hundred bytes: the pipe takes them at once, the helper reads them after its warm-up
+            try:
+                self.proc.stdin.write(pickle.dumps(("prepare", prepare), protocol=pickle.HIGHEST_PROTOCOL))
+                self.proc.stdin.flush()
+            except OSError:     # the helper died: result() says so
+                pass
 
     def send(self, data):
         # written by a thread: the pipe holds less than the summary, and the helper reads it only once started
@@ -119,14 +139,18 @@ class _Helper:
                 pass
 
 
-def start_helpers():
-    """Start the report's helpers now (kryflex reduce, as the run starts), where cores are free: they load NumPy and
-    matplotlib while the reduction runs and wait for the figures. Returns how many were started."""
+def start_helpers(ranks=1, prepare=None):
+    """Start the report's helpers now (kryflex reduce, as the run starts), when the cores this process may use
+    outnumber the run's ranks (or KRYFLEX_REPORT_HELPER=1): they load NumPy and matplotlib while the reduction runs
+    and wait for the figures. prepare: {"band_hz": [low, high], "configurations": n}, the scene's, from which each
+    helper prepares its figures of PREPARED_ROLES meanwhile (plots.prepared_figures). Returns how many were started."""
     stop_helpers()
-    if _core_free():
-        for _ in range(HELPERS_AHEAD):
+    wanted = _wanted()
+    if wanted == "on" or (wanted == "auto" and _idle_cores()[0] > ranks):
+        for k in range(HELPERS_AHEAD):
+            spec = None if prepare is None else dict(prepare, kinds=PREPARED_ROLES[k % len(PREPARED_ROLES)])
             try:
-                _ahead.append(_Helper(start_weight=0.0))
+                _ahead.append(_Helper(start_weight=0.0, prepare=spec))
             except OSError:
                 break
     return len(_ahead)
@@ -157,10 +181,10 @@ def _take_helpers():
 def helper_shares(jobs, helpers):
     """The indices of the jobs each helper draws ([set] per helper; the rest are this process's): the heaviest jobs
     first to whichever process has the least so far, this process starting with its writing (and its import of
-    matplotlib when it has drawn nothing yet), each helper with what its start still costs. With a helper per core
-    this process draws nothing (it writes the rest meanwhile). No helper for a report lighter than
-    HELPER_MIN_WEIGHT."""
-    total = sum(w for w, _ in jobs)
+    matplotlib when it has drawn nothing yet), each helper with what its start still costs; a job of a kind some
+    helpers prepared (their prepared set, start_helpers) to the least loaded of those. With a helper per core this
+    process draws nothing (it writes the rest meanwhile). No helper for a report lighter than HELPER_MIN_WEIGHT."""
+    total = sum(w for w, _, _ in jobs)
     if not helpers or total < HELPER_MIN_WEIGHT:
         return [set() for _ in helpers]
     if len(helpers) >= _idle_cores()[0]:
@@ -170,7 +194,8 @@ def helper_shares(jobs, helpers):
     loads += [h.start_weight for h in helpers]
     shares = [set() for _ in helpers]
     for k in sorted(range(len(jobs)), key=lambda k: -jobs[k][0]):
-        who = min(range(len(loads)), key=lambda p: (loads[p], -p))      # a tie to a helper
+        ready = [p + 1 for p, h in enumerate(helpers) if jobs[k][2] in getattr(h, "prepared", ())]
+        who = min(ready or range(len(loads)), key=lambda p: (loads[p], -p))      # a tie to a helper
         loads[who] += jobs[k][0]
         if who:
             shares[who - 1].add(k)
@@ -247,16 +272,31 @@ def _warm_up():
     fig.canvas.draw()
 
 
+def _prepared(spec):
+    """plots.prepared_figures for the spec start_helpers sent, None if it cannot be used (the figures are then made
+    when drawn, as without it)."""
+    from . import plots
+    try:
+        return plots.prepared_figures(spec["band_hz"], spec["configurations"], spec.get("kinds", plots.PREPARED_KINDS))
+    except Exception:  # noqa: BLE001 - a preparation only: the figures are drawn the same without it
+        return None
+
+
 def main():
-    """The helper: loads what it draws with, then reads its job indices and (summary, plot names), pickled, on
-    standard input; [(name, PNG bytes)] pickled on standard output."""
+    """The helper: loads what it draws with, then reads on standard input, pickled: optionally ("prepare", spec) (the
+    figures it prepares before its work), its job indices and (summary, plot names); writes [(name, PNG bytes)]
+    pickled on standard output."""
     _warm_up()
+    prepared = None
     try:
         share = pickle.load(sys.stdin.buffer)
+        if isinstance(share, tuple) and share and share[0] == "prepare":
+            prepared = _prepared(share[1])
+            share = pickle.load(sys.stdin.buffer)
         summary, plot_names = pickle.load(sys.stdin.buffer)
     except EOFError:         # the run ended (failed, or drew no figures) before sending work
         sys.exit(0)
-    jobs = figure_jobs(summary, plot_names)
+    jobs = figure_jobs(summary, plot_names, prepared)
     out = [item for k in share for item in jobs[k][1]()]
     sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
     sys.stdout.buffer.flush()

@@ -302,6 +302,60 @@ def bode_overview_figure(panels, suptitle):
     return fig
 
 
+def bode_overview_png(panels, suptitle, dpi=DPI, reuse=None):
+    """PNG bytes of bode_overview_figure(panels, suptitle), drawn on the overview left in reuse (a dict, as
+    bode_pngs_on_grids') when it has as many panels over the same bands: its curves, titles and y-limits replaced, its
+    frequency axes' ticks (some 60 to 70 per panel on a log axis, most of a new overview's drawing time) kept. The same
+    pixels as a new figure (the Bode plots' reuse, panel by panel). A panel whose response is identically zero gets a
+    new figure (bode_overview_figure notes it on the axes)."""
+    reuse = {} if reuse is None else reuse
+    spans = [(float(np.min(freq)), float(np.max(freq))) if np.size(freq) else None for _, freq, _, _ in panels]
+    fig, key = reuse.get("overview", (None, None))
+    if (fig is None or key != spans
+            or any(all(not np.any(np.asarray(c) != 0) for c in (full, red)) for _, _, full, red in panels)):
+        fig = bode_overview_figure(panels, suptitle)
+    else:
+        for ax, (title, freq, full, reduced) in zip(fig.axes, panels):
+            for line, y in zip(ax.lines, (magnitude_db(full), magnitude_db(reduced))):
+                line.set_data(np.asarray(freq, dtype=float), y)
+            _set_title(ax, title, fontsize="medium")
+            ax.relim()
+            ax.autoscale_view(scalex=False)
+        fig.suptitle(suptitle)
+    reuse["overview"] = (fig, spans)
+    return figure_png_bytes(fig, dpi)
+
+
+PREPARED_KINDS = ("bode", "overview", "importance")
+
+
+def prepared_figures(band_hz, configurations, kinds=PREPARED_KINDS, points=449, dpi=DPI):
+    """A reuse dict (bode_pngs_on_grids, bode_overview_png, importance_pngs) holding, of kinds, a Bode figure, an
+    overview of `configurations` panels over band_hz and an importance figure, each drawn once on placeholder data: their
+    frequency axes' ticks built (the importance axis's over seven decades from the band's bottom, more than the Krylov
+    modes usually span, so that their figures find their ticks made), the Bode figure's fixed layer rendered, the
+    fonts loaded, before the report's data exist (report/helper.py draws them while the reduction runs). A figure
+    whose band or panel count turns out different is simply made anew when used."""
+    low, high = float(band_hz[0]), float(band_hz[1])
+    freq = np.geomspace(low, high, points) if 0 < low < high else np.linspace(low, high, points)
+    freq[0], freq[-1] = low, high                   # the spans compared when used: the band's own numbers
+    corner = np.sqrt(low * high) if low > 0 else max(high, 1.0)
+    curve = 1.0 / (1.0 + 1j * freq / corner)           # any response that is not zero: the curves are replaced
+    reuse = {}
+    if "bode" in kinds:
+        for _ in bode_pngs_on_grids([(freq, curve, 1.01 * curve, "prepared")], dpi, reuse):
+            pass
+    if "overview" in kinds:
+        bode_overview_png([("prepared", freq, curve, 1.01 * curve)] * max(int(configurations), 1), "prepared", dpi,
+                          reuse)
+    if "importance" in kinds and low > 0:
+        modes = np.geomspace(low, low * 1e7, 24)
+        for _ in importance_pngs([(modes, np.linspace(1.0, 0.01, modes.size), modes < high, "prepared", 0.01,
+                                   [low, high])], dpi, reuse):
+            pass
+    return reuse
+
+
 def _overview_margins(ncols, nrows, width, height):
     """subplots_adjust's fractions for OVERVIEW_INCHES on a width x height (inches) figure of nrows x ncols panels."""
     m = OVERVIEW_INCHES

@@ -127,3 +127,35 @@ def test_overview_margins_hold_its_labels(npanels):
         assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1
         assert not box.overlaps(title)
         assert not any(box.overlaps(other) for other in boxes[k + 1:])
+
+
+def test_prepared_figures_give_the_same_pngs():
+    """The Bode figure, the overview and the importance figure a helper prepares on placeholder data before the
+    report's data exist (plots.prepared_figures) draw the PNGs of a new figure per plot: the prepared band and panel
+    count used, a band or a panel count that differs (a new figure then), an overview with a panel identically zero,
+    importance figures over fewer and more decades than prepared."""
+    f, pairs = responses()
+    band = (float(f[0]), float(f[-1]))
+    items = [(f, full, red, title) for full, red, title in pairs]
+    prepared = plots.prepared_figures(band, 3)
+    assert set(prepared) == {"bode", "overview", "importance"}
+    reused = list(plots.bode_pngs_on_grids(items, reuse=prepared))
+    fresh = [plots.figure_png_bytes(plots.bode_figure(*item)) for item in items]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+    live = [p for p in pairs if np.any(p[0] != 0)]
+    overviews = []
+    for panels in ([("%d deg" % (30 * k), f, full, red) for k, (full, red, _) in enumerate(live)],   # as prepared
+                   [("one", f, live[0][0], live[0][1])],                                             # fewer panels
+                   [("g", f[20:], live[0][0][20:], live[0][1][20:])] * 3,                            # another band
+                   [("%d" % k, f, full, red) for k, (full, red, _) in enumerate(pairs[:3])]):       # a zero panel
+        ours = plots.bode_overview_png(panels, "overview: full vs reduced", reuse=prepared)
+        assert ours == plots.figure_png_bytes(plots.bode_overview_figure(panels, "overview: full vs reduced"))
+        overviews.append(ours)
+    assert len(set(overviews)) == len(overviews)       # the comparisons are not vacuous
+    imp = [([0.05, 0.9, 3.0, 45.0, 700.0], [1.0, 0.3, 0.02, 1e-4, 0.5], [True, True, False, False, True], "a", 0.01,
+            [0.1, 30.0]),
+           (list(np.geomspace(0.2, 4e5, 30)), list(np.linspace(1.0, 0.0, 30)), [True] * 10 + [False] * 20, "b", None,
+            [0.1, 30.0])]
+    reused = list(plots.importance_pngs(imp, reuse=prepared))
+    fresh = [plots.figure_png_bytes(plots.importance_figure(*item)) for item in imp]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(imp)

@@ -23,9 +23,10 @@ def written(summary, out, monkeypatch, mode):
 
 
 class _Started:
-    """A stand-in for a helper process in the share computation: what its start still costs."""
-    def __init__(self, start_weight=0.0):
+    """A stand-in for a helper process in the share computation: what its start still costs, what it prepared."""
+    def __init__(self, start_weight=0.0, prepared=()):
         self.start_weight = start_weight
+        self.prepared = set(prepared)
 
 
 def test_helper_shares_split_the_figures(summary, monkeypatch):
@@ -42,6 +43,13 @@ def test_helper_shares_split_the_figures(summary, monkeypatch):
     weight = {k: jobs[k][0] for k in everything}
     assert abs(sum(weight[k] for k in a) - sum(weight[k] for k in b)) <= max(weight.values())
     assert helper.helper_shares(jobs, []) == []
+    # the figures a helper prepared (start_helpers' roles) go to it, the rest by weight
+    kinds = {k: jobs[k][2] for k in everything}
+    a, b = helper.helper_shares(jobs, [_Started(prepared=r) for r in helper.PREPARED_ROLES])
+    assert a and b and not a & b and a | b == everything
+    assert "overview" in {kinds[k] for k in a} and "importance" not in {kinds[k] for k in a}
+    assert "importance" in {kinds[k] for k in b} and "overview" not in {kinds[k] for k in b}
+    assert abs(sum(weight[k] for k in a) - sum(weight[k] for k in b)) <= max(weight.values())
 
 
 def test_helpers_are_not_started_when_turned_off(monkeypatch):
@@ -50,11 +58,29 @@ def test_helpers_are_not_started_when_turned_off(monkeypatch):
     assert helper._take_helpers() == []
 
 
+def test_helpers_are_started_where_the_run_leaves_a_core(monkeypatch):
+    """kryflex reduce's rule: a core beyond the run's ranks, whatever the load average (it made the report's time
+    depend on the minute before the run)."""
+    monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "auto")
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (2, -5.0))        # a loaded machine: 7 processes running
+    assert helper.start_helpers(ranks=1) == helper.HELPERS_AHEAD
+    helper.stop_helpers()
+    assert helper.start_helpers(ranks=2) == 0
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (1, 0.9))
+    assert helper.start_helpers(ranks=1) == 0
+    assert helper._ahead == []
+
+
 def test_helpers_started_ahead_give_the_same_files(summary, tmp_path, monkeypatch):
-    """kryflex reduce starts the helpers as the run starts; the report takes them (none left afterwards)."""
+    """kryflex reduce starts the helpers as the run starts, telling them the band and the configurations (their
+    figures prepared meanwhile); the report takes them (none left afterwards)."""
     alone = written(summary, tmp_path / "alone", monkeypatch, "0")
     monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "1")
-    assert helper.start_helpers() == helper.HELPERS_AHEAD
+    labels = list(summary["frf"])
+    freq = summary["frf"][labels[0]]["freq_hz"]
+    assert helper._prepared({"band_hz": [freq[0], freq[-1]], "configurations": len(labels)}) is not None
+    assert helper.start_helpers(prepare={"band_hz": [freq[0], freq[-1]], "configurations": len(labels)}) \
+        == helper.HELPERS_AHEAD
     started = [h.proc for h in helper._ahead]
     pending = report.begin_report(summary, str(tmp_path / "ahead"))
     assert helper._ahead == [] and len(pending.rendering.helpers) >= 1      # taken, and given work

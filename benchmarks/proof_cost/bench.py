@@ -3,7 +3,7 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check] [--block-eigen] [--slepc-eigen] [--other TREE]
+        [--direct-check] [--block-eigen] [--slepc-eigen] [--other TREE [--bare-only]]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
@@ -17,7 +17,8 @@ the two's ratio. --block-eigen adds a run of the default with the eigensolves by
 (-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
 of runs taken together, and the CPU seconds beside the wall. --other TREE runs that tree's build (e.g. /work/main)
-and this one's alternately, bare then default, and prints each beside the other with its ratios. The report's seconds
+and this one's alternately, bare then default, and prints each beside the other with its ratios (--bare-only: the bare runs alone, and whether the two trees'
+reduced models are the same bit for bit). The report's seconds
 run from the arrival of its progress line to the process's end (run()).
 """
 import argparse
@@ -151,8 +152,11 @@ def compare_trees(scene, refine, rep, args):
     got = {}
     for name, root in trees:
         bare = run(scene, os.path.join(args.work, "bare_%s_%s" % (name, refine)), ["-kf_verify", "false"], root)
-        full = run(scene, os.path.join(args.work, "default_%s_%s" % (name, refine)), [], root)
+        full = None if args.bare_only else run(scene, os.path.join(args.work, "default_%s_%s" % (name, refine)), [], root)
         got[name] = (bare, full)
+    if args.bare_only:
+        compare_bare(got, trees, refine, rep, args)
+        return
     print("\nrefine %s (%s dofs), run %d (%s first)" % (refine, got["this"][1]["dofs"], rep + 1, trees[0][0]))
     print("%-13s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
                                                              "verify", "eigen", "direct", "search", "report"))
@@ -168,6 +172,52 @@ def compare_trees(scene, refine, rep, args):
     print("this / other: default wall %.3f, default CPU %.3f, report %.3f" % (
         got["this"][1]["wall"] / got["other"][1]["wall"], got["this"][1]["cpu"] / got["other"][1]["cpu"],
         got["this"][1]["report"] / got["other"][1]["report"]))
+
+
+def compare_bare(got, trees, refine, rep, args):
+    """--bare-only with --other: the two trees' bare runs, their ratios, CPU seconds, and whether the reduced models
+    are the same (summary.json's sizes and errors, reduced.h5's arrays bit for bit)."""
+    print("\nrefine %s (%s dofs), run %d (%s first), load average %s" % (
+        refine, got["this"][0]["dofs"], rep + 1, trees[0][0], " ".join("%.1f" % x for x in os.getloadavg())))
+    print("%-13s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
+                                                             "verify", "eigen", "direct", "search", "report"))
+    for name, _ in trees:
+        bare = got[name][0]
+        show("%s bare" % name, bare, bare["factorization"] + bare["solves"])
+    this, other = got["this"][0], got["other"][0]
+    print("this / other: bare wall %.3f, bare CPU %.3f; outside factorization + solves: wall %.2f / %.2f s; "
+          "reduced.h5 %s" % (this["wall"] / other["wall"], this["cpu"] / other["cpu"],
+                             this["wall"] - this["factorization"] - this["solves"],
+                             other["wall"] - other["factorization"] - other["solves"],
+                             "identical" if same_model(os.path.join(args.work, "bare_this_%s" % refine),
+                                                       os.path.join(args.work, "bare_other_%s" % refine))
+                             else "DIFFERENT"))
+
+
+def same_model(a, b):
+    """Whether two output folders' reduced.h5 hold the same datasets, bit for bit, and summary.json the same error."""
+    import h5py
+    import numpy as np
+    with open(os.path.join(a, "summary.json")) as f, open(os.path.join(b, "summary.json")) as g:
+        if json.load(f).get("error_max") != json.load(g).get("error_max"):
+            return False
+    with h5py.File(os.path.join(a, "reduced.h5"), "r") as fa, h5py.File(os.path.join(b, "reduced.h5"), "r") as fb:
+        na, nb = [], []
+        fa.visit(na.append)
+        fb.visit(nb.append)
+        if sorted(na) != sorted(nb):
+            return False
+        for n in na:
+            if isinstance(fa[n], h5py.Dataset):
+                x, y = np.asarray(fa[n][()]), np.asarray(fb[n][()])
+                if x.dtype != y.dtype or x.shape != y.shape:
+                    return False
+                if x.dtype == object:     # names: their values (the array's bytes are pointers)
+                    if x.tolist() != y.tolist():
+                        return False
+                elif x.tobytes() != y.tobytes():
+                    return False
+    return True
 
 
 def main():
@@ -187,11 +237,16 @@ def main():
     ap.add_argument("--slepc-eigen", action="store_true",
                     help="a run of the default with SLEPc's Krylov-Schur eigensolves (-kf_verify_eigen_method slepc, "
                          "the method before the block Krylov one), beside the block path, and the two's ratio")
+    ap.add_argument("--bare-only", action="store_true",
+                    help="with --other: the bare runs alone (-kf_verify false), each tree's beside the other's, and "
+                         "whether their reduced models are the same bit for bit")
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "proof_cost"))
     ap.add_argument("--other", metavar="TREE",
                     help="another kryflex tree (its build/kryflex) run alternately with this one, bare and default, "
                          "in each repeat: the two builds timed side by side (e.g. --other /work/main)")
     args = ap.parse_args()
+    if args.bare_only and not args.other:
+        ap.error("--bare-only compares two trees: give --other TREE")
     os.makedirs(args.work, exist_ok=True)
     print("proof cost, %s UTC, load average %s" % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
                                                     " ".join("%.1f" % x for x in os.getloadavg())))

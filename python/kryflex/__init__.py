@@ -10,7 +10,8 @@ kryflex.reduce(scene) does the same in one call and returns the same Reduction (
 Importing kryflex starts nothing: PETSc and SLEPc start on first use, or from kryflex.init(argv) with a command
 line's PETSc options (the kryflex command does that). It only loads Debian's SCOTCH build of MUMPS where installed, so
 that PETSc, loaded after it, can order by nested dissection: import kryflex before petsc4py (docs/guide/large-models.md, "Nested
-dissection"). Runs under mpirun with mpi4py.
+dissection"), and, in a process not started by mpirun, sets Open MPI's singleton defaults until PETSc has started
+(kryflex._runtime.MPI_SINGLETON_DEFAULTS: no daemon, no fabric probe). Runs under mpirun with mpi4py.
 
 The package, in the order data flows through it:
     io/        scenes (YAML, in-memory matrices), body files, Nastran DMIG, Matrix Market, converters
@@ -24,9 +25,10 @@ The package, in the order data flows through it:
 """
 import importlib
 
-from ._runtime import init, load_mumps_with_orderings
+from ._runtime import init, load_mumps_with_orderings, mpi_singleton_defaults
 
 load_mumps_with_orderings()
+mpi_singleton_defaults()
 
 __version__ = "0.1.0"
 

@@ -58,6 +58,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSceneGetInfo(KFScene, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*, PetscInt*)
     PetscErrorCode KFSceneGetBodyInfo(KFScene, PetscInt, const char**, PetscInt*, PetscInt*)
     PetscErrorCode KFSceneGetBodyMatrices(KFScene, PetscInt, PetscMat*, PetscMat*, PetscMat*, PetscMat*)
+    PetscErrorCode KFSceneGetBodySymmetric(KFScene, PetscInt, PetscBool*, PetscBool*)
     PetscErrorCode KFSceneView(KFScene, PetscViewer)
     PetscErrorCode KFMatLoadFile(MPI_Comm, const char*, PetscMat*)
 

@@ -17,6 +17,16 @@ import sys
 
 _started = False
 _collect_registered = False
+_mpi_defaults_added = []
+
+# A process started alone (not by mpirun) is an MPI singleton. Open MPI's defaults cost it about half a second of
+# wall before PETSc starts, without CPU: it starts a daemon (orted) to support MPI_Comm_spawn, which kryflex never
+# calls, and selecting the point-to-point layer loads the Omni-Path library, whose constructor polls for adapters in
+# short sleeps. One process exchanges no messages, so neither is of use; under mpirun the launcher's settings stand.
+# Variables already set win (OMPI_MCA_ess_singleton_isolated=0 for a program that spawns processes).
+MPI_SINGLETON_DEFAULTS = {"OMPI_MCA_pml": "ob1", "OMPI_MCA_ess_singleton_isolated": "1"}
+# what Open MPI's, MPICH's and PMIx launchers set in the processes they start
+MPI_LAUNCHED = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE")
 
 # Debian's MUMPS with SCOTCH and PT-SCOTCH orderings (package libmumps-ptscotch-5.5, installed by scripts/setup): the
 # same MUMPS 5.5.1 as the plain build PETSc links, with nested dissection compiled in. Loaded into the process's
@@ -37,6 +47,23 @@ def load_mumps_with_orderings():
     return True
 
 
+def mpi_singleton_defaults():
+    """Sets MPI_SINGLETON_DEFAULTS in the environment where MPI will start as a singleton, until init() has started
+    it (they are then taken out again: a program kryflex's process starts, mpirun among them, does not inherit them)."""
+    if "petsc4py.PETSc" in sys.modules or "mpi4py.MPI" in sys.modules or any(v in os.environ for v in MPI_LAUNCHED):
+        return
+    for name, value in MPI_SINGLETON_DEFAULTS.items():
+        if name not in os.environ:
+            os.environ[name] = value
+            _mpi_defaults_added.append(name)
+
+
+def _drop_mpi_defaults():
+    """MPI has started and read them: out of the environment again."""
+    while _mpi_defaults_added:
+        os.environ.pop(_mpi_defaults_added.pop(), None)
+
+
 def init(argv=None):
     """Initializes PETSc and SLEPc. argv: a command line (program name, then options such as -kf_moments 12 or
     -log_view); None: no options. Only the first call starts PETSc; when PETSc is already running (started by
@@ -45,6 +72,7 @@ def init(argv=None):
     options = [str(a) for a in (argv or [])[1:]]
     if _started or "petsc4py.PETSc" in sys.modules:
         _started = True
+        _drop_mpi_defaults()
         _keep_python_signals()
         _collect_at_exit()
         if options:
@@ -56,6 +84,7 @@ def init(argv=None):
     slepc4py.init([program, "-no_signal_handler", "true"] + options)   # a value: PETSc would read the next word
     from slepc4py import SLEPc  # noqa: F401  (starts SLEPc, and PETSc with it)
     _started = True
+    _drop_mpi_defaults()
     _collect_at_exit()
 
 

@@ -90,6 +90,7 @@ PETSC_EXTERN PetscErrorCode KFSceneSetUp(KFScene);
 PETSC_EXTERN PetscErrorCode KFSceneGetInfo(KFScene, PetscInt *nbodies, PetscInt *njoints, PetscInt *nrevolute, PetscInt *nsystem, PetscInt *ninputs, PetscInt *noutputs);
 PETSC_EXTERN PetscErrorCode KFSceneGetBodyInfo(KFScene, PetscInt body, const char **name, PetscInt *ndofs, PetscInt *nnodes);
 PETSC_EXTERN PetscErrorCode KFSceneGetBodyMatrices(KFScene, PetscInt body, Mat *M, Mat *K, Mat *G, Mat *Ht);
+PETSC_EXTERN PetscErrorCode KFSceneGetBodySymmetric(KFScene, PetscInt body, PetscBool *M, PetscBool *K);
 PETSC_EXTERN PetscErrorCode KFSceneView(KFScene, PetscViewer);
 
 /* Body matrices from files: PETSc binary (*.petsc, *.bin, *.dat) or Matrix Market (*.mtx), loaded in parallel. */

@@ -43,6 +43,7 @@ typedef struct {
   PetscInt    *spring_dof; /* springs to ground, added to the diagonal of K at set-up */
   PetscReal   *spring_k;
   PetscBool    own_K;      /* K is the scene's copy with the springs added */
+  PetscBool    exact_M, exact_K; /* found exactly symmetric at set-up (springs, on the diagonal, keep K so) */
 } KFBodyData;
 
 typedef struct {
@@ -66,6 +67,7 @@ struct _KFSceneOps {
   PetscErrorCode (*view)(KFScene, PetscViewer);
 };
 PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
+PETSC_INTERN PetscErrorCode KFMatCheckSymmetricExact(Mat, const char[], PetscReal, PetscBool *); /* src/body/load.c */
 PETSC_INTERN PetscErrorCode KFGetStartTime(PetscLogDouble *); /* src/util/package.c: when KFInitialize first ran */
 
 struct _n_KFScene {
@@ -172,7 +174,7 @@ typedef struct {
 } KFBodyDirections;
 PETSC_INTERN PetscErrorCode KFBodyCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **);
 PETSC_INTERN PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **);
-PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyDirections[], const PetscInt counts[], KFReducedModel *);
+PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyDirections[], const PetscInt counts[], PetscBool with_map, KFReducedModel *);
 /* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */
 PETSC_INTERN PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis);
 PETSC_INTERN PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis, PetscInt body, Mat Pb, Mat X, PetscReal T[]);

@@ -262,8 +262,9 @@ static PetscErrorCode KFCongruence(PetscInt v, PetscInt k, const PetscReal A[], 
   PetscFunctionReturn(0);
 }
 
-/* body R of the compressed model: body B projected on W (v x k, M_b-orthonormal, holding B's rigid motions) */
-static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t, PetscInt k, const PetscReal W[], KFModelBody *R)
+/* body R of the compressed model: body B projected on W (v x k, M_b-orthonormal, holding B's rigid motions); its map
+   to the full dofs only when with_map (the product with the map is most of the projection's work) */
+static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t, PetscInt k, const PetscReal W[], PetscBool with_map, KFModelBody *R)
 {
   const PetscInt v = B->v, ni = B->ninterfaces;
   PetscReal     *MR;
@@ -291,7 +292,7 @@ static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t
   KFAtB(v, k, 6, W, v, MR, v, R->rigid);
   PetscCall(PetscFree(MR));
   R->map = NULL;
-  if (B->map) {
+  if (B->map && with_map) {
     PetscCall(PetscMalloc1(B->full_dofs * k, &R->map));
     KFAB(B->full_dofs, v, k, B->map, B->full_dofs, W, v, R->map, B->full_dofs);
   }
@@ -301,9 +302,10 @@ static PetscErrorCode KFProjectBody(const KFModelBody *B, PetscInt a, PetscInt t
 /*
   KFReducedModelCompress - the model whose body b keeps the kept columns of dirs[b] and its first counts[b] directions
   (counts NULL: all of them): each reduced body projected on them; names, joints, damping, settings and reduction
-  angles as m's. The new model lives on m's communicator.
+  angles as m's. The new model lives on m's communicator. with_map: the bodies' maps to the full dofs too (where m
+  has them); a candidate that is only reassembled and measured needs none.
 */
-PetscErrorCode KFReducedModelCompress(KFReducedModel m, const KFBodyDirections dirs[], const PetscInt counts[], KFReducedModel *out)
+PetscErrorCode KFReducedModelCompress(KFReducedModel m, const KFBodyDirections dirs[], const PetscInt counts[], PetscBool with_map, KFReducedModel *out)
 {
   KFReducedModel c;
   const PetscInt nb = m->nb, nj = m->nj, a = m->ninputs, t = m->noutputs;
@@ -331,7 +333,7 @@ PetscErrorCode KFReducedModelCompress(KFReducedModel m, const KFBodyDirections d
     const PetscInt          k = d->nkeep + (counts ? PetscMin(PetscMax(counts[b], 0), d->ndir) : d->ndir);
 
     PetscCheck(d->v == m->bodies[b].v, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_INCOMP, "body '%s': directions of %" PetscInt_FMT " coordinates for a body of %" PetscInt_FMT ": make them from this model", m->bodies[b].name, d->v, m->bodies[b].v);
-    PetscCall(KFProjectBody(&m->bodies[b], a, t, k, d->W, &c->bodies[b]));
+    PetscCall(KFProjectBody(&m->bodies[b], a, t, k, d->W, with_map, &c->bodies[b]));
   }
   *out = c;
   PetscFunctionReturn(0);

@@ -15,7 +15,7 @@ static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint eva
 
   PetscFunctionBegin;
   PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
-  PetscCall(KFReducedModelCompress(m, d, counts, &c));
+  PetscCall(KFReducedModelCompress(m, d, counts, PETSC_FALSE, &c)); /* measured, then dropped: no maps */
   PetscCall(KFReducedModelGetInfo(c, &nb, NULL, NULL, NULL, NULL, NULL));
   *size = 0;
   for (PetscInt b = 0; b < nb; b++) {
@@ -339,7 +339,7 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     KFReducedModel c;
     char           text[32];
 
-    PetscCall(KFReducedModelCompress(*model, best, NULL, &c));
+    PetscCall(KFReducedModelCompress(*model, best, NULL, PETSC_TRUE, &c));
     PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
     PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
     if (!bkept) PetscCall(KFReducedModelSetSetting(c, "static_exact", "false")); /* a saved model says its L^0 is approximated */

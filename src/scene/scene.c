@@ -525,6 +525,17 @@ PetscErrorCode KFSceneGetBodyMatrices(KFScene s, PetscInt body, Mat *M, Mat *K, 
   PetscFunctionReturn(0);
 }
 
+/* Whether the body's M and K were found exactly symmetric (A = A^T, entry for entry) when the scene was set up */
+PetscErrorCode KFSceneGetBodySymmetric(KFScene s, PetscInt body, PetscBool *M, PetscBool *K)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSceneSetUp(s));
+  PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
+  if (M) *M = s->bodies[body].exact_M;
+  if (K) *K = s->bodies[body].exact_K;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSceneView(KFScene s, PetscViewer viewer)
 {
   PetscFunctionBegin;

@@ -45,9 +45,9 @@ static PetscErrorCode KFBodyCheck(KFScene s, KFBodyData *B)
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(what, sizeof(what), "mass matrix M of body '%s'", B->name));
-  PetscCall(KFMatCheckSymmetric(B->M, what, 1e-10));
+  PetscCall(KFMatCheckSymmetricExact(B->M, what, 1e-10, &B->exact_M));
   PetscCall(PetscSNPrintf(what, sizeof(what), "stiffness matrix K of body '%s'", B->name));
-  PetscCall(KFMatCheckSymmetric(B->K, what, 1e-10));
+  PetscCall(KFMatCheckSymmetricExact(B->K, what, 1e-10, &B->exact_K));
   PetscCall(MatGetOwnershipRange(B->M, &rs, &re));
   PetscCall(MatGetOwnershipRange(B->K, &rsK, &reK));
   PetscCheck(rs == rsK && re == reK, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP, "body '%s': M and K are distributed differently over the ranks; load them with the same layout", B->name);

@@ -143,6 +143,12 @@ cdef class CScene:
         check(KFSceneGetBodyMatrices(self.s, b, &M, &K, &G, &Ht))
         return wrap_mat(M, True), wrap_mat(K, True), wrap_mat(G, True), wrap_mat(Ht, True)
 
+    def body_symmetric(self, PetscInt b):
+        """(M, K) of body b found exactly symmetric (A = A^T entry for entry) when the scene was set up."""
+        cdef PetscBool m, k
+        check(KFSceneGetBodySymmetric(self.s, b, &m, &k))
+        return bool(m), bool(k)
+
     def set_name(self, name):
         check(KFSceneSetName(self.s, cstr(name, "scene name")))
 

@@ -5,7 +5,8 @@ transposed partner, an entry without a partner (above or below the diagonal) cou
 A - A^T, and on several ranks the couplings between ranks against their transpose.  Its refusal message prints the
 measured ratio; here that figure is compared with the ratio NumPy computes from the dense matrix, for an entry whose
 partner differs, entries without a partner, and both across the ranks' boundary (2 ranks); a symmetric matrix with a
-rounding-level difference passes.
+rounding-level difference passes, and only an exactly symmetric one is recorded as such (the model check reads that
+instead of comparing the matrix with its transpose again).
 
     mpiexec -n 2 python tests/python/model/test_symmetry_check.py CASE   (the 2-rank half: prints the ratio or "ok")
 """
@@ -58,8 +59,9 @@ def stiffness(case):
     return K
 
 
-def measured_ratio(case):
-    """The ratio the check reports (None when it accepts the matrix)."""
+def measured_ratio(case, exact=None):
+    """The ratio the check reports (None when it accepts the matrix); exact: a list given the set-up's (M, K) found
+    exactly symmetric, when it accepts."""
     from kryflex import _core
     s = _core.CScene()
     b = s.add_body("plate", petsc_matrix(np.eye(N)), petsc_matrix(stiffness(case)), [1, 2, 3, 4],
@@ -75,6 +77,8 @@ def measured_ratio(case):
                           str(e))
         assert found, str(e)
         return float(found.group(1))
+    if exact is not None:
+        exact.extend(s.body_symmetric(b))
     return None
 
 
@@ -94,22 +98,34 @@ def test_ratio_matches_numpy_serial(case):
 
 def test_symmetric_within_tolerance_passes():
     assert 0 < numpy_ratio("rounding") < 1e-10
-    assert measured_ratio("rounding") is None
+    exact = []
+    assert measured_ratio("rounding", exact) is None
+    # accepted, but not exactly symmetric: the model check then measures the defect itself (kryflex.check._asymmetry)
+    assert exact == [True, False]
+
+
+def test_exactly_symmetric_found_at_setup():
+    K = stiffness("none")
+    assert np.array_equal(K, K.T)
+    exact = []
+    assert measured_ratio("none", exact) is None
+    assert exact == [True, True]
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("case", ASYMMETRIC + ["rounding"])
+@pytest.mark.parametrize("case", ASYMMETRIC + ["rounding", "none"])
 def test_ratio_matches_numpy_two_ranks(case):
     out = subprocess.run(["mpiexec", "-n", "2", sys.executable, os.path.abspath(__file__), case], env=MPI_ENV,
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr[-2000:]
     lines = [ln for ln in out.stdout.split("\n") if ln.startswith("ratio ")]
     assert len(lines) == 2, out.stdout        # both ranks answer, with the same verdict
-    values = {ln.split()[1] for ln in lines}
+    values = {ln.split(None, 1)[1] for ln in lines}
     assert len(values) == 1, lines
     got = values.pop()
-    if case == "rounding":
-        assert got == "ok"
+    if case in ("rounding", "none"):
+        # accepted; K exactly symmetric only without the rounding-level difference across the ranks' boundary
+        assert got == "ok %s" % ("exact" if case == "none" else "inexact")
     else:
         assert float(got) == pytest.approx(numpy_ratio(case), rel=1e-5)
 
@@ -118,6 +134,8 @@ if __name__ == "__main__":
     sys.path.insert(0, os.path.join(ROOT, "python"))
     import petsc4py
     petsc4py.init(sys.argv[:1])
-    r = measured_ratio(sys.argv[1])
-    sys.stdout.write("ratio %s\n" % ("ok" if r is None else repr(r)))  # one write per rank: lines stay whole
+    exact = []
+    r = measured_ratio(sys.argv[1], exact)
+    verdict = "ok %s" % ("exact" if exact == [True, True] else "inexact")
+    sys.stdout.write("ratio %s\n" % (verdict if r is None else repr(r)))  # one write per rank: lines stay whole
     sys.stdout.flush()

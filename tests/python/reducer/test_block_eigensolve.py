@@ -3,7 +3,10 @@ pairs of a block Krylov space of K+ M started from the inputs, outputs and rando
 against SLEPc's Krylov-Schur (-kf_verify_eigen_method slepc): on a free-free beam with double bending frequencies, a
 clamped beam, a clamped beam with paired frequencies and a free frame with a mechanism at two angles; on 2 ranks
 against 1; with damping matrices (Galileo) against the dense damped direct solve; and its fall back to Krylov-Schur
-when it has not converged within its cap of blocks."""
+when it has not converged within its cap of blocks. On models with massless dofs (a frame whose rotations carry no
+mass; a stick aircraft with lumped masses, some offset, exported as a DMIG punch and read back: M singular beyond its
+zero diagonal) the block path converges without falling back, to the dense reference with M's null space condensed
+by SciPy here."""
 import os
 import sys
 
@@ -119,28 +122,35 @@ def test_block_eigensolve_with_damping_matrices():
     assert errs["block"] <= 1e-5
 
 
-def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
-    """Capped at one block the block path does not converge: Krylov-Schur takes the configuration, the progress
-    line says so, and the reference is Krylov-Schur's."""
-    scene, systems, _ = model("frame", tmp_path)
+def reduce_logged(scene, log, **options):
+    """(reducer, progress text): the scene reduced on the sparse path with the options given, its progress lines
+    (printed by the C library on rank 0's stdout) captured in the file log."""
     opts = PETSc.Options()
-    values = dict(kf_verify_dense_max_dofs=0, kf_verify_eigen_method="block", kf_verify_eigen_max_blocks=1, kf_quiet=False)
+    values = dict(kf_verify_dense_max_dofs=0, kf_quiet=False, **options)
     for k, v in values.items():
         opts.setValue(k, v)
-    log = tmp_path / "progress.txt"
     fd, saved = sys.stdout.fileno(), os.dup(sys.stdout.fileno())
     try:
-        with open(log, "w") as f:  # the progress lines are printed by the C library on rank 0's stdout
+        with open(log, "w") as f:
             os.dup2(f.fileno(), fd)
-            capped = kryflex.Reducer(scene, quiet=False, search=False)
-            capped.reduce()
+            reducer = kryflex.Reducer(scene, quiet=False, search=False)
+            reducer.reduce()
     finally:
         os.dup2(saved, fd)
         os.close(saved)
         opts.setValue("kf_quiet", True)
-        for k in ("kf_verify_dense_max_dofs", "kf_verify_eigen_method", "kf_verify_eigen_max_blocks"):
-            opts.delValue(k)
-    text = log.read_text()
+        for k in values:
+            if k != "kf_quiet":
+                opts.delValue(k)
+    return reducer, log.read_text()
+
+
+def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
+    """Capped at one block the block path does not converge: Krylov-Schur takes the configuration, the progress
+    line says so, and the reference is Krylov-Schur's."""
+    scene, systems, _ = model("frame", tmp_path)
+    capped, text = reduce_logged(scene, tmp_path / "progress.txt", kf_verify_eigen_method="block",
+                                 kf_verify_eigen_max_blocks=1)
     slepc = reduce_sparse(scene, "slepc")
     # every configuration's reference (the angles and the midpoint) fell back, and only those
     assert text.count("did not converge") == text.count("(Krylov-Schur, shift-and-invert") >= len(systems), text[-2000:]
@@ -190,3 +200,65 @@ def test_block_eigensolve_wide_blocks_two_ranks(tmp_path):
     assert_two_ranks_agree(serial, "clamped_beam", tmp_path / "two.npz",
                            ["-kf_verify_eigen_method", "block", "-kf_verify_eigen_random", "12"],
                            "clamped, 12 random columns: 2 ranks vs 1")
+
+
+def massless_model(name, folder):
+    """(spec, M, K, G, H, rigid modes) of a model with massless dofs: 'lumped_frame' (bc_models.lumped_frame: lumped
+    translational masses, every rotation massless, zero rows of M), 'aircraft' (bc_models.lumped_aircraft written as
+    a long-field DMIG punch and read back by kryflex's Nastran reader, as test_reference_truth.py does: massless wing
+    tips and fin, masses offset from their nodes, so M is singular beyond its zero diagonal and rounded as exported)
+    or 'lumped_aircraft' (the same before the export, as assembled)."""
+    import reference_truth_probe as probe
+    spec = probe.plate_spec("aircraft", str(folder)) if name == "aircraft" else getattr(bc_models, name)()
+    M, K, G, H = bc_models.layout_reference(spec)
+    return spec, np.asarray(M), np.asarray(K), np.asarray(G), np.asarray(H), 6
+
+
+@pytest.mark.parametrize("name", ["lumped_frame", "aircraft"])
+def test_block_eigensolve_massless_against_condensed_scipy(tmp_path, name):
+    """Every flexible mode asked for (no residual term to approximate): the block path converges (the progress line
+    says block Krylov, no fall back), its frequencies are dense SciPy's with M's null space condensed (1e-9) and its
+    reference response the condensed modal response with the static flexibility of M's null space (1e-9 of the
+    peak). The default run (the modes to the cut) takes the block path too, with dense SciPy's frequencies (1e-9) and
+    Krylov-Schur's reference response (1e-9 of the peak)."""
+    from test_reference_truth import scipy_frf
+    spec, M, K, G, H, nrigid = massless_model(name, tmp_path)
+    scene = kryflex.scene_from_dict(spec)
+    f_dense = dense_flexible_frequencies(M, K)
+    assert np.count_nonzero(np.diag(M) == 0) > 0
+    every, text = reduce_logged(scene, tmp_path / "every.txt", kf_verify_eigen_method="block",
+                                kf_verify_modes=f_dense.size)
+    cut, text_cut = reduce_logged(scene, tmp_path / "cut.txt", kf_verify_eigen_method="block")
+    slepc = reduce_sparse(scene, "slepc")
+    f = np.ravel(every.result(0, "full_frequencies_hz"))
+    w = np.ravel(every.result(0, "frf_frequencies_hz"))
+    exact, _ = scipy_frf(M, K, G, H, w, scene.damping, nrigid)
+    err = np.abs(every.frf(0, "full") - exact).max() / np.abs(exact).max()
+    fc = np.ravel(cut.result(0, "full_frequencies_hz"))
+    Tc, Ts = common_grid(np.ravel(cut.result(0, "frf_frequencies_hz")), cut.frf(0, "full"),
+                         np.ravel(slepc.result(0, "frf_frequencies_hz")), slepc.frf(0, "full"))
+    dT = np.abs(Tc - Ts).max() / np.abs(Ts).max()
+    print("%s: %d massless dofs, M's null space %d; every mode: %d of %d, frequencies vs condensed SciPy %.1e, "
+          "response %.1e of the peak; to the cut: %d modes, vs SciPy %.1e, response vs Krylov-Schur %.1e"
+          % (name, np.count_nonzero(np.diag(M) == 0), len(M) - nrigid - f_dense.size, f.size, f_dense.size,
+             np.abs(f / f_dense - 1).max(), err, fc.size, np.abs(fc / f_dense[:fc.size] - 1).max(), dT))
+    for t in (text, text_cut):
+        assert "block Krylov of K+ M" in t and "Krylov-Schur (SLEPc) instead" not in t, t[-2000:]
+    assert f.size == f_dense.size
+    assert np.abs(f / f_dense - 1).max() <= 1e-9
+    assert err <= 1e-9
+    assert 0 < fc.size == np.ravel(slepc.result(0, "full_frequencies_hz")).size
+    assert np.abs(fc / f_dense[:fc.size] - 1).max() <= 1e-9
+    assert dT <= 1e-9
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("builder", ["lumped_frame", "lumped_aircraft"])
+def test_block_eigensolve_massless_two_ranks(tmp_path, builder):
+    """The block path on the massless models on 2 ranks against 1 (the serial run on the block path, not fallen
+    back): the same modes and reference response (1e-9)."""
+    spec = massless_model(builder, tmp_path)[0]
+    serial, text = reduce_logged(kryflex.scene_from_dict(spec), tmp_path / "one.txt", kf_verify_eigen_method="block")
+    assert "block Krylov of K+ M" in text and "Krylov-Schur (SLEPc) instead" not in text, text[-2000:]
+    assert_two_ranks_agree(serial, builder, tmp_path / "two.npz", ["-kf_verify_eigen_method", "block"],
+                           "%s: 2 ranks vs 1, block path" % builder)

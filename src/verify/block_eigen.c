@@ -54,10 +54,10 @@ PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nr
    mode expected and two blocks to spare, at least KF_BLOCK_EIGEN_BLOCKS. The modes expected: with a count that
    covered the cut before (the previous configuration's, hint->covered) that count and a quarter more (neighbouring
    configurations' counts differ by a few modes; nev is twice it, most of which the stop at the cut never computes),
-   else nev (the first configuration, or a doubled nev that the last count did not cover). The arrays (V, M V and W: 3 b (blocks + 2) columns,
-   KFBlockEigCreate) are allocated for the whole cap, so it is bounded by KF_BLOCK_EIGEN_MEM_FACTOR times the
-   basis Krylov-Schur holds for the same nev (SLEPc's ncv, max(2 nev, nev + 15) vectors) unless that is below the
-   least cap. With b = 8 the bound does not bind (12 columns held per mode against 2 nev x 8); it does for blocks much
+   else nev (the first configuration, or a doubled nev that the last count did not cover). The arrays (V, M V and
+   W: 3 b (blocks + 2) columns, KFBlockEigCreate) are allocated for the whole cap, so it is bounded by
+   KF_BLOCK_EIGEN_MEM_FACTOR times the basis Krylov-Schur holds for the same nev (SLEPc's ncv, max(2 nev, nev + 15)
+   vectors) unless that is below the least cap. With b = 8 the bound does not bind (12 columns held per mode against 2 nev x 8); it does for blocks much
    wider than the modes asked, where the least cap decides. */
 static PetscErrorCode KFBlockEigenMaxBlocks(const KFEigenHint *hint, PetscInt nev, PetscInt b, PetscInt *maxblocks)
 {

@@ -35,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 STAMP = re.compile(r"^\[kryflex\s+([0-9.]+) s\] (.*)$")
 # -info :eps, one line per sparse eigensolve (src/verify/eigen.c)
 # the block Krylov eigensolve's progress line, one per configuration (src/verify/eigen.c), and its fall back
-BLOCK_LINE = re.compile(r"block Krylov of K\+ M with the flexible solver's factor: (\d+) blocks of (\d+) columns\)")
+BLOCK_LINE = re.compile(r"block Krylov of K\+ M with the flexible solver's factor: (\d+) blocks of (\d+) columns(?:, at most \d+)?\)")
 BLOCK_FALLBACK = "the block Krylov space did not converge"
 EIGEN_INFO = re.compile(r"kryflex verification eigensolve: (\d+) iterations, (\d+) K\+ applications, (\d+) columns, "
                         r"([0-9.e+-]+) s in the factor's solves")

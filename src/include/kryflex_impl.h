@@ -129,10 +129,13 @@ PETSC_INTERN PetscErrorCode KFFlexSolverCheckOptions(MPI_Comm, const char prefix
 PETSC_INTERN PetscErrorCode KFRigidTolFromOptions(MPI_Comm, PetscReal *tol); /* src/rigid/rigid.c */
 PETSC_INTERN PetscErrorCode KFKrylovProgressOptions(MPI_Comm, PetscInt *progress_min); /* src/krylov/block_arnoldi.c */
 /* What is known of the modes before a verification eigensolve (src/verify/eigen.c, KFEPSApplyHint): cut2, the
-   omega^2 its modes must reach (0: none, the count asked); count, the modes expected to reach it (0: unknown) */
+   omega^2 its modes must reach (0: none, the count asked); count, the modes expected to reach it (0: unknown);
+   covered, whether count is what a previous eigensolve took to reach the cut (else the modes it was asked for, all
+   below the cut: a lower bound) */
 typedef struct {
   PetscReal cut2;
   PetscInt  count;
+  PetscBool covered;
 } KFEigenHint;
 /* An M-orthonormal basis kept M-orthogonal to the rigid modes (src/krylov/block_arnoldi.c: the Krylov basis's own
    numerics), for the verification's block eigensolve */

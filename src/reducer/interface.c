@@ -460,7 +460,8 @@ PetscErrorCode KFReducerReset(KFReducer r)
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCall(KFReducerResultsReset_Private(r));
-  r->verify_count = 0;
+  r->verify_count   = 0;
+  r->verify_covered = PETSC_FALSE;
   if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
   PetscFunctionReturn(0);
 }

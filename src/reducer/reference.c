@@ -50,7 +50,7 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
   if (keep) PetscCall(MatDestroy(keep));
   {
     const PetscReal wcut = 2 * PETSC_PI * fmax;
-    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count};
+    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count, r->verify_covered};
     PetscInt        c    = 0;
 
     if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
@@ -61,7 +61,10 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
     while (c + 1 < *nconv && w2[c + 1] <= (1 + 1e-8) * w2[c]) c++;
     /* the modes to the first at or above the cut, whatever the last restart cycle converged beyond it: the same
        reference on any number of ranks */
-    if (hint.cut2 > 0) *nconv = r->verify_count = PetscMin(c + 1, *nconv);
+    if (hint.cut2 > 0) {
+      r->verify_covered = (PetscBool)(c < *nconv);
+      *nconv = r->verify_count = PetscMin(c + 1, *nconv);
+    }
   }
   if (solver) PetscCall(KFFlexSolverSetPerf_Private(solver, &perf));
   PetscCall(PetscTime(&t1));

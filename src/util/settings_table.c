@@ -90,7 +90,7 @@ static const KFSettingInfo KFSettings[] = {
   {"-kf_verify_dense_max_dofs", TI, "600", "[0, inf)", NULL, "Dense LAPACK verification eigensolve up to this many system dofs, Krylov-Schur with shift-and-invert above (default 600)", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_verify_eigen_method", TE, "auto", NULL, "auto block slepc", "Sparse verification eigensolve with the flexible solver's factor: block (a block Krylov space of K+ M from the inputs, outputs and random columns, Rayleigh-Ritz), slepc (Krylov-Schur, one K+ application per vector) or auto (block from 20,000 system dofs on, slepc below; the default)", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_verify_eigen_random", TI, "3", "[0, inf)", NULL, "Random columns in the block Krylov eigensolve's blocks, beside the inputs and outputs (default 3)", NULL, "KFSystemEigen", "KFSystemEigen"},
-  {"-kf_verify_eigen_max_blocks", TI, "12", "[1, inf)", NULL, "Blocks of the block Krylov eigensolve before it falls back to Krylov-Schur (default 12)", NULL, "KFSystemEigen", "KFSystemEigen"},
+  {"-kf_verify_eigen_max_blocks", TI, "auto", "[1, inf)", "auto", "Blocks of the block Krylov eigensolve before it falls back to Krylov-Schur (auto or -1, the default: room for 4 columns per mode expected and 2 blocks, at least 12)", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_verify_target", TR, "auto", NULL, NULL, "Shift-and-invert target of the sparse verification eigensolve (default -1e-8 ||K_S||_F / ||M_S||_F); its EPS takes -kf_verify_eps_* options", NULL, "KFSystemEigen", "KFSystemEigen"},
   {"-kf_quiet", TB, "false", NULL, NULL, "Silence the progress lines with elapsed time on rank 0 (default false)", NULL, "KFProgress", "KFProgress"},
   /* viewers, and the command's own */

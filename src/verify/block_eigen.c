@@ -28,20 +28,47 @@ const char *const KFVerifyEigenMethods[] = {"auto", "block", "slepc", "KFVerifyE
 
 /* -kf_verify_eigen_method (0 auto: block from KF_BLOCK_EIGEN_MIN_DOFS system dofs on, else slepc; 1 block; 2 slepc),
    -kf_verify_eigen_random (random columns per block),
-   -kf_verify_eigen_max_blocks (blocks before the fall back to SLEPc's Krylov-Schur), read and checked */
+   -kf_verify_eigen_max_blocks (blocks before the fall back to SLEPc's Krylov-Schur; PETSC_DECIDE, the default: sized
+   from the modes asked, KFBlockEigenMaxBlocks), read and checked */
 PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks)
 {
   PetscFunctionBegin;
   *method    = 0;
   *nrand     = 3;
-  *maxblocks = 12;
+  *maxblocks = PETSC_DECIDE;
   PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (block Krylov)", "KFSystemEigen");
   PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_verify_eigen_method", KFVerifyEigenMethods, 3, KFVerifyEigenMethods[*method], method, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_random", *nrand, nrand, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_max_blocks", *maxblocks, maxblocks, NULL));
   PetscOptionsEnd();
   PetscCheck(*nrand >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_random %" PetscInt_FMT ": give the number of random start columns, 0 or more", *nrand);
-  PetscCheck(*maxblocks >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_max_blocks %" PetscInt_FMT ": give at least 1 block", *maxblocks);
+  PetscCheck(*maxblocks >= 1 || *maxblocks == PETSC_DECIDE, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_max_blocks %" PetscInt_FMT ": give at least 1 block, or -1 (auto: sized from the modes asked)", *maxblocks);
+  PetscFunctionReturn(0);
+}
+
+#define KF_BLOCK_EIGEN_BLOCKS       12 /* the least automatic cap: what the block path always had */
+#define KF_BLOCK_EIGEN_COLS_PER_MODE 4 /* measured: 20 modes in 12 blocks of 8, 39 in 19 (the 24k lumped frame) */
+#define KF_BLOCK_EIGEN_MEM_FACTOR    8 /* the arrays' columns at most this many times Krylov-Schur's basis */
+
+/* The automatic cap for nev modes asked in blocks of b columns: room for KF_BLOCK_EIGEN_COLS_PER_MODE columns per
+   mode expected and two blocks to spare, at least KF_BLOCK_EIGEN_BLOCKS. The modes expected: with a count that
+   covered the cut before (the previous configuration's, hint->covered) that count and a quarter more (neighbouring
+   configurations' counts differ by a few modes; nev is twice it, most of which the stop at the cut never computes),
+   else nev (the first configuration, or a doubled nev that the last count did not cover). The arrays (V, M V and
+   W: 3 b (blocks + 2) columns, KFBlockEigCreate) are allocated for the whole cap, so it is bounded by
+   KF_BLOCK_EIGEN_MEM_FACTOR times the basis Krylov-Schur holds for the same nev (SLEPc's ncv, max(2 nev, nev + 15)
+   vectors) unless that is below the least cap. With b = 8 the bound does not bind (12 columns held per mode against 2 nev x 8); it does for blocks much
+   wider than the modes asked, where the least cap decides. */
+static PetscErrorCode KFBlockEigenMaxBlocks(const KFEigenHint *hint, PetscInt nev, PetscInt b, PetscInt *maxblocks)
+{
+  PetscInt n = nev, want, ncv, bound;
+
+  PetscFunctionBegin;
+  if (hint->cut2 > 0 && hint->covered && hint->count > 0) n = PetscMin(nev, hint->count + (hint->count + 3) / 4);
+  want  = (KF_BLOCK_EIGEN_COLS_PER_MODE * n + b - 1) / b + 2;
+  ncv   = PetscMax(2 * nev, nev + 15);
+  bound = KF_BLOCK_EIGEN_MEM_FACTOR * ncv / (3 * b) - 2;
+  *maxblocks = PetscMax(KF_BLOCK_EIGEN_BLOCKS, PetscMin(want, bound));
   PetscFunctionReturn(0);
 }
 
@@ -409,11 +436,11 @@ static PetscErrorCode KFBlockEigDestroy(KFBlockEig *be)
   PetscFunctionReturn(0);
 }
 
-/* The lowest flexible modes of the flexible solver's configuration by the block Krylov space above: with cut2 > 0
+/* The lowest flexible modes of the flexible solver's configuration by the block Krylov space above: with hint->cut2 > 0
    every mode below it and the first at or above it (at most nev), else the nev lowest. On success (*ok) nconv modes:
-   omega2 ascending, P (nsys x nconv) purified and M-normalized. *ok false: not converged within maxblocks blocks, nothing
-   returned: the caller falls back to SLEPc. */
-PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, PetscReal cut2, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *P, PetscBool *ok, PetscInt *nblocks, PetscInt *bcols)
+   omega2 ascending, P (nsys x nconv) purified and M-normalized. *ok false: not converged within *cap blocks (the option's,
+   or KFBlockEigenMaxBlocks's from the hint and nev), nothing returned: the caller falls back to SLEPc. */
+PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *P, PetscBool *ok, PetscInt *nblocks, PetscInt *bcols, PetscInt *cap)
 {
   KFScene          s = sys->scene;
   KFBlockEig       be;
@@ -425,6 +452,8 @@ PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, PetscReal cu
 
   PetscFunctionBegin;
   PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks));
+  if (maxblocks == PETSC_DECIDE) PetscCall(KFBlockEigenMaxBlocks(hint, nev, s->ninputs + s->noutputs + nrand, &maxblocks));
+  *cap    = maxblocks;
   *ok     = PETSC_FALSE;
   *nconv  = 0;
   *P      = NULL;
@@ -438,7 +467,7 @@ PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, PetscReal cu
   while (!nret && grew && be.blocks < maxblocks) {
     PetscCall(KFBlockEigStep(&be, &grew));
     PetscCall(KFBlockEigRitz(&be, &nritz));
-    PetscCall(KFBlockEigConverged(&be, nritz, cut2, nev, (PetscBool)!grew, &nret));
+    PetscCall(KFBlockEigConverged(&be, nritz, hint->cut2, nev, (PetscBool)!grew, &nret));
   }
   *nblocks = be.blocks;
   if (nret) {
@@ -454,7 +483,7 @@ PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, PetscReal cu
   PetscCall(KFFlexSolverGetPerf(solver, &after));
   for (PetscInt j = 0; j < nret; j++) worst = PetscMax(worst, be.res[j]);
   /* the -info line of the Krylov-Schur path (iterations: blocks), which benchmarks/proof_cost/bench.py reads */
-  PetscCall(PetscInfo(NULL, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (block Krylov, %" PetscInt_FMT " columns per block, %" PetscInt_FMT " Ritz pairs, %" PetscInt_FMT " returned, largest residual returned %g; seconds: block solves %g, Gram-Schmidt %g, projection %g, Ritz residuals %g, start block %g, modes out %g)\n", be.blocks, after.blocks - before.blocks, after.solve_columns - before.solve_columns, (double)(after.solve_seconds - before.solve_seconds), be.b, nritz, nret, (double)worst, be.t_apply, be.t_orth, be.t_proj, be.t_res, be.t_start, be.t_out));
+  PetscCall(PetscInfo(NULL, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (block Krylov, %" PetscInt_FMT " columns per block, cap %" PetscInt_FMT " blocks for %" PetscInt_FMT " modes asked, %" PetscInt_FMT " Ritz pairs, %" PetscInt_FMT " returned, largest residual returned %g; seconds: block solves %g, Gram-Schmidt %g, projection %g, Ritz residuals %g, start block %g, modes out %g)\n", be.blocks, after.blocks - before.blocks, after.solve_columns - before.solve_columns, (double)(after.solve_seconds - before.solve_seconds), be.b, maxblocks, nev, nritz, nret, (double)worst, be.t_apply, be.t_orth, be.t_proj, be.t_res, be.t_start, be.t_out));
   PetscCall(KFBlockEigDestroy(&be));
   PetscFunctionReturn(0);
 }

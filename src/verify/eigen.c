@@ -514,7 +514,7 @@ static PetscErrorCode KFEigenModesOut(KFSystem sys, Mat P, PetscInt m, PetscInt 
 static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, PetscBool *done)
 {
   KFScene   s = sys->scene;
-  PetscInt  method, nrand, maxblocks, nblocks, b;
+  PetscInt  method, nrand, maxblocks, nblocks, b, cap;
   PetscReal fcut = hint && hint->cut2 > 0 ? PetscSqrtReal(hint->cut2) / (2 * PETSC_PI) : 0;
   Mat       P;
 
@@ -524,14 +524,14 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, cons
   if (method == 0) method = s->nsys >= KF_BLOCK_EIGEN_MIN_DOFS ? 1 : 2;
   if (method != 1 || !hint) PetscFunctionReturn(0);
   PetscCall(KFFlexSolverSetUp(solver));
-  PetscCall(KFBlockEigenSolve(sys, solver, hint->cut2, nev, nconv, omega2, &P, done, &nblocks, &b));
+  PetscCall(KFBlockEigenSolve(sys, solver, hint, nev, nconv, omega2, &P, done, &nblocks, &b, &cap));
   if (!*done) {
-    if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the modes to %.4g Hz in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", (double)fcut, nblocks, b));
-    else PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the %" PetscInt_FMT " lowest modes in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns: Krylov-Schur (SLEPc) instead", nev, nblocks, b));
+    if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the modes to %.4g Hz in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns (its cap %" PetscInt_FMT "): Krylov-Schur (SLEPc) instead", (double)fcut, nblocks, b, cap));
+    else PetscCall(KFProgress(s->comm, "verification eigensolve: the block Krylov space did not converge the %" PetscInt_FMT " lowest modes in %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns (its cap %" PetscInt_FMT "): Krylov-Schur (SLEPc) instead", nev, nblocks, b, cap));
     PetscFunctionReturn(0);
   }
-  if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system to %.4g Hz (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns)", *nconv, s->nsys, (double)fcut, nblocks, b));
-  else PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns)", *nconv, s->nsys, nblocks, b));
+  if (fcut > 0) PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " flexible modes of the %" PetscInt_FMT "-dof system to %.4g Hz (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns, at most %" PetscInt_FMT ")", *nconv, s->nsys, (double)fcut, nblocks, b, cap));
+  else PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (block Krylov of K+ M with the flexible solver's factor: %" PetscInt_FMT " blocks of %" PetscInt_FMT " columns, at most %" PetscInt_FMT ")", *nconv, s->nsys, nblocks, b, cap));
   PetscCall(KFEigenModesOut(sys, P, *nconv, nev, HPhi, PhiG, modes));
   PetscCall(MatDestroy(&P));
   PetscFunctionReturn(0);

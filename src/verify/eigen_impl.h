@@ -15,5 +15,5 @@ typedef struct {
 PETSC_INTERN PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *, Mat B, Mat X);
 PETSC_INTERN PetscErrorCode KFEPSNormalizeBlock(KFSystem, Mat P);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
-PETSC_INTERN PetscErrorCode KFBlockEigenSolve(KFSystem, KFFlexSolver, PetscReal cut2, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *P, PetscBool *ok, PetscInt *nblocks, PetscInt *bcols);
+PETSC_INTERN PetscErrorCode KFBlockEigenSolve(KFSystem, KFFlexSolver, const KFEigenHint *, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *P, PetscBool *ok, PetscInt *nblocks, PetscInt *bcols, PetscInt *cap);
 #endif

@@ -98,6 +98,7 @@ struct _p_KFReducer {
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
   PetscInt        verify_count;   /* the modes the last sparse reference took to cover its cut (0: none yet): the next
                                      eigensolve's size (KFEigenHint) */
+  PetscBool       verify_covered; /* whether they reached it (else they were all the modes asked, below the cut) */
   PetscInt        frequency_points;
   PetscReal       frf_floor_db;
   PetscBool       search;         /* the accuracy search (KFReducerSetSearch) */

@@ -8,6 +8,8 @@ mass; a stick aircraft with lumped masses, some offset, exported as a DMIG punch
 zero diagonal) the block path converges without falling back, to the dense reference with M's null space condensed
 by SciPy here."""
 import os
+import re
+import subprocess
 import sys
 
 import numpy as np
@@ -160,12 +162,71 @@ def test_block_eigensolve_falls_back_to_krylov_schur(tmp_path):
         assert f1.size == f2.size and np.allclose(f1, f2, rtol=1e-12, atol=0)
 
 
+def test_block_eigensolve_cap_follows_the_modes_asked(tmp_path):
+    """More modes asked than 12 blocks can hold (100 flexible modes of the 360-dof frame, blocks of 7 columns: 12
+    blocks and the start hold 91): with the cap's default (sized from the modes asked) every configuration converges
+    on the block path, its frequencies dense SciPy's (1e-9), the progress line stating the blocks and the cap; capped
+    at 12 blocks they fall back to Krylov-Schur, whose frequencies the block path's are (1e-9)."""
+    scene, systems, _ = model("frame", tmp_path)
+    nev = 100
+    auto, text = reduce_logged(scene, tmp_path / "auto.txt", kf_verify_eigen_method="block", kf_verify_modes=nev)
+    capped, text12 = reduce_logged(scene, tmp_path / "capped.txt", kf_verify_eigen_method="block",
+                                   kf_verify_modes=nev, kf_verify_eigen_max_blocks=12)
+    lines = [l for l in text.splitlines() if "block Krylov of K+ M" in l]
+    print("\n".join(lines))
+    assert "Krylov-Schur (SLEPc) instead" not in text, text[-2000:]
+    assert len(lines) >= len(systems)
+    for l in lines:  # blocks used above the old default, within the cap stated
+        used, b, cap = (int(x) for x in re.search(r"(\d+) blocks of (\d+) columns, at most (\d+)\)", l).groups())
+        assert 12 < used <= cap and b == 7
+    assert text12.count("did not converge") == text12.count("(Krylov-Schur, shift-and-invert") >= len(systems)
+    assert "(its cap 12)" in text12 and "block Krylov of K+ M" not in text12
+    for c, (Ms, Ks) in enumerate(systems):
+        f, f12 = np.ravel(auto.result(c, "full_frequencies_hz")), np.ravel(capped.result(c, "full_frequencies_hz"))
+        f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+        print("configuration %d: %d modes, block vs dense SciPy %.1e, vs Krylov-Schur %.1e" % (
+            c, f.size, np.abs(f / f_dense[:f.size] - 1).max(), np.abs(f / f12 - 1).max()))
+        assert f.size == f12.size == nev
+        assert np.abs(f / f_dense[:nev] - 1).max() <= 1e-9
+        assert np.abs(f / f12 - 1).max() <= 1e-9
+
+
+@pytest.mark.mpi
+def test_block_eigensolve_cap_follows_the_modes_asked_two_ranks(tmp_path):
+    """The 100 modes above on 2 ranks with the cap's default: every configuration on the block path (its -info line:
+    the cap sized from the modes asked, 100 returned), the same frequencies and reference response as 1 rank
+    (1e-9)."""
+    from test_sparse_eigensolve import ENV, PROBE
+    scene, systems, _ = model("frame", tmp_path)
+    serial = reduce_sparse(scene, "block", kf_verify_modes=100)
+    path = os.path.join(str(tmp_path), "scene.yaml")
+    out = tmp_path / "two.npz"
+    p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, str(out), "-kf_verify_eigen_method",
+                        "block", "-kf_verify_modes", "100", "-info", ":sys"], env=ENV, capture_output=True,
+                       text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    info = re.findall(r"block Krylov, 7 columns per block, cap (\d+) blocks for 100 modes asked, \d+ Ritz pairs, "
+                      r"(\d+) returned", p.stdout)
+    print(info)
+    assert len(info) >= len(systems) and all(int(cap) > 12 and ret == "100" for cap, ret in info), p.stdout[-3000:]
+    two = np.load(out)
+    for c in range(len(systems)):
+        f1, f2 = np.ravel(serial.result(c, "full_frequencies_hz")), two["f%d" % c]
+        T1, T2 = common_grid(np.ravel(serial.result(c, "frf_frequencies_hz")), serial.frf(c, "full"),
+                             two["w%d" % c], two["T%d" % c])
+        print("configuration %d: 2 ranks vs 1, frequencies %.1e, response %.1e of the peak" % (
+            c, np.abs(f2 / f1 - 1).max(), np.abs(T2 - T1).max() / np.abs(T1).max()))
+        assert f1.size == f2.size == 100 and np.allclose(f2, f1, rtol=1e-9, atol=0)
+        assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
+
+
 def test_bad_block_options(tmp_path):
     """A bad method or count is refused before any work, naming the option."""
     scene, _, _ = model("clamped", tmp_path)
     for k, v, msg in (("kf_verify_eigen_method", "lanczos", "kf_verify_eigen_method"),
                       ("kf_verify_eigen_random", -1, "kf_verify_eigen_random"),
-                      ("kf_verify_eigen_max_blocks", 0, "kf_verify_eigen_max_blocks")):
+                      ("kf_verify_eigen_max_blocks", 0, "kf_verify_eigen_max_blocks"),
+                      ("kf_verify_eigen_max_blocks", -2, "kf_verify_eigen_max_blocks")):
         with pytest.raises(Exception, match=msg):
             reduce_sparse(scene, "block", **{k: v})
 

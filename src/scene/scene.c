@@ -529,7 +529,7 @@ PetscErrorCode KFSceneGetBodyMatrices(KFScene s, PetscInt body, Mat *M, Mat *K, 
 PetscErrorCode KFSceneGetBodySymmetric(KFScene s, PetscInt body, PetscBool *M, PetscBool *K)
 {
   PetscFunctionBegin;
-  PetscCall(KFSceneSetUp(s));
+  PetscCheck(s->setup, s->comm, PETSC_ERR_ORDER, "call KFSceneSetUp() first: the symmetry is found there");
   PetscCheck(body >= 0 && body < s->nb, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "body index %" PetscInt_FMT " does not exist", body);
   if (M) *M = s->bodies[body].exact_M;
   if (K) *K = s->bodies[body].exact_K;

@@ -6,26 +6,6 @@
 #include <petscblaslapack.h>
 #include "eigen_impl.h"
 
-/* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
-   eigenvalues, which a dense generalized eigensolver cannot take (LAPACK sygv needs M positive definite) */
-PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem sys, PetscInt *n0)
-{
-  Vec                v;
-  const PetscScalar *x;
-  PetscInt           nl, c = 0;
-
-  PetscFunctionBegin;
-  PetscCall(MatCreateVecs(sys->Ms, NULL, &v));
-  PetscCall(MatGetRowMaxAbs(sys->Ms, v, NULL));
-  PetscCall(VecGetLocalSize(v, &nl));
-  PetscCall(VecGetArrayRead(v, &x));
-  for (PetscInt i = 0; i < nl; i++) c += PetscAbsScalar(x[i]) == 0;
-  PetscCall(VecRestoreArrayRead(v, &x));
-  PetscCall(VecDestroy(&v));
-  PetscCall(MPIU_Allreduce(&c, n0, 1, MPIU_INT, MPI_SUM, sys->scene->comm));
-  PetscFunctionReturn(0);
-}
-
 /* replicated column-major copy of any small parallel matrix */
 static PetscErrorCode KFGatherAny(Mat A, PetscReal out[])
 {

@@ -1,5 +1,6 @@
 /* What the verification's eigensolves with a flexible solver's factor share (src/verify/eigen.c, Krylov-Schur;
-   src/verify/block_eigen.c, block Krylov): K+ applications with their residual sampled, and modes M-normalized. */
+   src/verify/block_eigen.c, block Krylov): K+ applications with their residual sampled, modes M-normalized, and
+   the count of massless dofs (the dense path condenses them, the block path starts differently with them). */
 #include <kryflex_impl.h>
 #include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
 #include "eigen_impl.h"
@@ -66,5 +67,25 @@ PetscErrorCode KFEPSNormalizeBlock(KFSystem sys, Mat P)
   }
   PetscCall(PetscFree(nrm));
   PetscCall(MatDestroy(&MP));
+  PetscFunctionReturn(0);
+}
+
+/* System dofs whose row of M_S is zero (massless: rotations of a lumped-mass model): they carry infinite
+   eigenvalues, which a dense generalized eigensolver cannot take (LAPACK sygv needs M positive definite) */
+PetscErrorCode KFSystemMasslessCount(KFSystem sys, PetscInt *n0)
+{
+  Vec                v;
+  const PetscScalar *x;
+  PetscInt           nl, c = 0;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateVecs(sys->Ms, NULL, &v));
+  PetscCall(MatGetRowMaxAbs(sys->Ms, v, NULL));
+  PetscCall(VecGetLocalSize(v, &nl));
+  PetscCall(VecGetArrayRead(v, &x));
+  for (PetscInt i = 0; i < nl; i++) c += PetscAbsScalar(x[i]) == 0;
+  PetscCall(VecRestoreArrayRead(v, &x));
+  PetscCall(VecDestroy(&v));
+  PetscCall(MPIU_Allreduce(&c, n0, 1, MPIU_INT, MPI_SUM, sys->scene->comm));
   PetscFunctionReturn(0);
 }

@@ -192,8 +192,9 @@ def test_moments_where_the_fit_says_met(measured, achieved):
     off = np.argwhere(decided & (ours != met))
     assert not len(off), [(k, ANGLES[j], L[k, j], np.array(achieved["moments"])[k, j], PAPER_L[k, j]) for k, j in off]
     # both solve a flexibility form (fit.py with its own shift): they agree to round-off of each L^k's size over
-    # the angles
-    assert np.all(np.abs(L - np.array(achieved["moments"])) <= ROUNDOFF * scale[:, None])
+    # the angles, twice the round-off a decision above allows (the two are computed on different machines: up to
+    # 1.07e-5 of the size measured between fit_physical.json's record and an AMD EPYC machine, L^1..L^3 at 0 deg)
+    assert np.all(np.abs(L - np.array(achieved["moments"])) <= 2 * ROUNDOFF * scale[:, None])
 
 
 def test_moments_sign_where_the_paper_prints_a_nonzero(measured, achieved):
@@ -753,7 +754,9 @@ def _model_in_cell(generate, envelope, lo, hi, rng):
     vector generate.fitted_bodies takes."""
     nm = len(generate.MASS_PARAMETERS)
     n = nm + generate.n_rotation(12) + generate.n_rotation(21)
-    for _ in range(2000):
+    # a cell thin against the envelope can take more than 2,000 draws: the weakest cell after branch and bound,
+    # its corners placed by LAPACK's rounding, did on an AMD EPYC machine (the draws are cheap: 1.5 s for the test)
+    for _ in range(200000):
         c = dict(zip(envelope.COORDS, np.exp(rng.uniform(lo, hi))))
         for node in ("bearing node", "hub"):
             k0, k1 = envelope.GYRATION[node]

@@ -26,10 +26,11 @@ SOLID_BAND = [0.01, 15.0]
 ZETA = 0.0025
 MAXF = 4                     # factorizations the search may spend on points
 # L^0 of a model with points: the blocks at zero are in it, so it stays exact. Against the dense reference (one eigh
-# of the 2,755-dof system) every model of this solid, with or without points, at 24 or 31 dofs, measured 1.39e-10:
-# that is the reference's floor on this scene, so the bound is 2e-10 and, more tightly, the model with points must
-# give the moment-only model's L^0 to 1e-11.
-STATIC_RTOL = 2e-10
+# of the 2,755-dof system) every model of this solid, with or without points, at 24 or 31 dofs, measured 1.39e-10
+# on one machine and 1.53e-9 on an AMD EPYC one: that is the reference's own floor on this scene (its eigh's
+# rounding), so the bound is the moment-only model's distance to the same reference, with room (STATIC_FLOOR), and,
+# more tightly, the model with points must give the moment-only model's L^0 to 1e-11.
+STATIC_FLOOR = 1.5
 STATIC_SAME = 1e-11
 
 
@@ -86,7 +87,8 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     same = float(np.linalg.norm(L0p - L0m) / np.linalg.norm(L0m))
     print("L0 relative error %.2e (against the moment-only model's %.2e); elastic %.2e, total %.2e, kryflex's %.2e"
           % (err, same, el, tot, c.worst_error))
-    assert err <= STATIC_RTOL
+    floor = static_error(reduce(path, accuracy=1e-4).model, dense, SOLID_ANGLES[0])
+    assert err <= STATIC_FLOOR * floor
     assert same <= STATIC_SAME
     # the model kryflex measured is the one the dense reference measures: its verdict holds (to the grids' 5 %) on
     # the independent measure of the same kind (total here; elastic where kryflex's search measures it)
@@ -146,7 +148,7 @@ def test_elastic_target_no_more_dofs_than_moment_only_solid(solid, target):
         print("solid %g %s: %d dofs, elastic %.2e, total %.2e, points %s" % (target, name, dofs, el, tot, rows[-1][3]))
     assert rows[1][2] <= target * 1.05
     assert rows[1][1] <= rows[0][1]
-    assert static_error(sh.model, dense, SOLID_ANGLES[0]) <= STATIC_RTOL
+    assert static_error(sh.model, dense, SOLID_ANGLES[0]) <= STATIC_FLOOR * static_error(mo.model, dense, SOLID_ANGLES[0])
 
 
 @pytest.mark.slow

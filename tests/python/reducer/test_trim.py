@@ -226,7 +226,9 @@ def test_bodies_with_trimmed_mass_give_the_trimmed_system(galileo_paper):
         lam = np.sort(lam[np.isfinite(lam)].real)
         f = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
         expected = model.at(angles).frequencies_hz
-        flexible = f[f > 0.5 * expected[0]]
+        # the trimmed mass is singular: its infinite eigenvalues can leave QZ finite at rounding (4.1e9 Hz on an AMD
+        # EPYC machine, against 12.3 Hz for the highest mode); none is a mode
+        flexible = f[(f > 0.5 * expected[0]) & (f < 1e6 * expected[-1])]
         np.testing.assert_allclose(flexible, expected, rtol=1e-6)
 
 

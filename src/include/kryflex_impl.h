@@ -142,10 +142,11 @@ typedef struct {
 typedef struct _n_KFMOrthBasis *KFMOrthBasis;
 PETSC_INTERN PetscErrorCode KFMOrthBasisCreate(KFSystem, PetscInt maxcols, KFMOrthBasis *);
 PETSC_INTERN PetscErrorCode KFMOrthBasisAppend(KFMOrthBasis, Mat W, PetscReal tol, PetscInt *ndeflated);
+PETSC_INTERN PetscErrorCode KFMOrthBasisReserve(KFMOrthBasis, PetscInt ncols);
 PETSC_INTERN PetscErrorCode KFMOrthBasisGetArrays(KFMOrthBasis, PetscInt *k, PetscInt *nl, const PetscScalar **V, const PetscScalar **MV);
 PETSC_INTERN PetscErrorCode KFMOrthBasisDestroy(KFMOrthBasis *);
 PETSC_INTERN PetscErrorCode KFVerifyEigenOptions(MPI_Comm, PetscInt *dense_max, PetscReal *target, PetscBool *has_target); /* src/verify/eigen.c */
-PETSC_INTERN PetscErrorCode KFBlockEigenOptions(MPI_Comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks); /* src/verify/block_eigen.c */
+PETSC_INTERN PetscErrorCode KFBlockEigenOptions(MPI_Comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks, PetscInt *firstmb); /* src/verify/block_eigen.c */
 
 /* utilities (src/util) */
 PETSC_INTERN PetscErrorCode KFDenseGather(Mat, PetscReal[]);             /* replicated column-major copy of a small parallel dense Mat */

@@ -4,11 +4,16 @@
 
 /* A growing M-orthonormal basis: its columns in a BV and, beside them, M times each column (MV: local rows,
    column-major, leading dimension nl), computed when the column was made, so that no column's product with M is
-   formed twice. */
+   formed twice. Without a BV (V NULL, KFMBasisCreateGrowing) the columns are an array of its own, Vc (leading
+   dimension nl), and Vc and MV grow with the columns appended up to mmax: a BV is allocated for its whole size and
+   zero-filled, touched up front for columns an eigensolve that stops early never makes. */
 typedef struct {
   BV           V;
   PetscScalar *MV;
   PetscInt     k, nl;
+  MPI_Comm     comm;
+  PetscScalar *Vc;      /* the columns without a BV */
+  PetscInt     m, mmax; /* columns allocated in Vc and MV, the most they may grow to (with a BV: its size, both) */
   PetscScalar *work; /* the appended block and its product (2 x nl x wcap): kept from block to block, since a fresh
                         allocation of that size is fresh pages, faulted in and zeroed by the system at every block */
   PetscInt     wcap;
@@ -54,13 +59,37 @@ static PetscErrorCode KFMBasisCreate(BV V, KFMBasis *mb)
   PetscInt nl, m;
 
   PetscFunctionBegin;
+  PetscCall(PetscMemzero(mb, sizeof(*mb)));
   PetscCall(BVGetSizes(V, &nl, NULL, &m));
   mb->V    = V;
-  mb->k    = 0;
+  mb->comm = PetscObjectComm((PetscObject)V);
   mb->nl   = nl;
-  mb->work = NULL;
-  mb->wcap = 0;
+  mb->m = mb->mmax = m;
   PetscCall(PetscMalloc1(nl * m + 1, &mb->MV));
+  PetscFunctionReturn(0);
+}
+
+/* A basis of at most mmax columns of nl local rows, its arrays allocated as it grows (KFMBasisReserve) */
+static PetscErrorCode KFMBasisCreateGrowing(MPI_Comm comm, PetscInt nl, PetscInt mmax, KFMBasis *mb)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscMemzero(mb, sizeof(*mb)));
+  mb->comm = comm;
+  mb->nl   = nl;
+  mb->mmax = mmax;
+  PetscFunctionReturn(0);
+}
+
+/* room for ncols columns (at most mmax; a BV's basis has its room already), by realloc: what is not yet written is
+   not touched */
+static PetscErrorCode KFMBasisReserve(KFMBasis *mb, PetscInt ncols)
+{
+  PetscFunctionBegin;
+  ncols = PetscMin(ncols, mb->mmax);
+  if (mb->V || ncols <= mb->m) PetscFunctionReturn(0);
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (mb->nl * ncols + 1), &mb->Vc));
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (mb->nl * ncols + 1), &mb->MV));
+  mb->m = ncols;
   PetscFunctionReturn(0);
 }
 
@@ -68,8 +97,42 @@ static PetscErrorCode KFMBasisDestroy(KFMBasis *mb)
 {
   PetscFunctionBegin;
   PetscCall(PetscFree(mb->MV));
+  PetscCall(PetscFree(mb->Vc));
   PetscCall(PetscFree(mb->work));
   mb->wcap = 0;
+  PetscFunctionReturn(0);
+}
+
+/* the local rows of the columns (leading dimension nl), from the BV or the basis's own array */
+static PetscErrorCode KFMBasisGetColumnsRead(const KFMBasis *mb, const PetscScalar **v)
+{
+  PetscFunctionBegin;
+  if (mb->V) PetscCall(BVGetArrayRead(mb->V, v));
+  else *v = mb->Vc;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFMBasisRestoreColumnsRead(const KFMBasis *mb, const PetscScalar **v)
+{
+  PetscFunctionBegin;
+  if (mb->V) PetscCall(BVRestoreArrayRead(mb->V, v));
+  else *v = NULL;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFMBasisGetColumns(KFMBasis *mb, PetscScalar **v)
+{
+  PetscFunctionBegin;
+  if (mb->V) PetscCall(BVGetArray(mb->V, v));
+  else *v = mb->Vc;
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFMBasisRestoreColumns(KFMBasis *mb, PetscScalar **v)
+{
+  PetscFunctionBegin;
+  if (mb->V) PetscCall(BVRestoreArray(mb->V, v));
+  else *v = NULL;
   PetscFunctionReturn(0);
 }
 
@@ -106,10 +169,10 @@ static PetscErrorCode KFMBasisCoefficients(const KFRigidSpace *rs, const KFMBasi
   PetscFunctionBegin;
   PetscCall(PetscCalloc1((r + k) * p + 1, &loc));
   if (r) PetscCall(KFArraySkinnyTransposeMult(nl, r, mw ? rs->phi : rs->mphi, mw ? rs->ldp : rs->ldmp, p, x, nl, loc, r + k));
-  PetscCall(BVGetArrayRead(mb->V, &v));
+  PetscCall(KFMBasisGetColumnsRead(mb, &v));
   PetscCall(KFArraySkinnyTransposeMult(nl, k, mw ? v : mb->MV, nl, p, x, nl, loc + r, r + k));
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
-  PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, PetscObjectComm((PetscObject)mb->V)));
+  PetscCall(KFMBasisRestoreColumnsRead(mb, &v));
+  PetscCall(MPIU_Allreduce(loc, c, (PetscMPIInt)((r + k) * p), MPIU_REAL, MPIU_SUM, mb->comm));
   PetscCall(PetscFree(loc));
   PetscFunctionReturn(0);
 }
@@ -126,9 +189,9 @@ static PetscErrorCode KFMBasisSubtract(const KFRigidSpace *rs, const KFMBasis *m
     PetscCall(KFArraySkinnyMultAdd(nl, r, rs->phi, rs->ldp, p, -1.0, c, r + k, w, nl));
     if (mw) PetscCall(KFArraySkinnyMultAdd(nl, r, rs->mphi, rs->ldmp, p, -1.0, c, r + k, mw, nl));
   }
-  PetscCall(BVGetArrayRead(mb->V, &v));
+  PetscCall(KFMBasisGetColumnsRead(mb, &v));
   PetscCall(KFArraySkinnyMultAdd(nl, k, v, nl, p, -1.0, c + r, r + k, w, nl));
-  PetscCall(BVRestoreArrayRead(mb->V, &v));
+  PetscCall(KFMBasisRestoreColumnsRead(mb, &v));
   if (mw) PetscCall(KFArraySkinnyMultAdd(nl, k, mb->MV, nl, p, -1.0, c + r, r + k, mw, nl));
   PetscFunctionReturn(0);
 }
@@ -181,7 +244,7 @@ static PetscErrorCode KFMNorms(MPI_Comm comm, PetscInt nl, PetscInt p, const Pet
 static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, PetscInt p, PetscScalar *w, PetscScalar *mw, PetscReal nrm0[], PetscReal nrm[])
 {
   const PetscInt nl   = mb->nl;
-  MPI_Comm       comm = PetscObjectComm((PetscObject)mb->V);
+  MPI_Comm       comm = mb->comm;
   PetscReal     *cn1, *cn2;
 
   PetscFunctionBegin;
@@ -208,7 +271,7 @@ static PetscErrorCode KFMBasisPasses(const KFRigidSpace *rs, KFMBasis *mb, Petsc
 static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W, PetscInt j0, PetscInt j1, PetscReal tol, PetscInt *ndeflated, PetscReal nrm0out[])
 {
   const PetscInt     p = j1 - j0, nl = mb->nl, k0 = mb->k;
-  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  MPI_Comm           comm = mb->comm;
   Mat                Ms   = rs->sys->Ms;
   PetscScalar       *w, *mw;
   const PetscScalar *src;
@@ -217,6 +280,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
+  PetscCall(KFMBasisReserve(mb, k0 + p));
   if (p > mb->wcap) {
     PetscCall(PetscFree(mb->work));
     PetscCall(PetscMalloc1(2 * nl * p + 1, &mb->work));
@@ -246,10 +310,10 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
       const PetscScalar *vb;
 
       PetscCall(PetscMalloc1(kb, &c));
-      PetscCall(BVGetArrayRead(mb->V, &vb));
+      PetscCall(KFMBasisGetColumnsRead(mb, &vb));
       PetscCall(KFArrayTransposeMultGather(comm, nl, kb, vb + k0 * nl, nl, 1, mwj, nl, c));
       PetscCall(KFArrayMultSmall(nl, kb, 1, vb + k0 * nl, nl, c, -1.0, wj, nl));
-      PetscCall(BVRestoreArrayRead(mb->V, &vb));
+      PetscCall(KFMBasisRestoreColumnsRead(mb, &vb));
       PetscCall(KFArrayMultSmall(nl, kb, 1, mb->MV + k0 * nl, nl, c, -1.0, mwj, nl));
       PetscCall(PetscFree(c));
       PetscCall(KFMNorms(comm, nl, 1, wj, mwj, &na));
@@ -275,15 +339,15 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
         continue;
       }
     }
-    PetscCall(BVGetArray(mb->V, &v));
+    PetscCall(KFMBasisGetColumns(mb, &v));
     for (PetscInt i = 0; i < nl; i++) {
       v[i + mb->k * nl]      = wj[i] / na;
       mb->MV[i + mb->k * nl] = mwj[i] / na;
     }
-    PetscCall(BVRestoreArray(mb->V, &v));
+    PetscCall(KFMBasisRestoreColumns(mb, &v));
     mb->k++;
   }
-  PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
+  if (mb->V) PetscCall(BVSetActiveColumns(mb->V, 0, mb->k));
   PetscCall(PetscFree2(nrm0, nrm));
   PetscFunctionReturn(0);
 }
@@ -371,7 +435,7 @@ static PetscErrorCode KFSmallComplement(PetscInt m, PetscInt nq, const PetscScal
 static PetscErrorCode KFChainNext(KFChainComplement *cc, KFMBasis *mb, PetscInt k0, Mat W, PetscInt j0, PetscInt p, const PetscReal nrm0[], PetscReal tol, Mat *MY)
 {
   const PetscInt     nl = cc->nl, mu = cc->m, pb = mb->k - k0, m = mu + pb;
-  MPI_Comm           comm = PetscObjectComm((PetscObject)mb->V);
+  MPI_Comm           comm = mb->comm;
   const PetscScalar *w;
   PetscScalar       *g, *f, *my, *nmu;
   PetscInt           ld, nq, N;
@@ -693,8 +757,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
    residuals in the M-norm, the vectors returned purified, K+ M V y), so what such a column carries where M is null
    or at its rounding weighs nothing there; the reduction projects K on its basis, so it keeps the test. */
 struct _n_KFMOrthBasis {
-  BV           V;
-  KFMBasis     mb;
+  KFMBasis     mb; /* its own arrays, grown with the columns (KFMBasisCreateGrowing) */
   KFRigidSpace rs;
 };
 
@@ -704,41 +767,42 @@ PETSC_INTERN PetscErrorCode KFMOrthBasisCreate(KFSystem sys, PetscInt maxcols, K
 
   PetscFunctionBegin;
   PetscCall(PetscNew(ob));
-  PetscCall(BVCreate(s->comm, &(*ob)->V));
-  PetscCall(BVSetSizes((*ob)->V, s->nsys_local, s->nsys, PetscMax(maxcols, 1)));
-  PetscCall(BVSetType((*ob)->V, BVSVEC)); /* the columns read as one array, leading dimension nl */
-  PetscCall(BVSetMatrix((*ob)->V, sys->Ms, PETSC_FALSE));
-  PetscCall(KFMBasisCreate((*ob)->V, &(*ob)->mb));
+  PetscCall(KFMBasisCreateGrowing(s->comm, s->nsys_local, PetscMax(maxcols, 1), &(*ob)->mb));
   PetscCall(KFRigidSpaceOpen(sys, &(*ob)->rs));
   (*ob)->rs.mnorm_only = PETSC_TRUE;
   PetscFunctionReturn(0);
 }
 
-/* the columns of W appended (KFMBasisAppend); ndeflated counts the columns dropped. At most as many as the basis has
-   room for (its size at creation; the rest are not appended, nor counted): deflating on M-norms alone, a basis of a
-   model whose mass is singular can take columns of M's numerical null space, and so could reach the system's size. */
+/* the columns of W appended (KFMBasisAppend); ndeflated counts the columns dropped. At most maxcols in all (the rest
+   are not appended, nor counted): deflating on M-norms alone, a basis of a model whose mass is singular can take
+   columns of M's numerical null space, and so could reach the system's size. The arrays grow with the columns
+   (KFMOrthBasisReserve before, or else exactly what the append needs), so the memory follows the columns made, not
+   maxcols. */
 PETSC_INTERN PetscErrorCode KFMOrthBasisAppend(KFMOrthBasis ob, Mat W, PetscReal tol, PetscInt *ndeflated)
 {
-  PetscInt p, m;
+  PetscInt p;
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(W, NULL, &p));
-  PetscCall(BVGetSizes(ob->V, NULL, NULL, &m));
-  PetscCall(KFMBasisAppend(&ob->rs, &ob->mb, W, 0, PetscMin(p, m - ob->mb.k), tol, ndeflated, NULL));
+  PetscCall(KFMBasisAppend(&ob->rs, &ob->mb, W, 0, PetscMin(p, ob->mb.mmax - ob->mb.k), tol, ndeflated, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* room for ncols columns in all (at most the basis's maxcols), the growth's policy the caller's */
+PETSC_INTERN PetscErrorCode KFMOrthBasisReserve(KFMOrthBasis ob, PetscInt ncols)
+{
+  PetscFunctionBegin;
+  PetscCall(KFMBasisReserve(&ob->mb, ncols));
   PetscFunctionReturn(0);
 }
 
 /* the columns so far (k), local rows (nl, the leading dimension), V and M V: valid until the next append */
 PETSC_INTERN PetscErrorCode KFMOrthBasisGetArrays(KFMOrthBasis ob, PetscInt *k, PetscInt *nl, const PetscScalar **V, const PetscScalar **MV)
 {
-  const PetscScalar *v;
-
   PetscFunctionBegin;
   *k  = ob->mb.k;
   *nl = ob->mb.nl;
-  PetscCall(BVGetArrayRead(ob->V, &v));
-  *V = v; /* the restore clears its argument, not the array */
-  PetscCall(BVRestoreArrayRead(ob->V, &v));
+  *V  = ob->mb.Vc;
   *MV = ob->mb.MV;
   PetscFunctionReturn(0);
 }
@@ -748,7 +812,6 @@ PETSC_INTERN PetscErrorCode KFMOrthBasisDestroy(KFMOrthBasis *ob)
   PetscFunctionBegin;
   if (!*ob) PetscFunctionReturn(0);
   PetscCall(KFMBasisDestroy(&(*ob)->mb));
-  PetscCall(BVDestroy(&(*ob)->V));
   PetscCall(PetscFree(*ob));
   PetscFunctionReturn(0);
 }

@@ -25,7 +25,7 @@ static PetscErrorCode KFReducerDegreesOption_Private(KFReducer r, const char wha
 static PetscErrorCode KFReducerCheckStageOptions_Private(MPI_Comm comm, const char prefix[])
 {
   PetscReal rigid_tol, target;
-  PetscInt  progress_min, dense_max, method, nrand, maxblocks;
+  PetscInt  progress_min, dense_max, method, nrand, maxblocks, firstmb;
   PetscBool has_target;
 
   PetscFunctionBegin;
@@ -33,7 +33,7 @@ static PetscErrorCode KFReducerCheckStageOptions_Private(MPI_Comm comm, const ch
   PetscCall(KFRigidTolFromOptions(comm, &rigid_tol));
   PetscCall(KFKrylovProgressOptions(comm, &progress_min));
   PetscCall(KFVerifyEigenOptions(comm, &dense_max, &target, &has_target));
-  PetscCall(KFBlockEigenOptions(comm, &method, &nrand, &maxblocks));
+  PetscCall(KFBlockEigenOptions(comm, &method, &nrand, &maxblocks, &firstmb));
   PetscFunctionReturn(0);
 }
 

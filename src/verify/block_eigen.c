@@ -29,45 +29,54 @@ const char *const KFVerifyEigenMethods[] = {"auto", "block", "slepc", "KFVerifyE
 /* -kf_verify_eigen_method (0 auto: block from KF_BLOCK_EIGEN_MIN_DOFS system dofs on, else slepc; 1 block; 2 slepc),
    -kf_verify_eigen_random (random columns per block),
    -kf_verify_eigen_max_blocks (blocks before the fall back to SLEPc's Krylov-Schur; PETSC_DECIDE, the default: sized
-   from the modes asked, KFBlockEigenMaxBlocks), read and checked */
-PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks)
+   from the modes asked, KFBlockEigenMaxBlocks), -kf_verify_eigen_first_mb (the arrays' first allocation,
+   KFBlockEigReserve), read and checked */
+PetscErrorCode KFBlockEigenOptions(MPI_Comm comm, PetscInt *method, PetscInt *nrand, PetscInt *maxblocks, PetscInt *firstmb)
 {
   PetscFunctionBegin;
   *method    = 0;
   *nrand     = 3;
   *maxblocks = PETSC_DECIDE;
+  *firstmb   = 32;
   PetscOptionsBegin(comm, NULL, "kryflex verification eigensolve (block Krylov)", "KFSystemEigen");
   PetscCall(KFOptionsSettingEList(PetscOptionsObject, "-kf_verify_eigen_method", KFVerifyEigenMethods, 3, KFVerifyEigenMethods[*method], method, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_random", *nrand, nrand, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_max_blocks", *maxblocks, maxblocks, NULL));
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_eigen_first_mb", *firstmb, firstmb, NULL));
   PetscOptionsEnd();
   PetscCheck(*nrand >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_random %" PetscInt_FMT ": give the number of random start columns, 0 or more", *nrand);
   PetscCheck(*maxblocks >= 1 || *maxblocks == PETSC_DECIDE, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_max_blocks %" PetscInt_FMT ": give at least 1 block, or -1 (auto: sized from the modes asked)", *maxblocks);
+  PetscCheck(*firstmb >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-kf_verify_eigen_first_mb %" PetscInt_FMT ": give the megabytes of the first allocation, 0 or more", *firstmb);
   PetscFunctionReturn(0);
 }
 
 #define KF_BLOCK_EIGEN_BLOCKS       12 /* the least automatic cap: what the block path always had */
 #define KF_BLOCK_EIGEN_COLS_PER_MODE 4 /* measured: 20 modes in 12 blocks of 8, 39 in 19 (the 24k lumped frame) */
-#define KF_BLOCK_EIGEN_MEM_FACTOR    8 /* the arrays' columns at most this many times Krylov-Schur's basis */
+#define KF_BLOCK_EIGEN_MEM_FACTOR   12 /* the arrays' columns at the cap at most this many times Krylov-Schur's basis */
 
-/* The automatic cap for nev modes asked in blocks of b columns: room for KF_BLOCK_EIGEN_COLS_PER_MODE columns per
-   mode expected and two blocks to spare, at least KF_BLOCK_EIGEN_BLOCKS. The modes expected: with a count that
-   covered the cut before (the previous configuration's, hint->covered) that count and a quarter more (neighbouring
-   configurations' counts differ by a few modes; nev is twice it, most of which the stop at the cut never computes),
-   else nev (the first configuration, or a doubled nev that the last count did not cover). The arrays (V, M V and
-   W: 3 b (blocks + 2) columns, KFBlockEigCreate) are allocated for the whole cap, so it is bounded by
-   KF_BLOCK_EIGEN_MEM_FACTOR times the basis Krylov-Schur holds for the same nev (SLEPc's ncv, max(2 nev, nev + 15)
-   vectors) unless that is below the least cap. With b = 8 the bound does not bind (12 columns held per mode against 2 nev x 8); it does for blocks much
-   wider than the modes asked, where the least cap decides. */
+/* The automatic cap for nev modes asked in blocks of b columns: the blocks that KF_BLOCK_EIGEN_COLS_PER_MODE columns
+   per mode expected fill, half again as a margin, and two blocks to spare, at least KF_BLOCK_EIGEN_BLOCKS. The modes
+   expected: with a count that covered the cut before (the previous configuration's, hint->covered) that count and a
+   quarter more (neighbouring configurations' counts differ by a few modes; nev is twice it, most of which the stop at
+   the cut never computes), else nev (the first configuration, or a doubled nev that the last count did not cover).
+   The margin is for models that need more columns per mode than the one measured (its first configuration, 20
+   modes, took all 12 blocks of a cap without margin; a 13th would have meant the fall back to Krylov-Schur, several
+   times slower). The arrays (V, M V and W: 3 b (blocks + 2) columns at the cap) grow with the blocks made
+   (KFBlockEigReserve), so the cap costs memory only to a run that reaches it, one that falls back; that worst case
+   is bounded by KF_BLOCK_EIGEN_MEM_FACTOR times the basis Krylov-Schur holds for the same nev (SLEPc's ncv,
+   max(2 nev, nev + 15) vectors) unless that is below the least cap. With b = 8 the bound does not bind (18 columns
+   per mode and the spare blocks at the cap, against 2 nev x 12); it does for blocks much wider than the modes
+   asked, where the least cap decides. */
 static PetscErrorCode KFBlockEigenMaxBlocks(const KFEigenHint *hint, PetscInt nev, PetscInt b, PetscInt *maxblocks)
 {
-  PetscInt n = nev, want, ncv, bound;
+  PetscInt n = nev, blocks, want, ncv, bound;
 
   PetscFunctionBegin;
   if (hint->cut2 > 0 && hint->covered && hint->count > 0) n = PetscMin(nev, hint->count + (hint->count + 3) / 4);
-  want  = (KF_BLOCK_EIGEN_COLS_PER_MODE * n + b - 1) / b + 2;
-  ncv   = PetscMax(2 * nev, nev + 15);
-  bound = KF_BLOCK_EIGEN_MEM_FACTOR * ncv / (3 * b) - 2;
+  blocks = (KF_BLOCK_EIGEN_COLS_PER_MODE * n + b - 1) / b;
+  want   = blocks + (blocks + 1) / 2 + 2;
+  ncv    = PetscMax(2 * nev, nev + 15);
+  bound  = KF_BLOCK_EIGEN_MEM_FACTOR * ncv / (3 * b) - 2;
   *maxblocks = PetscMax(KF_BLOCK_EIGEN_BLOCKS, PetscMin(want, bound));
   PetscFunctionReturn(0);
 }
@@ -78,16 +87,53 @@ typedef struct {
   KFMOrthBasis basis;
   KFFlexPCCtx  pc;         /* the block solves, their residual sampled as the Krylov-Schur path's applications */
   PetscInt     b, cap, nl; /* columns per block, most columns, local rows */
-  PetscScalar *W;          /* K+ M V for the basis's first kw columns, as solved (nl x cap) */
-  PetscReal   *H;          /* V^T M W (cap x cap, column-major): the projected K+ M */
+  PetscInt     ld, grown;  /* columns allocated in the basis, W, H, Y (KFBlockEigReserve), in how many steps */
+  PetscInt     firstcols;  /* the first allocation's columns at least (-kf_verify_eigen_first_mb) */
+  PetscScalar *W;          /* K+ M V for the basis's first kw columns, as solved (nl x ld) */
+  PetscReal   *H;          /* V^T M W (ld x ld, column-major): the projected K+ M */
   PetscInt     kw, k0, k2, blocks, solved; /* W's columns (the square of H), the last block's first, the basis's */
   PetscBool    purify;     /* M has massless dofs: the start block taken through K+ M once more (KFBlockEigStart) */
   PetscReal   *theta, *Y, *res; /* the Ritz pairs of the last step: omega^2 ascending, vectors (kw x kw), residuals */
   PetscLogDouble t_apply, t_orth, t_proj, t_res; /* seconds: the block solves (residual checks included), Gram-Schmidt, H, the Ritz residuals */
   PetscLogDouble t_start, t_out;                 /* ... the start block (its solve and append), the modes returned (purified, normalized) */
+  PetscLogDouble t_grow;                         /* ... the arrays' growth (within Gram-Schmidt's and the start block's) */
 } KFBlockEig;
 
 static PetscErrorCode KFBlockEigRotate(KFBlockEig *, Mat);
+
+/* Room for n columns in the basis and in W, H, Y and the Ritz values (at most cap): when it grows, at least doubled and
+   at least firstcols (-kf_verify_eigen_first_mb's worth of local rows). The big arrays (the basis's V and M V, W)
+   grow by realloc and are never zero-filled: a page not yet written is not resident, so they hold in memory the
+   columns made, not the cap. The first allocation's 32 MB default is glibc malloc's largest mmap threshold: a block
+   that size is mapped on its own and realloc remaps its pages instead of copying them; blocks from the heap were
+   copied, the old and the new both resident meanwhile (measured on the 57k solid: 28 MB more than the cap's arrays
+   at the peak, growing from the start block). H is laid out again at the new leading dimension (its entries never
+   written are the block Hessenberg zeros Rayleigh-Ritz reads). */
+static PetscErrorCode KFBlockEigReserve(KFBlockEig *be, PetscInt n)
+{
+  PetscInt       ld;
+  PetscReal     *H;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  n = PetscMin(n, be->cap);
+  if (n <= be->ld) PetscFunctionReturn(0);
+  PetscCall(PetscTime(&t0));
+  ld = PetscMin(be->cap, PetscMax(PetscMax(n, 2 * be->ld), be->firstcols));
+  PetscCall(KFMOrthBasisReserve(be->basis, ld));
+  PetscCall(PetscRealloc(sizeof(PetscScalar) * (be->nl * ld + 1), &be->W));
+  PetscCall(PetscCalloc1(ld * ld, &H));
+  for (PetscInt j = 0; j < be->ld; j++) PetscCall(PetscArraycpy(&H[j * ld], &be->H[j * be->ld], be->ld));
+  PetscCall(PetscFree(be->H));
+  be->H = H;
+  PetscCall(PetscFree3(be->theta, be->Y, be->res));
+  PetscCall(PetscMalloc3(ld, &be->theta, ld * ld, &be->Y, ld, &be->res));
+  be->ld = ld;
+  be->grown++;
+  PetscCall(PetscTime(&t1));
+  be->t_grow += t1 - t0;
+  PetscFunctionReturn(0);
+}
 
 /* a uniform number in [-1, 1) from the global row, the column and nothing else: the same start on any rank count */
 static PetscReal KFBlockRandom(PetscInt row, PetscInt col)
@@ -143,6 +189,7 @@ static PetscErrorCode KFBlockEigStart(KFBlockEig *be, PetscInt nrand)
     be->solved += be->b;
   }
   PetscCall(KFBlockEigRotate(be, X));
+  PetscCall(KFBlockEigReserve(be, be->b));
   PetscCall(KFMOrthBasisAppend(be->basis, X, KF_BLOCK_EIGEN_DEFL, &ndefl));
   PetscCall(MatDestroy(&X));
   PetscCall(MatDestroy(&S));
@@ -234,6 +281,7 @@ static PetscErrorCode KFBlockEigStep(KFBlockEig *be, PetscBool *grew)
   PetscCall(MatDenseRestoreArrayRead(X, &w));
   be->kw = k1;
   PetscCall(KFBlockEigRotate(be, X));
+  PetscCall(KFBlockEigReserve(be, k1 + p));
   PetscCall(KFMOrthBasisAppend(be->basis, X, KF_BLOCK_EIGEN_DEFL, &ndefl));
   PetscCall(PetscTime(&t0));
   be->t_orth += t0 - t1;
@@ -246,7 +294,7 @@ static PetscErrorCode KFBlockEigStep(KFBlockEig *be, PetscBool *grew)
   PetscCall(PetscMalloc1(k2 * p + 1, &h));
   PetscCall(KFArrayTransposeMultGather(s->comm, nl, k2, mv, nl, p, &be->W[k0 * nl], nl, h));
   for (PetscInt j = 0; j < p; j++)
-    for (PetscInt i = 0; i < k2; i++) be->H[i + (k0 + j) * be->cap] = h[i + j * k2];
+    for (PetscInt i = 0; i < k2; i++) be->H[i + (k0 + j) * be->ld] = h[i + j * k2];
   PetscCall(PetscFree(h));
   PetscCall(PetscTime(&t1));
   be->t_proj += t1 - t0;
@@ -264,7 +312,7 @@ static PetscErrorCode KFBlockEigRitz(KFBlockEig *be, PetscInt *nritz)
   PetscFunctionBegin;
   PetscCall(PetscMalloc2(k * k, &A, k, &mu));
   for (PetscInt j = 0; j < k; j++)
-    for (PetscInt i = 0; i < k; i++) A[i + j * k] = 0.5 * (be->H[i + j * be->cap] + be->H[j + i * be->cap]);
+    for (PetscInt i = 0; i < k; i++) A[i + j * k] = 0.5 * (be->H[i + j * be->ld] + be->H[j + i * be->ld]);
   PetscCall(PetscBLASIntCast(k, &bk));
   lwork = PetscMax(3 * bk, 1) * 8;
   PetscCall(PetscMalloc1(lwork, &work));
@@ -390,7 +438,7 @@ static PetscErrorCode KFBlockEigConverged(KFBlockEig *be, PetscInt nritz, PetscR
     PetscReal e = 0;
     for (PetscInt i = k; i < k2; i++) {
       PetscReal d = 0;
-      for (PetscInt c = k0; c < k; c++) d += be->H[i + c * be->cap] * be->Y[c + j * k];
+      for (PetscInt c = k0; c < k; c++) d += be->H[i + c * be->ld] * be->Y[c + j * k];
       e += d * d;
     }
     be->res[j] = be->theta[j] * PetscSqrtReal(e);
@@ -404,7 +452,7 @@ static PetscErrorCode KFBlockEigConverged(KFBlockEig *be, PetscInt nritz, PetscR
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFBlockEigCreate(KFSystem sys, KFFlexSolver solver, PetscInt nrand, PetscInt maxblocks, KFBlockEig *be)
+static PetscErrorCode KFBlockEigCreate(KFSystem sys, KFFlexSolver solver, PetscInt nrand, PetscInt maxblocks, PetscInt firstmb, KFBlockEig *be)
 {
   KFScene  s = sys->scene;
   PetscInt n0;
@@ -419,10 +467,8 @@ static PetscErrorCode KFBlockEigCreate(KFSystem sys, KFFlexSolver solver, PetscI
   be->b      = s->ninputs + s->noutputs + nrand;
   be->cap    = PetscMin(be->b * (maxblocks + 2), s->nsys);
   be->nl     = s->nsys_local;
-  PetscCall(KFMOrthBasisCreate(sys, be->cap, &be->basis));
-  PetscCall(PetscMalloc1(be->nl * be->cap + 1, &be->W));
-  PetscCall(PetscCalloc1(be->cap * be->cap, &be->H));
-  PetscCall(PetscMalloc3(be->cap, &be->theta, be->cap * be->cap, &be->Y, be->cap, &be->res));
+  be->firstcols = be->nl ? (PetscInt)PetscMin((PetscReal)be->cap, PetscCeilReal(firstmb * 1048576.0 / (sizeof(PetscScalar) * be->nl))) : 0;
+  PetscCall(KFMOrthBasisCreate(sys, be->cap, &be->basis)); /* W, H and the basis allocated as it grows */
   PetscFunctionReturn(0);
 }
 
@@ -444,20 +490,20 @@ PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEige
 {
   KFScene          s = sys->scene;
   KFBlockEig       be;
-  PetscInt         method, nrand, maxblocks, nret = 0, nritz = 0;
+  PetscInt         method, nrand, maxblocks, firstmb, nret = 0, nritz = 0;
   PetscBool        grew = PETSC_TRUE;
   PetscReal        worst = 0;
   KFFlexSolverPerf before, after;
   PetscLogDouble   t0, t1;
 
   PetscFunctionBegin;
-  PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks));
+  PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks, &firstmb));
   if (maxblocks == PETSC_DECIDE) PetscCall(KFBlockEigenMaxBlocks(hint, nev, s->ninputs + s->noutputs + nrand, &maxblocks));
   *cap    = maxblocks;
   *ok     = PETSC_FALSE;
   *nconv  = 0;
   *P      = NULL;
-  PetscCall(KFBlockEigCreate(sys, solver, nrand, maxblocks, &be));
+  PetscCall(KFBlockEigCreate(sys, solver, nrand, maxblocks, firstmb, &be));
   *bcols = be.b;
   PetscCall(KFFlexSolverGetPerf(solver, &before));
   PetscCall(PetscTime(&t0));
@@ -483,7 +529,7 @@ PetscErrorCode KFBlockEigenSolve(KFSystem sys, KFFlexSolver solver, const KFEige
   PetscCall(KFFlexSolverGetPerf(solver, &after));
   for (PetscInt j = 0; j < nret; j++) worst = PetscMax(worst, be.res[j]);
   /* the -info line of the Krylov-Schur path (iterations: blocks), which benchmarks/proof_cost/bench.py reads */
-  PetscCall(PetscInfo(NULL, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (block Krylov, %" PetscInt_FMT " columns per block, cap %" PetscInt_FMT " blocks for %" PetscInt_FMT " modes asked, %" PetscInt_FMT " Ritz pairs, %" PetscInt_FMT " returned, largest residual returned %g; seconds: block solves %g, Gram-Schmidt %g, projection %g, Ritz residuals %g, start block %g, modes out %g)\n", be.blocks, after.blocks - before.blocks, after.solve_columns - before.solve_columns, (double)(after.solve_seconds - before.solve_seconds), be.b, maxblocks, nev, nritz, nret, (double)worst, be.t_apply, be.t_orth, be.t_proj, be.t_res, be.t_start, be.t_out));
+  PetscCall(PetscInfo(NULL, "kryflex verification eigensolve: %" PetscInt_FMT " iterations, %" PetscInt_FMT " K+ applications, %" PetscInt_FMT " columns, %g s in the factor's solves (block Krylov, %" PetscInt_FMT " columns per block, cap %" PetscInt_FMT " blocks for %" PetscInt_FMT " modes asked, %" PetscInt_FMT " Ritz pairs, %" PetscInt_FMT " returned, largest residual returned %g; seconds: block solves %g, Gram-Schmidt %g, projection %g, Ritz residuals %g, start block %g, modes out %g, the arrays' growth %g; arrays for %" PetscInt_FMT " of the cap's %" PetscInt_FMT " columns, allocated in %" PetscInt_FMT " steps)\n", be.blocks, after.blocks - before.blocks, after.solve_columns - before.solve_columns, (double)(after.solve_seconds - before.solve_seconds), be.b, maxblocks, nev, nritz, nret, (double)worst, be.t_apply, be.t_orth, be.t_proj, be.t_res, be.t_start, be.t_out, be.t_grow, be.ld, be.cap, be.grown));
   PetscCall(KFBlockEigDestroy(&be));
   PetscFunctionReturn(0);
 }

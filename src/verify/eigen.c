@@ -494,13 +494,13 @@ static PetscErrorCode KFEigenModesOut(KFSystem sys, Mat P, PetscInt m, PetscInt 
 static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, const KFEigenHint *hint, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes, PetscBool *done)
 {
   KFScene   s = sys->scene;
-  PetscInt  method, nrand, maxblocks, nblocks, b, cap;
+  PetscInt  method, nrand, maxblocks, firstmb, nblocks, b, cap;
   PetscReal fcut = hint && hint->cut2 > 0 ? PetscSqrtReal(hint->cut2) / (2 * PETSC_PI) : 0;
   Mat       P;
 
   PetscFunctionBegin;
   *done = PETSC_FALSE;
-  PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks));
+  PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks, &firstmb));
   if (method == 0) method = s->nsys >= KF_BLOCK_EIGEN_MIN_DOFS ? 1 : 2;
   if (method != 1 || !hint) PetscFunctionReturn(0);
   PetscCall(KFFlexSolverSetUp(solver));

@@ -220,13 +220,64 @@ def test_block_eigensolve_cap_follows_the_modes_asked_two_ranks(tmp_path):
         assert np.abs(T2 - T1).max() <= 1e-9 * np.abs(T1).max()
 
 
+BLOCK_INFO = re.compile(r"eigensolve: (\d+) iterations, .*block Krylov, (\d+) columns per block, cap (\d+) blocks .*"
+                        r"arrays for (\d+) of the cap's (\d+) columns, allocated in (\d+) steps\)")
+
+
+def probe_one_rank(path, out, options):
+    """(the probe's npz, [(blocks, columns per block, cap, columns allocated, the cap's columns, steps)] from the block
+    eigensolve's -info lines): the scene reduced on 1 rank by the sparse probe with the options given"""
+    from test_sparse_eigensolve import ENV, PROBE
+    p = subprocess.run([sys.executable, PROBE, path, str(out), "-info", ":sys"] + options, env=ENV,
+                       capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stdout + p.stderr[-3000:]
+    return np.load(out), [tuple(int(x) for x in m) for m in BLOCK_INFO.findall(p.stdout)]
+
+
+def test_block_eigensolve_arrays_grow_with_the_basis(tmp_path):
+    """The block path's arrays (V, M V, K+ M V, the projection) are allocated as its basis grows, at least doubling,
+    from the start block on with -kf_verify_eigen_first_mb 0 (the default first allocation, 32 MB, holds the whole
+    cap of a model this small). Forced to many blocks (100 modes of the 360-dof frame, blocks of 7 columns: 44
+    blocks, the basis filling the system) they grow in several steps and every mode is dense SciPy eigh's (1e-9).
+    With a cap far above the blocks used (500 blocks, the modes to the cut) the arrays are those of the blocks used,
+    well below the cap's, and the reference, frequencies and response, is the automatic cap's bit for bit, and the
+    default first allocation's."""
+    scene, systems, _ = model("frame", tmp_path)
+    path = os.path.join(str(tmp_path), "scene.yaml")
+    words = ["-kf_verify_eigen_method", "block", "-kf_verify_eigen_first_mb", "0"]
+    many, info_many = probe_one_rank(path, tmp_path / "many.npz", words + ["-kf_verify_modes", "100"])
+    auto, info = probe_one_rank(path, tmp_path / "auto.npz", words)
+    far, info_far = probe_one_rank(path, tmp_path / "far.npz", words + ["-kf_verify_eigen_max_blocks", "500"])
+    first, info_first = probe_one_rank(path, tmp_path / "first.npz", words[:2])
+    print("(blocks, columns per block, cap, columns allocated, the cap's columns, steps)\n100 modes: %s\n"
+          "to the cut, automatic cap: %s\nto the cut, cap 500: %s\nto the cut, first allocation 32 MB: %s"
+          % (info_many, info, info_far, info_first))
+    assert len(info_many) == len(info) == len(info_far) == len(info_first) >= len(systems)
+    for blocks, b, cap, ld, capcols, steps in info_many:  # grown from the start block, within the cap
+        assert 12 < blocks <= cap and b == 7 and steps >= 3 and (blocks + 1) * b <= 2 * ld and ld <= capcols
+    for (blocks, _, cap, ld, capcols, steps), (blocks_far, _, cap_far, ld_far, capcols_far, _) in zip(info, info_far):
+        assert blocks == blocks_far < cap < cap_far == 500 and steps >= 2
+        assert ld <= capcols and ld_far <= 2 * (blocks + 1) * 7 and 2 * ld_far <= capcols_far  # arrays of the blocks used
+    for (_, _, _, ld, capcols, steps), (_, _, _, ld_first, _, steps_first) in zip(info, info_first):
+        assert ld_first == capcols and steps_first == 1  # the whole cap at once, its pages touched as written
+    for c, (Ms, Ks) in enumerate(systems):
+        f = many["f%d" % c]
+        f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
+        print("configuration %d: %d modes, vs dense SciPy eigh %.1e" % (c, f.size, np.abs(f / f_dense[:f.size] - 1).max()))
+        assert f.size == 100 and np.abs(f / f_dense[:f.size] - 1).max() <= 1e-9
+        assert auto["f%d" % c].size > 0
+        for key in ("f%d", "T%d", "w%d"):
+            assert np.array_equal(auto[key % c], far[key % c]) and np.array_equal(auto[key % c], first[key % c])
+
+
 def test_bad_block_options(tmp_path):
     """A bad method or count is refused before any work, naming the option."""
     scene, _, _ = model("clamped", tmp_path)
     for k, v, msg in (("kf_verify_eigen_method", "lanczos", "kf_verify_eigen_method"),
                       ("kf_verify_eigen_random", -1, "kf_verify_eigen_random"),
                       ("kf_verify_eigen_max_blocks", 0, "kf_verify_eigen_max_blocks"),
-                      ("kf_verify_eigen_max_blocks", -2, "kf_verify_eigen_max_blocks")):
+                      ("kf_verify_eigen_max_blocks", -2, "kf_verify_eigen_max_blocks"),
+                      ("kf_verify_eigen_first_mb", -1, "kf_verify_eigen_first_mb")):
         with pytest.raises(Exception, match=msg):
             reduce_sparse(scene, "block", **{k: v})
 

@@ -193,22 +193,25 @@ def test_block_eigensolve_cap_follows_the_modes_asked(tmp_path):
 
 @pytest.mark.mpi
 def test_block_eigensolve_cap_follows_the_modes_asked_two_ranks(tmp_path):
-    """The 100 modes above on 2 ranks with the cap's default: every configuration on the block path (its -info line:
-    the cap sized from the modes asked, 100 returned), the same frequencies and reference response as 1 rank
-    (1e-9)."""
+    """The 100 modes above on 2 ranks with the cap's default, the arrays grown from the start block
+    (-kf_verify_eigen_first_mb 0; the serial run allocates them once): every configuration on the block path (its
+    -info line: the cap sized from the modes asked, 100 returned), the same frequencies and reference response as 1
+    rank (1e-9)."""
     from test_sparse_eigensolve import ENV, PROBE
     scene, systems, _ = model("frame", tmp_path)
     serial = reduce_sparse(scene, "block", kf_verify_modes=100)
     path = os.path.join(str(tmp_path), "scene.yaml")
     out = tmp_path / "two.npz"
     p = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, path, str(out), "-kf_verify_eigen_method",
-                        "block", "-kf_verify_modes", "100", "-info", ":sys"], env=ENV, capture_output=True,
-                       text=True, timeout=240)
+                        "block", "-kf_verify_modes", "100", "-kf_verify_eigen_first_mb", "0", "-info", ":sys"],
+                       env=ENV, capture_output=True, text=True, timeout=240)
     assert p.returncode == 0, p.stdout + p.stderr[-3000:]
     info = re.findall(r"block Krylov, 7 columns per block, cap (\d+) blocks for 100 modes asked, \d+ Ritz pairs, "
                       r"(\d+) returned", p.stdout)
-    print(info)
+    steps = [int(x) for x in re.findall(r"allocated in (\d+) steps", p.stdout)]
+    print(info, steps)
     assert len(info) >= len(systems) and all(int(cap) > 12 and ret == "100" for cap, ret in info), p.stdout[-3000:]
+    assert len(steps) == len(info) and min(steps) >= 3
     two = np.load(out)
     for c in range(len(systems)):
         f1, f2 = np.ravel(serial.result(c, "full_frequencies_hz")), two["f%d" % c]
@@ -257,13 +260,14 @@ def test_block_eigensolve_arrays_grow_with_the_basis(tmp_path):
         assert 12 < blocks <= cap and b == 7 and steps >= 3 and (blocks + 1) * b <= 2 * ld and ld <= capcols
     for (blocks, _, cap, ld, capcols, steps), (blocks_far, _, cap_far, ld_far, capcols_far, _) in zip(info, info_far):
         assert blocks == blocks_far < cap < cap_far == 500 and steps >= 2
-        assert ld <= capcols and ld_far <= 2 * (blocks + 1) * 7 and 2 * ld_far <= capcols_far  # arrays of the blocks used
+        assert ld <= capcols and ld_far <= 2 * (blocks + 1) * 7 and 2 * ld_far <= capcols_far  # the blocks used
     for (_, _, _, ld, capcols, steps), (_, _, _, ld_first, _, steps_first) in zip(info, info_first):
         assert ld_first == capcols and steps_first == 1  # the whole cap at once, its pages touched as written
     for c, (Ms, Ks) in enumerate(systems):
         f = many["f%d" % c]
         f_dense = dense_flexible_frequencies(np.asarray(Ms), np.asarray(Ks))
-        print("configuration %d: %d modes, vs dense SciPy eigh %.1e" % (c, f.size, np.abs(f / f_dense[:f.size] - 1).max()))
+        print("configuration %d: %d modes, vs dense SciPy eigh %.1e"
+              % (c, f.size, np.abs(f / f_dense[:f.size] - 1).max()))
         assert f.size == 100 and np.abs(f / f_dense[:f.size] - 1).max() <= 1e-9
         assert auto["f%d" % c].size > 0
         for key in ("f%d", "T%d", "w%d"):

@@ -92,7 +92,7 @@ typedef struct {
   PetscScalar *W;          /* K+ M V for the basis's first kw columns, as solved (nl x ld) */
   PetscReal   *H;          /* V^T M W (ld x ld, column-major): the projected K+ M */
   PetscInt     kw, k0, k2, blocks, solved; /* W's columns (the square of H), the last block's first, the basis's */
-  PetscBool    purify;     /* M has massless dofs: the start block taken through K+ M once more (KFBlockEigStart) */
+  PetscBool    purify;     /* M is singular: the start block taken through K+ M once more (KFBlockEigStart) */
   PetscReal   *theta, *Y, *res; /* the Ritz pairs of the last step: omega^2 ascending, vectors (kw x kw), residuals */
   PetscLogDouble t_apply, t_orth, t_proj, t_res; /* seconds: the block solves (residual checks included), Gram-Schmidt, H, the Ritz residuals */
   PetscLogDouble t_start, t_out;                 /* ... the start block (its solve and append), the modes returned (purified, normalized) */
@@ -146,7 +146,7 @@ static PetscReal KFBlockRandom(PetscInt row, PetscInt col)
   return (PetscReal)(z >> 11) / 4503599627370496.0 - 1.0; /* 53 bits over 2^52 */
 }
 
-/* The start block K+ [G, H^T, R] appended to the basis (one block solve), or with massless dofs K+ M K+ [G, H^T, R]
+/* The start block K+ [G, H^T, R] appended to the basis (one block solve), or with M singular K+ M K+ [G, H^T, R]
    (two): K+ G is the static response to the loads, which on a massless dof (the inputs of the stick aircraft act
    there) or through M's null space is not in the space the modes live in, K+ M's range (on M's null space the
    static condensation of the rest); what M cannot see of it the basis's M-orthonormalization cannot control either,
@@ -455,12 +455,10 @@ static PetscErrorCode KFBlockEigConverged(KFBlockEig *be, PetscInt nritz, PetscR
 static PetscErrorCode KFBlockEigCreate(KFSystem sys, KFFlexSolver solver, PetscInt nrand, PetscInt maxblocks, PetscInt firstmb, KFBlockEig *be)
 {
   KFScene  s = sys->scene;
-  PetscInt n0;
 
   PetscFunctionBegin;
   PetscCall(PetscMemzero(be, sizeof(*be)));
-  PetscCall(KFSystemMasslessCount(sys, &n0));
-  be->purify = (PetscBool)(n0 > 0);
+  PetscCall(KFSystemMassSingular(sys, &be->purify));
   be->sys    = sys;
   be->solver = solver;
   be->pc.solver = solver;

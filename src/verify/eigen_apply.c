@@ -1,6 +1,7 @@
 /* What the verification's eigensolves with a flexible solver's factor share (src/verify/eigen.c, Krylov-Schur;
    src/verify/block_eigen.c, block Krylov): K+ applications with their residual sampled, modes M-normalized, and
-   the count of massless dofs (the dense path condenses them, the block path starts differently with them). */
+   the count of massless dofs (the dense path condenses them) and whether M is singular (the block path starts
+   differently then). */
 #include <kryflex_impl.h>
 #include <kryflex/flexsolverimpl.h> /* the solver's refinement steps, off for the unsampled applications */
 #include "eigen_impl.h"
@@ -87,5 +88,41 @@ PetscErrorCode KFSystemMasslessCount(KFSystem sys, PetscInt *n0)
   PetscCall(VecRestoreArrayRead(v, &x));
   PetscCall(VecDestroy(&v));
   PetscCall(MPIU_Allreduce(&c, n0, 1, MPIU_INT, MPI_SUM, sys->scene->comm));
+  PetscFunctionReturn(0);
+}
+
+/* a row of M_S with at most this many nonzeros throughout: lumped masses (at a node, offset from it, or moved onto an
+   independent node with the rigid elements eliminated: one node's six dofs, twelve where a rigid element's mass spans
+   two nodes), whose factor fills in little beyond its own blocks; consistent masses (81 per row on the hex8 solid) have
+   more, and their factor would cost about what K's does */
+#define KF_LUMPED_ROW_NNZ 12
+
+/* Whether M_S is singular: a zero row (a massless dof), or, for a lumped mass (KF_LUMPED_ROW_NNZ), null pivots of its
+   factor (KFSystemMassNullity, the 1e-8 relative threshold). Offset masses and rigid elements eliminated into the
+   independent nodes (M = T^T M T) leave M as singular as its massless rotations made it, yet with no zero diagonal.
+   A mass with more couplings per row (consistent element masses) is taken as assembled: definite. */
+PetscErrorCode KFSystemMassSingular(KFSystem sys, PetscBool *singular)
+{
+  PetscInt n0, rstart, rend, most = 0;
+
+  PetscFunctionBegin;
+  PetscCall(KFSystemMasslessCount(sys, &n0));
+  *singular = (PetscBool)(n0 > 0);
+  if (*singular) PetscFunctionReturn(0);
+  PetscCall(MatGetOwnershipRange(sys->Ms, &rstart, &rend));
+  for (PetscInt i = rstart; i < rend; i++) {
+    PetscInt nz;
+
+    PetscCall(MatGetRow(sys->Ms, i, &nz, NULL, NULL));
+    most = PetscMax(most, nz);
+    PetscCall(MatRestoreRow(sys->Ms, i, &nz, NULL, NULL));
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &most, 1, MPIU_INT, MPI_MAX, sys->scene->comm));
+  if (most <= KF_LUMPED_ROW_NNZ) {
+    PetscInt nnull;
+
+    PetscCall(KFSystemMassNullity(sys, PETSC_FALSE, &nnull, &n0));
+    *singular = (PetscBool)(nnull > 0);
+  }
   PetscFunctionReturn(0);
 }

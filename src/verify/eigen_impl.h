@@ -15,5 +15,7 @@ typedef struct {
 PETSC_INTERN PetscErrorCode KFFlexPCApplySampled(KFFlexPCCtx *, Mat B, Mat X);
 PETSC_INTERN PetscErrorCode KFEPSNormalizeBlock(KFSystem, Mat P);
 PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
+PETSC_INTERN PetscErrorCode KFSystemMassSingular(KFSystem, PetscBool *);
+PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem, PetscBool, PetscInt *, PetscInt *);
 PETSC_INTERN PetscErrorCode KFBlockEigenSolve(KFSystem, KFFlexSolver, const KFEigenHint *, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *P, PetscBool *ok, PetscInt *nblocks, PetscInt *bcols, PetscInt *cap);
 #endif

@@ -278,6 +278,31 @@ def lumped_frame():
             "band": BAND, "damping": ZETA, "accuracy": 0.01}
 
 
+def rigid_offset_frame():
+    """The lumped frame as a code writes it after eliminating rigid elements: each node of lumped_frame (its mass at
+    the node p, rotations massless) becomes the dependent end of an RBE2 from an independent node at p - r (r random,
+    a few centimetres to 0.2 m per component), and the dependent dofs are condensed into the independent node's: u_dep = T u_ind,
+    T = [[I, -[r]x], [0, I]] per node, K and M replaced by T^T K T and T^T M T, the nodes at the independent points.
+    The mass block m T^T T couples the independent rotations to the translations: no zero diagonal is left, yet M is
+    as singular as before (rank 3 per node: half the 90 dofs are M's null space). Rigid modes are the geometric ones
+    of the independent nodes (T maps them onto the frame's)."""
+    spec = lumped_frame()
+    body = spec["bodies"]["beam"]
+    K, M = np.asarray(body["stiffness"]), np.asarray(body["mass"])
+    n = len(body["nodes"])
+    rng = np.random.default_rng(5)
+    T = np.eye(6 * n)
+    nodes = []
+    for i, (nid, x, y, z, dofs) in enumerate(body["nodes"]):
+        r = rng.uniform(0.03, 0.2, 3) * rng.choice([-1.0, 1.0], 3)
+        T[6 * i:6 * i + 3, 6 * i + 3:6 * i + 6] = -np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+        nodes.append([nid, x - r[0], y - r[1], z - r[2], dofs])
+    Kc, Mc = T.T @ K @ T, T.T @ M @ T
+    body.update(stiffness=0.5 * (Kc + Kc.T), mass=0.5 * (Mc + Mc.T), nodes=nodes)
+    spec["name"] = "rigid_offset_frame"
+    return spec
+
+
 def condensed_frf(Ms, Ks, Gs, Hs, f_hz, zeta=ZETA):
     """FRF of a pencil with massless dofs (zero rows of Ms): static condensation onto the dofs with mass, the
     condensed loads and readings, the rigid modes from the condensed K's null space."""

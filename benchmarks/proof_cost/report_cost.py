@@ -8,7 +8,8 @@ in a fresh Python (the cost kryflex reduce pays: matplotlib's import included), 
            figures) and left to load matplotlib, then write_report timed (the reduction's time is not counted).
 
 Printed per run: write_report's wall, this process's CPU and the helpers' CPU; then the PNGs' pixels (decoded) compared
-with the other tree's alone run, and summary.json and report.md byte for byte. Run on an idle machine for the wall
+with the same tree's alone run and the files both trees write with the other tree's alone run, summary.json and
+report.md byte for byte. --modes: some of the three modes only. Run on an idle machine for the wall
 figures; on a shared one read the CPU columns.
 
     .venv/bin/python benchmarks/proof_cost/report_cost.py OUTDIR_OF_A_DEFAULT_RUN --against /work/main [--repeat 3]
@@ -28,7 +29,14 @@ if sys.argv[3] == "ahead":
     import inspect
     from kryflex.report.helper import start_helpers, _ahead
     if "prepare" in inspect.signature(start_helpers).parameters:
-        start_helpers(prepare={"band_hz": s.band_hz, "configurations": len(s.frf)})
+        spec = {"band_hz": s.band_hz, "configurations": len(s.frf)}
+        try:                # the pairs' names, where the tree's report draws them in one figure (kryflex reduce's spec)
+            from kryflex.report.formatting import MAX_PAIRS_PER_FIGURE, pair_name
+            pairs = [pair_name(o, i) for o in s.outputs for i in s.inputs]
+            spec["pairs"] = pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []
+        except ImportError:
+            pass
+        start_helpers(prepare=spec)
     else:
         start_helpers()
     time.sleep(float(sys.argv[4]))          # the reduction's time, during which the helpers load matplotlib
@@ -81,9 +89,12 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--settle", type=float, default=3.0, help="seconds the helpers started ahead get to load")
     ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "kryflex_report_cost"))
+    ap.add_argument("--modes", default="alone,on call,ahead", help="comma-separated, of: alone, on call, ahead")
     args = ap.parse_args()
-    trees = [("against", os.path.abspath(args.against), ("alone", "on call", "ahead")),
-             ("this", ROOT, ("alone", "on call", "ahead"))]
+    modes = tuple(m.strip() for m in args.modes.split(","))
+    if "alone" not in modes:
+        modes = ("alone",) + modes          # the reference of the comparisons
+    trees = [("against", os.path.abspath(args.against), modes), ("this", ROOT, modes)]
     print("report of %s, %s UTC, load average %s" % (args.summary, time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
                                                     " ".join("%.1f" % x for x in os.getloadavg())), flush=True)
     print("%-8s %-8s %8s %8s %8s %8s %8s   load" % ("tree", "mode", "wall", "cpu", "helpers", "of it", "cpu sum"))
@@ -101,14 +112,18 @@ def main():
                       r["ahead"], r["cpu"] + r["helpers"] - r["ahead"], os.getloadavg()[0]), flush=True)
     ref = contents(os.path.join(args.work, "against_alone"))
     for name, _, modes in trees:
+        own = contents(os.path.join(args.work, "%s_alone" % name))
         for mode in modes:
             folder = os.path.join(args.work, "%s_%s" % (name, mode.replace(" ", "_")))
             got = contents(folder)
-            same = sorted(got) == sorted(ref) and all(got[n] == ref[n] for n in ref)
+            same = sorted(got) == sorted(own) and all(got[n] == own[n] for n in own)
+            common = sorted(set(got) & set(ref))
+            differ = [n for n in common if got[n] != ref[n]]
             size = sum(os.path.getsize(os.path.join(folder, n)) for n in got if n.endswith(".png"))
-            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files, the against tree's pixels and "
-                  "text: %s; PNGs %.2f MB" % (name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")],
-                                    len(got), same, size / 1e6))
+            print("%-8s %-8s best wall %.2f s (%.2f of against alone); %d files (%d PNGs, %.2f MB), the same as its "
+                  "tree's alone run: %s; of the %d files the against tree writes too, differing: %s" % (
+                      name, mode, best[(name, mode)], best[(name, mode)] / best[("against", "alone")], len(got),
+                      sum(n.endswith(".png") for n in got), size / 1e6, same, len(common), differ or "none"))
 
 
 if __name__ == "__main__":

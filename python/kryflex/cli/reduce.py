@@ -22,6 +22,8 @@ def parser():
     p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
     p.add_argument("--npz", action="store_true", help="also export the reduced bodies' arrays as NumPy .npz (kryflex reads only reduced.h5)")
     p.add_argument("-quiet", "--quiet", action="store_true", help="no progress lines (-kf_quiet)")
+    p.add_argument("--pair-plots", action="store_true",
+                   help="also a Bode plot per configuration and input/output pair (bode_<angle>deg_<output>_<input>.png)")
     return p
 
 
@@ -64,9 +66,12 @@ def run(argv):
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
         if rank() == 0 and draws_figures(scene):
             # its helper processes, where cores are free, load matplotlib while the reduction runs (report/helper.py)
+            from ..report.formatting import MAX_PAIRS_PER_FIGURE, pair_name
             from ..report.helper import start_helpers
-            start_helpers(ranks=common.size(), prepare={"band_hz": list(scene.band),
-                                                        "configurations": len(scene.configurations)})
+            pairs = [pair_name(o, i) for o in scene.output_names for i in scene.input_names]
+            start_helpers(ranks=common.size(), prepare={
+                "band_hz": list(scene.band), "configurations": len(scene.configurations),
+                "pairs": pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []})
 
         # the model check (kryflex check): its warnings before any work, also under -quiet
         health = collective(lambda: model_check(scene))
@@ -103,7 +108,8 @@ def run(argv):
                 # estimated against the richest candidate) the short report with the estimated verdict
                 if s.frf and not s.verdict.error_estimated:
                     # its figures drawn by the helpers while the model file is written, then finished below
-                    pending.append(begin_report(s, staging.path, between=common.raise_if_interrupted))
+                    pending.append(begin_report(s, staging.path, between=common.raise_if_interrupted,
+                                                pair_plots=args.pair_plots))
                 else:
                     write_unverified(s, staging.path)
 

@@ -1,6 +1,6 @@
 """Facts derived from a summary that several report sections and figures share."""
 from ..io.scene_schema import NO_JOINT_LABEL
-from .formatting import MAX_MOMENT_ENTRIES_SHOWN
+from .formatting import MAX_MOMENT_ENTRIES_SHOWN, pair_name
 from ..results import ChosenModel, Summary, SummaryError
 from .schema import ReportError
 
@@ -103,7 +103,7 @@ class _Context:
 
     def entry_name(self, entry):
         o, i = entry
-        return f"{self.outputs[o]} ← {self.inputs[i]}"
+        return pair_name(self.outputs[o], self.inputs[i])
 
     def mode_number(self, flex_index):
         """Paper-style mode number of the flex_index-th (0-based) flexible mode: rigid modes come first."""

@@ -3,12 +3,14 @@ import numpy as np
 
 from . import plots
 from .context import _Context
-from .formatting import RATIO_EXACT_TOL, safe_name
+from .formatting import MAX_PAIRS_PER_FIGURE, RATIO_EXACT_TOL, safe_name
 from .paper import paper_figures
 
 
-def plot_file_names(summary):
-    """{"bode": {(label, (o, i)): file}, "importance": {label: file}} with file-name-safe, distinct names."""
+def plot_file_names(summary, pair_plots=False):
+    """{"bode_pairs": {label: file}, "bode": {(label, (o, i)): file}, "importance": {label: file}} with file-name-safe,
+    distinct names: the Bode plots of a configuration in one figure (a cell per input/output pair, "bode_pairs") when it
+    has at most MAX_PAIRS_PER_FIGURE pairs, else a figure per pair ("bode"); pair_plots: a figure per pair too."""
     c = _Context(summary)
     used = set()
 
@@ -19,10 +21,13 @@ def plot_file_names(summary):
         used.add(candidate)
         return candidate
 
-    names = {"bode": {}, "importance": {}}
+    names = {"bode_pairs": {}, "bode": {}, "importance": {}}
+    together = len(c.entries) <= MAX_PAIRS_PER_FIGURE
     for label in c.labels:
         unit = "" if c.no_joint(label) else "deg"   # bode_15deg_..., bode_structure_... without revolute joints
-        for (o, i) in c.entries:
+        if together:
+            names["bode_pairs"][label] = unique(f"bode_{safe_name(label)}{unit}.png")
+        for (o, i) in (c.entries if pair_plots or not together else ()):
             names["bode"][(label, (o, i))] = unique(
                 f"bode_{safe_name(label)}{unit}_{safe_name(c.outputs[o])}_{safe_name(c.inputs[i])}.png")
         names["importance"][label] = unique(f"importance_{safe_name(label)}{unit}.png")
@@ -65,7 +70,20 @@ def figure_jobs(summary, plot_names, prepared=None):
     # two jobs (a share for each process of report/helper.py), each configuration's pairs in one of them; a process's
     # first figure draws the fixed layer too, unless prepared
     halves = [c.labels[:(len(c.labels) + 1) // 2], c.labels[(len(c.labels) + 1) // 2:]]
-    jobs += [(float(len(part) * len(c.entries)), lambda part=part: bode(part), "bode") for part in halves if part]
+    if plot_names["bode"]:
+        jobs += [(float(len(part) * len(c.entries)), lambda part=part: bode(part), "bode") for part in halves if part]
+
+    def bode_pairs(labels):     # a figure per configuration, its pairs as cells, on one reused figure
+        items = []
+        for label in labels:
+            freq, full, red = arrays[label]
+            items.append((freq, [(full[:, o, i], red[:, o, i], c.entry_name((o, i))) for (o, i) in c.entries],
+                          f"{c.angle(label)}{c.g_mark(label)}: full vs reduced ({c.model_name})"))
+        yield from zip([plot_names["bode_pairs"][label] for label in labels], plots.bode_pairs_pngs(items, reuse=reuse))
+    # a figure of six cells draws in about the time of 2.5 Bode plots (its y axes: 0.4 Bode plot each)
+    if plot_names["bode_pairs"]:
+        jobs += [(0.45 * len(part) * len(c.entries), lambda part=part: bode_pairs(part), "bode_pairs")
+                 for part in halves if part]
 
     def overview():
         o, i = c.dominant_entry

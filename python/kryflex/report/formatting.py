@@ -8,6 +8,14 @@ MAX_MOMENT_ENTRIES_SHOWN = 4
 # A mismatch list longer than this is cut, the rest being in summary.json.
 MAX_MISMATCHES_LISTED = 40
 DASH = "—"
+# The Bode plots of a configuration with at most this many input/output pairs are one figure (a cell per pair); with
+# more, one figure per pair (a figure of more cells would be too large to read).
+MAX_PAIRS_PER_FIGURE = 12
+
+
+def pair_name(output, input_):
+    """An input/output pair as the report names it: "output ← input"."""
+    return f"{output} ← {input_}"
 
 
 def fmt_freq(x):

@@ -42,9 +42,9 @@ MAIN_WRITE_WEIGHT = 6.0
 MAIN_IMPORT_WEIGHT = 16.0
 HELPER_MIN_WEIGHT = 20.0     # no helper for a lighter report: its start would cost more than it saves
 HELPERS_AHEAD = 2            # helpers started ahead of the report (start_helpers)
-# what each helper started ahead prepares (plots.prepared_figures' kinds), in turn: both the Bode figure (each draws
-# Bode plots), one the overview and the other the importance figures, which helper_shares then gives to it
-PREPARED_ROLES = (("bode", "overview"), ("bode", "importance"))
+# what each helper started ahead prepares (plots.prepared_figures' kinds), in turn: both the Bode figure of the pairs
+# (each draws Bode plots), one the overview and the other the importance figures, which helper_shares then gives to it
+PREPARED_ROLES = (("bode_pairs", "overview"), ("bode_pairs", "importance"))
 
 _ahead = []                  # the helpers start_helpers started, waiting for their work
 
@@ -142,13 +142,18 @@ class _Helper:
 def start_helpers(ranks=1, prepare=None):
     """Start the report's helpers now (kryflex reduce, as the run starts), when the cores this process may use
     outnumber the run's ranks (or KRYFLEX_REPORT_HELPER=1): they load NumPy and matplotlib while the reduction runs
-    and wait for the figures. prepare: {"band_hz": [low, high], "configurations": n}, the scene's, from which each
-    helper prepares its figures of PREPARED_ROLES meanwhile (plots.prepared_figures). Returns how many were started."""
+    and wait for the figures. prepare: {"band_hz": [low, high], "configurations": n, "pairs": [pair names]}, the
+    scene's, from which each helper prepares its figures of PREPARED_ROLES meanwhile (plots.prepared_figures; without
+    pairs, the report's Bode plots are a figure per pair: the Bode figure instead of the pairs' figure). Returns how
+    many were started."""
     stop_helpers()
     wanted = _wanted()
     if wanted == "on" or (wanted == "auto" and _idle_cores()[0] > ranks):
         for k in range(HELPERS_AHEAD):
-            spec = None if prepare is None else dict(prepare, kinds=PREPARED_ROLES[k % len(PREPARED_ROLES)])
+            role = PREPARED_ROLES[k % len(PREPARED_ROLES)]
+            if prepare is not None and not prepare.get("pairs"):
+                role = tuple("bode" if kind == "bode_pairs" else kind for kind in role)
+            spec = None if prepare is None else dict(prepare, kinds=role)
             try:
                 _ahead.append(_Helper(start_weight=0.0, prepare=spec))
             except OSError:
@@ -277,7 +282,8 @@ def _prepared(spec):
     when drawn, as without it)."""
     from . import plots
     try:
-        return plots.prepared_figures(spec["band_hz"], spec["configurations"], spec.get("kinds", plots.PREPARED_KINDS))
+        return plots.prepared_figures(spec["band_hz"], spec["configurations"], spec.get("kinds", plots.PREPARED_KINDS),
+                                      pairs=spec.get("pairs", ()))
     except Exception:  # noqa: BLE001 - a preparation only: the figures are drawn the same without it
         return None
 

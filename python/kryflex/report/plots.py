@@ -252,14 +252,16 @@ class _FixedLayer:
     byte for byte what figure_png_bytes gives: the same artists drawn in the same order on the same pixels, provided
     an axes' changing artists never reach into a later axes' rectangle (true of figures whose axes do not overlap)."""
 
-    def __init__(self, fig, dpi, fixed):
+    def __init__(self, fig, dpi, fixed, after=()):
         fig.set_dpi(dpi)       # what savefig(dpi=) does for the time of its drawing
         self.fig = fig
         keep = set(map(id, fixed))
         # each axes' changing artists in its drawing order (Axes.draw: its children but the patch, by zorder)
         self.moving = [(ax, sorted((a for a in ax.get_children() if a is not ax.patch and id(a) not in keep),
                                    key=lambda a: a.get_zorder())) for ax in fig.axes]
-        for _, artists in self.moving:
+        # the figure's own changing artists (e.g. its suptitle), which Figure.draw draws after the axes (zorder above 0)
+        self.after = list(after)
+        for _, artists in self.moving + [(None, self.after)]:
             for a in artists:
                 a.set_animated(True)           # left out of canvas.draw(): the fixed layer alone
         fig.canvas.draw()
@@ -274,7 +276,113 @@ class _FixedLayer:
             for a in artists:
                 if a.get_visible():
                     a.draw(renderer)
+        for a in self.after:
+            if a.get_visible():
+                a.draw(renderer)
         return _encode_png(canvas, self.fig.dpi)
+
+
+# the per-configuration Bode figure's cell (one input/output pair: magnitude over phase) in inches, and its margins and
+# gaps in inches (fixed, as the overview's: these fit a one-line suptitle, panel titles, tick labels of up to 5
+# characters, the y labels of the left column and the legend under the cells)
+PAIRS_CELL = (4.2, 3.6)
+PAIRS_INCHES = dict(left=0.8, right=0.15, top=0.75, bottom=0.8, wgap=0.6, hgap=0.75)
+PAIRS_MIN_WIDTH = 7.0       # a figure of one cell as wide as a Bode plot, for its suptitle
+PAIRS_COLUMNS = 3
+
+
+def bode_pairs_figure(freq_hz, pairs, suptitle):
+    """Every input/output pair of one configuration on one figure: a cell per pair (its title), magnitude (dB) over
+    phase (deg) against frequency (Hz, log axis, the same for every cell), full and reduced overlaid, one legend.
+
+    pairs: [(full [nf], reduced [nf], title), ...] complex responses; what bode_figure draws for each pair."""
+    freq = np.asarray(freq_hz, dtype=float)
+    n = max(len(pairs), 1)
+    ncols = min(PAIRS_COLUMNS, n)
+    nrows = (n + ncols - 1) // ncols
+    m = PAIRS_INCHES
+    cell_w = max(PAIRS_CELL[0], (PAIRS_MIN_WIDTH - m["left"] - m["right"] - (ncols - 1) * m["wgap"]) / ncols)
+    cell_h = PAIRS_CELL[1]
+    width = cell_w * ncols + m["left"] + m["right"] + (ncols - 1) * m["wgap"]
+    height = cell_h * nrows + m["top"] + m["bottom"] + (nrows - 1) * m["hgap"]
+    fig = _new_figure(figsize=(width, height))
+    for k in range(n):
+        row, col = divmod(k, ncols)
+        x0 = (m["left"] + col * (cell_w + m["wgap"])) / width
+        top = height - m["top"] - row * (cell_h + m["hgap"])
+        mag_h, gap = 0.58 * cell_h, 0.06 * cell_h
+        ax_mag = fig.add_axes([x0, (top - mag_h) / height, cell_w / width, mag_h / height])
+        ax_ph = fig.add_axes([x0, (top - cell_h) / height, cell_w / width, (cell_h - mag_h - gap) / height],
+                             sharex=ax_mag)
+        ax_mag.tick_params(labelbottom=False)
+        if col == 0:        # at a fixed place (set_ylabel would place them by measuring every tick label)
+            for ax, text in ((ax_mag, "magnitude (dB)"), (ax_ph, "phase (deg)")):
+                box = ax.get_position()
+                fig.text(0.22 / width, (box.y0 + box.y1) / 2, text, rotation=90, ha="center", va="center",
+                         fontsize="small")
+        if row == nrows - 1 or k + ncols >= n:
+            ax_ph.set_xlabel("frequency (Hz)", fontsize="small")
+        for ax in (ax_mag, ax_ph):
+            ax.tick_params(labelsize="small")
+            ax.grid(True, which="both", alpha=0.3)
+            # four or five ticks on a cell's y axes (the y axes are drawn for every figure: most of its time)
+            ax.yaxis.set_major_locator(_ticker().MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
+            # their labels are the figure's texts above: the axis's own (empty) label is not placed (matplotlib
+            # places it on every drawing by measuring the tick labels of the axis and of its siblings)
+            ax.yaxis._update_label_position = lambda renderer: None
+        if k < len(pairs):
+            full, reduced, title = pairs[k]
+            _set_title(ax_mag, title, fontsize="medium")
+            ax_mag.semilogx(freq, magnitude_db(full), **FULL_STYLE)
+            ax_mag.semilogx(freq, magnitude_db(reduced), **REDUCED_STYLE)
+            ph_full, ph_red = phase_pair_deg(full, reduced)
+            ax_ph.semilogx(freq, ph_full, **FULL_STYLE)
+            ax_ph.semilogx(freq, ph_red, **REDUCED_STYLE)
+            _note_zero_response(ax_mag, full, reduced)
+        _frequency_axis(ax_ph, freq)
+        # minor ticks and grid lines at 2 and 5 only, as _frequency_axis sets them under two decades (wider, unlabelled
+        # as the default ones are): the default eight per decade, on twelve axes, were most of a new figure's time
+        ax_ph.xaxis.set_minor_locator(_ticker().LogLocator(base=10.0, subs=(2.0, 5.0)))
+    # one legend under the cells (the same two entries for every cell), drawn once with the frequency axes
+    if pairs:
+        fig.legend(handles=fig.axes[0].lines, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=2,
+                   fontsize="small", frameon=False)
+    fig.suptitle(suptitle, x=m["left"] / width, ha="left")
+    return fig
+
+
+def bode_pairs_pngs(items, dpi=DPI, reuse=None):
+    """PNG bytes of bode_pairs_figure(freq_hz, pairs, suptitle) for each (freq_hz, pairs, suptitle) of items, drawn on
+    one figure for all items of the same band and pair titles: their curves, y-limits and suptitle replaced, the
+    fixed layer (_FixedLayer: the frequency axes, the cells' titles and y labels, the legend) drawn once. The same
+    pixels as a new figure per item. An item with a pair whose response is identically zero gets a figure of its own
+    (noted on its panel). reuse: as bode_pngs_on_grids'."""
+    reuse = {} if reuse is None else reuse
+    fig, key, layer = reuse.get("bode_pairs", (None, None, None))
+    for freq_hz, pairs, suptitle in items:
+        freq = np.asarray(freq_hz, dtype=float)
+        if any(all(not np.any(np.asarray(c) != 0) for c in (full, red)) for full, red, _ in pairs):
+            yield figure_png_bytes(bode_pairs_figure(freq, pairs, suptitle), dpi)
+            continue
+        this = ((float(freq.min()), float(freq.max())) if freq.size else None, tuple(t for _, _, t in pairs))
+        if fig is None or this != key:
+            fig, key = bode_pairs_figure(freq, pairs, suptitle), this
+            layer = _FixedLayer(fig, dpi, [ax.xaxis for ax in fig.axes] + [ax.title for ax in fig.axes],
+                                after=[fig._suptitle])
+        else:
+            axes = fig.axes
+            for k, (full, reduced, _) in enumerate(pairs):
+                ax_mag, ax_ph = axes[2 * k], axes[2 * k + 1]
+                for line, y in zip(ax_mag.lines, (magnitude_db(full), magnitude_db(reduced))):
+                    line.set_data(freq, y)
+                for line, y in zip(ax_ph.lines, phase_pair_deg(full, reduced)):
+                    line.set_data(freq, y)
+                for ax in (ax_mag, ax_ph):
+                    ax.relim()
+                    ax.autoscale_view(scalex=False)
+            fig.suptitle(suptitle, x=PAIRS_INCHES["left"] / fig.get_figwidth(), ha="left")
+        reuse["bode_pairs"] = (fig, key, layer)
+        yield layer.png_bytes()
 
 
 def bode_overview_figure(panels, suptitle):
@@ -326,12 +434,13 @@ def bode_overview_png(panels, suptitle, dpi=DPI, reuse=None):
     return figure_png_bytes(fig, dpi)
 
 
-PREPARED_KINDS = ("bode", "overview", "importance")
+PREPARED_KINDS = ("bode_pairs", "bode", "overview", "importance")
 
 
-def prepared_figures(band_hz, configurations, kinds=PREPARED_KINDS, points=449, dpi=DPI):
-    """A reuse dict (bode_pngs_on_grids, bode_overview_png, importance_pngs) holding, of kinds, a Bode figure, an
-    overview of `configurations` panels over band_hz and an importance figure, each drawn once on placeholder data: their
+def prepared_figures(band_hz, configurations, kinds=PREPARED_KINDS, points=449, dpi=DPI, pairs=()):
+    """A reuse dict (bode_pairs_pngs, bode_pngs_on_grids, bode_overview_png, importance_pngs) holding, of kinds, a
+    figure of the input/output pairs named in pairs (when given), a Bode figure, an overview of `configurations` panels
+    over band_hz and an importance figure, each drawn once on placeholder data: their
     frequency axes' ticks built (the importance axis's over seven decades from the band's bottom, more than the Krylov
     modes usually span, so that their figures find their ticks made), the Bode figure's fixed layer rendered, the
     fonts loaded, before the report's data exist (report/helper.py draws them while the reduction runs). A figure
@@ -342,6 +451,9 @@ def prepared_figures(band_hz, configurations, kinds=PREPARED_KINDS, points=449, 
     corner = np.sqrt(low * high) if low > 0 else max(high, 1.0)
     curve = 1.0 / (1.0 + 1j * freq / corner)           # any response that is not zero: the curves are replaced
     reuse = {}
+    if "bode_pairs" in kinds and pairs:
+        for _ in bode_pairs_pngs([(freq, [(curve, 1.01 * curve, title) for title in pairs], "prepared")], dpi, reuse):
+            pass
     if "bode" in kinds:
         for _ in bode_pngs_on_grids([(freq, curve, 1.01 * curve, "prepared")], dpi, reuse):
             pass

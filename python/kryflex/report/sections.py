@@ -659,10 +659,17 @@ def _section_frf(c, plot_names):
               "frequency, |T_full − T_red| / max_w |T_full| for the worst input/output pair: the peak of each curve "
               "is that configuration's relative H∞ error of Table 7. Phases are unwrapped, the reduced curve drawn within "
               "180° of the full one at every frequency.", ""]
-    lines += ["![Bode overview](bode_overview.png)", "", "Bode plots, full vs reduced:", ""]
-    for label in c.labels:
-        links = [f"[{c.entry_name(e)}]({plot_names['bode'][(label, e)]})" for e in c.entries]
-        lines.append(f"- {c.short_angle(label)}: " + ", ".join(links))
+    lines += ["![Bode overview](bode_overview.png)", ""]
+    if plot_names.get("bode_pairs"):
+        lines += ["Bode plots, full vs reduced, every input/output pair: " + ", ".join(
+            f"[{c.short_angle(l)}]({plot_names['bode_pairs'][l]})" for l in c.labels), "",
+            f"![Bode plots {c.at_g()}]({plot_names['bode_pairs'][c.label_g]})"]
+    if plot_names.get("bode"):
+        lines += [""] if plot_names.get("bode_pairs") else []
+        lines += ["Bode plots, full vs reduced, a figure per pair:", ""]
+        for label in c.labels:
+            links = [f"[{c.entry_name(e)}]({plot_names['bode'][(label, e)]})" for e in c.entries]
+            lines.append(f"- {c.short_angle(label)}: " + ", ".join(links))
     lines += ["", "![Relative FRF error](frf_error.png)", "", "![Moment ratios](moment_ratios.png)", "",
               "Importance of the Krylov modes: " + ", ".join(
                   f"[{c.short_angle(l)}]({plot_names['importance'][l]})" for l in c.labels), "",

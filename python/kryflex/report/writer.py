@@ -5,8 +5,10 @@
 writes into out_dir (created if needed):
   summary.json                                   every number, exactly as given
   report.md                                      tables in the order of the paper's Tables 1-6 and Fig. 3
-  bode_<angle>deg_<output>_<input>.png           full vs reduced, one per configuration and I/O pair
-                                                 (bode_structure_... without revolute joints)
+  bode_<angle>deg.png                            full vs reduced, one per configuration, every I/O pair a cell
+                                                 (bode_structure.png without revolute joints)
+  bode_<angle>deg_<output>_<input>.png           the same, one per configuration and I/O pair: with pair_plots,
+                                                 or instead of the above for more than 12 pairs
   bode_overview.png                              magnitudes at every configuration (dominant I/O pair)
   importance_<angle>deg.png                      normalized importance of the Krylov modes, kept ones marked
                                                  (importance_structure.png without revolute joints)
@@ -52,13 +54,13 @@ class PendingReport:
     here, writes the figures and moves every file into out_dir together (returning their paths); stop() abandons it
     (the helpers stopped, the staging folder removed, out_dir as it was)."""
 
-    def __init__(self, summary, out_dir, between):
+    def __init__(self, summary, out_dir, between, pair_plots=False):
         if not isinstance(summary, dict):
             summary = as_summary(summary).to_json()
         validate_summary(summary)
         summary = as_summary(summary)
         self.between, self.staging = between, None
-        plot_names = plot_file_names(summary)
+        plot_names = plot_file_names(summary, pair_plots)
         # the helpers first, so that they draw while the text below is written and the caller writes its files
         self.rendering = PlotRendering(summary, plot_names).start()
         try:
@@ -89,21 +91,23 @@ class PendingReport:
             self.staging.discard()
 
 
-def begin_report(summary, out_dir, between=None):
+def begin_report(summary, out_dir, between=None, pair_plots=False):
     """write_report in two steps, so that the caller can write its own files while the figures are drawn: returns a
     PendingReport whose finish() writes the report (stop() abandons it). Raises as write_report."""
-    return PendingReport(summary, out_dir, between)
+    return PendingReport(summary, out_dir, between, pair_plots)
 
 
-def write_report(summary, out_dir, between=None):
+def write_report(summary, out_dir, between=None, pair_plots=False):
     """Write summary.json, report.md and the PNG plots into out_dir; return the written paths.
 
     Raises ReportError (a ValueError) naming the offending key when the summary is incomplete or not plain JSON;
     on any failure no file of this report is left in out_dir (earlier files there are untouched). between: called
     after each plot drawn in this process (the command stops there when it was interrupted: rendering the plots is
     the long part). The figures are shared with helper processes where cores are free (report/helper.py).
+    pair_plots: a Bode figure per input/output pair too (bode_<angle>deg_<output>_<input>.png), besides the one per
+    configuration.
     """
-    return begin_report(summary, out_dir, between).finish()
+    return begin_report(summary, out_dir, between, pair_plots).finish()
 
 
 def write_unverified(summary, out_dir):

@@ -318,7 +318,7 @@ def test_every_file_is_written_and_valid(summary, written):
     names = {pathlib.Path(p).name for p in paths}
     expected = {"summary.json", "report.md", "bode_overview.png", "moment_ratios.png", "frf_error.png"}
     expected |= {f"importance_{l}deg.png" for l in LABELS}
-    expected |= {f"bode_{l}deg_{o}_force4.png" for l in LABELS for o in ("x1", "x4_rot")}
+    expected |= {f"bode_{l}deg.png" for l in LABELS}      # every input/output pair of a configuration in one figure
     assert names == expected
     assert all(pathlib.Path(p).parent == out for p in paths)
     for name in names:
@@ -327,6 +327,40 @@ def test_every_file_is_written_and_valid(summary, written):
     # every key and value as given, at the current summary version (the synthetic summary has none: version 1)
     assert json.loads((out / "summary.json").read_text()) == dict(summary, summary_version=SUMMARY_VERSION)
     assert not list(out.glob(".*.tmp"))
+
+
+def test_pair_plots_add_a_figure_per_pair(summary, written, tmp_path):
+    """write_report(pair_plots=True) (kryflex reduce --pair-plots) writes a Bode figure per configuration and pair
+    besides the default files, their bytes unchanged; report.md links every figure written."""
+    out, paths, _ = written
+    paths2 = report.write_report(summary, str(tmp_path), pair_plots=True)
+    names = {pathlib.Path(p).name for p in paths}
+    names2 = {pathlib.Path(p).name for p in paths2}
+    per_pair = {f"bode_{l}deg_{o}_force4.png" for l in LABELS for o in ("x1", "x4_rot")}
+    assert names2 == names | per_pair
+    for name in names - {"report.md"}:
+        assert (tmp_path / name).read_bytes() == (out / name).read_bytes(), name
+    for folder, files in ((out, names), (tmp_path, names2)):
+        markdown = (folder / "report.md").read_text(encoding="utf-8")
+        for name in files - {"report.md", "summary.json", "moment_ratios.png", "frf_error.png", "bode_overview.png"}:
+            assert "](%s)" % name in markdown, name
+    assert "![Bode plots at α_G (α = 30°)](bode_30deg.png)" in (out / "report.md").read_text(encoding="utf-8")
+
+
+def test_many_pairs_get_a_figure_each(summary, tmp_path, monkeypatch):
+    """A configuration with more than MAX_PAIRS_PER_FIGURE input/output pairs gets a Bode figure per pair (a figure of
+    that many cells would not be read), linked from report.md; at most that many, one figure."""
+    from kryflex.report import figures
+    assert figures.MAX_PAIRS_PER_FIGURE >= 2 and set(figures.plot_file_names(summary)["bode_pairs"]) == set(LABELS)
+    monkeypatch.setattr(figures, "MAX_PAIRS_PER_FIGURE", 1)          # the summary's two pairs are then too many
+    names = figures.plot_file_names(summary)
+    assert not names["bode_pairs"] and set(names["bode"]) == {(l, (o, 0)) for l in LABELS for o in (0, 1)}
+    paths = report.write_report(summary, str(tmp_path))
+    per_pair = {f"bode_{l}deg_{o}_force4.png" for l in LABELS for o in ("x1", "x4_rot")}
+    assert per_pair <= {pathlib.Path(p).name for p in paths}
+    assert not any(pathlib.Path(p).name == "bode_30deg.png" for p in paths)
+    markdown = (tmp_path / "report.md").read_text(encoding="utf-8")
+    assert all("](%s)" % name in markdown for name in per_pair)
 
 
 def test_modules_import_standalone():

@@ -159,3 +159,90 @@ def test_prepared_figures_give_the_same_pngs():
     reused = list(plots.importance_pngs(imp, reuse=prepared))
     fresh = [plots.figure_png_bytes(plots.importance_figure(*item)) for item in imp]
     assert [a == b for a, b in zip(reused, fresh)] == [True] * len(imp)
+
+
+def pair_items():
+    """Two configurations' pairs over one band (their curves' grids differ), one over another band, one with a pair
+    identically zero: what plots.bode_pairs_pngs draws."""
+    f, pairs = responses()
+    live = [p for p in pairs if np.any(p[0] != 0)]
+    g = np.sort(np.concatenate([f[::2], [0.79, 0.81, 3.09, 3.11]]))      # the same band, other points
+    h = np.geomspace(0.5, 12.0, 200)                                        # another band
+
+    def on(grid, responses_):
+        return [(np.interp(grid, f, a.real) + 1j * np.interp(grid, f, a.imag),
+                 np.interp(grid, f, b.real) + 1j * np.interp(grid, f, b.imag), title) for a, b, title in responses_]
+    return [(f, live, "0°: full vs reduced"), (g, on(g, live[::-1]), "30°: full vs reduced"),
+            (h, on(h, live), "60°: full vs reduced"), (f, pairs, "90°: full vs reduced")]
+
+
+def test_reused_pairs_figure_gives_the_same_pngs():
+    """The figures of every input/output pair of a configuration drawn on one figure (plots.bode_pairs_pngs: its
+    frequency axes, cells' titles and legend drawn once) are the PNGs a new figure per configuration gives, across
+    calls sharing it (reuse=), pairs in another order, another band and a pair identically zero."""
+    items = pair_items()
+    kept = {}
+    reused = list(plots.bode_pairs_pngs(items[:1], reuse=kept)) + list(plots.bode_pairs_pngs(items[1:], reuse=kept))
+    assert "bode_pairs" in kept
+    fresh = [plots.figure_png_bytes(plots.bode_pairs_figure(*item)) for item in items]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+    assert len(set(fresh)) == len(fresh)
+
+
+def test_prepared_pairs_figure_gives_the_same_pngs():
+    """The pairs' figure a helper prepares from the scene's band and pair names (plots.prepared_figures) draws the
+    PNGs of a new figure: for those pairs, and for others (a new figure then)."""
+    items = pair_items()
+    f = items[0][0]
+    prepared = plots.prepared_figures((float(f[0]), float(f[-1])), 4, kinds=("bode_pairs",),
+                                      pairs=[title for _, _, title in items[0][1]])
+    assert set(prepared) == {"bode_pairs"}
+    reused = list(plots.bode_pairs_pngs(items, reuse=prepared))
+    fresh = [plots.figure_png_bytes(plots.bode_pairs_figure(*item)) for item in items]
+    assert [a == b for a, b in zip(reused, fresh)] == [True] * len(items)
+
+
+def test_pairs_figure_draws_what_the_figure_per_pair_draws():
+    """Each cell of the pairs' figure holds the curves of that pair's own Bode figure (plots.bode_figure): the same
+    frequencies, magnitudes and phases, full and reduced, the same axis limits and the pair's title."""
+    f, pairs, _ = pair_items()[3]
+    fig = plots.bode_pairs_figure(f, pairs, "every pair")
+    assert len(fig.axes) == 2 * len(pairs)
+    for k, (full, red, title) in enumerate(pairs):
+        single = plots.bode_figure(f, full, red, title)
+        for ours, theirs in zip(fig.axes[2 * k:2 * k + 2], single.axes):
+            assert len(ours.lines) == len(theirs.lines) == 2
+            for a, b in zip(ours.lines, theirs.lines):
+                assert np.array_equal(a.get_xdata(), b.get_xdata())
+                assert np.array_equal(a.get_ydata(), b.get_ydata(), equal_nan=True)
+                assert (a.get_color(), a.get_linestyle(), a.get_label()) == (b.get_color(), b.get_linestyle(),
+                                                                            b.get_label())
+            assert ours.get_xlim() == theirs.get_xlim()
+        assert fig.axes[2 * k].get_title() == title
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == ["full order", "reduced (Krylov)"]
+
+
+@pytest.mark.parametrize("npairs", [1, 2, 4, 6, 12])
+def test_pairs_figure_margins_hold_its_labels(npairs):
+    """The pairs' figure's fixed margins keep every cell's tick labels and title inside the figure and clear of the
+    other cells, of the y labels, the suptitle and the legend, with five-character tick labels (-1000 dB)."""
+    f, pairs = responses()
+    full = pairs[0][0] * 1e-50 / np.abs(pairs[0][0]).max()          # magnitudes down to about -1000 dB
+    fig = plots.bode_pairs_figure(f, [(full, full * 1.01, "output%d ← input" % k) for k in range(npairs)],
+                                  "a scene's name: full vs reduced (single-angle model)")
+    fig.set_dpi(plots.DPI)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    page = fig.bbox
+    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes]
+    cells = [boxes[k].union([boxes[k], boxes[k + 1]]) for k in range(0, 2 * npairs, 2)]
+    others = [fig._suptitle.get_window_extent(renderer), fig.legends[0].get_window_extent(renderer)]
+    labels = [t for t in fig.texts if t is not fig._suptitle]
+    others += [t.get_window_extent(renderer) for t in labels]
+    assert len(labels) == 2 * ((npairs + 2) // 3)      # the y labels of the left column's cells
+    assert page.x0 <= others[0].x0 and others[0].x1 <= page.x1 and others[1].x1 <= page.x1
+    assert any(len(t.get_text()) >= 5 for t in fig.axes[0].get_yticklabels())    # the widest labels are drawn
+    for k, box in enumerate(cells):
+        assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1
+        assert not any(box.overlaps(other) for other in others + cells[k + 1:])
+    assert not others[0].overlaps(others[1])

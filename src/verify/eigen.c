@@ -18,11 +18,6 @@ static PetscErrorCode KFGatherAny(Mat A, PetscReal out[])
   PetscFunctionReturn(0);
 }
 
-/* M's null space below this fraction of its largest eigenvalue: exported mass matrices are rounded (8 to 12 digits in
-   a punch), so a direction whose mass is 1e-8 of the largest would resonate 1e4 times above the model's frequencies;
-   its static part is kept exactly by the condensation */
-#define KF_MASS_NULL_RTOL 1e-8
-
 /* The eigendecomposition M = U diag(mu) U^T of a replicated n x n M (U overwrites a copy of M): the null directions
    (mu <= KF_MASS_NULL_RTOL max mu) are the nz first columns of U, LAPACK ordering the eigenvalues ascending */
 static PetscErrorCode KFMassEig(PetscInt n, const PetscReal M[], PetscReal U[], PetscReal mu[], PetscInt *nz)
@@ -62,26 +57,7 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullity(KFSystem sys, PetscBool dense, P
     PetscCall(KFGatherAny(sys->Ms, M));
     PetscCall(KFMassEig(n, M, U, mu, nnull));
     PetscCall(PetscFree3(M, U, mu));
-  } else {
-    Mat           F;
-    MatFactorInfo info;
-    IS            rp, cp;
-    PetscInt      nullp;
-
-    /* LDL^T with null-pivot detection: a pivot below 1e-8 ||M_S|| counts as a null direction */
-    PetscCall(MatGetFactor(sys->Ms, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
-    PetscCall(MatMumpsSetIcntl(F, 24, 1));
-    PetscCall(MatMumpsSetCntl(F, 3, KF_MASS_NULL_RTOL));
-    PetscCall(MatGetOrdering(sys->Ms, MATORDERINGNATURAL, &rp, &cp));
-    PetscCall(MatFactorInfoInitialize(&info));
-    PetscCall(MatCholeskyFactorSymbolic(F, sys->Ms, rp, &info));
-    PetscCall(MatCholeskyFactorNumeric(F, sys->Ms, &info));
-    PetscCall(MatMumpsGetInfog(F, 28, &nullp));
-    *nnull = nullp;
-    PetscCall(ISDestroy(&rp));
-    PetscCall(ISDestroy(&cp));
-    PetscCall(MatDestroy(&F));
-  }
+  } else PetscCall(KFSystemMassNullPivots(sys, nnull));
   PetscFunctionReturn(0);
 }
 

@@ -98,7 +98,7 @@ PetscErrorCode KFSystemMasslessCount(KFSystem sys, PetscInt *n0)
 #define KF_LUMPED_ROW_NNZ 12
 
 /* Whether M_S is singular: a zero row (a massless dof), or, for a lumped mass (KF_LUMPED_ROW_NNZ), null pivots of its
-   factor (KFSystemMassNullity, the 1e-8 relative threshold). Offset masses and rigid elements eliminated into the
+   factor (KFSystemMassNullPivots). Offset masses and rigid elements eliminated into the
    independent nodes (M = T^T M T) leave M as singular as its massless rotations made it, yet with no zero diagonal.
    A mass with more couplings per row (consistent element masses) is taken as assembled: definite. */
 PetscErrorCode KFSystemMassSingular(KFSystem sys, PetscBool *singular)
@@ -121,8 +121,33 @@ PetscErrorCode KFSystemMassSingular(KFSystem sys, PetscBool *singular)
   if (most <= KF_LUMPED_ROW_NNZ) {
     PetscInt nnull;
 
-    PetscCall(KFSystemMassNullity(sys, PETSC_FALSE, &nnull, &n0));
+    PetscCall(KFSystemMassNullPivots(sys, &nnull));
     *singular = (PetscBool)(nnull > 0);
   }
+  PetscFunctionReturn(0);
+}
+
+/* The null pivots of M_S's sparse LDL^T (MUMPS null-pivot detection, a pivot below KF_MASS_NULL_RTOL ||M_S|| counting
+   as a null direction): the dimension of M's null space without a dense eigensolve */
+PetscErrorCode KFSystemMassNullPivots(KFSystem sys, PetscInt *nnull)
+{
+  Mat           F;
+  MatFactorInfo info;
+  IS            rp, cp;
+  PetscInt      nullp;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetFactor(sys->Ms, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+  PetscCall(MatMumpsSetIcntl(F, 24, 1));
+  PetscCall(MatMumpsSetCntl(F, 3, KF_MASS_NULL_RTOL));
+  PetscCall(MatGetOrdering(sys->Ms, MATORDERINGNATURAL, &rp, &cp));
+  PetscCall(MatFactorInfoInitialize(&info));
+  PetscCall(MatCholeskyFactorSymbolic(F, sys->Ms, rp, &info));
+  PetscCall(MatCholeskyFactorNumeric(F, sys->Ms, &info));
+  PetscCall(MatMumpsGetInfog(F, 28, &nullp));
+  *nnull = nullp;
+  PetscCall(ISDestroy(&rp));
+  PetscCall(ISDestroy(&cp));
+  PetscCall(MatDestroy(&F));
   PetscFunctionReturn(0);
 }

@@ -472,8 +472,10 @@ def test_signals_leave_the_earlier_results(previous, frames, case):
         cmd = ["mpiexec", "-n", str(ranks)] + cmd
     graced = ranks > 1 and to == "process" and during == "reduce"
     if ranks > 1 and to == "process" and during == "write":
-        # mpiexec passes the SIGTERM on a grace (1 s) late: the per-pair figures keep the write going longer than that
+        # mpiexec passes the SIGTERM on a grace late and kills a grace after: 3 s for the ranks to remove their staging
+        # (1 s was not always enough under load), the per-pair figures keeping the write going longer than the first
         cmd += ["--pair-plots"]
+        env = dict(ENV, OMPI_MCA_odls_base_sigkill_timeout="3")
     if graced:
         env = dict(ENV, OMPI_MCA_odls_base_sigkill_timeout=str(MPIEXEC_GRACE))
         cmd += ["-scene.angles", MANY_ANGLES]

@@ -10,6 +10,7 @@ M-orthonormal. On 2 MPI ranks the sub-bases choose the model 1 rank chooses, wit
 the multi-angle candidates are sub-bases of a parent spanning every visit: the same search and the same model.
 """
 import os
+import re
 import subprocess
 import sys
 
@@ -155,3 +156,18 @@ def test_multi_angle_candidates_are_sub_bases_of_every_visit(verify):
 def test_two_ranks_choose_the_same_multi_angle_sub_basis_model(tmp_path):
     reducer = kryflex.Reducer(kryflex.load_scene(GALILEO), quiet=True, angles="0,45,90", verify=False)
     assert_two_ranks_choose(reducer.reduce().model, tmp_path, "-kf_angles", "0,45,90", "-kf_verify", "false")
+
+
+def test_verified_search_makes_one_parent_of_every_visit(tmp_path):
+    """With verification the search's parent (every visit's whole Krylov basis, made before the search as the
+    estimator's richest model is without verification) holds every candidate of both families: each candidate's body
+    basis is a sub-basis of a parent of all three visits (-info), none of a parent made for one angle or one set of
+    expansion angles. That the sub-bases choose the full way's model is test_multi_angle_candidates_... above."""
+    p = subprocess.run([sys.executable, PROBE, GALILEO, str(tmp_path / "m.h5"), str(tmp_path / "s.json"), "-kf_angles",
+                        "0,45,90", "-info"], env=ENV, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    parents = re.findall(r"candidate c=\d+ kept=-?\d+ nbody=\d+ nexp=(\d+): a sub-basis of the parent's (\d+) visits",
+                         p.stdout)
+    print(len(parents), sorted(set(parents)))
+    assert len(parents) >= 5 and {nexp for nexp, _ in parents} >= {"1", "2"}, parents
+    assert all(pn == "3" for _, pn in parents), parents

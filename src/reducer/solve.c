@@ -664,6 +664,15 @@ static PetscErrorCode KFReducerSearchVisit_Private(KFReducer r, KFSearch *st, Pe
   PetscFunctionReturn(0);
 }
 
+/* The richest candidate: the multi-angle model of every visit's whole Krylov basis (at most KF_MAX_EXPANSION visits) */
+static void KFReducerRichCandidate_Private(PetscInt nc, PetscInt nfull, KFCandidate *rich)
+{
+  rich->family = KF_METHOD_MULTI_ANGLE;
+  rich->c      = nfull;
+  rich->kept   = -1;
+  for (PetscInt i = 0; i < nc && rich->nexp < KF_MAX_EXPANSION; i++) rich->exp[rich->nexp++] = i;
+}
+
 /* Without verification, the estimator: the richest candidate, every basis whole, stands in for the full order */
 static PetscErrorCode KFReducerSearchEstimator_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
 {
@@ -678,10 +687,7 @@ if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
   KFReducedModel model;
 
   PetscCall(PetscTime(&t0)); /* its model is projection work (the bodies' bases and reduced matrices) */
-  rich.family = KF_METHOD_MULTI_ANGLE;
-  rich.c      = nfull;
-  rich.kept   = -1;
-  for (PetscInt i = 0; i < nc && rich.nexp < KF_MAX_EXPANSION; i++) rich.exp[rich.nexp++] = i;
+  KFReducerRichCandidate_Private(nc, nfull, &rich);
   PetscCall(KFCandidateModel_Private(r, visits, &rich, PETSC_FALSE, &model));
   PetscCall(KFReducedModelSetSetting(model, "max_frequency_hz", "0")); /* the reference is never trimmed */
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedModelReassemble(model, evals[e].angles, &evals[e].rich));
@@ -726,10 +732,7 @@ static PetscErrorCode KFReducerSearchParent_Private(KFReducer r, KFSearch *st)
     ninterest += st->visits[i].interest >= 0;
   }
   if (ninterest < 2 || (r->method == KF_METHOD_SINGLE_ANGLE && !r->auto_alpha)) PetscFunctionReturn(0);
-  rich.family = KF_METHOD_MULTI_ANGLE;
-  rich.c      = st->nfull;
-  rich.kept   = -1;
-  for (PetscInt i = 0; i < st->nc; i++) rich.exp[rich.nexp++] = i;
+  KFReducerRichCandidate_Private(st->nc, st->nfull, &rich);
   PetscCall(KFCandidateModel_Private(r, st->visits, &rich, PETSC_FALSE, &model));
   PetscCall(KFReducedModelDestroy(&model));
   PetscFunctionReturn(0);

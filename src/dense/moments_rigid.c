@@ -18,7 +18,11 @@ PetscErrorCode KFDenseMomentsRigid(PetscInt n, const PetscReal K[], const PetscR
   PetscBLASInt bn, bp, info;
 
   PetscFunctionBegin;
-  PetscCheck(n >= 1 && r >= 0 && r < n && a >= 1 && t >= 1 && nmom >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDenseMomentsRigid: bad sizes (n %" PetscInt_FMT ", r %" PetscInt_FMT ", a %" PetscInt_FMT ", t %" PetscInt_FMT ", nmom %" PetscInt_FMT ")", n, r, a, t, nmom);
+  PetscCheck(n >= 1 && r >= 0 && r <= n && a >= 1 && t >= 1 && nmom >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDenseMomentsRigid: bad sizes (n %" PetscInt_FMT ", r %" PetscInt_FMT ", a %" PetscInt_FMT ", t %" PetscInt_FMT ", nmom %" PetscInt_FMT ")", n, r, a, t, nmom);
+  if (r == n) { /* rigid motions only (a search's smallest candidate): no flexible subspace, every moment is zero */
+    PetscCall(PetscArrayzero(L, nmom * t * a));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscMalloc5(n * PetscMax(r, 1), &Phi, n * PetscMax(r, 1), &MPhi, n * n, &A, n * a, &X, n * a, &Y));
   PetscCall(PetscMalloc4(PetscMax(r, 1) * PetscMax(a, r), &work, n, &lambda, n * n, &vecs, PetscMax(r * r, 1), &Gm));
   PetscCall(PetscMalloc2(n * n, &A0, n * a, &work2));

@@ -198,3 +198,15 @@ def test_export_refuses_a_tied_model(runs, tmp_path):
         assert "Traceback" not in p.stderr
         assert "shared_directions false" in p.stderr
     from_model(runs[False].model)      # the split model exports as before
+
+
+def test_a_file_with_ties_of_the_wrong_shape_is_refused(runs, tmp_path):
+    import h5py
+    path = str(tmp_path / "bad.h5")
+    runs[True].model.save(path)
+    with h5py.File(path, "r+") as f:
+        D = f["ties"][()]
+        del f["ties"]
+        f["ties"] = D[:, :-1]                      # one body coordinate short
+    with pytest.raises(kryflex.ModelFileError, match="ties"):
+        kryflex.ReducedModel.load(path)

@@ -210,3 +210,14 @@ def test_a_file_with_ties_of_the_wrong_shape_is_refused(runs, tmp_path):
         f["ties"] = D[:, :-1]                      # one body coordinate short
     with pytest.raises(kryflex.ModelFileError, match="ties"):
         kryflex.ReducedModel.load(path)
+
+
+def test_the_scene_key_sets_it(tmp_path):
+    galileo = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+    path = acc.write_variant(galileo, str(tmp_path / "g.yaml"), accuracy=1e-3, angles=[[0.0]],
+                             reduction={"shared_directions": True})
+    m = kryflex.reduce(kryflex.load_scene(path), quiet=True).model
+    assert m.settings.get("shared_directions") is True and m.ties is not None
+    bad = acc.write_variant(galileo, str(tmp_path / "bad.yaml"), reduction={"shared_directions": "maybe"})
+    with pytest.raises(kryflex.SceneError, match="shared_directions"):
+        kryflex.load_scene(bad)

@@ -280,6 +280,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducedModelGetDamping(KFReducedModel, KFDamping*)
     PetscErrorCode KFReducedModelGetOutputQuantities(KFReducedModel, const PetscInt**)
     PetscErrorCode KFReducedModelGetBodyDamping(KFReducedModel, PetscInt, const PetscReal**)
+    PetscErrorCode KFReducedModelGetTies(KFReducedModel, PetscInt*, PetscInt*, const PetscReal**)
     PetscErrorCode KFReducedSystemGetDamping(KFReducedSystem, const PetscReal**, KFDamping*)
     PetscErrorCode KFReducedSystemResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFReducedSystemRigidResponse(KFReducedSystem, PetscInt, const PetscReal*, PetscReal*, PetscReal*)

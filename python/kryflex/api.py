@@ -283,6 +283,13 @@ class ReducedModel(_core.CReducedModel):
         maps = [b["map"] for b in self._bodies]
         return maps if any(m is not None for m in maps) else None
 
+    @functools.cached_property
+    def ties(self):
+        """The coordinate ties between the bodies of a model of shared directions (-kf_shared_directions): ms x n
+        (n = sum(sizes)), rows D with D q = 0 on the stacked body coordinates q, appended to the joints' ties at every
+        reassembly; None for a model without them."""
+        return self.coordinate_ties()
+
     @property
     def body_names(self):
         return [b["name"] for b in self._bodies]

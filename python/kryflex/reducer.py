@@ -116,6 +116,8 @@ class Reducer:
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]))
+        if red.get("shared_directions") and "shared_directions" not in options:
+            options = dict(options, shared_directions=True)   # the search's option (-kf_shared_directions)
         if red.get("damped_moments") and "krylov_damped" not in options:
             options = dict(options, krylov_damped=True)   # the Krylov implementation's option (docs/guide/damping.md)
         with quiet_progress(quiet), kf_options(options):

@@ -121,7 +121,7 @@ static PetscErrorCode KFReassemblyRigidMotions(KFReassembly r, PetscReal **Rout,
   eigen-decomposition need is allocated here, and KFReassemblyApply / KFReassemblyEig then allocate nothing.
   alpha, beta: Rayleigh damping added to the reassembled viscous damping (0, 0: none).
 */
-static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, PetscBool witheig, KFReassembly *reassembly)
+static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt ms, const PetscReal Ds[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, PetscBool witheig, KFReassembly *reassembly)
 {
   KFReassembly r;
   PetscInt     n = 0, m = 0, total = 0, ldm, nrc;
@@ -157,7 +157,15 @@ static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReduc
     m += joints[j].type == KF_JOINT_REVOLUTE ? 5 : 6;
     r->nrev += joints[j].type == KF_JOINT_REVOLUTE;
   }
+  PetscCheck(ms >= 0 && (Ds || !ms), PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "KFReassemblyCreate: %" PetscInt_FMT " coordinate ties without their matrix", ms);
+  r->mj = m;
+  r->ms = ms;
+  m += ms;
   r->m = m;
+  if (ms) { /* the coordinate ties, angle-independent: copied once, appended to the joints' rows at each call */
+    PetscCall(PetscMalloc1(ms * n, &r->Ds));
+    PetscCall(PetscArraycpy(r->Ds, Ds, ms * n));
+  }
   /* the bodies' arrays, copied: the workspace does not depend on the lifetime of the caller's */
   PetscCall(PetscMalloc1(total + 1, &r->data));
   p = r->data;
@@ -208,7 +216,8 @@ static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReduc
     PetscCall(PetscMalloc1(r->leig, &r->eigwork));
   }
   /* the closed form costs a few one-shot reassemblies to make: for workspaces that serve many angles only */
-  if (witheig) PetscCall(KFPrimalCreate_Private(r));
+  /* the closed form eliminates the joints' ties only: with coordinate ties every call takes the SVD path */
+  if (witheig && !ms) PetscCall(KFPrimalCreate_Private(r));
   *reassembly = r;
   PetscFunctionReturn(0);
 }
@@ -216,7 +225,19 @@ static PetscErrorCode KFReassemblyCreate_Private(PetscInt nbodies, const KFReduc
 PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *reassembly)
 {
   PetscFunctionBegin;
-  PetscCall(KFReassemblyCreate_Private(nbodies, bodies, njoints, joints, a, t, rtol, alpha, beta, PETSC_TRUE, reassembly));
+  PetscCall(KFReassemblyCreate_Private(nbodies, bodies, njoints, joints, 0, NULL, a, t, rtol, alpha, beta, PETSC_TRUE, reassembly));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReassemblyCreateTied - KFReassemblyCreate with ms coordinate ties Ds (ms x n, column-major, n = sum of the bodies'
+  v): angle-independent rows appended to the joints' ties at every angle (a reduced model's shared directions,
+  KFReducedModelGetTies). ms 0: KFReassemblyCreate.
+*/
+PetscErrorCode KFReassemblyCreateTied(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt ms, const PetscReal Ds[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *reassembly)
+{
+  PetscFunctionBegin;
+  PetscCall(KFReassemblyCreate_Private(nbodies, bodies, njoints, joints, ms, Ds, a, t, rtol, alpha, beta, PETSC_TRUE, reassembly));
   PetscFunctionReturn(0);
 }
 
@@ -230,6 +251,7 @@ PetscErrorCode KFReassemblyDestroy(KFReassembly *reassembly)
   PetscCall(PetscFree3(r->bodies, r->joints, r->off));
   PetscCall(PetscFree(r->data));
   PetscCall(PetscFree(r->R));
+  PetscCall(PetscFree(r->Ds));
   PetscCall(PetscFree4(r->D, r->N, r->A, r->s));
   PetscCall(PetscFree3(r->VT, r->svdwork, r->W));
   PetscCall(PetscFree(r->WL));
@@ -293,7 +315,8 @@ PetscErrorCode KFReassemblyConstraints_Private(KFReassembly r, const PetscReal a
       row += 6;
     }
   }
-
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < r->ms; i++) D[row + i + j * m] = r->Ds[i + j * r->ms];
   PetscFunctionReturn(0);
 }
 
@@ -433,6 +456,14 @@ PetscErrorCode KFReassemble(PetscInt nbodies, const KFReducedBody bodies[], Pets
    reassembly through a KFReassembly made for it */
 PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
 {
+  PetscFunctionBegin;
+  PetscCall(KFReassembleTied(nbodies, bodies, njoints, joints, 0, NULL, angles, a, t, rtol, h, Mh, Kh, Ch, Gh, Hh, rank, sratio, nrigid, Phir));
+  PetscFunctionReturn(0);
+}
+
+/* KFReassembleDamped with ms coordinate ties Ds (ms x n) appended to the joints' ties (KFReassemblyCreateTied) */
+PetscErrorCode KFReassembleTied(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt ms, const PetscReal Ds[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[])
+{
   KFReassembly   r;
   KFReducedBody *used;
 
@@ -445,7 +476,7 @@ PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[]
     if (!Ch) used[b].C = NULL;
     if (!nrigid || !Phir) used[b].rigid = NULL;
   }
-  PetscCall(KFReassemblyCreate_Private(nbodies, used, njoints, joints, a, t, rtol, 0, 0, PETSC_FALSE, &r)); /* one reassembly, no modes */
+  PetscCall(KFReassemblyCreate_Private(nbodies, used, njoints, joints, ms, Ds, a, t, rtol, 0, 0, PETSC_FALSE, &r)); /* one reassembly, no modes */
   PetscCall(PetscFree(used));
   PetscCall(KFReassemblyApply(r, angles, h, Mh, Kh, Ch, Gh, Hh, rank, sratio, nrigid, Phir));
   PetscCall(KFReassemblyDestroy(&r));

@@ -29,6 +29,8 @@ struct _n_KFReassembly {
   KFPrimal       primal; /* the closed-form path, NULL when the bodies and joints do not allow it */
   PetscInt       hprimal; /* its size, n - m */
   PetscBool      use_svd; /* the SVD of the constraints at every call even when primal exists */
+  PetscInt       mj, ms;  /* m = mj joint rows + ms coordinate ties */
+  PetscReal     *Ds;      /* the coordinate ties (ms x n), or NULL */
 };
 
 /* the interface ties D (m x n) at these angles into r->D */

@@ -362,6 +362,9 @@ PETSC_EXTERN PetscErrorCode KFReducedModelGetMaxFrequency(KFReducedModel, PetscR
 PETSC_EXTERN PetscErrorCode KFReducedModelGetSettings(KFReducedModel, PetscInt *n, const char *const **keys, const char *const **values);
 /* reassembly at one configuration (angles: one per revolute joint, radians), eq. 20-24 */
 PETSC_EXTERN PetscErrorCode KFReducedModelReassemble(KFReducedModel, const PetscReal angles[], KFReducedSystem *);
+/* coordinate ties between the bodies (ms x n, n = sum of the bodies' v), appended to the joints' ties at reassembly */
+PETSC_EXTERN PetscErrorCode KFReducedModelSetTies(KFReducedModel, PetscInt ms, PetscInt n, const PetscReal D[]);
+PETSC_EXTERN PetscErrorCode KFReducedModelGetTies(KFReducedModel, PetscInt *ms, PetscInt *n, const PetscReal **D);
 /* HDF5, written under a temporary name in the same folder and renamed into place (earlier file left intact on
    failure); read with checks of format, version and internal consistency (shapes, names, counts). */
 PETSC_EXTERN PetscErrorCode KFReducedModelSave(KFReducedModel, const char path[]);
@@ -577,6 +580,9 @@ PETSC_EXTERN PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[
 /* KFReassemble that also reassembles the bodies' viscous damping (KFReducedBody.C, NULL for none) into Ch (h x h,
    sized n*n); Ch NULL: KFReassemble */
 PETSC_EXTERN PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
+/* KFReassembleDamped with ms coordinate ties Ds (ms x n, n = sum of the bodies' v; angle-independent rows appended to
+   the joints' ties: a reduced model's shared directions); ms 0: KFReassembleDamped */
+PETSC_EXTERN PetscErrorCode KFReassembleTied(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt ms, const PetscReal Ds[], const PetscReal angles[], PetscInt a, PetscInt t, PetscReal rtol, PetscInt *h, PetscReal Mh[], PetscReal Kh[], PetscReal Ch[], PetscReal Gh[], PetscReal Hh[], PetscInt *rank, PetscReal *sratio, PetscInt *nrigid, PetscReal Phir[]);
 /* Reassembly at changing angles without allocation (a simulation reassembles at every time step): a workspace made
    once for the bodies and joints (their arrays are copied), then KFReassemblyApply at each angle into the caller's
    arrays, and KFReassemblyEig for the eigen-decomposition when it is wanted. Plain data, not a PETSc object; one per
@@ -587,6 +593,8 @@ PETSC_EXTERN PetscErrorCode KFReassembleDamped(PetscInt nbodies, const KFReduced
    of the ties on either path. */
 typedef struct _n_KFReassembly *KFReassembly;
 PETSC_EXTERN PetscErrorCode KFReassemblyCreate(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *);
+/* with ms coordinate ties Ds (ms x n) appended to the joints' (no closed form: every call takes the SVD path) */
+PETSC_EXTERN PetscErrorCode KFReassemblyCreateTied(PetscInt nbodies, const KFReducedBody bodies[], PetscInt njoints, const KFJointDef joints[], PetscInt ms, const PetscReal Ds[], PetscInt a, PetscInt t, PetscReal rtol, PetscReal alpha, PetscReal beta, KFReassembly *);
 /* n: the largest reassembled size (outputs sized n n, n a, t n); viscous: some body has a damping matrix; rigid: the
    bodies' rigid motions are known (Apply returns Phir) */
 PETSC_EXTERN PetscErrorCode KFReassemblyGetSizes(KFReassembly, PetscInt *n, PetscInt *a, PetscInt *t, PetscBool *viscous, PetscBool *rigid);

@@ -182,6 +182,8 @@ PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyD
 /* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */
 PETSC_INTERN PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis);
 PETSC_INTERN PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis, PetscInt body, Mat Pb, Mat X, PetscReal T[]);
+/* the coordinates in a sub-basis of body vectors given in its parent's (v_b x m) */
+PETSC_INTERN PetscErrorCode KFBodyBasisSubCoordinates(KFBodyBasis sub, KFBodyBasis parent, PetscInt body, PetscInt m, const PetscReal Y[], PetscReal T[]);
 PETSC_INTERN PetscErrorCode KFBodyBasisCreateSub(KFBodyBasis parent, PetscReal tol, const PetscInt m[], PetscReal *const Y[], KFBodyBasis *sub);
 PETSC_INTERN PetscErrorCode KFSystemGetMPhi(KFSystem, Mat *); /* M Phi, kept on the system; NULL without rigid modes */
 PETSC_INTERN PetscErrorCode KFProjectFlexible(KFSystem, Mat X, PetscBool left); /* X <- (I - Phi Phi^T M) X, or (I - M Phi Phi^T) X if left */

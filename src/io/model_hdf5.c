@@ -11,6 +11,9 @@
      /joints/<name>        attributes index, type ("revolute"/"fixed"), parent, child, parent_interface,
                            child_interface (indices), axis (3), orientation (3 x 3 R0), revolute_index (-1 if fixed)
      /bodies/<name>/C      optional: the reduced viscous damping Psi^T C_b Psi (v x v)
+     /ties                 optional: coordinate ties between the bodies (shared directions), ms x n with n the sum of
+                           the bodies' v in body index order, rows D with D q = 0 appended to the joints' ties at
+                           reassembly; a file without it is a model without ties
      /damping              optional group (files before it: uniform modal damping, the 'damping' setting; displacement
                            outputs): attributes modal_bands (count), modal_fmax_hz, modal_zeta (count each, inf for
                            the last band of a uniform ratio), rayleigh (alpha, beta), structural (g),
@@ -248,6 +251,12 @@ static PetscErrorCode KFReducedModelWriteFile_Private(KFReducedModel m, hid_t f,
   PetscCall(WriteStrings(w, f, "inputs", m->ninputs, m->input_names));
   PetscCall(WriteStrings(w, f, "outputs", m->noutputs, m->output_names));
   PetscCall(WriteMatrix(w, f, "reduction_angles", m->nangles, m->nrevolute, m->angles, PETSC_TRUE, PETSC_FALSE));
+  if (m->nties) {
+    PetscInt n = 0;
+
+    for (PetscInt b = 0; b < m->nb; b++) n += m->bodies[b].v;
+    PetscCall(WriteMatrix(w, f, "ties", m->nties, n, m->ties, PETSC_TRUE, PETSC_FALSE));
+  }
 
   /* settings keep their order: attributes are tracked by creation order */
   if (!w->st->code) {
@@ -1319,6 +1328,17 @@ static PetscErrorCode KFReducedModelRead_Private(const char path[], KFReducedMod
   if (!st->code && n > 0) {
     m->nangles = n;
     PetscCall(ReadMatrix(&r, f, "", "reduction_angles", n, m->nrevolute, "one column per revolute joint", PETSC_TRUE, &m->angles));
+  }
+  if (!st->code && Exists(f, "ties")) {
+    PetscInt nsum = 0;
+
+    for (PetscInt b = 0; b < m->nb; b++) nsum += m->bodies[b].v;
+    n = DatasetRows(f, "ties");
+    if (n < 1 || n > nsum) PetscCall(Inconsistent(&r, "the dataset 'ties' has %" PetscInt_FMT " rows; a model of %" PetscInt_FMT " body coordinates has 1 to %" PetscInt_FMT " ties", n, nsum, nsum));
+    else {
+      PetscCall(ReadMatrix(&r, f, "", "ties", n, nsum, "one column per body coordinate (the sum of the bodies' reduced sizes)", PETSC_TRUE, &m->ties));
+      if (!st->code) m->nties = n;
+    }
   }
   H5Fclose(f);
   PetscFunctionReturn(0);

@@ -148,6 +148,7 @@ PetscErrorCode KFReducedModelDestroy(KFReducedModel *model)
   PetscCall(PetscFree(m->output_names));
   PetscCall(PetscFree(m->angles));
   PetscCall(PetscFree(m->quantity));
+  PetscCall(PetscFree(m->ties));
   for (PetscInt k = 0; k < m->nsettings; k++) {
     PetscCall(PetscFree(m->keys[k]));
     PetscCall(PetscFree(m->values[k]));
@@ -297,5 +298,45 @@ PetscErrorCode KFReducedModelGetSettings(KFReducedModel m, PetscInt *n, const ch
   if (n) *n = m->nsettings;
   if (keys) *keys = (const char *const *)m->keys;
   if (values) *values = (const char *const *)m->values;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedModelSetTies - ms coordinate ties between the bodies (D, ms x n column-major, n the sum of the bodies'
+  reduced sizes, copied): angle-independent rows D q = 0 on the stacked body coordinates q = (q_1, ..., q_nb) that
+  every reassembly appends to the joints' ties. A model of shared directions keeps each system vector one direction
+  of the system instead of one per body. ms 0 removes them.
+*/
+PetscErrorCode KFReducedModelSetTies(KFReducedModel m, PetscInt ms, PetscInt n, const PetscReal D[])
+{
+  PetscInt nsum = 0;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  for (PetscInt b = 0; b < m->nb; b++) nsum += m->bodies[b].v;
+  PetscCheck(ms >= 0 && ms <= nsum, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "KFReducedModelSetTies: %" PetscInt_FMT " ties on %" PetscInt_FMT " body coordinates: give 0 to %" PetscInt_FMT, ms, nsum, nsum);
+  PetscCheck(!ms || n == nsum, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_SIZ, "KFReducedModelSetTies: the ties have %" PetscInt_FMT " columns, the bodies %" PetscInt_FMT " coordinates", n, nsum);
+  PetscCheck(!ms || D, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_NULL, "KFReducedModelSetTies: %" PetscInt_FMT " ties without their matrix", ms);
+  for (PetscInt i = 0; i < ms * n; i++) PetscCheck(!PetscIsInfOrNanReal(D[i]), PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "KFReducedModelSetTies: entry %" PetscInt_FMT " of the ties is not a finite number", i);
+  PetscCall(PetscFree(m->ties));
+  m->nties = ms;
+  if (ms) {
+    PetscCall(PetscMalloc1(ms * n, &m->ties));
+    PetscCall(PetscArraycpy(m->ties, D, ms * n));
+  }
+  PetscFunctionReturn(0);
+}
+
+/* the model's coordinate ties (KFReducedModelSetTies): ms rows on n coordinates, D NULL when ms is 0 */
+PetscErrorCode KFReducedModelGetTies(KFReducedModel m, PetscInt *ms, PetscInt *n, const PetscReal **D)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  if (ms) *ms = m->nties;
+  if (n) {
+    *n = 0;
+    for (PetscInt b = 0; b < m->nb; b++) *n += m->bodies[b].v;
+  }
+  if (D) *D = m->ties;
   PetscFunctionReturn(0);
 }

@@ -35,7 +35,7 @@ PetscErrorCode KFReducedModelCreateReassembly(KFReducedModel m, KFReassembly *re
   PetscCall(KFReducedModelGetReassemblyRtol(m, &rtol));
   PetscCall(PetscMalloc1(m->nb, &bodies));
   for (PetscInt b = 0; b < m->nb; b++) PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
-  PetscCall(KFReassemblyCreate(m->nb, bodies, m->nj, m->joints, m->ninputs, m->noutputs, rtol, m->damping.alpha, m->damping.beta, reassembly));
+  PetscCall(KFReassemblyCreateTied(m->nb, bodies, m->nj, m->joints, m->nties, m->ties, m->ninputs, m->noutputs, rtol, m->damping.alpha, m->damping.beta, reassembly));
   PetscCall(PetscFree(bodies));
   PetscFunctionReturn(0);
 }
@@ -77,14 +77,14 @@ PetscErrorCode KFReducedModelReassemble(KFReducedModel m, const PetscReal angles
   PetscCall(PetscMalloc1(PetscMax(t, 1), &y->quantity));
   PetscCall(PetscArraycpy(y->quantity, m->quantity, t));
   if (viscous || m->damping.alpha > 0 || m->damping.beta > 0) PetscCall(PetscMalloc1(n * n, &y->C));
-  PetscCall(KFReassembleDamped(m->nb, bodies, m->nj, m->joints, angles, a, t, rtol, &h, y->M, y->K, viscous ? y->C : NULL, y->G, y->H, &y->rank, &y->sratio, &nrigid, y->Phir));
+  PetscCall(KFReassembleTied(m->nb, bodies, m->nj, m->joints, m->nties, m->ties, angles, a, t, rtol, &h, y->M, y->K, viscous ? y->C : NULL, y->G, y->H, &y->rank, &y->sratio, &nrigid, y->Phir));
   if (y->C) { /* Rayleigh: alpha M + beta K, exact under projection */
     if (!viscous) PetscCall(PetscArrayzero(y->C, h * h));
     for (PetscInt e = 0; e < h * h; e++) y->C[e] += m->damping.alpha * y->M[e] + m->damping.beta * y->K[e];
   }
   PetscCall(PetscFree(bodies));
   y->n = h;
-  PetscCheck(h > 0, comm, PETSC_ERR_ARG_WRONG, "the joints' interface ties leave no free coordinate in the reduced model: reduce again with a larger body basis");
+  PetscCheck(h > 0, comm, PETSC_ERR_ARG_WRONG, "the joints' interface ties (and the model's %" PetscInt_FMT " coordinate ties) leave no free coordinate in the reduced model: reduce again with a larger body basis", m->nties);
   if (nrigid >= 0) {
     y->nrigid     = nrigid;
     y->phir_known = PETSC_TRUE;

@@ -50,6 +50,7 @@ PetscErrorCode KFReducedModelView(KFReducedModel m, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
     PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
   }
+  if (m->nties) PetscCall(PetscViewerASCIIPrintf(viewer, "coordinate ties between the bodies (shared directions): %" PetscInt_FMT "\n", m->nties));
   if (m->nsettings) {
     PetscCall(PetscViewerASCIIPrintf(viewer, "settings:\n"));
     PetscCall(PetscViewerASCIIPushTab(viewer));

@@ -624,6 +624,24 @@ static void KFSmallMult(PetscBool trans, PetscInt r, PetscInt k, PetscInt p, con
     }
 }
 
+/* T = Z_b^T M_p Y (v x m): the coordinates in a sub-basis (KFBodyBasisCreateSub of parent) of body vectors given by
+   their parent coordinates Y (parent v_b x m), as KFBodyBasisCoordinates gives them in a basis of its own */
+PetscErrorCode KFBodyBasisSubCoordinates(KFBodyBasis sub, KFBodyBasis parent, PetscInt b, PetscInt m, const PetscReal Y[], PetscReal T[])
+{
+  PetscInt   vp, v;
+  PetscReal *MY;
+
+  PetscFunctionBegin;
+  PetscCheck(sub->finished && sub->Z && sub->Z[b] && parent->finished && sub->ppsi[b] == parent->Psi[b], sub->s->comm, PETSC_ERR_ARG_WRONG, "KFBodyBasisSubCoordinates: not a sub-basis of this parent");
+  vp = sub->vp[b];
+  v  = sub->v[b];
+  PetscCall(PetscMalloc1(vp * m + 1, &MY));
+  KFSmallMult(PETSC_FALSE, vp, vp, m, parent->M[b], vp, Y, MY);
+  KFSmallMult(PETSC_TRUE, v, vp, m, sub->Z[b], vp, MY, T);
+  PetscCall(PetscFree(MY));
+  PetscFunctionReturn(0);
+}
+
 /* A finished body basis spanned by a parent's (kept with KFBodyBasisKeepProducts): body b's vectors given by their
    coordinates Y[b] (parent v_b x m[b], column-major; KFBodyBasisCoordinates), scaled as KFBodyBasisAdd's are. In
    these coordinates the M-inner product is the parent's reduced mass M_p (the identity to rounding), so the pivoted

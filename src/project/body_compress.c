@@ -219,6 +219,7 @@ PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
   PetscCheck(nconf >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "compression needs at least one configuration");
+  PetscCheck(!m->nties, PetscObjectComm((PetscObject)m), PETSC_ERR_SUP, "the model's bodies are tied by %" PetscInt_FMT " coordinate ties (shared directions), and compression truncates each body on its own: reduce with -kf_shared_directions false to compress", m->nties);
   PetscCall(PetscCalloc1(m->nb, dirs));
   PetscCall(PetscMalloc2(m->nb, &S, m->nb, &Gq));
   for (PetscInt b = 0; b < m->nb; b++) {

@@ -238,6 +238,12 @@ PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscI
     PetscCall(KFReducedModelGetBody(model, b, NULL, NULL, &body, NULL));
     cand->size += body.v;
   }
+  { /* a model of shared directions: its coordinate ties take as many dofs out at every angle */
+    PetscInt ms;
+
+    PetscCall(KFReducedModelGetTies(model, &ms, NULL, NULL));
+    cand->size -= ms;
+  }
   cand->error    = 0;
   cand->sysdofs  = 0;
   cand->complete = PETSC_TRUE;

@@ -169,6 +169,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_shift_blocks", r->shift_blocks, &r->shift_blocks, NULL));
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_shift_family_only", r->shift_family_only, &r->shift_family_only, NULL));
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_compress", r->compress, &r->compress, NULL));
+    PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_shared_directions", r->shared_directions, &r->shared_directions, NULL));
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_static_exact", r->static_exact, &r->static_exact, NULL));
   }
   importance = (PetscInt)r->importance;

@@ -928,7 +928,8 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
   if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
-  if (r->compress) { /* the chosen model, body by body, by what its response needs */
+  if (r->compress && r->shared_directions) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
+  if (r->compress && !r->shared_directions) { /* the chosen model, body by body, by what its response needs */
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
     PetscInt        from, to;
     PetscLogDouble  c0, c1;

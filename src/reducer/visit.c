@@ -193,6 +193,8 @@ typedef struct {
   KFBodyBasis parent;                                   /* never bb (a parent is no model), but the code allows it */
   PetscInt    pn, pvisit[KF_MAX_EXPANSION], pm[KF_MAX_EXPANSION]; /* the parent's visits and their Krylov columns */
   PetscReal **Tr, **T; /* per parent visit e and body b, at e * nb + b: v_b x nr_e, v_b x pm[e] */
+  PetscInt    tk;      /* with shared directions: the last basis' coordinates of its vectors, per body v_b x tk */
+  PetscReal **tC;
 } KFCandidateCache;
 
 /* the same vectors: the same visits, moments, kept clusters (per body when shared); not the family */
@@ -261,13 +263,22 @@ static PetscErrorCode KFCandidateCacheDropParent(KFReducer r, KFCandidateCache *
   PetscFunctionReturn(0);
 }
 
-/* the last model's basis replaced by bb (the parent is kept) */
-static PetscErrorCode KFCandidateCacheSetLast(KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis bb)
+/* the last model's basis replaced by bb (the parent is kept), with its vectors' coordinates tC (nb arrays of v_b x tk,
+   taken over; NULL without shared directions) */
+static PetscErrorCode KFCandidateCacheSetLast(KFReducer r, KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis bb, PetscInt tk, PetscReal **tC)
 {
+  PetscInt nb;
+
   PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
   if (cc->bb != cc->parent) PetscCall(KFBodyBasisDestroy(&cc->bb));
+  if (cc->tC)
+    for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(cc->tC[b]));
+  PetscCall(PetscFree(cc->tC));
   cc->key = *cand;
   cc->bb  = bb;
+  cc->tk  = tk;
+  cc->tC  = tC;
   PetscFunctionReturn(0);
 }
 
@@ -278,7 +289,7 @@ PetscErrorCode KFCandidateCacheReset_Private(KFReducer r)
   PetscFunctionBegin;
   if (!cc) PetscFunctionReturn(0);
   PetscCall(KFCandidateCacheDropParent(r, cc));
-  PetscCall(KFBodyBasisDestroy(&cc->bb));
+  PetscCall(KFCandidateCacheSetLast(r, cc, &cc->key, NULL, 0, NULL));
   PetscCall(PetscFree(r->candcache));
   PetscFunctionReturn(0);
 }
@@ -321,7 +332,7 @@ static PetscErrorCode KFCandidateCacheCoordinates(KFReducer r, KFVisit visits[],
 
 /* a candidate of the parent's visits as a sub-basis: body vectors [Tr_eb, T_eb(:, 1:m_e) C_eb] per visit e of the
    candidate (the order of the full way: each visit's rigid modes, then its vectors), in the parent's coordinates */
-static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb)
+static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandidateCache *cc, const KFCandidate *cand, KFBodyBasis *bb, PetscInt *tk, PetscReal ***tC)
 {
   PetscInt    nb, *mb, *m, *ncol;
   PetscReal **Y, **C;
@@ -364,8 +375,60 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
   }
   PetscCall(PetscFree3(m, ncol, C));
   PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
+  *tk = 0;
+  *tC = NULL;
+  if (r->shared_directions && !cand->nbody) { /* the same columns on every body: their coordinates in the sub-basis */
+    *tk = mb[0];
+    PetscCall(PetscMalloc1(nb, tC));
+    for (PetscInt b = 0; b < nb; b++) {
+      PetscInt vb;
+
+      PetscCall(KFBodyBasisGetReduced(*bb, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+      PetscCall(PetscMalloc1(vb * mb[b] + 1, &(*tC)[b]));
+      PetscCall(KFBodyBasisSubCoordinates(*bb, cc->parent, b, mb[b], Y[b], (*tC)[b]));
+    }
+  }
   for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(Y[b]));
   PetscCall(PetscFree2(mb, Y));
+  PetscFunctionReturn(0);
+}
+
+/* the coordinates in bb (made with KFBodyBasisKeepProducts) of a candidate's columns, the full way: each visit's rigid
+   modes, then its vectors, as KFCandidateModel_Private adds them */
+static PetscErrorCode KFCandidateCoordinates(KFReducer r, KFVisit visits[], const KFCandidate *cand, KFBodyBasis bb, PetscInt *tk, PetscReal ***tC)
+{
+  PetscInt nb, k = 0, col = 0, *nr, *nx;
+  Mat     *X;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(PetscMalloc3(cand->nexp, &X, cand->nexp, &nr, cand->nexp, &nx));
+  for (PetscInt e = 0; e < cand->nexp; e++) {
+    KFVisit *v = &visits[cand->exp[e]];
+
+    PetscCall(MatGetSize(v->Phir, NULL, &nr[e]));
+    PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X[e], NULL));
+    PetscCall(MatGetSize(X[e], NULL, &nx[e]));
+    k += nr[e] + nx[e];
+  }
+  PetscCall(PetscMalloc1(nb, tC));
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscInt vb;
+
+    PetscCall(KFBodyBasisGetReduced(bb, b, &vb, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(PetscMalloc1(vb * k + 1, &(*tC)[b]));
+    col = 0;
+    for (PetscInt e = 0; e < cand->nexp; e++) {
+      KFVisit *v = &visits[cand->exp[e]];
+
+      PetscCall(KFBodyBasisCoordinates(bb, b, v->P[b], v->Phir, (*tC)[b] + col * vb));
+      PetscCall(KFBodyBasisCoordinates(bb, b, v->P[b], X[e], (*tC)[b] + (col + nr[e]) * vb));
+      col += nr[e] + nx[e];
+    }
+  }
+  for (PetscInt e = 0; e < cand->nexp; e++) PetscCall(MatDestroy(&X[e]));
+  PetscCall(PetscFree3(X, nr, nx));
+  *tk = k;
   PetscFunctionReturn(0);
 }
 
@@ -376,8 +439,10 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   KFBodyBasis       bb;
   PetscInt          nrev, nrev1, nb, maxdofs = 0;
   PetscReal        *angles;
-  PetscBool         keep;
+  PetscBool         keep, shared = (PetscBool)(r->shared_directions && !cand->nbody);
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
+  PetscInt          tk = 0;
+  PetscReal       **tC = NULL;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
@@ -395,8 +460,8 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     for (PetscInt e = 0; e < cand->nexp; e++) krylov = (PetscBool)(krylov && visits[cand->exp[e]].basis.nblocks);
     if (r->sub_bases && KFInParent(cc, visits, cand)) {
       PetscCall(PetscInfo(r, "candidate c=%" PetscInt_FMT " kept=%" PetscInt_FMT " nbody=%" PetscInt_FMT " nexp=%" PetscInt_FMT ": a sub-basis of the parent's %" PetscInt_FMT " visits\n", cand->c, cand->kept, cand->nbody, cand->nexp, cc->pn));
-      PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb));
-      PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
+      PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb, &tk, &tC));
+      PetscCall(KFCandidateCacheSetLast(r, cc, cand, bb, tk, tC));
     } else {
       /* the whole bases of its visits: the new parent */
       PetscBool parent = PETSC_FALSE;
@@ -404,7 +469,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
       if (r->sub_bases && krylov && !cand->nbody) PetscCall(KFWholeBasis(r, visits, cand, &parent));
 
       PetscCall(KFBodyBasisCreate(r->scene, &bb));
-      if (parent) PetscCall(KFBodyBasisKeepProducts(bb));
+      if (parent || shared) PetscCall(KFBodyBasisKeepProducts(bb)); /* shared: for the vectors' coordinates */
       for (PetscInt e = 0; e < cand->nexp; e++) {
         KFVisit *v = &visits[cand->exp[e]];
         Mat      X;
@@ -431,9 +496,9 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
           cc->pm[e]     = KFVisitColumns(&visits[cand->exp[e]], cand->c);
         }
         PetscCall(KFCandidateCacheCoordinates(r, visits, cc));
-        PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb));
-      }
-      PetscCall(KFCandidateCacheSetLast(cc, cand, bb));
+        PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb, &tk, &tC));
+      } else if (shared) PetscCall(KFCandidateCoordinates(r, visits, cand, bb, &tk, &tC));
+      PetscCall(KFCandidateCacheSetLast(r, cc, cand, bb, tk, tC));
     }
   }
   bb = cc->bb;
@@ -447,6 +512,10 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   keep = (PetscBool)(keep && maps);
   PetscCall(KFReducedModelCreateFromBodyBasis(r->scene, bb, cand->nexp, angles, keep, model));
   PetscCall(KFReducerRecordSettings_Private(r, *model, (KFReducerMethod)cand->family, cand->c, cand->nexp, angles));
+  if (shared) {
+    PetscCheck(cc->tC, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "shared directions: the candidate's body basis has no coordinates of its vectors");
+    PetscCall(KFCandidateTies_Private(r, *model, cc->tk, cc->tC));
+  }
   PetscCall(PetscFree(angles)); /* bb stays in the cache */
   PetscFunctionReturn(0);
 }

@@ -189,6 +189,14 @@ cdef class CReducedModel:
                     iface=carray(B.iface, 6 * B.ninterfaces, B.v), rigid=carray(B.rigid, B.v, 6),
                     map=carray(Psi, n, B.v))
 
+    def coordinate_ties(self):
+        """The coordinate ties between the bodies (shared directions): ms x n (n the sum of the bodies' sizes), rows D
+        with D q = 0 on the stacked body coordinates, or None for a model without them."""
+        cdef PetscInt ms, n
+        cdef const PetscReal *D
+        check(KFReducedModelGetTies(self.m, &ms, &n, &D))
+        return carray(D, ms, n) if ms else None
+
     def joint(self, PetscInt j):
         """Joint j (revolute joints first, in the order of the angles): dict with name, type, parent, child (body
         indices), parent_interface, child_interface (interface indices), axis, R0 (3x3, rows)."""

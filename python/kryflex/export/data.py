@@ -46,6 +46,12 @@ def from_model(model, configurations_deg=None):
     else as reduced (FloatingBody.floating False); a trimmed model adds its trimmed systems at configurations_deg
     (default: its reduction angles), and a model without joints whose bodies do not all float adds its reassembled
     system (no angle), which Exudyn takes as one ObjectGenericODE2."""
+    ties = getattr(model, "ties", None)
+    if ties is not None:    # the bodies are not free: their coordinates obey the ties besides the joints
+        raise ExportError("model of scene '%s': its bodies' coordinates are bound by %d coordinate ties (shared "
+                          "directions); a body-by-body export would drop them, and its bodies would have more freedom "
+                          "than the model: reduce again with -kf_shared_directions false (scene key "
+                          "reduction.shared_directions: false) to export it" % (model.scene_name, ties.shape[0]))
     bodies = [reduced_body(name, ifs, **arrays)
               for name, ifs, arrays in zip(model.body_names, model.interfaces, model.bodies)]
     joints = []

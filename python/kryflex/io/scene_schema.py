@@ -805,7 +805,7 @@ def _reduction(where, given, revolute):
         fail(where, p + "output_blocks", "%d is not below moments (%d); give fewer output blocks than moments"
              % (red["output_blocks"], red["moments"]))
     for key in ("keep_threshold", "deflation_tol", "body_tol", "reassembly_rtol", "shift", "eigen_cover",
-                "static_correction", "damped_moments", "save_maps", "compress", "static_exact"):
+                "static_correction", "damped_moments", "save_maps", "compress", "static_exact", "shared_directions"):
         red[key] = _setting(where, p + key, red[key])
     red["max_frequency"] = _max_frequency(where, p + "max_frequency", red["max_frequency"])
     red["reduction_angle"] = _reduction_angle(where, red["reduction_angle"], revolute)

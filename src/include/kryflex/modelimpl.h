@@ -41,6 +41,8 @@ struct _p_KFReducedModel {
   char        **keys, **values;
   KFDamping     damping;     /* modal, Rayleigh, structural (src/model/damping.c) */
   PetscInt     *quantity;    /* per output a KFQuantity */
+  PetscInt      nties;       /* coordinate ties between the bodies (shared directions), 0: none */
+  PetscReal    *ties;        /* nties x (sum of the bodies' v), column-major, or NULL */
 };
 
 /* A reassembled model at one configuration (plain data). */

@@ -114,6 +114,7 @@ struct _p_KFReducer {
   PetscBool       compress;       /* the chosen model compressed body by body by its response (-kf_compress) */
   PetscBool       static_exact;   /* compression keeps each body's share of the static response exactly (-kf_static_exact) */
   PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
+  PetscBool       shared_directions; /* candidates' bodies tied to the kept system vectors' directions (-kf_shared_directions) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
 
@@ -243,6 +244,9 @@ PETSC_INTERN PetscErrorCode KFDampingDescribe_Private(const KFDamping *, char bu
    (m x m, replicated); *has: whether any body has a C_b */
 PETSC_INTERN PetscErrorCode KFSystemProjectDamping_Private(KFSystem, Mat X, PetscBool *has, PetscReal Cm[]);
 /* measure a candidate: error over the points (stopping at the first point above stop, stop <= 0: all), sizes */
+/* the coordinate ties of a model whose kept system vectors have body coordinates C[b] (v_b x k each): the rows D with
+   D [R C] = 0, R the bodies' rigid motions (src/reducer/ties.c), set on the model */
+PETSC_INTERN PetscErrorCode KFCandidateTies_Private(KFReducer, KFReducedModel, PetscInt k, PetscReal *const C[]);
 PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
 /* expansion points inside the band (src/reducer/shifts.c): after the search over moments, models with the Krylov blocks
    of points sigma = (2 pi f)^2 chosen greedily; visits of those points appended to *visits; the chosen family's

@@ -1,0 +1,223 @@
+"""Shared directions (-kf_shared_directions, src/reducer/ties.c, the ties of src/dense/reassemble.c): each kept system
+vector costs one direction of the system, not one per body. The bodies keep their bases; their stacked coordinates are
+tied to span[R C] (the bodies' rigid motions and the kept vectors' body coordinates) by angle-independent rows D_s the
+model stores and every reassembly appends to the joints' ties.
+
+Checked on the solid bus/rotor pair (2,760 dofs, one angle) against an independent dense NumPy/SciPy reference built
+from the bodies' own mass and stiffness files, the joints' constraints and the model's maps and ties:
+(a) at the reduction angle and (b) at another angle, the reassembled tied model is the Galerkin projection of the full
+order on the conforming subspace blkdiag(Psi_b) null([D_joints(angle) Psi; D_s]) (eigenvalues and transfer function),
+its eigenvalues are upper bounds of the full order's (Cauchy interlacing) and its rigid modes are exact;
+(c) the ties survive a save/load round trip; (d) the search with the option meets the elastic target with fewer system
+dofs than without, and 2 MPI ranks choose the same model; (e) the static moment L^0 is the full order's at the
+reduction angle (1e-10). With the option off a model has no ties.
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+import kryflex
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+sys.path.insert(0, SUPPORT)
+import accuracy_scenes as acc  # noqa: E402
+import reference as ref  # noqa: E402
+
+PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1",
+           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+TARGET = 1e-3
+ANGLE = 0.0           # the reduction angle
+OTHER = 40.0          # an angle the basis was not built at
+SAME_EIG = 1e-10      # tied model against the NumPy Galerkin projection: eigenvalues, relative to the largest
+                      # (measured 1.5e-12; the split model 4e-15)
+SAME_FRF = 1e-8       # and transfer function, relative to its largest entry (measured ~1e-11)
+INTERLACE = 1e-7      # lam_k(model) >= lam_k(full) to this (relative): at the reduction angle the lowest modes are
+                      # matched to rounding (measured -6.5e-9), and the dense full order's eigenvalues are only known to
+                      # eps lam_max / lam_k (reference.py); at 40 deg every gap is positive (>= 4.6e-7)
+STATIC = 1e-10        # L^0 against the full order's at the reduction angle (relative)
+RIGID = 1e-9          # the full order's rigid modes outside the tied subspace (relative)
+
+pytestmark = pytest.mark.usefixtures("quiet_library")
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    base = acc.solid_base(str(tmp_path_factory.mktemp("solid")))
+    return acc.write_variant(base, str(tmp_path_factory.mktemp("tied") / "one.yaml"), accuracy=TARGET,
+                             angles=[[ANGLE]], band=acc.SOLID_BAND)
+
+
+@pytest.fixture(scope="module")
+def runs(scene):
+    return {sd: kryflex.reduce(kryflex.load_scene(scene), quiet=True, shared_directions=sd) for sd in (False, True)}
+
+
+@pytest.fixture(scope="module")
+def full(scene):
+    s = ref.load_scene(scene)
+    return s, ref.assemble(s, [ANGLE]), ref.assemble(s, [OTHER])
+
+
+def tied_subspace(s, model, angle):
+    """The tied model's subspace in the full order's coordinates at this angle (ref.assemble's: x = P y), from the
+    maps, the joints' full constraints and the model's ties alone."""
+    Q = sl.block_diag(*model.maps)                        # stacked body dofs x body coordinates
+    C = ref.constraint_matrix(s, [angle])
+    N = ref.null_space_svd(np.vstack([C @ Q, model.ties]), rtol=1e-9)
+    P = ref.null_space_svd(C)
+    return P.T @ (Q @ N)
+
+
+def transfer(M, K, G, H, w):
+    return np.array([H @ np.linalg.solve(K - x * x * M, G) for x in w])
+
+
+def check_galerkin(s, model, system, angle):
+    Ms, Ks, Gs, Hs = system
+    V = tied_subspace(s, model, angle)
+    Mr, Kr = V.T @ Ms @ V, V.T @ Ks @ V
+    rs = model.at([angle], trimmed=False)
+    assert rs.dofs == V.shape[1]
+    lam_ref = sl.eigh(Kr, Mr, eigvals_only=True)
+    lam = np.sort(rs.eigenvalues)
+    top = lam_ref.max()
+    err = np.max(np.abs(lam - lam_ref)) / top
+    # the band's resonances (5.96 .. 11.8 Hz) lie between these: off resonance, both systems invertible
+    w = 2 * np.pi * np.array([3.1, 8.3, 14.7])
+    T_ref = transfer(Mr, Kr, V.T @ Gs, Hs @ V, w)
+    T = transfer(rs.M, rs.K, rs.B, rs.C, w)
+    ferr = np.max(np.abs(T - T_ref)) / np.max(np.abs(T_ref))
+    # Cauchy interlacing: a Galerkin model's k-th eigenvalue bounds the full order's from above
+    lam_full = sl.eigh(Ks, Ms, eigvals_only=True, subset_by_index=[0, len(lam) - 1])
+    nr = rs.rigid_modes.shape[1]
+    above = np.min((lam[nr:] - lam_full[nr:]) / lam[nr:])
+    # the full order's rigid modes (from geometry, in ref.assemble's coordinates) lie in the tied subspace
+    R = ref.geometric_rigid_modes(s, [angle])
+    Qv, _ = np.linalg.qr(V)
+    res = np.linalg.norm(R - Qv @ (Qv.T @ R)) / np.linalg.norm(R)
+    print("angle %g: %d dofs (ties %d), eigenvalues %.2e, FRF %.2e from the NumPy projection; (lam - lam_full)/lam "
+          ">= %.2e; %d rigid modes, residual %.2e" % (angle, rs.dofs, model.ties.shape[0], err, ferr, above, nr, res))
+    assert err <= SAME_EIG
+    assert ferr <= SAME_FRF
+    assert above >= -INTERLACE
+    assert nr == 7
+    assert res <= RIGID
+
+
+def test_off_by_default_and_model_records_it(runs):
+    assert runs[False].model.ties is None
+    assert "shared_directions" not in runs[False].model.settings
+    assert runs[True].model.ties is not None
+    assert runs[True].model.settings["shared_directions"] is True
+
+
+def test_galerkin_at_the_reduction_angle(runs, full):
+    s, at_angle, _ = full
+    check_galerkin(s, runs[True].model, at_angle, ANGLE)
+
+
+def test_galerkin_and_conforming_at_another_angle(runs, full):
+    s, _, other = full
+    check_galerkin(s, runs[True].model, other, OTHER)
+
+
+def test_static_moment_exact_at_the_reduction_angle(runs, full):
+    s, (Ms, Ks, Gs, Hs), _ = full
+    # the rigid modes from geometry (independent of the model), M-orthonormalized
+    R = ref.geometric_rigid_modes(s, [ANGLE])
+    R = R @ np.linalg.inv(np.linalg.cholesky(R.T @ Ms @ R)).T
+    Ge = Gs - Ms @ R @ (R.T @ Gs)
+    x = np.linalg.solve(Ks + Ms @ R @ R.T @ Ms, Ge)
+    x -= R @ (R.T @ (Ms @ x))
+    L0 = Hs @ x
+    L0r = runs[True].model.at([ANGLE]).moments(1)[0]
+    err = np.linalg.norm(L0r - L0) / np.linalg.norm(L0)
+    print("L^0 of the tied model against the full order: %.2e" % err)
+    assert err <= STATIC
+
+
+def test_save_load_keeps_the_ties(runs, tmp_path):
+    m = runs[True].model
+    path = str(tmp_path / "tied.h5")
+    m.save(path)
+    back = kryflex.ReducedModel.load(path)
+    assert np.array_equal(back.ties, m.ties)
+    assert np.allclose(back.at([OTHER]).frequencies_hz, m.at([OTHER]).frequencies_hz, rtol=1e-12, atol=0)
+    m0 = runs[False].model
+    m0.save(str(tmp_path / "split.h5"))
+    assert kryflex.ReducedModel.load(str(tmp_path / "split.h5")).ties is None
+
+
+def test_search_meets_the_target_with_fewer_system_dofs(runs):
+    split, tied = runs[False], runs[True]
+    n_split, n_tied = split.model.at([ANGLE]).dofs, tied.model.at([ANGLE]).dofs
+    print("system dofs at %g deg: %d split (bodies %s), %d tied (bodies %s, %d ties); errors %.3g, %.3g"
+          % (ANGLE, n_split, split.model.sizes, n_tied, tied.model.sizes, tied.model.ties.shape[0],
+             split.summary.verdict.error_max, tied.summary.verdict.error_max))
+    assert tied.summary.verdict.target_met and tied.summary.verdict.error_max <= TARGET
+    assert n_tied < n_split        # measured 16 against 19
+
+
+@pytest.mark.mpi
+def test_two_ranks_choose_the_same_tied_model(runs, scene, tmp_path):
+    path = str(tmp_path / "m.h5")
+    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, scene, path, str(tmp_path / "s.json"),
+                    "-kf_shared_directions", "true"], env=ENV, check=True, timeout=600, capture_output=True)
+    two, one = kryflex.ReducedModel.load(path), runs[True].model
+    assert two.sizes == one.sizes and two.ties.shape == one.ties.shape
+    f1, f2 = one.at([OTHER]).frequencies_hz, two.at([OTHER]).frequencies_hz
+    assert np.allclose(f1, f2, rtol=1e-8, atol=0)
+
+
+def test_compression_refuses_a_tied_model(runs):
+    # the reducer skips compression with shared directions (what it would compress is each body on its own)
+    assert runs[True].summary.chosen.compressed_from_dofs is None
+
+
+def test_export_refuses_a_tied_model(runs, tmp_path):
+    from kryflex.export import ExportError, from_model
+    with pytest.raises(ExportError, match=r"11 coordinate ties|coordinate ties.*-kf_shared_directions false") as e:
+        from_model(runs[True].model)
+    assert "-kf_shared_directions false" in str(e.value)
+    # the command: a documented non-zero exit and the message, no traceback
+    path = str(tmp_path / "tied.h5")
+    runs[True].model.save(path)
+    for fmt in ("neutral", "exudyn"):
+        p = subprocess.run([sys.executable, "-m", "kryflex", "export", path, "-o", str(tmp_path / ("x_%s.npz" % fmt)),
+                            "--format", fmt], env=ENV, cwd=ROOT, capture_output=True, text=True, timeout=300)
+        print(fmt, p.returncode, p.stderr.strip().splitlines()[-1:])
+        assert p.returncode != 0
+        assert "Traceback" not in p.stderr
+        assert "shared_directions false" in p.stderr
+    from_model(runs[False].model)      # the split model exports as before
+
+
+def test_a_file_with_ties_of_the_wrong_shape_is_refused(runs, tmp_path):
+    import h5py
+    path = str(tmp_path / "bad.h5")
+    runs[True].model.save(path)
+    with h5py.File(path, "r+") as f:
+        D = f["ties"][()]
+        del f["ties"]
+        f["ties"] = D[:, :-1]                      # one body coordinate short
+    with pytest.raises(kryflex.ModelFileError, match="ties"):
+        kryflex.ReducedModel.load(path)
+
+
+def test_the_scene_key_sets_it(tmp_path):
+    galileo = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+    path = acc.write_variant(galileo, str(tmp_path / "g.yaml"), accuracy=1e-3, angles=[[0.0]],
+                             reduction={"shared_directions": True})
+    m = kryflex.reduce(kryflex.load_scene(path), quiet=True).model
+    assert m.settings.get("shared_directions") is True and m.ties is not None
+    bad = acc.write_variant(galileo, str(tmp_path / "bad.yaml"), reduction={"shared_directions": "maybe"})
+    with pytest.raises(kryflex.SceneError, match="shared_directions"):
+        kryflex.load_scene(bad)

@@ -1,0 +1,130 @@
+"""The count of the full order's flexible modes below a frequency without an eigensolve (src/verify/mode_count.c:
+the negative pivots of MUMPS' LDL^T of K_S - (2 pi f)^2 M_S, Sylvester's law of inertia, less the rigid modes),
+against dense SciPy eigenvalues of the assembled full order (M_S's null space condensed statically, the low modes
+resolved by shift-and-invert as in the assembly tests): Galileo at two angles, the solid spacecraft at refine 0.5,
+a clamped beam (no rigid modes), a free-free beam with clustered bending frequencies, a frame whose rotations are
+massless, a plate with a singular lumped mass (offset masses, M singular beyond its zero diagonal). The counts are
+taken half-way below the first mode, just below and just above modes (1e-6 in frequency, far above the reference's
+own error), between the two closest modes of a cluster and above every finite mode; on 1 and 2 ranks."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+import kryflex
+from kryflex import _core
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+sys.path.insert(0, SUPPORT)
+import accuracy_scenes  # noqa: E402
+import bc_models  # noqa: E402
+from mpi_assembly_probe import accurate_eigenvalues, zero_split  # noqa: E402
+
+pytestmark = [pytest.mark.usefixtures("quiet_library")]
+
+PROBE = os.path.join(SUPPORT, "mode_count_probe.py")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+# taken at import, before this process initializes MPI (its singleton's variables would confuse mpiexec)
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1",
+           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+REL = 1e-6                      # just below / just above a mode, relative in frequency
+
+
+def dense(A):
+    """A petsc4py Mat gathered on this (single) rank as a NumPy array."""
+    return A.convert("dense").getDenseArray().copy() if not A.getType().endswith("dense") else A.getDenseArray().copy()
+
+
+def reference_frequencies(M, K):
+    """(every finite flexible frequency in Hz ascending, rigid count) of (K, M) by SciPy: M's null space (eigenvalues
+    of M at most 1e-8 of its largest) condensed statically, then the condensed pencil's eigenvalues with its low
+    ones resolved by shift-and-invert (accurate_eigenvalues)."""
+    M, K = 0.5 * (M + M.T), 0.5 * (K + K.T)
+    mu, U = np.linalg.eigh(M)
+    null = mu <= 1e-8 * mu.max()
+    Z, Y = U[:, null], U[:, ~null]
+    T = Y - Z @ np.linalg.solve(Z.T @ K @ Z, Z.T @ K @ Y) if null.any() else Y
+    Kc, Mc = T.T @ K @ T, T.T @ M @ T
+    lam = accurate_eigenvalues(0.5 * (Kc + Kc.T), 0.5 * (Mc + Mc.T))
+    nzero = zero_split(lam)[0]
+    return np.sqrt(np.sort(lam)[nzero:]) / (2 * np.pi), nzero
+
+
+def probe_frequencies(f):
+    """Frequencies (Hz) at which to count: half the first mode; just below and above the first, a middle and the
+    last mode; the geometric midpoint of the closest pair of distinct modes (a cluster); above every mode."""
+    out = [0.5 * f[0]]
+    for k in sorted({0, 1, len(f) // 2, len(f) - 1}):
+        out += [f[k] * (1 - REL), f[k] * (1 + REL)]
+    gaps = f[1:] / f[:-1] - 1
+    distinct = np.flatnonzero(gaps > 1e3 * REL)
+    k = distinct[np.argmin(gaps[distinct])]
+    out.append(np.sqrt(f[k] * f[k + 1]))
+    out.append(1.5 * f[-1])
+    return np.array(out)
+
+
+def scene_and_angles(name, tmp_path_factory):
+    """(scene object, scene argument of the probe, angles in degrees)"""
+    if name.startswith("galileo"):
+        angle = {"galileo0": 0.0, "galileo45": 52.5}[name]
+        return kryflex.load_scene(accuracy_scenes.GALILEO), accuracy_scenes.GALILEO, [angle]
+    if name == "solid":
+        path = accuracy_scenes.solid_base(str(tmp_path_factory.mktemp("solid")))
+        return kryflex.load_scene(path), path, [45.0]
+    return kryflex.scene_from_dict(getattr(bc_models, name)()), "bc:" + name, []
+
+
+NAMES = ["galileo0", "galileo45", "solid", "clamped_beam", "free_clustered_beam", "lumped_frame", "lumped_plate"]
+
+
+@pytest.fixture(scope="module", params=NAMES)
+def case(request, tmp_path_factory):
+    """(name, probe scene argument, angles, reference frequencies, frequencies probed, counts by kryflex on 1 rank)"""
+    name = request.param
+    scene, arg, angles = scene_and_angles(name, tmp_path_factory)
+    system = _core.CSystem(scene.cscene)
+    system.set_angles(np.radians(angles))
+    Ms, Ks, _, _ = system.matrices()
+    f, nzero = reference_frequencies(dense(Ms), dense(Ks))
+    Phi, _ = system.rigid_modes()
+    assert nzero == Phi.getSize()[1], (name, nzero)   # the geometric rigid modes are K's null space
+    probes = probe_frequencies(f)
+    counts = [system.count_modes_below(q) for q in probes]
+    return name, arg, angles, f, probes, counts
+
+
+def test_count_matches_dense_eigenvalues(case):
+    """Every count equals the number of SciPy's flexible frequencies below it, at every probe."""
+    name, _, _, f, probes, counts = case
+    expected = [int(np.sum(f < q)) for q in probes]
+    assert counts == expected, (name, list(zip(probes, counts, expected)))
+    assert expected[0] == 0 and expected[-1] == len(f)        # the probes span nothing to everything
+    assert any(e - c == 1 for c, e in zip(expected[1::2], expected[2::2]))  # a mode falls between a pair of probes
+
+
+def test_two_ranks_agree(case, tmp_path):
+    """The counts on 2 ranks (the inertia of the distributed factor: ICNTL(13) = 1) are the serial ones."""
+    name, arg, angles, _, probes, counts = case
+    out = tmp_path / "counts.json"
+    r = subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, arg, ",".join("%r" % a for a in angles),
+                        ",".join("%.17g" % q for q in probes), str(out)], capture_output=True, text=True, timeout=600,
+                       cwd=ROOT, env=ENV)
+    assert r.returncode == 0, r.stderr[-3000:]
+    got = json.load(open(out))
+    assert got["ranks"] == 2 and got["counts"] == counts, (name, got, counts)
+
+
+def test_bad_frequency_is_a_clear_error():
+    """A frequency that is not a positive number is refused by name."""
+    system = _core.CSystem(kryflex.scene_from_dict(bc_models.clamped_beam()).cscene)
+    system.set_angles(np.zeros(0))
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="positive number of Hz"):
+            system.count_modes_below(bad)

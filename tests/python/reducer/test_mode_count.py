@@ -5,7 +5,9 @@ resolved by shift-and-invert as in the assembly tests): Galileo at two angles, t
 a clamped beam (no rigid modes), a free-free beam with clustered bending frequencies, a frame whose rotations are
 massless, a plate with a singular lumped mass (offset masses, M singular beyond its zero diagonal). The counts are
 taken half-way below the first mode, just below and just above modes (1e-6 in frequency, far above the reference's
-own error), between the two closest modes of a cluster and above every finite mode; on 1 and 2 ranks."""
+own error), between the two closest modes of a cluster and above every finite mode; on 1 and 2 ranks. As the
+verification's certificate (-kf_verify_count): the count recorded per configuration against SciPy's, the reference and
+the model unchanged by it, and a block eigensolve that misses modes (its start block never reaches them) refused."""
 import json
 import os
 import subprocess
@@ -128,3 +130,112 @@ def test_bad_frequency_is_a_clear_error():
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="positive number of Hz"):
             system.count_modes_below(bad)
+
+
+# ---------------------------------------------------------------- the certificate of the verification's eigensolve
+
+def z_only_clustered_beam():
+    """The clamped beam with equal section inertias (bending pairs in y and z) read and loaded in z only: with no random
+    start columns (-kf_verify_eigen_random 0) the block eigensolve's space never leaves the xz plane, so it misses
+    every y-bending mode below the cut, and nothing in its stop can tell."""
+    from test_sparse_eigensolve import clustered_beam
+    spec = clustered_beam()
+    spec["inputs"] = {k: v for k, v in spec["inputs"].items() if all(d["dof"] == "uz" for d in v)}
+    spec["outputs"] = {k: v for k, v in spec["outputs"].items() if all(d["dof"] == "uz" for d in v)}
+    assert spec["inputs"] and spec["outputs"]
+    return spec
+
+
+@pytest.mark.parametrize("method", ["block", "slepc"])
+@pytest.mark.parametrize("name", ["clamped_beam", "lumped_frame", "free_clustered_beam", "rigid_offset_frame"])
+def test_verification_count_recorded(name, method):
+    """-kf_verify_count on the sparse path: the count recorded (full_order_mode_count) is SciPy's number of flexible
+    modes below the cut, the eigensolve's modes below it are as many, and the reference and the model's error are
+    the same as without the count, bit for bit."""
+    from test_sparse_eigensolve import reduce_sparse
+    spec = getattr(bc_models, name)()
+    on = reduce_sparse(kryflex.scene_from_dict(spec), kf_verify_count=True, kf_verify_eigen_method=method)
+    off = reduce_sparse(kryflex.scene_from_dict(spec), kf_verify_eigen_method=method)
+    count, below = int(on.result(0, "full_order_mode_count")[0]), float(on.result(0, "full_order_mode_count_below_hz")[0])
+    Ms, Ks = bc_models.single_body_reference(spec)[:2]
+    f, _ = reference_frequencies(np.asarray(Ms), np.asarray(Ks))
+    assert below == pytest.approx(3 * spec["band"][1])              # -kf_verify_cover x the band's top
+    assert count == int(np.sum(f < below)) > 0
+    assert int(np.sum(np.ravel(on.result(0, "full_frequencies_hz")) < below)) == count
+    for key in ("full_frequencies_hz", "frf_full_re", "frf_reduced_re"):
+        assert np.array_equal(on.result(0, key), off.result(0, key)), key
+    assert "full_order_mode_count" not in off.result_names(0)       # off by default: nothing counted
+
+
+def test_missed_modes_are_a_numerical_failure():
+    """The block eigensolve that misses the y-bending modes (z-only inputs and outputs, no random columns) passes
+    silently without the count (its reference lacks SciPy's y modes); with -kf_verify_count it is refused, naming both
+    counts (kryflex reduce: exit 3)."""
+    from test_sparse_eigensolve import reduce_sparse
+    spec = z_only_clustered_beam()
+    opts = dict(kf_verify_eigen_method="block", kf_verify_eigen_random=0)
+    silent = reduce_sparse(kryflex.scene_from_dict(spec), **opts)
+    Ms, Ks = bc_models.single_body_reference(spec)[:2]
+    f, _ = reference_frequencies(np.asarray(Ms), np.asarray(Ks))
+    cut = 3 * spec["band"][1]
+    found = int(np.sum(np.ravel(silent.result(0, "full_frequencies_hz")) < cut))
+    expected = int(np.sum(f < cut))
+    assert found < expected                                          # the miss the count is for
+    with pytest.raises(_core.Error, match=r"found %d flexible modes below .* counts %d: it missed a mode"
+                       % (found, expected)):
+        reduce_sparse(kryflex.scene_from_dict(spec), kf_verify_count=True, **opts)
+
+
+def test_bodywise_count_on_the_solid(tmp_path_factory):
+    """On the solid spacecraft (two bodies, a revolute joint: the body-wise split applies) the verification's count is
+    Haynsworth's: the bodies' interiors of K_b - sigma M_b factored once, the interface problem per configuration. At
+    every angle of interest and midpoint it equals the whole system's LDL^T count (-kf_verify_count_bodywise false),
+    and at 45 deg SciPy's count of the assembled full order below the cut; the model is the same bit for bit."""
+    from petsc4py import PETSc
+    path = accuracy_scenes.solid_base(str(tmp_path_factory.mktemp("solid_count")))
+    runs = {}
+    for bodywise in (True, False):
+        opts = PETSc.Options()
+        values = dict(kf_verify_count=True, kf_verify_count_bodywise=bodywise)
+        for k, v in values.items():
+            opts.setValue(k, v)
+        try:
+            reducer = kryflex.Reducer(kryflex.load_scene(path), quiet=True, search=False)
+            reducer.reduce()
+        finally:
+            for k in values:
+                opts.delValue(k)
+        runs[bodywise] = reducer
+    scene = kryflex.load_scene(path)
+    angles = [float(np.ravel(a)[0]) for a in scene.configurations]
+    counts = {bw: [int(r.result(c, "full_order_mode_count")[0]) for c in range(len(angles))] for bw, r in runs.items()}
+    assert counts[True] == counts[False] and min(counts[True]) > 0, counts
+    below = float(runs[True].result(0, "full_order_mode_count_below_hz")[0])
+    system = _core.CSystem(scene.cscene)
+    k = angles.index(45.0) if 45.0 in angles else 0
+    system.set_angles(np.radians([angles[k]]))
+    Ms, Ks, _, _ = system.matrices()
+    f, _ = reference_frequencies(dense(Ms), dense(Ks))
+    assert counts[True][k] == int(np.sum(f < below))
+    assert np.array_equal(runs[True].result(0, "frf_reduced_re"), runs[False].result(0, "frf_reduced_re"))
+
+
+def test_bodywise_count_two_ranks(tmp_path_factory, tmp_path):
+    """`kryflex reduce -kf_verify_count true` on 2 ranks (the bodies spread over the ranks, each body's negative pivots
+    counted on its owner and summed): summary.json's full.mode_count at every angle is the serial whole-system count
+    of the same configuration below the same cut."""
+    path = accuracy_scenes.solid_base(str(tmp_path_factory.mktemp("solid_count2")))
+    out = tmp_path / "out"
+    r = subprocess.run(["mpiexec", "-n", "2", sys.executable, "-m", "kryflex", "reduce", path, "-o", str(out),
+                        "-kf_verify_count", "true"], capture_output=True, text=True, timeout=600, cwd=ROOT, env=ENV)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "s, body-wise)" in r.stdout
+    counted = json.load(open(out / "summary.json"))["full"]["mode_count"]
+    scene = kryflex.load_scene(path)
+    system = _core.CSystem(scene.cscene)
+    assert len(counted) == len(scene.configurations)
+    for angles in scene.configurations:
+        label = scene.label([float(a) for a in np.atleast_1d(angles)])
+        system.set_angles(np.radians(np.atleast_1d(angles)))
+        got = counted[label]
+        assert got["count"] == system.count_modes_below(got["below_hz"]) > 0, (label, got)

@@ -137,6 +137,7 @@ typedef struct {
   PetscReal cut2;
   PetscInt  count;
   PetscBool covered;
+  PetscBool krylov_schur; /* Krylov-Schur even where the block path applies: the inertia count found it missed modes */
 } KFEigenHint;
 /* An M-orthonormal basis kept M-orthogonal to the rigid modes (src/krylov/block_arnoldi.c: the Krylov basis's own
    numerics), for the verification's block eigensolve */

@@ -98,6 +98,7 @@ struct _p_KFReducer {
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
   PetscLogDouble  verify_count_seconds; /* the references' mode counts (-kf_verify_count), part of the verification's */
   KFBodyFactors   count_bf;             /* the bodies' interior factors of K_b - sigma M_b at the count's cut, for every configuration (or NULL) */
+  PetscBool       verify_krylov_schur;  /* this reference's eigensolve again by Krylov-Schur: the count found the first missed modes */
   PetscBool       count_bf_made;        /* count_bf tried (NULL then: the count factors the whole system) */
   PetscInt        verify_count;   /* the modes the last sparse reference took to cover its cut (0: none yet): the next
                                      eigensolve's size (KFEigenHint) */

@@ -3,7 +3,7 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check] [--block-eigen] [--slepc-eigen] [--other TREE [--bare-only]]
+        [--direct-check] [--block-eigen] [--slepc-eigen] [--mode-count] [--other TREE [--bare-only]]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
@@ -12,7 +12,9 @@ is stated in: default wall / (factorization + block solves of the bare run), and
 factorizations (its progress line), and how many angles and midpoints the check iterated from the reference (steps,
 fallbacks: summary.json). The default's eigensolves are the block Krylov path's: their blocks per configuration and columns per block
 are printed. --slepc-eigen adds a run of the default with SLEPc's Krylov-Schur (-kf_verify_eigen_method slepc) and
-the two's ratio. --block-eigen adds a run of the default with the eigensolves by SLEPc's subspace iteration
+the two's ratio. --mode-count adds a run of the default with the eigensolves certified by inertia counts
+(-kf_verify_count true: one LDL^T of K_S - sigma M_S per configuration) and prints each count's seconds beside the
+eigensolve's per configuration, and whether the two runs' models are the same bit for bit. --block-eigen adds a run of the default with the eigensolves by SLEPc's subspace iteration
 (K+ applied to blocks) and prints both runs' K+ applications, columns and seconds per column. --direct-check adds a run of the default with the check solved by factorizations
 (-kf_verify_check_method direct, the method before the iterative one) and the two checks' ratio. --whole-check adds a third run, the default with the direct check factoring the
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
@@ -37,6 +39,9 @@ STAMP = re.compile(r"^\[kryflex\s+([0-9.]+) s\] (.*)$")
 # the block Krylov eigensolve's progress line, one per configuration (src/verify/eigen.c), and its fall back
 BLOCK_LINE = re.compile(r"block Krylov of K\+ M with the flexible solver's factor: (\d+) blocks of (\d+) columns(?:, at most \d+)?\)")
 BLOCK_FALLBACK = "the block Krylov space did not converge"
+# the mode count's progress line, one per configuration (src/reducer/reference.c)
+COUNT_LINE = re.compile(r"mode count \(inertia of K_S - sigma M_S\): (\d+) flexible modes below ([0-9.e+-]+) Hz, the "
+                        r"eigensolve found (\d+) \(([0-9.e+-]+) s, (?:body-wise|monolithic)\)")
 EIGEN_INFO = re.compile(r"kryflex verification eigensolve: (\d+) iterations, (\d+) K\+ applications, (\d+) columns, "
                         r"([0-9.e+-]+) s in the factor's solves")
 
@@ -94,7 +99,9 @@ def run(scene, out, extra, root=ROOT):
                 factorization=perf.get("factorization_s", 0.0), solves=perf.get("solves_s", 0.0),
                 whole=perf.get("whole_s", 0.0), verification=(s.get("timings_s") or {}).get("verification eigensolve", 0.0),
                 eigensolve=perf.get("reference_eigensolve_s"), check=perf.get("reference_check_s"),
-                search=perf.get("search_s"),
+                search=perf.get("search_s"), count=perf.get("reference_count_s"),
+                counts=[(int(a), float(b), int(c), float(d)) for a, b, c, d in COUNT_LINE.findall(proc.stdout)],
+                count_kind="body-wise" if "s, body-wise)" in proc.stdout else "monolithic",
                 model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
                 report=(t0 + wall - t_write_seen) if t_write_seen is not None else None,
                 report_stamp=(wall - t_write) if t_write is not None else None,
@@ -237,6 +244,9 @@ def main():
     ap.add_argument("--slepc-eigen", action="store_true",
                     help="a run of the default with SLEPc's Krylov-Schur eigensolves (-kf_verify_eigen_method slepc, "
                          "the method before the block Krylov one), beside the block path, and the two's ratio")
+    ap.add_argument("--mode-count", action="store_true",
+                    help="a run of the default with its eigensolves certified by inertia counts (-kf_verify_count "
+                         "true), beside the default: each count's seconds against the eigensolve's per configuration")
     ap.add_argument("--bare-only", action="store_true",
                     help="with --other: the bare runs alone (-kf_verify false), each tree's beside the other's, and "
                          "whether their reduced models are the same bit for bit")
@@ -270,6 +280,8 @@ def main():
                 if args.whole_check else None
             direct = run(scene, os.path.join(args.work, "direct_%s" % refine), ["-kf_verify_check_method", "direct"]) \
                 if args.direct_check else None
+            counted = run(scene, os.path.join(args.work, "count_%s" % refine), ["-kf_verify_count", "true"]) \
+                if args.mode_count else None
             denom = bare["factorization"] + bare["solves"]
             print("\nrefine %s (%s dofs), run %d; bare factorization + solves %.2f s" % (refine, full["dofs"], rep + 1, denom))
             print("%-8s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("run", "wall", "cpu", "factor", "solves", "check",
@@ -293,6 +305,18 @@ def main():
                 show("whole", whole, denom)
                 print("direct solves, body-wise / whole-system: %.2f (%s against %s factorizations)" % (
                     full["check"] / whole["check"], full["check_factorizations"], whole["check_factorizations"]))
+            if counted:
+                show("count", counted, denom)
+                n = len(counted["counts"])
+                print("count: %d configurations counted %s (modes below the cut, inertia / eigensolve); counts %.2f s "
+                      "(%s s each; %s) against eigensolves %.2f s (%.2f s per configuration): %.2f; default wall with / "
+                      "without %.3f, CPU %.3f; models %s" % (
+                          n, ",".join("%d/%d" % (c[0], c[2]) for c in counted["counts"]), counted["count"] or 0,
+                          ",".join("%.2f" % c[3] for c in counted["counts"]), counted["count_kind"], counted["eigensolve"],
+                          counted["eigensolve"] / max(n, 1), (counted["count"] or 0) / counted["eigensolve"],
+                          counted["wall"] / full["wall"], counted["cpu"] / full["cpu"],
+                          "identical" if same_model(os.path.join(args.work, "default_%s" % refine),
+                                                    os.path.join(args.work, "count_%s" % refine)) else "DIFFERENT"))
             if direct:
                 show("direct", direct, denom)
                 print("reference check, iterative / direct: %.2f s / %.2f s = %.2f; default wall, iterative / direct: %.2f" % (

@@ -81,6 +81,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt*, PetscReal*, PetscReal*)
     PetscErrorCode KFSystemEigen(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscMat*)
+    PetscErrorCode KFSystemCountModesBelow(KFSystem, PetscReal, PetscInt*)
     PetscErrorCode KFSystemProject(KFSystem, SlepcBV, PetscReal*, PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFBVCombine(SlepcBV, PetscInt, const PetscReal*, PetscMat*)
     PetscErrorCode KFMatCombine(PetscMat, PetscInt, const PetscReal*, PetscMat*)

@@ -248,6 +248,8 @@ class FullOrder(Record):
     rigid_modes: int = _value(doc="rigid-body and mechanism modes")
     body_frequencies_hz: dict = _value(doc="{body: lowest free-free component frequencies}")
     frequencies_hz: dict = _value({}, doc="{label: lowest flexible system frequencies}")
+    mode_count: dict = _value({}, doc="{label: {count, below_hz}}: flexible modes below the verification's cut by "
+                                      "the inertia of K_S - sigma M_S (-kf_verify_count), where counted")
     moments: dict = _value({}, doc="{label: [k][output][input]} moments L^k (None entries: not computed)")
 
 
@@ -345,6 +347,7 @@ class Performance(Record):
     memory_estimate_mb: float = _value()
     reference_eigensolve_s: float = _value(doc="the verification's full-order eigensolves")
     reference_check_s: float = _value(doc="the verification's direct solves of the full system")
+    reference_count_s: float = _value(doc="the verification's mode counts by inertia (-kf_verify_count)")
     search_s: float = _value(doc="the accuracy search")
     compress_s: float = _value(doc="the compression of the chosen model (-kf_compress)")
 

@@ -240,6 +240,8 @@ PETSC_EXTERN PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt *nrigid, PetscRea
 PETSC_EXTERN PetscErrorCode KFSystemEigen(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[]);
 /* Whether the verification eigensolve is dense (LAPACK: every mode at once, -kf_verify_dense_max_dofs) */
 PETSC_EXTERN PetscErrorCode KFSystemEigenIsDense(KFSystem, PetscBool *dense);
+/* The flexible modes below freq (Hz), from the inertia of one LDL^T of K_S - (2 pi freq)^2 M_S (src/verify/mode_count.c) */
+PETSC_EXTERN PetscErrorCode KFSystemCountModesBelow(KFSystem, PetscReal freq, PetscInt *count);
 
 /* ---------------------------------------------------------------- small dense algebra (src/dense) */
 

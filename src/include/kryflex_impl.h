@@ -120,6 +120,7 @@ typedef struct _n_KFBodywiseOp *KFBodywiseOp;
 PETSC_INTERN PetscErrorCode KFBodywiseApplies(KFScene, PetscBool *);
 PETSC_INTERN PetscErrorCode KFBodyFactorsCreateShifted(KFSystem, const char[], PetscReal, KFBodyFactors *);
 PETSC_INTERN PetscErrorCode KFBodywiseOpCreate(KFSystem, KFBodyFactors, KFBodywiseOp *);
+PETSC_INTERN PetscErrorCode KFBodywiseOpInertia(KFBodyFactors, KFBodywiseOp, PetscInt *nneg); /* negative pivots of K_S + shift M_S */
 PETSC_INTERN PetscErrorCode KFBodywiseOpSolve(KFSystem, KFBodyFactors, KFBodywiseOp, Mat, Mat);
 PETSC_INTERN PetscErrorCode KFBodywiseOpDestroy(KFBodywiseOp *);
 PETSC_INTERN PetscErrorCode KFHeldDofsOptions(MPI_Comm, const char prefix[], PetscReal *cond_max); /* src/solve/held_dofs.c */
@@ -136,6 +137,7 @@ typedef struct {
   PetscReal cut2;
   PetscInt  count;
   PetscBool covered;
+  PetscBool krylov_schur; /* Krylov-Schur even where the block path applies: the inertia count found it missed modes */
 } KFEigenHint;
 /* An M-orthonormal basis kept M-orthogonal to the rigid modes (src/krylov/block_arnoldi.c: the Krylov basis's own
    numerics), for the verification's block eigensolve */

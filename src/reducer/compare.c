@@ -138,6 +138,10 @@ static PetscErrorCode KFCompareOne(KFReducer r, KFReducedModel model, const char
         PetscCall(PetscMalloc3(PetscMax(p->ref.n, 1), &ff, PetscMax(p->ref.n, 1), &dom, PetscMax(p->ref.n, 1), &domerr));
         for (PetscInt k = 0; k < p->ref.n; k++) ff[k] = PetscSqrtReal(p->ref.w2[k]) / (2 * PETSC_PI);
         PetscCall(KFReducerResultSet_Private(r, c, "full_frequencies_hz", 1, &p->ref.n, ff));
+        if (p->ref.count >= 0) {
+          PetscCall(KFReducerResultScalar_Private(r, c, "full_order_mode_count", (PetscReal)p->ref.count));
+          PetscCall(KFReducerResultScalar_Private(r, c, "full_order_mode_count_below_hz", p->ref.count_hz));
+        }
         PetscCall(KFDominantModes(&p->ref, t, a, r->band, r->zeta, 0.05, &nd, dom));
         PetscCall(KFReducedSystemGetFrequencies(rs, &nf, &freq));
         for (PetscInt k = 0; k < nd; k++) {

@@ -462,6 +462,8 @@ PetscErrorCode KFReducerReset(KFReducer r)
   PetscCall(KFReducerResultsReset_Private(r));
   r->verify_count   = 0;
   r->verify_covered = PETSC_FALSE;
+  PetscCall(KFBodyFactorsDestroy(&r->count_bf));
+  r->count_bf_made = PETSC_FALSE;
   if (r->candcache_reset) PetscCall((*r->candcache_reset)(r));
   PetscFunctionReturn(0);
 }

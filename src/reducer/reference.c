@@ -17,6 +17,52 @@ PETSC_INTERN PetscErrorCode KFSystemMasslessCount(KFSystem, PetscInt *);
 PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
+PETSC_INTERN PetscErrorCode KFSystemShiftedInertia(KFSystem, PetscReal, KFBodyFactors, PetscInt *, PetscInt *);
+PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], PetscReal, KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFModeCountOptions(MPI_Comm, const char[], PetscBool *, PetscBool *);
+
+/* The certificate of a sparse eigensolve stopped at the cut (cut2 = omega^2): the flexible modes below it counted by
+   Sylvester's inertia of K_S - cut2 M_S (one LDL^T factorization) against those the eigensolve returned below it. A
+   Krylov method cannot see a mode its start block misses; the count can. Fewer returned than counted is a mode
+   missed: with retry, *missed (the caller solves again by Krylov-Schur, whose random start reaches what the block
+   path's inputs, outputs and random columns may not), else exit 3 naming the configuration and both counts (more
+   returned than counted, a spurious mode, is exit 3 at once). A cut that is itself an eigenvalue (a null pivot) is
+   moved 1e-6 lower, with the returned count taken there. */
+static PetscErrorCode KFReferenceCount(KFReducer r, KFSystem sys, PetscReal cut2, PetscInt nconv, const PetscReal w2[], PetscBool retry, KFFullReference *ref, PetscBool *missed)
+{
+  MPI_Comm       comm = PetscObjectComm((PetscObject)r);
+  PetscInt       nneg, nnull, below = 0, nrigid;
+  PetscReal      sigma = cut2;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(PetscTime(&t0));
+  PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL));
+  if (!r->count_bf_made) { /* the cut is the same at every configuration: the bodies' factors at it serve them all */
+    PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, sigma, &r->count_bf));
+    r->count_bf_made = PETSC_TRUE;
+  }
+  PetscCall(KFSystemShiftedInertia(sys, sigma, r->count_bf, &nneg, &nnull));
+  if (nnull) {
+    sigma *= 1 - 1e-6;
+    PetscCall(KFSystemShiftedInertia(sys, sigma, NULL, &nneg, &nnull));
+  }
+  PetscCheck(nnull == 0, comm, PETSC_ERR_CONV_FAILED, "the verification's mode count: K_S - sigma M_S is singular at the cut %g Hz and 1e-6 below it; set -kf_verify_cover to move the cut", (double)(PetscSqrtReal(cut2) / (2 * PETSC_PI)));
+  while (below < nconv && w2[below] < sigma) below++;
+  ref->count    = nneg - nrigid;
+  ref->count_hz = PetscSqrtReal(sigma) / (2 * PETSC_PI);
+  PetscCall(PetscTime(&t1));
+  r->verify_count_seconds += t1 - t0;
+  PetscCall(KFReducerResultScalar_Private(r, -1, "time_reference_count", (PetscReal)r->verify_count_seconds));
+  PetscCall(KFProgress(comm, "  mode count (inertia of K_S - sigma M_S): %" PetscInt_FMT " flexible modes below %.6g Hz, the eigensolve found %" PetscInt_FMT " (%.3g s, %s)", ref->count, (double)ref->count_hz, below, (double)(t1 - t0), r->count_bf ? "body-wise" : "monolithic"));
+  *missed = (PetscBool)(retry && ref->count > below);
+  if (*missed) {
+    PetscCall(KFProgress(comm, "  the eigensolve missed %" PetscInt_FMT " of the %" PetscInt_FMT " flexible modes below %.6g Hz: solved again by Krylov-Schur", ref->count - below, ref->count, (double)ref->count_hz));
+    PetscFunctionReturn(0);
+  }
+  PetscCheck(ref->count == below, comm, PETSC_ERR_CONV_FAILED, "the verification eigensolve found %" PetscInt_FMT " flexible modes below %.6g Hz, the inertia of K_S - sigma M_S (Sylvester) counts %" PetscInt_FMT ": %s. Widen its start block (-kf_verify_eigen_random) or take Krylov-Schur (-kf_verify_eigen_method slepc)", below, (double)ref->count_hz, ref->count, ref->count > below ? "it missed a mode its start block did not reach" : "it returned a mode that is not one");
+  PetscFunctionReturn(0);
+}
 
 /* Whether the sparse eigensolve may take the reduction's flexible solver as its shift-and-invert step: K+ is what
    it needs when the solver holds dofs (no shift) and no target was asked for (-kf_verify_target: that target's own
@@ -50,7 +96,7 @@ static PetscErrorCode KFReferenceEigen(KFReducer r, KFSystem sys, KFFlexSolver s
   if (keep) PetscCall(MatDestroy(keep));
   {
     const PetscReal wcut = 2 * PETSC_PI * fmax;
-    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count, r->verify_covered};
+    KFEigenHint     hint = {r->verify_modes == PETSC_DECIDE ? wcut * wcut : 0, r->verify_count, r->verify_covered, r->verify_krylov_schur};
     PetscInt        c    = 0;
 
     if (solver) PetscCall(KFFlexSolverEigen_Private(solver, &hint, nev, nconv, w2, HPhi, PhiG, viscous ? modes : keep));
@@ -101,6 +147,7 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
   /* dense: every mode (no residual to approximate) */
   /* sparse: twice the count the previous reference took to reach the cut (its eigensolve stops there), at least 20 */
   nev = r->verify_modes == PETSC_DECIDE ? (dense ? nflex : PetscMax(20, 2 * r->verify_count)) : r->verify_modes;
+  for (PetscInt attempt = 0; attempt < 2; attempt++) { /* again by Krylov-Schur when the count finds modes missed */
   while (PETSC_TRUE) { /* double the count until the modes cover fmax */
     if (!exact && 2 * nev >= nflex) {
       PetscCall(KFSystemMassNullity(sys, PETSC_FALSE, &nnull, &n0));
@@ -118,7 +165,21 @@ PetscErrorCode KFReducerFullReference_Private(KFReducer r, KFSystem sys, KFFlexS
     PetscCall(PetscFree3(w2, HPhi, PhiG));
     nev = PetscMin(nflex, 2 * nev);
   }
-  ref->n        = nconv;
+  ref->count = -1;
+  {
+    PetscBool count, missed = PETSC_FALSE;
+
+    PetscCall(KFModeCountOptions(PetscObjectComm((PetscObject)r), ((PetscObject)r)->prefix, &count, NULL));
+    /* the sparse eigensolve stopped at the cut (a dense or complete one has every mode) */
+    if (count && !dense && r->verify_modes == PETSC_DECIDE && !viscous && nev < nflex) PetscCall(KFReferenceCount(r, sys, PetscSqr(2 * PETSC_PI * fmax), nconv, w2, (PetscBool)(attempt == 0), ref, &missed));
+    if (!missed) break;
+    PetscCall(PetscFree3(w2, HPhi, PhiG));
+    r->verify_krylov_schur = PETSC_TRUE;
+    nev = PetscMin(nflex, PetscMax(nev, 2 * ref->count)); /* room for every mode counted below the cut */
+  }
+  }
+  r->verify_krylov_schur = PETSC_FALSE;
+  ref->n = nconv;
   /* with M singular the modes are not the whole response: a load on M's null space moves it statically,
      H Z K_zz^-1 Z^T G at every frequency, which no mode carries. The dense path computes that term exactly (ref->D);
      the sparse path's static residual R^0 = L^0 - sum over the modes holds it, so it is kept there even when every

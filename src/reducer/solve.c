@@ -894,6 +894,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify ? neval - r->nconfig : 0))); /* the midpoints' references too */
   for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
+  PetscCall(KFBodyFactorsDestroy(&r->count_bf)); /* the last reference is made: the count's factors go */
   if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
   if (!r->verify) PetscCall(KFReducerSearchEstimator_Private(r, &st, neval, evals, Lfull));
   if (r->verify) { /* the truth the references are checked against, verification too */
@@ -1049,6 +1050,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   r->verify_check_worst_hz = 0;
   r->verify_check_seconds  = 0;
   r->verify_eigen_seconds  = 0;
+  r->verify_count_seconds  = 0;
   r->verify_check_iter_points    = 0;
   r->verify_check_iter_steps     = 0;
   r->verify_check_iter_steps_max = 0;
@@ -1077,6 +1079,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
       PetscCall(KFSystemCreate(r->scene, &sys));
       PetscCall(KFSystemSetConfigurationCount(sys, PetscMax(neval - r->nconfig, 1)));
       PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &seconds));
+      PetscCall(KFBodyFactorsDestroy(&r->count_bf));
       PetscCall(KFSystemDestroy(&sys));
       seconds -= r->verify_check_seconds; /* the truth the references are checked against, verification too */
       PetscCall(KFReducerDirectChecks_Private(r, neval, evals));

@@ -478,7 +478,7 @@ static PetscErrorCode KFSystemEigenBlock(KFSystem sys, KFFlexSolver solver, cons
   *done = PETSC_FALSE;
   PetscCall(KFBlockEigenOptions(s->comm, &method, &nrand, &maxblocks, &firstmb));
   if (method == 0) method = s->nsys >= KF_BLOCK_EIGEN_MIN_DOFS ? 1 : 2;
-  if (method != 1 || !hint) PetscFunctionReturn(0);
+  if (method != 1 || !hint || hint->krylov_schur) PetscFunctionReturn(0);
   PetscCall(KFFlexSolverSetUp(solver));
   PetscCall(KFBlockEigenSolve(sys, solver, hint, nev, nconv, omega2, &P, done, &nblocks, &b, &cap));
   if (!*done) {

@@ -90,6 +90,16 @@ cdef class CSystem:
             modes = combine(modes, np.eye(nev)[:, :nconv])
         return w2[:nconv].copy(), modes
 
+    def count_modes_below(self, freq_hz):
+        """The flexible modes below freq_hz (Hz), counted from the inertia of one LDL^T factorization of
+        K_S - (2 pi freq_hz)^2 M_S (Sylvester), without an eigensolve."""
+        cdef PetscInt n = 0
+        f = float(freq_hz)
+        if not (np.isfinite(f) and f > 0):
+            raise ValueError("freq_hz is a positive number of Hz, got %r" % (freq_hz,))
+        check(KFSystemCountModesBelow(self.y, f, &n))
+        return int(n)
+
 
 cdef class KrylovBasis:
     """An M-orthonormal Krylov basis of one system: a slepc4py BV (.bv) and the system it spans."""

@@ -47,6 +47,7 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb"),
                ("time_reference_eigensolve", "reference_eigensolve_s"), ("time_reference_check", "reference_check_s"),
+               ("time_reference_count", "reference_count_s"),
                ("time_search", "search_s"), ("time_compress", "compress_s")]
 PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
@@ -352,10 +353,13 @@ def build_summary(reducer, single, multi, chosen):
         alpha_g = reducer.result(-1, "reduction_angles")[:, 0]
         label_g = scene.label([float(a) for a in np.degrees(alpha_g)])
 
-    full_freqs, frf, dom, dom_err = {}, {}, {}, {}
+    full_freqs, frf, dom, dom_err, mode_count = {}, {}, {}, {}, {}
     for c, lab in enumerate(labels):
         if "full_frequencies_hz" in has[c]:
             full_freqs[lab] = _list(reducer.result(c, "full_frequencies_hz"))
+        if "full_order_mode_count" in has[c]:
+            mode_count[lab] = {"count": _scalar(reducer, c, "full_order_mode_count", int),
+                               "below_hz": _scalar(reducer, c, "full_order_mode_count_below_hz")}
         if "frf_error" in has[c]:
             frf[lab] = dict(freq_hz=_list(reducer.result(c, "frf_frequencies_hz")),
                             full_re=_list(reducer.result(c, "frf_full_re").transpose(2, 0, 1)),
@@ -402,6 +406,7 @@ def build_summary(reducer, single, multi, chosen):
                  "system_dofs": _scalar(reducer, -1, "full_system_dofs", int),
                  "rigid_modes": _scalar(reducer, -1, "rigid_modes", int),
                  "frequencies_hz": full_freqs,
+                 "mode_count": mode_count,
                  "moments": {lab: _list(reducer.moments(c, "full_moments")) for c, lab in enumerate(labels)}},
         "krylov": {lab: {"frequency_hz": _list(reducer.result(c, "krylov_frequencies_hz")),
                          "importance": _list(reducer.result(c, "krylov_importance")),

@@ -96,6 +96,10 @@ struct _p_KFReducer {
   PetscReal       verify_check_worst, verify_check_worst_hz; /* the worst disagreement so far and where (-1: none) */
   PetscLogDouble  verify_check_seconds; /* the direct solves' time, part of the verification's */
   PetscLogDouble  verify_eigen_seconds; /* the reference's eigensolves' time, part of the verification's */
+  PetscLogDouble  verify_count_seconds; /* the references' mode counts (-kf_verify_count), part of the verification's */
+  KFBodyFactors   count_bf;             /* the bodies' interior factors of K_b - sigma M_b at the count's cut, for every configuration (or NULL) */
+  PetscBool       verify_krylov_schur;  /* this reference's eigensolve again by Krylov-Schur: the count found the first missed modes */
+  PetscBool       count_bf_made;        /* count_bf tried (NULL then: the count factors the whole system) */
   PetscInt        verify_count;   /* the modes the last sparse reference took to cover its cut (0: none yet): the next
                                      eigensolve's size (KFEigenHint) */
   PetscBool       verify_covered; /* whether they reached it (else they were all the modes asked, below the cut) */
@@ -146,6 +150,9 @@ typedef struct {
   PetscReal *D;              /* t x a: H Z K_zz^-1 Z^T G, the static response of M's null space Z (dense path), or NULL */
   Mat        V;              /* e x n: the flexible modes themselves (M-orthonormal), kept only until the iterative
                                 reference check has used them (src/verify/refined_check.c), else NULL */
+  PetscInt   count;          /* flexible modes of the full order below count_hz by the inertia of K_S - sigma M_S
+                                (-kf_verify_count, src/verify/mode_count.c), -1: not counted */
+  PetscReal  count_hz;
 } KFFullReference;
 PETSC_INTERN PetscErrorCode KFReducerFullReference_Private(KFReducer, KFSystem, KFFlexSolver, KFFullReference *);
 PETSC_INTERN PetscErrorCode KFFullReferenceDestroy_Private(KFFullReference *);

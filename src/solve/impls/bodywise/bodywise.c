@@ -35,6 +35,7 @@ struct _n_KFBodyFactors {
   PetscMPIInt *owner;
   PetscSF     *sf;
   PetscReal    estimate_mb; /* MUMPS' estimate of the largest body factorization's memory on a rank, MB */
+  PetscInt     nneg;        /* shift < 0: the interior factors' negative pivots, all bodies (KFBodywiseOpInertia) */
 };
 
 /* per solver (one angle): the interface problem, and the options that choose and spread the body-wise solve */
@@ -151,7 +152,8 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
      few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
   PetscCall(KFFactorMumps(bf->Kb[b], prefix, 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
   bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
-  if (shift < 0) *nneg = 0;                     /* above the body's first fixed-interface frequency: negative pivots */
+  if (shift < 0) bf->nneg += *nneg;             /* above the body's first fixed-interface frequency: negative pivots, */
+  if (shift < 0) *nneg = 0;                     /* counted (Sylvester), not an error */
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
 
   /* E: unit columns at Gamma; Psi = K_II^-1 K_IG; Phi_c = E - Psi (constraint modes); S_b = Phi_c^T K Phi_c */
@@ -936,6 +938,7 @@ PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], Pet
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
   PetscCall(KFBodywiseAssign(s, spread, bf));
   PetscCall(KFBodyFactorsSetUpAll(s, prefix, shift, bf));
+  if (bf->spread) PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bf->nneg, 1, MPIU_INT, MPI_SUM, s->comm)); /* each body counted on its owner */
   bf->factored = PETSC_TRUE;
   *bfo         = bf;
   PetscFunctionReturn(0);
@@ -958,6 +961,31 @@ PetscErrorCode KFBodywiseOpSolve(KFSystem sys, KFBodyFactors bf, KFBodywiseOp op
 {
   PetscFunctionBegin;
   PetscCall(KFBodywiseSolveWith(sys, bf, op, W, X));
+  PetscFunctionReturn(0);
+}
+
+/* The inertia of K_S + shift M_S (shift < 0) on the body-wise split (Haynsworth): the bodies' interior factors'
+   negative pivots (their interface rows held by a positive diagonal add none) and those of the interface problem's
+   LDL^T (LAPACK sytrf: D's 1 x 1 blocks, and its 2 x 2 blocks, one negative eigenvalue where the determinant is
+   negative, two where it is positive with a negative diagonal) */
+PetscErrorCode KFBodywiseOpInertia(KFBodyFactors bf, KFBodywiseOp op, PetscInt *nneg)
+{
+  PetscInt nG = op->nG, n = bf->nneg;
+
+  PetscFunctionBegin;
+  PetscCheck(bf->shift < 0 && op->ipiv, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONGSTATE, "the body-wise inertia needs factors of K - w^2 M (a negative shift)");
+  for (PetscInt k = 0; k < nG; k++) {
+    const PetscReal a = op->S[k + k * nG];
+
+    if (op->ipiv[k] > 0) n += a < 0;
+    else { /* a 2 x 2 block on k, k + 1 */
+      const PetscReal b = op->S[k + 1 + k * nG], c = op->S[k + 1 + (k + 1) * nG], det = a * c - b * b;
+
+      n += det < 0 ? 1 : (a < 0 ? 2 : 0);
+      k++;
+    }
+  }
+  *nneg = n;
   PetscFunctionReturn(0);
 }
 

@@ -391,6 +391,10 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
    floor times the largest peak.
    T*: nw blocks of t x a, real and imaginary parts; hinf or pointwise may be NULL. */
 #define KF_FRF_PAIR_FLOOR 1e-4
+/* An elastic pair's denominator is also at least KF_FRF_ELASTIC_FLOOR of the pair's total peak: the reference is
+   certified by the direct solves only to -kf_verify_check_rtol (1e-6) of that peak, and an elastic response below it
+   (a light body's quasi-static deflection, 5e-8 of the rigid 1/w^2 response) is within the rigid part's rounding */
+#define KF_FRF_ELASTIC_FLOOR 1e-6
 /* The same measures on the elastic response: every |Tf| above becomes |Tf - Tg|, Tg the rigid-body and mechanism part
    of the full response (from the geometric rigid modes, exact in both models); Tg NULL: the total response
    (KFFRFErrors). KFFRFPairScales: each pair's denominator s_ij (its peak, raised to the floor), top: the largest peak. */

@@ -18,8 +18,11 @@ static inline PetscReal Part(const PetscReal Tfre[], const PetscReal Tfim[], con
 /*
   KFFRFPairScales - the denominator of each input/output pair's relative error: the peak over the grid of the measured
   part of the full response, |Tf - Tg| (the elastic response, Tg the rigid-body and mechanism part) or |Tf| (Tg NULL:
-  the total response), raised to KF_FRF_PAIR_FLOOR times the largest pair's peak. scale: t x a; top: the largest
-  pair's peak (may be NULL).
+  the total response), raised to KF_FRF_PAIR_FLOOR times the largest pair's peak and, for the elastic response, to
+  KF_FRF_ELASTIC_FLOOR times the pair's own total peak (an elastic response below it is the rigid part's rounding: two
+  double-precision references of the light-mass stress scene, whose elastic peak is 5e-8 of its total, differ by
+  3e-10 of the total, 1e-2 of the elastic peak). scale: t x a; top: the largest pair's peak, before the rounding
+  floor (may be NULL).
 */
 PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top)
 {
@@ -36,6 +39,15 @@ PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscR
   for (PetscInt k = 0; k < m; k++) big = MaxNaN(big, scale[k]);
   for (PetscInt k = 0; k < m; k++) scale[k] = MaxNaN(MaxNaN(scale[k], KF_FRF_PAIR_FLOOR * big), 1e-300);
   if (top) *top = big;
+  if (Tgre) { /* the total peak of each pair: the rounding floor of its elastic peak */
+    PetscReal *tot;
+
+    PetscCall(PetscCalloc1(PetscMax(m, 1), &tot));
+    for (PetscInt f = 0; f < nw; f++)
+      for (PetscInt k = 0; k < m; k++) tot[k] = MaxNaN(tot[k], Part(Tfre, Tfim, NULL, NULL, f * m + k));
+    for (PetscInt k = 0; k < m; k++) scale[k] = MaxNaN(scale[k], KF_FRF_ELASTIC_FLOOR * tot[k]);
+    PetscCall(PetscFree(tot));
+  }
   PetscFunctionReturn(0);
 }
 

@@ -19,7 +19,12 @@ static PetscErrorCode KFGatherAny(Mat A, PetscReal out[])
 }
 
 /* The eigendecomposition M = U diag(mu) U^T of a replicated n x n M (U overwrites a copy of M): the null directions
-   (mu <= KF_MASS_NULL_RTOL max mu) are the nz first columns of U, LAPACK ordering the eigenvalues ascending */
+   are the nz first columns of U, LAPACK ordering the eigenvalues ascending. A direction u is null when its mass is
+   rounding: below KF_MASS_NULL_RTOL of the masses its own dofs carry, sum_k u_k^2 M_kk (an export rounds each entry
+   relative to itself, so a cancellation such as an offset lumped mass's rank-1 block leaves that fraction of its
+   diagonal), or below the eigensolver's own rounding, n eps max mu. Not against the largest mass alone: a light
+   body (a rotor 1e-6 of the stator's mass) has masses 1e-9 of the largest that are its own, not rounding, and
+   condensing them statically drops its dynamics (and the elastic response its modes carry). */
 static PetscErrorCode KFMassEig(PetscInt n, const PetscReal M[], PetscReal U[], PetscReal mu[], PetscInt *nz)
 {
   PetscBLASInt bn, lwork, info;
@@ -37,7 +42,14 @@ static PetscErrorCode KFMassEig(PetscInt n, const PetscReal M[], PetscReal U[], 
   top = n ? PetscMax(PetscAbsReal(mu[n - 1]), PetscAbsReal(mu[0])) : 0;
   PetscCheck(!n || mu[0] >= -1e-6 * top, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S is indefinite (eigenvalue %g against a largest %g): a mass matrix must be positive semi-definite; check the bodies' mass matrices (signs, units, a stiffness given as mass)", (double)mu[0], (double)top);
   *nz = 0;
-  while (*nz < n && mu[*nz] <= KF_MASS_NULL_RTOL * top) (*nz)++;
+  while (*nz < n) {
+    const PetscReal *u = &U[*nz * n];
+    PetscReal        own = 0;
+
+    for (PetscInt k = 0; k < n; k++) own += u[k] * u[k] * PetscAbsReal(M[k + k * n]);
+    if (!(mu[*nz] <= PetscMax(KF_MASS_NULL_RTOL * own, n * PETSC_MACHINE_EPSILON * top))) break;
+    (*nz)++;
+  }
   PetscFunctionReturn(0);
 }
 
@@ -130,7 +142,8 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem sys, PetscReal D[])
    say K_zy y + K_zz z = 0: they are condensed statically (K_c = K_yy - K_yz K_zz^-1 K_zy, M_c = diag(mu) positive
    definite), the pencil solved with the rigid modes known (KFDenseEigRigid; y = Y^T phi_r), and each mode expanded
    by z = -K_zz^-1 K_zy y. This takes M's whole null space, not only its zero rows: a lumped mass offset from its node
-   gives a rank-1 block with a full diagonal, singular beyond any zero diagonal. */
+   gives a rank-1 block with a full diagonal, singular beyond any zero diagonal. With M definite (nz = 0) it is the
+   pencil itself with the rigid modes known. */
 static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene      s = sys->scene;
@@ -149,19 +162,26 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
   PetscCall(PetscMalloc4(n * n, &U, n, &mu, n * n, &KU, n * n, &Kt));
   PetscCall(KFMassEig(n, M, U, mu, &nz));
   ny = n - nz;
+  if (!nz) { /* M definite: the pencil itself, no change of coordinates (U = I, y = x) */
+    for (PetscInt k = 0; k < n * n; k++) U[k] = 0;
+    for (PetscInt k = 0; k < n; k++) U[k + k * n] = 1;
+  }
   /* Kt = U^T K U: the stiffness in (z, y) coordinates, z first */
-  for (PetscInt j = 0; j < n; j++)
-    for (PetscInt i = 0; i < n; i++) {
-      PetscReal d = 0;
-      for (PetscInt k = 0; k < n; k++) d += K[i + k * n] * U[k + j * n];
-      KU[i + j * n] = d;
-    }
-  for (PetscInt j = 0; j < n; j++)
-    for (PetscInt i = 0; i < n; i++) {
-      PetscReal d = 0;
-      for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KU[k + j * n];
-      Kt[i + j * n] = d;
-    }
+  if (!nz) PetscCall(PetscArraycpy(Kt, K, n * n));
+  else {
+    for (PetscInt j = 0; j < n; j++)
+      for (PetscInt i = 0; i < n; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += K[i + k * n] * U[k + j * n];
+        KU[i + j * n] = d;
+      }
+    for (PetscInt j = 0; j < n; j++)
+      for (PetscInt i = 0; i < n; i++) {
+        PetscReal d = 0;
+        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KU[k + j * n];
+        Kt[i + j * n] = d;
+      }
+  }
   PetscCall(KFDenseSymmetrize_Private(n, Kt));
   PetscCall(PetscMalloc5(nz * nz + 1, &Kzz, nz * ny + 1, &X, ny * ny, &Kc, ny * ny, &Mc, ny * PetscMax(r, 1), &Pm));
   PetscCall(PetscMalloc4(ny, &lam, ny * ny, &V, n, &x, nz + 1, &zc));
@@ -171,13 +191,15 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
     for (PetscInt i = 0; i < nz; i++) X[i + j * nz] = Kt[i + (nz + j) * n];
   PetscCall(PetscBLASIntCast(nz, &bz));
   PetscCall(PetscBLASIntCast(ny, &by));
-  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
-  PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
-  PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &by, Kzz, &bz, X, &bz, &info)); /* X = K_zz^-1 K_zy */
+  if (nz) {
+    PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
+    PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
+    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &by, Kzz, &bz, X, &bz, &info)); /* X = K_zz^-1 K_zy */
+  }
   for (PetscInt j = 0; j < ny; j++)
     for (PetscInt i = 0; i < ny; i++) {
       Kc[i + j * ny] = Kt[nz + i + (nz + j) * n];
-      Mc[i + j * ny] = i == j ? mu[nz + i] : 0;
+      Mc[i + j * ny] = nz ? (i == j ? mu[nz + i] : 0) : M[i + j * n];
       for (PetscInt k = 0; k < nz; k++) Kc[i + j * ny] -= Kt[nz + i + k * n] * X[k + j * nz];
     }
   PetscCall(KFDenseSymmetrize_Private(ny, Kc));
@@ -520,6 +542,14 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
     PetscCall(KFSystemMassNullity(sys, PETSC_TRUE, &nnull, &n0));
     if (nnull) {
       PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, %" PetscInt_FMT " massless dofs condensed with the rest of the mass matrix's null space: %" PetscInt_FMT " directions)", PetscMin(nev, nflex - nnull), s->nsys, n0, nnull));
+      PetscCall(KFSystemEigenCondensed(sys, nev, nconv, omega2, HPhi, PhiG, modes));
+      PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
+      PetscFunctionReturn(0);
+    }
+    if (r) { /* the flexible modes on the geometric rigid modes' M-orthogonal complement: an eigensolve of the whole
+                pencil knows the rigid subspace only to eps lam_max, and mixes it into a flexible mode as soft as
+                that (a rotor 1e-5 as stiff as its stator: 1e-3 of a rigid mode in its first flexible mode) */
+      PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, on the complement of the %" PetscInt_FMT " geometric rigid modes)", nev, s->nsys, r));
       PetscCall(KFSystemEigenCondensed(sys, nev, nconv, omega2, HPhi, PhiG, modes));
       PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
       PetscFunctionReturn(0);

@@ -127,27 +127,41 @@ PetscErrorCode KFSystemMassSingular(KFSystem sys, PetscBool *singular)
   PetscFunctionReturn(0);
 }
 
-/* The null pivots of M_S's sparse LDL^T (MUMPS null-pivot detection, a pivot below KF_MASS_NULL_RTOL ||M_S|| counting
-   as a null direction): the dimension of M's null space without a dense eigensolve */
+/* The null pivots of M_S's sparse LDL^T (MUMPS null-pivot detection, a pivot below KF_MASS_NULL_RTOL of the largest
+   entry counting as a null direction): the dimension of M's null space without a dense eigensolve. M_S is scaled
+   first to a unit diagonal, D^-1/2 M_S D^-1/2 (massless dofs left as they are), so that the threshold is relative to
+   the masses a direction's own dofs carry, as in the dense test (KFMassEig): a light body is not a null space. */
 PetscErrorCode KFSystemMassNullPivots(KFSystem sys, PetscInt *nnull)
 {
-  Mat           F;
+  Mat           F, Md;
+  Vec           d;
   MatFactorInfo info;
   IS            rp, cp;
-  PetscInt      nullp;
+  PetscInt      nullp, lo, hi;
+  PetscScalar  *v;
 
   PetscFunctionBegin;
-  PetscCall(MatGetFactor(sys->Ms, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+  PetscCall(MatDuplicate(sys->Ms, MAT_COPY_VALUES, &Md));
+  PetscCall(MatCreateVecs(Md, &d, NULL));
+  PetscCall(MatGetDiagonal(Md, d));
+  PetscCall(VecGetOwnershipRange(d, &lo, &hi));
+  PetscCall(VecGetArray(d, &v));
+  for (PetscInt i = 0; i < hi - lo; i++) v[i] = PetscAbsScalar(v[i]) > 0 ? 1 / PetscSqrtReal(PetscAbsScalar(v[i])) : 1;
+  PetscCall(VecRestoreArray(d, &v));
+  PetscCall(MatDiagonalScale(Md, d, d));
+  PetscCall(VecDestroy(&d));
+  PetscCall(MatGetFactor(Md, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
   PetscCall(MatMumpsSetIcntl(F, 24, 1));
   PetscCall(MatMumpsSetCntl(F, 3, KF_MASS_NULL_RTOL));
-  PetscCall(MatGetOrdering(sys->Ms, MATORDERINGNATURAL, &rp, &cp));
+  PetscCall(MatGetOrdering(Md, MATORDERINGNATURAL, &rp, &cp));
   PetscCall(MatFactorInfoInitialize(&info));
-  PetscCall(MatCholeskyFactorSymbolic(F, sys->Ms, rp, &info));
-  PetscCall(MatCholeskyFactorNumeric(F, sys->Ms, &info));
+  PetscCall(MatCholeskyFactorSymbolic(F, Md, rp, &info));
+  PetscCall(MatCholeskyFactorNumeric(F, Md, &info));
   PetscCall(MatMumpsGetInfog(F, 28, &nullp));
   *nnull = nullp;
   PetscCall(ISDestroy(&rp));
   PetscCall(ISDestroy(&cp));
   PetscCall(MatDestroy(&F));
+  PetscCall(MatDestroy(&Md));
   PetscFunctionReturn(0);
 }

@@ -3,7 +3,7 @@
 The elastic response of a pair is the total response minus its rigid-body and mechanism part, which both models hold
 exactly (the geometric rigid modes): per input/output pair, the error is max_w |T_full - T_red| divided by the peak of
 T_full - T_full,rigid over the band (a pair whose elastic peak is below PAIR_FLOOR x the largest pair's is measured
-against that floor). The full order comes from tests/python/reference.py and accuracy_scenes.DenseReference (SciPy,
+against that floor, and none against less than ELASTIC_FLOOR x its own total peak, the rigid part's rounding). The full order comes from tests/python/reference.py and accuracy_scenes.DenseReference (SciPy,
 one dense generalized eigendecomposition per configuration), nothing from kryflex; the reduced model only gives its
 frequency response. The grid has points across every full-order resonance in the band and every reduced-model
 resonance (fr (1 + zeta [-2, 2]), 29 points each), so a missed or shifted peak cannot fall between grid points.
@@ -15,6 +15,7 @@ import numpy as np
 import accuracy_scenes as acc
 
 PAIR_FLOOR = 1e-4
+ELASTIC_FLOOR = 1e-6      # an elastic peak below this fraction of the pair's total peak is rounding (KF_FRF_ELASTIC_FLOOR)
 
 
 def rigid_response(full, freqs_hz):
@@ -37,7 +38,7 @@ def errors_at(model, dense, angles, band_hz, zeta, n_log=200):
     diff = np.abs(Tf - Tr).max(axis=0)
     el_peak = np.abs(Tf - rigid_response(full, f)).max(axis=0)
     tot_peak = np.abs(Tf).max(axis=0)
-    elastic = diff / np.maximum(el_peak, PAIR_FLOOR * el_peak.max())
+    elastic = diff / np.maximum(np.maximum(el_peak, PAIR_FLOOR * el_peak.max()), ELASTIC_FLOOR * tot_peak)
     total = diff / np.maximum(tot_peak, PAIR_FLOOR * tot_peak.max())
     return float(elastic.max()), float(total.max())
 

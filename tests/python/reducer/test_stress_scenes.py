@@ -1,0 +1,161 @@
+"""The stress scenes of meshes/stress.py (small two-body variants of Galileo, 28 system dofs) under the elastic measure.
+
+Every variant at accuracy 1e-2 and 1e-3, measured against the full order (the default) and estimated (verify false):
+- the measured error agrees with an independent dense NumPy elastic error (tests/python/support: reference.py's
+  assembly and geometric rigid modes, elastic_measure.py's measure) at the angles of interest and the midpoints, on a
+  grid with points across every full-order and reduced resonance, and the verdict (target met, exit 0; else exit 6)
+  follows it;
+- an estimated pass is a true pass: the estimated model's dense elastic error meets the target (no false pass).
+The dense modes are solved on the M-orthogonal complement of the geometric rigid modes: on spread-1e-5 (a rotor 1e-5
+as stiff) the first flexible eigenvalue is 7e-14 of the largest, and an eigensolve of the whole pencil mixes 1e-3 of a
+rigid mode into it. Light-mass (a rotor 1e-6 as heavy) has masses 2e-9 of the largest that are the rotor's own,
+not a null space of M.
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+import accuracy_scenes as acc
+import elastic_measure as em
+import reference as ref
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+VARIANTS = ["damping-heavy", "damping-light", "far-angle", "light-mass", "many-moments", "mimo-8x8", "repeated",
+            "spread-1e-5", "spread-1e5"]
+ACCURACIES = [1e-2, 1e-3]
+AGREE_RTOL = 0.02     # kryflex's measured error against the dense NumPy one (different grids, same measure)
+
+
+@pytest.fixture(scope="module")
+def scenes(tmp_path_factory):
+    # written by its own process: meshes/stress.py imports Galileo's generate.py (see test_full_reference.py)
+    out = str(tmp_path_factory.mktemp("stress_scenes"))
+    subprocess.run([sys.executable, os.path.join(ROOT, "meshes", "stress.py"), "--out", out], check=True,
+                   capture_output=True, timeout=120)
+    return {v: os.path.join(out, v, "scene.yaml") for v in VARIANTS}
+
+
+class DeflatedDense:
+    """The dense full-order modes of a scene per configuration: the geometric rigid modes, M-orthonormalized, and the
+    flexible modes of the pencil restricted to their M-orthogonal complement (SciPy, nothing from kryflex)."""
+
+    def __init__(self, path):
+        self.scene = ref.load_scene(path)
+        self._memo = {}
+
+    def at(self, angles):
+        key = tuple(float(a) for a in angles)
+        if key not in self._memo:
+            Ms, Ks, Gs, Hs = (np.asarray(x.todense()) if hasattr(x, "todense") else np.asarray(x)
+                              for x in ref.assemble(self.scene, list(key)))
+            R = ref.geometric_rigid_modes(self.scene, list(key))
+            Q = R @ np.linalg.inv(sl.cholesky(R.T @ Ms @ R))
+            Z = sl.null_space((Ms @ Q).T)
+            lam, Y = sl.eigh(Z.T @ Ks @ Z, Z.T @ Ms @ Z)
+            phi = np.hstack([Q, Z @ Y])
+            rigid = np.arange(phi.shape[1]) < Q.shape[1]
+            self._memo[key] = acc.ModalData(np.concatenate([np.zeros(Q.shape[1]), lam]), rigid, Hs @ phi,
+                                            phi.T @ Gs)
+        return self._memo[key]
+
+
+_dense = {}
+
+
+def dense_error(path, model):
+    """The model's elastic error by the dense NumPy measure, max over the angles of interest and the midpoints."""
+    if path not in _dense:
+        _dense[path] = DeflatedDense(path)
+    raw = _dense[path].scene.raw
+    configurations = [[float(a)] for a in raw["angles"]]
+    return em.errors(model, _dense[path], configurations, raw["band"], float(raw["damping"]))[0]
+
+
+def reduce(path, accuracy, verify):
+    import kryflex
+    return kryflex.reduce(kryflex.load_scene(path), quiet=True, accuracy=accuracy, verify=verify)
+
+
+# Measured and dense errors that differ by more than AGREE_RTOL, on 2026-11-30 (the verdicts agree):
+# damping-light (zeta 1e-4) 1.36e-4 against 1.30e-4; spread-1e-5 5.37e-4 against 4.82e-4 (the worst angle differs:
+# 30 deg against 72 deg; both references agree with extended-precision solves away from the resonances);
+# light-mass, whose elastic error is measured against the rounding floor: the two references differ by 3e-10 of
+# the pair's total peak there, 3e-4 of the floor.
+UNEXPLAINED = {("damping-light", 1e-3), ("spread-1e-5", 1e-2), ("spread-1e-5", 1e-3), ("light-mass", 1e-2),
+               ("light-mass", 1e-3)}
+
+
+@pytest.mark.parametrize("accuracy", ACCURACIES)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_measured_error_is_the_dense_one(scenes, variant, accuracy, quiet_library, request):
+    path = scenes[variant]
+    measured = reduce(path, accuracy, True)
+    s = measured.summary.verdict
+    truth = dense_error(path, measured.model)
+    print(variant, accuracy, "measured", s.error_max, "dense", truth)
+    assert not s.error_estimated
+    assert s.target_met == (s.error_max <= accuracy)
+    if abs(truth - accuracy) > AGREE_RTOL * accuracy:     # the verdict is the dense one's
+        assert s.target_met == (truth <= accuracy)
+    if (variant, accuracy) in UNEXPLAINED:
+        request.applymarker(pytest.mark.xfail(strict=True, reason="measured and dense errors differ (see above)"))
+    assert abs(s.error_max - truth) <= AGREE_RTOL * truth + 1e-3 * accuracy
+
+
+@pytest.mark.parametrize("accuracy", ACCURACIES)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_no_estimate_passes_falsely(scenes, variant, accuracy, quiet_library):
+    path = scenes[variant]
+    estimated = reduce(path, accuracy, False)
+    e = estimated.summary.verdict
+    truth = dense_error(path, estimated.model)
+    print(variant, accuracy, "estimated", e.error_max, "dense", truth)
+    assert e.error_estimated
+    if e.target_met:
+        assert truth <= (1 + AGREE_RTOL) * accuracy, "a false pass: estimated %.3g, dense %.3g" % (e.error_max, truth)
+
+
+@pytest.mark.parametrize("variant, code", [("light-mass", 0), ("spread-1e-5", 0)])
+def test_exit_codes(scenes, variant, code, tmp_path):
+    """The command's exit code on the two variants that broke: light-mass meets 1e-3 (its elastic response, 5e-8 of
+    the total, measured against the rounding floor; the rotor's masses are not a null space of M), spread-1e-5's
+    reference agrees with the direct solves (its flexible modes solved with the rigid modes known)."""
+    run = subprocess.run([os.path.join(ROOT, "build", "kryflex"), "reduce", scenes[variant], "-o",
+                          str(tmp_path / "out"), "-scene.accuracy", "1e-3", "-quiet"], capture_output=True, text=True,
+                         timeout=300, env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert run.returncode == code, run.stdout[-1500:] + run.stderr[-1500:]
+    assert "Traceback" not in run.stderr
+
+
+TWO_RANKS = """
+import json, sys
+import kryflex
+red = kryflex.reduce(kryflex.load_scene(sys.argv[1]), quiet=True, accuracy=1e-3)
+from mpi4py import MPI
+if MPI.COMM_WORLD.rank == 0:
+    print("RESULT " + json.dumps({"error": red.summary.verdict.error_max, "met": bool(red.summary.verdict.target_met)}))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("variant", ["light-mass", pytest.param("spread-1e-5", marks=pytest.mark.xfail(
+    strict=True, reason="2026-11-30: 4.87e-4 on 2 ranks against 5.37e-4 on 1 (96 block solves above the refinement "
+    "tolerance, residual 2.7e-6, on the rotor 1e-5 as stiff); the verdict agrees"))])
+def test_two_ranks_agree_with_one(scenes, variant, tmp_path):
+    import json
+    script = tmp_path / "two.py"
+    script.write_text(TWO_RANKS)
+    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1")
+    res = {}
+    for n in (1, 2):
+        run = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script), scenes[variant]],
+                             capture_output=True, text=True, env=env, timeout=300)
+        assert run.returncode == 0, run.stderr[-2000:]
+        res[n] = json.loads([ln for ln in run.stdout.splitlines() if ln.startswith("RESULT ")][0][7:])
+    assert res[1]["met"] == res[2]["met"]
+    # light-mass is measured against its rounding floor: 2 ranks' rounding moves it by 7e-4 of itself
+    np.testing.assert_allclose(res[2]["error"], res[1]["error"], rtol=AGREE_RTOL)

@@ -546,14 +546,6 @@ static PetscErrorCode KFSystemEigenSolve(KFSystem sys, KFFlexSolver solver, cons
       PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
       PetscFunctionReturn(0);
     }
-    if (r) { /* the flexible modes on the geometric rigid modes' M-orthogonal complement: an eigensolve of the whole
-                pencil knows the rigid subspace only to eps lam_max, and mixes it into a flexible mode as soft as
-                that (a rotor 1e-5 as stiff as its stator: 1e-3 of a rigid mode in its first flexible mode) */
-      PetscCall(KFProgress(s->comm, "verification eigensolve: %" PetscInt_FMT " lowest flexible modes of the %" PetscInt_FMT "-dof system (dense LAPACK, on the complement of the %" PetscInt_FMT " geometric rigid modes)", nev, s->nsys, r));
-      PetscCall(KFSystemEigenCondensed(sys, nev, nconv, omega2, HPhi, PhiG, modes));
-      PetscCall(PetscLogEventEnd(KF_EVENT_VERIFY, 0, 0, 0, 0));
-      PetscFunctionReturn(0);
-    }
   }
   PetscCall(KFVerifyEigenOptions(s->comm, &dense_max, &target, &has_target));
   if (solver && !dense) {

@@ -142,8 +142,7 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem sys, PetscReal D[])
    say K_zy y + K_zz z = 0: they are condensed statically (K_c = K_yy - K_yz K_zz^-1 K_zy, M_c = diag(mu) positive
    definite), the pencil solved with the rigid modes known (KFDenseEigRigid; y = Y^T phi_r), and each mode expanded
    by z = -K_zz^-1 K_zy y. This takes M's whole null space, not only its zero rows: a lumped mass offset from its node
-   gives a rank-1 block with a full diagonal, singular beyond any zero diagonal. With M definite (nz = 0) it is the
-   pencil itself with the rigid modes known. */
+   gives a rank-1 block with a full diagonal, singular beyond any zero diagonal. */
 static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscInt *nconv, PetscReal omega2[], PetscReal HPhi[], PetscReal PhiG[], Mat *modes)
 {
   KFScene      s = sys->scene;
@@ -162,26 +161,19 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
   PetscCall(PetscMalloc4(n * n, &U, n, &mu, n * n, &KU, n * n, &Kt));
   PetscCall(KFMassEig(n, M, U, mu, &nz));
   ny = n - nz;
-  if (!nz) { /* M definite: the pencil itself, no change of coordinates (U = I, y = x) */
-    for (PetscInt k = 0; k < n * n; k++) U[k] = 0;
-    for (PetscInt k = 0; k < n; k++) U[k + k * n] = 1;
-  }
   /* Kt = U^T K U: the stiffness in (z, y) coordinates, z first */
-  if (!nz) PetscCall(PetscArraycpy(Kt, K, n * n));
-  else {
-    for (PetscInt j = 0; j < n; j++)
-      for (PetscInt i = 0; i < n; i++) {
-        PetscReal d = 0;
-        for (PetscInt k = 0; k < n; k++) d += K[i + k * n] * U[k + j * n];
-        KU[i + j * n] = d;
-      }
-    for (PetscInt j = 0; j < n; j++)
-      for (PetscInt i = 0; i < n; i++) {
-        PetscReal d = 0;
-        for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KU[k + j * n];
-        Kt[i + j * n] = d;
-      }
-  }
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < n; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < n; k++) d += K[i + k * n] * U[k + j * n];
+      KU[i + j * n] = d;
+    }
+  for (PetscInt j = 0; j < n; j++)
+    for (PetscInt i = 0; i < n; i++) {
+      PetscReal d = 0;
+      for (PetscInt k = 0; k < n; k++) d += U[k + i * n] * KU[k + j * n];
+      Kt[i + j * n] = d;
+    }
   PetscCall(KFDenseSymmetrize_Private(n, Kt));
   PetscCall(PetscMalloc5(nz * nz + 1, &Kzz, nz * ny + 1, &X, ny * ny, &Kc, ny * ny, &Mc, ny * PetscMax(r, 1), &Pm));
   PetscCall(PetscMalloc4(ny, &lam, ny * ny, &V, n, &x, nz + 1, &zc));
@@ -191,15 +183,13 @@ static PetscErrorCode KFSystemEigenCondensed(KFSystem sys, PetscInt nev, PetscIn
     for (PetscInt i = 0; i < nz; i++) X[i + j * nz] = Kt[i + (nz + j) * n];
   PetscCall(PetscBLASIntCast(nz, &bz));
   PetscCall(PetscBLASIntCast(ny, &by));
-  if (nz) {
-    PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
-    PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
-    PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &by, Kzz, &bz, X, &bz, &info)); /* X = K_zz^-1 K_zy */
-  }
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bz, Kzz, &bz, &info));
+  PetscCheck(!info, s->comm, PETSC_ERR_ARG_WRONG, "the full-order system's mass matrix M_S has a null space of dimension %" PetscInt_FMT " on which its stiffness K_S is singular (leading minor %d): a combination of dofs without inertia can move freely, a mechanism without mass; clamp or connect it, or give it mass", nz, (int)info);
+  PetscCallBLAS("LAPACKpotrs", LAPACKpotrs_("L", &bz, &by, Kzz, &bz, X, &bz, &info)); /* X = K_zz^-1 K_zy */
   for (PetscInt j = 0; j < ny; j++)
     for (PetscInt i = 0; i < ny; i++) {
       Kc[i + j * ny] = Kt[nz + i + (nz + j) * n];
-      Mc[i + j * ny] = nz ? (i == j ? mu[nz + i] : 0) : M[i + j * n];
+      Mc[i + j * ny] = i == j ? mu[nz + i] : 0;
       for (PetscInt k = 0; k < nz; k++) Kc[i + j * ny] -= Kt[nz + i + k * n] * X[k + j * nz];
     }
   PetscCall(KFDenseSymmetrize_Private(ny, Kc));

@@ -14,6 +14,7 @@ the JSON Schema made from it (setting()); the ranges refuse at least everything 
 """
 import difflib
 import functools
+import itertools
 import math
 import re
 
@@ -431,7 +432,11 @@ def node_table(where, path, rows, labels=None):
 def _node_array(rows):
     """All rows at once when every rule holds (a large body's nodes in milliseconds), else None."""
     try:
-        if not all(isinstance(r, (list, tuple)) and len(r) == 5 and all(map(_is_number, r)) for r in rows):
+        # a nodes file's rows are lists of Python ints and floats: their types collected in passes of C; other rows
+        # (NumPy numbers, bools, strings) are looked at one value at a time
+        if not (set(map(type, rows)) <= {list, tuple} and set(map(len, rows)) == {5}
+                and set(map(type, itertools.chain.from_iterable(rows))) <= {int, float}) \
+                and not all(isinstance(r, (list, tuple)) and len(r) == 5 and all(map(_is_number, r)) for r in rows):
             return None
         A = np.array(rows, dtype=np.float64)
     except (TypeError, ValueError):

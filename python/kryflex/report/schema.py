@@ -41,6 +41,15 @@ def _get(summary, path, default=None):
     return node
 
 
+def _finite_numbers(node):
+    """Whether a list holds finite floats only, or lists and tuples of them at any depth (no path built: where a check
+    fails, _check_json_types walks it again to name the element)."""
+    types = set(map(type, node))
+    if types == {float}:
+        return all(map(math.isfinite, node))
+    return bool(types) and types <= {list, tuple} and all(map(_finite_numbers, node))
+
+
 def _check_json_types(node, path):
     """Reject anything json would refuse or change: numpy objects, NaN/inf, non-str keys."""
     if node is None or isinstance(node, (str, bool, int)):  # numpy integers are not int: rejected below
@@ -50,8 +59,8 @@ def _check_json_types(node, path):
             raise ReportError(f"{_key_text(path)} is {node}: JSON has no NaN/inf; use None for an undefined number")
         return
     if isinstance(node, (list, tuple)):
-        if all(type(item) is float for item in node) and all(map(math.isfinite, node)):
-            return  # a list of finite floats (most of a summary: the FRF blocks), checked in one pass
+        if _finite_numbers(node):
+            return  # finite floats, or lists of them (most of a summary: the FRF blocks), checked in passes of C
         for index, item in enumerate(node):
             _check_json_types(item, path + (index,))
         return

@@ -613,3 +613,13 @@ def test_bode_phase_of_full_and_reduced_never_differs_by_a_wrap():
     assert np.all(np.abs(np.diff(ph_full)) < 180.0)          # the full curve itself is unwrapped
     # the phases are those of the responses, up to whole turns
     np.testing.assert_allclose(np.exp(1j * np.radians(ph_full)), full / np.abs(full), atol=1e-12)
+
+
+def test_a_bad_number_inside_an_frf_block_is_named(summary, tmp_path):
+    # the FRF blocks (lists of lists of numbers) are checked in one pass; a bad number deep inside is still named
+    for bad, what in ((float("nan"), "is nan"), (np.float32(0.5), "is a numpy.float32")):
+        broken = json.loads(json.dumps(summary))
+        broken["frf"]["60"]["full_re"][3][1][0] = bad
+        with pytest.raises(report.ReportError, match=r"summary\['frf'\]\['60'\]\['full_re'\]\[3\]\[1\]\[0\] %s" % what):
+            report.write_report(broken, str(tmp_path))
+        assert not any(tmp_path.iterdir())

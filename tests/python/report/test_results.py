@@ -20,7 +20,7 @@ import pytest
 import yaml
 
 from kryflex.results import (SUMMARY_VERSION, Candidate, ChosenModel, FrequencyResponse, Record, Summary,
-                             SummaryError, Verdict)
+                             SummaryError, Verdict, _json_text)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
@@ -244,3 +244,15 @@ def test_kryflex_info_reads_a_results_folder(runs, tmp_path):
     bad.write_text("[1, 2]")
     run = subprocess.run([KRYFLEX, "info", str(bad)], env=ENV, capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and str(bad) in run.stderr and "Traceback" not in run.stderr
+
+
+def test_summary_text_keeps_lists_without_objects_on_one_line():
+    # the layout summary.json is written in, spelled out by hand: objects indented one space per level, a list that
+    # holds no object (numbers, nested lists of them, NumPy numbers, tuples) on one line, a list with an object broken
+    value = {"a": [[1.0, 2.0], [3.0, 4.0]], "b": [{"c": [1, [2, 3]]}, 5], "e": [], "f": (np.float64(1.5), [2, None])}
+    assert _json_text(value) == ('{\n "a": [[1.0, 2.0], [3.0, 4.0]],\n "b": [\n  {\n   "c": [1, [2, 3]]\n  },\n  5\n ],'
+                                 '\n "e": [],\n "f": [1.5, [2, null]]\n}')
+    deep = {"frf": [[[0.5, -1.0]] * 3] * 4, "rows": [[1.0], [{"x": 1}]]}
+    text = _json_text(deep)
+    assert '"frf": [[[0.5, -1.0], [0.5, -1.0], [0.5, -1.0]], ' in text and '\n  [1.0],\n  [\n   {\n    "x": 1\n' in text
+    assert json.loads(text) == json.loads(json.dumps(deep))

@@ -5,6 +5,12 @@
 #include <kryflex.h>
 #include <petsc/private/petscimpl.h>
 
+/* M's null space: a direction whose mass is below this fraction of the masses its own dofs carry (diag(M) on it).
+   Exported mass matrices are rounded (8 to 12 digits in a punch) entry by entry, so a cancellation leaves that
+   fraction of the entries it cancels, whatever the other bodies weigh; its static part is kept exactly by the
+   verification's condensation, and the Krylov basis drops such columns (src/krylov/block_arnoldi.c) */
+#define KF_MASS_NULL_RTOL 1e-8
+
 /* A linear combination of system dofs: how one interface dof of a body reads in system coordinates. */
 #define KF_MAX_TERMS 96
 typedef struct {

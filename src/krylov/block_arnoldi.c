@@ -25,17 +25,19 @@ typedef struct {
   Mat                MPhi; /* NULL without rigid modes (clamped) */
   PetscInt           r, ldp, ldmp;
   const PetscScalar *phi, *mphi; /* the local rows of Phi and M Phi while the basis is built (KFRigidSpaceOpen) */
-  PetscReal          mnorm;      /* ||M||_inf >= M's largest eigenvalue: the null-space test of KFMBasisAppend */
+  PetscReal         *mscale;     /* per local row: ||M_b||_inf of the body the dof belongs to (null-space test) */
   PetscBool          mnorm_only; /* KFMBasisAppend's deflation on M-norms alone, without the null-space test */
 } KFRigidSpace;
 
-/* The rigid modes of the system, M Phi (the system's own: no product here), their local arrays, and ||M||. The arrays
-   are read while the basis is built; neither matrix changes meanwhile. */
-static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, KFRigidSpace *rs)
+/* The rigid modes of the system, M Phi (the system's own: no product here), their local arrays and, for the
+   null-space test (null_test), each local system dof's body mass scale. The arrays are read while the basis is built;
+   neither matrix changes meanwhile. */
+static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, PetscBool null_test, KFRigidSpace *rs)
 {
   PetscFunctionBegin;
   PetscCall(PetscMemzero(rs, sizeof(*rs)));
-  rs->sys = sys;
+  rs->sys        = sys;
+  rs->mnorm_only = (PetscBool)!null_test;
   PetscCall(MatGetSize(sys->Phi, NULL, &rs->r));
   PetscCall(KFSystemGetMPhi(sys, &rs->MPhi));
   if (rs->r) {
@@ -50,7 +52,40 @@ static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, KFRigidSpace *rs)
     rs->mphi = a;
     PetscCall(MatDenseRestoreArrayRead(rs->MPhi, &a));
   }
-  PetscCall(MatNorm(sys->Ms, NORM_INFINITY, &rs->mnorm));
+  if (null_test) { /* a system dof is one body's kept dof: that body's ||M_b|| */
+    KFScene            s = sys->scene;
+    Vec                v;
+    const PetscScalar *a;
+    PetscReal          mnorm;
+    PetscInt           nl;
+
+    PetscCall(MatNorm(sys->Ms, NORM_INFINITY, &mnorm));
+    PetscCall(MatCreateVecs(sys->Ms, &v, NULL));
+    PetscCall(VecSet(v, mnorm)); /* a dof no body with mass keeps (none expected): the whole system's scale */
+    for (PetscInt b = 0; b < s->nb; b++) {
+      KFBodyData *B = &s->bodies[b];
+      PetscReal   nb;
+
+      PetscCall(MatNorm(B->M, NORM_INFINITY, &nb));
+      for (PetscInt i = 0; i < B->rend - B->rstart; i++)
+        if (B->sysidx[i] >= 0 && nb > 0) PetscCall(VecSetValue(v, B->sysidx[i], nb, INSERT_VALUES));
+    }
+    PetscCall(VecAssemblyBegin(v));
+    PetscCall(VecAssemblyEnd(v));
+    PetscCall(VecGetLocalSize(v, &nl));
+    PetscCall(PetscMalloc1(nl + 1, &rs->mscale));
+    PetscCall(VecGetArrayRead(v, &a));
+    for (PetscInt i = 0; i < nl; i++) rs->mscale[i] = PetscRealPart(a[i]);
+    PetscCall(VecRestoreArrayRead(v, &a));
+    PetscCall(VecDestroy(&v));
+  }
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFRigidSpaceClose(KFRigidSpace *rs)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(rs->mscale));
   PetscFunctionReturn(0);
 }
 
@@ -276,7 +311,7 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
   PetscScalar       *w, *mw;
   const PetscScalar *src;
   PetscInt           ld;
-  PetscReal         *nrm0, *nrm, mnorm = rs->mnorm;
+  PetscReal         *nrm0, *nrm;
 
   PetscFunctionBegin;
   if (p <= 0) PetscFunctionReturn(0);
@@ -325,16 +360,20 @@ static PetscErrorCode KFMBasisAppend(const KFRigidSpace *rs, KFMBasis *mb, Mat W
     }
     { /* M singular (lumped masses without rotary inertia, masses offset from their nodes) and rounded as exported: once
          the M-positive directions the Krylov space reaches are spanned, what is left of a column lies in M's
-         numerical null space, with a Rayleigh quotient w^T M w / w^T w at the rounding of M (1e-14 of its largest
-         eigenvalue) but an M-norm well above tol nrm0; normalized, it would put that rounding into the basis. Such a
-         column is dropped: the same threshold (1e-8 of ||M||) as the verification's null space of M (src/verify/eigen.c) */
-      PetscReal e2 = 0;
+         numerical null space, with a Rayleigh quotient w^T M w / w^T w at the rounding of M (1e-14 of the largest
+         mass) but an M-norm well above tol nrm0; normalized, it would put that rounding into the basis. Such a column
+         is dropped: w^T M w below KF_MASS_NULL_RTOL of sum_k w_k^2 ||M_b(k)||, each dof weighed by its own body's
+         mass scale (the verification's null space of M too is relative to a direction's own masses, src/verify/
+         eigen.c). Not against the whole system's ||M||: a light body (a rotor 1e-6 of the stator's mass, its masses
+         2e-9 of the largest) has masses that are its own, and at 1e-8 of ||M|| every Krylov column after the static
+         one was dropped, so even the richest candidate lacked the rotor's dynamics */
+      PetscReal m2 = 0; /* sum_k w_k^2 ||M_b(k)|| */
 
       if (!rs->mnorm_only) {
-        for (PetscInt i = 0; i < nl; i++) e2 += PetscRealPart(wj[i] * wj[i]);
-        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &e2, 1, MPIU_REAL, MPIU_SUM, comm));
+        for (PetscInt i = 0; i < nl; i++) m2 += PetscRealPart(wj[i] * wj[i]) * rs->mscale[i];
+        PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &m2, 1, MPIU_REAL, MPIU_SUM, comm));
       }
-      if (!(na > tol * nrm0[j]) || (!rs->mnorm_only && !(na * na > 1e-8 * mnorm * e2))) {
+      if (!(na > tol * nrm0[j]) || (!rs->mnorm_only && !(na * na > KF_MASS_NULL_RTOL * m2))) {
         (*ndeflated)++;
         continue;
       }
@@ -588,7 +627,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(KFMBasisCreate(V, &basis));
   PetscCall(PetscMemzero(cc, sizeof(cc)));
   cc[0].nl = cc[1].nl = basis.nl;
-  PetscCall(KFRigidSpaceOpen(sys, &rs));
+  PetscCall(KFRigidSpaceOpen(sys, PETSC_TRUE, &rs));
   if (damp) PetscCall(KFDampedChainCreate_Private(solver, damp, a * nin, &dch));
   for (PetscInt blk = 0; blk < nblocks; blk++) {
     /* input on even blocks while outputs remain, otherwise whichever chain has blocks left */
@@ -697,6 +736,7 @@ PetscErrorCode KFKrylovBasisDamped_Private(KFFlexSolver solver, PetscInt nin, Pe
   PetscCall(BVSetActiveColumns(V, 0, k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
   PetscCall(KFMBasisDestroy(&basis));
+  PetscCall(KFRigidSpaceClose(&rs));
   PetscCall(BVSetActiveColumns(V, 0, k));
   info->ndeflated = ndefl;
   *Vout           = V;
@@ -722,7 +762,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   PetscCall(BVSetMatrix(V, sys->Ms, PETSC_FALSE));
   PetscCall(BVSetFromOptions(V));
   PetscCall(KFMBasisCreate(V, &basis));
-  PetscCall(KFRigidSpaceOpen(sys, &rs));
+  PetscCall(KFRigidSpaceOpen(sys, PETSC_TRUE, &rs));
   for (PetscInt i = 0; i < n; i++) {
     Mat      A;
     PetscInt l0, k0;
@@ -738,6 +778,7 @@ PETSC_INTERN PetscErrorCode KFKrylovBasisMerge_Private(KFSystem sys, PetscInt n,
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   PetscCall(KFKrylovHealth(sys, &basis, &info->rigid_content, &info->orthogonality, &info->gram));
   PetscCall(KFMBasisDestroy(&basis));
+  PetscCall(KFRigidSpaceClose(&rs));
   PetscCall(BVSetActiveColumns(V, 0, basis.k));
   info->ndeflated = ndefl;
   *Vout           = V;
@@ -768,8 +809,7 @@ PETSC_INTERN PetscErrorCode KFMOrthBasisCreate(KFSystem sys, PetscInt maxcols, K
   PetscFunctionBegin;
   PetscCall(PetscNew(ob));
   PetscCall(KFMBasisCreateGrowing(s->comm, s->nsys_local, PetscMax(maxcols, 1), &(*ob)->mb));
-  PetscCall(KFRigidSpaceOpen(sys, &(*ob)->rs));
-  (*ob)->rs.mnorm_only = PETSC_TRUE;
+  PetscCall(KFRigidSpaceOpen(sys, PETSC_FALSE, &(*ob)->rs));
   PetscFunctionReturn(0);
 }
 
@@ -812,6 +852,7 @@ PETSC_INTERN PetscErrorCode KFMOrthBasisDestroy(KFMOrthBasis *ob)
   PetscFunctionBegin;
   if (!*ob) PetscFunctionReturn(0);
   PetscCall(KFMBasisDestroy(&(*ob)->mb));
+  PetscCall(KFRigidSpaceClose(&(*ob)->rs));
   PetscCall(PetscFree(*ob));
   PetscFunctionReturn(0);
 }

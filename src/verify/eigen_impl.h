@@ -4,12 +4,6 @@
 
 #include <kryflex_impl.h>
 
-/* M's null space: a direction whose mass is below this fraction of the masses its own dofs carry (diag(M) on it).
-   Exported mass matrices are rounded (8 to 12 digits in a punch) entry by entry, so a cancellation leaves that
-   fraction of the entries it cancels, whatever the other bodies weigh; its static part is kept exactly by the
-   condensation */
-#define KF_MASS_NULL_RTOL 1e-8
-
 /* K+ applications of one eigensolve with the flexible solver's factor, their residual sampled (KFFlexPCApplySampled) */
 typedef struct {
   KFFlexSolver solver;

@@ -85,14 +85,14 @@ def reduce(path, accuracy, verify):
 # Measured and dense errors that differ by more than AGREE_RTOL, on 2026-11-30 (the verdicts agree):
 # damping-light (zeta 1e-4) 1.36e-4 against 1.30e-4; spread-1e-5 5.37e-4 against 4.82e-4 (the worst angle differs:
 # 30 deg against 72 deg; both references agree with extended-precision solves away from the resonances);
-# light-mass, whose elastic error is measured against the rounding floor: the two references differ by 3e-10 of
-# the pair's total peak there, 3e-4 of the floor.
+# light-mass at 1e-3, whose elastic error is measured against the rounding floor: kryflex's reference at 15 deg is
+# 5.5e-4 of the floor off a 50-digit solve, this file's dense one 2.9e-5 (benchmarks/estimator/README.md). At 1e-2
+# the model chosen since the Krylov basis keeps the light rotor's columns (6.97e-3) is far enough above that to agree.
 # kryflex's dense reference on spread-1e-5 disagrees with its direct-solve check (exit 3): solving it on the rigid
 # modes' complement fixed that serially but moved Galileo's 2-rank references by 4e-6 (tests/python/report/
 # test_study.py::test_two_ranks_same_errors), so it is not in (2026-11-30)
 REFERENCE_WRONG = {"spread-1e-5"}
-UNEXPLAINED = {("damping-light", 1e-3), ("spread-1e-5", 1e-2), ("spread-1e-5", 1e-3), ("light-mass", 1e-2),
-               ("light-mass", 1e-3)}
+UNEXPLAINED = {("damping-light", 1e-3), ("spread-1e-5", 1e-2), ("spread-1e-5", 1e-3), ("light-mass", 1e-3)}
 
 
 @pytest.mark.parametrize("accuracy", ACCURACIES)

@@ -156,3 +156,14 @@ def test_bad_scene_value_is_a_clear_error(tmp_path):
                        cwd=ROOT, env=ENV)
     assert r.returncode == 2, r.stdout[-2000:] + r.stderr[-2000:]
     assert "verify.full_order" in r.stderr and "sometimes" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_a_certified_estimate_that_misses_the_target_is_exit_6(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "kryflex", "reduce", accuracy_scenes.GALILEO, "-o", str(tmp_path / "out"),
+                        "-kf_verify_certified_min_dofs", "0", "-scene.accuracy", "1e-9",
+                        "-kf_verify_certified_min_accuracy", "1e-12", "-quiet"], capture_output=True, text=True,
+                       timeout=300, cwd=ROOT, env=ENV)
+    assert r.returncode == 6, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "estimated, certified (" in r.stdout and "target missed" in r.stderr
+    s = json.load(open(tmp_path / "out" / "summary.json"))
+    assert s["verdict_kind"] == "certified" and s["target_met"] is False

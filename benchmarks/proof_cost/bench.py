@@ -3,7 +3,7 @@ bare reduction (`-kf_verify false`: the error only estimated, no plots), side by
 spacecraft of meshes/solid.
 
     .venv/bin/python benchmarks/proof_cost/bench.py [--refine 0.5 1.55] [--repeat 1] [--work DIR] [--whole-check]
-        [--direct-check] [--block-eigen] [--slepc-eigen] [--mode-count] [--other TREE [--bare-only]]
+        [--direct-check] [--block-eigen] [--slepc-eigen] [--mode-count] [--certified] [--other TREE [--bare-only]]
 
 For each size the two runs alternate (bare first), --repeat times. Printed per run: the wall and CPU seconds of the
 process, the reduction's factorization and block solves (summary.json's performance), the model check, the
@@ -20,7 +20,11 @@ eigensolve's per configuration, and whether the two runs' models are the same bi
 whole system per angle and frequency (-kf_verify_check_bodywise false), and the two checks' ratio. The machine is shared: read the ratios
 of runs taken together, and the CPU seconds beside the wall. --other TREE runs that tree's build (e.g. /work/main)
 and this one's alternately, bare then default, and prints each beside the other with its ratios (--bare-only: the bare runs alone, and whether the two trees'
-reduced models are the same bit for bit). The report's seconds
+reduced models are the same bit for bit). --certified adds the certified estimate (-kf_verify auto with
+-kf_verify_certified_min_dofs 0: the estimate, its mode counts at every configuration, measured only where they
+differ) and prints its count's seconds, wall / (factorization + solves of the bare run) and wall / (its own
+factorizations, the count's included, + solves). "default" is the measured run (-kf_verify true; since 2026-11-30
+certify, the default from 50,000 system dofs is the certified estimate). The report's seconds
 run from the arrival of its progress line to the process's end (run()).
 """
 import argparse
@@ -100,6 +104,8 @@ def run(scene, out, extra, root=ROOT):
                 whole=perf.get("whole_s", 0.0), verification=(s.get("timings_s") or {}).get("verification eigensolve", 0.0),
                 eigensolve=perf.get("reference_eigensolve_s"), check=perf.get("reference_check_s"),
                 search=perf.get("search_s"), count=perf.get("reference_count_s"),
+                certificate_count=perf.get("certificate_count_s"), kind=s.get("verdict_kind"),
+                certificate=s.get("certificate"),
                 counts=[(int(a), float(b), int(c), float(d)) for a, b, c, d in COUNT_LINE.findall(proc.stdout)],
                 count_kind="body-wise" if "s, body-wise)" in proc.stdout else "monolithic",
                 model_check=(t_scene - t_check0) if t_check0 is not None and t_scene is not None else None,
@@ -247,6 +253,9 @@ def main():
     ap.add_argument("--mode-count", action="store_true",
                     help="a run of the default with its eigensolves certified by inertia counts (-kf_verify_count "
                          "true), beside the default: each count's seconds against the eigensolve's per configuration")
+    ap.add_argument("--certified", action="store_true",
+                    help="a run of the certified estimate (-kf_verify auto, the threshold at 0 dofs) beside bare and "
+                         "measured: its mode count's seconds and its two ratios")
     ap.add_argument("--bare-only", action="store_true",
                     help="with --other: the bare runs alone (-kf_verify false), each tree's beside the other's, and "
                          "whether their reduced models are the same bit for bit")
@@ -270,7 +279,9 @@ def main():
                 continue
             bare = run(scene, os.path.join(args.work, "bare_%s" % refine), ["-kf_verify", "false"])
             info = ["-info", ":eps"] if args.block_eigen else []
-            full = run(scene, os.path.join(args.work, "default_%s" % refine), info)
+            full = run(scene, os.path.join(args.work, "default_%s" % refine), info + ["-kf_verify", "true"])
+            cert = run(scene, os.path.join(args.work, "certified_%s" % refine),
+                       ["-kf_verify", "auto", "-kf_verify_certified_min_dofs", "0"]) if args.certified else None
             block = run(scene, os.path.join(args.work, "block_%s" % refine),
                         info + ["-kf_verify_eigen_method", "slepc", "-kf_verify_eps_type", "subspace"]) \
                 if args.block_eigen else None
@@ -289,6 +300,19 @@ def main():
             show("bare", bare, denom)
             show("default", full, denom)
             show_blocks("default", full)
+            if cert:
+                show("certified", cert, denom)
+                own = cert["factorization"] + (cert["certificate_count"] or 0) + cert["solves"]
+                c = cert["certificate"] or {}
+                print("certified: verdict %s; counts %s flexible modes below %s Hz (full order / richest candidate "
+                      "per configuration); count %.2f s; wall / (bare factorization + solves) %.2f; wall / (own "
+                      "factorizations + count + solves = %.2f s) %.2f; CPU %.2f; wall / measured %.2f; error %.12g "
+                      "(bare %.12g, measured %.12g)" % (
+                          cert["kind"], ",".join("%d/%d" % (a, b) for a, b in zip(c.get("full_counts", []),
+                                                                                 c.get("rich_counts", []))),
+                          c.get("below_hz"), cert["certificate_count"] or 0, cert["wall"] / denom, own,
+                          cert["wall"] / own, cert["cpu"], cert["wall"] / full["wall"], cert["error"], bare["error"],
+                          full["error"]))
             if slepc:
                 show("slepc", slepc, denom)
                 print("eigensolves, block Krylov (default) / Krylov-Schur: %.2f s / %.2f s = %.2f; default wall / "

@@ -247,6 +247,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetSaveMaps(KFReducer, PetscInt)
     PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool, PetscInt, PetscInt, PetscReal)
+    PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt)
     PetscErrorCode KFReducerSetFromOptions(KFReducer)
     PetscErrorCode KFReducerSetUp(KFReducer)
     PetscErrorCode KFReducerSolve(KFReducer)

@@ -66,6 +66,11 @@ def _save_maps(value):
     return "auto" if value in (None, "auto") else bool(value)
 
 
+def _full_order(value):
+    """verify.full_order: True (measured), False (estimated) or "auto" (by size: measured or certified)."""
+    return "auto" if value in (None, "auto") else value in (True, "true")
+
+
 class Reducer:
     """The reduction of a loaded Scene (io/scene.py) by the C reducer.
 
@@ -114,8 +119,8 @@ class Reducer:
         r.set_max_frequency(red.get("max_frequency"))
         r.set_save_maps(_save_maps(red["save_maps"]))
         r.eigen_set_cover(float(red["eigen_cover"]))
-        r.set_verification(bool(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
-                           float(ver["frf_floor_db"]))
+        r.set_verification(_full_order(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
+                           float(ver["frf_floor_db"]), ver.get("certified_min_dofs"))
         if red.get("shared_directions") and "shared_directions" not in options:
             options = dict(options, shared_directions=True)   # the search's option (-kf_shared_directions)
         if red.get("damped_moments") and "krylov_damped" not in options:

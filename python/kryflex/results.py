@@ -359,6 +359,7 @@ class Performance(Record):
     reference_eigensolve_s: float = _value(doc="the verification's full-order eigensolves")
     reference_check_s: float = _value(doc="the verification's direct solves of the full system")
     reference_count_s: float = _value(doc="the verification's mode counts by inertia (-kf_verify_count)")
+    certificate_count_s: float = _value(doc="the certified estimate's mode counts by inertia (-kf_verify auto)")
     search_s: float = _value(doc="the accuracy search")
     compress_s: float = _value(doc="the compression of the chosen model (-kf_compress)")
 
@@ -395,6 +396,12 @@ class Verdict(Record):
     target_met: bool = _value(doc="error <= accuracy at every angle of interest and midpoint; None: not measured")
     error_max: float = _value(doc="the chosen model's worst error over angles and midpoints")
     error_estimated: bool = _value(doc="true when the reference was the a-posteriori estimator")
+    verdict_kind: str = _value(doc="measured (against the full order) | estimated (against the richest candidate, "
+                                   "uncertified: verify.full_order false) | certified (estimated, the full order's "
+                                   "mode count equal to the richest candidate's at every configuration)")
+    certificate: dict = _value(doc="the mode count of -kf_verify auto's estimate (None: not tried): below_hz, "
+                                   "certified, and per configuration (angles of interest, then midpoints) "
+                                   "full_counts and rich_counts, the flexible modes below below_hz")
     moments_matched: int = _value()
     multi_moments_matched: int = _value()
     reference_check: ReferenceCheck = _record(ReferenceCheck)

@@ -497,6 +497,9 @@ PETSC_EXTERN PetscErrorCode KFReducerSetSaveMaps(KFReducer, PetscInt);
 PETSC_EXTERN PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal cover);
 /* full-order verification: on/off, modes (PETSC_DECIDE: cover 3 x the band's top), frequency points, FRF floor (dB) */
 PETSC_EXTERN PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool full_order, PetscInt modes, PetscInt frequency_points, PetscReal frf_floor_db);
+/* the verdict by size (-kf_verify auto, the default): measured below min_dofs system dofs, from there the estimate
+   certified by the mode count (measured where it cannot certify); min_dofs PETSC_DECIDE keeps the current (50000) */
+PETSC_EXTERN PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt min_dofs);
 PETSC_EXTERN PetscErrorCode KFReducerSetFromOptions(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);

@@ -74,6 +74,10 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->gram_condition_max_dofs = 20000;
   r->negligible              = 1e-8;
   r->verify                  = PETSC_TRUE;
+  r->verify_auto             = PETSC_TRUE;
+  r->verify_certified_min_dofs = 50000;
+  r->verify_certified_cover  = 1.5;
+  r->verify_certified_min_accuracy = 1e-3;
   r->verify_modes            = PETSC_DECIDE;
   r->verify_cover            = 3.0;
   r->verify_check_points     = 3;
@@ -409,9 +413,20 @@ PetscErrorCode KFReducerSetVerification(KFReducer r, PetscBool full_order, Petsc
   PetscCheck(frequency_points >= 2, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "frequency points: give at least 2, got %" PetscInt_FMT " (-kf_frequency_points)", frequency_points);
   PetscCheck(frf_floor_db < 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "FRF floor: give a level below the peak in dB (negative), got %g (-kf_frf_floor_db)", (double)frf_floor_db);
   r->verify           = full_order;
+  r->verify_auto      = PETSC_FALSE;
   r->verify_modes     = modes;
   r->frequency_points = frequency_points;
   r->frf_floor_db     = frf_floor_db;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerSetVerificationAuto(KFReducer r, PetscInt min_dofs)
+{
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(min_dofs == PETSC_DECIDE || min_dofs >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_OUTOFRANGE, "the certified estimate's threshold: give a number of system dofs >= 0, got %" PetscInt_FMT " (-kf_verify_certified_min_dofs)", min_dofs);
+  r->verify_auto = PETSC_TRUE;
+  if (min_dofs != PETSC_DECIDE) r->verify_certified_min_dofs = min_dofs;
   PetscFunctionReturn(0);
 }
 

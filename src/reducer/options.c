@@ -216,7 +216,28 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   vmodes   = r->verify_modes;
   npoints  = r->frequency_points;
   floor_db = r->frf_floor_db;
-  PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_verify", verify, &verify, NULL));
+  {
+    char      text[16];
+    PetscBool auto_ = r->verify_auto;
+
+    /* auto or a boolean (PETSc's spellings: 0, 1, yes, no...) */
+    PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_verify", auto_ ? "auto" : (verify ? "true" : "false"), text, sizeof(text), &flg));
+    if (flg) {
+      PetscCall(PetscStrcasecmp(text, "auto", &auto_));
+      if (!auto_) {
+        PetscErrorCode ierr;
+
+        PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+        ierr = PetscOptionsStringToBool(text, &verify);
+        PetscCall(PetscPopErrorHandler());
+        PetscCheck(!ierr, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_verify %s: give auto, true or false", text);
+      }
+    }
+    PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_certified_min_dofs", r->verify_certified_min_dofs, &r->verify_certified_min_dofs, NULL));
+    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_cover", r->verify_certified_cover, &r->verify_certified_cover, NULL));
+    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_min_accuracy", r->verify_certified_min_accuracy, &r->verify_certified_min_accuracy, NULL));
+    r->verify_auto = auto_; /* KFReducerSetVerification below keeps it */
+  }
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_modes", vmodes, &vmodes, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_cover", r->verify_cover, &r->verify_cover, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_check_points", r->verify_check_points, &r->verify_check_points, NULL));
@@ -231,7 +252,12 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   }
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_frequency_points", npoints, &npoints, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_frf_floor_db", floor_db, &floor_db, NULL));
-  PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
+  {
+    const PetscBool auto_ = r->verify_auto;
+
+    PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
+    r->verify_auto = auto_;
+  }
   {
     PetscBool full = r->full_moments_set ? r->full_moments : r->verify, set;
 

@@ -551,6 +551,52 @@ static PetscErrorCode KFReducerMidpointReferences_Private(KFReducer r, KFSystem 
   PetscFunctionReturn(0);
 }
 
+/* The certificate failed: the measured verdict instead. The estimator's references are replaced by the full order's
+   at every point, and at the angles of interest the full-order moments by block solves (the moment checks' reference,
+   as with -kf_verify true): the visits' solvers are gone, so each angle is factored again (the body-wise solve
+   reusing the bodies' factors). The search then runs as with -kf_verify true. seconds: their time */
+static PetscErrorCode KFReducerCertifyFallback_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscInt nfull, PetscReal Lfull[], PetscReal *seconds)
+{
+  MPI_Comm       comm = PetscObjectComm((PetscObject)r);
+  KFSystem       sys;
+  PetscInt       nrev, a, t;
+  PetscLogDouble t0, t1;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, &a, &t));
+  for (PetscInt e = 0; e < neval; e++) PetscCall(KFReducedSystemDestroy(&evals[e].rich));
+  r->verify = PETSC_TRUE;
+  PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFSystemSetConfigurationCount(sys, neval));
+  for (PetscInt ci = 0; ci < r->nconfig; ci++) {
+    const PetscInt shape[3] = {t, a, nfull};
+    char           label[128];
+    KFFlexSolver   solver;
+    PetscReal     *L = &Lfull[ci * nfull * t * a];
+
+    PetscCall(KFInterruptCheck(comm));
+    PetscCall(KFReducerConfigLabel_Private(nrev, evals[ci].angles, label, sizeof(label)));
+    PetscCall(KFProgress(comm, "full-order reference at %s deg (the certificate failed)", label));
+    PetscCall(PetscTime(&t0));
+    PetscCall(KFSystemSetAngles(sys, evals[ci].angles));
+    PetscCall(KFFlexSolverCreate(sys, &solver));
+    PetscCall(KFFlexSolverSetOptionsPrefix(solver, ((PetscObject)r)->prefix));
+    PetscCall(KFFlexSolverSetShift(solver, r->shift));
+    PetscCall(KFReducerPointMoments_Private(r, NULL, solver, nfull, L, &evals[ci].kg));
+    PetscCall(KFReducerResultSet_Private(r, ci, "full_moments", 3, shape, L));
+    PetscCall(KFReducerResultScalar_Private(r, ci, "full_moments_estimated", 0.0));
+    PetscCall(KFReducerReference_Private(r, sys, solver, nfull, L, &evals[ci]));
+    PetscCall(KFReducerAddPerf_Private(r, solver));
+    PetscCall(KFFlexSolverDestroy(&solver));
+    PetscCall(PetscTime(&t1));
+    *seconds += t1 - t0;
+  }
+  PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, seconds));
+  PetscCall(KFBodyFactorsDestroy(&r->count_bf));
+  PetscCall(KFSystemDestroy(&sys));
+  PetscFunctionReturn(0);
+}
+
 /* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
    the shorter way round) */
 static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
@@ -708,7 +754,7 @@ if (!r->verify) { /* the estimator: the richest candidate, every basis whole */
     times[4] += t1 - t0;
   }
   PetscCall(KFReducedModelDestroy(&model));
-  PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
+  if (!r->certify) PetscCall(KFReducerNote_Private(r, "verification off: errors are estimated against the richest candidate (every basis whole, %" PetscInt_FMT " moments, %" PetscInt_FMT " expansion angles), not measured against the full order", nfull, rich.nexp));
 }
   PetscFunctionReturn(0);
 }
@@ -878,8 +924,8 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   KFSearch       st;
   KFSystem       sys;
   KFCandidate    single, multi;
-  PetscInt       nrows;
-  PetscReal     *rows;
+  PetscInt       nrows, *ccount = NULL, *crigid = NULL;
+  PetscReal     *rows, *csigma = NULL;
   PetscLogDouble t0, t1;
 
   PetscFunctionBegin;
@@ -891,12 +937,23 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFReducerConfigurations_Private(r, st.nrev1, &st.nc, &st.configs));
   PetscCall(PetscCalloc1(st.nc, &st.visits));
   PetscCall(KFSystemCreate(r->scene, &sys));
-  PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify ? neval - r->nconfig : 0))); /* the midpoints' references too */
+  PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify || r->certify ? neval - r->nconfig : 0))); /* the midpoints' references or counts too */
   for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
+  if (r->certify) {
+    PetscCall(PetscMalloc3(neval, &ccount, neval, &crigid, neval, &csigma));
+    PetscCall(KFReducerCertifyCount_Private(r, sys, neval, evals, ccount, crigid, csigma));
+  }
   PetscCall(KFBodyFactorsDestroy(&r->count_bf)); /* the last reference is made: the count's factors go */
   if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */
   if (!r->verify) PetscCall(KFReducerSearchEstimator_Private(r, &st, neval, evals, Lfull));
+  if (r->certify) {
+    PetscBool certified;
+
+    PetscCall(KFReducerCertifyCompare_Private(r, neval, evals, ccount, crigid, csigma, &certified));
+    PetscCall(PetscFree3(ccount, crigid, csigma));
+    if (!certified) PetscCall(KFReducerCertifyFallback_Private(r, neval, evals, st.nfull, Lfull, &st.times[6]));
+  }
   if (r->verify) { /* the truth the references are checked against, verification too */
     const PetscLogDouble c0 = r->verify_check_seconds;
 
@@ -1066,6 +1123,15 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   r->build_moments = r->moments != PETSC_DECIDE ? r->moments : (search ? r->moments_max : 10);
   if (r->build_moments <= r->output_blocks) r->build_moments = r->output_blocks + 1;
   nfull = r->build_moments;
+  /* auto: measured below the size threshold or for a target tighter than the estimate is trusted to; else the
+     estimate, certified (the search's only) */
+  if (r->verify_auto) {
+    PetscInt nsys;
+
+    PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
+    r->verify = (PetscBool)(!search || nsys < r->verify_certified_min_dofs || r->accuracy < r->verify_certified_min_accuracy);
+  }
+  r->certify = (PetscBool)(r->verify_auto && !r->verify);
   PetscCall(KFReducerAnnounce_Private(r));
   PetscCall(KFReducerEvalPoints_Private(r, &neval, &evals));
   PetscCall(PetscCalloc1(r->nconfig * nfull * t * a, &Lfull));

@@ -191,14 +191,25 @@ cdef class CReducer:
     def eigen_set_cover(self, PetscReal cover):
         check(KFReducerEigenSetCover(self.r, cover))
 
-    def set_verification(self, bint full_order, modes=None, PetscInt frequency_points=400, PetscReal frf_floor_db=-60.0):
-        """Full-order verification: on/off, modes (None or "auto": cover 3 x the band's top), frequency points and
-        the FRF error's floor (dB)."""
+    def set_verification(self, full_order, modes=None, PetscInt frequency_points=400, PetscReal frf_floor_db=-60.0,
+                         certified_min_dofs=None):
+        """The verdict: full_order True (measured against the full order), False (estimated against the richest
+        candidate) or "auto" (measured below certified_min_dofs system dofs, None: 50000; from there the estimate
+        certified by the mode count); modes (None or "auto": cover 3 x the band's top), frequency points and the FRF
+        error's floor (dB)."""
         cdef PetscInt nmodes = -1  # PETSC_DECIDE
+        cdef PetscInt min_dofs = -1
         if modes not in (None, "auto"):
             nmodes = int(modes)
-        check(KFReducerSetVerification(self.r, PETSC_TRUE if full_order else PETSC_FALSE, nmodes, frequency_points,
-                                       frf_floor_db))
+        auto = isinstance(full_order, str) and full_order == "auto"
+        if isinstance(full_order, str) and not auto:
+            raise ValueError("verify.full_order must be true, false or auto, got %r" % (full_order,))
+        check(KFReducerSetVerification(self.r, PETSC_TRUE if (auto or full_order) else PETSC_FALSE, nmodes,
+                                       frequency_points, frf_floor_db))
+        if certified_min_dofs is not None:
+            min_dofs = int(certified_min_dofs)
+        if auto:
+            check(KFReducerSetVerificationAuto(self.r, min_dofs))
 
     def set_from_options(self):
         check(KFReducerSetFromOptions(self.r))

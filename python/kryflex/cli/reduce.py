@@ -149,7 +149,7 @@ def run(argv):
             "(verify.full_order: false and no estimate)" % s.accuracy)
         return EXIT_OK
     solves_inexact(s)
-    how = "estimated, verify.full_order: false" if s.verdict.error_estimated else "measured against the full order"
+    how = how_text(s.verdict)
     measure = s.verdict.accuracy_measure or "total"
     say("kryflex: max relative %s-response error (relative H-inf per input/output pair, %s model, %s): "
         "%.3g%s (target %.3g)%s" % (measure, s.verdict.chosen_method or result.model.settings["method"], how,
@@ -159,6 +159,18 @@ def run(argv):
             % (measure, worst, at_text(where), s.accuracy), sys.stderr)
         return EXIT_TARGET
     return EXIT_OK
+
+
+def how_text(verdict):
+    """How the verdict's error was obtained, for its line: measured, estimated and certified, or estimated only."""
+    if not verdict.error_estimated:
+        return "measured against the full order"
+    cert = verdict.certificate
+    if verdict.verdict_kind == "certified" and cert:
+        counts = sorted(set(cert["full_counts"]))
+        n = str(counts[0]) if len(counts) == 1 else "%d-%d" % (counts[0], counts[-1])
+        return ("estimated, certified (%s modes below %.4g Hz at every angle, counted)" % (n, cert["below_hz"]))
+    return "estimated, verify.full_order: false"
 
 
 def at_text(label):
@@ -181,7 +193,11 @@ def draws_figures(scene):
     """Whether the run will draw the report's figures: the scene verifies against the full order and -kf_verify does
     not turn it off."""
     from petsc4py import PETSc
-    return bool(PETSc.Options().getBool("kf_verify", bool(scene.verify["full_order"])))
+    opts = PETSc.Options()
+    given = opts.getString("kf_verify") if opts.hasName("kf_verify") else None
+    full = scene.verify["full_order"] if given is None else given
+    # auto: measured below -kf_verify_certified_min_dofs system dofs (the figures are drawn), certified above (not)
+    return full in ("auto", None) or full is True or (isinstance(full, str) and full.lower() in ("true", "1", "yes", ""))
 
 
 def append_check_section(path, findings):

@@ -826,7 +826,7 @@ def _verify(where, given):
     defaults = __getattr__("VERIFY_DEFAULTS")
     ver = dict(defaults)
     ver.update(mapping(where, "verify", given if given is not None else {}, set(defaults)))
-    for key in ("modes", "frequency_points", "full_order", "frf_floor_db"):
+    for key in ("modes", "frequency_points", "full_order", "frf_floor_db", "certified_min_dofs"):
         ver[key] = _setting(where, "verify." + key, ver[key])
     return ver
 

@@ -110,13 +110,25 @@ def _row_name(c, label):
     return c.short_angle(label) if c.model_name.startswith("single") else c.angle(label)[4:]
 
 
+def _certified_text(verdict):
+    """The certified estimate's sentence: what was counted and what that proves."""
+    cert = verdict.certificate or {}
+    counts = sorted(set(cert.get("full_counts") or [0]))
+    n = str(counts[0]) if len(counts) == 1 else "%d to %d" % (counts[0], counts[-1])
+    return ("It is **estimated** against the search's richest candidate and **certified** by the mode count "
+            "(`verify.full_order: auto`): at every angle of interest and midpoint the full order has %s flexible "
+            "modes below %.4g Hz (Sylvester's inertia) and the richest candidate as many, so it lacks none of them; "
+            "the count does not bound the estimate's own error." % (n, cert.get("below_hz") or 0))
+
+
 def _section_accuracy(c):
     s, verdict = c.summary, c.summary.verdict
     accuracy = s.accuracy
     estimated = bool(verdict.error_estimated)
     lines = ["## Accuracy of the chosen model", "", _chosen_sentence(c), ""]
     lines += [f"Error measure (the verdict): the {verdict.error_definition or ERROR_TEXT}. "
-              + ("It is **estimated** by the a-posteriori estimator (the full-order verification was off: "
+              + (_certified_text(verdict) if estimated and verdict.verdict_kind == "certified" else
+                 "It is **estimated** by the a-posteriori estimator (the full-order verification was off: "
                  "`verify.full_order: false`), not measured." if estimated else
                  "It is **measured** against the full-order model "
                  + ("of the structure" if c.no_joint(c.label_g) else "at every angle of interest")

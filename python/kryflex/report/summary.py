@@ -47,7 +47,7 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("solve_residual_first_max", "residual_first_max"),
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb"),
                ("time_reference_eigensolve", "reference_eigensolve_s"), ("time_reference_check", "reference_check_s"),
-               ("time_reference_count", "reference_count_s"),
+               ("time_reference_count", "reference_count_s"), ("time_certificate_count", "certificate_count_s"),
                ("time_search", "search_s"), ("time_compress", "compress_s")]
 PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
@@ -198,6 +198,15 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     out["error_max"] = _optional_scalar(reducer, -1, "error_max", whole)
     estimated = _optional_scalar(reducer, -1, "error_estimated", whole)
     out["error_estimated"] = bool(estimated) if estimated is not None else False
+    certified = _optional_scalar(reducer, -1, "certified", whole)
+    out["certificate"] = None
+    if certified is not None:     # -kf_verify auto's certificate (src/reducer/certify.c)
+        out["certificate"] = {"certified": bool(certified),
+                              "below_hz": _optional_scalar(reducer, -1, "certificate_below_hz", whole),
+                              "full_counts": [int(x) for x in np.ravel(reducer.result(-1, "certificate_full_counts"))],
+                              "rich_counts": [int(x) for x in np.ravel(reducer.result(-1, "certificate_rich_counts"))]}
+    out["verdict_kind"] = None if out["error_max"] is None else (
+        "measured" if not out["error_estimated"] else "certified" if certified else "estimated")
     out["moments_matched"] = _optional_scalar(reducer, -1, "moments_matched", whole, int)
     out["multi_moments_matched"] = _optional_scalar(reducer, -1, "multi_moments_matched", whole, int)
     # the full-order reference checked against direct solves of the full system (src/verify/direct_check.c)

@@ -84,7 +84,13 @@ struct _p_KFReducer {
   PetscInt        save_maps;      /* PETSC_TRUE, PETSC_FALSE or PETSC_DECIDE */
   PetscInt        save_maps_max_dofs, gram_condition_max_dofs;
   PetscReal       negligible;     /* a moment below this fraction of its largest value over the angles is zero */
-  PetscBool       verify;
+  PetscBool       verify;         /* this solve's references: measured (true) or estimated against the richest candidate */
+  PetscBool       verify_auto;    /* -kf_verify auto: measured below verify_certified_min_dofs system dofs, else the
+                                     estimate certified by the mode count (src/reducer/certify.c) */
+  PetscInt        verify_certified_min_dofs;
+  PetscReal       verify_certified_cover; /* the certificate counts modes below this multiple of the band's top */
+  PetscReal       verify_certified_min_accuracy; /* auto measures targets tighter than this */
+  PetscBool       certify;        /* this solve's estimate is certified (resolved from verify_auto at KFReducerSolve) */
   PetscInt        verify_modes;   /* PETSC_DECIDE: cover verify_cover x the band's top */
   PetscReal       verify_cover;
   PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
@@ -220,6 +226,9 @@ typedef struct _KFEvalPoint {
 } KFEvalPoint;
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
+/* the estimated verdict's certificate by the mode count (src/reducer/certify.c) */
+PETSC_INTERN PetscErrorCode KFReducerCertifyCount_Private(KFReducer, KFSystem, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[]);
+PETSC_INTERN PetscErrorCode KFReducerCertifyCompare_Private(KFReducer, PetscInt neval, const KFEvalPoint[], const PetscInt count[], const PetscInt nrigid[], const PetscReal sigma[], PetscBool *certified);
 /* the full-order moments at the system's configuration: from its basis (NULL: none) where it matches them, else by
    solves; kg (or NULL): K+ P^T G for the reference check */
 PETSC_INTERN PetscErrorCode KFReducerPointMoments_Private(KFReducer, const KFReducerBasis *, KFFlexSolver, PetscInt nmom, PetscReal L[], Mat *kg);

@@ -8,10 +8,9 @@ Every variant at accuracy 1e-2 and 1e-3, measured against the full order (the de
 - an estimated pass is a true pass: the estimated model's dense elastic error meets the target (no false pass).
 The dense modes here are solved on the M-orthogonal complement of the geometric rigid modes: on spread-1e-5 (a rotor
 1e-5 as stiff) the first flexible eigenvalue is 7e-14 of the largest, and an eigensolve of the whole pencil mixes 1e-3
-of a rigid mode into it. kryflex's own dense reference still solves the whole pencil, so its verification of
-spread-1e-5 exits 3 (the reference 5.5e-6 of the peak from the direct solves): those cases are expected failures
-(REFERENCE_WRONG). Light-mass (a rotor 1e-6 as heavy) has masses 2e-9 of the largest that are the rotor's own,
-not a null space of M.
+of a rigid mode into it. kryflex's dense reference solves them there too and refines each eigenvalue to its own
+accuracy (src/verify/eigen.c, KFSystemEigenRefine). Light-mass (a rotor 1e-6 as heavy) has masses 2e-9 of the
+largest that are the rotor's own, not a null space of M.
 """
 import os
 import subprocess
@@ -83,24 +82,18 @@ def reduce(path, accuracy, verify):
 
 
 # Measured and dense errors that differ by more than AGREE_RTOL, on 2026-11-30 (the verdicts agree):
-# damping-light (zeta 1e-4) 1.36e-4 against 1.30e-4; spread-1e-5 5.37e-4 against 4.82e-4 (the worst angle differs:
-# 30 deg against 72 deg; both references agree with extended-precision solves away from the resonances);
-# light-mass at 1e-3, whose elastic error is measured against the rounding floor: kryflex's reference at 15 deg is
-# 5.5e-4 of the floor off a 50-digit solve, this file's dense one 2.9e-5 (benchmarks/estimator/README.md). At 1e-2
-# the model chosen since the Krylov basis keeps the light rotor's columns (6.97e-3) is far enough above that to agree.
-# kryflex's dense reference on spread-1e-5 disagrees with its direct-solve check (exit 3): solving it on the rigid
-# modes' complement fixed that serially but moved Galileo's 2-rank references by 4e-6 (tests/python/report/
-# test_study.py::test_two_ranks_same_errors), so it is not in (2026-11-30)
-REFERENCE_WRONG = {"spread-1e-5"}
-UNEXPLAINED = {("damping-light", 1e-3), ("spread-1e-5", 1e-2), ("spread-1e-5", 1e-3), ("light-mass", 1e-3)}
+# damping-light (zeta 1e-4) 1.36e-4 against 1.30e-4; light-mass at 1e-3, whose elastic error is measured against the
+# rounding floor (the two references differ by 3e-10 of the pair's total peak there, 3e-4 of the floor). At 1e-2 the
+# model chosen since the Krylov basis keeps the light rotor's columns (6.97e-3) is far enough above that to agree.
+# spread-1e-5 agrees since kryflex's dense reference refines its eigenvalues (4.83e-4 against 4.82e-4; before, its
+# reference was 5.5e-6 of the peak off the direct solves and the run exited 3).
+UNEXPLAINED = {("damping-light", 1e-3), ("light-mass", 1e-3)}
 
 
 @pytest.mark.parametrize("accuracy", ACCURACIES)
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_measured_error_is_the_dense_one(scenes, variant, accuracy, quiet_library, request):
     path = scenes[variant]
-    if variant in REFERENCE_WRONG:
-        request.applymarker(pytest.mark.xfail(strict=True, reason="kryflex's dense reference is wrong here (see above)"))
     measured = reduce(path, accuracy, True)
     s = measured.summary.verdict
     truth = dense_error(path, measured.model)
@@ -127,12 +120,11 @@ def test_no_estimate_passes_falsely(scenes, variant, accuracy, quiet_library):
         assert truth <= (1 + AGREE_RTOL) * accuracy, "a false pass: estimated %.3g, dense %.3g" % (e.error_max, truth)
 
 
-@pytest.mark.parametrize("variant, code", [("light-mass", 0), pytest.param("spread-1e-5", 0, marks=pytest.mark.xfail(
-    strict=True, reason="kryflex's dense reference is wrong here: exit 3 (REFERENCE_WRONG)"))])
+@pytest.mark.parametrize("variant, code", [("light-mass", 0), ("spread-1e-5", 0)])
 def test_exit_codes(scenes, variant, code, tmp_path):
     """The command's exit code on the two variants that broke: light-mass meets 1e-3 (its elastic response, 5e-8 of
-    the total, measured against the rounding floor; the rotor's masses are not a null space of M); spread-1e-5 should
-    exit 0 too, and exits 3 (REFERENCE_WRONG)."""
+    the total, measured against the rounding floor; the rotor's masses are not a null space of M); spread-1e-5's
+    reference agrees with the direct solves (its flexible modes on the rigid modes' complement, refined)."""
     run = subprocess.run([os.path.join(ROOT, "build", "kryflex"), "reduce", scenes[variant], "-o",
                           str(tmp_path / "out"), "-scene.accuracy", "1e-3", "-quiet"], capture_output=True, text=True,
                          timeout=300, env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
@@ -151,9 +143,7 @@ if MPI.COMM_WORLD.rank == 0:
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("variant", ["light-mass", pytest.param("spread-1e-5", marks=pytest.mark.xfail(
-    strict=True, reason="kryflex's dense reference is wrong here: exit 3 (REFERENCE_WRONG); with it solved on the rigid "
-    "modes' complement, 4.87e-4 on 2 ranks against 5.37e-4 on 1"))])
+@pytest.mark.parametrize("variant", ["light-mass", "spread-1e-5"])
 def test_two_ranks_agree_with_one(scenes, variant, tmp_path):
     import json
     script = tmp_path / "two.py"

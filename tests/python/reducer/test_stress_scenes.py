@@ -138,7 +138,9 @@ import kryflex
 red = kryflex.reduce(kryflex.load_scene(sys.argv[1]), quiet=True, accuracy=1e-3)
 from mpi4py import MPI
 if MPI.COMM_WORLD.rank == 0:
-    print("RESULT " + json.dumps({"error": red.summary.verdict.error_max, "met": bool(red.summary.verdict.target_met)}))
+    s = red.summary
+    print("RESULT " + json.dumps({"error": s.verdict.error_max, "met": bool(s.verdict.target_met),
+                                  "dofs": s.search[s.search_chosen].reduced_dofs}))
 """
 
 
@@ -156,5 +158,11 @@ def test_two_ranks_agree_with_one(scenes, variant, tmp_path):
         assert run.returncode == 0, run.stderr[-2000:]
         res[n] = json.loads([ln for ln in run.stdout.splitlines() if ln.startswith("RESULT ")][0][7:])
     assert res[1]["met"] == res[2]["met"]
-    # light-mass is measured against its rounding floor: 2 ranks' rounding moves it by 7e-4 of itself
-    np.testing.assert_allclose(res[2]["error"], res[1]["error"], rtol=AGREE_RTOL)
+    assert res[1]["dofs"] == res[2]["dofs"]
+    if variant == "light-mass":
+        # measured against its rounding floor, the search's tie between candidates of the same size is decided by
+        # errors of a few 1e-5 that rounding moves: 1 rank chose alpha_G 0 deg (4.06e-5), 2 ranks 15 deg (2.93e-5)
+        # on 2026-11-30, both far inside the target
+        assert max(res[1]["error"], res[2]["error"]) <= 0.1 * 1e-3
+    else:
+        np.testing.assert_allclose(res[2]["error"], res[1]["error"], rtol=AGREE_RTOL)

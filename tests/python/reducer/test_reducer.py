@@ -418,7 +418,7 @@ def test_reduce_help_lists_the_reducer_options(flag):
     assert "usage: kryflex reduce" in out and "-scene." in out
     for option, default in (("-kf_reducer_type", "krylov"), ("-kf_moments", "auto"), ("-kf_band", "0.01"),
                             ("-kf_damping", "0.0025"), ("-kf_keep_threshold", "0.05"), ("-kf_method", "auto"),
-                            ("-kf_verify", "TRUE"), ("-kf_quiet", None)):
+                            ("-kf_verify", "auto"), ("-kf_quiet", None)):
         lines = [line for line in out.splitlines() if line.strip().startswith((option + " ", option + ":"))]
         assert lines, "%s is not listed by kryflex reduce %s:\n%s" % (option, flag, out)
         assert default is None or default in lines[0], (option, lines[0])

@@ -229,5 +229,6 @@ PETSC_INTERN PetscErrorCode KFOptionsSettingEnum(PetscOptionItems *, const char[
 PETSC_INTERN PetscErrorCode KFOptionsSettingFList(PetscOptionItems *, const char[], PetscFunctionList, const char[], char[], size_t, PetscBool *);
 /* a value given another way (a word parsed by hand) checked against the row's range */
 PETSC_INTERN PetscErrorCode KFSettingCheckRange(MPI_Comm, const char[], PetscReal);
+PETSC_INTERN PetscErrorCode KFStringToAutoBool(const char[], PetscBool *, PetscBool *, PetscBool *);
 
 #endif

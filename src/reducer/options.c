@@ -45,7 +45,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscReal      band[2], deg[KF_MAX_OPTION_ANGLES];
   PetscInt       n, nconfig, save, method, importance, moments, oblocks, vmodes, npoints;
   PetscReal      zeta, accuracy, keep, dtol, btol, rtol, shift, floor_db;
-  PetscBool      flg, sc, verify;
+  PetscBool      flg, sc, verify, verify_auto;
 
   PetscFunctionBegin;
   PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
@@ -213,31 +213,23 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_negligible_moment", r->negligible, &r->negligible, NULL));
 
   verify   = r->verify;
+  verify_auto = r->verify_auto;
   vmodes   = r->verify_modes;
   npoints  = r->frequency_points;
   floor_db = r->frf_floor_db;
   {
     char      text[16];
-    PetscBool auto_ = r->verify_auto;
+    PetscBool ok;
 
-    /* auto or a boolean (PETSc's spellings: 0, 1, yes, no...) */
-    PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_verify", auto_ ? "auto" : (verify ? "true" : "false"), text, sizeof(text), &flg));
+    PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_verify", verify_auto ? "auto" : (verify ? "true" : "false"), text, sizeof(text), &flg));
     if (flg) {
-      PetscCall(PetscStrcasecmp(text, "auto", &auto_));
-      if (!auto_) {
-        PetscErrorCode ierr;
-
-        PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-        ierr = PetscOptionsStringToBool(text, &verify);
-        PetscCall(PetscPopErrorHandler());
-        PetscCheck(!ierr, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_verify %s: give auto, true or false", text);
-      }
+      PetscCall(KFStringToAutoBool(text, &verify_auto, &verify, &ok));
+      PetscCheck(ok, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_verify %s: give auto, true or false", text);
     }
-    PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_certified_min_dofs", r->verify_certified_min_dofs, &r->verify_certified_min_dofs, NULL));
-    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_cover", r->verify_certified_cover, &r->verify_certified_cover, NULL));
-    PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_min_accuracy", r->verify_certified_min_accuracy, &r->verify_certified_min_accuracy, NULL));
-    r->verify_auto = auto_; /* KFReducerSetVerification below keeps it */
   }
+  PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_certified_min_dofs", r->verify_certified_min_dofs, &r->verify_certified_min_dofs, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_cover", r->verify_certified_cover, &r->verify_certified_cover, NULL));
+  PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_certified_min_accuracy", r->verify_certified_min_accuracy, &r->verify_certified_min_accuracy, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_modes", vmodes, &vmodes, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_verify_cover", r->verify_cover, &r->verify_cover, NULL));
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_verify_check_points", r->verify_check_points, &r->verify_check_points, NULL));
@@ -252,12 +244,8 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
   }
   PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_frequency_points", npoints, &npoints, NULL));
   PetscCall(KFOptionsSettingReal(PetscOptionsObject, "-kf_frf_floor_db", floor_db, &floor_db, NULL));
-  {
-    const PetscBool auto_ = r->verify_auto;
-
-    PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
-    r->verify_auto = auto_;
-  }
+  PetscCall(KFReducerSetVerification(r, verify, vmodes, npoints, floor_db));
+  r->verify_auto = verify_auto; /* KFReducerSetVerification, an explicit verdict, turns auto off */
   {
     PetscBool full = r->full_moments_set ? r->full_moments : r->verify, set;
 

@@ -168,16 +168,11 @@ static PetscErrorCode KFMumpsControlsFromOptions(MPI_Comm comm, const char prefi
   PetscOptionsEnd();
   if (set && !val[0]) c->ooc_mode = 1; /* a bare -kf_ooc */
   else if (set) {
-    PetscCall(PetscStrcasecmp(val, "auto", &on));
-    if (!on) {
-      PetscErrorCode ierr;
+    PetscBool isauto, ok;
 
-      PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-      ierr = PetscOptionsStringToBool(val, &on);
-      PetscCall(PetscPopErrorHandler());
-      PetscCheck(!ierr, comm, PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
-      c->ooc_mode = on ? 1 : 0;
-    }
+    PetscCall(KFStringToAutoBool(val, &isauto, &on, &ok));
+    PetscCheck(ok, comm, PETSC_ERR_ARG_WRONG, "-kf_ooc takes true, false or auto; got '%s'", val);
+    if (!isauto) c->ooc_mode = on ? 1 : 0;
   }
   PetscFunctionReturn(0);
 }

@@ -112,6 +112,23 @@ PetscErrorCode KFOptionsSettingRealArray(PetscOptionItems *PetscOptionsObject, c
   PetscFunctionReturn(0);
 }
 
+/* The value of an option that takes auto or a boolean in PETSc's spellings (0, 1, yes, no, ...): *isauto, else
+   *value; *ok false when it is neither (the caller names the option in its error) */
+PetscErrorCode KFStringToAutoBool(const char text[], PetscBool *isauto, PetscBool *value, PetscBool *ok)
+{
+  PetscErrorCode ierr;
+
+  PetscFunctionBegin;
+  *ok = PETSC_TRUE;
+  PetscCall(PetscStrcasecmp(text, "auto", isauto));
+  if (*isauto) PetscFunctionReturn(0);
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = PetscOptionsStringToBool(text, value);
+  PetscCall(PetscPopErrorHandler());
+  *ok = (PetscBool)!ierr;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFOptionsSettingString(PetscOptionItems *PetscOptionsObject, const char name[], const char cur[], char value[], size_t len, PetscBool *set)
 {
   const KFSettingInfo *row;

@@ -165,10 +165,12 @@ static PetscErrorCode KFSystemEigenRefine(KFSystem sys, const PetscReal M[], Pet
   PetscCall(PetscBLASIntCast(m, &bm));
   PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bm, B, &bm, &info));
   PetscCheck(!info, s->comm, PETSC_ERR_LIB, "the verification's flexible modes are not M-independent (leading minor %d of their M-Gram matrix)", (int)info);
-  for (PetscInt j = 0; j < m; j++) {
-    for (PetscInt k = 0; k < j; k++)
-      for (PetscInt i = 0; i < n; i++) X[i + j * n] -= B[j + k * m] * X[i + k * n];
-    for (PetscInt i = 0; i < n; i++) X[i + j * n] /= B[j + j * m];
+  {
+    const PetscScalar one = 1.0;
+    PetscBLASInt      bn;
+
+    PetscCall(PetscBLASIntCast(n, &bn));
+    PetscCallBLAS("BLAStrsm", BLAStrsm_("R", "L", "T", "N", &bn, &bm, &one, B, &bm, X, &bn));
   }
   /* K X in double-double, on the distributed K_S */
   PetscCall(KFDenseCreate(s->comm, s->nsys_local, n, m, &Xd));

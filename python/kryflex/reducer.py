@@ -66,6 +66,11 @@ def _save_maps(value):
     return "auto" if value in (None, "auto") else bool(value)
 
 
+def _shared_directions(value):
+    """reduction.shared_directions: False (split), True (tied) or "auto" (the search measures both, keeps the smaller)."""
+    return "auto" if value == "auto" else value in (True, "true")
+
+
 def _full_order(value):
     """verify.full_order: True (measured), False (estimated) or "auto" (by size: measured or certified)."""
     return "auto" if value in (None, "auto") else value in (True, "true")
@@ -121,8 +126,9 @@ class Reducer:
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(_full_order(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]), ver.get("certified_min_dofs"))
-        if red.get("shared_directions") and "shared_directions" not in options:
-            options = dict(options, shared_directions=True)   # the search's option (-kf_shared_directions)
+        shared = _shared_directions(red.get("shared_directions"))
+        if shared and "shared_directions" not in options:
+            options = dict(options, shared_directions=shared)   # the search's option (-kf_shared_directions)
         if red.get("damped_moments") and "krylov_damped" not in options:
             options = dict(options, krylov_damped=True)   # the Krylov implementation's option (docs/guide/damping.md)
         with quiet_progress(quiet), kf_options(options):

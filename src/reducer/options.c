@@ -169,7 +169,17 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
     PetscCall(KFOptionsSettingInt(PetscOptionsObject, "-kf_shift_blocks", r->shift_blocks, &r->shift_blocks, NULL));
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_shift_family_only", r->shift_family_only, &r->shift_family_only, NULL));
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_compress", r->compress, &r->compress, NULL));
-    PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_shared_directions", r->shared_directions, &r->shared_directions, NULL));
+    {
+      char      text[16];
+      PetscBool ok;
+
+      PetscCall(KFOptionsSettingString(PetscOptionsObject, "-kf_shared_directions", r->shared_auto ? "auto" : (r->shared_directions ? "true" : "false"), text, sizeof(text), &flg));
+      if (flg) {
+        PetscCall(KFStringToAutoBool(text, &r->shared_auto, &r->shared_directions, &ok));
+        PetscCheck(ok, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_shared_directions %s: give auto, true or false", text);
+        if (r->shared_auto) r->shared_directions = PETSC_TRUE; /* the candidates' coordinates are kept for their ties */
+      }
+    }
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_static_exact", r->static_exact, &r->static_exact, NULL));
   }
   importance = (PetscInt)r->importance;

@@ -159,9 +159,9 @@ PetscErrorCode KFReducerShareBodies_Private(KFReducer r, KFVisit visits[], Petsc
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows)
+/* one pass of the search, every candidate tied or every one split (tied matters only under -kf_shared_directions auto) */
+static PetscErrorCode KFSearchPass(KFReducer r, PetscBool tied, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFSearchTable *tab, KFCandidate *single, KFCandidate *multi)
 {
-  KFSearchTable tab  = {0, 0, NULL};
   const PetscBool fixed = (PetscBool)(r->moments != PETSC_DECIDE);
   const PetscInt  cmax  = r->build_moments, cmin = fixed ? r->moments : 1;
   PetscInt        nrev, nrev1, ninterest = 0;
@@ -182,9 +182,10 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
 
       if (r->auto_alpha ? visits[g].interest < 0 : !visits[g].is_g) continue;
       proto.family = KF_METHOD_SINGLE_ANGLE;
+      proto.tied   = tied;
       proto.nexp   = 1;
       proto.exp[0] = g;
-      PetscCall(KFSearchMoments(r, visits, neval, evals, &tab, &proto, cmin, cmax, &found));
+      PetscCall(KFSearchMoments(r, visits, neval, evals, tab, &proto, cmin, cmax, &found));
       if (KFBetter(r, &found, single)) *single = found;
       if (!KFPasses(r, &found)) continue;
       cstar = found.c;
@@ -199,14 +200,14 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
         hi     = nclusters; /* every cluster kept: the whole basis, which passes for c = cstar */
         if (c > cstar) {
           cand.kept = hi;
-          PetscCall(KFTry(r, visits, neval, evals, &tab, &cand, &best));
+          PetscCall(KFTry(r, visits, neval, evals, tab, &cand, &best));
           if (!KFPasses(r, &cand)) continue;
         }
         while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
           const PetscInt mid = (lo + hi) / 2;
 
           cand.kept = mid;
-          PetscCall(KFTry(r, visits, neval, evals, &tab, &cand, &best));
+          PetscCall(KFTry(r, visits, neval, evals, tab, &cand, &best));
           if (KFPasses(r, &cand)) hi = mid;
           else lo = mid;
         }
@@ -220,6 +221,7 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
     PetscBool   in[1024] = {PETSC_FALSE};
 
     proto.family = KF_METHOD_MULTI_ANGLE;
+    proto.tied   = tied;
     if (r->nmulti) { /* named expansion configurations */
       for (PetscInt i = 0; i < nvisit && proto.nexp < KF_MAX_EXPANSION; i++)
         if (visits[i].in_multi) proto.exp[proto.nexp++] = i;
@@ -235,7 +237,7 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
       KFCandidate found;
 
       if (proto.nexp > 1) {
-        PetscCall(KFSearchMoments(r, visits, neval, evals, &tab, &proto, cmin, cmax, &found));
+        PetscCall(KFSearchMoments(r, visits, neval, evals, tab, &proto, cmin, cmax, &found));
         if (KFBetter(r, &found, multi)) *multi = found;
         if (KFPasses(r, &found) || r->nmulti) break;
       }
@@ -265,8 +267,41 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
       }
     }
   }
-  PetscCall(KFShareBodies(r, visits, neval, evals, &tab, single));
-  PetscCall(KFShareBodies(r, visits, neval, evals, &tab, multi));
+  PetscCall(KFShareBodies(r, visits, neval, evals, tab, single));
+  PetscCall(KFShareBodies(r, visits, neval, evals, tab, multi));
+  PetscFunctionReturn(0);
+}
+
+/* of a family's split and tied best: the one that passes, then the one with fewer reassembled system dofs (what is
+   simulated: a tied model's own ties and the joints' overlap, so its size, body dofs less its ties, undercounts), and
+   on a tie the split one (it compresses and exports); when neither passes the more accurate */
+static void KFSplitOrTied(KFReducer r, const KFCandidate *split, const KFCandidate *tied, KFCandidate *best)
+{
+  const PetscBool ps = (PetscBool)(split->nexp && KFPasses(r, split)), pt = (PetscBool)(tied->nexp && KFPasses(r, tied));
+
+  if (!tied->nexp) *best = *split;
+  else if (!split->nexp) *best = *tied;
+  else if (ps != pt) *best = pt ? *tied : *split;
+  else if (ps) *best = tied->sysdofs < split->sysdofs ? *tied : *split;
+  else *best = tied->error < split->error ? *tied : *split;
+}
+
+PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, KFCandidate split[2], PetscInt *nrows, PetscReal **rows)
+{
+  KFSearchTable tab = {0, 0, NULL};
+
+  PetscFunctionBegin;
+  PetscCall(KFSearchPass(r, PETSC_FALSE, nvisit, visits, neval, evals, &tab, single, multi));
+  split[0] = *single;
+  split[1] = *multi;
+  if (r->shared_auto) { /* every candidate size again, tied: a tied model wins at one angle, a split one often at several */
+    KFCandidate ssingle = *single, smulti = *multi, tsingle, tmulti;
+
+    PetscCall(KFSearchPass(r, PETSC_TRUE, nvisit, visits, neval, evals, &tab, &tsingle, &tmulti));
+    KFSplitOrTied(r, &ssingle, &tsingle, single);
+    KFSplitOrTied(r, &smulti, &tmulti, multi);
+    PetscCall(PetscInfo(r, "shared directions auto, system dofs: single-angle %" PetscInt_FMT " split, %" PetscInt_FMT " tied: %s; multi-angle %" PetscInt_FMT " split, %" PetscInt_FMT " tied: %s\n", ssingle.sysdofs, tsingle.sysdofs, single->tied ? "tied" : "split", smulti.sysdofs, tmulti.sysdofs, multi->tied ? "tied" : "split"));
+  }
   *nrows = tab.n;
   *rows  = tab.rows;
   PetscFunctionReturn(0);

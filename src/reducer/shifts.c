@@ -269,7 +269,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
   {
     const PetscBool sp = KFShiftPasses(r, single), mp = KFShiftPasses(r, multi);
 
-    base = (mp && (!sp || multi->size < single->size)) || (!sp && !mp && multi->nexp && multi->error < single->error) ? multi : single;
+    base = (mp && (!sp || KFCandidateSizeAgainst(multi, single) < KFCandidateSizeAgainst(single, multi))) || (!sp && !mp && multi->nexp && multi->error < single->error) ? multi : single;
   }
   if (!base->nexp) PetscFunctionReturn(0);
   base_passes = KFShiftPasses(r, base);
@@ -289,6 +289,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
       PetscCall(KFInterruptCheck(comm));
       /* the candidate: per base angle, one visit of its c0 blocks at zero and its points' blocks */
       cand.family = base->family;
+      cand.tied   = base->tied;
       cand.c      = c0;
       cand.kept   = -1;
       PetscCall(KFVisitsGrow(nvisit, visitsp, nbase));

@@ -794,7 +794,7 @@ static PetscErrorCode KFReducerSearchChoose_Private(KFReducer r, const KFCandida
   {
     const PetscBool sp = (PetscBool)(single.nexp && single.complete && single.error <= r->accuracy), mp = (PetscBool)(multi.nexp && multi.complete && multi.error <= r->accuracy);
 
-    if (sp && mp) r->chosen = multi.size < single.size || (multi.size == single.size && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
+    if (sp && mp) r->chosen = KFCandidateSizeAgainst(&multi, &single) < KFCandidateSizeAgainst(&single, &multi) || (KFCandidateSizeAgainst(&multi, &single) == KFCandidateSizeAgainst(&single, &multi) && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
     else if (sp || mp) r->chosen = sp ? KF_METHOD_SINGLE_ANGLE : KF_METHOD_MULTI_ANGLE;
     else r->chosen = !single.nexp || (multi.nexp && multi.error < single.error) ? KF_METHOD_MULTI_ANGLE : KF_METHOD_SINGLE_ANGLE;
   }
@@ -917,13 +917,64 @@ static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, c
   PetscFunctionReturn(0);
 }
 
+/* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed (which a
+   tied one cannot be), may have fewer system dofs. Measured; when it has no more, the split candidates replace the
+   tied ones (*nties 0: the caller compresses them again, as it would have without ties) */
+static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties)
+{
+  const KFReducerMethod tchosen = r->chosen;
+  const KFCandidate    *tied    = tchosen == KF_METHOD_MULTI_ANGLE && multi->nexp ? multi : single, *alt;
+  KFReducedModel        model;
+  PetscInt              from, to, n = 0;
+  PetscBool             kept;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducerSearchChoose_Private(r, &split[0], &split[1]));
+  alt = r->chosen == KF_METHOD_MULTI_ANGLE && split[1].nexp ? &split[1] : &split[0];
+  if (!alt->nexp || !alt->complete || alt->error > r->accuracy) {
+    r->chosen = tchosen;
+    PetscFunctionReturn(0);
+  }
+  PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_FALSE, &model));
+  PetscCall(KFReducerCompress_Private(r, neval, evals, &model, &from, &to, &kept));
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscInt        ne;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &ne, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    n = PetscMax(n, ne);
+  }
+  PetscCall(KFReducedModelDestroy(&model));
+  PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tied->sysdofs, n));
+  if (n > tied->sysdofs) {
+    r->chosen = tchosen;
+    PetscFunctionReturn(0);
+  }
+  *single = split[0];
+  *multi  = split[1];
+  if (!single->nexp) { /* as the caller's: the single-angle model of the first expansion angle, for reference */
+    *single        = *multi;
+    single->family = KF_METHOD_SINGLE_ANGLE;
+    single->nexp   = 1;
+  }
+  PetscCall(KFReducedModelDestroy(&r->single));
+  PetscCall(KFReducedModelDestroy(&r->multi_model));
+  PetscCall(KFCandidateModel_Private(r, st->visits, single, PETSC_TRUE, &r->single));
+  if (multi->nexp) PetscCall(KFCandidateModel_Private(r, st->visits, multi, PETSC_TRUE, &r->multi_model));
+  *nties = 0;
+  PetscFunctionReturn(0);
+}
+
 /* The accuracy search: every configuration visited (KFReducerSearchVisit_Private), the references or the estimator set
    up, the smallest models meeting the target found (src/reducer/search.c, shifts.c), then made and recorded */
 static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscReal Lfull[])
 {
   KFSearch       st;
   KFSystem       sys;
-  KFCandidate    single, multi;
+  KFCandidate    single, multi, split[2];
+  PetscInt       nties = 0;
   PetscInt       nrows, *ccount = NULL, *crigid = NULL;
   PetscReal     *rows, *csigma = NULL;
   PetscLogDouble t0, t1;
@@ -966,7 +1017,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   else PetscCall(KFProgress(st.comm, "searching the smallest model with relative H-inf error of the %s response <= %g at %" PetscInt_FMT " angles (%" PetscInt_FMT " of interest, %" PetscInt_FMT " midpoints)", KFAccuracyMeasures[r->accuracy_measure], (double)r->accuracy, neval, r->nconfig, neval - r->nconfig));
   PetscCall(PetscTime(&t0));
   if (r->verify) PetscCall(KFReducerSearchParent_Private(r, &st));
-  PetscCall(KFReducerSearch_Private(r, st.nc, st.visits, neval, evals, &single, &multi, &nrows, &rows));
+  PetscCall(KFReducerSearch_Private(r, st.nc, st.visits, neval, evals, &single, &multi, split, &nrows, &rows));
   PetscCall(KFReducerSearchShifts_Private(r, sys, &st.nc, &st.visits, neval, evals, &single, &multi, &nrows, &rows));
   PetscCall(KFSystemDestroy(&sys));
   PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
@@ -986,8 +1037,14 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
   if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
-  if (r->compress && r->shared_directions) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
-  if (r->compress && !r->shared_directions) { /* the chosen model, body by body, by what its response needs */
+  { /* a model of shared directions (tied) is not compressed */
+    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+
+    PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
+    if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties));
+    if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
+  }
+  if (r->compress && !nties) { /* the chosen model, body by body, by what its response needs */
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
     PetscInt        from, to;
     PetscLogDouble  c0, c1;

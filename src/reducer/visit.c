@@ -439,7 +439,9 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   KFBodyBasis       bb;
   PetscInt          nrev, nrev1, nb, maxdofs = 0;
   PetscReal        *angles;
-  PetscBool         keep, shared = (PetscBool)(r->shared_directions && !cand->nbody);
+  /* coords: the vectors' body coordinates kept (for ties, also of the split candidates under auto, so that one cached
+     body basis serves both); shared: this candidate tied */
+  PetscBool         keep, coords = (PetscBool)(r->shared_directions && !cand->nbody), shared = (PetscBool)(coords && (!r->shared_auto || cand->tied));
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
   PetscInt          tk = 0;
   PetscReal       **tC = NULL;
@@ -469,7 +471,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
       if (r->sub_bases && krylov && !cand->nbody) PetscCall(KFWholeBasis(r, visits, cand, &parent));
 
       PetscCall(KFBodyBasisCreate(r->scene, &bb));
-      if (parent || shared) PetscCall(KFBodyBasisKeepProducts(bb)); /* shared: for the vectors' coordinates */
+      if (parent || coords) PetscCall(KFBodyBasisKeepProducts(bb)); /* coords: for the vectors' coordinates */
       for (PetscInt e = 0; e < cand->nexp; e++) {
         KFVisit *v = &visits[cand->exp[e]];
         Mat      X;
@@ -497,7 +499,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
         }
         PetscCall(KFCandidateCacheCoordinates(r, visits, cc));
         PetscCall(KFCandidateSubBasis(r, visits, cc, cand, &bb, &tk, &tC));
-      } else if (shared) PetscCall(KFCandidateCoordinates(r, visits, cand, bb, &tk, &tC));
+      } else if (coords) PetscCall(KFCandidateCoordinates(r, visits, cand, bb, &tk, &tC));
       PetscCall(KFCandidateCacheSetLast(r, cc, cand, bb, tk, tC));
     }
   }
@@ -515,6 +517,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   if (shared) {
     PetscCheck(cc->tC, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "shared directions: the candidate's body basis has no coordinates of its vectors");
     PetscCall(KFCandidateTies_Private(r, *model, cc->tk, cc->tC));
+    if (r->shared_auto) PetscCall(KFReducedModelSetSetting(*model, "shared_directions", "true"));
   }
   PetscCall(PetscFree(angles)); /* bb stays in the cache */
   PetscFunctionReturn(0);

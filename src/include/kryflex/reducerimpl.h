@@ -125,6 +125,7 @@ struct _p_KFReducer {
   PetscBool       static_exact;   /* compression keeps each body's share of the static response exactly (-kf_static_exact) */
   PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
   PetscBool       shared_directions; /* candidates' bodies tied to the kept system vectors' directions (-kf_shared_directions) */
+  PetscBool       shared_auto;       /* -kf_shared_directions auto: each candidate measured split and tied (KFCandidate.tied) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */
 
@@ -198,12 +199,19 @@ typedef struct {
   PetscInt  nexp, exp[KF_MAX_EXPANSION]; /* visits whose bases make the model */
   PetscInt  nbody;      /* > 0: body b keeps its own bkept[b] clusters (its share of the target); 0: kept for all */
   PetscInt  bkept[KF_MAX_BODY_SHARE];
+  PetscBool tied;       /* with -kf_shared_directions auto: its bodies tied to its kept vectors (shared directions) */
   /* after evaluation */
   PetscInt  size, sysdofs;
   PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */
   PetscBool complete;   /* every evaluation point was measured */
 } KFCandidate;
 PETSC_INTERN PetscErrorCode KFCandidateModel_Private(KFReducer, KFVisit visits[], const KFCandidate *, PetscBool maps, KFReducedModel *);
+/* a's size to compare with b's: its body dofs less its ties, or between a split and a tied candidate (-kf_shared_directions
+   auto) its reassembled system dofs, since a tied model's own ties and the joints' overlap */
+static inline PetscInt KFCandidateSizeAgainst(const KFCandidate *a, const KFCandidate *b)
+{
+  return a->tied == b->tied ? a->size : a->sysdofs;
+}
 PETSC_INTERN PetscErrorCode KFCandidateCacheReset_Private(KFReducer);
 
 /* a configuration where models are measured: an angle of interest or a midpoint, with its reference response */
@@ -273,7 +281,8 @@ PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, P
    and still meeting the target; its reduced dofs before and after, and whether it keeps the static response (-kf_static_exact) */
 PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
-PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
+/* split[2]: the best split single-angle and multi-angle candidates (under -kf_shared_directions auto the others may be tied) */
+PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, KFCandidate split[2], PetscInt *nrows, PetscReal **rows);
 
 PETSC_EXTERN PetscLogEvent KF_EVENT_REDUCER_SETUP, KF_EVENT_REDUCER_SOLVE, KF_EVENT_REDUCER_BASIS, KF_EVENT_REDUCER_VERIFY;
 

@@ -221,3 +221,92 @@ def test_the_scene_key_sets_it(tmp_path):
     bad = acc.write_variant(galileo, str(tmp_path / "bad.yaml"), reduction={"shared_directions": "maybe"})
     with pytest.raises(kryflex.SceneError, match="shared_directions"):
         kryflex.load_scene(bad)
+
+
+# -kf_shared_directions auto: the search measures every candidate size split and tied and keeps the model with fewer
+# reassembled system dofs that meets the target (split on a tie, and split when its compressed model is no larger)
+
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+GALILEO_REDUCTION = {"moments": 10, "output_blocks": 1, "importance": "h2", "keep_threshold": 0.1,
+                     "reduction_angle": "auto"}      # the scene's own settings
+GALILEO_TARGET = 1e-4
+
+
+@pytest.fixture(scope="module")
+def auto_run(scene):
+    return kryflex.reduce(kryflex.load_scene(scene), quiet=True, shared_directions="auto")
+
+
+@pytest.fixture(scope="module")
+def galileo_angles(tmp_path_factory):
+    work = tmp_path_factory.mktemp("galileo")
+    path = acc.write_variant(GALILEO, str(work / "g.yaml"), accuracy=GALILEO_TARGET, reduction=GALILEO_REDUCTION)
+    runs = {sd: kryflex.reduce(kryflex.load_scene(path), quiet=True, shared_directions=sd)
+            for sd in (False, True, "auto")}
+    return path, acc.DenseReference(path, str(work / "dense")), runs
+
+
+def test_auto_keeps_the_tied_model_where_it_is_smaller(runs, auto_run, scene, full, tmp_path):
+    import elastic_measure as em
+    split, tied = runs[False].model, runs[True].model
+    m = auto_run.model
+    configs = [[ANGLE]]
+    n = {k: em.system_dofs(x, configs) for k, x in (("split", split), ("tied", tied), ("auto", m))}
+    print("system dofs at %g deg: %s" % (ANGLE, n))
+    assert n["tied"] < n["split"]
+    assert m.ties is not None and m.settings.get("shared_directions") is True
+    assert m.sizes == tied.sizes and m.ties.shape == tied.ties.shape and n["auto"] == n["tied"]
+    s, _, other = full
+    check_galerkin(s, m, other, OTHER)                 # the NumPy Galerkin projection on its tied subspace
+    dense = acc.DenseReference(scene, str(tmp_path / "dense"))
+    el, _ = em.errors(m, dense, configs, acc.SOLID_BAND, float(s.raw["damping"]))
+    print("auto: dense elastic error %.3g (kryflex's %.3g)" % (el, auto_run.summary.verdict.error_max))
+    assert el <= TARGET and auto_run.summary.verdict.target_met
+    assert auto_run.summary.chosen.compressed_from_dofs is None
+
+
+def test_auto_keeps_the_split_model_where_it_is_smaller(galileo_angles):
+    import elastic_measure as em
+    path, dense, runs = galileo_angles
+    raw = dense.scene.raw
+    configs = [[float(a)] for a in raw["angles"]]
+    n = {sd: em.system_dofs(r.model, configs) for sd, r in runs.items()}
+    print("Galileo, 6 angles, %g: system dofs %s" % (GALILEO_TARGET, n))
+    assert n[False] < n[True]                          # measured 23 against 25
+    m = runs["auto"].model
+    assert m.ties is None and "shared_directions" not in m.settings
+    assert m.sizes == runs[False].model.sizes and n["auto"] == n[False]
+    el, _ = em.errors(m, dense, configs, raw["band"], float(raw["damping"]))
+    print("auto: dense elastic error %.3g (kryflex's %.3g)" % (el, runs["auto"].summary.verdict.error_max))
+    assert el <= GALILEO_TARGET and runs["auto"].summary.verdict.target_met
+    from kryflex.export import from_model
+    from_model(m)                                      # a split model exports
+
+
+@pytest.mark.mpi
+def test_two_ranks_choose_the_same_model_under_auto(auto_run, scene, tmp_path):
+    path = str(tmp_path / "m.h5")
+    subprocess.run(["mpiexec", "-n", "2", sys.executable, PROBE, scene, path, str(tmp_path / "s.json"),
+                    "-kf_shared_directions", "auto"], env=ENV, check=True, timeout=600, capture_output=True)
+    two, one = kryflex.ReducedModel.load(path), auto_run.model
+    assert two.sizes == one.sizes and two.ties is not None and two.ties.shape == one.ties.shape
+    assert np.allclose(one.at([OTHER]).frequencies_hz, two.at([OTHER]).frequencies_hz, rtol=1e-8, atol=0)
+
+
+def test_a_bad_option_value_is_a_clear_error(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "kryflex", "reduce", GALILEO, "-o", str(tmp_path / "out"),
+                        "-kf_shared_directions", "sometimes"], capture_output=True, text=True, timeout=300, cwd=ROOT,
+                       env=ENV)
+    assert r.returncode == 2, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "-kf_shared_directions sometimes: give auto, true or false" in r.stderr
+    assert "Traceback" not in r.stderr + r.stdout
+
+
+def test_the_scene_key_takes_auto(galileo_angles, tmp_path):
+    path = acc.write_variant(GALILEO, str(tmp_path / "a.yaml"), accuracy=GALILEO_TARGET,
+                             reduction=dict(GALILEO_REDUCTION, shared_directions="auto"))
+    m = kryflex.reduce(kryflex.load_scene(path), quiet=True).model
+    assert m.sizes == galileo_angles[2]["auto"].model.sizes and m.ties is None
+    bad = acc.write_variant(GALILEO, str(tmp_path / "bad.yaml"), reduction={"shared_directions": "sometimes"})
+    with pytest.raises(kryflex.SceneError, match="shared_directions.*auto, true or false"):
+        kryflex.load_scene(bad)

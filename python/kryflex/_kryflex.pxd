@@ -248,6 +248,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerEigenSetCover(KFReducer, PetscReal)
     PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool, PetscInt, PetscInt, PetscReal)
     PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt)
+    PetscErrorCode KFReducerGetVerificationPlan(KFReducer, PetscBool*, PetscBool*)
     PetscErrorCode KFReducerSetFromOptions(KFReducer)
     PetscErrorCode KFReducerSetUp(KFReducer)
     PetscErrorCode KFReducerSolve(KFReducer)

@@ -154,6 +154,12 @@ class Reducer:
         collective, and cheap."""
         self.handle.setup()
 
+    def verification_plan(self):
+        """(measured, certified) as the solve will give its verdict: measured against the full order, or estimated
+        and certified by the mode count (verify.full_order auto from verify.certified_min_dofs; where the count finds
+        a mode the richest candidate lacks, the verdict is measured after all). After setup()."""
+        return self.handle.verification_plan()
+
     def reduce(self):
         """Sets up and solves (collective: every rank calls it and gets the same small dense models back); returns a
         Reduction. A second call returns the same Reduction."""

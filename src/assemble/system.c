@@ -96,6 +96,25 @@ PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
   PetscFunctionReturn(0);
 }
 
+/* The angles alone, nothing assembled: what the body-wise interface problem reads (KFSystemInterfaceExprs), for the
+   certificate's counts at every configuration, which need no assembled matrix (src/reducer/certify.c). The system
+   is unassembled until KFSystemSetAngles: anything that needs its matrices or rigid modes refuses it until then. */
+PETSC_INTERN PetscErrorCode KFSystemSetInterfaceAngles(KFSystem y, const PetscReal angles[])
+{
+  KFScene s = y->scene;
+
+  PetscFunctionBegin;
+  for (PetscInt r = 0; r < s->nrevolute; r++) {
+    PetscCheck(PetscIsNormalReal(angles[r]) || angles[r] == 0, s->comm, PETSC_ERR_ARG_WRONG, "angle %" PetscInt_FMT " is not a finite number", r);
+    y->angles[r] = angles[r];
+  }
+  y->assembled = PETSC_FALSE;
+  PetscCall(MatDestroy(&y->Phi));
+  PetscCall(MatDestroy(&y->MPhi));
+  y->user_rigid = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFSystemGetMatrices(KFSystem y, Mat *Ms, Mat *Ks, Mat *G, Mat *Ht)
 {
   PetscFunctionBegin;

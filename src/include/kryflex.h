@@ -500,6 +500,9 @@ PETSC_EXTERN PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool full_o
 /* the verdict by size (-kf_verify auto, the default): measured below min_dofs system dofs, from there the estimate
    certified by the mode count (measured where it cannot certify); min_dofs PETSC_DECIDE keeps the current (50000) */
 PETSC_EXTERN PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt min_dofs);
+/* the verdict KFReducerSolve will give, resolved from -kf_verify auto before it starts: measured against the full
+   order, or the estimate certified by the mode count (which may still fall back to measuring) */
+PETSC_EXTERN PetscErrorCode KFReducerGetVerificationPlan(KFReducer, PetscBool *measured, PetscBool *certified);
 PETSC_EXTERN PetscErrorCode KFReducerSetFromOptions(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);

@@ -201,6 +201,8 @@ PETSC_INTERN PetscErrorCode KFExprAXPY(KFExpr *, PetscReal a, const KFExpr *);
 /* how each body's interface dofs read in system dofs at the system's angles, replicated (src/assemble/body_map.c) */
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprs(KFSystem, KFExpr ***);
 PETSC_INTERN PetscErrorCode KFSystemInterfaceExprsDestroy(KFSystem, KFExpr ***);
+/* the system's angles set, its matrices not assembled (KFSystemSetAngles assembles): for the interface alone */
+PETSC_INTERN PetscErrorCode KFSystemSetInterfaceAngles(KFSystem, const PetscReal[]);
 /* node and component (0..5: ux uy uz rx ry rz; KF_COMPONENT_SCALAR for a scalar point) of body dof i */
 PETSC_INTERN PetscErrorCode KFBodyDofComponent(KFBodyData *, PetscInt dof, PetscInt *node, PetscInt *comp);
 /* the body dof of (node, comp), or -1 when the node has no such component */

@@ -24,7 +24,11 @@ PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], Petsc
 
 /* The full order's modes (rigid and flexible) below the cut at every evaluation point: count[e] and the shift
    sigma[e] it was taken at (omega^2; 1e-6 below the cut where the cut is a natural frequency there); nrigid[e] the
-   rigid-body and mechanism modes among them. sys is left at the last point's angles. */
+   rigid-body and mechanism modes among them. Body-wise, a configuration needs only its interface problem, so the
+   system is not assembled there (7 assemblies and rigid-mode sets were a fifth of the count at 57k dofs), and its
+   rigid and mechanism modes are those the visits found: their number is the scene's, 6 + revolute joints less what
+   the constraints hold, whatever the angles. sys is left at the last point's angles, body-wise unassembled (the
+   search's expansion points set their angles again, src/reducer/shifts.c). */
 PetscErrorCode KFReducerCertifyCount_Private(KFReducer r, KFSystem sys, PetscInt neval, const KFEvalPoint evals[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[])
 {
   MPI_Comm       comm = PetscObjectComm((PetscObject)r);
@@ -32,20 +36,28 @@ PetscErrorCode KFReducerCertifyCount_Private(KFReducer r, KFSystem sys, PetscInt
   KFBodyFactors  bf = NULL;
   PetscBool      bodywise;
   PetscLogDouble t0, t1;
+  PetscInt       nrig = 0;
 
   PetscFunctionBegin;
   PetscCall(PetscTime(&t0));
   PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, w * w, &bf));
   bodywise = (PetscBool)!!bf;
+  if (bodywise) PetscCall(KFSystemRigidIO(sys, &nrig, NULL, NULL)); /* the last visit's, made already */
   for (PetscInt e = 0; e < neval; e++) {
     PetscInt nnull;
 
     PetscCall(KFInterruptCheck(comm));
-    PetscCall(KFSystemSetAngles(sys, evals[e].angles));
-    PetscCall(KFSystemRigidIO(sys, &nrigid[e], NULL, NULL));
+    if (bodywise) {
+      PetscCall(KFSystemSetInterfaceAngles(sys, evals[e].angles));
+      nrigid[e] = nrig;
+    } else {
+      PetscCall(KFSystemSetAngles(sys, evals[e].angles));
+      PetscCall(KFSystemRigidIO(sys, &nrigid[e], NULL, NULL));
+    }
     sigma[e] = w * w;
     PetscCall(KFSystemShiftedInertia(sys, sigma[e], bf, &count[e], &nnull));
-    if (nnull) {
+    if (nnull) { /* the whole system factored 1e-6 below the cut: it needs the matrices */
+      if (bodywise) PetscCall(KFSystemSetAngles(sys, evals[e].angles));
       sigma[e] *= 1 - 1e-6;
       PetscCall(KFSystemShiftedInertia(sys, sigma[e], NULL, &count[e], &nnull));
     }

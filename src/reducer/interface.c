@@ -430,6 +430,28 @@ PetscErrorCode KFReducerSetVerificationAuto(KFReducer r, PetscInt min_dofs)
   PetscFunctionReturn(0);
 }
 
+/* How KFReducerSolve will give its verdict, known before it starts: *measured against the full order (-kf_verify true;
+   auto below -kf_verify_certified_min_dofs system dofs, for a target tighter than -kf_verify_certified_min_accuracy,
+   or for a basis without an accuracy search) or estimated, then *certified by the mode count (auto otherwise; the
+   count may still send the verdict to the full order: src/reducer/certify.c). Either may be NULL. */
+PetscErrorCode KFReducerGetVerificationPlan(KFReducer r, PetscBool *measured, PetscBool *certified)
+{
+  PetscBool verify = r->verify;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCheck(r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "no scene: call KFReducerSetScene() first");
+  if (r->verify_auto) {
+    PetscInt nsys;
+
+    PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
+    verify = (PetscBool)(!(r->search && r->ops->blocks) || nsys < r->verify_certified_min_dofs || r->accuracy < r->verify_certified_min_accuracy);
+  }
+  if (measured) *measured = verify;
+  if (certified) *certified = (PetscBool)(r->verify_auto && !verify);
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFReducerGetReducedModel(KFReducer r, KFReducedModel *model)
 {
   PetscFunctionBegin;

@@ -1183,13 +1183,7 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   nfull = r->build_moments;
   /* auto: measured below the size threshold or for a target tighter than the estimate is trusted to; else the
      estimate, certified (the search's only) */
-  if (r->verify_auto) {
-    PetscInt nsys;
-
-    PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, &nsys, NULL, NULL));
-    r->verify = (PetscBool)(!search || nsys < r->verify_certified_min_dofs || r->accuracy < r->verify_certified_min_accuracy);
-  }
-  r->certify = (PetscBool)(r->verify_auto && !r->verify);
+  PetscCall(KFReducerGetVerificationPlan(r, &r->verify, &r->certify));
   PetscCall(KFReducerAnnounce_Private(r));
   PetscCall(KFReducerEvalPoints_Private(r, &neval, &evals));
   PetscCall(PetscCalloc1(r->nconfig * nfull * t * a, &Lfull));

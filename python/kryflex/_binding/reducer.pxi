@@ -211,6 +211,14 @@ cdef class CReducer:
         if auto:
             check(KFReducerSetVerificationAuto(self.r, min_dofs))
 
+    def verification_plan(self):
+        """(measured, certified): whether the solve will measure its verdict against the full order, or estimate it
+        and certify the estimate by the mode count (-kf_verify auto, resolved by the scene's size and the target;
+        the count may still fall back to measuring). After setup()."""
+        cdef PetscBool measured = PETSC_FALSE, certified = PETSC_FALSE
+        check(KFReducerGetVerificationPlan(self.r, &measured, &certified))
+        return bool(measured), bool(certified)
+
     def set_from_options(self):
         check(KFReducerSetFromOptions(self.r))
 

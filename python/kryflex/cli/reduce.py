@@ -64,15 +64,6 @@ def run(argv):
     try:
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
-        if rank() == 0 and draws_figures(scene):
-            # its helper processes, where cores are free, load matplotlib while the reduction runs (report/helper.py)
-            from ..report.formatting import MAX_PAIRS_PER_FIGURE, pair_name
-            from ..report.helper import start_helpers
-            pairs = [pair_name(o, i) for o in scene.output_names for i in scene.input_names]
-            start_helpers(ranks=common.size(), prepare={
-                "band_hz": list(scene.band), "configurations": len(scene.configurations),
-                "pairs": pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []})
-
         # the model check (kryflex check): its warnings before any work, also under -quiet
         health = collective(lambda: model_check(scene))
         for f in (health[1] if health else []):
@@ -83,6 +74,17 @@ def run(argv):
         reducer = collective(lambda: common.checked_reducer(scene, quiet=True if args.quiet else None),
                              (SceneError, EXIT_INPUT, str),
                              (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
+        if rank() == 0 and reducer.verification_plan()[0]:
+            # the figures compare with the full order: their helper processes, where cores are free, load matplotlib
+            # while the reduction runs (report/helper.py). An estimated verdict (-kf_verify false, or auto's certified
+            # estimate from -kf_verify_certified_min_dofs on) draws none, and helpers started for it would only take
+            # the core the reduction's factorizations run on; where the certificate fails, the report starts its own
+            from ..report.formatting import MAX_PAIRS_PER_FIGURE, pair_name
+            from ..report.helper import start_helpers
+            pairs = [pair_name(o, i) for o in scene.output_names for i in scene.input_names]
+            start_helpers(ranks=common.size(), prepare={
+                "band_hz": list(scene.band), "configurations": len(scene.configurations),
+                "pairs": pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []})
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
 
         s = result.summary
@@ -187,17 +189,6 @@ def model_check(scene):
         return check_scene(scene, factor=False, dense_max=REDUCE_DENSE_MAX)
     except _core.Error:
         return None
-
-
-def draws_figures(scene):
-    """Whether the run will draw the report's figures: the scene verifies against the full order and -kf_verify does
-    not turn it off."""
-    from petsc4py import PETSc
-    opts = PETSc.Options()
-    given = opts.getString("kf_verify") if opts.hasName("kf_verify") else None
-    full = scene.verify["full_order"] if given is None else given
-    # auto: measured below -kf_verify_certified_min_dofs system dofs (the figures are drawn), certified above (not)
-    return full in ("auto", None) or full is True or (isinstance(full, str) and full.lower() in ("true", "1", "yes", ""))
 
 
 def append_check_section(path, findings):

@@ -82,11 +82,16 @@ def test_certified_counts_are_scipys_and_the_error_is_the_estimators(name, solid
     assert cert.performance.certificate_count_s > 0
 
 
-def test_a_mode_the_richest_candidate_lacks_falls_back_to_the_measured_verdict(solid):
+@pytest.fixture(scope="module")
+def fallback(solid):
+    """The solid counted to 20 x the band's top (the certificate fails), and its -kf_verify true run, on 1 rank."""
+    return reduce(solid, verify_certified_cover=20, **CERTIFIED), reduce(solid, verify=True)
+
+
+def test_a_mode_the_richest_candidate_lacks_falls_back_to_the_measured_verdict(solid, fallback):
     """Counted to 20 x the band's top, beyond the Krylov bases' reach: the full order has modes there that the
     richest candidate lacks, so the run measures against the full order, with -kf_verify true's error."""
-    cert = reduce(solid, verify_certified_cover=20, **CERTIFIED)
-    measured = reduce(solid, verify=True)
+    cert, measured = fallback
     v = cert.verdict
     c = v.certificate
     assert not c["certified"] and v.verdict_kind == "measured" and not v.error_estimated
@@ -136,6 +141,47 @@ def test_two_ranks_agree_with_one(solid, tmp_path):
     assert s["certificate"] == serial.verdict.certificate
     # the bases' rounding on 2 ranks moves the estimate by ~1e-9 of itself (the counts are exact integers)
     assert s["error_max"] == pytest.approx(serial.verdict.error_max, rel=1e-7)
+
+
+def test_two_ranks_fall_back_as_one_rank_does(solid, fallback, tmp_path):
+    """The failed certificate on 2 ranks (the bodies spread, one per rank): the same counts, the same measured verdict
+    and error as 1 rank and as -kf_verify true, and the measured report's figures though no helper was started ahead
+    for them (the run was planned certified)."""
+    serial, measured = fallback
+    out = tmp_path / "out"
+    r = subprocess.run(["mpiexec", "-n", "2", sys.executable, "-m", "kryflex", "reduce", solid, "-o", str(out),
+                        "-kf_verify_certified_min_dofs", "0", "-kf_verify_certified_cover", "20"],
+                       capture_output=True, text=True, timeout=900, cwd=ROOT, env=ENV)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "measured against the full order" in r.stdout and "Traceback" not in r.stdout + r.stderr
+    s = json.load(open(out / "summary.json"))
+    c = s["certificate"]
+    assert s["verdict_kind"] == "measured" and not s["error_estimated"] and not c["certified"]
+    assert c == serial.verdict.certificate
+    assert any("the certificate failed" in n for n in s["notes"])
+    # MUMPS' parallel scheduling and the bases' rounding on 2 ranks move the error by ~1e-9 of itself
+    assert s["error_max"] == pytest.approx(serial.verdict.error_max, rel=1e-7)
+    assert s["error_max"] == pytest.approx(measured.verdict.error_max, rel=1e-7)
+    assert s["chosen"]["dofs"] == serial.chosen.dofs == measured.chosen.dofs
+    assert (out / "bode_overview.png").is_file() and any(f.startswith("bode_") and f.endswith("deg.png")
+                                                           for f in os.listdir(out))
+
+
+@pytest.mark.parametrize("options, plan", [
+    (dict(verify=True), (True, False)),
+    (dict(verify=False), (False, False)),
+    (dict(verify="auto"), (True, False)),                      # Galileo: far below 50,000 system dofs
+    (CERTIFIED, (False, True)),
+    (dict(CERTIFIED, accuracy=1e-4), (True, False)),           # tighter than -kf_verify_certified_min_accuracy
+])
+def test_the_plan_is_the_verdict_the_solve_gives(options, plan):
+    """Reducer.verification_plan() (what kryflex reduce starts the report's helpers by) before the solve, against the
+    verdict the solve then gives"""
+    r = kryflex.Reducer(kryflex.load_scene(accuracy_scenes.GALILEO), quiet=True, **options)
+    r.setup()
+    assert r.verification_plan() == plan
+    kind = r.reduce().summary.verdict.verdict_kind
+    assert kind == ("measured" if plan[0] else "certified" if plan[1] else "estimated")
 
 
 @pytest.mark.parametrize("args, says", [

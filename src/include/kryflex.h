@@ -231,8 +231,8 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *P
 /* Lowest nev flexible modes of (K_S, M_S) with SLEPc (GHEP, shift-and-invert with MUMPS, small negative target,
    rigid modes as deflation space). omega2: eigenvalues; HPhi (t x nconv) and PhiG (nconv x a) column-major,
    arrays sized for nev. Either array may be NULL. */
-/* The same eigensolve returning the M-normalized modes (e x nev dense, first nconv columns filled): the basis of the
-   eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
+/* The same eigensolve returning the M-normalized modes (e x min(nev, the flexible modes' count) dense, first nconv
+   columns filled): the basis of the eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
 PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes);
 PETSC_EXTERN PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes); /* with its factor */
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */

@@ -400,6 +400,9 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
    (KFFRFErrors). KFFRFPairScales: each pair's denominator s_ij (its peak, raised to the floor), top: the largest peak. */
 PETSC_EXTERN PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 PETSC_EXTERN PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top);
+/* Which floor each pair's denominator is (t x a): 0 its own peak, 1 KF_FRF_PAIR_FLOOR x the largest pair's peak, 2
+   KF_FRF_ELASTIC_FLOOR x its own total peak */
+PETSC_EXTERN PetscErrorCode KFFRFPairFloors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscInt floor[]);
 PETSC_EXTERN PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 /* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
    below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales

@@ -200,6 +200,7 @@ cdef extern from "kryflex.h" nogil:
     # ------------------------------------------------------------ error measures (src/measure)
     PetscErrorCode KFFRFErrors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFFRFElasticErrors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
+    PetscErrorCode KFFRFPairFloors(PetscInt, PetscInt, PetscInt, const PetscReal*, const PetscReal*, const PetscReal*, const PetscReal*, PetscInt*)
     PetscErrorCode KFMomentErrors(PetscInt, PetscInt, PetscInt, PetscInt, const PetscReal*, PetscInt, const PetscReal*, PetscReal, PetscReal*, PetscReal*)
     PetscErrorCode KFRigidTolerance(PetscInt, const PetscReal*, PetscInt, PetscReal*)
     PetscErrorCode KFFrequencyGrid(PetscReal, PetscReal, PetscInt, PetscInt, const PetscReal*, PetscReal, PetscInt*, PetscReal*)

@@ -402,6 +402,10 @@ class Verdict(Record):
     certificate: dict = _value(doc="the mode count of -kf_verify auto's estimate (None: not tried): below_hz, "
                                    "certified, and per configuration (angles of interest, then midpoints) "
                                    "full_counts and rich_counts, the flexible modes below below_hz")
+    floored_pairs: dict = _value(doc="per angle of interest (None: not verified), the [output, input] pairs whose "
+                                     "error is measured against a floor, not their own peak: largest_pair (peak "
+                                     "below 1e-4 of the largest pair's), own_total (elastic peak below 1e-6 of "
+                                     "their own total peak)")
     moments_matched: int = _value()
     multi_moments_matched: int = _value()
     reference_check: ReferenceCheck = _record(ReferenceCheck)

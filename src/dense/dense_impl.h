@@ -28,8 +28,8 @@ PETSC_INTERN PetscErrorCode KFDenseEig_Private(PetscInt n, const PetscReal K[], 
 PETSC_INTERN PetscErrorCode KFDenseEigRigidWorkSize_Private(PetscInt n, PetscInt r, PetscInt *size, PetscBLASInt *lsvd, PetscBLASInt *leig);
 PETSC_INTERN PetscErrorCode KFDenseEigRigid_Private(PetscInt n, const PetscReal K[], const PetscReal M[], PetscInt r, const PetscReal Phir[], PetscReal lambda[], PetscReal Phi[], PetscReal work[], PetscBLASInt lsvd, PetscBLASInt leig);
 
-/* A (m x m, symmetric, overwritten) = W diag(lambda) W^T by cyclic Jacobi, each eigenvalue to a few eps of itself
-   where A is positive definite and nearly diagonal; lambda ascending (eig_jacobi.c) */
+/* A (m x m, symmetric, overwritten) = W diag(lambda) W^T by Cholesky and LAPACK's one-sided Jacobi SVD (gesvj), each
+   eigenvalue to a few eps of itself where A is positive definite and nearly diagonal; lambda ascending (eig_jacobi.c) */
 PETSC_INTERN PetscErrorCode KFDenseEigJacobi_Private(PetscInt m, PetscReal A[], PetscReal lambda[], PetscReal W[]);
 
 /* Tolerance of KFDenseCheckSymmetric_Private for input pencils */

@@ -1,73 +1,61 @@
-/* Eigenvalues of a symmetric positive definite matrix to high relative accuracy: two-sided cyclic Jacobi with the
-   relative stopping test |a_ij| <= eps sqrt(a_ii a_jj) (Demmel and Veselic, SIAM J. Matrix Anal. Appl. 13, 1992).
-   A Householder eigensolver (LAPACK syev) knows every eigenvalue to eps times the largest only; on a nearly
-   diagonal matrix whose diagonal spans many orders (a stiff structure's modal stiffness) Jacobi keeps each small
-   eigenvalue to a few eps of itself. */
+/* Eigenvalues of a symmetric positive definite matrix to high relative accuracy, the LAPACK way of Demmel and Veselic
+   (SIAM J. Matrix Anal. Appl. 13, 1992): Cholesky A = L L^T, then the one-sided Jacobi SVD of G = L^T (dgesvj),
+   A = G^T G = V diag(sigma^2) V^T. G's columns have the norms sqrt(a_ii), so G = B D^1/2 with B^T B = D^-1/2 A D^-1/2,
+   and one-sided Jacobi keeps each singular value to eps kappa(B) of itself. A Householder eigensolver (LAPACK syev)
+   knows every eigenvalue to eps times the largest only; on a nearly diagonal matrix whose diagonal spans many orders
+   (a stiff structure's modal stiffness) this keeps each small eigenvalue to a few eps of itself. */
 #include "dense_impl.h"
+#include <petscblaslapack.h> /* after the PETSc headers it relies on */
+
+/* one-sided Jacobi SVD; not among PETSc's LAPACK declarations (Fortran's hidden string lengths omitted, as PETSc's) */
+#if defined(PETSC_BLASLAPACK_UNDERSCORE)
+  #define KFLAPACKgesvj_ dgesvj_
+#else
+  #define KFLAPACKgesvj_ dgesvj
+#endif
+extern void KFLAPACKgesvj_(const char *, const char *, const char *, const PetscBLASInt *, const PetscBLASInt *, PetscReal *, const PetscBLASInt *, PetscReal *, const PetscBLASInt *, PetscReal *, const PetscBLASInt *, PetscReal *, const PetscBLASInt *, PetscBLASInt *);
 
 /* A (m x m, column-major, symmetric, overwritten) = W diag(lambda) W^T; lambda ascending, W's columns with it. Each
-   eigenvalue to a few eps of itself when A is positive definite and D^-1/2 A D^-1/2 (D its diagonal) well conditioned */
+   eigenvalue to a few eps of itself when A is positive definite and D^-1/2 A D^-1/2 (D its diagonal) well
+   conditioned. An A that is not positive definite (a mechanism the rigid modes missed) is solved by syev, without
+   the relative accuracy. */
 PetscErrorCode KFDenseEigJacobi_Private(PetscInt m, PetscReal A[], PetscReal lambda[], PetscReal W[])
 {
-  PetscInt  sweep, rotations = 1;
-  PetscReal tol = PETSC_MACHINE_EPSILON;
+  PetscBLASInt bm, lwork, info;
+  PetscReal   *work, *sva, scale;
 
   PetscFunctionBegin;
-  PetscCall(PetscArrayzero(W, m * m));
-  for (PetscInt i = 0; i < m; i++) W[i + i * m] = 1;
-  for (sweep = 0; sweep < 30 && rotations; sweep++) {
-    rotations = 0;
-    for (PetscInt p = 0; p < m - 1; p++)
-      for (PetscInt q = p + 1; q < m; q++) {
-        PetscReal app = A[p + p * m], aqq = A[q + q * m], apq = A[p + q * m], zeta, t, c, s;
-
-        PetscReal gap = PetscAbsReal(aqq - app), low = PetscMin(PetscAbsReal(app), PetscAbsReal(aqq));
-
-        /* negligible relative to both (|a_ii|: an indefinite matrix, a mechanism the rigid modes missed, converges
-           too, without the relative accuracy), or against their gap: the rotation below 1e-12 rad and the softer
-           eigenvalue moved by less than eps of itself (a_pq^2 / gap). The computed entries of a nearly diagonal
-           matrix are rounding of that size; rotating them all costs a second per sweep at 600 dofs */
-        if (PetscAbsReal(apq) <= tol * PetscSqrtReal(PetscAbsReal(app * aqq))) continue;
-        if (PetscAbsReal(apq) <= 1e-12 * gap && apq * apq <= tol * gap * low) continue;
-        rotations++;
-        /* the rotation that zeroes a_pq (Rutishauser's formulas: t the smaller root of t^2 + 2 zeta t - 1) */
-        zeta = (aqq - app) / (2 * apq);
-        t    = (zeta >= 0 ? 1 : -1) / (PetscAbsReal(zeta) + PetscSqrtReal(1 + zeta * zeta));
-        c    = 1 / PetscSqrtReal(1 + t * t);
-        s    = c * t;
-        for (PetscInt k = 0; k < m; k++) { /* columns p, q */
-          PetscReal akp = A[k + p * m], akq = A[k + q * m];
-          A[k + p * m] = c * akp - s * akq;
-          A[k + q * m] = s * akp + c * akq;
-        }
-        for (PetscInt k = 0; k < m; k++) { /* rows p, q */
-          PetscReal apk = A[p + k * m], aqk = A[q + k * m];
-          A[p + k * m] = c * apk - s * aqk;
-          A[q + k * m] = s * apk + c * aqk;
-        }
-        A[p + p * m] = app - t * apq; /* the exact updates of the pivot block */
-        A[q + q * m] = aqq + t * apq;
-        A[p + q * m] = A[q + p * m] = 0;
-        for (PetscInt k = 0; k < m; k++) {
-          PetscReal wkp = W[k + p * m], wkq = W[k + q * m];
-          W[k + p * m] = c * wkp - s * wkq;
-          W[k + q * m] = s * wkp + c * wkq;
-        }
-      }
+  if (m <= 0) PetscFunctionReturn(0);
+  PetscCall(PetscBLASIntCast(m, &bm));
+  PetscCall(PetscArraycpy(W, A, m * m)); /* for syev, should A not be positive definite */
+  lwork = PetscMax(6, 2 * bm);
+  lwork = PetscMax(lwork, 34 * bm); /* syev's, blocked */
+  PetscCall(PetscMalloc2(lwork, &work, m, &sva));
+  PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bm, A, &bm, &info));
+  if (info) {
+    PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bm, W, &bm, lambda, work, &lwork, &info));
+    PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_CONV_FAILED, "KFDenseEigJacobi: the symmetric eigensolver did not converge on the %" PetscInt_FMT " x %" PetscInt_FMT " matrix, which is not positive definite (LAPACK syev info %d)", m, m, (int)info);
+    PetscCall(PetscFree2(work, sva));
+    PetscFunctionReturn(0);
   }
-  PetscCheck(!rotations, PETSC_COMM_SELF, PETSC_ERR_CONV_FAILED, "KFDenseEigJacobi: %" PetscInt_FMT " rotations still needed after %" PetscInt_FMT " sweeps on the %" PetscInt_FMT " x %" PetscInt_FMT " matrix", rotations, sweep, m, m);
-  for (PetscInt i = 0; i < m; i++) lambda[i] = A[i + i * m];
-  for (PetscInt i = 1; i < m; i++) { /* ascending (insertion: the order is nearly right already) */
-    for (PetscInt j = i; j > 0 && lambda[j - 1] > lambda[j]; j--) {
-      PetscReal l = lambda[j];
-      lambda[j]     = lambda[j - 1];
-      lambda[j - 1] = l;
-      for (PetscInt k = 0; k < m; k++) {
-        PetscReal w      = W[k + j * m];
-        W[k + j * m]       = W[k + (j - 1) * m];
-        W[k + (j - 1) * m] = w;
-      }
+  for (PetscInt j = 0; j < m; j++) /* G = L^T, upper triangular */
+    for (PetscInt i = j + 1; i < m; i++) {
+      A[j + i * m] = A[i + j * m];
+      A[i + j * m] = 0;
     }
+  PetscCallBLAS("LAPACKgesvj", KFLAPACKgesvj_("U", "N", "V", &bm, &bm, A, &bm, sva, &bm, W, &bm, work, &lwork, &info));
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_CONV_FAILED, "KFDenseEigJacobi: the one-sided Jacobi SVD did not converge on the %" PetscInt_FMT " x %" PetscInt_FMT " Cholesky factor (LAPACK gesvj info %d)", m, m, (int)info);
+  scale = work[0]; /* the singular values are scale sva, descending */
+  for (PetscInt i = 0; i < m; i++) {
+    PetscReal s = scale * sva[m - 1 - i];
+    lambda[i] = s * s;
   }
+  for (PetscInt j = 0; j < m / 2; j++) /* ascending: W's columns reversed with them */
+    for (PetscInt k = 0; k < m; k++) {
+      PetscReal w = W[k + j * m];
+      W[k + j * m]           = W[k + (m - 1 - j) * m];
+      W[k + (m - 1 - j) * m] = w;
+    }
+  PetscCall(PetscFree2(work, sva));
   PetscFunctionReturn(0);
 }

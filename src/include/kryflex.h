@@ -231,8 +231,8 @@ PETSC_EXTERN PetscErrorCode KFBodyBasisGetMap(KFBodyBasis, PetscInt body, Mat *P
 /* Lowest nev flexible modes of (K_S, M_S) with SLEPc (GHEP, shift-and-invert with MUMPS, small negative target,
    rigid modes as deflation space). omega2: eigenvalues; HPhi (t x nconv) and PhiG (nconv x a) column-major,
    arrays sized for nev. Either array may be NULL. */
-/* The same eigensolve returning the M-normalized modes (e x nev dense, first nconv columns filled): the basis of the
-   eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
+/* The same eigensolve returning the M-normalized modes (e x min(nev, the flexible modes' count) dense, first nconv
+   columns filled): the basis of the eigenvector baseline (EP&A / COMPARE style) that kryflex's Krylov basis replaces. */
 PETSC_EXTERN PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes);
 PETSC_EXTERN PetscErrorCode KFFlexSolverEigenModes(KFFlexSolver, PetscInt nev, PetscInt *nconv, PetscReal omega2[], Mat *modes); /* with its factor */
 /* Rigid modes' participation: HPhi (t x r), PhiG (r x a); arrays sized for r = 6 + revolute joints (or the supplied count). */
@@ -400,6 +400,9 @@ PETSC_EXTERN PetscErrorCode KFSceneGetIOName(KFScene, PetscBool input, PetscInt 
    (KFFRFErrors). KFFRFPairScales: each pair's denominator s_ij (its peak, raised to the floor), top: the largest peak. */
 PETSC_EXTERN PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 PETSC_EXTERN PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top);
+/* Which floor each pair's denominator is (t x a): 0 its own peak, 1 KF_FRF_PAIR_FLOOR x the largest pair's peak, 2
+   KF_FRF_ELASTIC_FLOOR x its own total peak */
+PETSC_EXTERN PetscErrorCode KFFRFPairFloors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscInt floor[]);
 PETSC_EXTERN PetscErrorCode KFFRFErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise);
 /* Normwise moment errors ||L_full^k - L_red^k||_F / ||L_full^k||_F per k (NaN where the full moment is negligible,
    below negligible * scale[k]); ratios L_full / L_red entrywise (NaN where negligible or L_red = 0), with the scales

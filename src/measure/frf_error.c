@@ -24,7 +24,7 @@ static inline PetscReal Part(const PetscReal Tfre[], const PetscReal Tfim[], con
   3e-10 of the total, 1e-2 of the elastic peak). scale: t x a; top: the largest pair's peak, before the rounding
   floor (may be NULL).
 */
-PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top)
+static PetscErrorCode KFFRFPairScalesFloors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top, PetscInt floor[])
 {
   const PetscInt m = t * a;
   PetscReal      big = 0;
@@ -37,6 +37,7 @@ PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscR
   for (PetscInt f = 0; f < nw; f++)
     for (PetscInt k = 0; k < m; k++) scale[k] = MaxNaN(scale[k], Part(Tfre, Tfim, Tgre, Tgim, f * m + k));
   for (PetscInt k = 0; k < m; k++) big = MaxNaN(big, scale[k]);
+  for (PetscInt k = 0; k < m && floor; k++) floor[k] = scale[k] < KF_FRF_PAIR_FLOOR * big ? 1 : 0;
   for (PetscInt k = 0; k < m; k++) scale[k] = MaxNaN(MaxNaN(scale[k], KF_FRF_PAIR_FLOOR * big), 1e-300);
   if (top) *top = big;
   if (Tgre) { /* the total peak of each pair: the rounding floor of its elastic peak */
@@ -45,9 +46,32 @@ PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscR
     PetscCall(PetscCalloc1(PetscMax(m, 1), &tot));
     for (PetscInt f = 0; f < nw; f++)
       for (PetscInt k = 0; k < m; k++) tot[k] = MaxNaN(tot[k], Part(Tfre, Tfim, NULL, NULL, f * m + k));
+    for (PetscInt k = 0; k < m && floor; k++)
+      if (scale[k] < KF_FRF_ELASTIC_FLOOR * tot[k]) floor[k] = 2;
     for (PetscInt k = 0; k < m; k++) scale[k] = MaxNaN(scale[k], KF_FRF_ELASTIC_FLOOR * tot[k]);
     PetscCall(PetscFree(tot));
   }
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFRFPairScales(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal scale[], PetscReal *top)
+{
+  PetscFunctionBegin;
+  PetscCall(KFFRFPairScalesFloors(nw, t, a, Tfre, Tfim, Tgre, Tgim, scale, top, NULL));
+  PetscFunctionReturn(0);
+}
+
+/* KFFRFPairFloors - which floor, if any, is each pair's denominator (KFFRFPairScales): 0 its own peak, 1
+   KF_FRF_PAIR_FLOOR times the largest pair's peak (its peak negligible against that one's), 2 KF_FRF_ELASTIC_FLOOR
+   times its own total peak (its elastic peak within the rigid part's rounding). floor: t x a */
+PetscErrorCode KFFRFPairFloors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscInt floor[])
+{
+  PetscReal *scale;
+
+  PetscFunctionBegin;
+  PetscCall(PetscMalloc1(PetscMax(t * a, 1), &scale));
+  PetscCall(KFFRFPairScalesFloors(nw, t, a, Tfre, Tfim, Tgre, Tgim, scale, NULL, floor));
+  PetscCall(PetscFree(scale));
   PetscFunctionReturn(0);
 }
 

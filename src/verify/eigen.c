@@ -144,8 +144,8 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem sys, PetscReal D[])
    computed modes X span the rigid modes' M-complement exactly (to rounding), so the Rayleigh-Ritz pencil
    (X^T K X, X^T M X) on them has the flexible eigenvalues exactly: X is M-orthonormalized again, K X formed in
    double-double, X^T K X taken from its lower triangle (x_i^T (K x_j), K on the softer mode: each entry to eps of
-   the softer mode's stiffness) and solved by Jacobi, which keeps each eigenvalue of that nearly diagonal matrix to a
-   few eps of itself. lam, V: KFDenseEigRigid's (n x n, the r rigid modes first), the flexible ones replaced. */
+   the softer mode's stiffness) and solved by Cholesky and one-sided Jacobi (LAPACK gesvj, KFDenseEigJacobi_Private),
+   which keeps each eigenvalue of that nearly diagonal matrix to a few eps of itself. lam, V: KFDenseEigRigid's (n x n, the r rigid modes first), the flexible ones replaced. */
 static PetscErrorCode KFSystemEigenRefine(KFSystem sys, const PetscReal M[], PetscInt r, PetscReal lam[], PetscReal V[])
 {
   KFScene      s = sys->scene;

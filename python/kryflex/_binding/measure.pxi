@@ -42,6 +42,37 @@ def frf_errors(Tf, Tr, PetscReal floor_db=-60.0, rigid=None):
     return float(hinf), float(pointwise)
 
 
+FLOOR_KINDS = (None, "largest_pair", "own_total")
+
+
+def frf_pair_floors(Tf, rigid=None):
+    """Which floor each input/output pair's denominator in frf_errors is (KFFRFPairFloors), (outputs, inputs) of
+    FLOOR_KINDS: None its own peak, "largest_pair" 1e-4 x the largest pair's peak (its own negligible against it),
+    "own_total" 1e-6 x its own total peak (the elastic response within the rigid part's rounding; elastic only).
+    Tf, rigid: complex (frequencies, outputs, inputs); rigid None: the total response."""
+    full = np.asarray(Tf)
+    if full.ndim != 3 or full.shape[0] < 1:
+        raise ValueError("the full response must have shape (frequencies >= 1, outputs, inputs), got %s" % (full.shape,))
+    nw, t, a = full.shape
+    cdef cnp.ndarray fre = blocks_ta(full.real, "the full response")
+    cdef cnp.ndarray fim = blocks_ta(np.imag(full), "the full response")
+    cdef cnp.ndarray gre, gim
+    cdef cnp.ndarray fl = np.zeros(max(t * a, 1), dtype=INT_DTYPE)
+    if rigid is None:
+        check(KFFRFPairFloors(<PetscInt>nw, <PetscInt>t, <PetscInt>a, real_ptr(fre), real_ptr(fim), NULL, NULL,
+                              int_ptr(fl)))
+    else:
+        g = np.asarray(rigid)
+        if g.shape != full.shape:
+            raise ValueError("the rigid part must have the full response's shape %s, got %s" % (full.shape, g.shape))
+        gre = blocks_ta(g.real, "the rigid part")
+        gim = blocks_ta(np.imag(g), "the rigid part")
+        check(KFFRFPairFloors(<PetscInt>nw, <PetscInt>t, <PetscInt>a, real_ptr(fre), real_ptr(fim), real_ptr(gre),
+                              real_ptr(gim), int_ptr(fl)))
+    codes = fl[:t * a].reshape(a, t).T      # t x a column-major
+    return [[FLOOR_KINDS[int(codes[i, j])] for j in range(a)] for i in range(t)]
+
+
 def moment_errors(Lall, PetscInt config, Lred, PetscReal negligible=1e-8):
     """(errors (k), ratios (k, outputs, inputs)) of the reduced moments Lred against the full ones of configuration
     config among Lall (configurations, k, outputs, inputs) (KFMomentErrors): normwise relative errors and entrywise

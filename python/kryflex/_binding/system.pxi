@@ -78,7 +78,8 @@ cdef class CSystem:
         return w2[:nconv].copy(), HPhi[:, :nconv].copy(), PhiG[:nconv, :].copy()
 
     def eigen_modes(self, PetscInt nev):
-        """Lowest nev flexible modes: (omega^2, modes as a dense e x nconv petsc4py Mat)."""
+        """Lowest nev flexible modes: (omega^2, modes as a dense e x nconv petsc4py Mat). Fewer than nev (nconv, the
+        length of omega^2) when the system has fewer flexible modes than nev, or fewer converged: what exists."""
         cdef PetscInt nconv = 0
         cdef PetscMat P
         if nev < 1:
@@ -86,8 +87,10 @@ cdef class CSystem:
         cdef cnp.ndarray w2 = np.zeros(nev)
         check(KFSystemEigenModes(self.y, nev, &nconv, real_ptr(w2), &P))
         modes = wrap_mat(P, False)
-        if nconv < nev:
-            modes = combine(modes, np.eye(nev)[:, :nconv])
+        # the C side sizes the modes for min(nev, the flexible modes' count), its first nconv columns filled
+        p = modes.getSize()[1]
+        if nconv < p:
+            modes = combine(modes, np.eye(p)[:, :nconv])
         return w2[:nconv].copy(), modes
 
     def count_modes_below(self, freq_hz):

@@ -121,6 +121,23 @@ def _certified_text(verdict):
             "the count does not bound the estimate's own error." % (n, cert.get("below_hz") or 0))
 
 
+def _floored_text(c, floored):
+    """The pairs measured against a floor instead of their own peak (summary floored_pairs), per angle of interest;
+    empty when none was."""
+    what = {"largest_pair": "below 1e-4 of the largest pair's peak, measured against 1e-4 x that peak",
+            "own_total": "elastic peak below 1e-6 of their own total peak (the rigid part's rounding), measured "
+                         "against 1e-6 x the total peak"}
+    parts = []
+    for label in c.labels:
+        block = (floored or {}).get(label) or {}
+        for kind, text in what.items():
+            pairs = block.get(kind) or []
+            if pairs:
+                parts.append(f"{_row_name(c, label)}: " + ", ".join(f"{o}/{i}" for o, i in pairs) + f" ({text})")
+    return ("Pairs (output/input) whose error is measured against a floor, their own peak negligible: "
+            + "; ".join(parts) + ".") if parts else ""
+
+
 def _section_accuracy(c):
     s, verdict = c.summary, c.summary.verdict
     accuracy = s.accuracy
@@ -152,6 +169,9 @@ def _section_accuracy(c):
     lines += [f"Table 7. The {c.model_name}'s {_error_text(s)} against the accuracy target, "
               + ("of the structure." if c.no_joint(c.label_g) else "at the angles of interest and the midpoints between them."), "",
               table(["configuration", "where", measure, "target", "result"], rows, "llrrl"), ""]
+    floored = _floored_text(c, verdict.floored_pairs)
+    if floored:
+        lines += [floored, ""]
     check = verdict.reference_check
     if check is not None and check.error is not None:
         if check.iterative_points:   # src/verify/refined_check.c

@@ -12,6 +12,8 @@ record (an older C library, the eigen basis, verification off) are left out or N
 """
 import numpy as np
 
+from .. import _core
+
 # the reducer's stage timings, as the report names them, in the order stages run ("krylov" / "eigen basis": the
 # basis of the reducer's type)
 TIMINGS = [("time_assembly", "assembly"), ("time_factorization", "factorization"), ("time_basis", None),
@@ -183,6 +185,23 @@ def accuracy_measure(settings):
     return measure if measure in ERROR_DEFINITIONS else "total"
 
 
+def _floored_pairs(reducer, scene, labels, has, measure):
+    """Per angle of interest, the pairs whose error is measured against a floor instead of their own peak, from the
+    verification's full response on its grid (KFFRFPairFloors, the floors of the error measure): "largest_pair",
+    [output, input] names of the pairs whose peak is below 1e-4 of the largest pair's; "own_total", those whose
+    elastic peak is below 1e-6 of their own total peak (elastic measure only). None where nothing was verified."""
+    out = {}
+    for c, lab in enumerate(labels):
+        if "frf_full_re" not in has[c]:
+            out[lab] = None
+            continue
+        rigid = reducer.full_rigid(c) if measure == "elastic" else None
+        kinds = _core.frf_pair_floors(reducer.frf(c, "full"), rigid)
+        out[lab] = {kind: [[scene.output_names[i], scene.input_names[j]] for i, row in enumerate(kinds)
+                           for j, k in enumerate(row) if k == kind] for kind in ("largest_pair", "own_total")}
+    return out
+
+
 def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     """The accuracy part of the summary: the verdict of the chosen model (target_met, error_max, where, measured or
     estimated), its errors at the angles of interest and at the midpoints, the search table and the Hankel bound."""
@@ -229,6 +248,7 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     for c, lab in enumerate(labels):
         errors[lab] = _optional_scalar(reducer, c, prefix + "frf_error", has[c])
         pointwise[lab] = _optional_scalar(reducer, c, prefix + "frf_pointwise_error", has[c])
+    out["floored_pairs"] = _floored_pairs(reducer, scene, labels, has, measure)
     midpoints = []
     mid_angles = _optional(reducer, -1, "midpoint_angles", whole)
     mid_errors = _optional(reducer, -1, "midpoint_frf_error", whole)

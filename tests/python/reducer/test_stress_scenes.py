@@ -169,3 +169,44 @@ def test_two_ranks_agree_with_one(scenes, variant, tmp_path):
         assert max(res[1]["error"], res[2]["error"]) <= 0.1 * 1e-3
     else:
         np.testing.assert_allclose(res[2]["error"], res[1]["error"], rtol=AGREE_RTOL)
+
+
+def numpy_floors(frf, measure, outputs, inputs):
+    """The pairs of one configuration the error measure floors, recomputed with NumPy from the summary's responses:
+    largest_pair, the measured peak below 1e-4 of the largest pair's; own_total, the elastic peak (so raised) still
+    below 1e-6 of the pair's own total peak; as [output, input] names."""
+    full = np.array(frf["full_re"]) + 1j * np.array(frf["full_im"])
+    rigid = np.array(frf["full_rigid_re"]) + 1j * np.array(frf["full_rigid_im"]) if measure == "elastic" else 0
+    peak = np.abs(full - rigid).max(axis=0)
+    largest = peak < 1e-4 * peak.max()
+    own = np.maximum(peak, 1e-4 * peak.max()) < 1e-6 * np.abs(full).max(axis=0) if measure == "elastic" \
+        else np.zeros_like(largest)
+    names = lambda mask: [[outputs[i], inputs[j]] for i, j in zip(*np.nonzero(mask))]
+    return {"largest_pair": names(largest & ~own), "own_total": names(own)}
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("variant, kind", [("mimo-8x8", "largest_pair"), ("light-mass", "own_total")])
+def test_floored_pairs_are_those_numpy_finds(scenes, variant, kind, ranks, tmp_path):
+    """summary.json's floored_pairs per angle of interest against NumPy's floors of the responses the summary holds:
+    mimo-8x8 has pairs whose elastic peak is below 1e-4 of the largest pair's, light-mass an elastic response 5e-8 of
+    its total (below 1e-6 of its own total peak); the report names them."""
+    import json
+    cmd = [os.path.join(ROOT, "build", "kryflex"), "reduce", scenes[variant], "-o", str(tmp_path / "out"), "-quiet"]
+    if ranks > 1:
+        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+    assert run.returncode == 0, run.stdout[-1500:] + run.stderr[-1500:]
+    with open(tmp_path / "out" / "summary.json", encoding="utf-8") as f:
+        data = json.load(f)
+    floored = data["floored_pairs"]
+    assert sorted(floored) == sorted(data["frf"])
+    for label, frf in data["frf"].items():
+        mine = numpy_floors(frf, data["accuracy_measure"], data["outputs"], data["inputs"])
+        assert floored[label] == mine, (label, floored[label], mine)
+        assert mine[kind], (label, mine)
+    report = (tmp_path / "out" / "report.md").read_text(encoding="utf-8")
+    assert "measured against a floor" in report

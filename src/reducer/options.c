@@ -177,7 +177,7 @@ PetscErrorCode KFReducerSetFromOptions(KFReducer r)
       if (flg) {
         PetscCall(KFStringToAutoBool(text, &r->shared_auto, &r->shared_directions, &ok));
         PetscCheck(ok, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "-kf_shared_directions %s: give auto, true or false", text);
-        if (r->shared_auto) r->shared_directions = PETSC_TRUE; /* the candidates' coordinates are kept for their ties */
+        if (r->shared_auto) r->shared_directions = PETSC_FALSE; /* auto ties candidate by candidate (KFCandidate.tied) */
       }
     }
     PetscCall(KFOptionsSettingBool(PetscOptionsObject, "-kf_static_exact", r->static_exact, &r->static_exact, NULL));

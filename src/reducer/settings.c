@@ -83,7 +83,7 @@ PetscErrorCode KFReducerRecordSettings_Private(KFReducer r, KFReducedModel m, KF
     PetscCall(KFSetReal(m, "max_frequency_hz", fmax));
   }
   PetscCall(KFReducedModelSetSetting(m, "static_correction", r->static_correction ? "true" : "false"));
-  if (r->shared_directions && !r->shared_auto) PetscCall(KFReducedModelSetSetting(m, "shared_directions", "true")); /* auto: set on the tied models (visit.c) */
+  if (r->shared_directions) PetscCall(KFReducedModelSetSetting(m, "shared_directions", "true")); /* auto: set on the tied models (visit.c) */
   PetscCall(KFSetReal(m, "shift", r->shift));
   if (r->save_maps == PETSC_DECIDE) PetscCall(KFSetString(m, "save_maps", "auto"));
   else PetscCall(KFReducedModelSetSetting(m, "save_maps", r->save_maps ? "true" : "false"));

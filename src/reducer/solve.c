@@ -1041,7 +1041,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
 
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
-    if (r->shared_directions && !r->shared_auto) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
+    if (r->shared_directions) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
     if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties));
     if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
   }

@@ -377,7 +377,7 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
   PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
   *tk = 0;
   *tC = NULL;
-  if (r->shared_directions && !cand->nbody) { /* the same columns on every body: their coordinates in the sub-basis */
+  if ((r->shared_directions || r->shared_auto) && !cand->nbody) { /* the same columns on every body: their coordinates in the sub-basis */
     *tk = mb[0];
     PetscCall(PetscMalloc1(nb, tC));
     for (PetscInt b = 0; b < nb; b++) {
@@ -441,7 +441,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   PetscReal        *angles;
   /* coords: the vectors' body coordinates kept (for ties, also of the split candidates under auto, so that one cached
      body basis serves both); shared: this candidate tied */
-  PetscBool         keep, coords = (PetscBool)(r->shared_directions && !cand->nbody), shared = (PetscBool)(coords && (!r->shared_auto || cand->tied));
+  PetscBool         keep, coords = (PetscBool)((r->shared_directions || r->shared_auto) && !cand->nbody), shared = (PetscBool)(coords && (r->shared_directions || cand->tied));
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
   PetscInt          tk = 0;
   PetscReal       **tC = NULL;

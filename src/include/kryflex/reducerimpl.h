@@ -124,7 +124,7 @@ struct _p_KFReducer {
   PetscBool       compress;       /* the chosen model compressed body by body by its response (-kf_compress) */
   PetscBool       static_exact;   /* compression keeps each body's share of the static response exactly (-kf_static_exact) */
   PetscBool       shift_family_only; /* the best model with expansion points chosen even when not smaller (-kf_shift_family_only) */
-  PetscBool       shared_directions; /* candidates' bodies tied to the kept system vectors' directions (-kf_shared_directions) */
+  PetscBool       shared_directions; /* every candidate's bodies tied to the kept system vectors' directions (-kf_shared_directions true) */
   PetscBool       shared_auto;       /* -kf_shared_directions auto: each candidate measured split and tied (KFCandidate.tied) */
   KFDamping       damping;        /* what the frequency responses use; zeta above: its equivalent ratio over the band
                                      (KFDampingEffectiveRatio) for the grid and the mode importance */

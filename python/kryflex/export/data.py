@@ -5,6 +5,7 @@ import dataclasses
 import numpy as np
 
 from .bodies import ExportError, reduced_body
+from .ties import coordinates, export_ties
 
 
 @dataclasses.dataclass(eq=False)
@@ -24,6 +25,14 @@ class MultibodyExport:
     damping: float
     max_frequency_hz: float = 0.0       # the model's trimming limit (0: none), docs/guide/trimming.md
     systems: list = dataclasses.field(default_factory=list)   # fixed-angle systems (export/systems.py)
+    # a model of shared directions: its coordinate ties on the stacked exported coordinates (export/ties.py: the
+    # floating bodies' flexible ones, a body without a floating frame its reduced ones), T q = 0; None without ties
+    ties: np.ndarray = None
+
+    @property
+    def coordinate_sizes(self):
+        """Per body the number of its exported coordinates the ties act on (export/ties.py)."""
+        return [coordinates(b) for b in self.bodies]
 
     @property
     def floating(self):
@@ -45,15 +54,13 @@ def from_model(model, configurations_deg=None):
     """The MultibodyExport of a kryflex ReducedModel: each body a floating-frame body when it has its 6 rigid motions,
     else as reduced (FloatingBody.floating False); a trimmed model adds its trimmed systems at configurations_deg
     (default: its reduction angles), and a model without joints whose bodies do not all float adds its reassembled
-    system (no angle), which Exudyn takes as one ObjectGenericODE2."""
-    ties = getattr(model, "ties", None)
-    if ties is not None:    # the bodies are not free: their coordinates obey the ties besides the joints
-        raise ExportError("model of scene '%s': its bodies' coordinates are bound by %d coordinate ties (shared "
-                          "directions); a body-by-body export would drop them, and its bodies would have more freedom "
-                          "than the model: reduce again with -kf_shared_directions false (scene key "
-                          "reduction.shared_directions: false) to export it" % (model.scene_name, ties.shape[0]))
+    system (no angle), which Exudyn takes as one ObjectGenericODE2. A model of shared directions carries its
+    coordinate ties (export/ties.py), ExportError where one reaches a body's rigid motions."""
     bodies = [reduced_body(name, ifs, **arrays)
               for name, ifs, arrays in zip(model.body_names, model.interfaces, model.bodies)]
+    # a model of shared directions: its ties, on the flexible coordinates (export/ties.py)
+    D = getattr(model, "ties", None)
+    ties = None if D is None else export_ties(D, bodies, model.scene_name)
     joints = []
     for j in model.joints:
         joints.append(dict(name=j["name"], type=j["type"], parent=int(j["parent"]), child=int(j["child"]),
@@ -71,4 +78,4 @@ def from_model(model, configurations_deg=None):
         systems = trimmed_systems(model, [[]])
     return MultibodyExport(scene=model.scene_name, bodies=bodies, joints=joints, inputs=list(model.input_names),
                            outputs=list(model.output_names), damping=float(model.settings.get("damping", 0.0)),
-                           max_frequency_hz=limit, systems=systems)
+                           max_frequency_hz=limit, systems=systems, ties=ties)

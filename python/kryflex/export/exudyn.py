@@ -218,9 +218,56 @@ def build_mbs(source, angles_deg, SC=None, mbs=None, assemble=True, arm=None, mo
         axes = [1, 1, 1, 1, 1, 0] if j["type"] == "revolute" else [1] * 6
         handles["joints"][j["name"]] = mbs.AddObject(eii.ObjectJointGeneric(
             name=j["name"], markerNumbers=ends, constrainedAxes=axes, visualization=eii.VObjectJointGeneric(show=False)))
+    handles["ties"] = _add_ties(eii, mbs, data, handles)
     if assemble:
         mbs.Assemble()
     return SC, mbs, handles
+
+
+def _add_ties(eii, mbs, data, handles):
+    """A model of shared directions: its coordinate ties T q = 0 on the bodies' flexible coordinates (export/ties.py)
+    as linear coordinate constraints, ObjectConnectorCoordinateVector (X_m1 q_m1 - X_m0 q_m0 = 0, Exudyn's sign):
+    one connector per pair of bodies the rows couple, between the MarkerNodeCoordinates of their modal nodes; one per
+    body for rows on its own coordinates (marker 0 there: the body's frame node, with no scaling). Rows that couple
+    three or more bodies act on the coordinates of an ObjectGenericODE2 over those bodies' modal nodes, without mass
+    or stiffness: it only gathers their coordinates for a MarkerObjectODE2Coordinates. Returns the connectors."""
+    if data.ties is None:
+        return []
+    from .ties import split_ties
+    sizes = data.coordinate_sizes
+    off = np.concatenate([[0], np.cumsum(sizes)])
+    names = [b.name for b in data.bodies]
+    nodes = [handles["bodies"][b]["modal_node"] for b in names]
+    groups, rest = split_ties(data.ties, sizes)
+    if rest is not None:
+        groups.append((tuple(b for b in range(len(sizes)) if sizes[b] and np.any(rest[:, off[b]:off[b + 1]])), rest))
+    markers, out = {}, []
+
+    def marker(key, item):
+        if key not in markers:
+            markers[key] = mbs.AddMarker(item)
+        return markers[key]
+    for bodies, rows in groups:
+        label = "ties:" + "/".join(names[b] for b in bodies)
+        cols = [rows[:, off[b]:off[b + 1]] for b in bodies]
+        if len(bodies) == 2:
+            m = [marker(b, eii.MarkerNodeCoordinates(name="ties:" + names[b], nodeNumber=nodes[b])) for b in bodies]
+            X0, X1 = -cols[0], cols[1]
+        else:
+            m0 = marker(("frame", bodies[0]), eii.MarkerNodeCoordinates(
+                name="ties:frame:" + names[bodies[0]], nodeNumber=handles["bodies"][names[bodies[0]]]["rigid_node"]))
+            if len(bodies) == 1:
+                m1 = marker(bodies[0], eii.MarkerNodeCoordinates(name="ties:" + names[bodies[0]], nodeNumber=nodes[bodies[0]]))
+            else:
+                n = sum(sizes[b] for b in bodies)
+                gather = mbs.AddObject(eii.ObjectGenericODE2(name=label, nodeNumbers=[nodes[b] for b in bodies],
+                                                             massMatrix=np.zeros((n, n)), stiffnessMatrix=np.zeros((n, n)),
+                                                             visualization=eii.VObjectGenericODE2(show=False)))
+                m1 = mbs.AddMarker(eii.MarkerObjectODE2Coordinates(name=label, objectNumber=gather))
+            m, X0, X1 = [m0, m1], np.zeros((0, 0)), np.hstack(cols)
+        out.append(mbs.AddObject(eii.ObjectConnectorCoordinateVector(
+            name=label, markerNumbers=m, scalingMarker0=X0, scalingMarker1=X1, offset=np.zeros(rows.shape[0]))))
+    return out
 
 
 def _add_ffrf(exu, eii, mbs, body, nRigid, xref, Psi, zeta, show_nodes):

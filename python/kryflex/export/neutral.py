@@ -48,6 +48,10 @@ def arrays(data):
     for i, sysd in enumerate(data.systems):
         for key in SYSTEM_ARRAYS:
             out["system%d/%s" % (i, key)] = np.asarray(sysd[key], dtype=float)
+    # a model of shared directions: its coordinate ties on the stacked exported coordinates (rows: ties; columns: per
+    # body its flexible coordinates when it floats, else its reduced ones; 0 rows without ties)
+    ncoord = sum(data.coordinate_sizes)
+    out["ties"] = np.zeros((0, ncoord)) if data.ties is None else np.asarray(data.ties, dtype=float)
     for i, b in enumerate(data.bodies):
         out["body%d/interface_names" % i] = _strings(b.interfaces)
         out["body%d/floating" % i] = np.array(int(b.floating), dtype=np.int64)
@@ -110,11 +114,17 @@ def read_neutral(path):
                                                              z["joint_child_interface"], z["joint_axis"], z["joint_R0"])]
             nsys = int(z["nsystems"]) if "nsystems" in z.files else 0     # files before trimming have none
             systems = [{key: z["system%d/%s" % (i, key)] for key in SYSTEM_ARRAYS} for i in range(nsys)]
-            return MultibodyExport(scene=str(z["scene"]), bodies=bodies, joints=joints,
+            # files before shared directions have no 'ties'; an empty one: none
+            ties = z["ties"] if "ties" in z.files and z["ties"].shape[0] else None
+            data = MultibodyExport(scene=str(z["scene"]), bodies=bodies, joints=joints,
                                    inputs=[str(s) for s in z["inputs"]], outputs=[str(s) for s in z["outputs"]],
                                    damping=float(z["damping_ratio"]),
                                    max_frequency_hz=float(z["max_frequency_hz"]) if "max_frequency_hz" in z.files
-                                   else 0.0, systems=systems)
+                                   else 0.0, systems=systems, ties=ties)
+            if ties is not None and ties.shape[1] != sum(data.coordinate_sizes):
+                raise ExportError("%s: its ties have %d columns, its bodies %d exported coordinates: export the model "
+                                  "again" % (path, ties.shape[1], sum(data.coordinate_sizes)))
+            return data
         except KeyError as e:
             raise ExportError("%s: incomplete kryflex multibody export: %s is missing; export the model again"
                               % (path, e)) from None

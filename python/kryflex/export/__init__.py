@@ -10,7 +10,8 @@ Modules, one job each:
     bodies.py   one reduced body as a floating-frame body (rigid frame + flexible modes, mass properties, interfaces)
     data.py     the whole export (bodies, joints, inputs, outputs, damping) from a ReducedModel
     neutral.py  the neutral file: write (atomic) and read, without kryflex on the reading side
-    exudyn.py   the Exudyn system: ObjectFFRFreducedOrder per body, joints, loads for inputs, outputs
+    ties.py     a model of shared directions: its coordinate ties on the exported (flexible) coordinates
+    exudyn.py   the Exudyn system: ObjectFFRFreducedOrder per body, joints, ties, loads for inputs, outputs
 """
 import os
 

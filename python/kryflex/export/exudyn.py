@@ -31,6 +31,9 @@ leaves the rotation about it free (constrainedAxes [1,1,1,1,1,0]), a fixed joint
 the configuration: each child body's frame is the parent's turned by R(alpha) = Rot(axis, alpha) R0, placed so that
 the interface nodes coincide. Bodies not reached from the first body through joints stay where the scene has them.
 
+Ties (a model of shared directions, export/ties.py): linear constraints on the bodies' flexible coordinates,
+ObjectConnectorCoordinateVector between the modal nodes (_add_ties).
+
 Inputs: per body the generalized forces of a unit input, a body-fixed force and torque on the frame (about its origin)
 and a load on each flexible coordinate; set_input scales them all. Outputs: the linear outputs of kryflex,
 y = H R r + H F q, with r the frame's small motion relative to its reference (body frame) and q the flexible

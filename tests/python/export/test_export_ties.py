@@ -271,3 +271,16 @@ def test_a_tie_on_the_rigid_motions_is_refused(tied):
     with pytest.raises(ExportError, match="coordinate tie 2 moves the rigid motion ry of body 'rotor'.*"
                                           "-kf_shared_directions false"):
         export_ties(D, data.bodies, data.scene)
+
+
+@pytest.mark.mpi
+def test_two_ranks_write_the_same_tied_export(tied, tmp_path):
+    out = tmp_path / "two.npz"
+    r = run(["mpiexec", "-n", "2", KRYFLEX, "export", str(tied[0]), "-o", str(out), "--format", "exudyn", "--angle",
+             "0", "--angle", "40"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout.count("kryflex: exported") == 1
+    with np.load(str(out)) as a, np.load(str(tied[1])) as b:
+        assert sorted(a.files) == sorted(b.files) and a["ties"].shape[0] > 0
+        for k in a.files:
+            assert np.array_equal(a[k], b[k]), k

@@ -260,12 +260,13 @@ def _add_ties(eii, mbs, data, handles):
             m0 = marker(("frame", bodies[0]), eii.MarkerNodeCoordinates(
                 name="ties:frame:" + names[bodies[0]], nodeNumber=handles["bodies"][names[bodies[0]]]["rigid_node"]))
             if len(bodies) == 1:
-                m1 = marker(bodies[0], eii.MarkerNodeCoordinates(name="ties:" + names[bodies[0]], nodeNumber=nodes[bodies[0]]))
+                b = bodies[0]
+                m1 = marker(b, eii.MarkerNodeCoordinates(name="ties:" + names[b], nodeNumber=nodes[b]))
             else:
                 n = sum(sizes[b] for b in bodies)
-                gather = mbs.AddObject(eii.ObjectGenericODE2(name=label, nodeNumbers=[nodes[b] for b in bodies],
-                                                             massMatrix=np.zeros((n, n)), stiffnessMatrix=np.zeros((n, n)),
-                                                             visualization=eii.VObjectGenericODE2(show=False)))
+                gather = mbs.AddObject(eii.ObjectGenericODE2(
+                    name=label, nodeNumbers=[nodes[b] for b in bodies], massMatrix=np.zeros((n, n)),
+                    stiffnessMatrix=np.zeros((n, n)), visualization=eii.VObjectGenericODE2(show=False)))
                 m1 = mbs.AddMarker(eii.MarkerObjectODE2Coordinates(name=label, objectNumber=gather))
             m, X0, X1 = [m0, m1], np.zeros((0, 0)), np.hstack(cols)
         out.append(mbs.AddObject(eii.ObjectConnectorCoordinateVector(

@@ -48,8 +48,8 @@ def export_ties(D, bodies, scene=""):
         E = np.abs(Db @ R) / np.maximum(np.linalg.norm(R, axis=0), 1e-300)
         if E.size and E.max() > RIGID_TIE_TOL:
             i, j = np.unravel_index(np.argmax(E), E.shape)
-            raise ExportError("model of scene '%s': coordinate tie %d moves the rigid motion %s of body '%s' (|D_b R_b| "
-                              "/ |R_b| = %.2g > %.0e): the floating-frame bodies cannot carry it; reduce again with "
+            raise ExportError("model of scene '%s': coordinate tie %d moves the rigid motion %s of body '%s' "
+                              "(|D_b R_b| / |R_b| = %.2g > %.0e): the floating-frame bodies cannot carry it; reduce again with "
                               "-kf_shared_directions false (scene key reduction.shared_directions: false) to export "
                               "the model" % (scene, i, ("ux", "uy", "uz", "rx", "ry", "rz")[j], body.name, E[i, j],
                                              RIGID_TIE_TOL))

@@ -51,7 +51,7 @@ def tied(tmp_path_factory):
     return model, out / "tied.npz", json.loads(r.stdout)
 
 
-def numpy_reassembly(model, angle):
+def numpy_reassembly(model, angle, ties=None):
     """Independent reference from the model's own arrays: blkdiag(M_b), blkdiag(K_b), the joints' rows on the interface
     rows at this angle (translations equal; rotations across the axis equal) and the ties D_s, null space by SVD:
     (M, K, G, H, N) with the tied model's coordinates phi = N y."""
@@ -70,7 +70,7 @@ def numpy_reassembly(model, angle):
             D[:, off[p]:off[p + 1]] = T @ ip[sel]
             D[:, off[c]:off[c + 1]] = -T @ R @ ic[sel]
             rows.append(D)
-    rows.append(np.asarray(model.ties))
+    rows.append(np.asarray(model.ties if ties is None else ties))
     N = sl.null_space(np.vstack(rows), rcond=1e-10)
     M = sl.block_diag(*[b["M"] for b in bodies])
     K = sl.block_diag(*[b["K"] for b in bodies])
@@ -79,8 +79,8 @@ def numpy_reassembly(model, angle):
     return M, K, G, H, N
 
 
-def numpy_frequencies(model, angle):
-    M, K, _, _, N = numpy_reassembly(model, angle)
+def numpy_frequencies(model, angle, ties=None):
+    M, K, _, _, N = numpy_reassembly(model, angle, ties)
     lam = sl.eigh(N.T @ K @ N, N.T @ M @ N, eigvals_only=True)
     nzero = int(np.sum(np.abs(lam) <= 1e-9 * lam.max()))
     return np.sqrt(lam[nzero:]) / (2 * np.pi), nzero
@@ -229,6 +229,31 @@ def test_rows_on_three_bodies_go_through_gathered_coordinates(tied, monkeypatch)
     f, nzero = exudyn_frequencies(mbs)
     ref, _ = numpy_frequencies(model, 40.0)
     assert nzero == 7 and len(f) == len(ref) and np.max(np.abs(f - ref) / ref) <= MATCH
+
+
+def test_rows_on_one_body_hold_too(tied):
+    """A tie on one body's own flexible coordinates (added here: the bus's first flexible mode held, d = (M F e_0)^T
+    on its reduced coordinates, so that d R = 0 and d F = e_0^T) gets a connector on that body alone; the system keeps
+    the NumPy reassembly's frequencies with [D_s; d]."""
+    import kryflex
+    from kryflex.export import from_model
+    from kryflex.export.exudyn import build_mbs
+    model = kryflex.ReducedModel.load(str(tied[0]))
+    data = from_model(model)
+    bus = data.bodies[0]
+    d = np.zeros((1, sum(model.sizes)))
+    d[0, :model.sizes[0]] = (bus.M @ bus.modes[:, 0])
+    D = np.vstack([model.ties, d])
+    data.ties = np.vstack([data.ties, np.eye(1, data.ties.shape[1])])
+    SC, mbs, h = build_mbs(data, [40.0])
+    from kryflex.export.ties import split_ties
+    groups = [b for b, _ in split_ties(data.ties, data.coordinate_sizes)[0]]
+    # the bus's own row, and (the pair's rows then fixing a combination of the rotor's) the rotor's own and the pair's
+    assert groups == [(0,), (1,), (0, 1)] and len(h["ties"]) == 3
+    f, nzero = exudyn_frequencies(mbs)
+    ref, rzero = numpy_frequencies(model, 40.0, D)
+    assert rzero == nzero == 7 and len(f) == len(ref) == len(model.at([40.0]).frequencies_hz) - 1
+    assert np.max(np.abs(f - ref) / ref) <= MATCH
 
 
 def test_split_ties_keeps_the_row_space():

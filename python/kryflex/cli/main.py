@@ -12,16 +12,14 @@ Exit codes (cli/common.py; docs/guide/troubleshooting.md), the same on every ran
 Under mpirun a rank that fails alone while the others wait in a collective call ends the run with MPI_Abort(code)
 after -kf_error_agreement_timeout seconds (cli/common.py).
 """
+import importlib
 import sys
 
 from .common import EXIT_INPUT, EXIT_INTERNAL, EXIT_OK, EXIT_SIGINT, Failure, agree, error, internal, say, start_agreement
-from .check import run as check
-from .export import run as export
-from .info import run as info
-from .reassemble import run as reassemble
-from .reduce import run as reduce
-from .slew import run as slew
-from .study import run as study
+
+# the commands, each run(argv) of its module cli/<command>.py: only the one run is imported (a reduction then loads
+# none of the others' modules)
+COMMANDS = ("reduce", "reassemble", "info", "study", "slew", "export", "check")
 
 USAGE = """kryflex: Krylov reduction of articulated multi-flexible-body structures
 
@@ -60,11 +58,10 @@ def main(argv=None):
     if cmd == "convert":
         from ..io.convert import main as convert_main
         return convert_main(rest)
-    commands = {"reduce": reduce, "reassemble": reassemble, "info": info, "study": study, "slew": slew,
-                "export": export, "check": check}
-    if cmd not in commands:
+    if cmd not in COMMANDS:
         error("unknown command '%s': use reduce, reassemble, info, check, study, slew, export or convert (kryflex -h)" % cmd)
         return EXIT_INPUT
+    run = importlib.import_module("." + cmd, __package__).run
     if "-quiet" in rest or "--quiet" in rest:
         from petsc4py import PETSc
         PETSc.Options().setValue("kf_quiet", True)
@@ -73,7 +70,7 @@ def main(argv=None):
             # help only prints, on rank 0; and the binding must not start before 'kryflex reduce -help' sets PETSc's
             # help option (KFInitialize lists -kf_quiet then)
             try:
-                return commands[cmd](rest)
+                return run(rest)
             except Failure as f:  # an option given beside the help with a value it refuses: the same on every rank
                 say(f.text, sys.stderr)
                 return f.code
@@ -85,7 +82,7 @@ def main(argv=None):
             start_agreement()
         except Failure as f:
             agree(f)
-        return commands[cmd](rest)
+        return run(rest)
     except SystemExit as e:
         return int(e.code or 0)
     except KeyboardInterrupt:

@@ -134,6 +134,22 @@ def grid(band, f_res, zeta_res):
     return f[(f >= band[0]) & (f <= band[1])]
 
 
+def elastic_setup(scene, angle):
+    """The full order at one angle as this bench measures it: M, K, G, H, the rigid modes PhiR, beta (C = beta K,
+    zeta at the first flexible mode), the grid, and the self-equilibrated Ge, He of the elastic response."""
+    band, zeta = scene.raw["band"], float(scene.raw["damping"])
+    M, K, G, H, PhiR = full_order(scene, angle)
+    nrigid = PhiR.shape[1]
+    lam, _ = modes(M, K, band[1], nrigid)
+    beta = 2 * zeta / np.sqrt(lam[nrigid])
+    f_res = np.sqrt(np.maximum(lam[nrigid:], 0)) / (2 * np.pi)
+    f_res = f_res[f_res <= band[1]]
+    freqs = grid(band, f_res, beta * 2 * np.pi * f_res / 2)
+    Ge = G - M @ (PhiR @ (PhiR.T @ G))
+    He = H - (H @ PhiR) @ (PhiR.T @ M)
+    return M, K, G, H, PhiR, beta, freqs, Ge, He
+
+
 def direct_response(M, K, beta, G, H, freqs):
     """T(w) = H (K (1 + i w beta) - w^2 M)^-1 G by a sparse LU per frequency: (nw, t, a)."""
     out = np.empty((len(freqs), H.shape[0], G.shape[1]), complex)

@@ -854,7 +854,7 @@ static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, c
   PetscCall(KFVisitModes_Private(r, v, single.c, &m, &lambda, &Phi, &imp, &clu, &nclu));
   PetscCall(PetscMalloc5(m, &freq, m, &keptf, m, &kept, m, &cluf, nb, &dofs));
   PetscCall(KFReducerSearchKeptModes_Private(&single, m, lambda, imp, clu, nclu, freq, keptf, kept, cluf, &nkept));
-  nstatic = nkept < m && r->static_correction ? a : 0;
+  nstatic = nkept < m && r->static_correction && !single.nostatic ? a : 0;
   for (PetscInt ci = 0; ci < r->nconfig; ci++) {
     PetscCall(KFReducerResultSet_Private(r, ci, "krylov_frequencies_hz", 1, &m, freq));
     PetscCall(KFReducerResultSet_Private(r, ci, "krylov_importance", 1, &m, imp));
@@ -1044,6 +1044,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     if (r->shared_directions) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
     if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties));
     if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
+    if (nties && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
   }
   if (r->compress && !nties) { /* the chosen model, body by body, by what its response needs */
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;

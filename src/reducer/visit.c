@@ -200,7 +200,7 @@ typedef struct {
 /* the same vectors: the same visits, moments, kept clusters (per body when shared); not the family */
 static PetscBool KFSameVectors(const KFCandidate *a, const KFCandidate *b)
 {
-  if (a->c != b->c || a->kept != b->kept || a->nexp != b->nexp || a->nbody != b->nbody) return PETSC_FALSE;
+  if (a->c != b->c || a->kept != b->kept || a->nexp != b->nexp || a->nbody != b->nbody || a->nostatic != b->nostatic) return PETSC_FALSE;
   for (PetscInt e = 0; e < a->nexp; e++)
     if (a->exp[e] != b->exp[e]) return PETSC_FALSE;
   for (PetscInt k = 0; k < a->nbody; k++)
@@ -445,8 +445,11 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
   PetscInt          tk = 0;
   PetscReal       **tC = NULL;
+  const PetscBool   sc = r->static_correction;
 
   PetscFunctionBegin;
+  /* the candidate's vectors (KFVisitCombination, here and in the sub-bases) without the static correction when it says so */
+  r->static_correction = (PetscBool)(sc && !cand->nostatic);
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
   nrev1 = PetscMax(nrev, 1);
   PetscCall(PetscMalloc1(cand->nexp * nrev1, &angles));
@@ -520,5 +523,7 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     if (r->shared_auto) PetscCall(KFReducedModelSetSetting(*model, "shared_directions", "true"));
   }
   PetscCall(PetscFree(angles)); /* bb stays in the cache */
+  if (cand->nostatic) PetscCall(KFReducedModelSetSetting(*model, "static_exact", "false")); /* its L^0 is measured, not exact */
+  r->static_correction = sc;
   PetscFunctionReturn(0);
 }

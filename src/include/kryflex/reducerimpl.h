@@ -200,6 +200,8 @@ typedef struct {
   PetscInt  nbody;      /* > 0: body b keeps its own bkept[b] clusters (its share of the target); 0: kept for all */
   PetscInt  bkept[KF_MAX_BODY_SHARE];
   PetscBool tied;       /* with -kf_shared_directions auto: its bodies tied to its kept vectors (shared directions) */
+  PetscBool nostatic;   /* the kept clusters alone, without the static correction of the others (L^0 then measured, not
+                           exact: tried only under -kf_static_exact false, for tied candidates, which are not compressed) */
   /* after evaluation */
   PetscInt  size, sysdofs;
   PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */

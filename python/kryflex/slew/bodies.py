@@ -8,6 +8,9 @@ The joint ties at angles alpha are D(alpha) = T(alpha) I, with T(alpha) the smal
 rows: translations u_p - R u_c, rotations across the axis (revolute) or fully (fixed), R = R(alpha) from the C
 library's KFJointRotation; the same rows C's KFReassemble builds (tests/python/slew/test_slew.py checks that the null
 space of D(alpha) gives C's reassembled frequencies). Full and reduced models go through the same code.
+A reduced model of shared directions also binds its bodies' coordinates by fixed rows D_s (ReducedModel.ties, appended
+to the joints' ties at every angle, as the reassembly appends them): they are kept as extra rows of I with an identity
+block in T, so that every user of T and I (the integrators, the trimmed mass, the Exudyn check) ties them too.
 """
 import numpy as np
 import scipy.sparse as sp
@@ -56,7 +59,7 @@ class SlewBodies:
     parent_interface, child_interface (interface indices), type, axis, R0 (3x3 or None), angle (index into the
     angle vector, or None for a fixed joint)."""
 
-    def __init__(self, label, M, K, G, H, iface, rigid, joints, sizes, quantities=None):
+    def __init__(self, label, M, K, G, H, iface, rigid, joints, sizes, quantities=None, model_ties=None):
         self.label = label
         # what each output reads: displacement (H z), velocity (H z') or acceleration (H z'')
         self.quantities = list(quantities) if quantities is not None else ["displacement"] * np.shape(H)[0]
@@ -72,6 +75,12 @@ class SlewBodies:
         self.rigid = sp.block_diag([sp.csr_matrix(r) for r in rigid], format="csr")   # N x 6 nbodies
         self.joints = joints
         self.nties = sum(5 if j["type"] == "revolute" else 6 for j in joints)
+        # the model's coordinate ties D_s: rows of I past the interfaces', tied by an identity block of T
+        Ds = np.zeros((0, self.M.shape[0])) if model_ties is None else np.asarray(model_ties, float)
+        self.nmodel_ties = Ds.shape[0]
+        if self.nmodel_ties:
+            self.I = sp.vstack([self.I, sp.csr_matrix(Ds)], format="csr")
+            self.nties += self.nmodel_ties
         self.nangles = sum(1 for j in joints if j["type"] == "revolute")
 
     @property
@@ -136,13 +145,14 @@ class SlewBodies:
                    np.vstack([b["G"] for b in bodies]), np.hstack([b["H"] for b in bodies]),
                    [b["iface"] if b.get("iface") is not None else np.zeros((0, v))
                     for b, v in zip(bodies, model.sizes)],
-                   [b["rigid"] for b in bodies], joints, model.sizes, model.output_quantities())
+                   [b["rigid"] for b in bodies], joints, model.sizes, model.output_quantities(),
+                   getattr(model, "ties", None))
 
     # ------------------------------------------------------------------ the joint ties
 
     def _tie_template(self):
         """The angle-free part of T and, per revolute joint, where its child's -E R block goes (computed once)."""
-        T0 = np.zeros((self.nties, self.iface_first[-1]))
+        T0 = np.zeros((self.nties, self.I.shape[0]))
         turning, row = [], 0
         for j in self.joints:
             axis = np.asarray(j["axis"], float)
@@ -159,6 +169,7 @@ class SlewBodies:
                 else:
                     T0[row:row + n, c + k:c + k + 3] -= E @ (np.eye(3) if R0 is None else R0)
                 row += n
+        T0[row:, self.iface_first[-1]:] = np.eye(self.nmodel_ties)
         return T0, turning
 
     def tie_matrix(self, angles_rad):

@@ -129,36 +129,24 @@ PetscErrorCode KFBodyBasisAddMappedTo(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X)
   PetscFunctionReturn(0);
 }
 
-/* d[j] = x^T A_j for the columns j of A (nl x m, leading dimension nl) with skip[j] false, d[j] = 0 otherwise. Four
-   columns per sweep: x is read once per four columns and the four sums are independent (a single running sum's
-   latency bounded the loop); each sum still runs over i in order, so the values are those of one column at a time. */
-static void KFColumnDots(PetscInt nl, PetscInt m, const PetscReal *x, const PetscReal *A, const PetscBool *skip, PetscReal d[])
+/* d[cols[k]] = x^T A_cols[k] for n columns (1 to 4) of A (leading dimension nl): x is read once for the n columns and
+   the sums are independent (a single running sum's latency bounded the loop); each sum still runs over i in order,
+   so the values are those of one column at a time. */
+static void KFGroupDots(PetscInt nl, PetscInt n, const PetscInt cols[], const PetscReal *x, const PetscReal *A, PetscReal d[])
 {
-  PetscInt cols[4], n = 0;
+  const PetscReal *a0 = &A[cols[0] * nl], *a1 = &A[cols[n > 1 ? 1 : 0] * nl], *a2 = &A[cols[n > 2 ? 2 : 0] * nl], *a3 = &A[cols[n > 3 ? 3 : 0] * nl];
+  PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
 
-  for (PetscInt j = 0; j <= m; j++) {
-    if (j < m) {
-      d[j] = 0;
-      if (skip[j]) continue;
-      cols[n++] = j;
-    }
-    if (n == 4 || (j == m && n > 0)) {
-      const PetscReal *a0 = &A[cols[0] * nl], *a1 = &A[cols[n > 1 ? 1 : 0] * nl], *a2 = &A[cols[n > 2 ? 2 : 0] * nl], *a3 = &A[cols[n > 3 ? 3 : 0] * nl];
-      PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-
-      for (PetscInt i = 0; i < nl; i++) {
-        s0 += x[i] * a0[i];
-        s1 += x[i] * a1[i];
-        s2 += x[i] * a2[i];
-        s3 += x[i] * a3[i];
-      }
-      d[cols[0]] = s0;
-      if (n > 1) d[cols[1]] = s1;
-      if (n > 2) d[cols[2]] = s2;
-      if (n > 3) d[cols[3]] = s3;
-      n = 0;
-    }
+  for (PetscInt i = 0; i < nl; i++) {
+    s0 += x[i] * a0[i];
+    s1 += x[i] * a1[i];
+    s2 += x[i] * a2[i];
+    s3 += x[i] * a3[i];
   }
+  d[cols[0]] = s0;
+  if (n > 1) d[cols[1]] = s1;
+  if (n > 2) d[cols[2]] = s2;
+  if (n > 3) d[cols[3]] = s3;
 }
 
 /* One Gram-Schmidt pass over n columns (1 to 4) of (W, MW) (nl rows, leading dimension nl): w -= c q, mw -= c mq for
@@ -212,11 +200,72 @@ static void KFGroupPass(PetscInt nl, PetscInt n, const PetscInt cols[], const Pe
   }
 }
 
+/* Both passes of one rank's Gram-Schmidt over n columns (1 to 4) of (W, MW), c the first pass's coefficients, t the
+   second's sums (the remaining M-norms): the numbers of KFGroupPass's first pass followed by its second, with one
+   sweep over W and MW fewer. The first sweep only reads: its sum mq^T (w - c q) takes w - c q as it comes, and the
+   second sweep forms (w - c q) - s q and (mw - c mq) - s mq again in that order before writing them: the same
+   operations on the same numbers (the file is built for baseline x86-64, no FMA to contract into), so the same bits
+   as the two stored passes. The columns are memory-bound at 28k rows per body: this reads W twice and writes W and
+   MW once per chosen column, against three reads and two writes of each. */
+static void KFGroupPassFused(PetscInt nl, PetscInt n, const PetscInt cols[], const PetscReal c[], const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, PetscReal t[])
+{
+  if (n == 4) {
+    PetscReal *w0 = &W[cols[0] * nl], *w1 = &W[cols[1] * nl], *w2 = &W[cols[2] * nl], *w3 = &W[cols[3] * nl];
+    PetscReal *m0 = &MW[cols[0] * nl], *m1 = &MW[cols[1] * nl], *m2 = &MW[cols[2] * nl], *m3 = &MW[cols[3] * nl];
+    const PetscReal c0 = c[0], c1 = c[1], c2 = c[2], c3 = c[3];
+    PetscReal       s0 = 0, s1 = 0, s2 = 0, s3 = 0, r0 = 0, r1 = 0, r2 = 0, r3 = 0;
+
+    for (PetscInt i = 0; i < nl; i++) {
+      s0 += mq[i] * (w0[i] - c0 * q[i]);
+      s1 += mq[i] * (w1[i] - c1 * q[i]);
+      s2 += mq[i] * (w2[i] - c2 * q[i]);
+      s3 += mq[i] * (w3[i] - c3 * q[i]);
+    }
+    for (PetscInt i = 0; i < nl; i++) {
+      const PetscReal a0 = (w0[i] - c0 * q[i]) - s0 * q[i], b0 = (m0[i] - c0 * mq[i]) - s0 * mq[i];
+      const PetscReal a1 = (w1[i] - c1 * q[i]) - s1 * q[i], b1 = (m1[i] - c1 * mq[i]) - s1 * mq[i];
+      const PetscReal a2 = (w2[i] - c2 * q[i]) - s2 * q[i], b2 = (m2[i] - c2 * mq[i]) - s2 * mq[i];
+      const PetscReal a3 = (w3[i] - c3 * q[i]) - s3 * q[i], b3 = (m3[i] - c3 * mq[i]) - s3 * mq[i];
+
+      w0[i] = a0;
+      m0[i] = b0;
+      r0 += b0 * a0;
+      w1[i] = a1;
+      m1[i] = b1;
+      r1 += b1 * a1;
+      w2[i] = a2;
+      m2[i] = b2;
+      r2 += b2 * a2;
+      w3[i] = a3;
+      m3[i] = b3;
+      r3 += b3 * a3;
+    }
+    t[0] = r0;
+    t[1] = r1;
+    t[2] = r2;
+    t[3] = r3;
+    return;
+  }
+  for (PetscInt k = 0; k < n; k++) {
+    PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], s = 0, r = 0;
+    const PetscReal ck = c[k];
+
+    for (PetscInt i = 0; i < nl; i++) s += mq[i] * (w[i] - ck * q[i]);
+    for (PetscInt i = 0; i < nl; i++) {
+      const PetscReal a = (w[i] - ck * q[i]) - s * q[i], b = (mw[i] - ck * mq[i]) - s * mq[i];
+
+      w[i]  = a;
+      mw[i] = b;
+      r += b * a;
+    }
+    t[k] = r;
+  }
+}
+
 /* A Gram-Schmidt pass (KFGroupPass) over the columns j of (W, MW) with skip[j] false, with c_j = d[j], its sums back
-   in d[j]. A column with c_j = 0 is not updated, only summed. fused (one rank, where a local sum is the global one):
-   each group of columns makes the second pass right after the first, with the first's sums as coefficients, while
-   its columns are still in cache (the same numbers as two passes over every column; d[j] then holds the second's). */
-static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool second, PetscBool fused, PetscReal d[])
+   in d[j]. A column with c_j = 0 is not updated, only summed. (One rank makes both passes at once:
+   KFColumnStep.) */
+static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool second, PetscReal d[])
 {
   PetscInt  cols[4], n = 0;
   PetscReal c[4], t[4];
@@ -233,7 +282,6 @@ static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const P
         else
           for (PetscInt i = 0; i < nl; i++) s += w[i] * mw[i];
         d[j] = s;
-        if (fused) KFGroupPass(nl, 1, &j, &d[j], q, mq, W, MW, PETSC_TRUE, &d[j]);
         continue;
       }
       c[n]      = d[j];
@@ -241,8 +289,56 @@ static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const P
     }
     if (n == 4 || (j == m && n > 0)) {
       KFGroupPass(nl, n, cols, c, q, mq, W, MW, second, t);
-      if (fused) KFGroupPass(nl, n, cols, t, q, mq, W, MW, PETSC_TRUE, t);
       for (PetscInt k = 0; k < n; k++) d[cols[k]] = t[k];
+      n = 0;
+    }
+  }
+}
+
+/* A step of the pivoted Gram-Schmidt over the columns j with skip[j] false, four at a time: their coefficients
+   d[j] = mq^T w_j (KFGroupDots; d[j] = 0 for the others) and, with both (one rank, where a local sum is the global
+   one), both passes right after (KFGroupPassFused), while the group's columns are still in cache, d[j] then the
+   remaining M-norm. Every column's operations are those of a coefficient sweep and two passes apart: the same
+   numbers. */
+static void KFColumnStep(PetscInt nl, PetscInt m, const PetscReal *q, const PetscReal *mq, PetscReal *W, PetscReal *MW, const PetscBool *skip, PetscBool both, PetscReal d[])
+{
+  PetscInt cols[4], n = 0;
+
+  for (PetscInt j = 0; j <= m; j++) {
+    if (j < m) {
+      d[j] = 0;
+      if (skip[j]) continue;
+      cols[n++] = j;
+    }
+    if (n == 4 || (j == m && n > 0)) {
+      PetscInt  gc[4], ng = 0;
+      PetscReal c[4], t[4];
+
+      KFGroupDots(nl, n, cols, mq, W, d); /* the group's coefficients */
+      if (!both) {
+        n = 0;
+        continue;
+      }
+      /* both passes on the group; a column with nothing to remove (c = 0) is summed, then makes its second pass */
+      for (PetscInt k = 0; k < n; k++) {
+        const PetscInt jk = cols[k];
+
+        if (d[jk] == 0) { /* nothing to remove: the sum only */
+          const PetscReal *w = &W[jk * nl];
+          PetscReal        s = 0;
+
+          for (PetscInt i = 0; i < nl; i++) s += mq[i] * w[i];
+          d[jk] = s;
+          KFGroupPass(nl, 1, &jk, &d[jk], q, mq, W, MW, PETSC_TRUE, &d[jk]);
+          continue;
+        }
+        c[ng]    = d[jk];
+        gc[ng++] = jk;
+      }
+      if (ng > 0) {
+        KFGroupPassFused(nl, ng, gc, c, q, mq, W, MW, t);
+        for (PetscInt k = 0; k < ng; k++) d[gc[k]] = t[k];
+      }
       n = 0;
     }
   }
@@ -251,7 +347,8 @@ static void KFColumnUpdates(PetscInt nl, PetscInt m, const PetscReal *q, const P
 /* Pivoted Gram-Schmidt in the M-inner product on local arrays (W, MW: nl x m, column-major). Returns the chosen
    columns' count and the orthonormal basis in Q (nl x v). The remaining M-norms of the next step are summed in the
    sweep of the second update (the same sums in the same order as a sweep of their own), and the dot products and
-   the updates run four columns at a time (KFColumnDots, KFColumnUpdates): the same numbers as one loop per column.
+   the updates run four columns at a time (KFColumnStep, KFColumnUpdates): the same numbers as
+   one loop per column.
    A column whose remaining M-norm is below the tolerance is dead: no later step can raise it above (each only
    removes a component), so it is neither updated nor summed again (the pivots and the basis are those of the
    sweeps over every column: its norm only falls further below the tolerance). */
@@ -304,13 +401,14 @@ static PetscErrorCode KFPivotedMGS(MPI_Comm comm, PetscInt nl, PetscInt m, Petsc
       }
       /* remove q from every remaining column, twice (classical Gram-Schmidt with refinement); the first pass's
          update also sums the second pass's dot products (each column's sum in the same order as a sweep of its
-         own: the same numbers, one sweep over W fewer per chosen column) */
-      KFColumnDots(nl, m, mq, W, used, dots);
-      if (size == 1) KFColumnUpdates(nl, m, q, mq, W, MW, used, PETSC_FALSE, PETSC_TRUE, dots);
+         own: the same numbers, one sweep over W fewer per chosen column); on one rank both passes at once, a group
+         of columns at a time (KFColumnStep) */
+      if (size == 1) KFColumnStep(nl, m, q, mq, W, MW, used, PETSC_TRUE, dots);
       else
         for (int pass = 0; pass < 2; pass++) {
+          if (pass == 0) KFColumnStep(nl, m, q, mq, W, MW, used, PETSC_FALSE, dots);
           PetscCall(MPIU_Allreduce(MPI_IN_PLACE, dots, (PetscMPIInt)m, MPIU_REAL, MPIU_SUM, comm));
-          KFColumnUpdates(nl, m, q, mq, W, MW, used, (PetscBool)(pass == 1), PETSC_FALSE, dots);
+          KFColumnUpdates(nl, m, q, mq, W, MW, used, (PetscBool)(pass == 1), dots);
         }
       for (PetscInt j = 0; j < m; j++) res[j] = used[j] ? 0 : dots[j];
     }

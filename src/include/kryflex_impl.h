@@ -125,6 +125,7 @@ PETSC_INTERN PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *);
 typedef struct _n_KFBodywiseOp *KFBodywiseOp;
 PETSC_INTERN PetscErrorCode KFBodywiseApplies(KFScene, PetscBool *);
 PETSC_INTERN PetscErrorCode KFBodyFactorsCreateShifted(KFSystem, const char[], PetscReal, KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFBodyFactorsCreateShiftedReusing(KFSystem, const char[], PetscReal, KFBodyFactors *); /* sys's own body factors taken over */
 PETSC_INTERN PetscErrorCode KFBodywiseOpCreate(KFSystem, KFBodyFactors, KFBodywiseOp *);
 PETSC_INTERN PetscErrorCode KFBodywiseOpInertia(KFBodyFactors, KFBodywiseOp, PetscInt *nneg); /* negative pivots of K_S + shift M_S */
 PETSC_INTERN PetscErrorCode KFBodywiseOpSolve(KFSystem, KFBodyFactors, KFBodywiseOp, Mat, Mat);

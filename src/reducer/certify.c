@@ -20,7 +20,7 @@
 #include <kryflex/reducerimpl.h>
 
 PETSC_INTERN PetscErrorCode KFSystemShiftedInertia(KFSystem, PetscReal, KFBodyFactors, PetscInt *, PetscInt *);
-PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], PetscReal, KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], PetscReal, PetscBool, KFBodyFactors *);
 
 /* The full order's modes (rigid and flexible) below the cut at every evaluation point: count[e] and the shift
    sigma[e] it was taken at (omega^2; 1e-6 below the cut where the cut is a natural frequency there); nrigid[e] the
@@ -28,7 +28,10 @@ PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], Petsc
    system is not assembled there (7 assemblies and rigid-mode sets were a fifth of the count at 57k dofs), and its
    rigid and mechanism modes are those the visits found: their number is the scene's, 6 + revolute joints less what
    the constraints hold, whatever the angles. sys is left at the last point's angles, body-wise unassembled (the
-   search's expansion points set their angles again, src/reducer/shifts.c). */
+   search's expansion points set their angles again, src/reducer/shifts.c). Unless expansion points will factor the
+   system again (-kf_max_factorizations), the visits' solves are over here: the count takes the system's body factors
+   over and factors each body's K_b - sigma M_b on its MUMPS analysis (the same pattern where M_b's lies within K_b's:
+   the ordering and symbolic factorization, 0.9 s of the count's 4.7 s at 57k dofs under load, not made again). */
 PetscErrorCode KFReducerCertifyCount_Private(KFReducer r, KFSystem sys, PetscInt neval, const KFEvalPoint evals[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[])
 {
   MPI_Comm       comm = PetscObjectComm((PetscObject)r);
@@ -40,7 +43,7 @@ PetscErrorCode KFReducerCertifyCount_Private(KFReducer r, KFSystem sys, PetscInt
 
   PetscFunctionBegin;
   PetscCall(PetscTime(&t0));
-  PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, w * w, &bf));
+  PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, w * w, (PetscBool)!r->max_factorizations, &bf));
   bodywise = (PetscBool)!!bf;
   if (bodywise) PetscCall(KFSystemRigidIO(sys, &nrig, NULL, NULL)); /* the last visit's, made already */
   for (PetscInt e = 0; e < neval; e++) {

@@ -18,7 +18,7 @@ PETSC_INTERN PetscErrorCode KFSystemMassNullStatic(KFSystem, PetscReal[]);
 PETSC_INTERN PetscErrorCode KFFlexSolverEigen_Private(KFFlexSolver, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 PETSC_INTERN PetscErrorCode KFSystemEigen_Private(KFSystem, const KFEigenHint *, PetscInt, PetscInt *, PetscReal[], PetscReal[], PetscReal[], Mat *);
 PETSC_INTERN PetscErrorCode KFSystemShiftedInertia(KFSystem, PetscReal, KFBodyFactors, PetscInt *, PetscInt *);
-PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], PetscReal, KFBodyFactors *);
+PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem, const char[], PetscReal, PetscBool, KFBodyFactors *);
 PETSC_INTERN PetscErrorCode KFModeCountOptions(MPI_Comm, const char[], PetscBool *, PetscBool *);
 
 /* The certificate of a sparse eigensolve stopped at the cut (cut2 = omega^2): the flexible modes below it counted by
@@ -39,7 +39,7 @@ static PetscErrorCode KFReferenceCount(KFReducer r, KFSystem sys, PetscReal cut2
   PetscCall(PetscTime(&t0));
   PetscCall(KFSystemRigidIO(sys, &nrigid, NULL, NULL));
   if (!r->count_bf_made) { /* the cut is the same at every configuration: the bodies' factors at it serve them all */
-    PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, sigma, &r->count_bf));
+    PetscCall(KFModeCountBodyFactors(sys, ((PetscObject)r)->prefix, sigma, PETSC_FALSE, &r->count_bf));
     r->count_bf_made = PETSC_TRUE;
   }
   PetscCall(KFSystemShiftedInertia(sys, sigma, r->count_bf, &nneg, &nnull));

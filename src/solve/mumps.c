@@ -360,6 +360,18 @@ static PetscErrorCode KFMumpsOocFolder(Mat F, const char given[])
   PetscFunctionReturn(0);
 }
 
+/* A numerical factorization's outcome: a failure destroys *F (its out-of-core folder with it, on every rank) and is an
+   error; else MUMPS' null (INFOG(28)) and negative (INFOG(12)) pivots */
+static PetscErrorCode KFMumpsFactorResult(Mat A, Mat *F, MatFactorError err, PetscInt *null_pivots, PetscInt *negative_pivots)
+{
+  PetscFunctionBegin;
+  if (err != MAT_FACTOR_NOERROR) PetscCall(MatDestroy(F));
+  PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
+  PetscCall(MatMumpsGetInfog(*F, 28, null_pivots));
+  PetscCall(MatMumpsGetInfog(*F, 12, negative_pivots));
+  PetscFunctionReturn(0);
+}
+
 /* MUMPS factorization with null-pivot detection; reports the inertia MUMPS sees. spd: K_h is known positive definite
    (held or shifted), MUMPS' SYM=1 (Cholesky without pivoting) instead of SYM=2; opts: the user's factorization
    options (ordering, block low-rank, out-of-core, memory check) apply, else MUMPS' defaults (the null-pivot check). */
@@ -434,10 +446,22 @@ PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal 
       PetscCall(MPIU_Allreduce(&mine, estimate_mb, 1, MPIU_REAL, MPIU_MAX, PetscObjectComm((PetscObject)A)));
     }
   }
-  if (err != MAT_FACTOR_NOERROR) PetscCall(MatDestroy(F)); /* its out-of-core folder with it, on every rank */
-  PetscCheck(err == MAT_FACTOR_NOERROR, PetscObjectComm((PetscObject)A), PETSC_ERR_MAT_LU_ZRPVT, "MUMPS could not factor the stiffness matrix (error type %d): it is singular beyond its rigid-body and mechanism modes, or out of memory (-mat_mumps_icntl_14 raises MUMPS' workspace)", (int)err);
-  PetscCall(MatMumpsGetInfog(*F, 28, null_pivots));
-  PetscCall(MatMumpsGetInfog(*F, 12, negative_pivots));
+  PetscCall(KFMumpsFactorResult(A, F, err, null_pivots, negative_pivots));
+  PetscFunctionReturn(0);
+}
+
+/* A factor made by KFFactorMumps factored again for A, a matrix of the pattern it was analysed for (the ordering and
+   symbolic factorization kept: MUMPS' numerical phase alone, with the controls it was analysed with); the pivots'
+   counts as KFFactorMumps reports them. */
+PETSC_INTERN PetscErrorCode KFFactorMumpsNumericAgain(Mat A, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots)
+{
+  MatFactorError err;
+
+  PetscFunctionBegin;
+  KFReturnFreedMemory();
+  PetscCall(KFMumpsFactorNumeric(*F, A));
+  PetscCall(MatFactorGetError(*F, &err));
+  PetscCall(KFMumpsFactorResult(A, F, err, null_pivots, negative_pivots));
   PetscFunctionReturn(0);
 }
 

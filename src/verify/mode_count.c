@@ -63,8 +63,10 @@ PETSC_INTERN PetscErrorCode KFModeCountOptions(MPI_Comm comm, const char prefix[
 
 /* The bodies' interior factors of K_b - sigma M_b for counts at sigma on every configuration of the scene, where the
    body-wise split applies (KFBodywiseApplies) and -kf_verify_count_bodywise (default true) allows it; else *bf = NULL
-   (a count is then one factorization of the whole system). The caller destroys them (KFBodyFactorsDestroy). */
-PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem sys, const char prefix[], PetscReal sigma, KFBodyFactors *bf)
+   (a count is then one factorization of the whole system). The caller destroys them (KFBodyFactorsDestroy). reuse: the
+   caller solves with the system's own body factors no more, whose MUMPS analyses then serve the count's factorizations
+   of the same patterns (KFBodyFactorsCreateShiftedReusing; the system's factors are gone after). */
+PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem sys, const char prefix[], PetscReal sigma, PetscBool reuse, KFBodyFactors *bf)
 {
   PetscBool use, opt;
 
@@ -72,7 +74,8 @@ PETSC_INTERN PetscErrorCode KFModeCountBodyFactors(KFSystem sys, const char pref
   *bf = NULL;
   PetscCall(KFBodywiseApplies(sys->scene, &use));
   PetscCall(KFModeCountOptions(sys->scene->comm, prefix, NULL, &opt));
-  if (use && opt) PetscCall(KFBodyFactorsCreateShifted(sys, prefix, -sigma, bf));
+  if (use && opt && reuse) PetscCall(KFBodyFactorsCreateShiftedReusing(sys, prefix, -sigma, bf));
+  else if (use && opt) PetscCall(KFBodyFactorsCreateShifted(sys, prefix, -sigma, bf));
   PetscFunctionReturn(0);
 }
 

@@ -47,6 +47,7 @@ PETSC_INTERN PetscErrorCode    KFFlexSolverCreate_Auto(KFFlexSolver);
    options prefix of the user's factorization controls; opts: those controls (ordering, block low-rank, out of core,
    memory check) apply, else MUMPS' defaults; estimate_mb: non-NULL runs the memory check and reports the estimate. */
 PETSC_INTERN PetscErrorCode KFFactorMumps(Mat A, const char prefix[], PetscReal null_threshold, PetscBool opts, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots, PetscReal *estimate_mb);
+PETSC_INTERN PetscErrorCode KFFactorMumpsNumericAgain(Mat A, Mat *F, PetscInt *null_pivots, PetscInt *negative_pivots); /* F's analysis kept */
 PETSC_INTERN PetscErrorCode KFMumpsCheckOptions(MPI_Comm, const char prefix[]); /* every factorization option, read and checked */
 PETSC_INTERN PetscErrorCode KFMumpsGetBLR(MPI_Comm, const char prefix[], PetscReal *blr); /* -kf_blr */
 PETSC_INTERN PetscReal      KFNodeMemoryAvailableMB(void);

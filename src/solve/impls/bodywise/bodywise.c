@@ -36,6 +36,9 @@ struct _n_KFBodyFactors {
   PetscSF     *sf;
   PetscReal    estimate_mb; /* MUMPS' estimate of the largest body factorization's memory on a rank, MB */
   PetscInt     nneg;        /* shift < 0: the interior factors' negative pivots, all bodies (KFBodywiseOpInertia) */
+  /* another factor set's interiors taken over (KFBodyFactorsCreateShiftedReusing): body b's MUMPS analysis of a matrix
+     with prev_K[b]'s pattern, reused where K_b + shift M_b's pattern agrees; NULL where none */
+  Mat         *prev_K, *prev_F;
 };
 
 /* per solver (one angle): the interface problem, and the options that choose and spread the body-wise solve */
@@ -64,6 +67,12 @@ PetscErrorCode KFBodyFactorsDestroy(KFBodyFactors *bf)
     PetscCall(PetscFree((*bf)->gif[b]));
     if ((*bf)->sf) PetscCall(PetscSFDestroy(&(*bf)->sf[b]));
   }
+  if ((*bf)->prev_F)
+    for (PetscInt b = 0; b < (*bf)->nb; b++) {
+      PetscCall(MatDestroy(&(*bf)->prev_K[b]));
+      PetscCall(MatDestroy(&(*bf)->prev_F[b]));
+    }
+  PetscCall(PetscFree2((*bf)->prev_K, (*bf)->prev_F));
   PetscCall(PetscFree2((*bf)->owner, (*bf)->sf));
   PetscCall(PetscFree6((*bf)->ng, (*bf)->gif, (*bf)->Kb, (*bf)->F, (*bf)->Psi, (*bf)->S));
   PetscCall(PetscFree(*bf));
@@ -117,6 +126,32 @@ static PetscErrorCode KFBodyGammaNodes(KFScene s, PetscInt b, KFBodyFactors bf)
 
 #define KF_TINY_BODY 100 /* dofs */
 
+/* whether A and B (same type and layout) have the same nonzero pattern on every rank of their communicator */
+static PetscErrorCode KFSamePattern(Mat A, Mat B, PetscBool *same)
+{
+  PetscInt  rs, re, rsb, reb;
+  PetscBool mine, typed;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)A, ((PetscObject)B)->type_name, &typed));
+  PetscCall(MatGetOwnershipRange(A, &rs, &re));
+  PetscCall(MatGetOwnershipRange(B, &rsb, &reb));
+  mine = (PetscBool)(typed && rs == rsb && re == reb);
+  for (PetscInt i = rs; i < re && mine; i++) {
+    const PetscInt *ca, *cb;
+    PetscInt        na, nb;
+
+    PetscCall(MatGetRow(A, i, &na, &ca, NULL));
+    PetscCall(MatGetRow(B, i, &nb, &cb, NULL));
+    mine = (PetscBool)(na == nb);
+    for (PetscInt k = 0; k < na && mine; k++) mine = (PetscBool)(ca[k] == cb[k]);
+    PetscCall(MatRestoreRow(B, i, &nb, &cb, NULL));
+    PetscCall(MatRestoreRow(A, i, &na, &ca, NULL));
+  }
+  PetscCall(MPIU_Allreduce(&mine, same, 1, MPIU_BOOL, MPI_LAND, PetscObjectComm((PetscObject)A)));
+  PetscFunctionReturn(0);
+}
+
 /* One body: the interior factor, Psi_b and S_b, from the body's K and M on their communicator (the scene's, or the
    owner's PETSC_COMM_SELF when the bodies are spread over the ranks). The pivots' counts are returned for the caller
    to check collectively. */
@@ -150,8 +185,23 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
   PetscCall(PetscFree(loc));
   /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
      few vertices ("no valid number of stages in multisector", Galileo's 12-dof stator), so MUMPS' defaults there */
-  PetscCall(KFFactorMumps(bf->Kb[b], prefix, 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
-  bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
+  {
+    PetscBool same = PETSC_FALSE;
+
+    if (bf->prev_F && bf->prev_F[b]) PetscCall(KFSamePattern(bf->Kb[b], bf->prev_K[b], &same));
+    if (same) { /* the ordering and symbolic factorization made for that pattern: the numerical phase alone */
+      bf->F[b]         = bf->prev_F[b];
+      bf->prev_F[b]    = NULL;
+      PetscCall(KFFactorMumpsNumericAgain(bf->Kb[b], &bf->F[b], nnull, nneg));
+    } else {
+      PetscCall(KFFactorMumps(bf->Kb[b], prefix, 0.0, (PetscBool)(B->n >= KF_TINY_BODY), &bf->F[b], nnull, nneg, &estimate_mb));
+      bf->estimate_mb = PetscMax(bf->estimate_mb, estimate_mb);
+    }
+    if (bf->prev_F) {
+      PetscCall(MatDestroy(&bf->prev_F[b]));
+      PetscCall(MatDestroy(&bf->prev_K[b]));
+    }
+  }
   if (shift < 0) bf->nneg += *nneg;             /* above the body's first fixed-interface frequency: negative pivots, */
   if (shift < 0) *nneg = 0;                     /* counted (Sylvester), not an error */
   if (*nnull || *nneg) PetscFunctionReturn(0); /* Psi and S would be meaningless: the caller stops */
@@ -923,7 +973,8 @@ PetscErrorCode KFBodywiseApplies(KFScene s, PetscBool *use)
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *bfo)
+/* prev (or NULL): factors of the system made for the same bodies whose interiors are taken over (prev is destroyed) */
+static PetscErrorCode KFBodyFactorsCreateShifted_Private(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *prev, KFBodyFactors *bfo)
 {
   KFScene       s      = sys->scene;
   PetscBool     spread = PETSC_TRUE;
@@ -937,10 +988,46 @@ PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], Pet
   PetscCall(PetscCalloc6(s->nb, &bf->ng, s->nb, &bf->gif, s->nb, &bf->Kb, s->nb, &bf->F, s->nb, &bf->Psi, s->nb, &bf->S));
   for (PetscInt b = 0; b < s->nb; b++) PetscCall(KFBodyGammaNodes(s, b, bf));
   PetscCall(KFBodywiseAssign(s, spread, bf));
+  if (prev && *prev) {
+    KFBodyFactors p    = *prev;
+    PetscBool     same = (PetscBool)(p->factored && p->nb == bf->nb && p->spread == bf->spread);
+
+    /* each body's interior where this set factors it (the same rank, or the same ranks), so that the pattern's check
+       and the factorization stay on the communicator both share */
+    for (PetscInt b = 0; b < s->nb && same && bf->spread; b++) same = (PetscBool)(p->owner[b] == bf->owner[b]);
+    if (same) {
+      PetscCall(PetscCalloc2(s->nb, &bf->prev_K, s->nb, &bf->prev_F));
+      for (PetscInt b = 0; b < s->nb; b++) {
+        bf->prev_K[b] = p->Kb[b];
+        bf->prev_F[b] = p->F[b];
+        p->Kb[b] = p->F[b] = NULL;
+      }
+    }
+    PetscCall(KFBodyFactorsDestroy(prev));
+  }
   PetscCall(KFBodyFactorsSetUpAll(s, prefix, shift, bf));
   if (bf->spread) PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &bf->nneg, 1, MPIU_INT, MPI_SUM, s->comm)); /* each body counted on its owner */
   bf->factored = PETSC_TRUE;
   *bfo         = bf;
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFBodyFactorsCreateShifted(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *bfo)
+{
+  PetscFunctionBegin;
+  PetscCall(KFBodyFactorsCreateShifted_Private(sys, prefix, shift, NULL, bfo));
+  PetscFunctionReturn(0);
+}
+
+/* As KFBodyFactorsCreateShifted, for a caller that solves with the system's own body factors (sys->bodyf) no more:
+   they are taken over and gone from the system, and a body whose K_b + shift M_b has the pattern its interior was
+   analysed for (M_b's pattern within K_b's) is factored on that MUMPS analysis, its ordering and symbolic
+   factorization not made again. The factors are MUMPS' of the same matrices either way; the analysis was made for
+   the same pattern, with the same controls. */
+PetscErrorCode KFBodyFactorsCreateShiftedReusing(KFSystem sys, const char prefix[], PetscReal shift, KFBodyFactors *bfo)
+{
+  PetscFunctionBegin;
+  PetscCall(KFBodyFactorsCreateShifted_Private(sys, prefix, shift, &sys->bodyf, bfo));
   PetscFunctionReturn(0);
 }
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python", "support"))
 KRYFLEX = os.path.join(ROOT, "build", "kryflex")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
            PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
@@ -161,34 +162,13 @@ def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
 
 
 def test_time_simulation_follows_kryflex_step_response(solid, neutral):
-    """Exudyn's nonlinear time integration (generalized-alpha, 2,000 steps over 0.2 s) of a small step input agrees
-    with kryflex's undamped step response at 30 deg by modal superposition: y(T) = sum_i H phi_i phi_i^T G u g_i(T),
-    g = T^2/2 for rigid/mechanism modes, (1 - cos w T) / w^2 for flexible ones, 1 / w^2 above 500 Hz (the integrator
-    damps those oscillations; their mean is the static deflection). Small input: rotations ~1e-5 rad, so the
-    nonlinear kinematics add ~1e-5 relative. Measured: 2e-5 (bearing_torque), 6e-6 (tip_force)."""
+    """Exudyn's nonlinear time integration of a small step input agrees with kryflex's undamped step response at
+    30 deg by modal superposition (support/exudyn_steps.py). Small input: rotations ~1e-5 rad, so the nonlinear
+    kinematics add ~1e-5 relative. Measured: 2e-5 (bearing_torque), 6e-6 (tip_force)."""
     import kryflex
-    from kryflex.export.exudyn import build_mbs, output_values, set_input
+    from exudyn_steps import step_response_errors
     model = kryflex.ReducedModel.load(str(solid[1]))
-    ref = model.at([30.0])
-    T = 0.2
-    lam, Phi = ref.eigenvalues, ref.modes
-    w = np.sqrt(np.abs(lam))
-    rigid = np.abs(lam) <= ZERO * np.abs(lam).max()
-    g = np.where(rigid, T ** 2 / 2, (1 - np.cos(w * T)) / np.where(rigid, 1.0, np.abs(lam)))
-    high = w / (2 * np.pi) > 500
-    g[high] = 1 / lam[high]
-    for k, name in enumerate(model.input_names):
-        SC, mbs, h = build_mbs(str(neutral[0]), [30.0])
-        set_input(mbs, h, name, 1.0)
-        ss = exudyn.SimulationSettings()
-        ss.timeIntegration.numberOfSteps = 2000
-        ss.timeIntegration.endTime = T
-        ss.timeIntegration.verboseMode = 0
-        ss.solution.file.write = False
-        mbs.SolveDynamic(ss)
-        y = np.array([output_values(mbs, h)[n] for n in model.output_names])
-        yref = ((ref.C @ Phi) * (Phi.T @ ref.B[:, k])) @ g
-        err = np.abs(y - yref).max() / np.abs(yref).max()
+    for name, err in step_response_errors(model, neutral[0], 30.0).items():
         assert err <= 1e-3, (name, err)
 
 

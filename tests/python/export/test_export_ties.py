@@ -218,33 +218,13 @@ def test_frequency_response_through_the_export(tied):
 
 
 def test_time_simulation_follows_the_tied_step_response(tied):
-    """Exudyn's nonlinear time integration (generalized-alpha, 2,000 steps over 0.2 s) of a small step input with the
-    ties as constraints follows the tied model's undamped step response at 40 deg by modal superposition (as
-    test_export.py's for the split model: g = T^2/2 for rigid/mechanism modes, (1 - cos w T) / w^2 for flexible ones,
-    1 / w^2 above 500 Hz)."""
+    """Exudyn's nonlinear time integration of a small step input, with the ties as constraints, follows the tied
+    model's undamped step response at 40 deg by modal superposition (support/exudyn_steps.py, as test_export.py's for
+    the split model)."""
     import kryflex
-    from kryflex.export.exudyn import build_mbs, output_values, set_input
+    from exudyn_steps import step_response_errors
     model = kryflex.ReducedModel.load(str(tied[0]))
-    ref = model.at([40.0])
-    T = 0.2
-    lam, Phi = ref.eigenvalues, ref.modes
-    w = np.sqrt(np.abs(lam))
-    rigid = np.abs(lam) <= ZERO * np.abs(lam).max()
-    g = np.where(rigid, T ** 2 / 2, (1 - np.cos(w * T)) / np.where(rigid, 1.0, np.abs(lam)))
-    high = w / (2 * np.pi) > 500
-    g[high] = 1 / lam[high]
-    for k, name in enumerate(model.input_names):
-        SC, mbs, h = build_mbs(str(tied[1]), [40.0])
-        set_input(mbs, h, name, 1.0)
-        ss = exudyn.SimulationSettings()
-        ss.timeIntegration.numberOfSteps = 2000
-        ss.timeIntegration.endTime = T
-        ss.timeIntegration.verboseMode = 0
-        ss.solution.file.write = False
-        mbs.SolveDynamic(ss)
-        y = np.array([output_values(mbs, h)[n] for n in model.output_names])
-        yref = ((ref.C @ Phi) * (Phi.T @ ref.B[:, k])) @ g
-        err = np.abs(y - yref).max() / np.abs(yref).max()
+    for name, err in step_response_errors(model, tied[1], 40.0).items():
         print("step response, %s: %.2e" % (name, err))
         assert err <= 1e-3, (name, err)
 

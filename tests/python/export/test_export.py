@@ -20,6 +20,7 @@ MATCH = 1e-6            # the frequencies must agree to this (relative): the exp
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
+from exudyn_checks import exudyn_frequencies, linear_parts, step_response_errors  # noqa: E402
 
 
 def run(cmd, **kw):
@@ -47,16 +48,6 @@ def neutral(solid, tmp_path_factory):
              "--angle", "60", "--json"])
     assert r.returncode == 0, r.stdout + r.stderr
     return out, json.loads(r.stdout)
-
-
-def exudyn_frequencies(mbs):
-    """Linearized undamped frequencies of an assembled Exudyn system (constraints by Exudyn's null-space projection):
-    (flexible ones in Hz, number of zero modes)."""
-    lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False)
-    lam = np.sort(np.real(lam))
-    zero = np.abs(lam) <= ZERO * np.abs(lam).max()
-    assert np.all(lam[~zero] > 0)
-    return np.sqrt(lam[~zero]) / (2 * np.pi), int(zero.sum())
 
 
 def test_exudyn_matches_reassembly_at_0_30_60(solid, neutral):
@@ -102,27 +93,6 @@ def test_joint_is_what_ties_the_bodies(solid, neutral):
     assert np.allclose(np.sqrt(lam[~zero]) / (2 * np.pi), own, rtol=1e-8)
 
 
-def _exudyn_linear_parts(mbs):
-    """Exudyn's own linearization at the initial state: mass matrix, stiffness (minus the Jacobian of the ODE2
-    right-hand side), constraint Jacobian (ODE2 coordinates x constraints) and the ODE2 right-hand side (the loads)."""
-    ss = exudyn.SimulationSettings()
-    ss.solution.file.write = False          # no solution/ folder in the working directory
-    ss.solution.file.writeInitialValues = False
-    sol = exudyn.MainSolverImplicitSecondOrder()
-    sol.InitializeSolver(mbs, ss)
-    n = sol.GetODE2size()
-    sol.ComputeMassMatrix(mbs)
-    M = sol.GetSystemMassMatrix().copy()
-    sol.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1, scalarFactor_ODE2_t=0, scalarFactor_ODE1=0)
-    sol.ComputeJacobianAE(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
-                          velocityLevel=False)
-    J = sol.GetSystemJacobian().copy()
-    sol.ComputeODE2RHS(mbs)
-    rhs = sol.GetSystemResidual()[:n].copy()
-    sol.FinalizeSolver(mbs, ss)
-    return M, J[:n, :n], J[:n, n:], rhs
-
-
 def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
     """The inputs' loads (set_input) and the outputs (output_values) of the Exudyn system give kryflex's undamped
     frequency response at 30 deg: H_y (K - w^2 M)^-1 f on the null space of Exudyn's constraint Jacobian, f from
@@ -136,7 +106,7 @@ def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
     freqs = np.array([0.5, 3.0, 12.0])            # between resonances, below and in the band
     T = ref.frf(freqs, damping=0.0)               # (frequencies, outputs, inputs)
     SC, mbs, h = build_mbs(str(neutral[0]), [30.0])
-    M, K, C, rhs0 = _exudyn_linear_parts(mbs)
+    M, K, C, rhs0 = linear_parts(mbs)
     assert np.abs(rhs0).max() == 0.0              # at rest, inputs off: no load
     N = null_space(C.T)
     q0 = mbs.systemData.GetODE2Coordinates()
@@ -152,7 +122,7 @@ def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
     assert output_values(mbs, h) == {n: 0.0 for n in model.output_names}
     for k, name in enumerate(model.input_names):
         set_input(mbs, h, name, 1.0)
-        f = _exudyn_linear_parts(mbs)[3] - rhs0
+        f = linear_parts(mbs)[3] - rhs0
         set_input(mbs, h, name, 0.0)
         assert np.abs(f).max() > 0
         for iw, w in enumerate(2 * np.pi * freqs):
@@ -163,10 +133,9 @@ def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
 
 def test_time_simulation_follows_kryflex_step_response(solid, neutral):
     """Exudyn's nonlinear time integration of a small step input agrees with kryflex's undamped step response at
-    30 deg by modal superposition (support/exudyn_steps.py). Small input: rotations ~1e-5 rad, so the nonlinear
+    30 deg by modal superposition (support/exudyn_checks.py). Small input: rotations ~1e-5 rad, so the nonlinear
     kinematics add ~1e-5 relative. Measured: 2e-5 (bearing_torque), 6e-6 (tip_force)."""
     import kryflex
-    from exudyn_steps import step_response_errors
     model = kryflex.ReducedModel.load(str(solid[1]))
     for name, err in step_response_errors(model, neutral[0], 30.0).items():
         assert err <= 1e-3, (name, err)

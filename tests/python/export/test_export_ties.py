@@ -29,6 +29,7 @@ ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mecha
 ANGLES = (0.0, 40.0)    # the reduction angle, and one the basis was not built at
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
+from exudyn_checks import exudyn_frequencies, linear_parts, step_response_errors  # noqa: E402
 
 
 def run(cmd, **kw):
@@ -84,13 +85,6 @@ def numpy_frequencies(model, angle, ties=None):
     lam = sl.eigh(N.T @ K @ N, N.T @ M @ N, eigvals_only=True)
     nzero = int(np.sum(np.abs(lam) <= 1e-9 * lam.max()))
     return np.sqrt(lam[nzero:]) / (2 * np.pi), nzero
-
-
-def exudyn_frequencies(mbs):
-    lam, _ = mbs.ComputeODE2Eigenvalues(useAbsoluteValues=False)
-    lam = np.sort(np.real(lam))
-    zero = np.abs(lam) <= ZERO * np.abs(lam).max()
-    return np.sqrt(np.abs(lam[~zero])) / (2 * np.pi), int(zero.sum())
 
 
 def test_neutral_file_carries_the_ties(tied):
@@ -159,26 +153,6 @@ def test_without_its_ties_the_export_differs(tied):
     assert np.max(np.abs(f[:len(ref)] - ref) / ref) > 100 * MATCH
 
 
-def _linear_parts(mbs):
-    """Exudyn's linearization at the initial state: M, K, constraint Jacobian (ODE2 x constraints), ODE2 rhs."""
-    ss = exudyn.SimulationSettings()
-    ss.solution.file.write = False
-    ss.solution.file.writeInitialValues = False
-    sol = exudyn.MainSolverImplicitSecondOrder()
-    sol.InitializeSolver(mbs, ss)
-    n = sol.GetODE2size()
-    sol.ComputeMassMatrix(mbs)
-    M = sol.GetSystemMassMatrix().copy()
-    sol.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1, scalarFactor_ODE2_t=0, scalarFactor_ODE1=0)
-    sol.ComputeJacobianAE(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0,
-                          velocityLevel=False)
-    J = sol.GetSystemJacobian().copy()
-    sol.ComputeODE2RHS(mbs)
-    rhs = sol.GetSystemResidual()[:n].copy()
-    sol.FinalizeSolver(mbs, ss)
-    return M, J[:n, :n], J[:n, n:], rhs
-
-
 def test_frequency_response_through_the_export(tied):
     """The inputs' loads and the outputs of the tied Exudyn system at 40 deg give the undamped frequency response of
     the NumPy reassembly H N (N^T (K - w^2 M) N)^-1 N^T G (and kryflex's), off resonance, to 1e-7."""
@@ -193,7 +167,7 @@ def test_frequency_response_through_the_export(tied):
     kerr = np.abs(Tk - Tn).max() / np.abs(Tn).max()       # measured 2.4e-8 (at 0.5 Hz, the rigid motions' share)
     assert kerr <= FRF_MATCH
     SC, mbs, h = build_mbs(str(tied[1]), [a])
-    M, K, C, rhs0 = _linear_parts(mbs)
+    M, K, C, rhs0 = linear_parts(mbs)
     N = sl.null_space(C.T)
     q0 = mbs.systemData.GetODE2Coordinates()
     Hy, eps = np.zeros((len(model.output_names), len(q0))), 1e-6
@@ -208,7 +182,7 @@ def test_frequency_response_through_the_export(tied):
     worst = 0.0
     for k, name in enumerate(model.input_names):
         set_input(mbs, h, name, 1.0)
-        f = _linear_parts(mbs)[3] - rhs0
+        f = linear_parts(mbs)[3] - rhs0
         set_input(mbs, h, name, 0.0)
         for iw, w in enumerate(2 * np.pi * freqs):
             y = Hy @ N @ np.linalg.solve(N.T @ (K - w ** 2 * M) @ N, N.T @ f)
@@ -219,10 +193,9 @@ def test_frequency_response_through_the_export(tied):
 
 def test_time_simulation_follows_the_tied_step_response(tied):
     """Exudyn's nonlinear time integration of a small step input, with the ties as constraints, follows the tied
-    model's undamped step response at 40 deg by modal superposition (support/exudyn_steps.py, as test_export.py's for
+    model's undamped step response at 40 deg by modal superposition (support/exudyn_checks.py, as test_export.py's for
     the split model)."""
     import kryflex
-    from exudyn_steps import step_response_errors
     model = kryflex.ReducedModel.load(str(tied[0]))
     for name, err in step_response_errors(model, tied[1], 40.0).items():
         print("step response, %s: %.2e" % (name, err))

@@ -20,7 +20,7 @@ MATCH = 1e-6            # the frequencies must agree to this (relative): the exp
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
-from exudyn_checks import exudyn_frequencies, linear_parts, step_response_errors  # noqa: E402
+from exudyn_checks import exudyn_frequencies, linear_parts, output_jacobian, step_response_errors  # noqa: E402
 
 
 def run(cmd, **kw):
@@ -109,16 +109,7 @@ def test_inputs_and_outputs_match_kryflex_frf(solid, neutral):
     M, K, C, rhs0 = linear_parts(mbs)
     assert np.abs(rhs0).max() == 0.0              # at rest, inputs off: no load
     N = null_space(C.T)
-    q0 = mbs.systemData.GetODE2Coordinates()
-    Hy, eps = np.zeros((len(model.output_names), len(q0))), 1e-6
-    for i in range(len(q0)):
-        for sign in (1.0, -1.0):
-            q = q0.copy()
-            q[i] += sign * eps
-            mbs.systemData.SetODE2Coordinates(q, exudyn.ConfigurationType.Current)
-            y = output_values(mbs, h)
-            Hy[:, i] += sign * np.array([y[n] for n in model.output_names]) / (2 * eps)
-    mbs.systemData.SetODE2Coordinates(q0, exudyn.ConfigurationType.Current)
+    Hy = output_jacobian(mbs, h, model.output_names)
     assert output_values(mbs, h) == {n: 0.0 for n in model.output_names}
     for k, name in enumerate(model.input_names):
         set_input(mbs, h, name, 1.0)

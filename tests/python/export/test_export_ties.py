@@ -29,7 +29,7 @@ ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mecha
 ANGLES = (0.0, 40.0)    # the reduction angle, and one the basis was not built at
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
-from exudyn_checks import exudyn_frequencies, linear_parts, step_response_errors  # noqa: E402
+from exudyn_checks import exudyn_frequencies, linear_parts, output_jacobian, step_response_errors  # noqa: E402
 
 
 def run(cmd, **kw):
@@ -169,16 +169,7 @@ def test_frequency_response_through_the_export(tied):
     SC, mbs, h = build_mbs(str(tied[1]), [a])
     M, K, C, rhs0 = linear_parts(mbs)
     N = sl.null_space(C.T)
-    q0 = mbs.systemData.GetODE2Coordinates()
-    Hy, eps = np.zeros((len(model.output_names), len(q0))), 1e-6
-    for i in range(len(q0)):
-        for sign in (1.0, -1.0):
-            q = q0.copy()
-            q[i] += sign * eps
-            mbs.systemData.SetODE2Coordinates(q, exudyn.ConfigurationType.Current)
-            y = output_values(mbs, h)
-            Hy[:, i] += sign * np.array([y[n] for n in model.output_names]) / (2 * eps)
-    mbs.systemData.SetODE2Coordinates(q0, exudyn.ConfigurationType.Current)
+    Hy = output_jacobian(mbs, h, model.output_names)
     worst = 0.0
     for k, name in enumerate(model.input_names):
         set_input(mbs, h, name, 1.0)

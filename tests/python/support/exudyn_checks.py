@@ -68,3 +68,21 @@ def linear_parts(mbs):
     rhs = sol.GetSystemResidual()[:n].copy()
     sol.FinalizeSolver(mbs, ss)
     return M, J[:n, :n], J[:n, n:], rhs
+
+
+def output_jacobian(mbs, h, output_names):
+    """d y / d q of the export's outputs (output_values) at the initial coordinates, by central differences (step 1e-6);
+    the coordinates are restored."""
+    import exudyn
+    from kryflex.export.exudyn import output_values
+    q0 = mbs.systemData.GetODE2Coordinates()
+    Hy, eps = np.zeros((len(output_names), len(q0))), 1e-6
+    for i in range(len(q0)):
+        for sign in (1.0, -1.0):
+            q = q0.copy()
+            q[i] += sign * eps
+            mbs.systemData.SetODE2Coordinates(q, exudyn.ConfigurationType.Current)
+            y = output_values(mbs, h)
+            Hy[:, i] += sign * np.array([y[n] for n in output_names]) / (2 * eps)
+    mbs.systemData.SetODE2Coordinates(q0, exudyn.ConfigurationType.Current)
+    return Hy

@@ -90,7 +90,8 @@ def run(argv):
     if args.json:
         say(json.dumps(dict(output=path, format=args.format, bodies=[b.name for b in data.bodies],
                             flexible_modes=[b.nflex for b in data.bodies], check=results,
-                            max_frequency_hz=data.max_frequency_hz, trimmed_systems=len(data.systems)), indent=1))
+                            max_frequency_hz=data.max_frequency_hz, trimmed_systems=len(data.systems),
+                            coordinate_ties=0 if data.ties is None else int(data.ties.shape[0])), indent=1))
     else:
         say("kryflex: exported %d bod%s (%s) of '%s' to %s" % (
             len(data.bodies), "y" if len(data.bodies) == 1 else "ies",
@@ -98,6 +99,9 @@ def run(argv):
                       ("%s: %d reduced dofs, no floating frame (no rigid %s)" % (b.name, b.M.shape[0],
                                                                                 " ".join(b.missing_rigid)))
                       for b in data.bodies), data.scene, path))
+        if data.ties is not None:
+            say("  with %d coordinate ties between the bodies' flexible coordinates (shared directions: the file's "
+                "ties, Exudyn's coordinate connectors)" % data.ties.shape[0])
         if data.systems and not data.max_frequency_hz:
             say("  the structure's reassembled reduced system in the file (system0/M, K, B, C, D): %d dofs, highest "
                 "frequency %.4g Hz" % (data.systems[0]["M"].shape[0],

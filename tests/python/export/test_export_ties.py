@@ -110,6 +110,8 @@ def test_neutral_file_carries_the_ties(tied):
     # read back: the same ties, and the same as an export made in memory
     assert np.array_equal(read_neutral(str(tied[1])).ties, T)
     assert np.array_equal(load(model).ties, T)
+    # the command says how many it wrote
+    assert tied[2]["coordinate_ties"] == D.shape[0]
 
 
 def test_exudyn_matches_the_tied_reassembly(tied):
@@ -281,6 +283,7 @@ def test_two_ranks_write_the_same_tied_export(tied, tmp_path):
              "0", "--angle", "40"])
     assert r.returncode == 0, r.stdout + r.stderr
     assert r.stdout.count("kryflex: exported") == 1
+    assert r.stdout.count("coordinate ties between the bodies' flexible coordinates") == 1
     with np.load(str(out)) as a, np.load(str(tied[1])) as b:
         assert sorted(a.files) == sorted(b.files) and a["ties"].shape[0] > 0
         for k in a.files:

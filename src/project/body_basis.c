@@ -246,20 +246,9 @@ static void KFGroupPassFused(PetscInt nl, PetscInt n, const PetscInt cols[], con
     t[3] = r3;
     return;
   }
-  for (PetscInt k = 0; k < n; k++) {
-    PetscReal      *w = &W[cols[k] * nl], *mw = &MW[cols[k] * nl], s = 0, r = 0;
-    const PetscReal ck = c[k];
-
-    for (PetscInt i = 0; i < nl; i++) s += mq[i] * (w[i] - ck * q[i]);
-    for (PetscInt i = 0; i < nl; i++) {
-      const PetscReal a = (w[i] - ck * q[i]) - s * q[i], b = (mw[i] - ck * mq[i]) - s * mq[i];
-
-      w[i]  = a;
-      mw[i] = b;
-      r += b * a;
-    }
-    t[k] = r;
-  }
+  /* a group of 1 to 3 (the last one): the two stored passes, the same numbers */
+  KFGroupPass(nl, n, cols, c, q, mq, W, MW, PETSC_FALSE, t);
+  KFGroupPass(nl, n, cols, t, q, mq, W, MW, PETSC_TRUE, t);
 }
 
 /* A Gram-Schmidt pass (KFGroupPass) over the columns j of (W, MW) with skip[j] false, with c_j = d[j], its sums back

@@ -94,7 +94,14 @@ static PetscErrorCode KFClusterOrder(PetscInt m, const PetscReal imp[], const Pe
 
 /* The Krylov combinations: kept modes (columns of Phi) and the static correction of the others (eq. 15-17), each
    scaled to unit M-norm (c^T Mr c = 1), as KFBodyBasisAddMapped expects; X = V C on the first m columns of the BV. */
-static PetscErrorCode KFVisitCombination(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, PetscInt *mout, PetscInt *ncolout, PetscReal **Cout, PetscInt *nclusters)
+/* whether a candidate's vectors carry the static correction of the clusters it drops: the reducer's setting, unless
+   the candidate was tried without it (KFCandidate.nostatic) */
+static inline PetscBool KFCandidateStaticCorrection(KFReducer r, const KFCandidate *cand)
+{
+  return (PetscBool)(r->static_correction && !cand->nostatic);
+}
+
+static PetscErrorCode KFVisitCombination(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, PetscBool static_correction, PetscInt *mout, PetscInt *ncolout, PetscReal **Cout, PetscInt *nclusters)
 {
   const PetscInt N = v->basis.size;
   PetscInt       m, nc, *clu, *order, a, nk = 0, nd, ncol;
@@ -117,7 +124,7 @@ static PetscErrorCode KFVisitCombination(KFReducer r, KFVisit *v, PetscInt c, Pe
     nk += keep[i];
     nd += !keep[i] && clu[i] >= 0;
   }
-  ncol = nk + (r->static_correction && nd ? a : 0);
+  ncol = nk + (static_correction && nd ? a : 0);
   PetscCall(PetscCalloc1(m * PetscMax(ncol, 1), &C));
   for (PetscInt i = 0, j = 0; i < m; i++)
     if (keep[i]) PetscCall(PetscArraycpy(&C[j++ * m], &Phi[i * m], m));
@@ -151,14 +158,14 @@ static PetscErrorCode KFVisitCombination(KFReducer r, KFVisit *v, PetscInt c, Pe
   PetscFunctionReturn(0);
 }
 
-PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters)
+PetscErrorCode KFVisitVectors_Private(KFReducer r, KFVisit *v, PetscInt c, PetscInt kept, PetscBool static_correction, Mat *X, PetscInt *nclusters)
 {
   BV         V = (BV)v->basis.data;
   PetscInt   m, ncol, l0, k0;
   PetscReal *C;
 
   PetscFunctionBegin;
-  PetscCall(KFVisitCombination(r, v, c, kept, &m, &ncol, &C, nclusters));
+  PetscCall(KFVisitCombination(r, v, c, kept, static_correction, &m, &ncol, &C, nclusters));
   PetscCall(BVGetActiveColumns(V, &l0, &k0));
   PetscCall(BVSetActiveColumns(V, 0, m));
   PetscCall(KFBVCombine(V, ncol, C, X));
@@ -350,7 +357,7 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
       PetscInt pe = KFParentVisit(cc, cand->exp[e]), nr;
 
       PetscCheck(pe >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has a visit its parent has not");
-      PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, &m[e], &ncol[e], &C[e], NULL));
+      PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, KFCandidateStaticCorrection(r, cand), &m[e], &ncol[e], &C[e], NULL));
       PetscCheck(m[e] <= cc->pm[pe], PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
       PetscCall(MatGetSize(v->Phir, NULL, &nr));
       mb[b] += nr + ncol[e];
@@ -407,7 +414,7 @@ static PetscErrorCode KFCandidateCoordinates(KFReducer r, KFVisit visits[], cons
     KFVisit *v = &visits[cand->exp[e]];
 
     PetscCall(MatGetSize(v->Phir, NULL, &nr[e]));
-    PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X[e], NULL));
+    PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, KFCandidateStaticCorrection(r, cand), &X[e], NULL));
     PetscCall(MatGetSize(X[e], NULL, &nx[e]));
     k += nr[e] + nx[e];
   }
@@ -445,11 +452,8 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
   KFCandidateCache *cc = (KFCandidateCache *)r->candcache;
   PetscInt          tk = 0;
   PetscReal       **tC = NULL;
-  const PetscBool   sc = r->static_correction;
 
   PetscFunctionBegin;
-  /* the candidate's vectors (KFVisitCombination, here and in the sub-bases) without the static correction when it says so */
-  r->static_correction = (PetscBool)(sc && !cand->nostatic);
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, &nrev, NULL, NULL, NULL));
   nrev1 = PetscMax(nrev, 1);
   PetscCall(PetscMalloc1(cand->nexp * nrev1, &angles));
@@ -481,12 +485,12 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
 
         PetscCall(KFBodyBasisAddMapped(bb, v->P, v->Phir));
         if (!cand->nbody) {
-          PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, &X, NULL));
+          PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->kept, KFCandidateStaticCorrection(r, cand), &X, NULL));
           PetscCall(KFBodyBasisAddMapped(bb, v->P, X));
           PetscCall(MatDestroy(&X));
         } else
           for (PetscInt b = 0; b < nb; b++) {
-            PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], &X, NULL));
+            PetscCall(KFVisitVectors_Private(r, v, cand->c, cand->bkept[b], KFCandidateStaticCorrection(r, cand), &X, NULL));
             PetscCall(KFBodyBasisAddMappedTo(bb, b, v->P[b], X));
             PetscCall(MatDestroy(&X));
           }
@@ -523,7 +527,9 @@ PetscErrorCode KFCandidateModel_Private(KFReducer r, KFVisit visits[], const KFC
     if (r->shared_auto) PetscCall(KFReducedModelSetSetting(*model, "shared_directions", "true"));
   }
   PetscCall(PetscFree(angles)); /* bb stays in the cache */
-  if (cand->nostatic) PetscCall(KFReducedModelSetSetting(*model, "static_exact", "false")); /* its L^0 is measured, not exact */
-  r->static_correction = sc;
+  if (cand->nostatic) { /* its vectors lack the dropped clusters' static correction: its L^0 is measured, not exact */
+    PetscCall(KFReducedModelSetSetting(*model, "static_correction", "false"));
+    PetscCall(KFReducedModelSetSetting(*model, "static_exact", "false"));
+  }
   PetscFunctionReturn(0);
 }

@@ -183,7 +183,7 @@ PETSC_INTERN PetscErrorCode KFVisitDestroy_Private(KFReducer, KFVisit *);
    importance order; -1: the whole sub-basis) plus the static correction of the others; nclusters (may be NULL): the
    clusters of the sub-basis. KFVisitModes_Private: the sub-basis' modes, importance and clusters (caller frees with
    PetscFree4(lambda, Phi, imp, clu)). */
-PETSC_INTERN PetscErrorCode KFVisitVectors_Private(KFReducer, KFVisit *, PetscInt c, PetscInt kept, Mat *X, PetscInt *nclusters);
+PETSC_INTERN PetscErrorCode KFVisitVectors_Private(KFReducer, KFVisit *, PetscInt c, PetscInt kept, PetscBool static_correction, Mat *X, PetscInt *nclusters);
 PETSC_INTERN PetscErrorCode KFVisitModes_Private(KFReducer, KFVisit *, PetscInt c, PetscInt *n, PetscReal **lambda, PetscReal **Phi, PetscReal **imp, PetscInt **clu, PetscInt *nclusters);
 
 #define KF_MAX_EXPANSION 64

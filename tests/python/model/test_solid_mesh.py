@@ -3,7 +3,6 @@
 Everything runs on the coarsest mesh (refine TINY, ~1,300 dofs for the pair),
 so dense NumPy references are affordable and the whole file takes seconds.
 """
-import os
 import shutil
 import subprocess
 import sys
@@ -25,6 +24,7 @@ import solid_assembly    # noqa: E402
 import solid_grid        # noqa: E402
 import solid_hex8        # noqa: E402
 import solid_spacecraft  # noqa: E402
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 TINY = 0.25
 E, NU, RHO = 70e9, 0.33, 2700.0
@@ -273,7 +273,7 @@ def test_scene_refers_to_existing_six_dof_nodes(tiny_scene):
 @pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
 def test_two_ranks_write_the_same_matrices(tiny_scene, tmp_path):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
+    env = run_env.BASE_ENV
     run = subprocess.run(["mpiexec", "-n", "2", sys.executable, str(SOLID / "generate.py"),
                           "--refine", str(TINY), "-o", str(tmp_path)],
                          env=env, capture_output=True, text=True, timeout=300)

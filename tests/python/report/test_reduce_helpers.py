@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           MPLBACKEND="Agg")
+ENV = dict(run_env.BASE_ENV, MPLBACKEND="Agg")
 
 pytestmark = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (cmake --build build)")
 

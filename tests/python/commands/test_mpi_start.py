@@ -8,7 +8,8 @@ import sys
 
 import pytest
 
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 NAMES = ("OMPI_MCA_pml", "OMPI_MCA_ess_singleton_isolated")
 PROBE = r"""
 import json, os, subprocess, sys

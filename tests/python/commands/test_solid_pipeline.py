@@ -8,7 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
 ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")

@@ -16,6 +16,7 @@ import scipy.linalg as sl
 from scipy.spatial.transform import Rotation
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "support"))
 import accuracy_scenes as acc  # noqa: E402

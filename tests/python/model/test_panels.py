@@ -14,9 +14,9 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
-sys.path.insert(0, SUPPORT)
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import panels  # noqa: E402
 import reference as ref  # noqa: E402

@@ -3,6 +3,7 @@
 Everything runs on the coarsest mesh (refine TINY, ~1,300 dofs for the pair),
 so dense NumPy references are affordable and the whole file takes seconds.
 """
+import os
 import shutil
 import subprocess
 import sys
@@ -24,6 +25,7 @@ import solid_assembly    # noqa: E402
 import solid_grid        # noqa: E402
 import solid_hex8        # noqa: E402
 import solid_spacecraft  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 TINY = 0.25

@@ -22,6 +22,7 @@ pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 MPI_ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)

@@ -32,9 +32,9 @@ from kryflex.results import Summary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
-sys.path.insert(0, SUPPORT)
 import accuracy_scenes as acs  # noqa: E402
 import accuracy_sweep as sweep  # noqa: E402
 

@@ -33,6 +33,7 @@ from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 PROBE = os.path.join(SUPPORT, "mpi_bodywise_probe.py")

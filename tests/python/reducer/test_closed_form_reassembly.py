@@ -22,6 +22,7 @@ import kryflex
 from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")

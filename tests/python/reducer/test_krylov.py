@@ -29,12 +29,12 @@ from petsc4py import PETSc
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
 GALILEO = os.path.join(GALILEO_DIR, "galileo.yaml")
 PROBE = os.path.join(SUPPORT, "mpi_krylov_probe.py")
-sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("frames", os.path.join(ROOT, "meshes", "frames.py"))

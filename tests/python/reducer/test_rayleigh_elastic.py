@@ -30,8 +30,8 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")
-import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import accuracy_scenes as acs  # noqa: E402
 import reference as ref  # noqa: E402
 

@@ -13,6 +13,7 @@ import jsonschema
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 SRC = os.path.join(ROOT, "src")

@@ -17,9 +17,9 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
-sys.path.insert(0, SUPPORT)
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import bc_models  # noqa: E402
 import frames  # noqa: E402

@@ -28,8 +28,8 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
 

@@ -3,12 +3,14 @@ without them writes, pixel for pixel (the PNGs' bytes too: the same encoder on t
 ranks, and leaves no helper running. The embedded Galileo scene at two angles (its paper section's figure included)."""
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
 from PIL import Image
 
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")

@@ -13,6 +13,7 @@ import json
 import os
 import re
 import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -23,6 +24,7 @@ from kryflex.results import (SUMMARY_VERSION, Candidate, ChosenModel, FrequencyR
                              SummaryError, Verdict, _json_text)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 DATA = os.path.join(HERE, "data")

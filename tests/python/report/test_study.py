@@ -11,11 +11,11 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
+sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 
 ENV = dict(run_env.ENV, MPLBACKEND="Agg")

@@ -11,8 +11,8 @@ import scipy.io
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import nastran_model as nm  # noqa: E402
 
 from kryflex.io import dmig  # noqa: E402

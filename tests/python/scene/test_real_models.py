@@ -17,7 +17,8 @@ import scipy.sparse as sp
 
 import kryflex
 
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
 KRYFLEX = run_env.KRYFLEX

@@ -15,7 +15,8 @@ import pytest
 import scipy.io
 import scipy.linalg as sl
 
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 GUIDE = os.path.join(ROOT, "docs", "guide", "real-models.md")
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")

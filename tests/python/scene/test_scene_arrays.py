@@ -4,6 +4,7 @@ through the one resolver io/scene.py resolve(). The Galileo scene given as array
 from its files; bad arrays give the scene's usual one-line errors."""
 import copy
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -15,7 +16,8 @@ from petsc4py import PETSc
 import kryflex
 from kryflex.io import scene as scene_io
 from kryflex.io.scene_schema import SceneError
-import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 GALILEO = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))), "meshes", "galileo", "galileo.yaml")

@@ -7,6 +7,7 @@ measure against the one of the independent solutions; the command's files and re
 import json
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ import scipy.linalg as sl
 import scipy.signal as ss
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX

@@ -16,7 +16,8 @@ BASE_ENV  the caller's environment with
 ENV       BASE_ENV and OMPI_MCA_rmaps_base_oversubscribe = 1: mpiexec -n 2 (or more) must start on a machine with
           fewer free slots than ranks (2 cores shared with other jobs), where Open MPI would otherwise refuse.
           PYTHONPATH is left as the caller's: a module that needs the package adds PYTHONPATH=PACKAGE (the package
-          alone) or PYTHONPATH=PYTHONPATH (the package first, then the caller's).
+          alone) or PYTHONPATH=PYTHONPATH (the package first, then the caller's). A new module takes ENV; the modules
+          that never asked for oversubscription (one process, or 2 ranks on the 2 cores) keep BASE_ENV.
 
 A module makes its own from these, e.g. ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 (MPLBACKEND=Agg: a child that plots draws no window). Copy before changing: these dicts are shared by every module.

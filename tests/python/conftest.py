@@ -6,6 +6,7 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
 
+import run_env  # noqa: E402,F401  (before kryflex: the subprocesses' environment is the caller's, see run_env)
 import kryflex  # noqa: F401  (first: the tests see the MUMPS the kryflex command uses, whoever imports petsc4py)
 
 

@@ -23,8 +23,9 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 GALILEO_DIR = os.path.dirname(GALILEO)
 sys.path.insert(0, SUPPORT)
@@ -33,7 +34,7 @@ from test_example import rigid_mode_moments, normwise_errors  # noqa: E402  (the
 from conftest import reassembled  # noqa: E402
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL, EXIT_TARGET = 0, 2, 3, 4, 5, 6
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
+ENV = run_env.BASE_ENV
 PNG = b"\x89PNG\r\n\x1a\n"
 EPS = np.finfo(float).eps
 

@@ -25,11 +25,11 @@ import pytest
 from disk_full import after_init, at_model_save, write_site  # support/, on sys.path (tests/python/conftest.py)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, MPLBACKEND="Agg")
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL = 0, 1, 2, 3, 4, 5
 EXIT_TARGET, EXIT_SIGINT, EXIT_SIGTERM = 6, 130, 143
 MPIEXEC_SIGNALLED = 1          # Open MPI's mpiexec, signalled itself: SIGTERM to the ranks, then exit 1

@@ -19,15 +19,15 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 EXAMPLE = os.path.join(ROOT, "python", "examples", "two_body_scene.py")
-PYTHON = sys.executable
+PYTHON = run_env.PYTHON
 sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 from conftest import reassembled  # noqa: E402
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PYTHONPATH)
 NFREQ_PRINTED = 6
 
 

@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 NAMES = ("OMPI_MCA_pml", "OMPI_MCA_ess_singleton_isolated")
 PROBE = r"""
 import json, os, subprocess, sys
@@ -28,9 +28,9 @@ sys.stdout.write(json.dumps(out) + "\n")
 
 
 def env(**extra):
-    e = {k: v for k, v in os.environ.items() if k not in NAMES and not k.startswith(("OMPI_COMM_WORLD", "PMIX_", "PMI_"))}
-    e.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1",
-             OPENBLAS_NUM_THREADS="1", PYTHONPATH=os.path.join(ROOT, "python"))
+    e = {k: v for k, v in run_env.ENV.items()
+         if k not in NAMES and not k.startswith(("OMPI_COMM_WORLD", "PMIX_", "PMI_"))}
+    e.update(PYTHONPATH=run_env.PACKAGE)
     e.update(extra)
     return e
 

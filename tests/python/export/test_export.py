@@ -10,11 +10,12 @@ import sys
 import numpy as np
 import pytest
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 sys.path.insert(0, os.path.join(ROOT, "tests", "python", "support"))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 ANGLES = (0.0, 30.0, 60.0)
 MATCH = 1e-6            # the frequencies must agree to this (relative): the export adds no approximation
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode

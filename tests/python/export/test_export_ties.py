@@ -16,13 +16,13 @@ import scipy.linalg as sl
 from scipy.spatial.transform import Rotation
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "support"))
 import accuracy_scenes as acc  # noqa: E402
 
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 MATCH = 1e-6            # frequencies, relative (measured ~1e-10)
 FRF_MATCH = 1e-7        # frequency response, relative to the largest entry per input (measured: see the test)
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode

@@ -29,9 +29,10 @@ from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 import mpi_assembly_probe as probe  # noqa: E402
 import reference as ref  # noqa: E402
 
@@ -55,8 +56,7 @@ def tf_factor(what):
 TF_RTOL = 1e-10          # transfer function, relative (Frobenius over outputs x inputs), or eps * kappa(w) if larger
 EPS = np.finfo(float).eps
 GAP = 1e3                # zeros below ZERO_RTOL / GAP, flexible above ZERO_RTOL * GAP (relative to the largest)
-MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+MPI_ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 
 
 def load_frames():

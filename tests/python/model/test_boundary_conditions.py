@@ -15,9 +15,8 @@ import bc_models
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
 PROBE = os.path.join(SUPPORT, "bc_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))),
-                                                                           "python"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 TIMEOUT = 240
 
 # the rigid and mechanism modes each case must have (free beam on uz springs at both ends: ux, uy, rx, rz)

@@ -14,16 +14,16 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import panels  # noqa: E402
 import reference as ref  # noqa: E402
 
 ANGLES = [30.0, 30.0]       # both solar-array drives
 PAIR_FLOOR = 1e-4
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
 

@@ -25,6 +25,8 @@ import solid_assembly    # noqa: E402
 import solid_grid        # noqa: E402
 import solid_hex8        # noqa: E402
 import solid_spacecraft  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 TINY = 0.25
 E, NU, RHO = 70e9, 0.33, 2700.0
@@ -273,7 +275,7 @@ def test_scene_refers_to_existing_six_dof_nodes(tiny_scene):
 @pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
 def test_two_ranks_write_the_same_matrices(tiny_scene, tmp_path):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
+    env = run_env.BASE_ENV
     run = subprocess.run(["mpiexec", "-n", "2", sys.executable, str(SOLID / "generate.py"),
                           "--refine", str(TINY), "-o", str(tmp_path)],
                          env=env, capture_output=True, text=True, timeout=300)

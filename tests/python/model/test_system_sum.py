@@ -22,9 +22,10 @@ pytestmark = pytest.mark.fast   # the fast tier (tests/README.md)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+MPI_ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 
 NODES = {"root": [1, 2], "child": [1, 2, 3], "grandchild": [1, 2]}
 

@@ -32,16 +32,15 @@ from kryflex.results import Summary
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 import accuracy_scenes as acs  # noqa: E402
 import accuracy_sweep as sweep  # noqa: E402
 
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+KRYFLEX = run_env.KRYFLEX
 PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 EXIT_OK, EXIT_TARGET = 0, 6
 
 TARGETS = (1e-2, 1e-3, 1e-4)

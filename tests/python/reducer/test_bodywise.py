@@ -33,10 +33,12 @@ from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 PROBE = os.path.join(SUPPORT, "mpi_bodywise_probe.py")
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-KRYFLEX_CMD = os.path.join(ROOT, "build", "kryflex")
+KRYFLEX_CMD = run_env.KRYFLEX
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 
@@ -45,9 +47,7 @@ RANKS_SAME = 1e-9     # H K+ G on 1 vs 2 ranks (different dof numbering: roundin
 LOWEST = 12          # reduced-model frequencies compared (the 10 Hz band holds 4 of the frame's)
 REFERENCE = 1e-8      # against the dense NumPy least-squares reference (the 600-dof frame: cond ~ 1e6)
 ANGLES = {"galileo": "0;37.5;72;200", "frames": "0,0;45,120;210,330;90,10", "solid": "0;30;135;250"}
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,9 @@ import kryflex
 from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "support"))
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
@@ -30,8 +32,7 @@ import bc_models  # noqa: E402
 import frames  # noqa: E402
 import reference as ref  # noqa: E402
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 FAR = [[0.0], [90.0], [181.0], [-135.0], [359.0]]
 FAR2 = [[0.0, 0.0], [10.0, 250.0], [-170.0, 95.0], [333.0, -17.0]]
 

@@ -27,14 +27,14 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 import reference as ref  # noqa: E402
 
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg", PYTHONPATH=os.path.join(ROOT, "python"))
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV, MPLBACKEND="Agg", PYTHONPATH=run_env.PACKAGE)
 EXIT_INPUT = 2
 ANGLES = [0.0, 30.0]
 ACCURACY = 1e-3

@@ -35,14 +35,12 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import accuracy_scenes as acs  # noqa: E402
 
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV, MPLBACKEND="Agg", PYTHONPATH=run_env.PYTHONPATH)
 TARGETS = (0.05, 1e-2, 1e-3)
 SEARCH = {"moments": "auto", "search": True}   # the scene's other reduction settings are kept
 REPORTED_RTOL = 0.10                            # the reported error within 10 % of the measured one

@@ -22,15 +22,15 @@ from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 import reference as ref  # noqa: E402
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 RAYLEIGH = {"alpha": 0.02, "beta": 2e-5}
 
 pytestmark = pytest.mark.usefixtures("quiet_library")   # tests/python/conftest.py

@@ -29,11 +29,12 @@ from petsc4py import PETSc
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
 GALILEO = os.path.join(GALILEO_DIR, "galileo.yaml")
 PROBE = os.path.join(SUPPORT, "mpi_krylov_probe.py")
-sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("frames", os.path.join(ROOT, "meshes", "frames.py"))
@@ -278,8 +279,7 @@ def test_generated_5000_dof_scene_moments_match(tmp_path):
 # ============================================================================ serial vs 2 ranks
 
 def run_probe(scene_path, out, nranks):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+    env = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
     cmd = [sys.executable, PROBE, scene_path, out]
     if nranks > 1:
         cmd = ["mpiexec", "-n", str(nranks)] + cmd

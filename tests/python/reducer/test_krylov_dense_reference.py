@@ -27,7 +27,9 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 PROBE = os.path.join(os.path.dirname(HERE), "support", "krylov_dense_probe.py")
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
@@ -62,8 +64,7 @@ def collocated_scene(free_scene, tmp_path_factory):
 
 
 def probe(scene, out, nranks, blocks=(8, 2)):
-    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1",
-               OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    env = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
     cmd = [sys.executable, PROBE, scene, out, "--input-blocks", str(blocks[0]), "--output-blocks", str(blocks[1])]
     if nranks > 1:
         cmd = ["mpiexec", "-n", str(nranks)] + cmd

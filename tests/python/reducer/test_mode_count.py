@@ -31,11 +31,10 @@ from mpi_assembly_probe import accurate_eigenvalues, zero_split  # noqa: E402
 pytestmark = [pytest.mark.usefixtures("quiet_library")]
 
 PROBE = os.path.join(SUPPORT, "mode_count_probe.py")
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 # taken at import, before this process initializes MPI (its singleton's variables would confuse mpiexec)
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 REL = 1e-6                      # just below / just above a mode, relative in frequency
 
 

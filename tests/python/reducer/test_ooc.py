@@ -9,11 +9,9 @@ import pytest
 import kryflex
 from solid_runs import reduce_solid, solid_scene
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1")
+import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV)   # a copy: MUMPS_OOC_TMPDIR is taken out below
 ENV.pop("MUMPS_OOC_TMPDIR", None)
 EXIT_NUMERIC = 3
 

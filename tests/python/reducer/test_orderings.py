@@ -22,11 +22,11 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX_CMD = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX_CMD = run_env.KRYFLEX
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 ONE_ANGLE = ("-scene.angles", "30", "-kf_verify", "false")
 SAME_FREQ = 1e-7     # reduced frequencies, relative: the orderings' factors differ by rounding (residuals ~1e-9)
 SAME_ERROR = 1e-6    # the estimated FRF error, relative

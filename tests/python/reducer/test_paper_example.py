@@ -19,14 +19,14 @@ import scipy.linalg as sl
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 import reference as ref  # noqa: E402
 
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 
 # Table 1 of the paper (Hz), flexible modes
 ROTOR = [0.1221, 1.0579, 2.8638, 3.4223, 4.9894, 5.2217, 73.425, 75.821, 76.998, 116.50, 116.51, 994.70, 994.70,

@@ -19,19 +19,19 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-KRYFLEX_CMD = os.path.join(ROOT, "build", "kryflex")
+KRYFLEX_CMD = run_env.KRYFLEX
 EXAMPLE = os.path.join(ROOT, "build", "examples", "reduce_galileo")
 PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-PYTHON = sys.executable
+PYTHON = run_env.PYTHON
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
 
 SAME = 1e-12
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 FRAMES_ANGLES = [[0.0, 0.0], [45.0, 120.0], [210.0, 330.0]]
 OTHER_ANGLES = {"galileo": [[7.5], [100.0]], "frames": [[10.0, 250.0], [-30.0, 95.0]]}
 

@@ -21,10 +21,11 @@ import scipy.linalg as sl
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 PROBE = os.path.join(SUPPORT, "reference_truth_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 TIMEOUT = 240
 PAIR_FLOOR = 1e-4          # KF_FRF_PAIR_FLOOR: a pair's peak below this fraction of the largest is measured against it
 RIGID = 3                  # a free plate out of its plane: uz, rx, ry

@@ -25,12 +25,11 @@ import bc_models  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 SAME = 1e-10          # sub-basis vs full way, relative to each matrix's largest entry (measured ~4e-14)
 SAME_ERROR = 1e-8     # the search's errors, relative and as a fraction of the target (measured 7e-12 apart at most on
                       # Galileo, 1.5e-10 on the grounded arm whose failing candidates have errors ~1)

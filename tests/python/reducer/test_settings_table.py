@@ -13,11 +13,12 @@ import jsonschema
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 SRC = os.path.join(ROOT, "src")
 TABLE_FILE = os.path.join(SRC, "util", "settings_table.c")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE)
 
 pytestmark = pytest.mark.fast
 

@@ -29,10 +29,9 @@ import accuracy_scenes as acc  # noqa: E402
 import reference as ref  # noqa: E402
 
 PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 TARGET = 1e-3
 ANGLE = 0.0           # the reduction angle
 OTHER = 40.0          # an angle the basis was not built at

@@ -17,8 +17,9 @@ import kryflex
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import bc_models  # noqa: E402
 import frames  # noqa: E402
@@ -26,8 +27,7 @@ import reference as ref  # noqa: E402
 
 pytestmark = [pytest.mark.fast, pytest.mark.usefixtures("quiet_library")]
 PROBE = os.path.join(SUPPORT, "sparse_eigen_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
 
 
 def dense_flexible_frequencies(M, K, rigid_rtol=1e-8):

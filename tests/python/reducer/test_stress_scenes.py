@@ -24,7 +24,8 @@ import accuracy_scenes as acc
 import elastic_measure as em
 import reference as ref
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+ROOT = run_env.ROOT
 VARIANTS = ["damping-heavy", "damping-light", "far-angle", "light-mass", "many-moments", "mimo-8x8", "repeated",
             "spread-1e-5", "spread-1e5"]
 ACCURACIES = [1e-2, 1e-3]
@@ -196,8 +197,7 @@ def test_floored_pairs_are_those_numpy_finds(scenes, variant, kind, ranks, tmp_p
     cmd = [os.path.join(ROOT, "build", "kryflex"), "reduce", scenes[variant], "-o", str(tmp_path / "out"), "-quiet"]
     if ranks > 1:
         cmd = ["mpiexec", "-n", str(ranks)] + cmd
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
+    env = run_env.ENV
     run = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
     assert run.returncode == 0, run.stdout[-1500:] + run.stderr[-1500:]
     with open(tmp_path / "out" / "summary.json", encoding="utf-8") as f:

@@ -28,14 +28,13 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
 
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 LIMIT = 3.0
 RECIPES = ("paper", "search")
 

@@ -3,16 +3,18 @@ without them writes, pixel for pixel (the PNGs' bytes too: the same encoder on t
 ranks, and leaves no helper running. The embedded Galileo scene at two angles (its paper section's figure included)."""
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
 from PIL import Image
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           MPLBACKEND="Agg")
+ENV = dict(run_env.BASE_ENV, MPLBACKEND="Agg")
 
 pytestmark = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (cmake --build build)")
 

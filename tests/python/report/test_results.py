@@ -13,6 +13,7 @@ import json
 import os
 import re
 import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -23,11 +24,13 @@ from kryflex.results import (SUMMARY_VERSION, Candidate, ChosenModel, FrequencyR
                              SummaryError, Verdict, _json_text)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 DATA = os.path.join(HERE, "data")
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1")
+ENV = run_env.BASE_ENV
 
 
 def old_summary():

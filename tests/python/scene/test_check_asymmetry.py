@@ -11,6 +11,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(
 from reference import petsc_matrix  # noqa: E402
 
 import kryflex  # noqa: E402
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 
 def symmetric(n=18, seed=3):
@@ -60,9 +61,7 @@ def main():
 @pytest.mark.mpi
 def test_asymmetry_matches_numpy_two_ranks():
     import subprocess
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYTHONPATH=os.path.join(root, "python"))
+    env = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
     p = subprocess.run(["mpiexec", "-n", "2", sys.executable, os.path.abspath(__file__)], env=env, capture_output=True,
                        text=True, timeout=300)
     assert p.returncode == 0, p.stderr

@@ -34,12 +34,12 @@ import kryflex
 from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
-COMMAND = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+COMMAND = run_env.KRYFLEX
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE + os.pathsep + os.environ.get("PYTHONPATH", ""))
 TIMEOUT = 120            # seconds per command: a hang is a failure, not a stuck test run
 EXIT_MODEL = 5
 

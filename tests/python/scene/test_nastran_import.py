@@ -11,17 +11,16 @@ import scipy.io
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 import nastran_model as nm  # noqa: E402
 
 from kryflex.io import dmig  # noqa: E402
 from kryflex.io.bodyfiles import ConversionError, ConversionWarning, dof_count, read_nodes  # noqa: E402
 from kryflex.io.convert import convert, main  # noqa: E402
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE)
+KRYFLEX = run_env.KRYFLEX
 # DMIG* fields carry 11-12 significant digits (1.2345678901+05): entries within 5e-11 relative of the reference
 ENTRY_RTOL = 1e-10
 

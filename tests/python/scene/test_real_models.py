@@ -17,12 +17,12 @@ import scipy.sparse as sp
 
 import kryflex
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
-           PYTHONPATH=os.path.join(ROOT, "python"))
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV, MPLBACKEND="Agg", PYTHONPATH=run_env.PACKAGE)
 # the example's own model builders, loaded from their file: other tests import meshes' generate.py under the same
 # module name, which the import system would hand back instead
 _spec = importlib.util.spec_from_file_location("single_structure_generate", os.path.join(EXAMPLE, "generate.py"))

@@ -15,14 +15,14 @@ import pytest
 import scipy.io
 import scipy.linalg as sl
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GUIDE = os.path.join(ROOT, "docs", "guide", "real-models.md")
 EXAMPLE = os.path.join(ROOT, "examples", "single_structure")
 GALILEO = os.path.join(ROOT, "meshes", "galileo")
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
-           PYTHONPATH=os.path.join(ROOT, "python"))
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.ENV, MPLBACKEND="Agg", PYTHONPATH=run_env.PACKAGE)
 
 pytestmark = [pytest.mark.slow, pytest.mark.mpi,
               pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built")]

@@ -4,6 +4,7 @@ through the one resolver io/scene.py resolve(). The Galileo scene given as array
 from its files; bad arrays give the scene's usual one-line errors."""
 import copy
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ from petsc4py import PETSc
 import kryflex
 from kryflex.io import scene as scene_io
 from kryflex.io.scene_schema import SceneError
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 GALILEO = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(HERE))), "meshes", "galileo", "galileo.yaml")
@@ -131,8 +134,7 @@ def test_arrays_on_two_ranks_match_serial():
     import json
     import subprocess
     import sys
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
+    env = run_env.ENV
     proc = subprocess.run(["mpiexec", "-n", "2", sys.executable, "-c", PROBE % HERE], env=env, capture_output=True,
                           text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr

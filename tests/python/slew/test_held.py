@@ -7,6 +7,7 @@ measure against the one of the independent solutions; the command's files and re
 import json
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -15,11 +16,12 @@ import scipy.linalg as sl
 import scipy.signal as ss
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
 EXAMPLES = os.path.join(ROOT, "examples", "single_structure")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, MPLBACKEND="Agg")
 PNG = b"\x89PNG\r\n\x1a\n"
 DOFS = {"ux": 0, "uy": 1, "uz": 2, "rx": 3, "ry": 4, "rz": 5}
 

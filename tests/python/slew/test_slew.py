@@ -13,14 +13,14 @@ import scipy.linalg as sl
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUPPORT = os.path.join(os.path.dirname(HERE), "support")   # the helpers (tests/python/support)
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 sys.path.insert(0, SUPPORT)
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
+GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 import reference as ref  # noqa: E402
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, MPLBACKEND="Agg")
 PNG = b"\x89PNG\r\n\x1a\n"
 
 

@@ -25,10 +25,11 @@ import sys
 import numpy as np
 import pytest
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           PYTHONPATH=os.path.join(ROOT, "python"), MPLBACKEND="Agg")
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
+KRYFLEX = run_env.KRYFLEX
+ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 NONLINEAR_FACTOR = 3.0    # outputs' response to the neglected (radial) loads against the drive's, per unit load ratio
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")

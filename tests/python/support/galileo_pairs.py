@@ -20,12 +20,11 @@ import kryflex
 import accuracy_scenes as acc
 
 SUPPORT = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(SUPPORT)))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 PROBE = os.path.join(SUPPORT, "mpi_reducer_probe.py")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1",
-           PYTHONPATH=os.pathsep.join(filter(None, [os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH")])))
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 TARGETS = (1e-3, 1e-4)
 
 

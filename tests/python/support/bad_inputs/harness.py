@@ -24,12 +24,11 @@ from typing import Callable, Optional
 import disk_full  # support/, on sys.path from tests/python/conftest.py
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(HERE))))
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+ROOT = run_env.ROOT
 GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
-COMMAND = os.path.join(ROOT, "build", "kryflex")
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg",
-           PYTHONPATH=os.path.join(ROOT, "python") + (":" + os.environ["PYTHONPATH"] if os.environ.get("PYTHONPATH") else ""))
+COMMAND = run_env.KRYFLEX
+ENV = dict(run_env.ENV, MPLBACKEND="Agg", PYTHONPATH=run_env.PYTHONPATH)
 
 # the documented exit-code table (python/kryflex/cli/common.py holds the same constants)
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL, EXIT_TARGET = 0, 1, 2, 3, 4, 5, 6

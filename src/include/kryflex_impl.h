@@ -102,6 +102,7 @@ PETSC_INTERN PetscErrorCode KFHoldDofsInPlace(Mat, PetscInt, const PetscInt[], P
 PETSC_INTERN PetscErrorCode KFRestoreHeldDofs(Mat, KFHeldEntries *);
 
 struct _n_KFSystem {
+  PetscInt  refct;           /* KFSystemReference: a reducer may hold one handed to it (KFReducerSetSystem) */
   KFScene   scene;
   PetscInt  nb;              /* bodies: destroying needs no scene */
   PetscBool assembled;

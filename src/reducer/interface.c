@@ -175,6 +175,8 @@ PetscErrorCode KFReducerSetSystem(KFReducer r, KFSystem sys)
     PetscCheck(r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "set the scene first (KFReducerSetScene)");
     PetscCheck(sys->scene == r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_INCOMP, "the system belongs to another scene than the reducer's: give a system made of the reducer's scene (KFSystemCreate)");
     PetscCheck(sys->assembled, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "the system is not assembled: call KFSystemSetAngles() first");
+    /* body factors made by earlier solves on it hold their own options and shift, not the reducer's */
+    PetscCheck(!sys->bodyf, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the system holds the factorizations of solves made on it: give a system that has only been assembled (KFSystemSetAngles) and had its rigid modes computed");
     PetscCall(KFSystemReference(sys));
   }
   PetscCall(KFSystemDestroy(&r->given_sys));

@@ -119,4 +119,6 @@ def test_the_handed_system_is_the_reducers_own(solid, tmp_path):
         assert res["keys_equal"] and res["numeric"] >= 10
         assert "another scene" in res["refused"]
     assert one["equal"] == one["numeric"]                       # bit for bit on 1 rank
-    assert two["rel_given"] <= max(10 * two["rel_again"], 1e-11)
+    # two runs of the same 2-rank reduction differ by up to 1.6e-11 of a dataset's largest entry (the 2,760-dof solid,
+    # kryflex reduce, three runs of main): round-off, not a different system
+    assert two["rel_given"] <= max(10 * two["rel_again"], 1e-9)

@@ -221,6 +221,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetOptionsPrefix(KFReducer, const char*)
     PetscErrorCode KFReducerSetScene(KFReducer, KFScene)
     PetscErrorCode KFReducerGetScene(KFReducer, KFScene*)
+    PetscErrorCode KFReducerSetSystem(KFReducer, KFSystem)
     PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt, const PetscReal*)
     PetscErrorCode KFReducerGetAngles(KFReducer, PetscInt*, const PetscReal**)
     PetscErrorCode KFReducerSetReductionAngle(KFReducer, const PetscReal*)

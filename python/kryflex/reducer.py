@@ -154,6 +154,13 @@ class Reducer:
         collective, and cheap."""
         self.handle.setup()
 
+    def start_from(self, system):
+        """The system of the scene's first configuration, assembled with its rigid modes (a CSystem after set_angles,
+        e.g. the model check's): the next reduce() takes its matrices and rigid modes there instead of making them
+        again, and then assembles it at the other configurations (do not use it afterwards). Collective: None on the
+        ranks that have none (then no rank uses it)."""
+        self.handle.set_system(system)
+
     def verification_plan(self):
         """(measured, certified) as the solve will give its verdict: measured against the full order, or estimated
         and certified by the mode count (verify.full_order auto from verify.certified_min_dofs; where the count finds

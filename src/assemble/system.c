@@ -11,6 +11,7 @@ PetscErrorCode KFSystemCreate(KFScene s, KFSystem *sys)
   PetscFunctionBegin;
   PetscCall(KFSceneSetUp(s));
   PetscCall(PetscNew(&y));
+  y->refct = 1;
   PetscCall(PetscObjectReference((PetscObject)s)); /* the scene lives as long as the system */
   y->scene = s;
   y->nb    = s->nb;
@@ -27,6 +28,8 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
 
   PetscFunctionBegin;
   if (!y) PetscFunctionReturn(0);
+  *sys = NULL;
+  if (--y->refct > 0) PetscFunctionReturn(0);
   for (PetscInt b = 0; b < y->nb; b++) PetscCall(MatDestroy(&y->P[b]));
   PetscCall(PetscFree3(y->Q, y->o, y->P));
   PetscCall(PetscFree(y->angles));
@@ -39,7 +42,15 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(KFBodyFactorsDestroy(&y->bodyf));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
-  *sys = NULL;
+  PetscFunctionReturn(0);
+}
+
+/* one more holder: KFSystemDestroy frees the system when the last one lets it go (PetscObjectReference's idiom) */
+PetscErrorCode KFSystemReference(KFSystem y)
+{
+  PetscFunctionBegin;
+  PetscValidPointer(y, 1);
+  y->refct++;
   PetscFunctionReturn(0);
 }
 

@@ -105,6 +105,8 @@ typedef struct _n_KFSystem *KFSystem;
 /* A system at one configuration. KFSystemSetAngles (re)assembles, reusing the symbolic work. */
 PETSC_EXTERN PetscErrorCode KFSystemCreate(KFScene, KFSystem *);
 PETSC_EXTERN PetscErrorCode KFSystemDestroy(KFSystem *);
+/* one more holder (PetscObjectReference's idiom): KFSystemDestroy frees the system when the last holder lets it go */
+PETSC_EXTERN PetscErrorCode KFSystemReference(KFSystem);
 /* angles: one per revolute joint, in the order the joints were added, radians */
 PETSC_EXTERN PetscErrorCode KFSystemSetAngles(KFSystem, const PetscReal angles[]);
 /* how many configurations this system will be solved at (default 1): -kf_flex_solver auto factors the bodies once for
@@ -445,6 +447,11 @@ PETSC_EXTERN PetscErrorCode KFReducerSetOptionsPrefix(KFReducer, const char[]);
 /* the scene is referenced; it is set up if it is not yet */
 PETSC_EXTERN PetscErrorCode KFReducerSetScene(KFReducer, KFScene);
 PETSC_EXTERN PetscErrorCode KFReducerGetScene(KFReducer, KFScene *);
+/* an assembled system of the reducer's scene (after KFSystemSetAngles) the next KFReducerSolve starts from: at its
+   first configuration, where the angles are the system's, the solve takes its matrices and rigid modes instead of
+   making them again. Referenced until that solve ends, which assembles the system at its other configurations.
+   Collective; NULL drops one given before */
+PETSC_EXTERN PetscErrorCode KFReducerSetSystem(KFReducer, KFSystem);
 /* angles of interest: nconfig configurations of nrevolute angles each (radians), row by row */
 PETSC_EXTERN PetscErrorCode KFReducerSetAngles(KFReducer, PetscInt nconfig, const PetscReal angles[]);
 /* the angles of interest as the reducer has them (after KFReducerSetFromOptions: -kf_angles); owned by the reducer */

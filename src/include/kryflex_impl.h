@@ -102,6 +102,7 @@ PETSC_INTERN PetscErrorCode KFHoldDofsInPlace(Mat, PetscInt, const PetscInt[], P
 PETSC_INTERN PetscErrorCode KFRestoreHeldDofs(Mat, KFHeldEntries *);
 
 struct _n_KFSystem {
+  PetscInt  refct;           /* KFSystemReference: a reducer may hold one handed to it (KFReducerSetSystem) */
   KFScene   scene;
   PetscInt  nb;              /* bodies: destroying needs no scene */
   PetscBool assembled;
@@ -172,6 +173,7 @@ PETSC_INTERN PetscErrorCode KFArraySkinnyMultSet(PetscInt nl, PetscInt nc, const
 PETSC_INTERN PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const PetscScalar *A, PetscInt lda, PetscInt p, PetscScalar alpha, const PetscScalar *c, PetscInt ldc, PetscScalar *X, PetscInt ldx); /* X += alpha A c, local rows, chunked */
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in double-double, rounded once */
 PETSC_INTERN PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y);    /* Y = A X in double: MatMatMult's bits, faster */
+PETSC_INTERN PetscErrorCode KFMatMultDenseInto(Mat A, Mat X, Mat Y); /* the same into the caller's dense Y */
 /* KFSystemProject with V^T M V given (NULL: formed) (src/project/reduced_system.c) */
 PETSC_INTERN PetscErrorCode KFSystemProjectGram_Private(KFSystem, BV V, const PetscReal gram[], PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);

@@ -145,12 +145,42 @@ PetscErrorCode KFReducerSetScene(KFReducer r, KFScene scene)
   PetscValidPointer(scene, 2);
   if (!scene->setup) PetscCall(KFSceneSetUp(scene));
   PetscCall(PetscObjectReference((PetscObject)scene));
+  PetscCall(KFSystemDestroy(&r->given_sys)); /* made of the scene it replaces */
   PetscCall(KFSceneDestroy(&r->scene));
   r->scene = scene;
   PetscCall(KFSceneGetInfo(scene, NULL, NULL, &nrev, NULL, NULL, NULL));
   PetscCall(PetscFree(r->alpha_g));
   PetscCall(PetscCalloc1(PetscMax(nrev, 1), &r->alpha_g));
   r->setupcalled = PETSC_FALSE;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducerSetSystem - an assembled system of the reducer's scene (KFSystemSetAngles, its rigid modes as computed or
+  set) that the next KFReducerSolve starts from: where its angles are those of the solve's first configuration, the
+  solve uses its matrices and rigid modes instead of assembling and computing them again (a model check made them
+  there, kryflex reduce). The reducer holds a reference until that solve ends, and the solve assembles the system at
+  its other configurations: the caller should not rely on its state afterwards. NULL drops a system given before.
+  Collective: a system given on some ranks only is dropped on all (the solve's assemblies are collective).
+*/
+PetscErrorCode KFReducerSetSystem(KFReducer r, KFSystem sys)
+{
+  PetscBool given = (PetscBool)(sys != NULL), all;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
+  PetscCall(MPIU_Allreduce(&given, &all, 1, MPIU_BOOL, MPI_LAND, PetscObjectComm((PetscObject)r)));
+  if (!all) sys = NULL;
+  if (sys) {
+    PetscCheck(r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "set the scene first (KFReducerSetScene)");
+    PetscCheck(sys->scene == r->scene, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_INCOMP, "the system belongs to another scene than the reducer's: give a system made of the reducer's scene (KFSystemCreate)");
+    PetscCheck(sys->assembled, PetscObjectComm((PetscObject)r), PETSC_ERR_ORDER, "the system is not assembled: call KFSystemSetAngles() first");
+    /* body factors made by earlier solves on it hold their own options and shift, not the reducer's */
+    PetscCheck(!sys->bodyf, PetscObjectComm((PetscObject)r), PETSC_ERR_ARG_WRONG, "the system holds the factorizations of solves made on it: give a system that has only been assembled (KFSystemSetAngles) and had its rigid modes computed");
+    PetscCall(KFSystemReference(sys));
+  }
+  PetscCall(KFSystemDestroy(&r->given_sys));
+  r->given_sys = sys;
   PetscFunctionReturn(0);
 }
 
@@ -517,6 +547,7 @@ PetscErrorCode KFReducerDestroy(KFReducer *reducer)
   if (--((PetscObject)r)->refct > 0) PetscFunctionReturn(0);
   if (r->ops->destroy) PetscCall((*r->ops->destroy)(r));
   PetscCall(KFReducerReset(r));
+  PetscCall(KFSystemDestroy(&r->given_sys));
   PetscCall(KFSceneDestroy(&r->scene));
   PetscCall(PetscFree(r->angles));
   PetscCall(PetscFree(r->alpha_g));

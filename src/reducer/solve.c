@@ -176,6 +176,19 @@ static PetscErrorCode KFReducerAddFactorSetUp_Private(KFFlexSolver solver, Petsc
   PetscFunctionReturn(0);
 }
 
+/* The system a solve's configurations are assembled in: the one given to the reducer (KFReducerSetSystem), taken
+   over by this solve, or a new one */
+static PetscErrorCode KFReducerSystemCreate_Private(KFReducer r, KFSystem *sys)
+{
+  PetscFunctionBegin;
+  if (r->given_sys) {
+    *sys         = r->given_sys;
+    r->given_sys = NULL;
+    r->fresh_sys = *sys;
+  } else PetscCall(KFSystemCreate(r->scene, sys));
+  PetscFunctionReturn(0);
+}
+
 /* The per-configuration pipeline that the fixed recipe and the search share: the system at the configuration's
    angles, its rigid modes, its factored flexible solver (the reducer's prefix and shift) and the basis the reducer's
    type builds with it. times[0..2]: assembly, factorization, basis; setup_s: the factorization stage outside MUMPS. */
@@ -192,7 +205,10 @@ static PetscErrorCode KFReducerConfigBasis_Private(KFReducer r, KFSystem sys, Pe
   if (nrev) PetscCall(KFProgress(comm, "configuration %s deg", label));
   else PetscCall(KFProgress(comm, "the structure (no revolute joint)"));
   PetscCall(PetscTime(&t0));
-  PetscCall(KFSystemSetAngles(sys, angles));
+  /* a system handed over assembled at these very angles, untouched since: its matrices and rigid modes are what
+     assembling again would give (the same code on the same input) */
+  if (!(sys == r->fresh_sys && sys->assembled && KFSameAngles(nrev, sys->angles, angles))) PetscCall(KFSystemSetAngles(sys, angles));
+  r->fresh_sys = NULL;
   PetscCall(KFSystemGetRigidModes(sys, Phir, rigid_res));
   PetscCall(PetscTime(&t1));
   times[0] += t1 - t0;
@@ -454,7 +470,7 @@ static PetscErrorCode KFReducerSolveFixed_Private(KFReducer r, KFEvalPoint evals
   PetscCall(PetscCalloc1(fx.nc, &fx.candidates));
   if (r->nmulti > 1 || (!r->nmulti && r->nconfig > 1) || r->method == KF_METHOD_MULTI_ANGLE) PetscCall(KFBodyBasisCreate(r->scene, &fx.multi_bb));
   PetscCall(PetscMalloc1(fx.nc * fx.nrev1, &fx.multi_angles));
-  PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFReducerSystemCreate_Private(r, &sys));
   PetscCall(KFSystemSetConfigurationCount(sys, fx.nc));
   for (PetscInt i = 0; i < fx.nc; i++) PetscCall(KFReducerFixedConfig_Private(r, &fx, i, sys, evals, Lfull));
   PetscCall(KFSystemDestroy(&sys));
@@ -987,7 +1003,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   st.nrev1 = PetscMax(st.nrev, 1);
   PetscCall(KFReducerConfigurations_Private(r, st.nrev1, &st.nc, &st.configs));
   PetscCall(PetscCalloc1(st.nc, &st.visits));
-  PetscCall(KFSystemCreate(r->scene, &sys));
+  PetscCall(KFReducerSystemCreate_Private(r, &sys));
   PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify || r->certify ? neval - r->nconfig : 0))); /* the midpoints' references or counts too */
   for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
@@ -1220,6 +1236,8 @@ PetscErrorCode KFReducerSolve(KFReducer r)
   for (PetscInt e = 0; e < neval; e++) PetscCall(KFEvalPointDestroy_Private(&evals[e]));
   PetscCall(PetscFree(evals));
   PetscCall(PetscFree(Lfull));
+  PetscCall(KFSystemDestroy(&r->given_sys)); /* for this solve only, taken or not */
+  r->fresh_sys = NULL;
   r->solved = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(KF_EVENT_REDUCER_SOLVE, r, 0, 0, 0));
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view"));

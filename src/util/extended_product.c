@@ -167,7 +167,8 @@ static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, 
   PetscFunctionReturn(0);
 }
 
-/* Y = A X by the chunked sweeps above, extended (double-double) or plain */
+/* Y = A X by the chunked sweeps above, extended (double-double) or plain; *Y NULL: made here, else a dense matrix of
+   A's rows and X's columns that is overwritten */
 static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
 {
   PetscBool          mpi;
@@ -181,7 +182,14 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
   PetscCall(MatGetLocalSize(A, &nl, NULL));
   PetscCall(MatGetSize(A, &N, NULL));
   PetscCall(MatGetSize(X, NULL, &ncols));
-  PetscCall(KFDenseCreateUninitialized(comm, nl, N, ncols, Y)); /* every entry written below */
+  if (!*Y) PetscCall(KFDenseCreateUninitialized(comm, nl, N, ncols, Y)); /* every entry written below */
+  else {
+    PetscInt yl, yc;
+
+    PetscCall(MatGetLocalSize(*Y, &yl, NULL));
+    PetscCall(MatGetSize(*Y, NULL, &yc));
+    PetscCheck(yl == nl && yc == ncols, comm, PETSC_ERR_ARG_SIZ, "the product's matrix has %" PetscInt_FMT " local rows and %" PetscInt_FMT " columns, not %" PetscInt_FMT " and %" PetscInt_FMT, yl, yc, nl, ncols);
+  }
   PetscCall(PetscObjectTypeCompare((PetscObject)A, MATMPIAIJ, &mpi));
   PetscCall(MatDenseGetLDA(X, &ldx));
   PetscCall(MatDenseGetLDA(*Y, &ldy));
@@ -230,6 +238,7 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
 PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y)
 {
   PetscFunctionBegin;
+  *Y = NULL;
   PetscCall(KFMatMultChunked(PETSC_TRUE, A, X, Y));
   PetscFunctionReturn(0);
 }
@@ -243,7 +252,26 @@ PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y)
 
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompareAny((PetscObject)A, &aij, MATSEQAIJ, MATMPIAIJ, ""));
+  *Y = NULL;
   if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y));
   else PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Y));
+  PetscFunctionReturn(0);
+}
+
+/* The same into a dense Y the caller made (A's rows, X's columns; e.g. on an array of its own), overwritten */
+PetscErrorCode KFMatMultDenseInto(Mat A, Mat X, Mat Y)
+{
+  PetscBool aij;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)A, &aij, MATSEQAIJ, MATMPIAIJ, ""));
+  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, &Y));
+  else {
+    Mat T;
+
+    PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &T));
+    PetscCall(MatCopy(T, Y, SAME_NONZERO_PATTERN));
+    PetscCall(MatDestroy(&T));
+  }
   PetscFunctionReturn(0);
 }

@@ -57,6 +57,13 @@ cdef class CReducer:
         check(KFReducerSetScene(self.r, scene.s))
         self.scene = scene
 
+    def set_system(self, CSystem system):
+        """An assembled system of the scene (CSystem.set_angles) the next solve starts from: at the angles of its first
+        configuration it takes the system's matrices and rigid modes instead of making them again
+        (KFReducerSetSystem). The reducer holds the system until that solve ends and assembles it at its other
+        configurations; None drops one given before."""
+        check(KFReducerSetSystem(self.r, NULL if system is None else system.y))
+
     def set_angles(self, angles_rad):
         """The angles of interest: (nconfig, nrevolute) radians."""
         cdef cnp.ndarray a

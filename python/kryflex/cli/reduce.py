@@ -65,7 +65,7 @@ def run(argv):
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
         # the model check (kryflex check): its warnings before any work, also under -quiet
-        health = collective(lambda: model_check(scene))
+        health, checked = collective(lambda: model_check(scene))
         for f in (health[1] if health else []):
             if f.severity == "warning" and not f.refused:
                 say("kryflex: warning: %s" % f.text(), sys.stderr)
@@ -74,6 +74,9 @@ def run(argv):
         reducer = collective(lambda: common.checked_reducer(scene, quiet=True if args.quiet else None),
                              (SceneError, EXIT_INPUT, str),
                              (_core.Error, EXIT_INPUT, lambda e: common.option_error(e, args.scene)))
+        # every rank, with or without a checked system (collective); the reducer's reference is then the system's last
+        collective(lambda: reducer.start_from(checked), (_core.Error, EXIT_NUMERIC, str))
+        checked = None
         if rank() == 0 and reducer.verification_plan()[0]:
             # the figures compare with the full order: their helper processes, where cores are free, load matplotlib
             # while the reduction runs (report/helper.py). An estimated verdict (-kf_verify false, or auto's certified
@@ -181,14 +184,18 @@ def at_text(label):
 
 
 def model_check(scene):
-    """(facts, findings) of kryflex check on the loaded scene, or None when the check itself cannot run (a model the
-    reducer will refuse with its own message: the rigid modes or the assembly fail)."""
+    """((facts, findings) of kryflex check on the loaded scene, the system it checked: a CSystem assembled at the first
+    configuration with its rigid modes, which the reduction starts from instead of making them again), or (None, None)
+    when the check itself cannot run (a model the reducer will refuse with its own message: the rigid modes or the
+    assembly fail)."""
     from .. import _core
     from ..check import REDUCE_DENSE_MAX, check_scene
     try:
-        return check_scene(scene, factor=False, dense_max=REDUCE_DENSE_MAX)
+        system = _core.CSystem(scene.cscene)
+        system.set_angles(scene.angles_rad(scene.configurations[0]))
+        return check_scene(scene, system=system, factor=False, dense_max=REDUCE_DENSE_MAX), system
     except _core.Error:
-        return None
+        return None, None
 
 
 def append_check_section(path, findings):

@@ -62,6 +62,8 @@ struct _p_KFReducer {
   PetscErrorCode (*candcache_reset)(KFReducer); /* releases it: set with it, called by KFReducerReset */
   KFScene   scene;
   PetscBool setupcalled, solved;
+  KFSystem  given_sys;  /* KFReducerSetSystem: an assembled system of the scene the next solve starts from */
+  KFSystem  fresh_sys;  /* that system, taken by the solve and not yet assembled again: its first visit may use it */
 
   /* what the reduction must serve */
   PetscInt        nconfig;        /* angles of interest: nconfig x nrevolute, radians */

@@ -176,6 +176,13 @@ def test_check_per_body_on_two_bodies():
 
 
 @pytest.mark.fast
+def system_at_first(scene):
+    from kryflex import _core
+    system = _core.CSystem(scene.cscene)
+    system.set_angles(scene.angles_rad(scene.configurations[0]))
+    return system
+
+
 def test_reduce_model_check_limits_the_dense_spectra():
     """kryflex reduce's model check computes the dense spectra up to REDUCE_DENSE_MAX system dofs (below: the same
     facts as kryflex check's, M's rank against a dense NumPy rank), above it says they were skipped and where they are
@@ -186,11 +193,11 @@ def test_reduce_model_check_limits_the_dense_spectra():
     full, found = kryflex.check_scene(scene, factor=False)
     n = full["system_dofs"]
     assert n <= REDUCE_DENSE_MAX < DENSE_MAX and full["dense"] and "dense_skipped" not in full
-    inside, _ = model_check(scene)
+    (inside, _), checked = model_check(scene)
     assert inside == full
-    from kryflex import _core
-    system = _core.CSystem(scene.cscene)
-    system.set_angles(scene.angles_rad(scene.configurations[0]))
+    # the system it checked, which the reduction starts from: assembled at the first configuration
+    assert checked.matrices()[0].equal(system_at_first(scene).matrices()[0])
+    system = system_at_first(scene)
     assert full["mass_rank"] == np.linalg.matrix_rank(_dense(system.matrices()[0]))
     skipped, found_skipped = kryflex.check_scene(scene, factor=False, dense_max=n - 1)
     assert not skipped["dense"] and "mass_rank" not in skipped and "verification_modes" not in skipped

@@ -599,7 +599,7 @@ static PetscErrorCode KFReducerCertifyFallback_Private(KFReducer r, PetscInt nev
 
 /* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
    the shorter way round) */
-static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
+PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
 {
   PetscInt nrev, nrev1, nmid;
 
@@ -993,7 +993,10 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
   if (r->certify) {
     PetscCall(PetscMalloc3(neval, &ccount, neval, &crigid, neval, &csigma));
-    PetscCall(KFReducerCertifyCount_Private(r, sys, neval, evals, ccount, crigid, csigma));
+    PetscBool got = PETSC_FALSE;
+
+    PetscCall(KFReducerCertifyCountRead_Private(r, neval, evals, ccount, crigid, csigma, &got));
+    if (!got) PetscCall(KFReducerCertifyCount_Private(r, sys, (PetscBool)!r->max_factorizations, neval, evals, ccount, crigid, csigma));
   }
   PetscCall(KFBodyFactorsDestroy(&r->count_bf)); /* the last reference is made: the count's factors go */
   if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */

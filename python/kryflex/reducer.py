@@ -182,6 +182,7 @@ class Reducer:
         """The certificate's counts at every configuration written to the file descriptor fd, as the solve would make
         them (the helper process of count_helper.py; one process)."""
         with quiet_progress(self.quiet), kf_options(self._options), self._flex_solver_option():
+            self.handle.setup()
             self.handle.certify_count_write(fd)
 
     def _flex_solver_option(self):

@@ -101,7 +101,7 @@ PetscErrorCode KFReducerSetCountSource(KFReducer r, int fd)
   PetscFunctionReturn(0);
 }
 
-/* The helper's side: the reducer set up as the reduction's (same scene, same options), the counts at every
+/* The helper's side: the reducer set up (KFReducerSetUp) as the reduction's (same scene, same options), the counts at every
    configuration made on factors of its own and written to fd */
 PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd)
 {
@@ -121,7 +121,7 @@ PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd)
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCheck(size == 1, comm, PETSC_ERR_SUP, "the count beside the reduction runs on one process");
   PetscCall(PetscTime(&t0));
-  PetscCall(KFReducerSetUp(r));
+  PetscCheck(r->setupcalled, comm, PETSC_ERR_ORDER, "call KFReducerSetUp() first");
   PetscCall(KFReducerGetVerificationPlan(r, NULL, &certified));
   PetscCheck(certified, comm, PETSC_ERR_ARG_WRONGSTATE, "the verification plan has no certificate: nothing to count");
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));

@@ -205,6 +205,7 @@ PetscErrorCode KFReducerCertifyCountRead_Private(KFReducer r, PetscInt neval, co
 {
   MPI_Comm       comm = PetscObjectComm((PetscObject)r);
   const char    *why  = NULL;
+  char           late[96];
   PetscLogDouble t0, t1, limit;
   PetscReal      seconds = 0;
   PetscInt       nrev;
@@ -231,7 +232,8 @@ PetscErrorCode KFReducerCertifyCountRead_Private(KFReducer r, PetscInt neval, co
     PetscCall(KFInterruptCheck(comm));
     PetscCall(PetscTime(&now));
     if (now - t0 > limit) {
-      why = "it took longer than the reduction beside it";
+      PetscCall(PetscSNPrintf(late, sizeof(late), "it was not done %.0f s after the reduction came to the count", (double)limit));
+      why = late;
       break;
     }
     k = poll(&pfd, 1, 200);

@@ -956,10 +956,10 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify || r->certify ? neval - r->nconfig : 0))); /* the midpoints' references or counts too */
   for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
-  if (r->certify) {
-    PetscCall(PetscMalloc3(neval, &ccount, neval, &crigid, neval, &csigma));
+  if (r->certify) { /* the helper process's counts (src/reducer/certify.c), else counted here */
     PetscBool got = PETSC_FALSE;
 
+    PetscCall(PetscMalloc3(neval, &ccount, neval, &crigid, neval, &csigma));
     PetscCall(KFReducerCertifyCountRead_Private(r, neval, evals, ccount, crigid, csigma, &got));
     if (!got) PetscCall(KFReducerCertifyCount_Private(r, sys, (PetscBool)!r->max_factorizations, neval, evals, ccount, crigid, csigma));
   }

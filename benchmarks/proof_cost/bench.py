@@ -108,6 +108,8 @@ def run(scene, out, extra, root=ROOT):
                 eigensolve=perf.get("reference_eigensolve_s"), check=perf.get("reference_check_s"),
                 search=perf.get("search_s"), count=perf.get("reference_count_s"),
                 certificate_count=perf.get("certificate_count_s"), kind=s.get("verdict_kind"),
+                count_helper=perf.get("certificate_count_helper_s"),
+                count_helper_rss=perf.get("certificate_count_helper_rss_mb"),
                 certificate=s.get("certificate"),
                 counts=[(int(a), float(b), int(c), float(d)) for a, b, c, d in COUNT_LINE.findall(proc.stdout)],
                 count_kind="body-wise" if "s, body-wise)" in proc.stdout else "monolithic",
@@ -122,6 +124,15 @@ def run(scene, out, extra, root=ROOT):
                 eigen_info=[(int(a), int(b), int(c), float(d)) for a, b, c, d in EIGEN_INFO.findall(proc.stdout)],
                 blocks=[(int(a), int(b)) for a, b in BLOCK_LINE.findall(proc.stdout)],
                 fallbacks=proc.stdout.count(BLOCK_FALLBACK))
+
+
+def helper_text(r):
+    """' (waited; the helper process's own 4.98 s beside the run, peak RSS 602 MB)' where the count helper counted
+    (kryflex/count_helper.py; its CPU is in the run's, the helper being the run's child)."""
+    if r.get("count_helper") is None:
+        return ""
+    return " (waited; the helper process's own %.2f s beside the run, peak RSS %.0f MB)" % (
+        r["count_helper"], r["count_helper_rss"] or float("nan"))
 
 
 def show_blocks(name, r):
@@ -202,11 +213,11 @@ def compare_trees(scene, refine, rep, args):
         denom = bare["factorization"] + bare["solves"]
         show("%s bare" % name, bare, denom)
         show("%s %s" % (name, kind_of(full)), full, denom)
-        print("%s: default (%s) / bare wall %.2f, CPU %.2f; CPU / wall %.2f; count %s s; report and plots %.2f s = "
+        print("%s: default (%s) / bare wall %.2f, CPU %.2f; CPU / wall %.2f; count %s s%s; report and plots %.2f s = "
               "%.1f %% of the default wall (by the line's stamp, as before: %.2f s, %.1f %%)" % (
                   name, kind_of(full), full["wall"] / bare["wall"], full["cpu"] / bare["cpu"],
                   full["cpu"] / full["wall"], "%.2f" % full["certificate_count"]
-                  if full["certificate_count"] is not None else "-", full["report"],
+                  if full["certificate_count"] is not None else "-", helper_text(full), full["report"],
                   100 * full["report"] / full["wall"], full["report_stamp"], 100 * full["report_stamp"] / full["wall"]))
     print("this / other: default wall %.3f, default CPU %.3f, report %.3f" % (
         got["this"][1]["wall"] / got["other"][1]["wall"], got["this"][1]["cpu"] / got["other"][1]["cpu"],
@@ -333,12 +344,12 @@ def main():
                 own = cert["factorization"] + (cert["certificate_count"] or 0) + cert["solves"]
                 c = cert["certificate"] or {}
                 print("certified: verdict %s; counts %s flexible modes below %s Hz (full order / richest candidate "
-                      "per configuration); count %.2f s; wall / (bare factorization + solves) %.2f; wall / (own "
+                      "per configuration); count %.2f s%s; wall / (bare factorization + solves) %.2f; wall / (own "
                       "factorizations + count + solves = %.2f s) %.2f; CPU %.2f; wall / measured %.2f; error %.12g "
                       "(bare %.12g, measured %.12g)" % (
                           cert["kind"], ",".join("%d/%d" % (a, b) for a, b in zip(c.get("full_counts", []),
                                                                                  c.get("rich_counts", []))),
-                          c.get("below_hz"), cert["certificate_count"] or 0, cert["wall"] / denom, own,
+                          c.get("below_hz"), cert["certificate_count"] or 0, helper_text(cert), cert["wall"] / denom, own,
                           cert["wall"] / own, cert["cpu"], cert["wall"] / full["wall"], cert["error"], bare["error"],
                           full["error"]))
             if slepc:

@@ -251,6 +251,8 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFReducerSetVerification(KFReducer, PetscBool, PetscInt, PetscInt, PetscReal)
     PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt)
     PetscErrorCode KFReducerGetVerificationPlan(KFReducer, PetscBool*, PetscBool*)
+    PetscErrorCode KFReducerSetCountSource(KFReducer, int)
+    PetscErrorCode KFReducerCertifyCountWrite(KFReducer, int)
     PetscErrorCode KFReducerSetFromOptions(KFReducer)
     PetscErrorCode KFReducerSetUp(KFReducer)
     PetscErrorCode KFReducerSolve(KFReducer)

@@ -185,6 +185,13 @@ class Reducer:
             self._reduction = Reduction(chosen, summary, single, multi)
         return self._reduction
 
+    def count_certificate(self, fd):
+        """The certificate's counts at every configuration written to the file descriptor fd, as the solve would make
+        them (the helper process of count_helper.py; one process)."""
+        with quiet_progress(self.quiet), kf_options(self._options), self._flex_solver_option():
+            self.handle.setup()
+            self.handle.certify_count_write(fd)
+
     def _flex_solver_option(self):
         """-kf_flex_solver for the solve: the keyword given to this reducer; else the scene's reduction.flex_solver
         unless the options (command line) give one."""

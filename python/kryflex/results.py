@@ -359,7 +359,11 @@ class Performance(Record):
     reference_eigensolve_s: float = _value(doc="the verification's full-order eigensolves")
     reference_check_s: float = _value(doc="the verification's direct solves of the full system")
     reference_count_s: float = _value(doc="the verification's mode counts by inertia (-kf_verify_count)")
-    certificate_count_s: float = _value(doc="the certified estimate's mode counts by inertia (-kf_verify auto)")
+    certificate_count_s: float = _value(doc="the certified estimate's mode counts by inertia (-kf_verify auto); "
+                                            "counted by the helper process: this process's wait for its counts")
+    certificate_count_helper_s: float = _value(doc="the helper process's own seconds for the counts (None: counted "
+                                                   "in-process)")
+    certificate_count_helper_rss_mb: float = _value(doc="the helper process's peak resident memory (its own factors)")
     search_s: float = _value(doc="the accuracy search")
     compress_s: float = _value(doc="the compression of the chosen model (-kf_compress)")
 
@@ -401,7 +405,8 @@ class Verdict(Record):
                                    "mode count equal to the richest candidate's at every configuration)")
     certificate: dict = _value(doc="the mode count of -kf_verify auto's estimate (None: not tried): below_hz, "
                                    "certified, and per configuration (angles of interest, then midpoints) "
-                                   "full_counts and rich_counts, the flexible modes below below_hz")
+                                   "full_counts and rich_counts, the flexible modes below below_hz; count_source "
+                                   "helper (counted beside the reduction) or in-process")
     floored_pairs: dict = _value(doc="per angle of interest (None: not verified), the [output, input] pairs whose "
                                      "error is measured against a floor, not their own peak: largest_pair (peak "
                                      "below 1e-4 of the largest pair's), own_total (elastic peak below 1e-6 of "

@@ -266,3 +266,38 @@ PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscI
   PetscCall(KFReducedModelDestroy(&model));
   PetscFunctionReturn(0);
 }
+
+/* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
+   the shorter way round) */
+PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
+{
+  PetscInt nrev, nrev1, nmid;
+
+  PetscFunctionBegin;
+  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
+  nrev1 = PetscMax(nrev, 1);
+  nmid  = nrev && r->nconfig > 1 ? r->nconfig - 1 : 0;
+  *neval = r->nconfig + nmid;
+  PetscCall(PetscCalloc1(*neval, evals));
+  for (PetscInt e = 0; e < *neval; e++) {
+    KFEvalPoint *p = &(*evals)[e];
+
+    PetscCall(PetscMalloc1(nrev1, &p->angles));
+    if (e < r->nconfig) {
+      p->interest = e;
+      PetscCall(PetscArraycpy(p->angles, &r->angles[e * nrev1], nrev1));
+    } else {
+      const PetscReal *x = &r->angles[(e - r->nconfig) * nrev1], *y = &r->angles[(e - r->nconfig + 1) * nrev1];
+
+      p->interest = -1;
+      for (PetscInt j = 0; j < nrev1; j++) {
+        PetscReal d = y[j] - x[j];
+
+        while (d > PETSC_PI) d -= 2 * PETSC_PI;
+        while (d < -PETSC_PI) d += 2 * PETSC_PI;
+        p->angles[j] = x[j] + 0.5 * d;
+      }
+    }
+  }
+  PetscFunctionReturn(0);
+}

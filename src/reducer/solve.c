@@ -613,41 +613,6 @@ static PetscErrorCode KFReducerCertifyFallback_Private(KFReducer r, PetscInt nev
   PetscFunctionReturn(0);
 }
 
-/* evaluation points: the angles of interest, then the midpoints between consecutive ones (one joint angle each:
-   the shorter way round) */
-static PetscErrorCode KFReducerEvalPoints_Private(KFReducer r, PetscInt *neval, KFEvalPoint **evals)
-{
-  PetscInt nrev, nrev1, nmid;
-
-  PetscFunctionBegin;
-  PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, &nrev, NULL, NULL, NULL));
-  nrev1 = PetscMax(nrev, 1);
-  nmid  = nrev && r->nconfig > 1 ? r->nconfig - 1 : 0;
-  *neval = r->nconfig + nmid;
-  PetscCall(PetscCalloc1(*neval, evals));
-  for (PetscInt e = 0; e < *neval; e++) {
-    KFEvalPoint *p = &(*evals)[e];
-
-    PetscCall(PetscMalloc1(nrev1, &p->angles));
-    if (e < r->nconfig) {
-      p->interest = e;
-      PetscCall(PetscArraycpy(p->angles, &r->angles[e * nrev1], nrev1));
-    } else {
-      const PetscReal *x = &r->angles[(e - r->nconfig) * nrev1], *y = &r->angles[(e - r->nconfig + 1) * nrev1];
-
-      p->interest = -1;
-      for (PetscInt j = 0; j < nrev1; j++) {
-        PetscReal d = y[j] - x[j];
-
-        while (d > PETSC_PI) d -= 2 * PETSC_PI;
-        while (d < -PETSC_PI) d += 2 * PETSC_PI;
-        p->angles[j] = x[j] + 0.5 * d;
-      }
-    }
-  }
-  PetscFunctionReturn(0);
-}
-
 /* the search's way: every configuration's basis kept (moments up to moments_max), the references, the search, and
    the best model of each family */
 /* The search's state across its visits */
@@ -1007,9 +972,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFSystemSetConfigurationCount(sys, st.nc + (r->verify || r->certify ? neval - r->nconfig : 0))); /* the midpoints' references or counts too */
   for (PetscInt i = 0; i < st.nc; i++) PetscCall(KFReducerSearchVisit_Private(r, &st, i, sys, evals, Lfull));
   if (r->verify) PetscCall(KFReducerMidpointReferences_Private(r, sys, neval, evals, &st.times[6]));
-  if (r->certify) {
+  if (r->certify) { /* the helper process's counts (src/reducer/certify.c), else counted here */
+    PetscBool got = PETSC_FALSE;
+
     PetscCall(PetscMalloc3(neval, &ccount, neval, &crigid, neval, &csigma));
-    PetscCall(KFReducerCertifyCount_Private(r, sys, neval, evals, ccount, crigid, csigma));
+    PetscCall(KFReducerCertifyCountRead_Private(r, neval, evals, ccount, crigid, csigma, &got));
+    if (!got) PetscCall(KFReducerCertifyCount_Private(r, sys, (PetscBool)!r->max_factorizations, neval, evals, ccount, crigid, csigma));
   }
   PetscCall(KFBodyFactorsDestroy(&r->count_bf)); /* the last reference is made: the count's factors go */
   if (!r->max_factorizations) PetscCall(KFSystemDestroy(&sys)); /* else kept for the expansion points' factorizations */

@@ -226,6 +226,15 @@ cdef class CReducer:
         check(KFReducerGetVerificationPlan(self.r, &measured, &certified))
         return bool(measured), bool(certified)
 
+    def set_count_source(self, int fd):
+        """The read end of the pipe a helper process writes the certificate's counts to (-1: counted in-process);
+        the caller keeps it open until the solve ends and closes it."""
+        check(KFReducerSetCountSource(self.r, fd))
+
+    def certify_count_write(self, int fd):
+        """The helper's side: the certificate's counts at every configuration, written to fd."""
+        check(KFReducerCertifyCountWrite(self.r, fd))
+
     def set_from_options(self):
         check(KFReducerSetFromOptions(self.r))
 

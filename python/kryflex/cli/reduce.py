@@ -61,6 +61,7 @@ def run(argv):
     ooc_folder_default(staging.path)
     committed = False
     pending = []        # the report begun, finished after the model file is written
+    counting = []       # the certificate's count helper, while it runs
     try:
         scene = collective(lambda: load_scene(args.scene), (SceneError, EXIT_INPUT, str),
                            (_core.Error, EXIT_INPUT, lambda e: "%s: %s" % (args.scene, e)))
@@ -88,7 +89,15 @@ def run(argv):
             start_helpers(ranks=common.size(), prepare={
                 "band_hz": list(scene.band), "configurations": len(scene.configurations),
                 "pairs": pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []})
+        if common.size() == 1:
+            # the certificate's count beside the reduction, on a free core (count_helper.py)
+            from .. import count_helper
+            counting.append(count_helper.start(reducer, args.scene, staging.path, common.size()))
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
+        if counting and counting[0] is not None:
+            rss = counting.pop().stop()      # its counts are taken: its memory freed before the report
+            if result.summary.performance is not None:
+                result.summary.performance.certificate_count_helper_rss_mb = rss
 
         s = result.summary
         if health:
@@ -133,6 +142,9 @@ def run(argv):
         collective(lambda: staging.commit() if rank() == 0 else None, cannot, interruptible=False)
         committed = True
     finally:
+        for helper in counting:
+            if helper is not None:
+                helper.stop()
         if rank() == 0 and "kryflex.report.helper" in sys.modules:
             for report in pending:
                 report.stop()

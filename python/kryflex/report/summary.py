@@ -50,6 +50,7 @@ PERFORMANCE = [("time_factor_total", "factorization_s"), ("time_solves", "solves
                ("solve_residual_final_max", "residual_final_max"), ("factor_memory_estimate_mb", "memory_estimate_mb"),
                ("time_reference_eigensolve", "reference_eigensolve_s"), ("time_reference_check", "reference_check_s"),
                ("time_reference_count", "reference_count_s"), ("time_certificate_count", "certificate_count_s"),
+               ("time_certificate_count_helper", "certificate_count_helper_s"),
                ("time_search", "search_s"), ("time_compress", "compress_s")]
 PERFORMANCE_COUNTS = ("solve_calls", "solve_columns", "refinement_solves", "blocks_unconverged", "blocks_escalated")  # ints in the JSON
 
@@ -223,7 +224,9 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         out["certificate"] = {"certified": bool(certified),
                               "below_hz": _optional_scalar(reducer, -1, "certificate_below_hz", whole),
                               "full_counts": [int(x) for x in np.ravel(reducer.result(-1, "certificate_full_counts"))],
-                              "rich_counts": [int(x) for x in np.ravel(reducer.result(-1, "certificate_rich_counts"))]}
+                              "rich_counts": [int(x) for x in np.ravel(reducer.result(-1, "certificate_rich_counts"))],
+                              "count_source": "helper" if _optional_scalar(reducer, -1, "certificate_count_helper",
+                                                                           whole) else "in-process"}
     out["verdict_kind"] = None if out["error_max"] is None else (
         "measured" if not out["error_estimated"] else "certified" if certified else "estimated")
     out["moments_matched"] = _optional_scalar(reducer, -1, "moments_matched", whole, int)

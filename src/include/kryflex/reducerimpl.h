@@ -93,6 +93,9 @@ struct _p_KFReducer {
   PetscReal       verify_certified_cover; /* the certificate counts modes below this multiple of the band's top */
   PetscReal       verify_certified_min_accuracy; /* auto measures targets tighter than this */
   PetscBool       certify;        /* this solve's estimate is certified (resolved from verify_auto at KFReducerSolve) */
+  int             count_fd;       /* -1, or the pipe a helper process writes the certificate's counts to
+                                     (KFReducerSetCountSource, src/reducer/certify.c) */
+  PetscLogDouble  count_t0;       /* when the helper started */
   PetscInt        verify_modes;   /* PETSC_DECIDE: cover verify_cover x the band's top */
   PetscReal       verify_cover;
   PetscInt        verify_check_points; /* direct solves per evaluation point checking the reference (0: none) */
@@ -239,7 +242,9 @@ typedef struct _KFEvalPoint {
 PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 /* the estimated verdict's certificate by the mode count (src/reducer/certify.c) */
-PETSC_INTERN PetscErrorCode KFReducerCertifyCount_Private(KFReducer, KFSystem, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[]);
+PETSC_INTERN PetscErrorCode KFReducerCertifyCount_Private(KFReducer, KFSystem, PetscBool reuse, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[]);
+PETSC_INTERN PetscErrorCode KFReducerCertifyCountRead_Private(KFReducer, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[], PetscBool *got);
+PETSC_INTERN PetscErrorCode KFReducerEvalPoints_Private(KFReducer, PetscInt *neval, KFEvalPoint **evals);
 PETSC_INTERN PetscErrorCode KFReducerCertifyCompare_Private(KFReducer, PetscInt neval, const KFEvalPoint[], const PetscInt count[], const PetscInt nrigid[], const PetscReal sigma[], PetscBool *certified);
 /* the full-order moments at the system's configuration: from its basis (NULL: none) where it matches them, else by
    solves; kg (or NULL): K+ P^T G for the reference check */

@@ -179,6 +179,12 @@ def numbers(x):
     return [float(x)] if isinstance(x, (int, float)) and not isinstance(x, bool) else []
 
 
+# the two solves' FRF errors differ by rounding below the floor (~1e-7) at which both models match the full one: 1.1e-9
+# on 1 rank and 1.9e-9 on 2 (test_bodywise_spread) on an AMD EPYC (2026-12-01), below 1e-9 on the machine before;
+# bounded at a tenth of that floor
+SAME_AT_FLOOR = 1e-8
+
+
 def test_multi_angle_reduction_same_model(scenes):
     """The frame reduced by the multi-angle recipe (its configurations and midpoints, full verification) with each
     solve: the same kept modes and reduced size, the same lowest frequencies at any angle, the same full-order
@@ -201,7 +207,7 @@ def test_multi_angle_reduction_same_model(scenes):
     for key in ("frf", "error_max", "dominant_freq_error"):
         a, b = numbers(sm[key]), numbers(sb[key])
         assert len(a) == len(b) > 0, key
-        assert np.abs(np.asarray(b) - np.asarray(a)).max() <= 1e-9, key
+        assert np.abs(np.asarray(b) - np.asarray(a)).max() <= SAME_AT_FLOOR, key
     # both at the rounding floor: on the elastic measure (the elastic peak, below the total one, divides it)
     # measured 9.2e-8
     assert sm["error_max"] <= 1e-6 and sb["error_max"] <= 1e-6

@@ -30,6 +30,10 @@ VARIANTS = ["damping-heavy", "damping-light", "far-angle", "light-mass", "many-m
             "spread-1e-5", "spread-1e5"]
 ACCURACIES = [1e-2, 1e-3]
 AGREE_RTOL = 0.02     # kryflex's measured error against the dense NumPy one (different grids, same measure)
+# below this the two errors cannot be told apart: kryflex's full-order reference is held to 1e-6 of a pair's peak
+# against direct solves (its reference check), and the error is a difference of two responses over that peak.
+# Measured: repeated at 1e-3, 5.7e-6 against the dense 4.2e-6 on an AMD EPYC (2026-12-01; within 1e-6 before)
+REFERENCE_FLOOR = 2e-6
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +109,7 @@ def test_measured_error_is_the_dense_one(scenes, variant, accuracy, quiet_librar
         assert s.target_met == (truth <= accuracy)
     if (variant, accuracy) in UNEXPLAINED:
         request.applymarker(pytest.mark.xfail(strict=True, reason="measured and dense errors differ (see above)"))
-    assert abs(s.error_max - truth) <= AGREE_RTOL * truth + 1e-3 * accuracy
+    assert abs(s.error_max - truth) <= AGREE_RTOL * truth + max(1e-3 * accuracy, REFERENCE_FLOOR)
 
 
 @pytest.mark.parametrize("accuracy", ACCURACIES)

@@ -473,8 +473,10 @@ def test_signals_leave_the_earlier_results(previous, frames, case):
     graced = ranks > 1 and to == "process" and during == "reduce"
     if ranks > 1 and to == "process" and during == "write":
         # mpiexec passes the SIGTERM on a grace late and kills a grace after: 3 s for the ranks to remove their staging
-        # (1 s was not always enough under load), the per-pair figures keeping the write going longer than the first
-        cmd += ["--pair-plots"]
+        # (1 s was not always enough under load), the per-pair figures at many angles keeping the write going longer
+        # than the first (at the scene's 6 angles a faster machine, 2026-12-01, wrote them all within the 3 s and
+        # replaced the results before the ranks saw the signal)
+        cmd += ["--pair-plots", "-scene.angles", MANY_ANGLES]
         env = dict(ENV, OMPI_MCA_odls_base_sigkill_timeout="3")
     if graced:
         env = dict(ENV, OMPI_MCA_odls_base_sigkill_timeout=str(MPIEXEC_GRACE))

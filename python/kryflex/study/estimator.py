@@ -113,8 +113,10 @@ def _starts(reducer, scene, cands):
         starts.append(block if auto_alpha else -1)
     nblocks = block + 1
     if auto_alpha and nblocks and nblocks != reducer.nconfig:
-        raise EstimatorCheckError("the single-angle rows of the search table fall into %d blocks, not one per angle "
-                                  "of interest (%d): cannot tell which alpha_G each candidate used"
+        raise EstimatorCheckError("the single-angle rows of the search table fall into %d blocks, not one per "
+                                  "configuration (%d): cannot tell which reduction configuration each candidate used "
+                                  "(under -kf_shared_directions auto, the default, the table holds a split and a tied "
+                                  "pass: give -kf_shared_directions false for the estimator check)"
                                   % (nblocks, reducer.nconfig))
     if not auto_alpha and nblocks > 1:
         raise EstimatorCheckError("the single-angle rows of the search table fall into %d blocks with a named "

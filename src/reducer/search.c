@@ -10,7 +10,7 @@
   Multi-angle family: expansion angles added one at a time (the angle of interest farthest from those already in),
   and for each set the fewest moments whose whole bases meet the target.
   Under -kf_shared_directions auto every candidate is tried split, then tied (a second pass, the table's variant
-  column).
+  column), except when the search is forced to the expansion-point family (-kf_shift_family_only): split alone.
   Tied candidates (-kf_shared_directions) under -kf_static_exact false: each bisection over kept clusters again with
   the kept clusters alone, without the static correction of the others (KFTriesNoStatic); at one size the candidate
   with the correction wins.
@@ -329,7 +329,10 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
   PetscCall(KFSearchPass(r, PETSC_FALSE, nvisit, visits, neval, evals, &tab, single, multi));
   split[0] = *single;
   split[1] = *multi;
-  if (r->shared_auto) { /* every candidate size again, tied: a tied model wins at one angle, a split one often at several */
+  /* every candidate size again, tied: a tied model wins at one angle, a split one often at several. Not when the search
+     is forced to the expansion-point family, whose model with points must be the one kept: it runs split (as false),
+     since the split model compressed may then replace a tied one (KFReducerSplitCompressed_Private) and its points */
+  if (r->shared_auto && !(r->max_factorizations && r->shift_family_only)) {
     KFCandidate ssingle = *single, smulti = *multi, tsingle, tmulti;
 
     PetscCall(KFSearchPass(r, PETSC_TRUE, nvisit, visits, neval, evals, &tab, &tsingle, &tmulti));

@@ -69,9 +69,7 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     """A model with points (the family forced, so that it is the one measured): its points lie in the band, their
     factorizations are reported and within the cap, L^0 is exact, and its elastic error is measured independently."""
     path, dense = solid
-    # split models (shared_directions false): under the default (auto) the forced family's model with points is not
-    # the one kept (no point chosen; the expansion-point search does not yet take tied candidates' measure)
-    red = reduce(path, accuracy=1e-4, max_factorizations=MAXF, shift_family_only=True, shared_directions=False)
+    red = reduce(path, accuracy=1e-4, max_factorizations=MAXF, shift_family_only=True)
     c = red.summary.chosen
     points = c.expansion_points_hz
     print("points %s Hz, %d factorizations, spent %d" % (points, c.expansion_point_factorizations,
@@ -85,11 +83,11 @@ def test_points_factored_inside_the_band_static_moment_exact(solid):
     err = static_error(red.model, dense, SOLID_ANGLES[0])
     el, tot = em.errors(red.model, dense, SOLID_ANGLES, SOLID_BAND, ZETA)
     L0p = red.model.at(SOLID_ANGLES[0]).moments(1)[0]
-    L0m = reduce(path, accuracy=1e-4, shared_directions=False).model.at(SOLID_ANGLES[0]).moments(1)[0]
+    L0m = reduce(path, accuracy=1e-4).model.at(SOLID_ANGLES[0]).moments(1)[0]
     same = float(np.linalg.norm(L0p - L0m) / np.linalg.norm(L0m))
     print("L0 relative error %.2e (against the moment-only model's %.2e); elastic %.2e, total %.2e, kryflex's %.2e"
           % (err, same, el, tot, c.worst_error))
-    floor = static_error(reduce(path, accuracy=1e-4, shared_directions=False).model, dense, SOLID_ANGLES[0])
+    floor = static_error(reduce(path, accuracy=1e-4).model, dense, SOLID_ANGLES[0])
     assert err <= STATIC_FLOOR * floor
     assert same <= STATIC_SAME
     # the model kryflex measured is the one the dense reference measures: its verdict holds (to the grids' 5 %) on
@@ -221,9 +219,7 @@ def test_multi_angle_points_at_every_expansion_angle(galileo):
     That model is not exact there: its bases at two angles share one body projection, deflated at the body
     tolerance, and it measured 2.3e-8 and 1.9e-8 at 0 and 72 deg on 2026-11-29."""
     path, dense, configs = galileo
-    # split models, as in test_points_factored_inside_the_band_static_moment_exact (under auto no point is kept)
-    red = reduce(path, accuracy=1e-3, method="multi-angle", max_factorizations=12, shift_family_only=True,
-                 shared_directions=False)
+    red = reduce(path, accuracy=1e-3, method="multi-angle", max_factorizations=12, shift_family_only=True)
     c = red.summary.chosen
     angles = c.expansion_angles_deg
     print("points %s Hz at angles %s, %d factorizations, %d dofs" % (c.expansion_points_hz, angles,
@@ -232,7 +228,7 @@ def test_multi_angle_points_at_every_expansion_angle(galileo):
     distinct = {tuple(a) for a in angles}
     assert len(distinct) >= 2
     assert c.expansion_point_factorizations == len(c.expansion_points_hz) * len(distinct)
-    base = reduce(path, accuracy=1e-3, method="multi-angle", shared_directions=False)
+    base = reduce(path, accuracy=1e-3, method="multi-angle")
     assert base.summary.chosen.expansion_points_hz == []
     for a in sorted(distinct):
         err, err0 = static_error(red.model, dense, list(a)), static_error(base.model, dense, list(a))

@@ -57,12 +57,9 @@ def main():
     spec = bench.kryflex_spec(scene_path, 0.0, beta, args.target)
     red = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, shared_directions="true")
     out = red.reduce()
-    tab = np.asarray(red.result(-1, "search_table")).reshape(-1, 7) if np.ndim(red.result(-1, "search_table")) == 1 \
-        else np.asarray(red.result(-1, "search_table"))
-    if tab.shape[1] != 7:
-        tab = tab.T
+    tab = np.asarray(red.result(-1, "search_table")).T   # 8 x ncand: one column per candidate
     print("tied search at %g: %d candidates (family, moments c, kept clusters, expansion angles, size = body dofs - "
-          "ties, system dofs, error)" % (args.target, len(tab)))
+          "ties, system dofs, error, variant)" % (args.target, len(tab)))
     for row in tab:
         print("  c=%d kept=%3d size=%3d sysdofs=%3d (elastic %d) error %.3g %s" % (
             row[1], row[2], row[4], row[5], row[5] - nr, row[6], "passes" if row[6] <= args.target else ""))

@@ -68,7 +68,13 @@ def _save_maps(value):
 
 def _shared_directions(value):
     """reduction.shared_directions: False (split), True (tied) or "auto" (the search measures both, keeps the smaller)."""
-    return "auto" if value == "auto" else value in (True, "true")
+    return "auto" if value in (None, "auto") else value in (True, "true")
+
+
+def _on_command_line(name):
+    """Whether PETSc's options database holds name (without its leading -)."""
+    from petsc4py import PETSc
+    return PETSc.Options().hasName(name)
 
 
 def _full_order(value):
@@ -126,9 +132,10 @@ class Reducer:
         r.eigen_set_cover(float(red["eigen_cover"]))
         r.set_verification(_full_order(ver["full_order"]), ver["modes"], int(ver["frequency_points"]),
                            float(ver["frf_floor_db"]), ver.get("certified_min_dofs"))
-        shared = _shared_directions(red.get("shared_directions"))
-        if shared and "shared_directions" not in options:
-            options = dict(options, shared_directions=shared)   # the search's option (-kf_shared_directions)
+        # the search's option (-kf_shared_directions), set from the scene unless given here or on the command line
+        # (which overrides the scene): false too, since the option's default is auto
+        if "shared_directions" not in options and not _on_command_line("kf_shared_directions"):
+            options = dict(options, shared_directions=_shared_directions(red.get("shared_directions", "auto")))
         if red.get("damped_moments") and "krylov_damped" not in options:
             options = dict(options, krylov_damped=True)   # the Krylov implementation's option (docs/guide/damping.md)
         with quiet_progress(quiet), kf_options(options):

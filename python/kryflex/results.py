@@ -459,6 +459,7 @@ class Candidate(Record):
     reduced_dofs: int = _value(doc="sum over bodies")
     max_system_dofs: int = _value()
     error: float = _value()
+    variant: str = _value(doc="split | tied | tied, no static correction (-kf_shared_directions), or None (not known)")
 
 
 @dataclass(kw_only=True)

@@ -9,6 +9,8 @@
        correction of the rest) that still meet it, by bisection (the error falls as clusters are added).
   Multi-angle family: expansion angles added one at a time (the angle of interest farthest from those already in),
   and for each set the fewest moments whose whole bases meet the target.
+  Under -kf_shared_directions auto every candidate is tried split, then tied (a second pass, the table's variant
+  column), except when the search is forced to the expansion-point family (-kf_shift_family_only): split alone.
   Tied candidates (-kf_shared_directions) under -kf_static_exact false: each bisection over kept clusters again with
   the kept clusters alone, without the static correction of the others (KFTriesNoStatic); at one size the candidate
   with the correction wins.
@@ -19,27 +21,37 @@
 
 typedef struct {
   PetscInt   n, nalloc;
-  PetscReal *rows; /* 7 per row */
+  PetscReal *rows; /* KF_SEARCH_TABLE_COLUMNS per row */
 } KFSearchTable;
 
-static PetscErrorCode KFSearchRecord(KFSearchTable *tab, const KFCandidate *c)
+/* a candidate's variant, which tells the passes of -kf_shared_directions auto apart in the search table (their rows
+   are otherwise alike): 0 split, 1 tied, 2 tied without the static correction of the dropped clusters */
+PetscReal KFCandidateVariant_Private(KFReducer r, const KFCandidate *c)
+{
+  return c->nostatic ? 2 : ((c->tied || r->shared_directions) ? 1 : 0);
+}
+
+/* a candidate's row of the search table */
+void KFSearchTableRow_Private(KFReducer r, const KFCandidate *c, PetscReal row[])
+{
+  row[0] = (PetscReal)c->family;
+  row[1] = (PetscReal)c->c;
+  row[2] = (PetscReal)c->kept;
+  row[3] = (PetscReal)c->nexp;
+  row[4] = (PetscReal)c->size;
+  row[5] = (PetscReal)c->sysdofs;
+  row[6] = c->error;
+  row[7] = KFCandidateVariant_Private(r, c);
+}
+
+static PetscErrorCode KFSearchRecord(KFReducer r, KFSearchTable *tab, const KFCandidate *c)
 {
   PetscFunctionBegin;
   if (tab->n == tab->nalloc) {
     tab->nalloc = PetscMax(64, 2 * tab->nalloc);
-    PetscCall(PetscRealloc(sizeof(PetscReal) * 7 * tab->nalloc, &tab->rows));
+    PetscCall(PetscRealloc(sizeof(PetscReal) * KF_SEARCH_TABLE_COLUMNS * tab->nalloc, &tab->rows));
   }
-  {
-    PetscReal *row = &tab->rows[7 * tab->n++];
-
-    row[0] = (PetscReal)c->family;
-    row[1] = (PetscReal)c->c;
-    row[2] = (PetscReal)c->kept;
-    row[3] = (PetscReal)c->nexp;
-    row[4] = (PetscReal)c->size;
-    row[5] = (PetscReal)c->sysdofs;
-    row[6] = c->error;
-  }
+  KFSearchTableRow_Private(r, c, &tab->rows[KF_SEARCH_TABLE_COLUMNS * tab->n++]);
   PetscFunctionReturn(0);
 }
 
@@ -73,7 +85,7 @@ static PetscErrorCode KFTry(KFReducer r, KFVisit visits[], PetscInt neval, KFEva
   PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
   /* a candidate already worse than the target is not measured further: its error is then a lower bound */
   PetscCall(KFCandidateEvaluate_Private(r, visits, neval, evals, r->accuracy, c));
-  PetscCall(KFSearchRecord(tab, c));
+  PetscCall(KFSearchRecord(r, tab, c));
   if (KFBetter(r, c, best)) *best = *c;
   PetscFunctionReturn(0);
 }
@@ -161,7 +173,7 @@ static PetscErrorCode KFShareBodies(KFReducer r, KFVisit visits[], PetscInt neva
   }
   if (cur.size < best->size) {
     cur.kept = -2;
-    PetscCall(KFSearchRecord(tab, &cur));
+    PetscCall(KFSearchRecord(r, tab, &cur));
     *best = cur;
   }
   PetscFunctionReturn(0);
@@ -317,7 +329,10 @@ PetscErrorCode KFReducerSearch_Private(KFReducer r, PetscInt nvisit, KFVisit vis
   PetscCall(KFSearchPass(r, PETSC_FALSE, nvisit, visits, neval, evals, &tab, single, multi));
   split[0] = *single;
   split[1] = *multi;
-  if (r->shared_auto) { /* every candidate size again, tied: a tied model wins at one angle, a split one often at several */
+  /* every candidate size again, tied: a tied model wins at one angle, a split one often at several. Not when the search
+     is forced to the expansion-point family, whose model with points must be the one kept: it runs split (as false),
+     since the split model compressed may then replace a tied one (KFReducerSplitCompressed_Private) and its points */
+  if (r->shared_auto && !(r->max_factorizations && r->shift_family_only)) {
     KFCandidate ssingle = *single, smulti = *multi, tsingle, tmulti;
 
     PetscCall(KFSearchPass(r, PETSC_TRUE, nvisit, visits, neval, evals, &tab, &tsingle, &tmulti));

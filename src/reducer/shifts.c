@@ -40,22 +40,12 @@ static PetscErrorCode KFShiftRecord(KFShiftTable *tab, const KFCandidate *c, Pet
   PetscFunctionReturn(0);
 }
 
-/* one more row of the search table (search.c's 7 columns), the whole bases of its visits */
-static PetscErrorCode KFSearchTableAppend(PetscInt *nrows, PetscReal **rows, const KFCandidate *c)
+/* one more row of the search table (search.c's), the whole bases of its visits */
+static PetscErrorCode KFSearchTableAppend(KFReducer r, PetscInt *nrows, PetscReal **rows, const KFCandidate *c)
 {
   PetscFunctionBegin;
-  PetscCall(PetscRealloc(sizeof(PetscReal) * 7 * (*nrows + 1), rows));
-  {
-    PetscReal *row = &(*rows)[7 * (*nrows)++];
-
-    row[0] = (PetscReal)c->family;
-    row[1] = (PetscReal)c->c;
-    row[2] = (PetscReal)c->kept;
-    row[3] = (PetscReal)c->nexp;
-    row[4] = (PetscReal)c->size;
-    row[5] = (PetscReal)c->sysdofs;
-    row[6] = c->error;
-  }
+  PetscCall(PetscRealloc(sizeof(PetscReal) * KF_SEARCH_TABLE_COLUMNS * (*nrows + 1), rows));
+  KFSearchTableRow_Private(r, c, &(*rows)[KF_SEARCH_TABLE_COLUMNS * (*nrows)++]);
   PetscFunctionReturn(0);
 }
 
@@ -300,7 +290,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
       }
       PetscCall(KFCandidateEvaluate_Private(r, *visitsp, neval, evals, 0, &cand));
       PetscCall(KFShiftRecord(&tab, &cand, np, spent));
-      PetscCall(KFSearchTableAppend(nrows, rows, &cand));
+      PetscCall(KFSearchTableAppend(r, nrows, rows, &cand));
       PetscCall(KFProgress(comm, "  %" PetscInt_FMT " moments at zero + %" PetscInt_FMT " point(s): %" PetscInt_FMT " system dofs, error %.3e", c0, np, cand.sysdofs, (double)cand.error));
       if (KFShiftPasses(r, &cand)) {
         KFCandidate small = cand;
@@ -310,7 +300,7 @@ PetscErrorCode KFReducerSearchShifts_Private(KFReducer r, KFSystem sys, PetscInt
         PetscCall(KFProgress(comm, "    its clusters pruned: %" PetscInt_FMT " reduced dofs, %" PetscInt_FMT " system dofs, error %.3e", small.size, small.sysdofs, (double)small.error));
         if (small.kept != -1) {
           PetscCall(KFShiftRecord(&tab, &small, np, spent));
-          PetscCall(KFSearchTableAppend(nrows, rows, &small));
+          PetscCall(KFSearchTableAppend(r, nrows, rows, &small));
         }
         if (!best.nexp || small.size < best.size) {
           best    = small;

@@ -1007,7 +1007,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_search", (PetscReal)(t1 - t0)));
   {
-    const PetscInt shape[2] = {7, nrows};
+    const PetscInt shape[2] = {KF_SEARCH_TABLE_COLUMNS, nrows};
 
     PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
     PetscCall(PetscFree(rows));
@@ -1049,6 +1049,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(PetscTime(&t1));
   st.times[5] += t1 - t0;
+  { /* the chosen candidate's search-table row names it: its variant and size (a tied model's, body dofs less its ties) */
+    const KFCandidate *c = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? &multi : &single;
+
+    PetscCall(KFReducerResultScalar_Private(r, -1, "chosen_variant", KFCandidateVariant_Private(r, c)));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "chosen_search_dofs", (PetscReal)c->size));
+  }
   PetscCall(KFReducerSearchRecord_Private(r, &st, &single, &multi));
   for (PetscInt k = 0; k < 7; k++) PetscCall(KFReducerResultScalar_Private(r, -1, KFSolveTimeNames[k], st.times[k]));
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_factor_setup", st.setup_s));

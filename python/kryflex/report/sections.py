@@ -247,10 +247,11 @@ def _section_choice(c):
             kept = "all" if r.kept_clusters is None else str(r.kept_clusters)
             rows.append([r.family or DASH, fmt_general(r.moments), kept, fmt_general(r.expansion_angles),
                          fmt_general(r.reduced_dofs), fmt_general(r.max_system_dofs), _fmt_error(r.error),
-                         _verdict(r.error, accuracy), _search_marker(k, s.search_chosen)])
-        lines += ["Table 8. The search: one row per candidate evaluated.", "",
+                         _verdict(r.error, accuracy), r.variant or DASH, _search_marker(k, s.search_chosen)])
+        lines += ["Table 8. The search: one row per candidate evaluated (variant: split, or its bodies tied to "
+                  "shared directions, -kf_shared_directions).", "",
                   table(["family", "moments c", "kept clusters", "expansion angles", "size (dofs, all bodies)",
-                         "max system dofs", "error", "target", ""], rows, "lrrrrrrll"), ""]
+                         "max system dofs", "error", "target", "variant", ""], rows, "lrrrrrrlll"), ""]
     elif s.settings is not None and s.settings.search is False:
         lines += ["The search was off (`reduction.search: false`): the paper's fixed recipe (fixed moments, "
                   "keep threshold%s)." % ("" if c.single else ", α_G rule"), ""]

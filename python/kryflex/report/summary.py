@@ -33,7 +33,10 @@ POINTWISE_DEFINITION = ("pointwise error with a floor (information, not the verd
                         "max_w |Tf_ij(w) - Tr_ij(w)| / max(|Tf_ij(w)|, 10^(floor_db/20) max_w |Tf_ij|)")
 METHODS = {0: "single-angle", 1: "multi-angle"}
 SEARCH_COLUMNS = ("family", "moments", "kept_clusters", "expansion_angles", "reduced_dofs", "max_system_dofs",
-                  "error")
+                  "error", "variant")
+# a candidate's variant (-kf_shared_directions): split, tied, or tied without the static correction of the dropped
+# clusters; tables of libraries before the column have 7 rows and leave it None
+VARIANTS = {0: "split", 1: "tied", 2: "tied, no static correction"}
 
 
 def _none(x):
@@ -124,20 +127,23 @@ def _degrees(angles_rad):
 
 
 def _search_rows(table):
-    """The rows of the search_table result (ncand x 7) as dicts named by SEARCH_COLUMNS."""
+    """The rows of the search_table result (8 x ncand, or 7 without the variant) as dicts named by SEARCH_COLUMNS."""
     table = np.asarray(table, dtype=float)
-    if table.ndim != 2 or len(SEARCH_COLUMNS) not in table.shape:
+    widths = (len(SEARCH_COLUMNS), len(SEARCH_COLUMNS) - 1)
+    if table.ndim != 2 or not (table.shape[0] in widths or table.shape[1] in widths):
         return []
-    if table.shape[0] == len(SEARCH_COLUMNS):          # C records it 7 x ncand: one column per candidate
+    if table.shape[0] in widths:                        # C records it 8 x ncand: one column per candidate
         table = table.T
     rows = []
     for values in table:
-        row = {}
+        row = {"variant": None}
         for name, v in zip(SEARCH_COLUMNS, values):
             if name == "family":
                 row[name] = METHODS.get(int(v), str(int(v)))
             elif name == "error":
                 row[name] = _none(v)
+            elif name == "variant":
+                row[name] = VARIANTS.get(int(v), str(int(v)))
             elif name == "kept_clusters":
                 # None: every cluster kept; "per body": each body its share (body_kept_clusters)
                 row[name] = None if np.isnan(v) or v == -1 else ("per body" if v == -2 else int(v))
@@ -159,11 +165,12 @@ def _shift_rows(table):
     return [{n: (_none(v) if n == "error" else int(v)) for n, v in zip(names, row)} for row in table]
 
 
-def _chosen_row(rows, method, moments, dofs):
-    """Index of the search row of the chosen model (its family, moments and reduced dofs; the smallest error among
-    equal ones), or None when no row matches (the search was off, or an older C library)."""
+def _chosen_row(rows, method, moments, dofs, variant=None):
+    """Index of the search row of the chosen model (its family, moments, reduced dofs and, when known, variant; the
+    smallest error among equal ones), or None when no row matches (the search was off, or an older C library)."""
     matches = [k for k, row in enumerate(rows) if row["family"] == method and row["reduced_dofs"] == dofs
-               and (moments is None or row["moments"] == moments)]
+               and (moments is None or row["moments"] == moments)
+               and (variant is None or row["variant"] is None or row["variant"] == variant)]
     if not matches:
         return None
     return min(matches, key=lambda k: float("inf") if rows[k]["error"] is None else rows[k]["error"])
@@ -280,7 +287,12 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
     # compression (-kf_compress): the search's row is the model before it, of compressed_from_dofs
     before = _optional_scalar(reducer, -1, "compressed_from_dofs", whole, int)
     after = _optional_scalar(reducer, -1, "compressed_to_dofs", whole, int)
-    row = _chosen_row(rows, method, moments, before if before and after and after < before else sum(sizes))
+    # the table's size of the chosen candidate (a tied model's: body dofs less its ties), when recorded
+    dofs = _optional_scalar(reducer, -1, "chosen_search_dofs", whole, int)
+    if dofs is None:
+        dofs = before if before and after and after < before else sum(sizes)
+    variant = _optional_scalar(reducer, -1, "chosen_variant", whole, int)
+    row = _chosen_row(rows, method, moments, dofs, None if variant is None else VARIANTS.get(variant, str(variant)))
     expansion = chosen.settings.get("reduction_angles_deg")
     out["chosen"] = {
         "method": method, "moments": moments, "dofs_per_body": dict(zip(scene.body_names, [int(v) for v in sizes])),

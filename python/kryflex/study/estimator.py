@@ -8,10 +8,12 @@ candidate by candidate.
     check.summary()                              # ratios estimate / true, false passes, the chosen models
 
 A search-table column is one candidate: family (0 single-angle, 1 multi-angle), moments c, kept clusters (-1 every
-mode), expansion angles, reduced dofs (summed over bodies), system dofs, error (src/reducer/search.c). The table
-does not say which expansion angle a single-angle candidate used, nor where a multi-angle one started, so the key
-adds it (`start`, see _starts): with reduction_angle auto every angle of interest is tried as alpha_G in turn, and
-the same (c, kept) comes back once per angle with a different error.
+mode), expansion angles, reduced dofs (summed over bodies), system dofs, error, variant (0 split, 1 tied, 2 tied
+without the static correction: -kf_shared_directions; src/reducer/search.c). The variant is part of the key: under
+-kf_shared_directions auto the search makes a split pass and a tied pass over the same (c, kept). The table does
+not say which expansion angle a single-angle candidate used, nor where a multi-angle one started, so the key adds it
+(`start`, see _starts): with reduction_angle auto every angle of interest is tried as alpha_G in turn, and the same
+(c, kept) comes back once per angle with a different error.
 
 Lower bounds: the search stops measuring a candidate at the first evaluation point (angles of interest, then the
 midpoints) where its error exceeds the accuracy (KFCandidateEvaluate_Private), and the table does not record that it
@@ -29,7 +31,9 @@ from .. import _core
 
 SINGLE, MULTI = 0, 1
 FAMILIES = {SINGLE: "single-angle", MULTI: "multi-angle"}
-FIELDS = ("family", "moments", "kept_clusters", "expansion_angles", "start_deg", "reduced_dofs", "system_dofs",
+SPLIT = 0
+VARIANTS = {SPLIT: "split", 1: "tied", 2: "tied, no static correction"}
+FIELDS = ("family", "moments", "kept_clusters", "expansion_angles", "start_deg", "variant", "reduced_dofs", "system_dofs",
           "true_error", "true_lower_bound", "estimated_error", "estimate_lower_bound", "ratio", "verdict",
           "chosen_full_order", "chosen_estimator")
 # the ratios where pass or fail is decided: candidates whose true error is at least accuracy / DECISION_BAND (far
@@ -61,12 +65,12 @@ class SearchRun:
 
 
 def read_search_table(reducer, scene):
-    """The search table as a list of candidates (dicts: family, c, kept, nexp, start, size, sysdofs, error, key,
-    lower_bound), in the order the search tried them."""
+    """The search table as a list of candidates (dicts: family, c, kept, nexp, start, variant, size, sysdofs, error,
+    key, lower_bound), in the order the search tried them. A table of 7 rows (a library before the variant) is split."""
     table = np.asarray(reducer.result(-1, "search_table"), float)
-    if table.ndim != 2 or table.shape[0] != 7:
-        raise EstimatorCheckError("search_table of shape %s: expected 7 rows (family, c, kept clusters, expansion "
-                                  "angles, reduced dofs, system dofs, error)" % (table.shape,))
+    if table.ndim != 2 or table.shape[0] not in (7, 8):
+        raise EstimatorCheckError("search_table of shape %s: expected 8 rows (family, c, kept clusters, expansion "
+                                  "angles, reduced dofs, system dofs, error, variant)" % (table.shape,))
     accuracy = float(scene.accuracy)
     npoints = evaluation_points(reducer.configurations)
     out = []
@@ -75,10 +79,11 @@ def read_search_table(reducer, scene):
         if error >= NAN_ERROR:
             error = math.inf
         out.append(dict(family=int(col[0]), c=int(col[1]), kept=int(col[2]), nexp=int(col[3]), size=int(col[4]),
-                        sysdofs=int(col[5]), error=error, lower_bound=npoints > 1 and not error <= accuracy))
+                        sysdofs=int(col[5]), error=error, lower_bound=npoints > 1 and not error <= accuracy,
+                        variant=int(col[7]) if len(col) > 7 else SPLIT))
     for cand, start in zip(out, _starts(reducer, scene, out)):
         cand["start"] = start
-        cand["key"] = (cand["family"], cand["c"], cand["kept"], cand["nexp"], start)
+        cand["key"] = (cand["family"], cand["c"], cand["kept"], cand["nexp"], start, cand["variant"])
     return out
 
 
@@ -95,11 +100,13 @@ def _starts(reducer, scene, cands):
     of interest (reduction_angle auto: the search tries each in order, a block of rows each, and a block starts
     with a whole-basis row (kept -1) whose c does not continue the moments loop before it), -1 for a named alpha_G.
     Multi-angle: the first expansion angle (the best single-angle model's alpha_G, result reduction_config: the
-    rest follow from it, farthest first), -1 for named expansion angles."""
+    rest follow from it, farthest first), -1 for named expansion angles. Under -kf_shared_directions auto the split
+    pass and the tied pass (variant 0, then 1 and 2 interleaved) each go through the angles: blocks are counted per
+    pass."""
     auto_alpha = scene.reduction["reduction_angle"] == "auto"
     named_multi = bool(scene.reduction["reduction_angles"])
     first = _whole(reducer, "reduction_config")
-    starts, block, prev = [], -1, None
+    starts, blocks, prevs = [], {}, {}
     for cand in cands:
         if cand["family"] != SINGLE:
             starts.append(-1 if named_multi else (int(first) if first is not None else -1))
@@ -107,15 +114,19 @@ def _starts(reducer, scene, cands):
         if cand["kept"] == -2:   # each body its share of the best single-angle model: at its alpha_G, after the blocks
             starts.append(int(first) if auto_alpha and first is not None else -1)
             continue
+        tied = cand["variant"] != SPLIT
+        prev = prevs.get(tied)
         if prev is None or (cand["kept"] == -1 and (prev["kept"] != -1 or prev["c"] >= cand["c"])):
-            block += 1
-        prev = cand
-        starts.append(block if auto_alpha else -1)
-    nblocks = block + 1
-    if auto_alpha and nblocks and nblocks != reducer.nconfig:
-        raise EstimatorCheckError("the single-angle rows of the search table fall into %d blocks, not one per angle "
-                                  "of interest (%d): cannot tell which alpha_G each candidate used"
-                                  % (nblocks, reducer.nconfig))
+            blocks[tied] = blocks.get(tied, -1) + 1
+        prevs[tied] = cand
+        starts.append(blocks[tied] if auto_alpha else -1)
+    for tied, block in blocks.items():
+        nblocks = block + 1
+        if auto_alpha and nblocks != reducer.nconfig:
+            raise EstimatorCheckError("the %s single-angle rows of the search table fall into %d blocks, not one per "
+                                      "configuration (%d): cannot tell which reduction configuration each candidate "
+                                      "used" % ("tied" if tied else "split", nblocks, reducer.nconfig))
+    nblocks = max([b + 1 for b in blocks.values()] or [0])
     if not auto_alpha and nblocks > 1:
         raise EstimatorCheckError("the single-angle rows of the search table fall into %d blocks with a named "
                                   "alpha_G: cannot tell the candidates apart" % nblocks)
@@ -124,7 +135,7 @@ def _starts(reducer, scene, cands):
 
 def chosen_candidate(reducer, scene, cands):
     """The candidate the reduction chose (chosen_method; moments_matched or multi_moments_matched; the reduced dofs
-    of that model; its alpha_G, reduction_config), or None when no table column matches it (the search's fallback
+    of that model, or chosen_search_dofs; its alpha_G, reduction_config; chosen_variant), or None when no table column matches it (the search's fallback
     model when it tried no single-angle one)."""
     method = _whole(reducer, "chosen_method")
     if method == 1.0:
@@ -138,8 +149,12 @@ def chosen_candidate(reducer, scene, cands):
         size = _sum(reducer, "reduced_dofs_per_body")
         cfg = _whole(reducer, "reduction_config")
         start = int(cfg) if scene.reduction["reduction_angle"] == "auto" and cfg is not None else -1
+    variant = _whole(reducer, "chosen_variant")      # split or tied: under auto both passes try each (c, kept)
+    if _whole(reducer, "chosen_search_dofs") is not None:   # the table's size: a tied model's body dofs less its ties
+        size = int(_whole(reducer, "chosen_search_dofs"))
     matches = [x for x in cands if x["family"] == family and c is not None and x["c"] == int(c)
-               and x["nexp"] == nexp and x["size"] == size and (start is None or x["start"] == start)]
+               and x["nexp"] == nexp and x["size"] == size and (start is None or x["start"] == start)
+               and (variant is None or x["variant"] == int(variant))]
     # kept -1 and kept = every cluster are the same model: the first of the smallest error
     return min(matches, key=lambda x: x["error"]) if matches else None
 
@@ -208,6 +223,7 @@ class EstimatorCheck:
             rows.append(dict(
                 family=FAMILIES.get(t["family"], str(t["family"])), moments=t["c"], kept_clusters=t["kept"],
                 expansion_angles=t["nexp"], start_deg=start_label(t, self.full.reducer, self.scene),
+                variant=VARIANTS.get(t["variant"], str(t["variant"])),
                 reduced_dofs=t["size"], system_dofs=t["sysdofs"], true_error=t["error"],
                 true_lower_bound=int(t["lower_bound"]), estimated_error=e["error"],
                 estimate_lower_bound=int(e["lower_bound"]), ratio=_ratio(e["error"], t["error"]),
@@ -327,8 +343,9 @@ def describe(family, c, kept, nexp, start_deg):
 
 
 def describe_key(key, reducer, scene):
-    family, c, kept, nexp, start = key
-    return describe(family, c, kept, nexp, start_label(dict(family=family, start=start), reducer, scene))
+    family, c, kept, nexp, start, variant = key
+    text = describe(family, c, kept, nexp, start_label(dict(family=family, start=start), reducer, scene))
+    return text if variant == SPLIT else "%s, %s" % (text, VARIANTS.get(variant, variant))
 
 
 def describe_candidate(cand, reducer, scene):

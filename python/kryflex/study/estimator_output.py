@@ -183,5 +183,6 @@ def _worst(row):
 
 def _row(r):
     return "%s: true %s, estimate %s" % (
-        describe(r["family"], r["moments"], r["kept_clusters"], r["expansion_angles"], r["start_deg"]),
+        describe(r["family"], r["moments"], r["kept_clusters"], r["expansion_angles"], r["start_deg"])
+        + ("" if r.get("variant", "split") == "split" else ", " + r["variant"]),
         _bounded(r["true_error"], r["true_lower_bound"]), _bounded(r["estimated_error"], r["estimate_lower_bound"]))

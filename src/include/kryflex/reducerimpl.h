@@ -291,6 +291,11 @@ PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, P
 PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 /* split[2]: the best split single-angle and multi-angle candidates (under -kf_shared_directions auto the others may be tied) */
+/* the search table (results "search_table"): one row per candidate tried, family, moments c, kept clusters, expansion
+   angles, reduced dofs, system dofs, error, variant (KFSearchTableRow_Private) */
+#define KF_SEARCH_TABLE_COLUMNS 8
+PETSC_INTERN PetscReal      KFCandidateVariant_Private(KFReducer, const KFCandidate *);
+PETSC_INTERN void           KFSearchTableRow_Private(KFReducer, const KFCandidate *, PetscReal[]);
 PETSC_INTERN PetscErrorCode KFReducerSearch_Private(KFReducer, PetscInt nvisit, KFVisit[], PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, KFCandidate split[2], PetscInt *nrows, PetscReal **rows);
 
 PETSC_EXTERN PetscLogEvent KF_EVENT_REDUCER_SETUP, KF_EVENT_REDUCER_SOLVE, KF_EVENT_REDUCER_BASIS, KF_EVENT_REDUCER_VERIFY;

@@ -81,8 +81,8 @@ def case(request):
 # ================================================================================================ NumPy reference
 
 def numpy_reassemble(model, angles_deg, rtol=1e-9):
-    """(M, K, C, G, H) of the reassembled system by NumPy: D of eq. (20) from the bodies' interface rows, its null
-    space by SVD, blkdiag of the bodies projected on it; C: the bodies' damping plus the model's Rayleigh terms."""
+    """(M, K, C, G, H) of the reassembled system by NumPy: D of eq. (20) from the bodies' interface rows (and the
+    model's coordinate ties, if it has them), its null space by SVD, blkdiag of the bodies projected on it; C: the bodies' damping plus the model's Rayleigh terms."""
     sizes = model.sizes
     off = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
     rows, irev = [], 0
@@ -103,6 +103,8 @@ def numpy_reassemble(model, angles_deg, rtol=1e-9):
             block[:, off[p]:off[p + 1]] = proj @ Ip[k:k + 3]
             block[:, off[c]:off[c + 1]] = -proj @ R @ Ic[k:k + 3]
             rows.append(block)
+    if model.ties is not None:      # a model of shared directions: its coordinate ties appended to the joints'
+        rows.append(model.ties)
     D = np.vstack(rows)
     _, s, vt = np.linalg.svd(D)
     N = vt[int(np.sum(s > rtol * s[0])):].T

@@ -111,7 +111,7 @@ def check_galerkin(s, model, system, angle):
     assert res <= RIGID
 
 
-def test_off_by_default_and_model_records_it(runs):
+def test_the_model_records_it(runs):
     assert runs[False].model.ties is None
     assert "shared_directions" not in runs[False].model.settings
     assert runs[True].model.ties is not None
@@ -219,6 +219,30 @@ def test_the_scene_key_sets_it(tmp_path):
     bad = acc.write_variant(galileo, str(tmp_path / "bad.yaml"), reduction={"shared_directions": "maybe"})
     with pytest.raises(kryflex.SceneError, match="shared_directions"):
         kryflex.load_scene(bad)
+
+
+def test_auto_by_default_the_scene_key_false_and_the_command_line_over_it(tmp_path):
+    """Galileo at one angle, 1e-3: a scene without the key reduces as auto does; the key false gives the split model
+    although the option's default is auto; the option in PETSc's database (the command line) overrides the key."""
+    from kryflex.reducer import kf_options
+    galileo = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
+    plain = acc.write_variant(galileo, str(tmp_path / "g.yaml"), accuracy=1e-3, angles=[[0.0]])
+    split = acc.write_variant(galileo, str(tmp_path / "s.yaml"), accuracy=1e-3, angles=[[0.0]],
+                              reduction={"shared_directions": False})
+    model = {sd: kryflex.reduce(kryflex.load_scene(plain), quiet=True, shared_directions=sd).model
+             for sd in (False, "auto")}
+    default = kryflex.reduce(kryflex.load_scene(plain), quiet=True).model
+    keyed = kryflex.reduce(kryflex.load_scene(split), quiet=True).model
+    with kf_options({"shared_directions": "auto"}):
+        overridden = kryflex.reduce(kryflex.load_scene(split), quiet=True).model
+    print("split %s, auto %s (ties %s), default %s, key false %s, key false under -kf_shared_directions auto %s"
+          % (model[False].sizes, model["auto"].sizes, model["auto"].ties is not None, default.sizes, keyed.sizes,
+             overridden.sizes))
+    assert model["auto"].ties is not None      # the tied model wins at one angle, so the cases differ
+    assert default.sizes == model["auto"].sizes and default.ties is not None
+    assert default.settings.get("shared_directions") is True
+    assert keyed.sizes == model[False].sizes and keyed.ties is None
+    assert overridden.sizes == model["auto"].sizes and overridden.ties is not None
 
 
 # -kf_shared_directions auto: the search measures every candidate size split and tied and keeps the model with fewer

@@ -487,14 +487,15 @@ def test_search_table_and_hankel_bound(summary, written):
     markdown = written[2]
     assert "How the model was chosen" in markdown
     rows = table_after(markdown, "Table 8.")
-    assert rows[0][:7] == ["family", "moments c", "kept clusters", "expansion angles", "size (dofs, all bodies)",
-                           "max system dofs", "error"]
+    assert rows[0][:9] == ["family", "moments c", "kept clusters", "expansion angles", "size (dofs, all bodies)",
+                           "max system dofs", "error", "target", "variant"]
     assert len(rows) - 1 == len(summary["search"])
     for k, (row, cand) in enumerate(zip(rows[1:], summary["search"])):
         assert row[0] == cand["family"] and int(row[1]) == cand["moments"] and row[2] == "all"
         assert int(row[4]) == cand["reduced_dofs"]
         assert number(row[6]) == pytest.approx(cand["error"], rel=5e-3)
-        assert (row[8] == "◀ chosen") == (k == summary["search_chosen"])
+        assert row[8] == "—"                            # this summary's candidates carry no variant
+        assert (row[9] == "◀ chosen") == (k == summary["search_chosen"])
     errors = [cand["error"] for cand in summary["search"]]
     assert errors == sorted(errors, reverse=True)     # more moments, smaller error (independently computed)
     rows = table_after(markdown, "Table 9.")

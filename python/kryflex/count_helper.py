@@ -73,7 +73,6 @@ class CountHelper:
     def __init__(self, reducer, scene_path, folder):
         self.log = os.path.join(folder, LOG_NAME)
         self.peak_rss_mb = None
-        self.failed = False
         read, write = os.pipe()
         try:
             with open(self.log, "wb") as log:
@@ -99,10 +98,10 @@ class CountHelper:
             pid, status, usage = os.wait4(self.proc.pid, 0)
         self.proc.returncode = os.waitstatus_to_exitcode(status)
         self.peak_rss_mb = usage.ru_maxrss / 1024.0
-        self.failed = self.proc.returncode != 0
+        failed = self.proc.returncode != 0
         self.proc = None
         os.close(self.read)
-        if not self.failed:
+        if not failed:
             try:
                 os.remove(self.log)
             except OSError:

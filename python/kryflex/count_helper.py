@@ -10,10 +10,10 @@ counts by the same C code (KFReducerCertifyCountWrite, on factors of its own), w
 end the solve reads with poll() (KFReducerSetCountSource). Its factorizations would share the memory bus with the
 reduction's own and slow them: the helper loads the scene and assembles at once, then waits on a second pipe for the
 one byte the solve writes when its factorizations are done (the bodies', body-wise; the first configuration's,
-monolithic), or when it ends, failed or not; that pipe's end of file without the byte ends the helper. A helper that fails, dies, writes something else or is
-slow leaves the solve to count in-process, as without it, with a progress line saying so. It dies with this process
-(PR_SET_PDEATHSIG) and is reaped by stop(); its output and errors go to count_helper.log in the staging folder, kept in
-the results only when it failed.
+monolithic), or when it ends, failed or not; that pipe's end of file without the byte ends the helper. A helper that
+fails, dies, writes something else or is slow leaves the solve to count in-process, as without it, with a progress
+line saying so. It dies with this process (PR_SET_PDEATHSIG) and is reaped by stop(); its output and errors go to
+count_helper.log in the staging folder, kept in the results only when it failed.
 
 Started when the run is on one process, its verification plan tries the certificate, and the cores this process may
 use outnumber the run's ranks (cores.core_beside, the report helpers' rule too). KRYFLEX_COUNT_HELPER=0 turns it off

@@ -282,13 +282,16 @@ def main():
                     help="option sets NAME:key=value ... (-kf_ options without the prefix), one kryflex row each")
     ap.add_argument("--with-bt", action="store_true", help="also BT and SOBT (dense Lyapunov solves)")
     ap.add_argument("--methods", nargs="+", default=None,
-                    help="pyMOR methods to run, by the start of their names (default: all)")
+                    help="pyMOR methods to run, by the start of their names (default: all; none: kryflex's rows "
+                    "only, without pyMOR, which is then neither imported nor installed)")
     ap.add_argument("--budget", type=float, default=120.0,
                     help="seconds: a method whose reduction took longer is not tried at larger orders")
     ap.add_argument("--reference", choices=["direct", "modal"], default="direct",
                     help="direct: a sparse LU per grid point; modal: modal_reference.py (sizes of 57k dofs and up)")
     args = ap.parse_args()
-    ensure_pymor()
+    with_pymor = args.methods != ["none"]
+    if with_pymor:
+        ensure_pymor()
     print("peers bench, %s UTC, %s at %g deg, 1 rank" %
           (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene or "solid spacecraft --refine %g" % args.refine,
            args.angle), flush=True)
@@ -339,8 +342,8 @@ def main():
                 except Exception as e:      # a failed run is a row of the table, not the end of the bench
                     print("kryflex %s target %g failed: %s" % (name, target, e), flush=True)
 
-        so = pymor_model(M, K, beta, Ge, He)
-        for mname, fn in pymor_methods(so, band, args.with_bt).items():
+        so = pymor_model(M, K, beta, Ge, He) if with_pymor else None
+        for mname, fn in (pymor_methods(so, band, args.with_bt) if with_pymor else {}).items():
             if args.methods and not any(mname.startswith(m) for m in args.methods):
                 continue
             for r in args.orders:

@@ -99,14 +99,15 @@ def kryflex_rows(args):
     for name, opts in bench.parse_options(args.kryflex_options).items():
         for target in args.targets:
             try:
-                s, sec, _, _, static = bench.kryflex_run(path, args.angle, float(z["beta"]), target, opts)
+                s, sec, reported, _, static, cpu = bench.kryflex_run(path, args.angle, float(z["beta"]), target, opts)
             except Exception as e:      # a failed run is a row of the table
                 print("kryflex %s target %g failed: %s" % (name, target, e), flush=True)
                 continue
             err = bench.elastic_error(T_full, s.frf(z["freqs"]), z["T_el"])
             states = 2 * (s.dofs - s.rigid_modes.shape[1])
-            print("kryflex %-8s target %g: %d dofs (%d elastic states), elastic error %.3g, %.1f s, maxrss %.2f GB, %s"
-                  % (name, target, s.dofs, states, err, sec, rss_gb(), static), flush=True)
+            print("kryflex %-8s target %g: %d dofs (%d elastic states), elastic error %.3g (reported %.3g), %.1f s "
+                  "(CPU %.1f s), maxrss %.2f GB, %s" % (name, target, s.dofs, states, err, reported, sec, cpu, rss_gb(),
+                                                        static), flush=True)
             add_rows(args.dir, [["kryflex", name, target, states, err, sec]])
 
 

@@ -14,7 +14,7 @@ elastic error at every point (angles.py's references). Not a kryflex model: a me
     python tied.py --scene meshes/galileo/galileo.yaml [--single 0] --targets 1e-2 1e-3 1e-4
     python tied.py --large DIR --targets 1e-3      # large.py's scene and modal reference (after large.py reference DIR)
 """
-import sys, os, argparse, time
+import sys, os, argparse, time, textwrap
 HERE = os.path.dirname(os.path.abspath(__file__))
 ap = argparse.ArgumentParser()
 ap.add_argument("--srcf", type=float, default=0.01)
@@ -26,6 +26,8 @@ sys.argv = [sys.argv[0]] + rest
 TIED = os.path.join(HERE, "..", "2026-11-29p", "tied.py")
 exec(compile(open(TIED).read().split("\nfor target in args.targets:")[0], TIED, "exec"))
 args.srcf, args.kmax, args.kryflex_only = mine.srcf, mine.kmax, mine.kryflex_only
+_src = open(TIED).read()
+SNAPSHOTS = compile(textwrap.dedent(_src[_src.index("    bodies = [dict(b)"):_src.index("    L = np.linalg.cholesky(Mblk)")]), TIED, "exec")
 
 
 def restricted(T, at_a, a):
@@ -72,32 +74,8 @@ for target in ([] if args.kryflex_only else args.targets):
     spec = B.kryflex_spec(path, angles[0], beta, target * args.srcf)
     spec["angles"] = list(angles)
     model = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, compress="0").reduce().model
-    bodies = [dict(b) for b in model.bodies]
-    joints = [model.joint(j) for j in range(len(model.joints))]
-    v = [b["M"].shape[0] for b in bodies]
-    off = np.concatenate([[0], np.cumsum(v)])
-    ident = [np.eye(off[-1])[:, off[i]:off[i + 1]] for i in range(len(v))]
-    Mblk = sl.block_diag(*[0.5 * (b["M"] + b["M"].T) for b in bodies])
-    Rblk = sl.block_diag(*[b["rigid"] for b in bodies])
-    at, snaps, stat, e_src = {}, [], [], 0.0
-    for a in points:
-        Ms, Ks, Gs, Hs, P = system(bodies, joints, a)
-        N = system(bodies, joints, a, H=ident)[3]
-        at[a] = (Ms, Ks, Gs, Hs, P, N)
-        e_src = max(e_src, measure(a, Ms, Ks, Gs, Hs, P))
-        w, T_el, _ = ref_at[a]
-        inw = 1 / np.maximum(np.abs(T_el).max(axis=0), 1e-4 * np.abs(T_el).max()).max(axis=0)
-        Pm = P @ np.linalg.inv(np.linalg.cholesky(P.T @ Ms @ P)).T
-        Q = sl.null_space(Pm.T @ Ms)
-        lr, X = sl.eigh(Q.T @ Ks @ Q, Q.T @ Ms @ Q)
-        X = Q @ X
-        PG = X.T @ Gs
-        for f in list(w) + [0.0]:
-            y = X @ (PG / (lr * (1 + 1j * f * beta) - f * f)[:, None]) * inw[None, :]
-            q = N @ y
-            snaps += [q.real, q.imag] if f else [q.real]
-            if not f:
-                stat.append(q.real)
+    exec(SNAPSHOTS)      # tied.py's: the source reassembled at every point (at[a]) and its snapshots there
+    stat = [snaps[i - 1] for i in np.cumsum([2 * len(ref_at[a][0]) + 1 for a in points])]    # each point's last: f = 0
     L = np.linalg.cholesky(Mblk)
     print("target %g: source (target x %g) %s, error %.2g over the points" % (target, args.srcf, "+".join(map(str, v)), e_src), flush=True)
     for static in (False, True):

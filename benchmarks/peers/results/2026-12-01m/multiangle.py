@@ -2,17 +2,9 @@
 (the search's model for the target x --srcf, uncompressed), of both kinds: body-wise (each body's own basis, a joint SVD
 of its share of the responses at every point, the two bodies' counts searched over every split of each total) and
 tied (stacked directions, as below); each with the static responses at every point kept exactly (--static) or not.
-Adapted from results/2026-11-29p/tied.py, whose description follows.
-Directions shared between bodies, emulated: how small a model whose elastic coordinates each have a part in every
-body (a tie q_b1,k = q_b2,k beside the joint ties) could be, at every angle of interest and midpoint of a scene.
-The search's model (uncompressed) is reassembled at every point; its elastic response to every input there, in the
-stacked body coordinates (q = N(theta) y: both bodies at once), each input weighted by 1 / its pairs' largest peak, is
-ordered by an SVD in the blockdiag(M_b) norm, each body's rigid motions kept. The model with the first k directions
-is, at each point, the reassembled model restricted to range(N(theta)) and range(T), T = [each body's rigid motions,
-the k stacked directions]: the joint ties and the shared coordinates together. Measured by bench.py's independent
-elastic error at every point (angles.py's references). Not a kryflex model: a measure of what one would gain.
-    python tied.py --scene meshes/galileo/galileo.yaml [--single 0] --targets 1e-2 1e-3 1e-4
-    python tied.py --large DIR --targets 1e-3      # large.py's scene and modal reference (after large.py reference DIR)
+The set-up (references, reassembly, the error) and the snapshots are results/2026-11-29p/tied.py's, run as they are
+(its description says what they are).
+    python multiangle.py --scene SCENE [--srcf 0.01] [--targets 1e-2 1e-3 1e-4] [--kryflex-only]
 """
 import sys, os, argparse, time, textwrap
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -1,7 +1,7 @@
 """Several angles of interest: the smallest Galerkin model of kryflex's form serving all of them, from a rich source
 (the search's model for the target x --srcf, uncompressed), of both kinds: body-wise (each body's own basis, a joint SVD
 of its share of the responses at every point, the two bodies' counts searched over every split of each total) and
-tied (stacked directions, as below); each with the static responses at every point kept exactly (--static) or not.
+tied (stacked directions: one SVD of all points' snapshots in both bodies' coordinates); each kind with the static responses at every point kept exactly and without.
 The set-up (references, reassembly, the error) and the snapshots are results/2026-11-29p/tied.py's, run as they are
 (its description says what they are).
     python multiangle.py --scene SCENE [--srcf 0.01] [--targets 1e-2 1e-3 1e-4] [--kryflex-only]

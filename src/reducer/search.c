@@ -14,8 +14,10 @@
   Tied candidates (-kf_shared_directions) under -kf_static_exact false: each bisection over kept clusters again with
   the kept clusters alone, without the static correction of the others (KFTriesNoStatic); at one size the candidate
   with the correction wins.
-  Sizes are the reduced bodies' dofs summed (what is stored and simulated); ties go to the smaller error. Every model
-  tried is a row of the search table (results "search_table").
+  Within a pass, sizes are the reduced bodies' dofs summed (what is stored; a tied candidate's less its ties), ties going
+  to the smaller error; under auto the split and the tied winner of each family are compared by the reassembled system's
+  dofs (the largest over the evaluation points: what is simulated), and a tied winner by the split one's compressed
+  (KFReducerSplitCompressed_Private). Every model tried is a row of the search table (results "search_table").
 */
 #include <kryflex/reducerimpl.h>
 

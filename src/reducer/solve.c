@@ -901,14 +901,17 @@ static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, c
 
 /* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed (which a
    tied one cannot be), may have fewer system dofs. Measured; when it has no more, the split candidates replace the
-   tied ones (*nties 0: the caller compresses them again, as it would have without ties) */
-static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties)
+   tied ones and the model measured is the one chosen, already compressed (*nties 0, cz[] its dofs before and after,
+   *ckept whether the static columns stayed, *csec the compression's seconds: the caller records them and does not
+   compress again) */
+static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec)
 {
   const KFReducerMethod tchosen = r->chosen;
   const KFCandidate    *tied    = tchosen == KF_METHOD_MULTI_ANGLE && multi->nexp ? multi : single, *alt;
   KFReducedModel        model;
   PetscInt              from, to, n = 0;
   PetscBool             kept;
+  PetscLogDouble        c0, c1;
 
   PetscFunctionBegin;
   PetscCall(KFReducerSearchChoose_Private(r, &split[0], &split[1]));
@@ -917,8 +920,10 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
     r->chosen = tchosen;
     PetscFunctionReturn(0);
   }
-  PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_FALSE, &model));
+  PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_TRUE, &model)); /* with its maps: it may be the one returned */
+  PetscCall(PetscTime(&c0));
   PetscCall(KFReducerCompress_Private(r, neval, evals, &model, &from, &to, &kept));
+  PetscCall(PetscTime(&c1));
   for (PetscInt e = 0; e < neval; e++) {
     KFReducedSystem rs;
     PetscInt        ne;
@@ -928,9 +933,9 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
     PetscCall(KFReducedSystemDestroy(&rs));
     n = PetscMax(n, ne);
   }
-  PetscCall(KFReducedModelDestroy(&model));
   PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tied->sysdofs, n));
   if (n > tied->sysdofs) {
+    PetscCall(KFReducedModelDestroy(&model));
     r->chosen = tchosen;
     PetscFunctionReturn(0);
   }
@@ -943,9 +948,18 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   }
   PetscCall(KFReducedModelDestroy(&r->single));
   PetscCall(KFReducedModelDestroy(&r->multi_model));
-  PetscCall(KFCandidateModel_Private(r, st->visits, single, PETSC_TRUE, &r->single));
-  if (multi->nexp) PetscCall(KFCandidateModel_Private(r, st->visits, multi, PETSC_TRUE, &r->multi_model));
+  if (alt == &split[1]) { /* the multi-angle model chosen: the measured one; the single-angle one made for reference */
+    r->multi_model = model;
+    PetscCall(KFCandidateModel_Private(r, st->visits, single, PETSC_TRUE, &r->single));
+  } else {
+    r->single = model;
+    if (multi->nexp) PetscCall(KFCandidateModel_Private(r, st->visits, multi, PETSC_TRUE, &r->multi_model));
+  }
   *nties = 0;
+  cz[0]  = from;
+  cz[1]  = to;
+  *ckept = kept;
+  *csec  = c1 - c0;
   PetscFunctionReturn(0);
 }
 
@@ -956,7 +970,9 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   KFSearch       st;
   KFSystem       sys;
   KFCandidate    single, multi, split[2];
-  PetscInt       nties = 0;
+  PetscInt       nties = 0, cz[2] = {-1, -1}; /* cz: the chosen model already compressed, its dofs before and after */
+  PetscBool      ckept = PETSC_TRUE;
+  PetscLogDouble csec  = 0;
   PetscInt       nrows, *ccount = NULL, *crigid = NULL;
   PetscReal     *rows, *csigma = NULL;
   PetscLogDouble t0, t1;
@@ -1027,7 +1043,7 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
 
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
     if (r->shared_directions) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
-    if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties));
+    if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties, cz, &ckept, &csec));
     if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
     if (nties && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
   }
@@ -1037,9 +1053,17 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     PetscLogDouble  c0, c1;
     PetscBool       kept;
 
-    PetscCall(PetscTime(&c0));
-    PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to, &kept));
-    PetscCall(PetscTime(&c1));
+    if (cz[0] < 0) {
+      PetscCall(PetscTime(&c0));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to, &kept));
+      PetscCall(PetscTime(&c1));
+    } else { /* compressed when it was measured against the tied model */
+      from = cz[0];
+      to   = cz[1];
+      kept = ckept;
+      c0   = 0;
+      c1   = csec;
+    }
     PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)(c1 - c0)));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));

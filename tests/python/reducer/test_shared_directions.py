@@ -298,6 +298,10 @@ def test_auto_keeps_the_split_model_where_it_is_smaller(galileo_angles):
     m = runs["auto"].model
     assert m.ties is None and "shared_directions" not in m.settings
     assert m.sizes == runs[False].model.sizes and n["auto"] == n[False]
+    # the split model auto returns is the one false makes, compressed once and recorded as such
+    ch, ref = runs["auto"].summary.chosen, runs[False].summary.chosen
+    assert (ch.compressed_from_dofs, ch.compressed_to_dofs) == (ref.compressed_from_dofs, ref.compressed_to_dofs)
+    assert np.allclose(m.at(configs[1]).frequencies_hz, runs[False].model.at(configs[1]).frequencies_hz, rtol=1e-8, atol=0)
     el, _ = em.errors(m, dense, configs, raw["band"], float(raw["damping"]))
     print("auto: dense elastic error %.3g (kryflex's %.3g)" % (el, runs["auto"].summary.verdict.error_max))
     assert el <= GALILEO_TARGET and runs["auto"].summary.verdict.target_met

@@ -180,7 +180,11 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
     if (dof >= rstart && dof < rend) loc[nloc++] = dof;
   }
   /* K with its Gamma rows and columns zeroed: the columns go to K_IG below, from the unmodified K */
-  PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's (shifted) K for S_b */
+  if (shift != 0) PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's shifted K for S_b */
+  else { /* unshifted: K itself, which the products below only read (no copy of the body's stiffness) */
+    PetscCall(PetscObjectReference((PetscObject)K));
+    KPhi = K;
+  }
   PetscCall(MatZeroRowsColumns(bf->Kb[b], nloc, loc, dsum / B->n, NULL, NULL));
   PetscCall(PetscFree(loc));
   /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a

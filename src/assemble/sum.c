@@ -146,8 +146,9 @@ static PetscErrorCode KFBodyRowsRestore(KFBodyRows *R)
   PetscFunctionReturn(0);
 }
 
-/* appends (A_b P_b)[i, :] (local row i of body b) to r; *sorted stays true while the columns come in increasing order */
-static PetscErrorCode KFRowAppendBody(const KFBodyRows *R, const KFExpr *Eb, const PetscInt sysidx[], PetscInt i, KFRowBuf *r, PetscBool *sorted)
+/* appends (A_b P_b)[i, :] (local row i of body b) to r; *sorted stays true while the columns come in increasing order,
+   *tied (if given) is set true when a column is tied (read through its expression, which the angles change) */
+static PetscErrorCode KFRowAppendBody(const KFBodyRows *R, const KFExpr *Eb, const PetscInt sysidx[], PetscInt i, KFRowBuf *r, PetscBool *sorted, PetscBool *tied)
 {
   const PetscInt nd = R->ia[i + 1] - R->ia[i], no = R->Ao ? R->ib[i + 1] - R->ib[i] : 0;
 
@@ -179,6 +180,7 @@ static PetscErrorCode KFRowAppendBody(const KFBodyRows *R, const KFExpr *Eb, con
           r->val[r->n++] = cv[k] * x->c[t];
         }
         *sorted = PETSC_FALSE;
+        if (tied) *tied = PETSC_TRUE;
       } /* clamped (-2): P_b reads it as zero */
     }
   }
@@ -214,7 +216,7 @@ static PetscErrorCode KFTiedRowsGather(KFScene s, const KFBodyRows R[], KFExpr *
     for (PetscInt i = 0; i < R[b].nl; i++) {
       if (s->bodies[b].sysidx[i] != -1) continue;
       sorted = PETSC_TRUE;
-      PetscCall(KFRowAppendBody(&R[b], E[b], s->bodies[b].sysidx, i, &r, &sorted));
+      PetscCall(KFRowAppendBody(&R[b], E[b], s->bodies[b].sysidx, i, &r, &sorted, NULL));
       mptr[m + 1]    = r.n; /* rows appended one after another into r */
       hdr[3 * m]     = b;
       hdr[3 * m + 1] = R[b].rstart + i - R[b].e0;
@@ -430,9 +432,59 @@ static void KFRefillRow(KFRefill *f, PetscInt i, PetscInt n, const PetscInt col[
   *done = PETSC_TRUE;
 }
 
+/* Whether *S and the body matrices are as the last sum left them (ids and states: nothing wrote into them since,
+   as the monolithic solve's held rows do), so that a row no angle changes holds its value already */
+static PetscErrorCode KFSumUnchanged(KFSystem y, PetscInt m, Mat S, PetscBool *same)
+{
+  KFScene          s = y->scene;
+  PetscObjectId    id;
+  PetscObjectState st;
+
+  PetscFunctionBegin;
+  *same = PETSC_FALSE;
+  if (!S || !y->sumbodyid[m]) PetscFunctionReturn(0);
+  PetscCall(PetscObjectGetId((PetscObject)S, &id));
+  PetscCall(PetscObjectStateGet((PetscObject)S, &st));
+  if (id != y->sumid[m] || st != y->sumstate[m]) PetscFunctionReturn(0);
+  for (PetscInt b = 0; b < s->nb; b++) {
+    Mat A = m ? s->bodies[b].K : s->bodies[b].M;
+
+    PetscCall(PetscObjectGetId((PetscObject)A, &id));
+    PetscCall(PetscObjectStateGet((PetscObject)A, &st));
+    if (id != y->sumbodyid[m][b] || st != y->sumbodystate[m][b]) PetscFunctionReturn(0);
+  }
+  *same = PETSC_TRUE;
+  PetscFunctionReturn(0);
+}
+
+/* after a sum: the states it leaves and, after one written whole (var given), the rows the angles change */
+static PetscErrorCode KFSumRecord(KFSystem y, PetscInt m, Mat S, PetscInt nvar, const PetscInt var[])
+{
+  KFScene s = y->scene;
+
+  PetscFunctionBegin;
+  if (var) {
+    PetscCall(PetscFree3(y->sumvar[m], y->sumbodyid[m], y->sumbodystate[m]));
+    PetscCall(PetscMalloc3(nvar + 1, &y->sumvar[m], s->nb, &y->sumbodyid[m], s->nb, &y->sumbodystate[m]));
+    PetscCall(PetscArraycpy(y->sumvar[m], var, nvar));
+    y->nsumvar[m] = nvar;
+  }
+  PetscCall(PetscObjectGetId((PetscObject)S, &y->sumid[m]));
+  PetscCall(PetscObjectStateGet((PetscObject)S, &y->sumstate[m]));
+  for (PetscInt b = 0; b < s->nb; b++) {
+    Mat A = m ? s->bodies[b].K : s->bodies[b].M;
+
+    PetscCall(PetscObjectGetId((PetscObject)A, &y->sumbodyid[m][b]));
+    PetscCall(PetscObjectStateGet((PetscObject)A, &y->sumbodystate[m][b]));
+  }
+  PetscFunctionReturn(0);
+}
+
 /* S = sum_b P_b^T A_b P_b (A_b = M_b with mass, else K_b), every diagonal entry present (an unconnected dof must
    reach MUMPS as a null pivot, not as a missing entry). *S NULL: created on its CSR arrays, written in one pass; else
-   the same pattern (an earlier angle's) refilled. */
+   the same pattern (an earlier angle's) refilled. The angles reach a row only through a tied column or a tied row
+   received; a refill of a matrix nothing else wrote into since the last sum writes those rows only (the others would
+   be written with the values they hold: the same operations on the same entries). */
 PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S)
 {
   KFScene     s = y->scene;
@@ -442,7 +494,8 @@ PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S
   KFRowBuf    r = {0};
   PetscInt    n = s->nsys_local, r0 = s->sys_rstart, *srcb, *srci, *cptr, *ct, ncon = 0;
   PetscReal  *cc;
-  PetscBool   create = (PetscBool)(*S == NULL);
+  PetscBool   create = (PetscBool)(*S == NULL), some;
+  PetscInt    m = mass ? 0 : 1, nrows, nvar = 0, *var = NULL;
   KFGrowCSR   D = {0}, O = {0}; /* a new matrix: its diagonal and off-diagonal blocks' CSR, written directly */
   KFRefill    F;                /* an earlier angle's matrix: its values written in place */
 
@@ -508,12 +561,16 @@ PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S
     PetscCall(MatSetOption(*S, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));      /* every rank writes its own rows only */
     PetscCall(KFRefillBegin(*S, &F));
   }
-  for (PetscInt i = 0; i < n; i++) {
-    const PetscInt row = r0 + i;
-    PetscBool      sorted = PETSC_TRUE, diag = PETSC_FALSE;
+  PetscCall(KFSumUnchanged(y, m, create ? NULL : *S, &some));
+  nrows = some ? y->nsumvar[m] : n;
+  if (!some) PetscCall(PetscMalloc1(n + 1, &var));
+  for (PetscInt q0 = 0; q0 < nrows; q0++) {
+    const PetscInt i = some ? y->sumvar[m][q0] : q0, row = r0 + i;
+    PetscBool      sorted = PETSC_TRUE, diag = PETSC_FALSE, tied = (PetscBool)(cptr[i + 1] > cptr[i]);
 
     r.n = 0;
-    if (srcb[i] >= 0) PetscCall(KFRowAppendBody(&R[srcb[i]], E[srcb[i]], s->bodies[srcb[i]].sysidx, srci[i], &r, &sorted));
+    if (srcb[i] >= 0) PetscCall(KFRowAppendBody(&R[srcb[i]], E[srcb[i]], s->bodies[srcb[i]].sysidx, srci[i], &r, &sorted, &tied));
+    if (!some && tied) var[nvar++] = i;
     for (PetscInt q = cptr[i]; q < cptr[i + 1]; q++) {
       const PetscInt t = ct[q];
 
@@ -558,7 +615,9 @@ PETSC_INTERN PetscErrorCode KFSystemSumBodies(KFSystem y, PetscBool mass, Mat *S
   else PetscCall(KFRefillEnd(*S, &F));
   PetscCall(MatAssemblyBegin(*S, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*S, MAT_FINAL_ASSEMBLY));
-
+  PetscCall(KFSumRecord(y, m, *S, nvar, var)); /* the states this refill leaves: the next angle's starting point */
+  PetscCall(PetscInfo(*S, "%s: %" PetscInt_FMT " of %" PetscInt_FMT " local rows written\n", mass ? "M_S" : "K_S", nrows, n));
+  PetscCall(PetscFree(var));
   PetscCall(PetscFree2(ct, cc));
   PetscCall(PetscFree(cptr));
   PetscCall(PetscFree2(srcb, srci));

@@ -40,6 +40,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(MatDestroy(&y->Phi));
   PetscCall(MatDestroy(&y->MPhi));
   PetscCall(KFBodyFactorsDestroy(&y->bodyf));
+  for (int m = 0; m < 2; m++) PetscCall(PetscFree3(y->sumvar[m], y->sumbodyid[m], y->sumbodystate[m]));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
   PetscCall(PetscFree(y));
   PetscFunctionReturn(0);

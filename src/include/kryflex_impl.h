@@ -118,6 +118,12 @@ struct _n_KFSystem {
   KFBodyFactors bodyf;       /* body-wise solve: the bodies' factorizations, valid at every angle */
   PetscInt   nfactor;        /* sparse factorizations made for this system's solves (all angles) */
   PetscInt   nconfig;        /* configurations it will be solved at (KFSystemSetConfigurationCount) */
+  /* KFSystemSumBodies (src/assemble/sum.c): per matrix (0 M_S, 1 K_S), the local rows an angle changes (those reading a
+     tied column or receiving a tied row), and the ids and states of the matrix and of the body matrices it was summed
+     from; while none changed since, a later angle writes those rows only */
+  PetscInt          nsumvar[2], *sumvar[2];
+  PetscObjectId     sumid[2], *sumbodyid[2];
+  PetscObjectState  sumstate[2], *sumbodystate[2];
 };
 
 /* the flexible solver's body-wise implementation keeps the bodies' factors on the system (src/solve/impls/bodywise) */

@@ -544,7 +544,8 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     }
     /* the collected blocks side by side in the Gram-Schmidt's own arrays, M W written into MW by the product: each
        26 MB array (57k dofs, 112 columns) filled once, not made as a matrix and copied */
-    PetscCall(PetscMalloc3(nl * m + 1, &W, nl * m + 1, &MW, nl * m + 1, &Q));
+    PetscCall(PetscMalloc2(nl * m + 1, &W, nl * m + 1, &MW));
+    PetscCall(PetscMalloc1(nl * m + 1, &Q)); /* apart: its first v columns become Psi's array */
     {
       PetscInt off = 0;
       for (PetscInt k = 0; k < bb->ncols[b]; k++) {
@@ -572,17 +573,13 @@ PetscErrorCode KFBodyBasisFinish(KFBodyBasis bb, PetscReal tol)
     PetscCall(PetscInfo(NULL, "body '%s': %" PetscInt_FMT " of %" PetscInt_FMT " columns kept (%" PetscInt_FMT " rows here)\n", B->name, v, m, nl));
     bb->v[b]     = v;
     bb->ndefl[b] = m - v;
-    PetscCall(KFDenseCreate(s->comm, nl, B->n, v, &bb->Psi[b]));
-    {
-      PetscScalar *p;
-      PetscInt     ldp;
-      PetscCall(MatDenseGetLDA(bb->Psi[b], &ldp));
-      PetscCall(MatDenseGetArray(bb->Psi[b], &p));
-      for (PetscInt j = 0; j < v; j++)
-        for (PetscInt i = 0; i < nl; i++) p[i + j * ldp] = Q[i + j * nl];
-      PetscCall(MatDenseRestoreArray(bb->Psi[b], &p));
-    }
-    PetscCall(PetscFree3(W, MW, Q));
+    PetscCall(PetscFree2(W, MW));
+    /* the kept columns are Q's first v (leading dimension nl): Psi takes them over, neither zero-filled nor copied */
+    PetscCall(PetscRealloc(sizeof(PetscReal) * (nl * v + 1), &Q));
+    PetscCall(MatCreateDense(s->comm, nl, PETSC_DECIDE, B->n, v, Q, &bb->Psi[b]));
+    PetscCall(MatDenseReplaceArray(bb->Psi[b], Q)); /* the array becomes the matrix' own, as KFDenseCreateUninitialized's */
+    PetscCall(MatAssemblyBegin(bb->Psi[b], MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(bb->Psi[b], MAT_FINAL_ASSEMBLY));
     /* one more M-orthonormalization of the chosen basis squeezes out the rounding of the updates: one pass, the
        Gram-Schmidt's columns are M-orthonormal to a few digits already (|Psi^T M Psi - I| ~ 1e-15 after it on the
        200k-dof solid); its product M Psi serves the reduced mass and the rigid rows, no other product with M */

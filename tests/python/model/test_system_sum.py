@@ -4,7 +4,8 @@ A hand-made chain of three bodies: a root, a child on a revolute joint, and a gr
 interface node (its interface dofs read through the child's expressions: the root's dofs and the joint's rotation),
 with a partly clamped root node.  M_S and K_S must equal the products P_b^T A_b P_b computed densely from kryflex's
 own body maps P_b (the maps themselves are checked against the constraint equations in test_assembly.py), at a first
-angle (a new matrix) and at a later one (the same pattern refilled); AIJ and dense body matrices give the same
+angle (a new matrix) and at a later one (the same pattern refilled, only the rows the angles reach written: bit for
+bit a fresh system's, also after the matrices were written into between angles); AIJ and dense body matrices give the same
 system; every diagonal entry is stored (a joint's free rotation has no row of its own in any body).
 The same checks run on 2 ranks (this file under mpiexec), where each rank writes the diagonal and off-diagonal blocks
 of its rows (MatCreateMPIAIJWithSplitArrays) and a later angle refills them through MatSetValues.
@@ -92,6 +93,19 @@ def check_sum_equals_dense_products(dense):
                 assert i in S.getRow(i)[0], (angle, which, i)
         # the joint's free rotation (the last system dof) reads through both tied nodes
         assert np.count_nonzero(P[1][:, -1]) and np.count_nonzero(P[2][:, -1])
+    # a refill writes only the rows the angles reach (src/assemble/sum.c): bit for bit a fresh sum at the same angle,
+    # also after something else wrote into the system's matrices (their states make the next refill whole)
+    fresh = _core.CSystem(scene)
+    for angle, write in ((2.9, False), (0.7, True), (1.3, False)):
+        if write:
+            Ms, Ks, _, _ = system.matrices()
+            Ms.scale(2.0)
+            Ks.shift(5.0)
+        system.set_angles([angle])
+        fresh.set_angles([angle])
+        for A, B in zip(system.matrices()[:2], fresh.matrices()[:2]):
+            assert np.array_equal(dense_of(A), dense_of(B)), (angle, write)
+        fresh = _core.CSystem(scene)
 
 
 @pytest.mark.parametrize("dense", [False, True], ids=["aij", "dense"])

@@ -180,7 +180,11 @@ static PetscErrorCode KFBodyFactorSetUp(KFScene s, const char prefix[], PetscInt
     if (dof >= rstart && dof < rend) loc[nloc++] = dof;
   }
   /* K with its Gamma rows and columns zeroed: the columns go to K_IG below, from the unmodified K */
-  PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's (shifted) K for S_b */
+  if (shift != 0) PetscCall(MatDuplicate(bf->Kb[b], MAT_COPY_VALUES, &KPhi)); /* kept as the body's shifted K for S_b */
+  else { /* unshifted: K itself, which the products below only read (no copy of the body's stiffness) */
+    PetscCall(PetscObjectReference((PetscObject)K));
+    KPhi = K;
+  }
   PetscCall(MatZeroRowsColumns(bf->Kb[b], nloc, loc, dsum / B->n, NULL, NULL));
   PetscCall(PetscFree(loc));
   /* the user's ordering, BLR, OOC and memory check apply, except on a tiny body: PORD stops the process on a graph of a
@@ -905,7 +909,8 @@ static PetscErrorCode KFBodywiseSolveWith(KFSystem sys, KFBodyFactors bf, KFBody
       PetscCall(MatDestroy(&Fb));
       continue;
     }
-    PetscCall(MatDuplicate(Fb, MAT_DO_NOT_COPY_VALUES, &Y[b]));
+    /* MUMPS' solve writes every entry of Y: no zero fill (a fresh matrix per block solve) */
+    PetscCall(KFDenseCreateUninitialized(s->comm, B->rend - B->rstart, B->n, p, &Y[b]));
     PetscCall(KFMumpsMatSolve(bf->F[b], Fb, Y[b])); /* K_II^-1 f_b,I, zero on Gamma */
     PetscCall(PetscMalloc1(ng * p + 1, &c));
     PetscCall(KFMatTransposeMatMultGather(bf->Psi[b], Fb, c)); /* K_GI K_II^-1 f_b,I */
@@ -917,7 +922,7 @@ static PetscErrorCode KFBodywiseSolveWith(KFSystem sys, KFBodyFactors bf, KFBody
     for (PetscInt b = 0; b < s->nb; b++) {
       PetscInt ng = bf->ng[b];
       if (!Q[b]) continue;
-      PetscCall(MatDuplicate(Q[b], MAT_DO_NOT_COPY_VALUES, &Y[b]));
+      PetscCall(KFDenseCreateUninitialized(PETSC_COMM_SELF, s->bodies[b].n, s->bodies[b].n, p, &Y[b]));
       PetscCall(KFMumpsMatSolve(bf->F[b], Q[b], Y[b]));
       PetscCall(PetscMalloc1(ng * p + 1, &c));
       PetscCall(KFMatTransposeMatMultGather(bf->Psi[b], Q[b], c)); /* sequential: no communication */

@@ -1,9 +1,11 @@
-"""A Python script run under mpiexec on 1 and on 2 ranks, its results read back for comparison: shared by the
-2-rank tests that compare a parallel result with the serial one (reducer/test_damped_check.py,
-reducer/test_direct_check_bodywise.py)."""
+"""Python scripts run on 1 and on 2 ranks: results_on_ranks (a script's results read back for comparison: the 2-rank
+tests that compare a parallel result with the serial one) and probe_on_ranks (a probe that writes its results to a
+file, on the ranks a test asks for)."""
 import json
 import subprocess
 import sys
+
+from run_env import on_ranks, run
 
 
 def results_on_ranks(script, folder, env, ranks=(1, 2), timeout=300):
@@ -19,3 +21,11 @@ def results_on_ranks(script, folder, env, ranks=(1, 2), timeout=300):
         line = [x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0]
         results.append(json.loads(line[7:]))
     return results
+
+
+def probe_on_ranks(cmd, ranks, env, timeout=300, **kw):
+    """cmd (a probe's command line: sys.executable, the probe, its arguments) on `ranks` ranks (under mpiexec above
+    1), which must exit 0: the finished process (what the probe wrote is the test's to read)."""
+    p = run(on_ranks(ranks, cmd), env=env, timeout=timeout, **kw)
+    assert p.returncode == 0, "%s failed:\n%s\n%s" % (" ".join(cmd), p.stdout[-2000:], p.stderr[-2000:])
+    return p

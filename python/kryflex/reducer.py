@@ -245,6 +245,11 @@ class Reducer:
         """elastic | total: the response the reducer's errors are of (KFReducerGetAccuracyMeasure)."""
         return self.handle.accuracy_measure()
 
+    def accuracy(self):
+        """The accuracy target the solve used (the scene's accuracy, unless -kf_accuracy or this reducer's keyword
+        said otherwise), from the chosen model's settings: reduces first if not done yet."""
+        return float(self.reduce().model.settings["accuracy"])
+
     def full_rigid(self, config):
         """The rigid part of frf(config, "full") when the reducer measured the elastic response, else None."""
         if self.accuracy_measure() != "elastic":

@@ -79,7 +79,7 @@ def run(argv):
         elif args.estimator:
             # a reduction that fails here is the check's finding (run_check), not the study's end
             check, no_check = collective(lambda: run_check(scene, study.default_run, progress))
-        accuracy = float(scene.accuracy)
+        accuracy = study.accuracy      # the target the runs read: the scene's, or -kf_accuracy
         cannot = (OSError, EXIT_OUTPUT, lambda e: cannot_write(out, e.strerror or e, created))
 
         def write():

@@ -71,7 +71,7 @@ def read_search_table(reducer, scene):
     if table.ndim != 2 or table.shape[0] not in (7, 8):
         raise EstimatorCheckError("search_table of shape %s: expected 8 rows (family, c, kept clusters, expansion "
                                   "angles, reduced dofs, system dofs, error, variant)" % (table.shape,))
-    accuracy = float(scene.accuracy)
+    accuracy = reducer.accuracy()      # the target the search pruned against (-kf_accuracy over the scene's)
     npoints = evaluation_points(reducer.configurations)
     out = []
     for col in table.T:
@@ -164,7 +164,7 @@ class EstimatorCheck:
 
     def __init__(self, scene, progress=None):
         self.scene = scene
-        self.accuracy = float(scene.accuracy)
+        self.accuracy = float(scene.accuracy)        # until the searches have run (run())
         self.progress = progress or (lambda msg: None)
         self.full = self.estimated = None
         self.rows = []
@@ -189,6 +189,7 @@ class EstimatorCheck:
         if self.full.estimated or not self.estimated.estimated:
             raise EstimatorCheckError("the full-order search reports error_estimated %s and the estimator search %s: "
                                       "expected 0 and 1" % (int(self.full.estimated), int(self.estimated.estimated)))
+        self.accuracy = self.full.reducer.accuracy()     # the searches' target: -kf_accuracy over the scene's
         self.rows = self.join()
         return self
 

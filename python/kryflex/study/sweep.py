@@ -9,12 +9,13 @@ per input/output pair, and the pointwise error with a floor). A run's error is t
 Methods (METHODS), each a sweep of its size parameter:
   krylov-single   Krylov single-angle, c = 1..cmax moments, every Krylov mode kept (the paper's fixed recipe)
   krylov-multi    Krylov multi-angle, c = 1..cmax, every mode kept
-  krylov-paper    Krylov single-angle, c = 1..cmax, with the scene's importance and keep_threshold (the modes the
-                  paper's importance rule keeps)
+  krylov-paper    Krylov single-angle, c = 1..cmax, with the scene's importance and keep_threshold, or the -kf_
+                  options' (the modes the paper's importance rule keeps)
   eigen-static    the eigenvector (modal) baseline with static correction, over eigen_cover values
   eigen-plain     the modal baseline without static correction
   krylov-raw      the raw recurrence of the paper's eq. (9) (-kf_krylov_raw), c = 1..cmax, when the C library has it
-  kryflex         the reducer's own choice with the scene's accuracy (its defaults): one point, marked on the charts
+  kryflex         the reducer's own choice: what `kryflex reduce` makes of the scene and the -kf_ options (its
+                  accuracy, search, ...), one point, marked on the charts
   krylov-search   the accuracy search over moments at zero alone, over the accuracy targets ACCURACY_SWEEP
   krylov-points   the accuracy search with expansion points inside the band (-kf_max_factorizations POINT_FACTORIZATIONS,
                   the family forced: -kf_shift_family_only), over the same targets; when the C library has them
@@ -73,6 +74,8 @@ class Study:
         self.progress = progress or (lambda msg: None)
         self.floor_db = float(scene.verify["frf_floor_db"])
         self.reference = None
+        # the target the runs read (the scene's, or -kf_accuracy): the reference's, once it has run
+        self.accuracy = float(scene.accuracy)
         # the kryflex run's (reducer, seconds): the estimator check (estimator.py) reuses its accuracy search
         self.default_run = None
         self.notes = []
@@ -97,6 +100,9 @@ class Study:
         ref.reduce()
         self.reference_seconds = time.perf_counter() - t0
         self.reference = ref
+        self.accuracy = ref.accuracy()
+        if self.features["frf_errors"]:
+            self.error_measure = "KFFRFElasticErrors (%s response)" % ref.accuracy_measure()
         self.angles = ref.configurations
         self.grids = [ref.result(c, "frf_frequencies_hz").ravel() for c in range(ref.nconfig)]
         self.full = [ref.frf(c, "full") for c in range(ref.nconfig)]
@@ -113,7 +119,6 @@ class Study:
         """(method, parameter, -kf_ options) of every run, in order."""
         out = []
         fixed = {"search": False} if self.features["search"] else {}
-        red = self.scene.reduction
         for method in self.methods:
             if method in ("krylov-single", "krylov-multi", "krylov-paper", "krylov-raw"):
                 if method == "krylov-raw" and not self.features["krylov_raw"]:
@@ -121,9 +126,9 @@ class Study:
                 for c in range(1, self.cmax + 1):
                     opts = dict(fixed, moments=c, output_blocks=min(1, c - 1),
                                 method="multi-angle" if method == "krylov-multi" else "single-angle")
-                    if method == "krylov-paper":
-                        opts.update(importance=red["importance"], keep_threshold=float(red["keep_threshold"]))
-                    else:               # every mode kept: the importance measure does not matter (see above)
+                    # krylov-paper: the importance and keep_threshold the scene and the -kf_ options give, as
+                    # `kryflex reduce` reads them (no keyword: a keyword would override the command line)
+                    if method != "krylov-paper":    # every mode kept: the importance measure does not matter
                         opts.update(importance="h2", keep_threshold=0.0)
                     if method == "krylov-raw":
                         opts["krylov_raw"] = True
@@ -141,8 +146,8 @@ class Study:
                     if method == "krylov-points":
                         opts.update(max_factorizations=POINT_FACTORIZATIONS, shift_family_only=True)
                     out.append((method, acc, opts))
-            elif method == "kryflex":
-                out.append((method, "default", dict(search=True) if self.features["search"] else {}))
+            elif method == "kryflex":   # `kryflex reduce`'s reducer: the scene and the -kf_ options, nothing else
+                out.append((method, "default", {}))
         return out
 
     def skipped(self):
@@ -247,14 +252,14 @@ class Study:
 
     def _default_outcome(self, reducer, row):
         """(exit code `kryflex reduce` gives this model, note): 6 when the target is missed, by the C reducer's
-        target_met when it records one, else by the study's error against the scene's accuracy."""
-        accuracy = float(self.scene.accuracy)
+        target_met when it records one, else by the study's error against the accuracy the reducer read."""
+        accuracy = reducer.accuracy()
         if "target_met" in reducer.result_names(-1):
             met = bool(reducer.result(-1, "target_met").ravel()[0])
             source = "the reducer's target_met"
         else:
             met = row["error_hinf"] <= accuracy
-            source = "the study's error against the scene's accuracy (the reducer records no target_met yet)"
+            source = "the study's error against the accuracy (the reducer records no target_met yet)"
         return (0 if met else 6), "accuracy %g %s, by %s" % (accuracy, "met" if met else "missed", source)
 
     # ------------------------------------------------------------------ the Hankel limit

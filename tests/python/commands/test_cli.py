@@ -34,7 +34,7 @@ from test_example import rigid_mode_moments, normwise_errors  # noqa: E402  (the
 from conftest import reassembled  # noqa: E402
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERIC, EXIT_OUTPUT, EXIT_MODEL, EXIT_TARGET = 0, 2, 3, 4, 5, 6
-ENV = run_env.BASE_ENV
+ENV = run_env.ENV
 PNG = b"\x89PNG\r\n\x1a\n"
 EPS = np.finfo(float).eps
 

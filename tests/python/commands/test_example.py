@@ -27,7 +27,7 @@ sys.path.insert(0, SUPPORT)
 import reference as ref  # noqa: E402
 from conftest import reassembled  # noqa: E402
 
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PYTHONPATH)
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PYTHONPATH)
 NFREQ_PRINTED = 6
 
 

@@ -2,7 +2,6 @@
 2 ranks, for the Krylov basis and the eigenvector baseline; and the scaling benchmark's machinery."""
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -10,14 +9,11 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+from run_env import run  # noqa: E402  (in run_env.COMMAND_ENV: oversubscribed, for mpiexec -n 2 on a small machine)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 REFINE = "0.5"   # 2,760 dofs: a real 3-D solid pair with RBE2 spiders, seconds to reduce
 
-
-def run(cmd, **kw):
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -31,9 +27,7 @@ def solid(tmp_path_factory):
 
 
 def reduce(scene, out, nranks, *options, code=0):
-    cmd = (["mpiexec", "-n", str(nranks)] if nranks > 1 else []) + [KRYFLEX, "reduce", scene, "-o", str(out), "-quiet",
-                                                                    *options]
-    r = run(cmd)
+    r = run(run_env.on_ranks(nranks, [KRYFLEX, "reduce", scene, "-o", str(out), "-quiet", *options]))
     assert r.returncode == code, r.stdout + r.stderr
     return json.load(open(os.path.join(out, "summary.json")))
 

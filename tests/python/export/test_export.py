@@ -4,7 +4,6 @@ whose linearized frequencies must equal kryflex's reassembled ones at 0, 30 and 
 against the full-order matrices with NumPy alone; the command's refusals."""
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -12,10 +11,10 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+from run_env import run  # noqa: E402  (in run_env.COMMAND_ENV: oversubscribed, for mpiexec -n 2 on a small machine)
 ROOT = run_env.ROOT
 sys.path.insert(0, os.path.join(ROOT, "tests", "python", "support"))
 KRYFLEX = run_env.KRYFLEX
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 ANGLES = (0.0, 30.0, 60.0)
 MATCH = 1e-6            # the frequencies must agree to this (relative): the export adds no approximation
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode
@@ -23,9 +22,6 @@ ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mecha
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
 from exudyn_checks import exudyn_frequencies, linear_parts, output_jacobian, step_response_errors  # noqa: E402
 
-
-def run(cmd, **kw):
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600, **kw)
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,6 @@ angle, D_s; null space by SVD) to 1e-6, at the reduction angle and at another; w
 system fails that check (the test is sensitive to them)."""
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -18,11 +17,11 @@ from scipy.spatial.transform import Rotation
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+from run_env import run  # noqa: E402  (in run_env.COMMAND_ENV: oversubscribed, for mpiexec -n 2 on a small machine)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "support"))
 import accuracy_scenes as acc  # noqa: E402
 
 KRYFLEX = run_env.KRYFLEX
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 MATCH = 1e-6            # frequencies, relative (measured ~1e-10)
 FRF_MATCH = 1e-7        # frequency response, relative to the largest entry per input (measured: see the test)
 ZERO = 1e-12            # |lambda| <= ZERO * max |lambda|: a rigid-body or mechanism mode
@@ -31,9 +30,6 @@ ANGLES = (0.0, 40.0)    # the reduction angle, and one the basis was not built a
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
 from exudyn_checks import exudyn_frequencies, linear_parts, output_jacobian, step_response_errors  # noqa: E402
 
-
-def run(cmd, **kw):
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600, **kw)
 
 
 @pytest.fixture(scope="module")

@@ -275,7 +275,7 @@ def test_scene_refers_to_existing_six_dof_nodes(tiny_scene):
 @pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
 def test_two_ranks_write_the_same_matrices(tiny_scene, tmp_path):
-    env = run_env.BASE_ENV
+    env = run_env.ENV
     run = subprocess.run(["mpiexec", "-n", "2", sys.executable, str(SOLID / "generate.py"),
                           "--refine", str(TINY), "-o", str(tmp_path)],
                          env=env, capture_output=True, text=True, timeout=300)

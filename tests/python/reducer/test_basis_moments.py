@@ -12,9 +12,7 @@ which matches the full order's first moments exactly (Galerkin), instead of one 
   the solves, with the same result;
 - 2 ranks give the serial moments and error.
 """
-import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -30,6 +28,7 @@ ROOT = run_env.ROOT
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 ENV = dict(run_env.ENV, MPLBACKEND="Agg")
 import reference as ref  # noqa: E402
+from rank_runs import results_on_ranks  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
 
@@ -140,14 +139,7 @@ if MPI.COMM_WORLD.rank == 0:
 
 @pytest.mark.mpi
 def test_two_ranks_same_moments(tmp_path):
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS % {"galileo": GALILEO})
-    results = []
-    for n in (1, 2):
-        p = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script)], env=ENV, capture_output=True,
-                           text=True, timeout=300)
-        assert p.returncode == 0, p.stderr[-2000:]
-        results.append(json.loads([x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0][7:]))
+    results = results_on_ranks(TWO_RANKS % {"galileo": GALILEO}, tmp_path, ENV)
     one, two = (np.array(r["L"]) for r in results)
     print("2 ranks vs 1: moments %.2e" % (np.abs(one - two).max() / np.abs(one).max()))
     assert np.abs(one - two).max() <= SAME_RTOL * np.abs(one).max()

@@ -31,6 +31,7 @@ sys.path.insert(0, SUPPORT)
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
 ROOT = run_env.ROOT
 import reference as ref  # noqa: E402
+from rank_runs import results_on_ranks  # noqa: E402
 
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 KRYFLEX = run_env.KRYFLEX
@@ -324,16 +325,7 @@ if MPI.COMM_WORLD.rank == 0:
 
 @pytest.mark.mpi
 def test_two_ranks_agree_with_one(tmp_path):
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS % {"here": HERE})
-    results = []
-    for n in (1, 2):
-        p = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script)], env=ENV, capture_output=True,
-                           text=True, timeout=300)
-        assert p.returncode == 0, p.stderr[-2000:]
-        line = [l for l in p.stdout.splitlines() if l.startswith("RESULT ")][0]
-        results.append(json.loads(line[7:]))
-    one, two = results
+    one, two = results_on_ranks(TWO_RANKS % {"here": HERE}, tmp_path, ENV)
     assert one["sizes"] == two["sizes"]
     T1 = np.array(one["re"]) + 1j * np.array(one["im"])
     T2 = np.array(two["re"]) + 1j * np.array(two["im"])

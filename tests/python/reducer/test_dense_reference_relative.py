@@ -20,6 +20,7 @@ ROOT = run_env.ROOT
 PROBE = os.path.join(SUPPORT, "dense_relative_probe.py")
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
+from rank_runs import probe_on_ranks  # noqa: E402
 LOWEST = 6
 
 
@@ -32,11 +33,7 @@ def scenes(tmp_path_factory):
 
 
 def probe(path, out, ranks):
-    cmd = [sys.executable, PROBE, path, str(out)]
-    if ranks > 1:
-        cmd = ["mpiexec", "-n", str(ranks)] + cmd
-    run = subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stderr[-2000:]
+    probe_on_ranks([sys.executable, PROBE, path, str(out)], ranks, ENV, timeout=120)
     return np.load(out)
 
 

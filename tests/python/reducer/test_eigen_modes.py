@@ -2,7 +2,6 @@
 returns the flexible modes that exist, the same as when asked for exactly that count, checked against a dense SciPy
 solve of the gathered pencil: Galileo (28 dofs, 7 rigid and mechanism modes), serially and on 2 ranks."""
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -17,15 +16,12 @@ ROOT = run_env.ROOT
 PROBE = os.path.join(SUPPORT, "eigen_modes_probe.py")
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
+from rank_runs import probe_on_ranks  # noqa: E402
 
 
 @pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
 def test_more_modes_than_exist(ranks, tmp_path):
-    cmd = [sys.executable, PROBE, GALILEO, str(tmp_path / "p.npz")]
-    if ranks > 1:
-        cmd = ["mpiexec", "-n", str(ranks)] + cmd
-    run = subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stderr[-2000:]
+    probe_on_ranks([sys.executable, PROBE, GALILEO, str(tmp_path / "p.npz")], ranks, ENV, timeout=120)
     d = np.load(tmp_path / "p.npz")
     K, M = d["K"], d["M"]
     n, nflex = K.shape[0], len(d["w2_all"])

@@ -14,7 +14,6 @@ the rigid modes' complement to 3e-6 of the elastic floor at every angle (test_de
 where kryflex's own full-order reference is 5.6e-4 of the floor off: the measured verdict's false fail, see
 benchmarks/estimator/README.md). The elastic measure is tests/python/support/elastic_measure.py's.
 """
-import json
 import os
 import subprocess
 import sys
@@ -25,6 +24,8 @@ import pytest
 import accuracy_scenes as acc
 import elastic_measure as em
 from extended_truth import ExtendedTruth
+import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+from rank_runs import results_on_ranks
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 DENSE_RTOL = 0.2     # the estimate against the dense error (the dense reference is within 3e-6 of the floor)
@@ -107,15 +108,8 @@ if MPI.COMM_WORLD.rank == 0:
 
 @pytest.mark.mpi
 def test_two_ranks_estimate_as_one(scene, tmp_path):
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS)
-    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1")
-    res = {}
-    for n in (1, 2):
-        run = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script), scene, "1e-4"],
-                             capture_output=True, text=True, env=env, timeout=300)
-        assert run.returncode == 0, run.stderr[-2000:]
-        res[n] = json.loads([ln for ln in run.stdout.splitlines() if ln.startswith("RESULT ")][0][7:])
+    res = dict(zip((1, 2), results_on_ranks(TWO_RANKS, tmp_path, dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE),
+                                            args=[scene, "1e-4"])))
     print(res)
     assert res[1]["met"] and res[2]["met"] and res[1]["dofs"] == res[2]["dofs"]
     np.testing.assert_allclose(res[2]["error"], res[1]["error"], rtol=0.02)

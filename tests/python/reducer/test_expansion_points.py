@@ -6,7 +6,6 @@ zeta 0.25 %), and Galileo (meshes/galileo, its six angles). The elastic error (t
 the total response's error divided by each pair's elastic peak, on a grid with points across every full-order and
 reduced resonance.
 """
-import json
 import os
 import subprocess
 import sys
@@ -20,6 +19,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, SUPPORT)
 import accuracy_scenes as acc  # noqa: E402
 import elastic_measure as em  # noqa: E402
+import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+from rank_runs import results_on_ranks  # noqa: E402
 
 SOLID_ANGLES = [[90.0]]
 SOLID_BAND = [0.01, 15.0]
@@ -197,17 +198,9 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.mpi
 def test_one_and_two_ranks_choose_the_same_model(solid, tmp_path):
     path, _ = solid
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS)
-    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1")
-    res = {}
-    for n in (1, 2):
-        run = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script), path], capture_output=True,
-                             text=True, env=env, timeout=300)
-        assert run.returncode == 0, run.stderr[-2000:]
-        line = [ln for ln in run.stdout.splitlines() if ln.startswith("RESULT ")][0]
-        res[n] = json.loads(line[7:])
-        print(n, res[n])
+    res = dict(zip((1, 2), results_on_ranks(TWO_RANKS, tmp_path, dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE),
+                                            args=[path])))
+    print(res)
     assert res[1]["dofs"] == res[2]["dofs"] and res[1]["moments"] == res[2]["moments"]
     assert res[1]["rows"] == res[2]["rows"]
     np.testing.assert_allclose(res[1]["points"], res[2]["points"], rtol=1e-9)

@@ -13,7 +13,6 @@ import importlib.util
 import json
 import os
 import shutil
-import subprocess
 import sys
 
 import mpmath
@@ -36,6 +35,7 @@ GALILEO_DIR = os.path.join(ROOT, "meshes", "galileo")
 GALILEO = os.path.join(GALILEO_DIR, "galileo.yaml")
 PROBE = os.path.join(SUPPORT, "mpi_krylov_probe.py")
 import reference as ref  # noqa: E402
+from rank_runs import probe_on_ranks  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("frames", os.path.join(ROOT, "meshes", "frames.py"))
 frames = importlib.util.module_from_spec(_spec)
@@ -279,12 +279,8 @@ def test_generated_5000_dof_scene_moments_match(tmp_path):
 # ============================================================================ serial vs 2 ranks
 
 def run_probe(scene_path, out, nranks):
-    env = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
-    cmd = [sys.executable, PROBE, scene_path, out]
-    if nranks > 1:
-        cmd = ["mpiexec", "-n", str(nranks)] + cmd
-    proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, f"{' '.join(cmd)} failed:\n{proc.stdout}\n{proc.stderr}"
+    probe_on_ranks([sys.executable, PROBE, scene_path, out], nranks, dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE),
+                   cwd=ROOT)
     with open(out) as f:
         return json.load(f)
 

@@ -20,7 +20,6 @@ Run (from the repository root): PYTHONPATH=python .venv/bin/python -m pytest -q 
 """
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -33,6 +32,7 @@ ROOT = run_env.ROOT
 PROBE = os.path.join(os.path.dirname(HERE), "support", "krylov_dense_probe.py")
 sys.path.insert(0, os.path.join(ROOT, "meshes"))
 import frames  # noqa: E402
+from rank_runs import probe_on_ranks  # noqa: E402
 
 EPS = np.finfo(float).eps
 
@@ -64,12 +64,8 @@ def collocated_scene(free_scene, tmp_path_factory):
 
 
 def probe(scene, out, nranks, blocks=(8, 2)):
-    env = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE)
-    cmd = [sys.executable, PROBE, scene, out, "--input-blocks", str(blocks[0]), "--output-blocks", str(blocks[1])]
-    if nranks > 1:
-        cmd = ["mpiexec", "-n", str(nranks)] + cmd
-    proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, f"{' '.join(cmd)} failed:\n{proc.stdout}\n{proc.stderr}"
+    probe_on_ranks([sys.executable, PROBE, scene, out, "--input-blocks", str(blocks[0]), "--output-blocks",
+                    str(blocks[1])], nranks, dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE), cwd=ROOT)
     with open(out) as f:
         return json.load(f)
 

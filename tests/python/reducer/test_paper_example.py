@@ -26,7 +26,7 @@ import reference as ref  # noqa: E402
 
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
 KRYFLEX = run_env.KRYFLEX
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 
 # Table 1 of the paper (Hz), flexible modes
 ROTOR = [0.1221, 1.0579, 2.8638, 3.4223, 4.9894, 5.2217, 73.425, 75.821, 76.998, 116.50, 116.51, 994.70, 994.70,

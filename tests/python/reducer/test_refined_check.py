@@ -34,6 +34,7 @@ import test_damping as td  # noqa: E402
 import test_damped_check as tdc  # noqa: E402
 import test_direct_check_bodywise as tdb  # noqa: E402
 import test_reference_truth as trt  # noqa: E402
+from rank_runs import results_on_ranks  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("quiet_library")
 
@@ -170,15 +171,7 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.parametrize("damping", [{"modal": 0.002}, {"modal": 0.0, "rayleigh": {"alpha": 0.02, "beta": 2e-5}}])
 def test_two_ranks_same_truth(tmp_path, damping):
     """The sparse reference path on 2 ranks, undamped and with Rayleigh: every point iterated, the serial truth."""
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS % {"here": HERE, "damping": damping})
-    results = []
-    for n in (1, 2):
-        p = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script)], env=td.ENV, capture_output=True,
-                           text=True, timeout=300)
-        assert p.returncode == 0, p.stderr[-2000:]
-        line = [x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0]
-        results.append(json.loads(line[7:]))
+    results = results_on_ranks(TWO_RANKS % {"here": HERE, "damping": damping}, tmp_path, td.ENV)
     one, two = (np.array(r["truth"]) for r in results)
     print("2 ranks vs 1: truth %.2e" % (np.abs(one - two).max() / np.abs(one).max()))
     assert results[0]["iterated"] == results[1]["iterated"] > 0

@@ -25,6 +25,7 @@ import elastic_measure as em
 import reference as ref
 
 import run_env  # support/run_env.py: the repository's paths, the subprocesses' environment
+from rank_runs import results_on_ranks
 ROOT = run_env.ROOT
 VARIANTS = ["damping-heavy", "damping-light", "far-angle", "light-mass", "many-moments", "mimo-8x8", "repeated",
             "spread-1e-5", "spread-1e5"]
@@ -155,16 +156,8 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.mpi
 @pytest.mark.parametrize("variant", ["light-mass", "spread-1e-5"])
 def test_two_ranks_agree_with_one(scenes, variant, tmp_path):
-    import json
-    script = tmp_path / "two.py"
-    script.write_text(TWO_RANKS)
-    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "python"), OPENBLAS_NUM_THREADS="1")
-    res = {}
-    for n in (1, 2):
-        run = subprocess.run(["mpiexec", "-n", str(n), sys.executable, str(script), scenes[variant]],
-                             capture_output=True, text=True, env=env, timeout=300)
-        assert run.returncode == 0, run.stderr[-2000:]
-        res[n] = json.loads([ln for ln in run.stdout.splitlines() if ln.startswith("RESULT ")][0][7:])
+    res = dict(zip((1, 2), results_on_ranks(TWO_RANKS, tmp_path, dict(run_env.ENV, PYTHONPATH=run_env.PACKAGE),
+                                            args=[scenes[variant]])))
     assert res[1]["met"] == res[2]["met"]
     # the same model: on light-mass two 10-dof candidates (alpha_G 0 and 15 deg) meet 1e-3 with errors of a few 1e-5
     # that rounding reorders between 1 and 2 ranks; errors of one size within 10 % of the target of each other are a

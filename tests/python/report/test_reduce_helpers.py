@@ -14,7 +14,7 @@ import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the s
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = dict(run_env.BASE_ENV, MPLBACKEND="Agg")
+ENV = dict(run_env.ENV, MPLBACKEND="Agg")
 
 pytestmark = pytest.mark.skipif(not os.path.exists(KRYFLEX), reason="build/kryflex not built (cmake --build build)")
 

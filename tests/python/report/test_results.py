@@ -30,7 +30,7 @@ ROOT = run_env.ROOT
 DATA = os.path.join(HERE, "data")
 KRYFLEX = run_env.KRYFLEX
 GALILEO = os.path.join(ROOT, "meshes", "galileo", "galileo.yaml")
-ENV = run_env.BASE_ENV
+ENV = run_env.ENV
 
 
 def old_summary():

@@ -336,3 +336,30 @@ def test_no_estimator(tmp_path):
     assert sorted(os.listdir(out)) == ["accuracy_vs_size.png", "accuracy_vs_time.png", "study.csv", "study.md"]
     with open(out / "study.md") as f:
         assert "estimator" not in f.read()
+
+
+def test_kf_options_reach_every_run(tmp_path, quiet_library):
+    """-kf_ options on the study's command line are read by every run as `kryflex reduce` reads them: -kf_accuracy
+    by kryflex's run and by the study's verdict on it, -kf_keep_threshold by krylov-paper (the scene's importance rule
+    unless the command line says otherwise). Against models reduced here with the same values given as keywords,
+    which differ from the scene's (so the check sees whether the options arrived)."""
+    import kryflex
+    from kryflex.io.scene import load_scene
+    out = tmp_path / "o"
+    proc = subprocess.run([KRYFLEX, "study", GALILEO, "-o", str(out), "--cmax", "3", "--methods", "krylov-paper,kryflex",
+                           "--no-estimator", "-quiet", "-kf_accuracy", "0.01", "-kf_keep_threshold", "0.9"], env=ENV,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "study.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    scene = load_scene(GALILEO)
+    assert float(scene.accuracy) != 0.01 and float(scene.reduction["keep_threshold"]) != 0.9
+    paper = dict(search=False, moments=3, output_blocks=1, method="single-angle", verify=False)
+    for r, given, scenes in ((row(rows, "kryflex", "default"), dict(accuracy=0.01), {}),
+                             (row(rows, "krylov-paper", 3), dict(paper, keep_threshold=0.9), paper)):
+        model = kryflex.Reducer(scene, quiet=True, **given).reduce().model
+        assert int(r["size_dofs"]) == sum(model.sizes), (r["method"], r["size_dofs"], model.sizes)
+        assert sum(kryflex.Reducer(scene, quiet=True, **scenes).reduce().model.sizes) != sum(model.sizes)
+    assert "accuracy 0.01 met" in row(rows, "kryflex", "default")["note"]
+    with open(out / "study.md") as f:
+        assert "Scene accuracy: 0.01." in f.read()

@@ -19,7 +19,6 @@ to the reduction's error plus that share; at 1 deg the Exudyn-vs-linear differen
 Measured (benchmarks/slew-exudyn/bench-slew-exudyn): 0.01 deg, 20 P1: Exudyn vs full 3.6e-4, reduced vs full 1.7e-4, Exudyn vs
 reduced 2.2e-4; 0.5 P1: reduced vs full 8.8e-4. 1 deg: Exudyn vs reduced 0.012 to 0.020 (2A/pi = 0.011)."""
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -27,16 +26,13 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support"))
 import run_env  # noqa: E402  (support/run_env.py: the repository's paths, the subprocesses' environment)
+from run_env import run  # noqa: E402  (in run_env.COMMAND_ENV: oversubscribed, for mpiexec -n 2 on a small machine)
 ROOT = run_env.ROOT
 KRYFLEX = run_env.KRYFLEX
-ENV = dict(run_env.BASE_ENV, PYTHONPATH=run_env.PACKAGE, MPLBACKEND="Agg")
 NONLINEAR_FACTOR = 3.0    # outputs' response to the neglected (radial) loads against the drive's, per unit load ratio
 
 exudyn = pytest.importorskip("exudyn", reason="Exudyn comes with the project's .venv (scripts/setup)")
 
-
-def run(cmd):
-    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
 
 
 @pytest.fixture(scope="module")

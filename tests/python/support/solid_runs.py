@@ -4,8 +4,7 @@ import os
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-KRYFLEX = os.path.join(ROOT, "build", "kryflex")
+from run_env import KRYFLEX, ROOT, on_ranks
 
 
 def solid_scene(tmp_path_factory, name, refine, env):
@@ -19,7 +18,6 @@ def solid_scene(tmp_path_factory, name, refine, env):
 
 def reduce_solid(scene, out, ranks, *options, env):
     """`kryflex reduce` at 30 degrees without verification, on `ranks` ranks (mpiexec above 1): the finished process."""
-    cmd = (["mpiexec", "-n", str(ranks)] if ranks > 1 else []) + [
-        KRYFLEX, "reduce", scene, "-o", str(out), "-kf_verify", "false", "-scene.angles", "30",
-        "-kf_error_agreement_timeout", "5", *options]
+    cmd = on_ranks(ranks, [KRYFLEX, "reduce", scene, "-o", str(out), "-kf_verify", "false", "-scene.angles", "30",
+                           "-kf_error_agreement_timeout", "5", *options])
     return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)

@@ -9,7 +9,7 @@ residuals), on 1 and 2 ranks:
 
 - kryflex's reference L^0 is the dense one to 1e-12 (6e-14 measured; 1e-10 with the block solves unrefined);
 - the reported error and the dense error of the model's L^0 agree within a factor 2 (1.9e-12 and 2.0e-12
-  measured; 1.07e-10 reported against 8.6e-12 before), both within the 1e-10 promised.
+  measured; 1.07e-10 reported against 2.0e-12 before), both within the 1e-10 promised.
 """
 import json
 import os

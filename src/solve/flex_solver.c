@@ -349,7 +349,8 @@ static PetscErrorCode KFFlexSolverRefine(KFFlexSolver solver, Mat PB, PetscReal 
    real convergence the halving rule cut short), then, with a block low-rank factor, the factor refactored full rank
    and the block solved again. One left above after that is counted (perf.blocks_unconverged): the reducer says so in
    its summary, report and last line, and the verification's direct solves decide the verdict.
-   floor: the steps are also taken below -kf_refine_rtol, down to the factor's floor (KFFlexSolverApplyRefined). */
+   floor: the steps (at least one) are taken whatever the residual, down to the factor's floor; escalation and the
+   counts still go by -kf_refine_rtol (KFFlexSolverApplyRefined). */
 static PetscErrorCode KFFlexSolverApply_Private(KFFlexSolver solver, Mat B, Mat X, PetscBool floor)
 {
   Mat       R, PB = NULL;
@@ -367,7 +368,7 @@ static PetscErrorCode KFFlexSolverApply_Private(KFFlexSolver solver, Mat B, Mat 
     PetscCall(KFFlexSolverResidual(solver, PB, nb, X, &R, &rel));
     solver->perf.residual_first_max = PetscMax(solver->perf.residual_first_max, rel);
     if (rel > solver->refine_rtol) solver->perf.blocks_refined++;
-    PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, solver->refine, 0.5, solver->refine_rtol));
+    PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, floor ? PetscMax(solver->refine, 1) : solver->refine, 0.5, floor ? 0.0 : solver->refine_rtol));
     if (rel > solver->refine_rtol && solver->refine_rtol > 0) { /* escalation (-kf_refine_rtol 0 asks for the steps, not a residual) */
       PetscBool refactored;
 
@@ -382,7 +383,6 @@ static PetscErrorCode KFFlexSolverApply_Private(KFFlexSolver solver, Mat B, Mat 
         PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, 4 * solver->refine + 10, 0.9, solver->refine_rtol));
       }
     }
-    if (floor) PetscCall(KFFlexSolverRefine(solver, PB, nb, X, &R, &rel, PetscMax(solver->refine, 1), 0.5, 0.0));
     PetscCall(MatDestroy(&R));
     PetscCall(MatDestroy(&PB));
     solver->perf.residual_final_max = PetscMax(solver->perf.residual_final_max, rel);

@@ -10,6 +10,9 @@ residuals), on 1 and 2 ranks:
 - kryflex's reference L^0 is the dense one to 1e-12 (6e-14 measured; 1e-10 with the block solves unrefined);
 - the reported error and the dense error of the model's L^0 agree within a factor 2 (1.9e-12 and 2.0e-12
   measured; 1.07e-10 reported against 2.0e-12 before), both within the 1e-10 promised.
+
+With the moments solved unrefined the "solved" case fails (reference 1.1e-10 from the dense one on 1 rank, 3.0e-11 on
+2); the "basis" one passed before too (the basis's L^0 was accurate there), and stays as a check of that path.
 """
 import json
 import os
@@ -85,8 +88,7 @@ def run(s, ranks, tmp_path):
     return json.loads([x for x in p.stdout.splitlines() if x.startswith("RESULT ")][0][7:])
 
 
-@pytest.mark.fast
-@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+@pytest.mark.parametrize("ranks", [pytest.param(1, marks=pytest.mark.fast), pytest.param(2, marks=pytest.mark.mpi)])
 @pytest.mark.parametrize("moments", [None, 10], ids=["solved", "basis"])
 def test_reported_static_error_is_the_dense_one(dense, moments, ranks, tmp_path):
     L0, beta = dense

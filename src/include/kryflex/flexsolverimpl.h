@@ -37,6 +37,8 @@ struct _p_KFFlexSolver {
 
 PETSC_EXTERN PetscClassId      KF_FLEXSOLVER_CLASSID; /* src/util/package.c */
 PETSC_EXTERN PetscFunctionList KFFlexSolverList;
+/* KFFlexSolverApply refined to the factor's floor whatever the first residual (src/solve/flex_solver.c) */
+PETSC_INTERN PetscErrorCode    KFFlexSolverApplyRefined(KFFlexSolver, Mat B, Mat X);
 PETSC_INTERN PetscErrorCode    KFFlexSolverRegisterAll(void); /* src/solve/register.c: the built-in types, once */
 PETSC_INTERN PetscErrorCode    KFFlexSolverGetTypeNames(PetscInt *, const char *const **);
 PETSC_INTERN PetscErrorCode    KFFlexSolverCreate_Monolithic(KFFlexSolver);

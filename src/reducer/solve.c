@@ -899,15 +899,32 @@ static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, c
   PetscFunctionReturn(0);
 }
 
-/* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed (which a
-   tied one cannot be), may have fewer system dofs. Measured; when it has no more, the split candidates replace the
+/* a model's reassembled system dofs, the largest over the evaluation points (what is simulated) */
+static PetscErrorCode KFReducerSystemDofs_Private(PetscInt neval, KFEvalPoint evals[], KFReducedModel model, PetscInt *n)
+{
+  PetscFunctionBegin;
+  *n = 0;
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscInt        ne;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &ne, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *n = PetscMax(*n, ne);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed body by
+   body, may have fewer system dofs than the tied one compressed across the bodies (tsys of them). Measured; when it has no more, the split candidates replace the
    tied ones and the model measured is the one chosen, already compressed (*nties 0, cz[] its dofs before and after,
    *ckept whether the static columns stayed, *csec the compression's seconds: the caller records them and does not
    compress again) */
-static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec)
+static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscInt tsys, KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec)
 {
   const KFReducerMethod tchosen = r->chosen;
-  const KFCandidate    *tied    = tchosen == KF_METHOD_MULTI_ANGLE && multi->nexp ? multi : single, *alt;
+  const KFCandidate    *alt;
   KFReducedModel        model;
   PetscInt              from, to, n = 0;
   PetscBool             kept;
@@ -922,19 +939,12 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   }
   PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_TRUE, &model)); /* with its maps: it may be the one returned */
   PetscCall(PetscTime(&c0));
-  PetscCall(KFReducerCompress_Private(r, neval, evals, &model, &from, &to, &kept));
+  PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, &model, &from, &to, &kept));
   PetscCall(PetscTime(&c1));
-  for (PetscInt e = 0; e < neval; e++) {
-    KFReducedSystem rs;
-    PetscInt        ne;
-
-    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
-    PetscCall(KFReducedSystemGetMatrices(rs, &ne, NULL, NULL, NULL, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    n = PetscMax(n, ne);
-  }
-  PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tied->sysdofs, n));
-  if (n > tied->sysdofs) {
+  *csec += c1 - c0;
+  PetscCall(KFReducerSystemDofs_Private(neval, evals, model, &n));
+  PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tsys, n));
+  if (n > tsys) {
     PetscCall(KFReducedModelDestroy(&model));
     r->chosen = tchosen;
     PetscFunctionReturn(0);
@@ -959,7 +969,6 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   cz[0]  = from;
   cz[1]  = to;
   *ckept = kept;
-  *csec  = c1 - c0;
   PetscFunctionReturn(0);
 }
 
@@ -1038,39 +1047,66 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
   if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
-  { /* a model of shared directions (tied) is not compressed */
+  if (r->compress) { /* the chosen model compressed: tied across its bodies (-kf_shared_directions true or auto) and
+                        body by body (false or auto); under auto the smaller by system dofs, the body-wise one at equal */
+    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+    KFReducedModel  tmodel = NULL;
+    PetscInt        from = 0, to = 0, tfrom = 0, tto = 0, tsys = PETSC_MAX_INT, ssys;
+    PetscBool       kept = PETSC_TRUE, tkept = PETSC_TRUE, tied_won = PETSC_FALSE, nostatic;
+    PetscLogDouble  c0, c1;
+
+    nostatic = (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic;
+    PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
+    if (r->shared_directions || r->shared_auto) { /* across the bodies: on a reference, the chosen model kept for the body-wise one */
+      tmodel = *chosen;
+      PetscCall(PetscObjectReference((PetscObject)tmodel));
+      PetscCall(PetscTime(&c0));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_TRUE, &tmodel, &tfrom, &tto, &tkept));
+      PetscCall(PetscTime(&c1));
+      csec += c1 - c0;
+      PetscCall(KFReducerSystemDofs_Private(neval, evals, tmodel, &tsys));
+    }
+    if (r->shared_directions) tied_won = PETSC_TRUE;
+    else if (nties) { /* auto, a tied model chosen: its split rival compressed */
+      PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, tsys, &single, &multi, split, &nties, cz, &ckept, &csec));
+      tied_won = (PetscBool)(nties > 0);
+      if (!tied_won) {
+        from = cz[0];
+        to   = cz[1];
+        kept = ckept;
+      }
+    } else { /* split chosen: compressed body by body */
+      PetscCall(PetscTime(&c0));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, chosen, &from, &to, &kept));
+      PetscCall(PetscTime(&c1));
+      csec += c1 - c0;
+      if (tmodel) {
+        PetscCall(KFReducerSystemDofs_Private(neval, evals, *chosen, &ssys));
+        PetscCall(PetscInfo(r, "compression: tied across the bodies %" PetscInt_FMT " system dofs, body by body %" PetscInt_FMT "\n", tsys, ssys));
+        tied_won = (PetscBool)(tsys < ssys);
+      }
+    }
+    chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+    if (tied_won) {
+      PetscCall(KFReducedModelDestroy(chosen));
+      *chosen = tmodel;
+      from    = tfrom;
+      to      = tto;
+      kept    = (PetscBool)(tkept && !nostatic);
+    } else PetscCall(KFReducedModelDestroy(&tmodel));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)csec));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_tied", tied_won ? 1.0 : 0.0));
+    /* a compression without the static columns changes L^0: the summary reports its measured error, not "exact" */
+    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", kept ? 1.0 : 0.0));
+    if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (%s)", from, to, tied_won ? "tied: the leading directions of the whole response across the bodies" : "each body its leading directions of the response"));
+    else PetscCall(KFProgress(st.comm, "compression: no direction can go and the model meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
+  } else {
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
 
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
-    if (r->shared_directions) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
-    if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties, cz, &ckept, &csec));
-    if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
-    if (nties && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
-  }
-  if (r->compress && !nties) { /* the chosen model, body by body, by what its response needs */
-    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
-    PetscInt        from, to;
-    PetscLogDouble  c0, c1;
-    PetscBool       kept;
-
-    if (cz[0] < 0) {
-      PetscCall(PetscTime(&c0));
-      PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to, &kept));
-      PetscCall(PetscTime(&c1));
-    } else { /* compressed when it was measured against the tied model */
-      from = cz[0];
-      to   = cz[1];
-      kept = ckept;
-      c0   = 0;
-      c1   = csec;
-    }
-    PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)(c1 - c0)));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
-    /* a compression without the static columns changes L^0: the summary reports its measured error, not "exact" */
-    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", kept ? 1.0 : 0.0));
-    if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (each body its leading directions of the response)", from, to));
-    else PetscCall(KFProgress(st.comm, "compression: no body can lose a direction and meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
+    if ((nties || r->shared_directions) && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
   }
   PetscCall(PetscTime(&t1));
   st.times[5] += t1 - t0;

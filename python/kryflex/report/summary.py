@@ -310,6 +310,8 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         _optional_scalar(reducer, -1, "expansion_point_factorizations", whole, int) or 0
     if before is not None:
         out["chosen"]["compressed_from_dofs"], out["chosen"]["compressed_to_dofs"] = before, after
+        tied = _optional_scalar(reducer, -1, "compressed_tied", whole, int)
+        out["chosen"]["compressed_tied"] = None if tied is None else bool(tied)
     out["chosen"].update(_static_moment(reducer, labels, has, whole, prefix))
     out["expansion_point_search"] = {
         "factorizations_spent": _optional_scalar(reducer, -1, "shift_factorizations_spent", whole, int) or 0,

@@ -291,7 +291,7 @@ PETSC_INTERN PetscErrorCode KFReducerShareBodies_Private(KFReducer, KFVisit[], P
 PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, PetscInt *nvisit, KFVisit **visits, PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 /* the chosen model compressed body by body by what its response needs (compress_search.c, -kf_compress): replaced when smaller
    and still meeting the target; its reduced dofs before and after, and whether it keeps the static response (-kf_static_exact) */
-PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
+PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], PetscBool tied, KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 /* split[2]: the best split single-angle and multi-angle candidates (under -kf_shared_directions auto the others may be tied) */
 /* the search table (results "search_table"): one row per candidate tried, family, moments c, kept clusters, expansion

@@ -462,7 +462,9 @@ class Candidate(Record):
     reduced_dofs: int = _value(doc="sum over bodies")
     max_system_dofs: int = _value()
     error: float = _value()
-    variant: str = _value(doc="split | tied | tied, no static correction (-kf_shared_directions), or None (not known)")
+    variant: str = _value(doc="split | tied | tied, no static correction (-kf_shared_directions) | compressed body by "
+                              "body | compressed, tied across the bodies (-kf_compress: the chosen model compressed, "
+                              "rows after the search's), or None (not known)")
 
 
 @dataclass(kw_only=True)

@@ -365,13 +365,13 @@ static PetscErrorCode KFCompressSearch(KFReducer r, PetscInt neval, KFEvalPoint 
   smaller: the result is never larger than with the static columns kept (the snapshot orderings alone gave 26 states
   against 24 on the solid at 1e-3), and at equal size L^0 stays exact. The smaller model replaces *model; *from and
   *to: the sizes before and after (equal when nothing was gained); *static_kept: whether the result keeps the static
-  columns (true when nothing was gained).
+  columns (true when nothing was gained); *error: the compressed model's (-1 when nothing was gained).
   tied: the model's stacked body coordinates instead, one set of directions ordered by one SVD of the whole response
   (the bodies' rigid motions and the static columns kept), the fewest leading ones meeting the target by bisection,
   the result tied to them (its ties as a tied candidate's); the model may be tied or split. Its size is its body
   dofs less its ties.
 */
-PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscBool tied, KFReducedModel *model, PetscInt *from, PetscInt *to, PetscBool *static_kept)
+PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscBool tied, KFReducedModel *model, PetscInt *from, PetscInt *to, PetscBool *static_kept, PetscReal *error)
 {
   KFBodyDirections *best = NULL;
   PetscInt          nb, nd, nevals = 0, bsize = 0;
@@ -429,6 +429,7 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     *to          = bsize;
     *static_kept = bkept;
   }
+  *error = best && bsize < *from ? berror : -1;
   PetscCall(PetscInfo(r, "compression%s: %" PetscInt_FMT " models measured, %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (error %g)\n", tied ? " (tied)" : "", nevals, *from, *to, (double)berror));
   PetscCall(KFBodyDirectionsDestroy(nd, &best));
   PetscFunctionReturn(0);

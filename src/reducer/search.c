@@ -27,9 +27,11 @@ typedef struct {
 } KFSearchTable;
 
 /* a candidate's variant, which tells the passes of -kf_shared_directions auto apart in the search table (their rows
-   are otherwise alike): 0 split, 1 tied, 2 tied without the static correction of the dropped clusters */
+   are otherwise alike): 0 split, 1 tied, 2 tied without the static correction of the dropped clusters; the chosen
+   model compressed (rows after the search's): 3 body by body, 4 tied across the bodies */
 PetscReal KFCandidateVariant_Private(KFReducer r, const KFCandidate *c)
 {
+  if (c->compressed) return 2 + c->compressed;
   return c->nostatic ? 2 : ((c->tied || r->shared_directions) ? 1 : 0);
 }
 

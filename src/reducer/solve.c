@@ -919,15 +919,16 @@ static PetscErrorCode KFReducerSystemDofs_Private(PetscInt neval, KFEvalPoint ev
 /* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed body by
    body, may have fewer system dofs than the tied one compressed across the bodies (tsys of them). Measured; when it has no more, the split candidates replace the
    tied ones and the model measured is the one chosen, already compressed (*nties 0, cz[] its dofs before and after,
-   *ckept whether the static columns stayed, *csec the compression's seconds: the caller records them and does not
-   compress again) */
-static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscInt tsys, KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec)
+   *ckept whether the static columns stayed, *csec += the compression's seconds: the caller records them and does not
+   compress again; *crow the compressed model's search-table row, crow->compressed 0 when nothing was gained) */
+static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscInt tsys, KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec, KFCandidate *crow)
 {
   const KFReducerMethod tchosen = r->chosen;
   const KFCandidate    *alt;
   KFReducedModel        model;
   PetscInt              from, to, n = 0;
   PetscBool             kept;
+  PetscReal             cerr;
   PetscLogDouble        c0, c1;
 
   PetscFunctionBegin;
@@ -939,10 +940,17 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   }
   PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_TRUE, &model)); /* with its maps: it may be the one returned */
   PetscCall(PetscTime(&c0));
-  PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, &model, &from, &to, &kept));
+  PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, &model, &from, &to, &kept, &cerr));
   PetscCall(PetscTime(&c1));
   *csec += c1 - c0;
   PetscCall(KFReducerSystemDofs_Private(neval, evals, model, &n));
+  if (to < from) { /* its row of the search table */
+    *crow            = *alt;
+    crow->compressed = 1;
+    crow->size       = to;
+    crow->sysdofs    = n;
+    crow->error      = cerr;
+  }
   PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tsys, n));
   if (n > tsys) {
     PetscCall(KFReducedModelDestroy(&model));
@@ -1032,12 +1040,6 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFSystemDestroy(&sys));
   PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_search", (PetscReal)(t1 - t0)));
-  {
-    const PetscInt shape[2] = {KF_SEARCH_TABLE_COLUMNS, nrows};
-
-    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
-    PetscCall(PetscFree(rows));
-  }
   PetscCheck(single.nexp || multi.nexp, st.comm, PETSC_ERR_PLIB, "the accuracy search tried no model");
   PetscCall(KFReducerSearchChoose_Private(r, &single, &multi));
   if (!single.nexp) { /* multi-angle only: the single-angle model of the first expansion angle, whole, for reference */
@@ -1053,22 +1055,33 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
     KFReducedModel  tmodel = NULL;
     PetscInt        from = 0, to = 0, tfrom = 0, tto = 0, tsys = PETSC_MAX_INT, ssys;
     PetscBool       kept = PETSC_TRUE, tkept = PETSC_TRUE, tied_won = PETSC_FALSE, nostatic;
+    PetscReal       terr = -1, serr = -1;
     PetscLogDouble  c0, c1;
+    KFCandidate     crow[2]; /* the search-table rows of the compressed models: tied, body by body */
 
     nostatic = (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic;
+    crow[0]  = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single;
+    crow[1]  = crow[0];
+    crow[0].compressed = crow[1].compressed = 0;
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
     if (r->shared_directions || r->shared_auto) { /* across the bodies: on a reference, the chosen model kept for the body-wise one */
       tmodel = *chosen;
       PetscCall(PetscObjectReference((PetscObject)tmodel));
       PetscCall(PetscTime(&c0));
-      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_TRUE, &tmodel, &tfrom, &tto, &tkept));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_TRUE, &tmodel, &tfrom, &tto, &tkept, &terr));
       PetscCall(PetscTime(&c1));
       csec += c1 - c0;
       PetscCall(KFReducerSystemDofs_Private(neval, evals, tmodel, &tsys));
+      if (tto < tfrom) {
+        crow[0].compressed = 2;
+        crow[0].size       = tto;
+        crow[0].sysdofs    = tsys;
+        crow[0].error      = terr;
+      }
     }
     if (r->shared_directions) tied_won = PETSC_TRUE;
     else if (nties) { /* auto, a tied model chosen: its split rival compressed */
-      PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, tsys, &single, &multi, split, &nties, cz, &ckept, &csec));
+      PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, tsys, &single, &multi, split, &nties, cz, &ckept, &csec, &crow[1]));
       tied_won = (PetscBool)(nties > 0);
       if (!tied_won) {
         from = cz[0];
@@ -1077,11 +1090,17 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       }
     } else { /* split chosen: compressed body by body */
       PetscCall(PetscTime(&c0));
-      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, chosen, &from, &to, &kept));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, chosen, &from, &to, &kept, &serr));
       PetscCall(PetscTime(&c1));
       csec += c1 - c0;
+      PetscCall(KFReducerSystemDofs_Private(neval, evals, *chosen, &ssys));
+      if (to < from) {
+        crow[1].compressed = 1;
+        crow[1].size       = to;
+        crow[1].sysdofs    = ssys;
+        crow[1].error      = serr;
+      }
       if (tmodel) {
-        PetscCall(KFReducerSystemDofs_Private(neval, evals, *chosen, &ssys));
         PetscCall(PetscInfo(r, "compression: tied across the bodies %" PetscInt_FMT " system dofs, body by body %" PetscInt_FMT "\n", tsys, ssys));
         tied_won = (PetscBool)(tsys < ssys);
       }
@@ -1094,6 +1113,11 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
       to      = tto;
       kept    = (PetscBool)(tkept && !nostatic);
     } else PetscCall(KFReducedModelDestroy(&tmodel));
+    for (PetscInt k = 0; k < 2; k++) /* the compressed models measured: rows after the search's */
+      if (crow[k].compressed) {
+        PetscCall(PetscRealloc(sizeof(PetscReal) * KF_SEARCH_TABLE_COLUMNS * (nrows + 1), &rows));
+        KFSearchTableRow_Private(r, &crow[k], &rows[KF_SEARCH_TABLE_COLUMNS * nrows++]);
+      }
     PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)csec));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
     PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
@@ -1107,6 +1131,12 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
 
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
     if ((nties || r->shared_directions) && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
+  }
+  {
+    const PetscInt shape[2] = {KF_SEARCH_TABLE_COLUMNS, nrows};
+
+    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
+    PetscCall(PetscFree(rows));
   }
   PetscCall(PetscTime(&t1));
   st.times[5] += t1 - t0;

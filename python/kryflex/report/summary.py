@@ -36,7 +36,8 @@ SEARCH_COLUMNS = ("family", "moments", "kept_clusters", "expansion_angles", "red
                   "error", "variant")
 # a candidate's variant (-kf_shared_directions): split, tied, or tied without the static correction of the dropped
 # clusters; tables of libraries before the column have 7 rows and leave it None
-VARIANTS = {0: "split", 1: "tied", 2: "tied, no static correction"}
+VARIANTS = {0: "split", 1: "tied", 2: "tied, no static correction", 3: "compressed body by body",
+            4: "compressed, tied across the bodies"}
 
 
 def _none(x):

@@ -7,7 +7,7 @@ bodies tied to them.
 Galileo (2 bodies, its 6 angles of interest) at 1e-3, tied (-kf_shared_directions true) with compression off and on,
 checked against an independent dense NumPy/SciPy reference:
 (a) the compressed model has fewer system dofs (measured 21 against 24), records its sizes (body dofs less its ties)
-    and says it is tied;
+    and says it is tied, in the summary and as the search table's last row;
 (b) its elastic error over every angle and midpoint meets the target by the dense measure;
 (c) its static moment L^0 is the uncompressed model's at every angle and midpoint (the rounding floor) and so the full
     order's;
@@ -74,6 +74,11 @@ def test_tied_model_is_compressed_and_recorded(runs):
     assert ch.compressed_from_dofs == sum(plain.model.sizes) - plain_ties
     assert comp.summary.verdict.target_met and ch.static_exact
     assert plain.summary.chosen.compressed_from_dofs is None
+    # its row of the search table, after the search's
+    row = comp.summary.search[-1]
+    assert (row.variant, row.reduced_dofs, row.max_system_dofs) == ("compressed, tied across the bodies",
+                                                                    ch.compressed_to_dofs, n1)
+    assert row.error == pytest.approx(comp.summary.verdict.error_max, rel=1e-6)
 
 
 def test_compressed_tied_model_meets_the_target_independently(runs, dense):

@@ -3,6 +3,8 @@
   (src/project/body_compress.c orders them) while the model still meets the scene's accuracy at every evaluation point.
   The counts are searched by bisection body by body, then (two bodies) along the frontier of count pairs, then by
   backward elimination of single directions; every model tried is measured as the search measures its candidates.
+  A tied model (or, under -kf_shared_directions auto, the chosen one as well) is compressed across its bodies instead:
+  one set of directions of the stacked coordinates, the count searched by bisection, the model tied to them.
 */
 #include <kryflex/reducerimpl.h>
 

@@ -435,7 +435,10 @@ class ChosenModel(Record):
     expansion_points_hz: list = _value([])
     expansion_point_factorizations: int = _value()
     compressed_from_dofs: int = _value(doc="-kf_compress: reduced dofs before the compression (None: not run)")
-    compressed_to_dofs: int = _value(doc="-kf_compress: reduced dofs after it (equal: no body could lose a direction)")
+    compressed_to_dofs: int = _value(doc="-kf_compress: reduced dofs after it (equal: no direction could go); a tied "
+                                         "model's: its body dofs less its ties")
+    compressed_tied: bool = _value(doc="-kf_compress: true when the model kept is the one tied across its bodies (one "
+                                       "SVD of the whole response), false body by body, None: not run")
     static_exact: bool = _value(True, doc="L^0 kept as the search made it (false: compressed with -kf_static_exact "
                                           "false, L^0 approximated: see static_moment_error)")
     static_moment_error: dict = _value({}, doc="{label: ||L^0_full - L^0_red|| / ||L^0_full||}, measured")
@@ -459,7 +462,9 @@ class Candidate(Record):
     reduced_dofs: int = _value(doc="sum over bodies")
     max_system_dofs: int = _value()
     error: float = _value()
-    variant: str = _value(doc="split | tied | tied, no static correction (-kf_shared_directions), or None (not known)")
+    variant: str = _value(doc="split | tied | tied, no static correction (-kf_shared_directions) | compressed body by "
+                              "body | compressed, tied across the bodies (-kf_compress: the chosen model compressed, "
+                              "rows after the search's), or None (not known)")
 
 
 @dataclass(kw_only=True)

@@ -196,6 +196,9 @@ typedef struct {
 PETSC_INTERN PetscErrorCode KFBodyCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **);
 PETSC_INTERN PetscErrorCode KFBodyDirectionsDestroy(PetscInt nb, KFBodyDirections **);
 PETSC_INTERN PetscErrorCode KFReducedModelCompress(KFReducedModel, const KFBodyDirections[], const PetscInt counts[], PetscBool with_map, KFReducedModel *);
+/* the same across the bodies' stacked coordinates: one set of directions, a model tied to the leading ones */
+PETSC_INTERN PetscErrorCode KFTiedCompressDirections(KFReducedModel, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **);
+PETSC_INTERN PetscErrorCode KFReducedModelCompressTied(KFReducedModel, const KFBodyDirections *, PetscInt count, PetscBool with_map, KFReducedModel *, PetscInt *k, PetscReal ***C);
 /* sub-bases: bases in the span of a finished one, made in its coordinates (src/project/body_basis.c) */
 PETSC_INTERN PetscErrorCode KFBodyBasisKeepProducts(KFBodyBasis);
 PETSC_INTERN PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis, PetscInt body, Mat Pb, Mat X, PetscReal T[]);

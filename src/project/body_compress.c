@@ -49,13 +49,17 @@ static void KFGramAdd(PetscInt v, PetscReal s2, const PetscReal re[], const Pets
     for (PetscInt r = 0; r < v; r++) Gq[r + c * v] += s2 * (re[r] * re[c] + (im ? im[r] * im[c] : 0));
 }
 
-/* one configuration's snapshots: each body's share of the static response (appended to S[b], v_b x a columns at
+/* one configuration's snapshots: each group's share of the static response (appended to S[g], v_g x a columns at
    column nS; also added to the Gram as a snapshot when !static_exact) and the Gram matrix of its dynamic response,
-   input j weighted by inw[j] (NULL: 1), added to Gq[b] (v_b x v_b), in reduced body coordinates */
-static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], const PetscReal inw[], PetscBool static_exact, PetscInt nS, PetscReal *S[], PetscReal *Gq[])
+   input j weighted by inw[j] (NULL: 1), added to Gq[g] (v_g x v_g), in reduced body coordinates. The groups: each
+   body (stacked false) or all bodies' stacked coordinates as one (stacked true: the Gram's cross-body terms too).
+   *ok false (nothing added): the reassembly here finds fewer rigid and mechanism modes than the scene has, so the
+   static response, a solve on the flexible subspace, cannot be formed */
+static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angles[], PetscInt nw, const PetscReal w[], const PetscReal inw[], PetscBool static_exact, PetscBool stacked, PetscInt nS, PetscReal *S[], PetscReal *Gq[], PetscBool *ok)
 {
   const PetscInt a = m->ninputs;
-  PetscInt       n = 0, h, rank, nrigid, *off;
+  PetscInt       n = 0, h, rank, nrigid, *off, ng, goff[2];
+  const PetscInt *go;
   KFReducedBody *bodies;
   PetscReal     *Mh, *Kh, *Gh, *N, *Phir, *lambda, *Phi, *PG, *NP, *Hid, sratio, rtol = 1e-9;
 
@@ -66,7 +70,11 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
     PetscCall(KFReducedModelGetBody(m, b, NULL, NULL, &bodies[b], NULL));
     off[b + 1] = off[b] + bodies[b].v;
   }
-  n = off[m->nb];
+  n       = off[m->nb];
+  ng      = stacked ? 1 : m->nb;
+  goff[0] = 0;
+  goff[1] = n;
+  go      = stacked ? goff : off;
   /* outputs H = I: the reassembled outputs are N itself (n x h) */
   PetscCall(PetscCalloc1(n * n, &Hid));
   for (PetscInt b = 0; b < m->nb; b++) {
@@ -80,8 +88,17 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
     if (same) rtol = (PetscReal)atof(m->values[k]);
   }
   PetscCall(PetscMalloc5(n * n, &Mh, n * n, &Kh, n * a, &Gh, n * n, &N, n * n, &Phir));
-  PetscCall(KFReassemble(m->nb, bodies, m->nj, m->joints, angles, a, n, rtol, &h, Mh, Kh, Gh, N, &rank, &sratio, &nrigid, Phir));
+  /* a tied model's coordinate ties too: N spans what its stacked coordinates may take */
+  PetscCall(KFReassembleTied(m->nb, bodies, m->nj, m->joints, m->nties, m->ties, angles, a, n, rtol, &h, Mh, Kh, NULL, Gh, N, &rank, &sratio, &nrigid, Phir));
   PetscCheck(nrigid >= 0, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "compression needs the bodies' rigid motions: the model has none recorded");
+  *ok = (PetscBool)(m->nrigid < 0 || nrigid >= m->nrigid);
+  if (!*ok) {
+    PetscCall(PetscInfo(m, "compression snapshots: %" PetscInt_FMT " rigid and mechanism modes of the bodies' rigid motions under the ties, the scene has %" PetscInt_FMT "\n", nrigid, m->nrigid));
+    PetscCall(PetscFree5(Mh, Kh, Gh, N, Phir));
+    PetscCall(PetscFree(Hid));
+    PetscCall(PetscFree2(bodies, off));
+    PetscFunctionReturn(0);
+  }
   PetscCall(PetscMalloc4(h, &lambda, h * h, &Phi, h * a, &PG, n * h, &NP));
   PetscCall(KFDenseEigRigid(h, Kh, Mh, nrigid, Phir, lambda, Phi));
   {
@@ -94,11 +111,14 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
     /* static: N K^+ G on the flexible subspace, by solves that keep the digits an eigendecomposition of a stiff model
        loses (KFDenseMomentsRigid with the outputs N) */
     PetscCall(KFDenseMomentsRigid(h, Kh, Mh, a, Gh, n, N, nrigid, Phir, 1, y));
-    for (PetscInt b = 0; b < m->nb; b++)
+    for (PetscInt g = 0; g < ng; g++) {
+      const PetscInt v = go[g + 1] - go[g];
+
       for (PetscInt j = 0; j < a; j++) {
-        PetscCall(PetscArraycpy(&S[b][(nS + j) * bodies[b].v], &y[off[b] + j * n], bodies[b].v));
-        if (!static_exact) KFGramAdd(bodies[b].v, inw ? inw[j] * inw[j] : 1, &y[off[b] + j * n], NULL, Gq[b]);
+        PetscCall(PetscArraycpy(&S[g][(nS + j) * v], &y[go[g] + j * n], v));
+        if (!static_exact) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[go[g] + j * n], NULL, Gq[g]);
       }
+    }
     for (PetscInt f = 0; f < nw; f++) {
       PetscCall(PetscArrayzero(y, n * a));
       PetscCall(PetscArrayzero(yi, n * a));
@@ -113,9 +133,9 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
           }
         }
       }
-      for (PetscInt b = 0; b < m->nb; b++) { /* Gq_b += Re q Re q^T + Im q Im q^T */
-        const PetscInt v = bodies[b].v;
-        for (PetscInt j = 0; j < a; j++) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[off[b] + j * n], &yi[off[b] + j * n], Gq[b]);
+      for (PetscInt g = 0; g < ng; g++) { /* Gq_g += Re q Re q^T + Im q Im q^T */
+        const PetscInt v = go[g + 1] - go[g];
+        for (PetscInt j = 0; j < a; j++) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[go[g] + j * n], &yi[go[g] + j * n], Gq[g]);
       }
     }
     PetscCall(PetscFree2(y, yi));
@@ -127,11 +147,11 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
   PetscFunctionReturn(0);
 }
 
-/* body b's directions from its static columns S (v x ns) and snapshot Gram Gq (v x v, reduced coordinates): W (v x
-   (nkeep + ndir)) M_b-orthonormal, the kept columns first, then the others leading first, with their weights */
-static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const PetscReal S[], PetscReal Gq[], KFBodyDirections *d)
+/* the directions of coordinates of mass M (v x v, named name) from their nr rigid motions R (v x nr), static columns S
+   (v x ns) and snapshot Gram Gq (v x v): W (v x (nkeep + ndir)) M-orthonormal, the kept columns first, then the
+   others leading first, with their weights. One body (nr 6) or all bodies stacked (M, R block diagonal) */
+static PetscErrorCode KFCompressBody(const char name[], PetscInt v, const PetscReal Mb[], PetscInt nr, const PetscReal R[], PetscInt ns, const PetscReal S[], PetscReal Gq[], KFBodyDirections *d)
 {
-  const PetscInt v = B->v;
   PetscBLASInt   bv, info, lwork;
   PetscReal     *L, *X, *Gz, *T, *ev, *work;
   PetscInt       nk;
@@ -144,17 +164,17 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
   }
   PetscCall(PetscBLASIntCast(v, &bv));
   lwork = PetscMax(3 * bv, 1) * 4;
-  PetscCall(PetscMalloc6(v * v, &L, v * (6 + ns + v), &X, v * v, &Gz, v * v, &T, v, &ev, lwork, &work));
+  PetscCall(PetscMalloc6(v * v, &L, v * (nr + ns + v), &X, v * v, &Gz, v * v, &T, v, &ev, lwork, &work));
   /* M_b = L L^T; coordinates z = L^T q make the M_b inner product Euclidean */
-  for (PetscInt i = 0; i < v * v; i++) L[i] = 0.5 * (B->M[i] + B->M[(i % v) * v + i / v]);
+  for (PetscInt i = 0; i < v * v; i++) L[i] = 0.5 * (Mb[i] + Mb[(i % v) * v + i / v]);
   PetscCallBLAS("LAPACKpotrf", LAPACKpotrf_("L", &bv, L, &bv, &info));
-  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': its reduced mass matrix is not positive definite (potrf %d): compression needs a mass on every reduced coordinate; set -kf_compress false", B->name, (int)info);
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': its reduced mass matrix is not positive definite (potrf %d): compression needs a mass on every reduced coordinate; set -kf_compress false", name, (int)info);
   for (PetscInt j = 0; j < v; j++)
     for (PetscInt i = 0; i < j; i++) L[i + j * v] = 0;
   /* kept: L^T [rigid, S] */
-  KFAtB(v, v, 6, L, v, B->rigid, v, X);
-  KFAtB(v, v, ns, L, v, S, v, X + 6 * v);
-  PetscCall(KFDenseOrthonormalizeSmall_Private(v, 6 + ns, X, NULL, 1e-8, &nk));
+  KFAtB(v, v, nr, L, v, R, v, X);
+  KFAtB(v, v, ns, L, v, S, v, X + nr * v);
+  PetscCall(KFDenseOrthonormalizeSmall_Private(v, nr + ns, X, NULL, 1e-8, &nk));
   /* the snapshots' Gram in z: L^T Gq L, then with the kept span projected out: P Gz P, P = I - X X^T */
   KFAtB(v, v, v, L, v, Gq, v, T);
   KFAB(v, v, v, T, v, L, v, Gz, v);
@@ -167,7 +187,7 @@ static PetscErrorCode KFCompressBody(const KFModelBody *B, PetscInt ns, const Pe
   for (PetscInt j = 0; j < v; j++)
     for (PetscInt i = 0; i < j; i++) Gz[i + j * v] = Gz[j + i * v] = 0.5 * (Gz[i + j * v] + Gz[j + i * v]);
   PetscCallBLAS("LAPACKsyev", LAPACKsyev_("V", "L", &bv, Gz, &bv, ev, work, &lwork, &info));
-  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': the eigensolve of its response snapshots failed (syev %d)", B->name, (int)info);
+  PetscCheck(!info, PETSC_COMM_SELF, PETSC_ERR_LIB, "body '%s': the eigensolve of its response snapshots failed (syev %d)", name, (int)info);
   /* directions, leading first, after the kept ones; what the kept span already holds drops out. Each with its largest
      entry positive: an eigenvector's sign is arbitrary, and 1 and 2 ranks must make the same model */
   for (PetscInt q = 0; q < v; q++) {
@@ -228,9 +248,16 @@ PetscErrorCode KFBodyCompressDirections(KFReducedModel m, PetscInt nconf, const 
     PetscCall(PetscCalloc1(v * a * nconf + 1, &S[b]));
     PetscCall(PetscCalloc1(v * v + 1, &Gq[b]));
   }
-  for (PetscInt k = 0; k < nconf; k++) PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, static_exact, k * a, S, Gq));
+  for (PetscInt k = 0; k < nconf; k++) {
+    PetscBool ok;
+
+    PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, static_exact, PETSC_FALSE, k * a, S, Gq, &ok));
+    PetscCheck(ok, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "compression: the model reassembled at configuration %" PetscInt_FMT " has fewer rigid and mechanism modes than the scene's %" PetscInt_FMT ": its static response cannot be formed; set -kf_compress false", k, m->nrigid);
+  }
   for (PetscInt b = 0; b < m->nb; b++) {
-    PetscCall(KFCompressBody(&m->bodies[b], static_exact ? a * nconf : 0, S[b], Gq[b], &(*dirs)[b]));
+    const KFModelBody *B = &m->bodies[b];
+
+    PetscCall(KFCompressBody(B->name, B->v, B->M, 6, B->rigid, static_exact ? a * nconf : 0, S[b], Gq[b], &(*dirs)[b]));
     PetscCall(PetscFree(S[b]));
     PetscCall(PetscFree(Gq[b]));
   }
@@ -337,5 +364,93 @@ PetscErrorCode KFReducedModelCompress(KFReducedModel m, const KFBodyDirections d
     PetscCall(KFProjectBody(&m->bodies[b], a, t, k, d->W, with_map, &c->bodies[b]));
   }
   *out = c;
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFTiedCompressDirections - the directions of the model's stacked body coordinates q = (q_1, ..., q_nb) ordered by
+  the whole elastic response at nconf configurations (the arguments as KFBodyCompressDirections'): one set d (v the
+  sum of the bodies' v_b), M-orthonormal in blockdiag(M_b), keeping every body's rigid motions (free in a tied
+  model, they absorb the joints' interface motions) and (static_exact) the static responses exactly, the rest ordered
+  by one SVD of all configurations' snapshots. Each direction has a part in every body: a model made of the leading
+  ones ties its bodies (KFReducedModelCompressTied). The model may be tied already (its response lies in its ties'
+  span) or split. Freed with KFBodyDirectionsDestroy(1, d). *d NULL: the model reassembled at some configuration has
+  fewer rigid and mechanism modes than the scene (its ties cut one; its static response cannot be formed).
+*/
+PetscErrorCode KFTiedCompressDirections(KFReducedModel m, PetscInt nconf, const PetscReal angles[], const PetscInt nw[], const PetscReal *const w[], const PetscReal *const inw[], PetscBool static_exact, KFBodyDirections **d)
+{
+  const PetscInt nrev1 = PetscMax(m->nrevolute, 1), a = m->ninputs, nb = m->nb;
+  PetscInt       n = 0, o = 0;
+  PetscReal     *S, *Gq, *Mblk, *Rblk;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  PetscCheck(nconf >= 1, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_OUTOFRANGE, "compression needs at least one configuration");
+  for (PetscInt b = 0; b < nb; b++) {
+    PetscCheck(m->bodies[b].rigid, PetscObjectComm((PetscObject)m), PETSC_ERR_ARG_WRONG, "body '%s' has no rigid motions recorded: compression keeps them exactly", m->bodies[b].name);
+    n += m->bodies[b].v;
+  }
+  PetscCall(PetscCalloc1(1, d));
+  PetscCall(PetscCalloc4(n * a * nconf + 1, &S, n * n + 1, &Gq, n * n + 1, &Mblk, n * 6 * nb + 1, &Rblk));
+  for (PetscInt b = 0; b < nb; b++) { /* blockdiag(M_b), blockdiag(rigid_b) */
+    const PetscInt v = m->bodies[b].v;
+
+    for (PetscInt j = 0; j < v; j++)
+      for (PetscInt i = 0; i < v; i++) Mblk[(o + i) + (o + j) * n] = m->bodies[b].M[i + j * v];
+    for (PetscInt j = 0; j < 6; j++)
+      for (PetscInt i = 0; i < v; i++) Rblk[(o + i) + (6 * b + j) * n] = m->bodies[b].rigid[i + j * v];
+    o += v;
+  }
+  for (PetscInt k = 0; k < nconf; k++) {
+    PetscBool ok;
+
+    PetscCall(KFCompressSnapshots(m, m->nrevolute ? &angles[k * nrev1] : NULL, nw[k], w[k], inw ? inw[k] : NULL, static_exact, PETSC_TRUE, k * a, &S, &Gq, &ok));
+    if (!ok) { /* no directions: the caller keeps the model */
+      PetscCall(PetscFree4(S, Gq, Mblk, Rblk));
+      PetscCall(PetscFree(*d));
+      PetscFunctionReturn(0);
+    }
+  }
+  PetscCall(KFCompressBody("(all bodies, stacked)", n, Mblk, 6 * nb, Rblk, static_exact ? a * nconf : 0, S, Gq, *d));
+  PetscCall(PetscFree4(S, Gq, Mblk, Rblk));
+  PetscFunctionReturn(0);
+}
+
+/*
+  KFReducedModelCompressTied - the model tied to the kept columns of the stacked directions d (KFTiedCompressDirections)
+  and its first count directions: each body projected on the span of its rigid motions and its parts of those columns
+  (nothing of the model's response is lost by it), and *C[b] (v'_b x *k, allocated here, freed by the caller with
+  PetscFree each and the array) the columns' coordinates in the new bodies, from which the caller makes the ties
+  (KFCandidateTies_Private). with_map as KFReducedModelCompress's.
+*/
+PetscErrorCode KFReducedModelCompressTied(KFReducedModel m, const KFBodyDirections *d, PetscInt count, PetscBool with_map, KFReducedModel *out, PetscInt *k, PetscReal ***C)
+{
+  const PetscInt    nb = m->nb;
+  KFBodyDirections *db;
+  PetscReal        *Z, *MC;
+  PetscInt          o = 0;
+
+  PetscFunctionBegin;
+  PetscValidHeaderSpecific(m, KF_REDUCEDMODEL_CLASSID, 1);
+  *k = d->nkeep + PetscMin(PetscMax(count, 0), d->ndir);
+  PetscCall(PetscCalloc1(nb, &db));
+  PetscCall(PetscMalloc1(nb, C));
+  for (PetscInt b = 0; b < nb; b++) { /* body b's span: its rigid motions and its rows of the columns, kept exactly */
+    const KFModelBody *B = &m->bodies[b];
+    const PetscInt     v = B->v;
+    PetscReal         *Cb;
+
+    PetscCall(PetscCalloc3(v * *k + 1, &Cb, v * v + 1, &Z, v * *k + 1, &MC));
+    for (PetscInt j = 0; j < *k; j++) PetscCall(PetscArraycpy(&Cb[j * v], &d->W[o + j * d->v], v));
+    PetscCall(KFCompressBody(B->name, v, B->M, 6, B->rigid, *k, Cb, Z, &db[b]));
+    /* the columns in the new coordinates: W_b^T M_b C_b (W_b M_b-orthonormal and spanning C_b) */
+    PetscCall(PetscMalloc1(db[b].nkeep * *k + 1, &(*C)[b]));
+    KFAB(v, v, *k, B->M, v, Cb, v, MC, v);
+    KFAtB(v, db[b].nkeep, *k, db[b].W, v, MC, v, (*C)[b]);
+    PetscCall(PetscFree3(Cb, Z, MC));
+    o += v;
+  }
+  PetscCall(KFReducedModelCompress(m, db, NULL, with_map, out));
+  PetscCall(KFBodyDirectionsDestroy(nb, &db));
   PetscFunctionReturn(0);
 }

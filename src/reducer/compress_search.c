@@ -3,39 +3,108 @@
   (src/project/body_compress.c orders them) while the model still meets the scene's accuracy at every evaluation point.
   The counts are searched by bisection body by body, then (two bodies) along the frontier of count pairs, then by
   backward elimination of single directions; every model tried is measured as the search measures its candidates.
+  A tied model (or, under -kf_shared_directions auto, the chosen one as well) is compressed across its bodies instead:
+  one set of directions of the stacked coordinates, the count searched by bisection, the model tied to them.
 */
 #include <kryflex/reducerimpl.h>
 
-/* the size (reduced dofs summed) and error of model m compressed to counts, measured as the search measures its
-   candidates (every evaluation point; a model already worse than the target is not measured further) */
-static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], const PetscInt counts[], PetscInt *size, PetscReal *error)
+/* the size of model c: its reduced dofs summed, less its coordinate ties (a tied model's) */
+static PetscErrorCode KFCompressSize(KFReducedModel c, PetscInt *size)
 {
-  KFReducedModel c;
-  PetscInt       nb;
+  PetscInt nb, nties;
 
   PetscFunctionBegin;
-  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
-  PetscCall(KFReducedModelCompress(m, d, counts, PETSC_FALSE, &c)); /* measured, then dropped: no maps */
   PetscCall(KFReducedModelGetInfo(c, &nb, NULL, NULL, NULL, NULL, NULL));
-  *size = 0;
+  PetscCall(KFReducedModelGetTies(c, &nties, NULL, NULL));
+  *size = -nties;
   for (PetscInt b = 0; b < nb; b++) {
     KFReducedBody body;
 
     PetscCall(KFReducedModelGetBody(c, b, NULL, NULL, &body, NULL));
     *size += body.v;
   }
+  PetscFunctionReturn(0);
+}
+
+/* the size and error of the candidate c, measured as the search measures its candidates (every evaluation point; a
+   model already worse than the target is not measured further); c is destroyed */
+static PetscErrorCode KFCompressMeasure(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *c, PetscInt *size, PetscReal *error)
+{
+  PetscFunctionBegin;
+  PetscCall(KFCompressSize(*c, size));
   *error = 0;
   for (PetscInt e = 0; e < neval && *error <= r->accuracy; e++) {
     KFReducedSystem rs;
     PetscReal       hinf;
 
-    PetscCall(KFReducedModelReassemble(c, evals[e].angles, &rs));
+    PetscCall(KFReducedModelReassemble(*c, evals[e].angles, &rs));
     PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
     PetscCall(KFReducedSystemDestroy(&rs));
     *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
   }
-  PetscCall(KFReducedModelDestroy(&c));
+  PetscCall(KFReducedModelDestroy(c));
   PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
+  PetscFunctionReturn(0);
+}
+
+/* the size (reduced dofs summed) and error of model m compressed to counts, measured (KFCompressMeasure) */
+static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], const PetscInt counts[], PetscInt *size, PetscReal *error)
+{
+  KFReducedModel c;
+
+  PetscFunctionBegin;
+  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  PetscCall(KFReducedModelCompress(m, d, counts, PETSC_FALSE, &c)); /* measured, then dropped: no maps */
+  PetscCall(KFCompressMeasure(r, neval, evals, &c, size, error));
+  PetscFunctionReturn(0);
+}
+
+/* the model m tied to the kept columns of the stacked directions d and its first count directions
+   (KFReducedModelCompressTied), its ties made as the search makes a tied candidate's */
+static PetscErrorCode KFCompressTied(KFReducer r, KFReducedModel m, const KFBodyDirections *d, PetscInt count, PetscBool with_map, KFReducedModel *c)
+{
+  PetscInt    nb, k;
+  PetscReal **C;
+
+  PetscFunctionBegin;
+  PetscCall(KFReducedModelGetInfo(m, &nb, NULL, NULL, NULL, NULL, NULL));
+  PetscCall(KFReducedModelCompressTied(m, d, count, with_map, c, &k, &C));
+  PetscCall(KFCandidateTies_Private(r, *c, k, C));
+  for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(C[b]));
+  PetscCall(PetscFree(C));
+  PetscFunctionReturn(0);
+}
+
+/* the fewest leading stacked directions with which the tied model meets the target (bisection; the error falls as
+   directions are added): *count the count found (-1: every direction together misses the target), *size and *error
+   its; *nevals += models measured */
+static PetscErrorCode KFCompressTiedSearch(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections *d, PetscInt *count, PetscInt *size, PetscReal *error, PetscInt *nevals)
+{
+  PetscInt       lo = -1, hi = d->ndir, sz;
+  PetscReal      er;
+  KFReducedModel c;
+
+  PetscFunctionBegin;
+  *count = -1;
+  PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  PetscCall(KFCompressTied(r, m, d, hi, PETSC_FALSE, &c));
+  PetscCall(KFCompressMeasure(r, neval, evals, &c, size, error));
+  ++*nevals;
+  if (*error > r->accuracy) PetscFunctionReturn(0);
+  while (hi - lo > 1) { /* invariant: hi passes, lo fails (or -1) */
+    const PetscInt mid = (lo + hi) / 2;
+
+    PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+    PetscCall(KFCompressTied(r, m, d, mid, PETSC_FALSE, &c));
+    PetscCall(KFCompressMeasure(r, neval, evals, &c, &sz, &er));
+    ++*nevals;
+    if (er <= r->accuracy) {
+      hi     = mid;
+      *size  = sz;
+      *error = er;
+    } else lo = mid;
+  }
+  *count = hi;
   PetscFunctionReturn(0);
 }
 
@@ -224,8 +293,8 @@ static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoi
 
 /* body b's directions of the model m ordered by its response on snapshot grids: each resonance once (once), or the
    evaluation grid (the measure's 7 points across each resonance); static_exact: the static response's columns kept
-   exactly, else one more snapshot */
-static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscBool once, PetscBool static_exact, KFBodyDirections **d)
+   exactly, else one more snapshot; tied: one set of directions of the bodies' stacked coordinates instead */
+static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscBool once, PetscBool static_exact, PetscBool tied, KFBodyDirections **d)
 {
   PetscInt         nrev, nrev1, a, *nw;
   PetscReal       *angles, *inw, **w;
@@ -247,7 +316,8 @@ static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPo
     wk[e]   = w[e];
     inwk[e] = &inw[e * a];
   }
-  PetscCall(KFBodyCompressDirections(m, neval, angles, nw, wk, inwk, static_exact, d));
+  if (tied) PetscCall(KFTiedCompressDirections(m, neval, angles, nw, wk, inwk, static_exact, d));
+  else PetscCall(KFBodyCompressDirections(m, neval, angles, nw, wk, inwk, static_exact, d));
   for (PetscInt e = 0; e < neval; e++) PetscCall(PetscFree(w[e]));
   PetscCall(PetscFree6(angles, nw, w, wk, inw, inwk));
   PetscFunctionReturn(0);
@@ -297,49 +367,64 @@ static PetscErrorCode KFCompressSearch(KFReducer r, PetscInt neval, KFEvalPoint 
   smaller: the result is never larger than with the static columns kept (the snapshot orderings alone gave 26 states
   against 24 on the solid at 1e-3), and at equal size L^0 stays exact. The smaller model replaces *model; *from and
   *to: the sizes before and after (equal when nothing was gained); *static_kept: whether the result keeps the static
-  columns (true when nothing was gained).
+  columns (true when nothing was gained); *error: the compressed model's (-1 when nothing was gained).
+  tied: the model's stacked body coordinates instead, one set of directions ordered by one SVD of the whole response
+  (the bodies' rigid motions and the static columns kept, also under -kf_static_exact false), the fewest leading ones meeting the target by bisection,
+  the result tied to them (its ties as a tied candidate's); the model may be tied or split. Its size is its body
+  dofs less its ties.
 */
-PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *model, PetscInt *from, PetscInt *to, PetscBool *static_kept)
+PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoint evals[], PetscBool tied, KFReducedModel *model, PetscInt *from, PetscInt *to, PetscBool *static_kept, PetscReal *error)
 {
   KFBodyDirections *best = NULL;
-  PetscInt          nb, nevals = 0, bsize = 0;
+  PetscInt          nb, nd, nevals = 0, bsize = 0;
   PetscReal         berror = 0;
   PetscBool         bkept  = PETSC_TRUE;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
-  *from = 0;
-  for (PetscInt b = 0; b < nb; b++) {
-    KFReducedBody body;
-
-    PetscCall(KFReducedModelGetBody(*model, b, NULL, NULL, &body, NULL));
-    *from += body.v;
-  }
+  nd = tied ? 1 : nb; /* sets of directions: one per body, or one of the stacked coordinates */
+  PetscCall(KFCompressSize(*model, from));
   *to          = *from;
   *static_kept = PETSC_TRUE;
-  for (PetscInt pass = 0; pass < (r->static_exact ? 2 : 4); pass++) {
-    KFBodyDirections *d, *ds;
-    PetscInt          size;
-    PetscReal         error;
+  /* tied: the static columns always kept. As a snapshot the static response (solved to the stiff model's rounding)
+     leads the stacked Gram, and 1 and 2 ranks then truncated to models 4e-6 apart in frequency (Galileo, 1e-3) */
+  for (PetscInt pass = 0; pass < (r->static_exact || tied ? 2 : 4); pass++) {
+    KFBodyDirections *d, *ds = NULL;
+    PetscInt          size = 0;
+    PetscReal         error = 0;
     const PetscBool   kept = (PetscBool)(pass < 2);
 
-    PetscCall(KFCompressDirections(r, neval, evals, *model, (PetscBool)(pass % 2 == 0), kept, &d));
-    for (PetscInt b = 0; b < nb; b++) PetscCall(PetscInfo(r, "compression, ordering %" PetscInt_FMT ": body %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", pass, b, d[b].v, d[b].nkeep, d[b].ndir));
-    PetscCall(KFCompressSearch(r, neval, evals, *model, nb, d, &ds, &size, &error, &nevals));
-    PetscCall(KFBodyDirectionsDestroy(nb, &d));
+    PetscCall(KFCompressDirections(r, neval, evals, *model, (PetscBool)(pass % 2 == 0), kept, tied, &d));
+    if (!d) { /* KFTiedCompressDirections: the model's reassembly misses a rigid or mechanism mode; kept as it is */
+      PetscCall(PetscInfo(r, "compression (tied) skipped: the model reassembled has fewer rigid and mechanism modes than the scene\n"));
+      break;
+    }
+    for (PetscInt b = 0; b < nd; b++) PetscCall(PetscInfo(r, "compression, ordering %" PetscInt_FMT ": %s %" PetscInt_FMT " of %" PetscInt_FMT " coordinates keeps %" PetscInt_FMT " exactly, %" PetscInt_FMT " directions ordered\n", pass, tied ? "stacked bodies" : "body", b, d[b].v, d[b].nkeep, d[b].ndir));
+    if (tied) {
+      PetscInt count;
+
+      PetscCall(KFCompressTiedSearch(r, neval, evals, *model, d, &count, &size, &error, &nevals));
+      if (count >= 0) { /* the directions truncated to the count found */
+        d->ndir = count;
+        ds      = d;
+        d       = NULL;
+      }
+    } else PetscCall(KFCompressSearch(r, neval, evals, *model, nb, d, &ds, &size, &error, &nevals));
+    PetscCall(KFBodyDirectionsDestroy(nd, &d));
     if (ds && error <= r->accuracy && (!best || size < bsize)) {
-      PetscCall(KFBodyDirectionsDestroy(nb, &best));
+      PetscCall(KFBodyDirectionsDestroy(nd, &best));
       best   = ds;
       bsize  = size;
       berror = error;
       bkept  = kept;
-    } else PetscCall(KFBodyDirectionsDestroy(nb, &ds));
+    } else PetscCall(KFBodyDirectionsDestroy(nd, &ds));
   }
   if (best && bsize < *from) {
     KFReducedModel c;
     char           text[32];
 
-    PetscCall(KFReducedModelCompress(*model, best, NULL, PETSC_TRUE, &c));
+    if (tied) PetscCall(KFCompressTied(r, *model, best, best->ndir, PETSC_TRUE, &c));
+    else PetscCall(KFReducedModelCompress(*model, best, NULL, PETSC_TRUE, &c));
     PetscCall(PetscSNPrintf(text, sizeof(text), "%" PetscInt_FMT, *from)); /* a saved model says what it was made from */
     PetscCall(KFReducedModelSetSetting(c, "compressed_from_dofs", text));
     if (!bkept) PetscCall(KFReducedModelSetSetting(c, "static_exact", "false")); /* a saved model says its L^0 is approximated */
@@ -348,7 +433,8 @@ PetscErrorCode KFReducerCompress_Private(KFReducer r, PetscInt neval, KFEvalPoin
     *to          = bsize;
     *static_kept = bkept;
   }
-  PetscCall(PetscInfo(r, "compression: %" PetscInt_FMT " models measured, %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (error %g)\n", nevals, *from, *to, (double)berror));
-  PetscCall(KFBodyDirectionsDestroy(nb, &best));
+  *error = best && bsize < *from ? berror : -1;
+  PetscCall(PetscInfo(r, "compression%s: %" PetscInt_FMT " models measured, %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (error %g)\n", tied ? " (tied)" : "", nevals, *from, *to, (double)berror));
+  PetscCall(KFBodyDirectionsDestroy(nd, &best));
   PetscFunctionReturn(0);
 }

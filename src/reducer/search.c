@@ -16,8 +16,9 @@
   with the correction wins.
   Within a pass, sizes are the reduced bodies' dofs summed (what is stored; a tied candidate's less its ties), ties going
   to the smaller error; under auto the split and the tied winner of each family are compared by the reassembled system's
-  dofs (the largest over the evaluation points: what is simulated), and a tied winner by the split one's compressed
-  (KFReducerSplitCompressed_Private). Every model tried is a row of the search table (results "search_table").
+  dofs (the largest over the evaluation points: what is simulated); after the search the chosen model compressed tied
+  across its bodies against the split winner compressed body by body, by the same measure (KFReducerSolveSearch_Private,
+  KFReducerSplitCompressed_Private). Every model tried is a row of the search table (results "search_table").
 */
 #include <kryflex/reducerimpl.h>
 
@@ -27,9 +28,11 @@ typedef struct {
 } KFSearchTable;
 
 /* a candidate's variant, which tells the passes of -kf_shared_directions auto apart in the search table (their rows
-   are otherwise alike): 0 split, 1 tied, 2 tied without the static correction of the dropped clusters */
+   are otherwise alike): 0 split, 1 tied, 2 tied without the static correction of the dropped clusters; the chosen
+   model compressed (rows after the search's): 3 body by body, 4 tied across the bodies */
 PetscReal KFCandidateVariant_Private(KFReducer r, const KFCandidate *c)
 {
+  if (c->compressed) return 2 + c->compressed;
   return c->nostatic ? 2 : ((c->tied || r->shared_directions) ? 1 : 0);
 }
 

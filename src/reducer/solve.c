@@ -899,18 +899,36 @@ static PetscErrorCode KFReducerSearchRecord_Private(KFReducer r, KFSearch *st, c
   PetscFunctionReturn(0);
 }
 
-/* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed (which a
-   tied one cannot be), may have fewer system dofs. Measured; when it has no more, the split candidates replace the
+/* a model's reassembled system dofs, the largest over the evaluation points (what is simulated) */
+static PetscErrorCode KFReducerSystemDofs_Private(PetscInt neval, KFEvalPoint evals[], KFReducedModel model, PetscInt *n)
+{
+  PetscFunctionBegin;
+  *n = 0;
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscInt        ne;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &ne, NULL, NULL, NULL, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *n = PetscMax(*n, ne);
+  }
+  PetscFunctionReturn(0);
+}
+
+/* -kf_shared_directions auto, a tied model chosen: the split model the search would have chosen, compressed body by
+   body, may have fewer system dofs than the tied one compressed across the bodies (tsys of them). Measured; when it has no more, the split candidates replace the
    tied ones and the model measured is the one chosen, already compressed (*nties 0, cz[] its dofs before and after,
-   *ckept whether the static columns stayed, *csec the compression's seconds: the caller records them and does not
-   compress again) */
-static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec)
+   *ckept whether the static columns stayed, *csec += the compression's seconds: the caller records them and does not
+   compress again; *crow the compressed model's search-table row, crow->compressed 0 when nothing was gained) */
+static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st, PetscInt neval, KFEvalPoint evals[], PetscInt tsys, KFCandidate *single, KFCandidate *multi, const KFCandidate split[2], PetscInt *nties, PetscInt cz[2], PetscBool *ckept, PetscLogDouble *csec, KFCandidate *crow)
 {
   const KFReducerMethod tchosen = r->chosen;
-  const KFCandidate    *tied    = tchosen == KF_METHOD_MULTI_ANGLE && multi->nexp ? multi : single, *alt;
+  const KFCandidate    *alt;
   KFReducedModel        model;
   PetscInt              from, to, n = 0;
   PetscBool             kept;
+  PetscReal             cerr;
   PetscLogDouble        c0, c1;
 
   PetscFunctionBegin;
@@ -922,19 +940,19 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   }
   PetscCall(KFCandidateModel_Private(r, st->visits, alt, PETSC_TRUE, &model)); /* with its maps: it may be the one returned */
   PetscCall(PetscTime(&c0));
-  PetscCall(KFReducerCompress_Private(r, neval, evals, &model, &from, &to, &kept));
+  PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, &model, &from, &to, &kept, &cerr));
   PetscCall(PetscTime(&c1));
-  for (PetscInt e = 0; e < neval; e++) {
-    KFReducedSystem rs;
-    PetscInt        ne;
-
-    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
-    PetscCall(KFReducedSystemGetMatrices(rs, &ne, NULL, NULL, NULL, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    n = PetscMax(n, ne);
+  *csec += c1 - c0;
+  PetscCall(KFReducerSystemDofs_Private(neval, evals, model, &n));
+  if (to < from) { /* its row of the search table */
+    *crow            = *alt;
+    crow->compressed = 1;
+    crow->size       = to;
+    crow->sysdofs    = n;
+    crow->error      = cerr;
   }
-  PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tied->sysdofs, n));
-  if (n > tied->sysdofs) {
+  PetscCall(PetscInfo(r, "shared directions auto: tied %" PetscInt_FMT " system dofs, split compressed %" PetscInt_FMT "\n", tsys, n));
+  if (n > tsys) {
     PetscCall(KFReducedModelDestroy(&model));
     r->chosen = tchosen;
     PetscFunctionReturn(0);
@@ -959,7 +977,6 @@ static PetscErrorCode KFReducerSplitCompressed_Private(KFReducer r, KFSearch *st
   cz[0]  = from;
   cz[1]  = to;
   *ckept = kept;
-  *csec  = c1 - c0;
   PetscFunctionReturn(0);
 }
 
@@ -1023,12 +1040,6 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   PetscCall(KFSystemDestroy(&sys));
   PetscCall(PetscTime(&t1)); /* the search's share of the projection stage, apart: what the proof's cost is made of */
   PetscCall(KFReducerResultScalar_Private(r, -1, "time_search", (PetscReal)(t1 - t0)));
-  {
-    const PetscInt shape[2] = {KF_SEARCH_TABLE_COLUMNS, nrows};
-
-    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
-    PetscCall(PetscFree(rows));
-  }
   PetscCheck(single.nexp || multi.nexp, st.comm, PETSC_ERR_PLIB, "the accuracy search tried no model");
   PetscCall(KFReducerSearchChoose_Private(r, &single, &multi));
   if (!single.nexp) { /* multi-angle only: the single-angle model of the first expansion angle, whole, for reference */
@@ -1038,39 +1049,94 @@ static PetscErrorCode KFReducerSolveSearch_Private(KFReducer r, PetscInt neval, 
   }
   PetscCall(KFCandidateModel_Private(r, st.visits, &single, PETSC_TRUE, &r->single));
   if (multi.nexp) PetscCall(KFCandidateModel_Private(r, st.visits, &multi, PETSC_TRUE, &r->multi_model));
-  { /* a model of shared directions (tied) is not compressed */
+  if (r->compress) { /* the chosen model compressed: tied across its bodies (-kf_shared_directions true or auto) and
+                        body by body (false or auto); under auto the smaller by system dofs, the body-wise one at equal */
+    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+    KFReducedModel  tmodel = NULL;
+    PetscInt        from = 0, to = 0, tfrom = 0, tto = 0, tsys = PETSC_MAX_INT, ssys;
+    PetscBool       kept = PETSC_TRUE, tkept = PETSC_TRUE, tied_won = PETSC_FALSE, nostatic;
+    PetscReal       terr = -1, serr = -1;
+    PetscLogDouble  c0, c1;
+    KFCandidate     crow[2]; /* the search-table rows of the compressed models: tied, body by body */
+
+    nostatic = (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic;
+    crow[0]  = r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single;
+    crow[1]  = crow[0];
+    crow[0].compressed = crow[1].compressed = 0;
+    PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
+    if (r->shared_directions || r->shared_auto) { /* across the bodies: on a reference, the chosen model kept for the body-wise one */
+      tmodel = *chosen;
+      PetscCall(PetscObjectReference((PetscObject)tmodel));
+      PetscCall(PetscTime(&c0));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_TRUE, &tmodel, &tfrom, &tto, &tkept, &terr));
+      PetscCall(PetscTime(&c1));
+      csec += c1 - c0;
+      PetscCall(KFReducerSystemDofs_Private(neval, evals, tmodel, &tsys));
+      if (tto < tfrom) {
+        crow[0].compressed = 2;
+        crow[0].size       = tto;
+        crow[0].sysdofs    = tsys;
+        crow[0].error      = terr;
+      }
+    }
+    if (r->shared_directions) tied_won = PETSC_TRUE;
+    else if (nties) { /* auto, a tied model chosen: its split rival compressed */
+      PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, tsys, &single, &multi, split, &nties, cz, &ckept, &csec, &crow[1]));
+      tied_won = (PetscBool)(nties > 0);
+      if (!tied_won) {
+        from = cz[0];
+        to   = cz[1];
+        kept = ckept;
+      }
+    } else { /* split chosen: compressed body by body */
+      PetscCall(PetscTime(&c0));
+      PetscCall(KFReducerCompress_Private(r, neval, evals, PETSC_FALSE, chosen, &from, &to, &kept, &serr));
+      PetscCall(PetscTime(&c1));
+      csec += c1 - c0;
+      PetscCall(KFReducerSystemDofs_Private(neval, evals, *chosen, &ssys));
+      if (to < from) {
+        crow[1].compressed = 1;
+        crow[1].size       = to;
+        crow[1].sysdofs    = ssys;
+        crow[1].error      = serr;
+      }
+      if (tmodel) {
+        PetscCall(PetscInfo(r, "compression: tied across the bodies %" PetscInt_FMT " system dofs, body by body %" PetscInt_FMT "\n", tsys, ssys));
+        tied_won = (PetscBool)(tsys < ssys);
+      }
+    }
+    chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
+    if (tied_won) {
+      PetscCall(KFReducedModelDestroy(chosen));
+      *chosen = tmodel;
+      from    = tfrom;
+      to      = tto;
+      kept    = (PetscBool)(tkept && !nostatic);
+    } else PetscCall(KFReducedModelDestroy(&tmodel));
+    for (PetscInt k = 0; k < 2; k++) /* the compressed models measured: rows after the search's */
+      if (crow[k].compressed) {
+        PetscCall(PetscRealloc(sizeof(PetscReal) * KF_SEARCH_TABLE_COLUMNS * (nrows + 1), &rows));
+        KFSearchTableRow_Private(r, &crow[k], &rows[KF_SEARCH_TABLE_COLUMNS * nrows++]);
+      }
+    PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)csec));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
+    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_tied", tied_won ? 1.0 : 0.0));
+    /* a compression without the static columns changes L^0: the summary reports its measured error, not "exact" */
+    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", kept ? 1.0 : 0.0));
+    if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (%s)", from, to, tied_won ? "tied: the leading directions of the whole response across the bodies" : "each body its leading directions of the response"));
+    else PetscCall(KFProgress(st.comm, "compression: no direction can go and the model meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
+  } else {
     KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
 
     PetscCall(KFReducedModelGetTies(*chosen, &nties, NULL, NULL));
-    if (r->shared_directions) nties = PetscMax(nties, 1); /* true: none compressed, tied or not (a multi-angle model may have no ties left) */
-    if (r->compress && nties && r->shared_auto) PetscCall(KFReducerSplitCompressed_Private(r, &st, neval, evals, &single, &multi, split, &nties, cz, &ckept, &csec));
-    if (r->compress && nties) PetscCall(PetscInfo(r, "compression skipped: a model of shared directions ties its bodies' coordinates, and compression truncates each body on its own\n"));
-    if (nties && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
+    if ((nties || r->shared_directions) && (r->chosen == KF_METHOD_MULTI_ANGLE && multi.nexp ? multi : single).nostatic) PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", 0.0));
   }
-  if (r->compress && !nties) { /* the chosen model, body by body, by what its response needs */
-    KFReducedModel *chosen = r->chosen == KF_METHOD_MULTI_ANGLE && r->multi_model ? &r->multi_model : &r->single;
-    PetscInt        from, to;
-    PetscLogDouble  c0, c1;
-    PetscBool       kept;
+  {
+    const PetscInt shape[2] = {KF_SEARCH_TABLE_COLUMNS, nrows};
 
-    if (cz[0] < 0) {
-      PetscCall(PetscTime(&c0));
-      PetscCall(KFReducerCompress_Private(r, neval, evals, chosen, &from, &to, &kept));
-      PetscCall(PetscTime(&c1));
-    } else { /* compressed when it was measured against the tied model */
-      from = cz[0];
-      to   = cz[1];
-      kept = ckept;
-      c0   = 0;
-      c1   = csec;
-    }
-    PetscCall(KFReducerResultScalar_Private(r, -1, "time_compress", (PetscReal)(c1 - c0)));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_from_dofs", (PetscReal)from));
-    PetscCall(KFReducerResultScalar_Private(r, -1, "compressed_to_dofs", (PetscReal)to));
-    /* a compression without the static columns changes L^0: the summary reports its measured error, not "exact" */
-    PetscCall(KFReducerResultScalar_Private(r, -1, "static_exact", kept ? 1.0 : 0.0));
-    if (to < from) PetscCall(KFProgress(st.comm, "compressed: %" PetscInt_FMT " -> %" PetscInt_FMT " reduced dofs (each body its leading directions of the response)", from, to));
-    else PetscCall(KFProgress(st.comm, "compression: no body can lose a direction and meet the target (%" PetscInt_FMT " reduced dofs kept)", from));
+    PetscCall(KFReducerResultSet_Private(r, -1, "search_table", 2, shape, rows));
+    PetscCall(PetscFree(rows));
   }
   PetscCall(PetscTime(&t1));
   st.times[5] += t1 - t0;

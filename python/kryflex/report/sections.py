@@ -89,8 +89,9 @@ def _chosen_sentence(c):
                      + " beside those at zero)")
     before, after = ch.compressed_from_dofs, ch.compressed_to_dofs
     if before is not None and after is not None:   # docs/guide/expansion-points.md, "Compression"
-        parts.append(f"compressed body by body from {before} to {after} reduced dofs" if after < before
-                     else f"compression tried, no body could lose a direction ({before} reduced dofs)")
+        how = "tied across the bodies" if ch.compressed_tied else "body by body"
+        parts.append(f"compressed {how} from {before} to {after} reduced dofs" if after < before
+                     else f"compression tried, no direction could go ({before} reduced dofs)")
     if ch.static_exact is False:
         parts.append(static_moment_text(ch))
     return parts[0] + ": " + "; ".join(parts[1:]) + "." if len(parts) > 1 else parts[0] + "."

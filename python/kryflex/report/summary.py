@@ -36,7 +36,8 @@ SEARCH_COLUMNS = ("family", "moments", "kept_clusters", "expansion_angles", "red
                   "error", "variant")
 # a candidate's variant (-kf_shared_directions): split, tied, or tied without the static correction of the dropped
 # clusters; tables of libraries before the column have 7 rows and leave it None
-VARIANTS = {0: "split", 1: "tied", 2: "tied, no static correction"}
+VARIANTS = {0: "split", 1: "tied", 2: "tied, no static correction", 3: "compressed body by body",
+            4: "compressed, tied across the bodies"}
 
 
 def _none(x):
@@ -310,6 +311,8 @@ def _accuracy(reducer, scene, labels, has, whole, chosen, multi, single_frf):
         _optional_scalar(reducer, -1, "expansion_point_factorizations", whole, int) or 0
     if before is not None:
         out["chosen"]["compressed_from_dofs"], out["chosen"]["compressed_to_dofs"] = before, after
+        tied = _optional_scalar(reducer, -1, "compressed_tied", whole, int)
+        out["chosen"]["compressed_tied"] = None if tied is None else bool(tied)
     out["chosen"].update(_static_moment(reducer, labels, has, whole, prefix))
     out["expansion_point_search"] = {
         "factorizations_spent": _optional_scalar(reducer, -1, "shift_factorizations_spent", whole, int) or 0,

@@ -33,6 +33,7 @@ SINGLE, MULTI = 0, 1
 FAMILIES = {SINGLE: "single-angle", MULTI: "multi-angle"}
 SPLIT = 0
 VARIANTS = {SPLIT: "split", 1: "tied", 2: "tied, no static correction"}
+COMPRESSED = (3, 4)     # search-table rows of the chosen model compressed (body by body, tied across the bodies)
 FIELDS = ("family", "moments", "kept_clusters", "expansion_angles", "start_deg", "variant", "reduced_dofs", "system_dofs",
           "true_error", "true_lower_bound", "estimated_error", "estimate_lower_bound", "ratio", "verdict",
           "chosen_full_order", "chosen_estimator")
@@ -75,6 +76,8 @@ def read_search_table(reducer, scene):
     npoints = evaluation_points(reducer.configurations)
     out = []
     for col in table.T:
+        if len(col) > 7 and int(col[7]) in COMPRESSED:     # the chosen model compressed: not a search candidate
+            continue
         error = float(col[6])
         if error >= NAN_ERROR:
             error = math.inf

@@ -208,7 +208,9 @@ typedef struct {
   PetscInt  bkept[KF_MAX_BODY_SHARE];
   PetscBool tied;       /* with -kf_shared_directions auto: its bodies tied to its kept vectors (shared directions) */
   PetscBool nostatic;   /* the kept clusters alone, without the static correction of the others (L^0 then measured, not
-                           exact: tried only under -kf_static_exact false, for tied candidates, which are not compressed) */
+                           exact: tried only under -kf_static_exact false, for tied candidates) */
+  PetscInt  compressed; /* 0: a search candidate; the chosen model compressed (-kf_compress): 1 body by body, 2 tied
+                           across the bodies (the search table's rows after the search's) */
   /* after evaluation */
   PetscInt  size, sysdofs;
   PetscReal error;      /* max over the evaluation points (a lower bound when aborted early) */
@@ -291,7 +293,7 @@ PETSC_INTERN PetscErrorCode KFReducerShareBodies_Private(KFReducer, KFVisit[], P
 PETSC_INTERN PetscErrorCode KFReducerSearchShifts_Private(KFReducer, KFSystem, PetscInt *nvisit, KFVisit **visits, PetscInt neval, KFEvalPoint[], KFCandidate *single, KFCandidate *multi, PetscInt *nrows, PetscReal **rows);
 /* the chosen model compressed body by body by what its response needs (compress_search.c, -kf_compress): replaced when smaller
    and still meeting the target; its reduced dofs before and after, and whether it keeps the static response (-kf_static_exact) */
-PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept);
+PETSC_INTERN PetscErrorCode KFReducerCompress_Private(KFReducer, PetscInt neval, KFEvalPoint[], PetscBool tied, KFReducedModel *, PetscInt *from, PetscInt *to, PetscBool *static_kept, PetscReal *error);
 /* the search: the best single-angle and multi-angle candidates (multi->nexp = 0 when none), the rows it tried */
 /* split[2]: the best split single-angle and multi-angle candidates (under -kf_shared_directions auto the others may be tied) */
 /* the search table (results "search_table"): one row per candidate tried, family, moments c, kept clusters, expansion

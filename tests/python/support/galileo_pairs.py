@@ -50,6 +50,16 @@ def static_rounding(model, angles):
     return np.finfo(float).eps * (f.max() / f.min()) ** 2
 
 
+def static_moments(a, b, dense, angles):
+    """The static moment L^0 of models a and b at angles and of the dense full order (its flexible modal sum), and
+    how far a's is from b's (relative)."""
+    La, Lb = a.at(angles).moments(1)[0], b.at(angles).moments(1)[0]
+    full = dense.at(angles)
+    f = ~full.rigid
+    Lf = (full.hp[:, f] / full.lam[f]) @ full.pg[f]
+    return La, Lb, Lf, np.linalg.norm(La - Lb) / np.linalg.norm(Lb)
+
+
 def pair_fixture(keyword, values, targets=TARGETS, name="both"):
     """A module-scoped fixture, parametrized by target (ids "%g"): Galileo reduced with keyword=value for each value
     (in the order given), as {value: reduction, "target": target}."""

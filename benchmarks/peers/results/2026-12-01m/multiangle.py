@@ -43,6 +43,17 @@ def worst_over(T, at, stop):
     return worst, max(el)
 
 
+def independent(model):
+    """A kryflex model's worst independent elastic error over the points, its elastic dofs at each, its system there."""
+    worst, el = 0.0, []
+    for a in points:
+        s_ = model.at([a])
+        w, T_el, T_full = ref_at[a]
+        worst = max(worst, B.elastic_error(T_full, s_.frf(w / (2 * np.pi)), T_el))
+        el.append(s_.dofs - s_.rigid_modes.shape[1])
+    return worst, el, s_
+
+
 import kryflex
 for target in (args.targets if args.kryflex_only else []):
     for label, opts in (("static exact", {}), ("static_exact 0", {"static_exact": "0"})):
@@ -51,12 +62,7 @@ for target in (args.targets if args.kryflex_only else []):
         spec["angles"] = list(angles)
         out = kryflex.Reducer(kryflex.scene_from_dict(spec), quiet=True, **opts).reduce()
         model = out.model
-        worst, el = 0.0, []
-        for a in points:
-            s_ = model.at([a])
-            w, T_el, T_full = ref_at[a]
-            worst = max(worst, B.elastic_error(T_full, s_.frf(w / (2 * np.pi)), T_el))
-            el.append(s_.dofs - s_.rigid_modes.shape[1])
+        worst, el, s_ = independent(model)
         print("kryflex target %g %-14s: bodies %s, ties %s, %d elastic states (%d system dofs), independent worst error %.2g, "
               "kryflex's %.2g, %s, whole %.2f s" % (target, label, model.sizes, None if model.ties is None else model.ties.shape[0],
               2 * max(el), max(el) + s_.rigid_modes.shape[1], worst, out.summary.verdict.error_max, out.summary.chosen.method,

@@ -7,24 +7,19 @@ that counts on it while the reduction runs, and the solve takes its counts at th
 The helper is a fresh interpreter (never a fork: this process holds MPI, PETSc and MUMPS state); it sees none of the
 launcher's MPI environment (an MPI singleton of its own), loads the same scene with this process's PETSc options, and
 counts by the same C code (KFReducerCertifyCountWrite, on factors of its own), writing the counts to a pipe whose read
-end the solve reads with poll() (KFReducerSetCountSource). Its factorizations would share the memory bus with the
-reduction's own and slow them: the helper loads the scene and assembles at once, then waits on a second pipe for the
-one byte the solve writes when its factorizations are done (the bodies', body-wise; the first configuration's,
-monolithic), or when it ends, failed or not; that pipe's end of file without the byte ends the helper. A helper that
-fails, dies, writes something else or is slow leaves the solve to count in-process, as without it, with a progress
-line saying so. It dies with this process (PR_SET_PDEATHSIG) and is reaped by stop(); its output and errors go to
-count_helper.log in the staging folder, kept in the results only when it failed.
+end the solve reads with poll() (KFReducerSetCountSource). A helper that fails, dies, writes something else or is
+slow leaves the solve to count in-process, as without it, with a progress line saying so. It dies with this process
+(PR_SET_PDEATHSIG) and is reaped by stop(); its output and errors go to count_helper.log in the staging folder, kept in
+the results only when it failed.
 
 Started when the run is on one process, its verification plan tries the certificate, and the cores this process may
-use outnumber the run's ranks (cores.core_beside, the report helpers' rule too). KRYFLEX_COUNT_HELPER=0 turns it off
+use outnumber the run's ranks (the report helpers' rule, report/helper.py). KRYFLEX_COUNT_HELPER=0 turns it off
 (counted in-process); =1 starts it whatever the cores.
 """
 import os
 import signal
 import subprocess
 import sys
-
-from .cores import core_beside
 
 LOG_NAME = "count_helper.log"
 # what the helper runs: an attribute, so that a test can give it a helper that fails
@@ -36,8 +31,8 @@ DROPPED_OPTIONS = ("help", "log_view", "kf_reducer_view", "kf_model_view", "opti
 
 
 def wanted(ranks):
-    """Whether to start the helper for a run on ranks processes: on one process only, then by KRYFLEX_COUNT_HELPER=0/1
-    or the free cores."""
+    """Whether to start the helper for a run on ranks processes (KRYFLEX_COUNT_HELPER=0/1 or the free cores)."""
+    from .report.helper import _idle_cores
     if ranks != 1:
         return False
     value = os.environ.get("KRYFLEX_COUNT_HELPER", "auto").strip().lower()
@@ -45,7 +40,7 @@ def wanted(ranks):
         return False
     if value in ("1", "yes", "true", "on"):
         return True
-    return core_beside(ranks)
+    return _idle_cores()[0] > ranks
 
 
 def child_environment():
@@ -72,31 +67,26 @@ def petsc_arguments():
 
 
 class CountHelper:
-    """The helper process counting for a reducer (set up, on one process): started at once, its pipes handed to the
-    reducer (the counts' read end, the go signal's write end); stop() ends and reaps it (a helper still counting or
-    waiting is killed), and returns its peak resident memory (MB)."""
+    """The helper process counting for a reducer (set up, on one process): started at once, its pipe handed to the
+    reducer; stop() ends and reaps it (a helper still counting is killed), and returns its peak resident memory (MB)."""
 
     def __init__(self, reducer, scene_path, folder):
         self.log = os.path.join(folder, LOG_NAME)
         self.peak_rss_mb = None
         read, write = os.pipe()
-        go_read, go_write = os.pipe()
         try:
             with open(self.log, "wb") as log:
                 self.proc = subprocess.Popen(
-                    [sys.executable, "-c", CHILD_CODE, str(write), str(go_read), str(os.getpid()),
-                     os.path.abspath(scene_path)] + petsc_arguments(), pass_fds=(write, go_read),
-                    stdin=subprocess.DEVNULL, stdout=log, stderr=log,
+                    [sys.executable, "-c", CHILD_CODE, str(write), str(os.getpid()), os.path.abspath(scene_path)]
+                    + petsc_arguments(), pass_fds=(write,), stdin=subprocess.DEVNULL, stdout=log, stderr=log,
                     env=child_environment(), start_new_session=True)   # a terminal's Ctrl-C is for the run: stop()
         except BaseException:
             os.close(read)
-            os.close(go_write)
             raise
         finally:
-            os.close(write)      # the helper's ends: its exit is then the reader's end of file, ours its
-            os.close(go_read)
-        self.read, self.go = read, go_write
-        reducer.handle.set_count_source(read, go_write)
+            os.close(write)      # the helper's end: its exit is then the reader's end of file
+        self.read = read
+        reducer.handle.set_count_source(read)
 
     def stop(self):
         if self.proc is None:
@@ -111,7 +101,6 @@ class CountHelper:
         failed = self.proc.returncode != 0
         self.proc = None
         os.close(self.read)
-        os.close(self.go)
         if not failed:
             try:
                 os.remove(self.log)
@@ -132,9 +121,9 @@ def start(reducer, scene_path, folder, ranks):
 
 
 def main():
-    """The helper: argv is the counts' pipe's write end, the go pipe's read end, the parent's process id, the scene,
-    then the parent's PETSc options. Exits non-zero on any failure (the parent counts itself)."""
-    fd, go, parent, scene_path = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+    """The helper: argv is the pipe's write end, the parent's process id, the scene, then the parent's PETSc options.
+    Exits non-zero on any failure (the parent counts itself)."""
+    fd, parent, scene_path = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
     try:
         import ctypes
         ctypes.CDLL(None).prctl(1, signal.SIGKILL)     # PR_SET_PDEATHSIG: never outlive the run
@@ -144,10 +133,9 @@ def main():
         sys.exit(1)
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     from . import init
-    init(["kryflex-count"] + sys.argv[5:])
+    init(["kryflex-count"] + sys.argv[4:])
     from .io.scene import load_scene
     from .reducer import Reducer
     reducer = Reducer(load_scene(scene_path), quiet=True)
-    reducer.count_certificate(fd, go)
+    reducer.count_certificate(fd)
     os.close(fd)
-    os.close(go)

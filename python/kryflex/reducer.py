@@ -192,13 +192,12 @@ class Reducer:
             self._reduction = Reduction(chosen, summary, single, multi)
         return self._reduction
 
-    def count_certificate(self, fd, go=-1):
+    def count_certificate(self, fd):
         """The certificate's counts at every configuration written to the file descriptor fd, as the solve would make
-        them (the helper process of count_helper.py; one process); go: a descriptor whose byte the factorizations
-        wait for (the reduction's own done), or -1."""
+        them (the helper process of count_helper.py; one process)."""
         with quiet_progress(self.quiet), kf_options(self._options), self._flex_solver_option():
             self.handle.setup()
-            self.handle.certify_count_write(fd, go)
+            self.handle.certify_count_write(fd)
 
     def _flex_solver_option(self):
         """-kf_flex_solver for the solve: the keyword given to this reducer; else the scene's reduction.flex_solver

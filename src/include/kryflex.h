@@ -514,10 +514,9 @@ PETSC_EXTERN PetscErrorCode KFReducerSetVerificationAuto(KFReducer, PetscInt min
    order, or the estimate certified by the mode count (which may still fall back to measuring) */
 PETSC_EXTERN PetscErrorCode KFReducerGetVerificationPlan(KFReducer, PetscBool *measured, PetscBool *certified);
 /* the certificate's counts made beside the reduction: a helper process writes them (KFReducerCertifyCountWrite) to
-   a pipe whose read end the solve reads them from at the count (KFReducerSetCountSource; -1: count in-process); the
-   helper factors only once the solve has written one byte to a second pipe, go, when its own factorizations are done */
-PETSC_EXTERN PetscErrorCode KFReducerSetCountSource(KFReducer, int fd, int go);
-PETSC_EXTERN PetscErrorCode KFReducerCertifyCountWrite(KFReducer, int fd, int go);
+   a pipe whose read end the solve reads them from at the count (KFReducerSetCountSource; -1: count in-process) */
+PETSC_EXTERN PetscErrorCode KFReducerSetCountSource(KFReducer, int fd);
+PETSC_EXTERN PetscErrorCode KFReducerCertifyCountWrite(KFReducer, int fd);
 PETSC_EXTERN PetscErrorCode KFReducerSetFromOptions(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSetUp(KFReducer);
 PETSC_EXTERN PetscErrorCode KFReducerSolve(KFReducer);

@@ -19,7 +19,6 @@
 */
 #include <errno.h>
 #include <poll.h>
-#include <signal.h>
 #include <unistd.h>
 #include <kryflex/reducerimpl.h>
 
@@ -85,15 +84,11 @@ PetscErrorCode KFReducerCertifyCount_Private(KFReducer r, KFSystem sys, PetscBoo
    from a pipe where it would count. The message is text: "kfcount1 neval nrev1 seconds", then per configuration its
    nrev1 angles, the count, the rigid and mechanism modes among it and the shift, then "end" (%.17g: the doubles
    read back exactly). Anything else (the helper ended without them, wrote other configurations or another cut, or
-   took longer than the reduction had run when it came to the count, at least 30 s) and the count is made here.
-   The helper's factorizations (a MUMPS analysis and an LDL^T factorization per body, or per configuration) would share
-   the memory bus with the reduction's own and slow them: the helper loads and assembles at once but factors only when
-   this process writes one byte to a second pipe, go, once its factorizations are done (KFReducerCountGo_Private). */
+   took longer than the reduction had run when it came to the count, at least 30 s) and the count is made here. */
 #define KF_COUNT_MAGIC "kfcount1"
 
-/* fd: the read end of the helper's pipe, or -1 (count in-process); go: the write end of the pipe the helper waits on
-   before it factors, or -1 (it does not wait). The caller keeps both and closes them. */
-PetscErrorCode KFReducerSetCountSource(KFReducer r, int fd, int go)
+/* fd: the read end of the helper's pipe, or -1 (count in-process); the caller keeps it and closes it */
+PetscErrorCode KFReducerSetCountSource(KFReducer r, int fd)
 {
   PetscMPIInt size;
 
@@ -102,36 +97,13 @@ PetscErrorCode KFReducerSetCountSource(KFReducer r, int fd, int go)
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)r), &size));
   PetscCheck(fd < 0 || size == 1, PetscObjectComm((PetscObject)r), PETSC_ERR_SUP, "the certificate's count beside the reduction is for a run on one process: on more, each counts its share in-process");
   r->count_fd = fd < 0 ? -1 : fd;
-  r->count_go = go < 0 ? -1 : go;
   PetscCall(PetscTime(&r->count_t0));
   PetscFunctionReturn(0);
 }
 
-/* The helper may factor: one byte on the go pipe, once per source (then -1). Called where the solve's factorizations
-   end (the first configuration's: body-wise, every body's, made once for all configurations), at the count, and when
-   the solve ends, failed or not, so that it happens whatever path the solve took. Never an error: a helper that is
-   gone (its read end closed) only leaves the count to this process, so SIGPIPE is ignored for the write. */
-void KFReducerCountGo_Private(KFReducer r)
-{
-  struct sigaction ign, old;
-  const char       go = 'g';
-  int              fd = r->count_go;
-
-  if (fd < 0) return;
-  r->count_go = -1;
-  memset(&ign, 0, sizeof(ign));
-  ign.sa_handler = SIG_IGN;
-  sigemptyset(&ign.sa_mask);
-  if (sigaction(SIGPIPE, &ign, &old)) return;
-  while (write(fd, &go, 1) < 0 && errno == EINTR) continue;
-  (void)sigaction(SIGPIPE, &old, NULL);
-}
-
 /* The helper's side: the reducer set up (KFReducerSetUp) as the reduction's (same scene, same options), the counts at every
-   configuration made on factors of its own and written to fd. go: the read end of the pipe whose byte says that the
-   reduction's factorizations are done (the system is assembled before, factored after), or -1; its end of file
-   without the byte (the reduction gone) is an error. The seconds written are the count's, without that wait. */
-PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd, int go)
+   configuration made on factors of its own and written to fd */
+PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd)
 {
   MPI_Comm       comm = PetscObjectComm((PetscObject)r);
   PetscMPIInt    size;
@@ -140,7 +112,7 @@ PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd, int go)
   PetscReal     *sigma;
   KFEvalPoint   *evals;
   KFSystem       sys;
-  PetscLogDouble t0, t1, w0, w1;
+  PetscLogDouble t0, t1;
   size_t         cap, len = 0;
   char          *buf;
 
@@ -159,20 +131,9 @@ PetscErrorCode KFReducerCertifyCountWrite(KFReducer r, int fd, int go)
   PetscCall(KFSystemCreate(r->scene, &sys));
   PetscCall(KFSystemSetConfigurationCount(sys, neval));
   PetscCall(KFSystemSetAngles(sys, evals[0].angles)); /* the rigid and mechanism modes the body-wise count takes */
-  PetscCall(PetscTime(&w0));
-  if (go >= 0) {
-    char    c;
-    ssize_t n;
-
-    do n = read(go, &c, 1);
-    while (n < 0 && errno == EINTR);
-    PetscCheck(n == 1, comm, PETSC_ERR_FILE_READ, "the reduction ended before its factorizations were done: nothing to count for");
-  }
-  PetscCall(PetscTime(&w1));
   PetscCall(KFReducerCertifyCount_Private(r, sys, PETSC_FALSE, neval, evals, count, nrigid, sigma));
   PetscCall(KFSystemDestroy(&sys));
   PetscCall(PetscTime(&t1));
-  t1 -= w1 - w0;
   cap = (size_t)(64 + neval * (nrev1 + 3) * 32);
   PetscCall(PetscMalloc1(cap, &buf));
   len += (size_t)snprintf(buf, cap, KF_COUNT_MAGIC " %" PetscInt_FMT " %" PetscInt_FMT " %.17g\n", neval, nrev1, (double)(t1 - t0));
@@ -253,7 +214,6 @@ PetscErrorCode KFReducerCertifyCountRead_Private(KFReducer r, PetscInt neval, co
   int            fd = r->count_fd;
 
   PetscFunctionBegin;
-  KFReducerCountGo_Private(r); /* if no factorization came before (it always does today): the helper waits on it */
   *got = PETSC_FALSE;
   PetscCall(KFReducerResultScalar_Private(r, -1, "certificate_count_helper", 0.0));
   if (fd < 0) PetscFunctionReturn(0);

@@ -80,7 +80,6 @@ PetscErrorCode KFReducerCreate(MPI_Comm comm, KFReducer *reducer)
   r->verify_certified_min_dofs = 50000;
   r->verify_certified_cover  = 1.5;
   r->count_fd                = -1;
-  r->count_go                = -1;
   r->verify_certified_min_accuracy = 1e-3;
   r->verify_modes            = PETSC_DECIDE;
   r->verify_cover            = 3.0;

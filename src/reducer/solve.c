@@ -221,7 +221,6 @@ static PetscErrorCode KFReducerConfigBasis_Private(KFReducer r, KFSystem sys, Pe
   PetscCall(PetscTime(&t1));
   times[1] += t1 - t0;
   PetscCall(KFReducerAddFactorSetUp_Private(*solver, t1 - t0, setup_s));
-  KFReducerCountGo_Private(r); /* the first configuration's factors (body-wise, every body's): the helper may factor */
   PetscCall(KFInterruptCheck(comm));
 
   t0 = t1;
@@ -1227,7 +1226,7 @@ static PetscErrorCode KFReducerTimingTable_Private(KFReducer r, PetscLogDouble w
   PetscFunctionReturn(0);
 }
 
-static PetscErrorCode KFReducerSolve_Private(KFReducer r)
+PetscErrorCode KFReducerSolve(KFReducer r)
 {
   MPI_Comm     comm;
   KFEvalPoint *evals;
@@ -1237,6 +1236,7 @@ static PetscErrorCode KFReducerSolve_Private(KFReducer r)
   PetscLogDouble tstart, tend;
 
   PetscFunctionBegin;
+  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
   PetscCall(KFReducerSetUp(r));
   PetscCall(PetscObjectGetComm((PetscObject)r, &comm));
   PetscCall(KFReducerViewFromOptions(r, NULL, "-kf_reducer_view_pre"));
@@ -1311,17 +1311,5 @@ static PetscErrorCode KFReducerSolve_Private(KFReducer r)
     PetscCall(KFReducerGetReducedModel(r, &model));
     PetscCall(KFReducedModelViewFromOptions(model, (PetscObject)r, "-kf_model_view"));
   }
-  PetscFunctionReturn(0);
-}
-
-PetscErrorCode KFReducerSolve(KFReducer r)
-{
-  PetscErrorCode ierr;
-
-  PetscFunctionBegin;
-  PetscValidHeaderSpecific(r, KF_REDUCER_CLASSID, 1);
-  ierr = KFReducerSolve_Private(r);
-  KFReducerCountGo_Private(r); /* a solve that failed or never factored: the helper waits for nothing more */
-  PetscCall(ierr);
   PetscFunctionReturn(0);
 }

@@ -226,16 +226,14 @@ cdef class CReducer:
         check(KFReducerGetVerificationPlan(self.r, &measured, &certified))
         return bool(measured), bool(certified)
 
-    def set_count_source(self, int fd, int go=-1):
-        """The read end of the pipe a helper process writes the certificate's counts to (-1: counted in-process),
-        and the write end of the pipe the solve writes one byte to when its factorizations are done (-1: none); the
-        caller keeps both open until the solve ends and closes them."""
-        check(KFReducerSetCountSource(self.r, fd, go))
+    def set_count_source(self, int fd):
+        """The read end of the pipe a helper process writes the certificate's counts to (-1: counted in-process);
+        the caller keeps it open until the solve ends and closes it."""
+        check(KFReducerSetCountSource(self.r, fd))
 
-    def certify_count_write(self, int fd, int go=-1):
-        """The helper's side: the certificate's counts at every configuration, written to fd; with go (a pipe's
-        read end), its factorizations wait for the reduction's byte there."""
-        check(KFReducerCertifyCountWrite(self.r, fd, go))
+    def certify_count_write(self, int fd):
+        """The helper's side: the certificate's counts at every configuration, written to fd."""
+        check(KFReducerCertifyCountWrite(self.r, fd))
 
     def set_from_options(self):
         check(KFReducerSetFromOptions(self.r))

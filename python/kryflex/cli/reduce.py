@@ -89,9 +89,10 @@ def run(argv):
             start_helpers(ranks=common.size(), prepare={
                 "band_hz": list(scene.band), "configurations": len(scene.configurations),
                 "pairs": pairs if len(pairs) <= MAX_PAIRS_PER_FIGURE else []})
-        # the certificate's count beside the reduction, on one process with a free core (count_helper.py)
-        from .. import count_helper
-        counting.append(count_helper.start(reducer, args.scene, staging.path, common.size()))
+        if common.size() == 1:
+            # the certificate's count beside the reduction, on a free core (count_helper.py)
+            from .. import count_helper
+            counting.append(count_helper.start(reducer, args.scene, staging.path, common.size()))
         result = collective(reducer.reduce, (_core.Error, EXIT_NUMERIC, lambda e: "the model cannot be reduced: %s" % e))
         if counting and counting[0] is not None:
             rss = counting.pop().stop()      # its counts are taken: its memory freed before the report

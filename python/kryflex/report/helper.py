@@ -31,7 +31,6 @@ import subprocess
 import sys
 import threading
 
-from .. import cores
 from .figures import figure_jobs
 
 # weights in figures.figure_jobs' units (about one Bode plot's drawing, 25 ms on an idle core): a helper started by
@@ -50,6 +49,19 @@ PREPARED_ROLES = (("bode_pairs", "overview"), ("bode_pairs", "importance"))
 _ahead = []                  # the helpers start_helpers started, waiting for their work
 
 
+def _idle_cores():
+    """(the cores this process may run on, those less the load average of the last minute: this process counts in
+    it)."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    try:
+        return cpus, cpus - os.getloadavg()[0]
+    except OSError:
+        return cpus, cpus - 1.0
+
+
 def _wanted():
     """'off', 'on' (KRYFLEX_REPORT_HELPER=1: whatever the load) or 'auto'."""
     wanted = os.environ.get("KRYFLEX_REPORT_HELPER", "auto").strip().lower()
@@ -60,7 +72,7 @@ def _core_free():
     wanted = _wanted()
     if wanted != "auto":
         return wanted == "on"
-    cpus, idle = cores.idle_cores()
+    cpus, idle = _idle_cores()
     return cpus >= 2 and idle >= 0.9
 
 
@@ -136,7 +148,7 @@ def start_helpers(ranks=1, prepare=None):
     many were started."""
     stop_helpers()
     wanted = _wanted()
-    if wanted == "on" or (wanted == "auto" and cores.core_beside(ranks)):
+    if wanted == "on" or (wanted == "auto" and _idle_cores()[0] > ranks):
         for k in range(HELPERS_AHEAD):
             role = PREPARED_ROLES[k % len(PREPARED_ROLES)]
             if prepare is not None and not prepare.get("pairs"):
@@ -180,7 +192,7 @@ def helper_shares(jobs, helpers):
     total = sum(w for w, _, _ in jobs)
     if not helpers or total < HELPER_MIN_WEIGHT:
         return [set() for _ in helpers]
-    if len(helpers) >= cores.idle_cores()[0]:
+    if len(helpers) >= _idle_cores()[0]:
         loads = [float("inf")]
     else:
         loads = [MAIN_WRITE_WEIGHT + (0.0 if "matplotlib.backends.backend_agg" in sys.modules else MAIN_IMPORT_WEIGHT)]

@@ -95,8 +95,6 @@ struct _p_KFReducer {
   PetscBool       certify;        /* this solve's estimate is certified (resolved from verify_auto at KFReducerSolve) */
   int             count_fd;       /* -1, or the pipe a helper process writes the certificate's counts to
                                      (KFReducerSetCountSource, src/reducer/certify.c) */
-  int             count_go;       /* -1, or the pipe this process writes one byte to when the reduction's factorizations
-                                     are done: the helper factors only then (KFReducerCountGo_Private) */
   PetscLogDouble  count_t0;       /* when the helper started */
   PetscInt        verify_modes;   /* PETSC_DECIDE: cover verify_cover x the band's top */
   PetscReal       verify_cover;
@@ -247,7 +245,6 @@ PETSC_INTERN PetscErrorCode KFEvalPointSetUp_Private(KFReducer, KFEvalPoint *);
 PETSC_INTERN PetscErrorCode KFReducerReference_Private(KFReducer, KFSystem, KFFlexSolver, PetscInt nmom, const PetscReal L[], KFEvalPoint *);
 /* the estimated verdict's certificate by the mode count (src/reducer/certify.c) */
 PETSC_INTERN PetscErrorCode KFReducerCertifyCount_Private(KFReducer, KFSystem, PetscBool reuse, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[]);
-PETSC_INTERN void           KFReducerCountGo_Private(KFReducer);
 PETSC_INTERN PetscErrorCode KFReducerCertifyCountRead_Private(KFReducer, PetscInt neval, const KFEvalPoint[], PetscInt count[], PetscInt nrigid[], PetscReal sigma[], PetscBool *got);
 PETSC_INTERN PetscErrorCode KFReducerEvalPoints_Private(KFReducer, PetscInt *neval, KFEvalPoint **evals);
 PETSC_INTERN PetscErrorCode KFReducerCertifyCompare_Private(KFReducer, PetscInt neval, const KFEvalPoint[], const PetscInt count[], const PetscInt nrigid[], const PetscReal sigma[], PetscBool *certified);

@@ -3,15 +3,11 @@ reduce on one process starts a helper process that counts while the reduction ru
 Checked on the 2,760-dof solid, body-wise, certified from 0 dofs: the helper's counts are the in-process count's and a
 dense SciPy count's, the verdict and reduced.h5 the in-process run's bit for bit; a helper that exits non-zero, is
 killed or writes other configurations leaves the count in-process (the same verdict and model, exit 0, no traceback);
-2 ranks count in-process, as 1 rank does. The helper factors only after the reduction's go byte: it waits for it
-(blocked reading its pipe, no counts written), counts once it comes, and exits non-zero, writing nothing, when the pipe
-closes without it."""
+2 ranks count in-process, as 1 rank does."""
 import json
 import os
-import select
 import subprocess
 import sys
-import time
 
 import h5py
 import numpy as np
@@ -19,7 +15,7 @@ import pytest
 import scipy.linalg
 
 import kryflex
-from kryflex import _core, count_helper
+from kryflex import _core
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -134,72 +130,3 @@ def test_two_ranks_count_in_process_as_one_rank_does(solid, in_process, tmp_path
     c = s["certificate"]
     assert c["count_source"] == "in-process" and "helper" not in r.stdout
     assert c["full_counts"] == in_process[1]["certificate"]["full_counts"]
-
-
-def wait_channel(pid):
-    """Where the process sleeps in the kernel ("0" while it runs; a pipe read: pipe_read, anon_pipe_read from 6.x), or
-    None where /proc does not say."""
-    try:
-        with open("/proc/%d/wchan" % pid) as f:
-            return f.read().strip()
-    except OSError:
-        return None
-
-
-def helper_waiting(solid):
-    """The helper as kryflex reduce starts it, this process its parent, once it waits for the go byte (its counts'
-    pipe still empty): (the process, the counts' read end, the go byte's write end, its log)."""
-    read, write = os.pipe()
-    go_read, go_write = os.pipe()
-    log = open(os.path.join(os.path.dirname(solid), "helper_%d.log" % time.monotonic_ns()), "w+b")
-    proc = subprocess.Popen([sys.executable, "-c", count_helper.CHILD_CODE, str(write), str(go_read), str(os.getpid()),
-                             solid] + OPTIONS, pass_fds=(write, go_read), stdin=subprocess.DEVNULL, stdout=log,
-                            stderr=log, env=dict(ENV, PYTHONPATH=os.path.join(ROOT, "python")))
-    os.close(write)
-    os.close(go_read)
-    end, seen = time.monotonic() + 120, set()
-    while "pipe_read" not in (wait_channel(proc.pid) or ""):
-        seen.add(wait_channel(proc.pid))
-        if proc.poll() is not None or time.monotonic() > end:
-            exited = proc.poll()
-            proc.kill()
-            proc.wait()
-            log.seek(0)
-            if exited is None and seen <= {None, "0", ""}:
-                pytest.skip("/proc/PID/wchan does not say where the helper sleeps")
-            pytest.fail("the helper never waited for the go byte: %s" % log.read()[-2000:].decode())
-        time.sleep(0.02)
-    time.sleep(0.3)      # still waiting, nothing written: it sleeps on the go pipe, not in a short read
-    assert "pipe_read" in wait_channel(proc.pid) and proc.poll() is None
-    assert select.select([read], [], [], 0)[0] == []
-    return proc, read, go_write, log
-
-
-def test_the_helper_factors_only_after_the_go_byte(solid, in_process):
-    proc, read, go, log = helper_waiting(solid)
-    os.write(go, b"g")
-    message = b""
-    while True:
-        chunk = os.read(read, 65536)
-        if not chunk:
-            break
-        message += chunk
-    assert proc.wait(timeout=120) == 0
-    os.close(read)
-    os.close(go)
-    lines = message.decode().split("\n")
-    assert lines[0].startswith("kfcount1 7 1 ") and lines[-2:] == ["end", ""]
-    rows = [line.split() for line in lines[1:-2]]
-    assert [int(r[1]) - int(r[2]) for r in rows] == in_process[1]["certificate"]["full_counts"]
-    log.close()
-
-
-def test_a_helper_whose_reduction_ends_without_the_go_byte_exits(solid):
-    proc, read, go, log = helper_waiting(solid)
-    os.close(go)        # the reduction ended (failed) before its factorizations
-    assert proc.wait(timeout=60) != 0
-    assert os.read(read, 65536) == b""
-    os.close(read)
-    log.seek(0)
-    assert b"the reduction ended before its factorizations were done" in log.read()
-    log.close()

@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from kryflex import cores, report
+from kryflex import report
 from kryflex.report import figures, helper
 
 from test_report import build_summary      # noqa: E402  (tests/python/report is on the path under pytest)
@@ -33,11 +33,11 @@ def test_helper_shares_split_the_figures(summary, monkeypatch):
     jobs = figures.figure_jobs(summary, figures.plot_file_names(summary))
     everything = set(range(len(jobs)))
     # 4 cores, one helper: it and this process both draw
-    monkeypatch.setattr(cores, "idle_cores", lambda: (4, 3.5))
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (4, 3.5))
     (share,) = helper.helper_shares(jobs, [_Started()])
     assert share and share < everything
     # as many helpers as cores: they draw every figure between them, this process none (it writes the rest)
-    monkeypatch.setattr(cores, "idle_cores", lambda: (2, 1.5))
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (2, 1.5))
     a, b = helper.helper_shares(jobs, [_Started(), _Started()])
     assert a and b and not a & b and a | b == everything
     weight = {k: jobs[k][0] for k in everything}
@@ -62,11 +62,11 @@ def test_helpers_are_started_where_the_run_leaves_a_core(monkeypatch):
     """kryflex reduce's rule: a core beyond the run's ranks, whatever the load average (it made the report's time
     depend on the minute before the run)."""
     monkeypatch.setenv("KRYFLEX_REPORT_HELPER", "auto")
-    monkeypatch.setattr(cores, "idle_cores", lambda: (2, -5.0))        # a loaded machine: 7 processes running
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (2, -5.0))        # a loaded machine: 7 processes running
     assert helper.start_helpers(ranks=1) == helper.HELPERS_AHEAD
     helper.stop_helpers()
     assert helper.start_helpers(ranks=2) == 0
-    monkeypatch.setattr(cores, "idle_cores", lambda: (1, 0.9))
+    monkeypatch.setattr(helper, "_idle_cores", lambda: (1, 0.9))
     assert helper.start_helpers(ranks=1) == 0
     assert helper._ahead == []
 

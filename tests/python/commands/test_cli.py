@@ -247,16 +247,23 @@ def test_two_ranks_give_the_serial_reduction(serial, two_ranks):
     s1, s2 = serial.summary, two_ranks.summary
     assert s2["reduction_label"] == s1["reduction_label"] and s2["kept_modes"] == s1["kept_modes"]
     assert s2["reduced"]["dofs_per_body"] == s1["reduced"]["dofs_per_body"]
+    # In the band the two runs agree to 1e-8. Above it (Galileo's 76 and 123.5 Hz) a compressed model's modes are
+    # made of the directions its truncation keeps, which the compression's SVD (of the snapshots' Gram matrix) takes
+    # from reduced matrices that differ between 1 and 2 ranks at round-off (1e-11): 3.6e-7 apart at 123.5 Hz.
+    top = s1["band_hz"][1]
     for label in s1["angle_labels"]:
-        np.testing.assert_allclose(s2["reduced"]["frequencies_hz"][label], s1["reduced"]["frequencies_hz"][label],
-                                   rtol=1e-8, err_msg=label)
+        f1, f2 = np.array(s1["reduced"]["frequencies_hz"][label]), np.array(s2["reduced"]["frequencies_hz"][label])
+        np.testing.assert_allclose(f2[f1 <= top], f1[f1 <= top], rtol=1e-8, err_msg=label)
+        np.testing.assert_allclose(f2, f1, rtol=1e-6, err_msg=label)
         L1, L2 = np.array(s1["reduced"]["moments"][label]), np.array(s2["reduced"]["moments"][label])
         assert normwise_errors(L1, L2).max() < 1e-8, label
     m1 = kryflex.ReducedModel.load(os.path.join(serial.out, "reduced.h5"))
     m2 = kryflex.ReducedModel.load(os.path.join(two_ranks.out, "reduced.h5"))
     # the two runs' reduced stiffnesses differ at round-off (4.6e-12 of their largest entry), and the 0.11 Hz mode is
     # (1221 / 0.11)^2 = 1.2e8 times softer than the stiffest: at() moves it by 1.1e-8 (the SVD path by 3.2e-10)
-    np.testing.assert_allclose(m2.at([37.5]).frequencies_hz, m1.at([37.5]).frequencies_hz, rtol=1e-7)
+    f1, f2 = m1.at([37.5]).frequencies_hz, m2.at([37.5]).frequencies_hz
+    np.testing.assert_allclose(f2[f1 <= top], f1[f1 <= top], rtol=1e-7)
+    np.testing.assert_allclose(f2, f1, rtol=1e-6)
 
 
 @pytest.mark.mpi

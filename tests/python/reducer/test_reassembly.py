@@ -114,6 +114,8 @@ def numpy_constraints(model, angles_deg):
             block[:, off[p]:off[p + 1]] = proj @ Ip[k:k + 3]
             block[:, off[c]:off[c + 1]] = -proj @ R @ Ic[k:k + 3]
             rows.append(block)
+    if model.ties is not None:      # a model compressed or reduced tied: its coordinate ties appended to the joints'
+        rows.append(model.ties)
     return np.vstack(rows), off
 
 
@@ -206,11 +208,13 @@ def test_exactly_the_rigid_and_mechanism_modes(case):
 # ================================================================================================ constraints
 
 def test_constraint_rank_and_numpy_reassembly(case):
-    """Rank = 5 per revolute + 6 per fixed joint; the sigma ratio and the reassembled system agree with NumPy."""
+    """Rank = 5 per revolute + 6 per fixed joint (+ the model's coordinate ties); the sigma ratio and the
+    reassembled system agree with NumPy."""
     rtol = case.model.settings["reassembly_rtol"]
     expected_rank = 5 * case.nrev + 6 * case.nfixed
     assert expected_rank == 5 * sum(j["type"] == "revolute" for j in case.spec["joints"].values()) \
         + 6 * sum(j["type"] == "fixed" for j in case.spec["joints"].values())
+    expected_rank += 0 if case.model.ties is None else case.model.ties.shape[0]
     n = sum(case.model.sizes)
     for a in case.angles:
         Mh, Kh, Gh, Hh, rank, ratio, _ = reassembled(case.model, a)

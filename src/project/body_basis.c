@@ -682,15 +682,41 @@ PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X,
   PetscFunctionReturn(0);
 }
 
-/* C (r x p) = op(A) B, with op(A) = A (r x k) or A^T (A k x r); B k x p, column-major, small replicated arrays */
+/* C (r x p) = op(A) B, with op(A) = A (r x k) or A^T (A k x r); B k x p, column-major, small replicated arrays. Each
+   entry is the sum over l in order from 0, as one dot product at a time: A B a column of A at a time into a column of C
+   (adjacent rows, one vector operation), A^T B four entries at a time (independent sums, not one sum's latency). */
 static void KFSmallMult(PetscBool trans, PetscInt r, PetscInt k, PetscInt p, const PetscReal *A, PetscInt lda, const PetscReal *B, PetscReal *C)
 {
-  for (PetscInt j = 0; j < p; j++)
-    for (PetscInt i = 0; i < r; i++) {
-      PetscReal d = 0;
-      for (PetscInt l = 0; l < k; l++) d += (trans ? A[l + i * lda] : A[i + l * lda]) * B[l + j * k];
-      C[i + j * r] = d;
+  for (PetscInt j = 0; j < p; j++) {
+    const PetscReal *b = &B[j * k];
+    PetscReal       *c = &C[j * r];
+
+    if (!trans) {
+      for (PetscInt i = 0; i < r; i++) c[i] = 0;
+      for (PetscInt l = 0; l < k; l++) {
+        const PetscReal *a = &A[l * lda], bl = b[l];
+
+        for (PetscInt i = 0; i < r; i++) c[i] += a[i] * bl;
+      }
+      continue;
     }
+    for (PetscInt i = 0; i < r; i += 4) {
+      const PetscInt   n  = PetscMin(4, r - i);
+      const PetscReal *a0 = &A[i * lda], *a1 = &A[(n > 1 ? i + 1 : i) * lda], *a2 = &A[(n > 2 ? i + 2 : i) * lda], *a3 = &A[(n > 3 ? i + 3 : i) * lda];
+      PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+
+      for (PetscInt l = 0; l < k; l++) {
+        s0 += a0[l] * b[l];
+        s1 += a1[l] * b[l];
+        s2 += a2[l] * b[l];
+        s3 += a3[l] * b[l];
+      }
+      c[i] = s0;
+      if (n > 1) c[i + 1] = s1;
+      if (n > 2) c[i + 2] = s2;
+      if (n > 3) c[i + 3] = s3;
+    }
+  }
 }
 
 /* T = Z_b^T M_p Y (v x m): the coordinates in a sub-basis (KFBodyBasisCreateSub of parent) of body vectors given by

@@ -347,7 +347,7 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, &nb, NULL, NULL, NULL, NULL, NULL));
   PetscCall(PetscCalloc2(nb, &mb, nb, &Y));
-  PetscCall(PetscMalloc3(cand->nexp, &m, cand->nexp, &ncol, cand->nexp, &C));
+  PetscCall(PetscCalloc3(cand->nexp, &m, cand->nexp, &ncol, cand->nexp, &C));
   for (PetscInt b = 0; b < nb; b++) {
     PetscInt vb, col = 0;
 
@@ -357,7 +357,8 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
       PetscInt pe = KFParentVisit(cc, cand->exp[e]), nr;
 
       PetscCheck(pe >= 0, PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has a visit its parent has not");
-      PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, KFCandidateStaticCorrection(r, cand), &m[e], &ncol[e], &C[e], NULL));
+      /* the same for every body unless each body keeps its own clusters: made for the first body only then */
+      if (!C[e]) PetscCall(KFVisitCombination(r, v, cand->c, cand->nbody ? cand->bkept[b] : cand->kept, KFCandidateStaticCorrection(r, cand), &m[e], &ncol[e], &C[e], NULL));
       PetscCheck(m[e] <= cc->pm[pe], PetscObjectComm((PetscObject)r), PETSC_ERR_PLIB, "a sub-basis candidate has more Krylov columns than its parent");
       PetscCall(MatGetSize(v->Phir, NULL, &nr));
       mb[b] += nr + ncol[e];
@@ -377,9 +378,10 @@ static PetscErrorCode KFCandidateSubBasis(KFReducer r, KFVisit visits[], KFCandi
           Y[b][i + (col + nr + j) * vb] = d;
         }
       col += nr + ncol[e];
-      PetscCall(PetscFree(C[e]));
+      if (cand->nbody) PetscCall(PetscFree(C[e]));
     }
   }
+  for (PetscInt e = 0; e < cand->nexp; e++) PetscCall(PetscFree(C[e]));
   PetscCall(PetscFree3(m, ncol, C));
   PetscCall(KFBodyBasisCreateSub(cc->parent, r->body_tol, mb, Y, bb));
   *tk = 0;

@@ -684,7 +684,8 @@ PetscErrorCode KFBodyBasisCoordinates(KFBodyBasis bb, PetscInt b, Mat Pb, Mat X,
 
 /* C (r x p) = op(A) B, with op(A) = A (r x k) or A^T (A k x r); B k x p, column-major, small replicated arrays. Each
    entry is the sum over l in order from 0, as one dot product at a time: A B a column of A at a time into a column of C
-   (adjacent rows, one vector operation), A^T B four entries at a time (independent sums, not one sum's latency). */
+   (adjacent rows, one vector operation), A^T B four entries at a time (KFGroupDots: independent sums, not one sum's
+   latency). */
 static void KFSmallMult(PetscBool trans, PetscInt r, PetscInt k, PetscInt p, const PetscReal *A, PetscInt lda, const PetscReal *B, PetscReal *C)
 {
   for (PetscInt j = 0; j < p; j++) {
@@ -700,21 +701,10 @@ static void KFSmallMult(PetscBool trans, PetscInt r, PetscInt k, PetscInt p, con
       }
       continue;
     }
-    for (PetscInt i = 0; i < r; i += 4) {
-      const PetscInt   n  = PetscMin(4, r - i);
-      const PetscReal *a0 = &A[i * lda], *a1 = &A[(n > 1 ? i + 1 : i) * lda], *a2 = &A[(n > 2 ? i + 2 : i) * lda], *a3 = &A[(n > 3 ? i + 3 : i) * lda];
-      PetscReal        s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+    for (PetscInt i = 0; i < r; i += 4) { /* A^T is always a whole array here (lda = k), as KFGroupDots reads it */
+      const PetscInt cols[4] = {i, i + 1, i + 2, i + 3};
 
-      for (PetscInt l = 0; l < k; l++) {
-        s0 += a0[l] * b[l];
-        s1 += a1[l] * b[l];
-        s2 += a2[l] * b[l];
-        s3 += a3[l] * b[l];
-      }
-      c[i] = s0;
-      if (n > 1) c[i + 1] = s1;
-      if (n > 2) c[i + 2] = s2;
-      if (n > 3) c[i + 3] = s3;
+      KFGroupDots(k, PetscMin(4, r - i), cols, b, A, c);
     }
   }
 }

@@ -30,18 +30,12 @@ static PetscErrorCode KFCompressSize(KFReducedModel c, PetscInt *size)
    model already worse than the target is not measured further); c is destroyed */
 static PetscErrorCode KFCompressMeasure(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *c, PetscInt *size, PetscReal *error)
 {
+  PetscInt  sysdofs;
+  PetscBool complete;
+
   PetscFunctionBegin;
   PetscCall(KFCompressSize(*c, size));
-  *error = 0;
-  for (PetscInt e = 0; e < neval && *error <= r->accuracy; e++) {
-    KFReducedSystem rs;
-    PetscReal       hinf;
-
-    PetscCall(KFReducedModelReassemble(*c, evals[e].angles, &rs));
-    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
-  }
+  PetscCall(KFReducerModelError_Private(r, *c, neval, evals, r->accuracy, error, &sysdofs, &complete));
   PetscCall(KFReducedModelDestroy(c));
   PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
   PetscFunctionReturn(0);

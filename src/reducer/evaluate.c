@@ -212,6 +212,31 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
   PetscFunctionReturn(0);
 }
 
+PetscErrorCode KFReducerModelError_Private(KFReducer r, KFReducedModel model, PetscInt neval, KFEvalPoint evals[], PetscReal stop, PetscReal *error, PetscInt *sysdofs, PetscBool *complete)
+{
+  PetscFunctionBegin;
+  *error    = 0;
+  *sysdofs  = 0;
+  *complete = PETSC_TRUE;
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscReal       hinf;
+    PetscInt        n;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
+    *sysdofs = PetscMax(*sysdofs, n);
+    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
+    if (stop > 0 && *error > stop) {
+      *complete = (PetscBool)(e == neval - 1);
+      break;
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
 PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscInt neval, KFEvalPoint evals[], PetscReal stop, KFCandidate *cand)
 {
   KFReducedModel model;
@@ -233,25 +258,7 @@ PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscI
     PetscCall(KFReducedModelGetTies(model, &ms, NULL, NULL));
     cand->size -= ms;
   }
-  cand->error    = 0;
-  cand->sysdofs  = 0;
-  cand->complete = PETSC_TRUE;
-  for (PetscInt e = 0; e < neval; e++) {
-    KFReducedSystem rs;
-    PetscReal       hinf;
-    PetscInt        n;
-
-    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
-    PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
-    cand->sysdofs = PetscMax(cand->sysdofs, n);
-    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    cand->error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(cand->error, hinf);
-    if (stop > 0 && cand->error > stop && e < neval - 1) {
-      cand->complete = PETSC_FALSE;
-      break;
-    }
-  }
+  PetscCall(KFReducerModelError_Private(r, model, neval, evals, stop, &cand->error, &cand->sysdofs, &cand->complete));
   PetscCall(KFReducedModelDestroy(&model));
   PetscFunctionReturn(0);
 }

@@ -6,7 +6,7 @@
 
 PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[], PetscInt t, const PetscReal HPhi[], PetscInt a, const PetscReal PhiG[], const KFDamping *d, const PetscReal Cm[], PetscInt nc, const PetscInt quantity[], PetscReal rigid_tol, PetscInt nw, const PetscReal w[], PetscReal Tre[], PetscReal Tim[])
 {
-  PetscReal   *lam, *dre, *dim, *Xre, *Xim, *S = NULL, *rhs = NULL, lmax = 0;
+  PetscReal   *lam, *glam, *dw, *dre, *dim, *Xre, *Xim, *S = NULL, *rhs = NULL, lmax = 0;
   PetscBLASInt *ipiv = NULL;
 
   PetscFunctionBegin;
@@ -19,26 +19,37 @@ PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[], PetscInt t
   PetscCall(PetscArrayzero(Tim, nw * t * a));
   if (!n) PetscFunctionReturn(0);
   for (PetscInt i = 0; i < n; i++) lmax = PetscMax(lmax, lambda[i]);
-  PetscCall(PetscMalloc5(n, &lam, n, &dre, n, &dim, n * a, &Xre, n * a, &Xim));
-  for (PetscInt i = 0; i < n; i++) lam[i] = (lambda[i] > 0 && lambda[i] > rigid_tol * lmax) ? lambda[i] : 0;
+  PetscCall(PetscMalloc7(n, &lam, n, &glam, n, &dw, n, &dre, n, &dim, n * a, &Xre, n * a, &Xim));
+  /* the diagonal of Z in the modes: real part lambda - w^2, imaginary part g lambda + w (2 zeta sqrt(lambda) + alpha +
+     beta lambda + Cm_kk); its parts that do not depend on w made once (per frequency they cost more than the rest) */
+  for (PetscInt k = 0; k < n; k++) {
+    PetscReal z;
+
+    lam[k]  = (lambda[k] > 0 && lambda[k] > rigid_tol * lmax) ? lambda[k] : 0;
+    z       = lam[k] > 0 ? KFDampingModalRatio(d, PetscSqrtReal(lam[k]) / (2 * PETSC_PI)) : 0;
+    glam[k] = d->g * lam[k];
+    dw[k]   = 2 * z * PetscSqrtReal(lam[k]) + d->alpha + d->beta * lam[k] + (Cm ? Cm[k + k * n] : 0);
+  }
   if (nc) PetscCall(PetscMalloc3(4 * nc * nc, &S, 2 * nc * a, &rhs, 2 * nc, &ipiv));
   for (PetscInt f = 0; f < nw; f++) {
     const PetscReal wf = w[f], w2 = wf * wf;
 
-    /* the diagonal of Z: real part lambda - w^2, imaginary part g lambda + w (2 zeta sqrt(lambda) + alpha + beta lambda + Cm_kk) */
     for (PetscInt k = 0; k < n; k++) {
-      const PetscReal z = lam[k] > 0 ? KFDampingModalRatio(d, PetscSqrtReal(lam[k]) / (2 * PETSC_PI)) : 0;
       dre[k] = lam[k] - w2;
-      dim[k] = d->g * lam[k] + wf * (2 * z * PetscSqrtReal(lam[k]) + d->alpha + d->beta * lam[k] + (Cm ? Cm[k + k * n] : 0));
+      dim[k] = glam[k] + wf * dw[k];
     }
     /* uncoupled modes: X = PhiG / Z_kk */
     for (PetscInt k = nc; k < n; k++) {
       const PetscReal d2 = dre[k] * dre[k] + dim[k] * dim[k];
+      PetscReal       cr, ci;
+
       PetscCheck(d2 > 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFDampedModalFRF: the response of mode %" PetscInt_FMT " (lambda %g) is infinite at w[%" PetscInt_FMT "] = %g rad/s: %s", k, (double)lambda[k], f, (double)wf,
                  lam[k] > 0 ? "give it some damping or avoid the exact resonance" : "rigid modes have no static response; start the band above 0");
+      cr = dre[k] / d2;
+      ci = -dim[k] / d2;
       for (PetscInt j = 0; j < a; j++) {
-        Xre[k + j * n] = dre[k] / d2 * PhiG[k + j * n];
-        Xim[k + j * n] = -dim[k] / d2 * PhiG[k + j * n];
+        Xre[k + j * n] = cr * PhiG[k + j * n];
+        Xim[k + j * n] = ci * PhiG[k + j * n];
       }
     }
     if (nc) { /* coupled modes: [A -B; B A] [xr; xi] = [PhiG; 0], A = diag(dre), B = diag(dim) + w offdiag(Cm) */
@@ -96,7 +107,7 @@ PetscErrorCode KFDampedModalFRF(PetscInt n, const PetscReal lambda[], PetscInt t
       }
     }
   }
-  PetscCall(PetscFree5(lam, dre, dim, Xre, Xim));
+  PetscCall(PetscFree7(lam, glam, dw, dre, dim, Xre, Xim));
   if (nc) PetscCall(PetscFree3(S, rhs, ipiv));
   PetscFunctionReturn(0);
 }

@@ -75,6 +75,9 @@ struct _KFSceneOps {
 PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
 PETSC_INTERN PetscErrorCode KFMatCheckSymmetricExact(Mat, const char[], PetscReal, PetscBool *); /* src/body/load.c */
 PETSC_INTERN PetscErrorCode KFGetStartTime(PetscLogDouble *); /* src/util/package.c: when KFInitialize first ran */
+/* src/measure/frf_error.c: KFFRFElasticErrors and the pair, frequency index and pair scale where hinf is made
+   (pointwise NULL: not measured) */
+PETSC_INTERN PetscErrorCode KFFRFElasticErrorsWorst_Private(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise, PetscInt *pair, PetscInt *freq, PetscReal *pscale);
 
 struct _n_KFScene {
   PETSCHEADER(struct _KFSceneOps);

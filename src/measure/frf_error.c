@@ -95,10 +95,14 @@ PetscErrorCode KFFRFPairFloors(PetscInt nw, PetscInt t, PetscInt a, const PetscR
   floor_db below the pair's peak it is measured against that floor; it is reported for information. Either output
   may be NULL. T*: nw blocks of t x a.
 */
-PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise)
+/* KFFRFElasticErrors, and where hinf is made (the reducer refines it there): *pair and *freq the first pair and
+   frequency, in frequency then pair order, of the largest |Tf - Tr| / s (-1 when no entry is a number), *pscale that
+   pair's s; pointwise NULL: not measured */
+PetscErrorCode KFFRFElasticErrorsWorst_Private(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise, PetscInt *pair, PetscInt *freq, PetscReal *pscale)
 {
   const PetscInt m = t * a;
-  PetscReal     *scale, *dmax, top = 0, eh = 0, ep = 0, fl;
+  PetscReal     *scale, *dmax, top = 0, eh = 0, ep = 0, fl, best = -1;
+  PetscInt       kw = -1, fw = -1;
 
   PetscFunctionBegin;
   PetscCheck(nw >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "KFFRFErrors: no frequencies (nw = %" PetscInt_FMT "); give at least one", nw);
@@ -110,16 +114,35 @@ PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const Pet
   for (PetscInt f = 0; f < nw; f++)
     for (PetscInt k = 0; k < m; k++) {
       const PetscReal dre = Tfre[f * m + k] - Trre[f * m + k], dim = Tfim[f * m + k] - Trim[f * m + k];
-      const PetscReal d = PetscSqrtReal(dre * dre + dim * dim), ref = MaxNaN(MaxNaN(Part(Tfre, Tfim, Tgre, Tgim, f * m + k), fl * scale[k]), 1e-300);
+      const PetscReal d = PetscSqrtReal(dre * dre + dim * dim), e = d / scale[k];
 
       dmax[k] = MaxNaN(dmax[k], d);
-      ep      = MaxNaN(ep, d / ref);
+      if (e > best) {
+        best = e;
+        kw   = k;
+        fw   = f;
+      }
+      if (pointwise) {
+        const PetscReal ref = MaxNaN(MaxNaN(Part(Tfre, Tfim, Tgre, Tgim, f * m + k), fl * scale[k]), 1e-300);
+
+        ep = MaxNaN(ep, d / ref);
+      }
     }
   for (PetscInt k = 0; k < m; k++) eh = MaxNaN(eh, dmax[k] / scale[k]);
   if (PetscIsNanReal(top)) eh = ep = (PetscReal)NAN;
   if (hinf) *hinf = eh;
   if (pointwise) *pointwise = ep;
+  if (pair) *pair = kw;
+  if (freq) *freq = fw;
+  if (pscale) *pscale = kw >= 0 ? scale[kw] : 1;
   PetscCall(PetscFree2(scale, dmax));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFFRFElasticErrors(PetscInt nw, PetscInt t, PetscInt a, const PetscReal Tfre[], const PetscReal Tfim[], const PetscReal Trre[], const PetscReal Trim[], const PetscReal Tgre[], const PetscReal Tgim[], PetscReal floor_db, PetscReal *hinf, PetscReal *pointwise)
+{
+  PetscFunctionBegin;
+  PetscCall(KFFRFElasticErrorsWorst_Private(nw, t, a, Tfre, Tfim, Trre, Trim, Tgre, Tgim, floor_db, hinf, pointwise, NULL, NULL, NULL));
   PetscFunctionReturn(0);
 }
 

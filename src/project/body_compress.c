@@ -103,7 +103,7 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
   PetscCall(KFDenseEigRigid(h, Kh, Mh, nrigid, Phir, lambda, Phi));
   {
     const PetscInt nf = h - nrigid;
-    PetscReal     *Pf = Phi + nrigid * h, *y, *yi;
+    PetscReal     *Pf = Phi + nrigid * h, *y, *yi, *glk, *dwk;
 
     KFAtB(h, nf, a, Pf, h, Gh, h, PG);      /* Phi_f^T G (nf x a) */
     KFAB(n, h, nf, N, n, Pf, h, NP, n);     /* N Phi_f (n x nf) */
@@ -119,12 +119,19 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
         if (!static_exact) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[go[g] + j * n], NULL, Gq[g]);
       }
     }
+    PetscCall(PetscMalloc2(nf + 1, &glk, nf + 1, &dwk));
+    for (PetscInt k = 0; k < nf; k++) { /* the parts of each mode's damping that do not depend on w, made once */
+      const PetscReal lk = lambda[nrigid + k], sk = PetscSqrtReal(PetscMax(lk, 0)), zk = KFDampingModalRatio(&m->damping, sk / (2 * PETSC_PI));
+
+      glk[k] = lk * m->damping.g;
+      dwk[k] = 2 * zk * sk + m->damping.alpha + m->damping.beta * lk;
+    }
     for (PetscInt f = 0; f < nw; f++) {
       PetscCall(PetscArrayzero(y, n * a));
       PetscCall(PetscArrayzero(yi, n * a));
       for (PetscInt k = 0; k < nf; k++) { /* 1 / (lambda (1 + i g) - w^2 + i w (2 zeta_k sqrt(lambda) + alpha + beta lambda)) */
-        const PetscReal lk = lambda[nrigid + k], sk = PetscSqrtReal(PetscMax(lk, 0)), zk = KFDampingModalRatio(&m->damping, sk / (2 * PETSC_PI));
-        const PetscReal re = lk - w[f] * w[f], im = lk * m->damping.g + w[f] * (2 * zk * sk + m->damping.alpha + m->damping.beta * lk), den = re * re + im * im;
+        const PetscReal lk = lambda[nrigid + k];
+        const PetscReal re = lk - w[f] * w[f], im = glk[k] + w[f] * dwk[k], den = re * re + im * im;
         for (PetscInt j = 0; j < a; j++) {
           const PetscReal c = PG[k + j * nf], cr = c * re / den, ci = -c * im / den;
           for (PetscInt i = 0; i < n; i++) {
@@ -138,6 +145,7 @@ static PetscErrorCode KFCompressSnapshots(KFReducedModel m, const PetscReal angl
         for (PetscInt j = 0; j < a; j++) KFGramAdd(v, inw ? inw[j] * inw[j] : 1, &y[go[g] + j * n], &yi[go[g] + j * n], Gq[g]);
       }
     }
+    PetscCall(PetscFree2(glk, dwk));
     PetscCall(PetscFree2(y, yi));
   }
   PetscCall(PetscFree4(lambda, Phi, PG, NP));

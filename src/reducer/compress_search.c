@@ -30,32 +30,114 @@ static PetscErrorCode KFCompressSize(KFReducedModel c, PetscInt *size)
    model already worse than the target is not measured further); c is destroyed */
 static PetscErrorCode KFCompressMeasure(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel *c, PetscInt *size, PetscReal *error)
 {
+  PetscInt  sysdofs;
+  PetscBool complete;
+
   PetscFunctionBegin;
   PetscCall(KFCompressSize(*c, size));
-  *error = 0;
-  for (PetscInt e = 0; e < neval && *error <= r->accuracy; e++) {
-    KFReducedSystem rs;
-    PetscReal       hinf;
-
-    PetscCall(KFReducedModelReassemble(*c, evals[e].angles, &rs));
-    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
-  }
+  PetscCall(KFReducerModelError_Private(r, *c, neval, evals, r->accuracy, error, &sysdofs, &complete));
   PetscCall(KFReducedModelDestroy(c));
   PetscCall(PetscInfo(r, "compression candidate: %" PetscInt_FMT " reduced dofs, error %g\n", *size, (double)*error));
   PetscFunctionReturn(0);
 }
 
-/* the size (reduced dofs summed) and error of model m compressed to counts, measured (KFCompressMeasure) */
-static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], const PetscInt counts[], PetscInt *size, PetscReal *error)
+/* The models of one ordering already measured, by the directions they keep: the bisection, the frontier and the
+   elimination come back to the same selections (the elimination's first sweep drops each body's last direction, as
+   the bisection did; the selection found is measured again), and one selection is one model, its columns in the
+   directions' order whichever way it was named. A flag per direction of every body, selection after selection. */
+typedef struct {
+  PetscInt   nflag, n, nalloc;
+  char      *flags, *cur;
+  PetscInt  *size;
+  PetscReal *error;
+} KFCompressMemo;
+
+static PetscErrorCode KFCompressMemoCreate(PetscInt nb, const KFBodyDirections d[], KFCompressMemo *memo)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscMemzero(memo, sizeof(*memo)));
+  for (PetscInt b = 0; b < nb; b++) memo->nflag += d[b].ndir;
+  PetscCall(PetscMalloc1(memo->nflag + 1, &memo->cur));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode KFCompressMemoDestroy(KFCompressMemo *memo)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscFree(memo->cur));
+  PetscCall(PetscFree3(memo->flags, memo->size, memo->error));
+  PetscFunctionReturn(0);
+}
+
+/* memo->cur: the flags of the selection of body b's first counts[b] directions (counts NULL: every one), or of its
+   directions sel[b][0 .. n[b]) (sel non-NULL) */
+static void KFCompressMemoSelect(KFCompressMemo *memo, PetscInt nb, const KFBodyDirections d[], const PetscInt counts[], PetscInt *const sel[], const PetscInt n[])
+{
+  char *f = memo->cur;
+
+  for (PetscInt b = 0; b < nb; b++) {
+    for (PetscInt i = 0; i < d[b].ndir; i++) f[i] = (char)(!sel && (!counts || i < counts[b]));
+    for (PetscInt i = 0; sel && i < n[b]; i++) f[sel[b][i]] = 1;
+    f += d[b].ndir;
+  }
+}
+
+/* the entry of memo->cur's selection, or -1 */
+static PetscInt KFCompressMemoFind(const KFCompressMemo *memo)
+{
+  for (PetscInt k = 0; k < memo->n; k++)
+    if (!memo->nflag || !memcmp(memo->flags + k * memo->nflag, memo->cur, (size_t)memo->nflag)) return k;
+  return -1;
+}
+
+static PetscErrorCode KFCompressMemoAdd(KFCompressMemo *memo, PetscInt size, PetscReal error)
+{
+  PetscFunctionBegin;
+  if (memo->n == memo->nalloc) {
+    char      *flags;
+    PetscInt  *sz;
+    PetscReal *er;
+
+    memo->nalloc = PetscMax(16, 2 * memo->nalloc);
+    PetscCall(PetscMalloc3(memo->nalloc * memo->nflag + 1, &flags, memo->nalloc, &sz, memo->nalloc, &er));
+    if (memo->n) {
+      PetscCall(PetscArraycpy(flags, memo->flags, memo->n * memo->nflag));
+      PetscCall(PetscArraycpy(sz, memo->size, memo->n));
+      PetscCall(PetscArraycpy(er, memo->error, memo->n));
+    }
+    PetscCall(PetscFree3(memo->flags, memo->size, memo->error));
+    memo->flags = flags;
+    memo->size  = sz;
+    memo->error = er;
+  }
+  PetscCall(PetscArraycpy(memo->flags + memo->n * memo->nflag, memo->cur, memo->nflag));
+  memo->size[memo->n]  = size;
+  memo->error[memo->n] = error;
+  memo->n++;
+  PetscFunctionReturn(0);
+}
+
+/* the size (reduced dofs summed) and error of model m compressed to counts, measured (KFCompressMeasure) unless memo
+   (may be NULL) has them */
+static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], const PetscInt counts[], KFCompressMemo *memo, PetscInt *size, PetscReal *error)
 {
   KFReducedModel c;
+  PetscInt       k = -1;
 
   PetscFunctionBegin;
   PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+  if (memo) {
+    KFCompressMemoSelect(memo, nb, d, counts, NULL, NULL);
+    k = KFCompressMemoFind(memo);
+  }
+  if (k >= 0) {
+    *size  = memo->size[k];
+    *error = memo->error[k];
+    PetscFunctionReturn(0);
+  }
   PetscCall(KFReducedModelCompress(m, d, counts, PETSC_FALSE, &c)); /* measured, then dropped: no maps */
   PetscCall(KFCompressMeasure(r, neval, evals, &c, size, error));
+  if (memo) PetscCall(KFCompressMemoAdd(memo, *size, *error));
   PetscFunctionReturn(0);
 }
 
@@ -167,7 +249,7 @@ static PetscErrorCode KFCompressSnapshotGrid(KFReducer r, const KFEvalPoint *p, 
 
 /* body by body, the fewest leading directions that still meet the target (bisection, the other bodies as found so
    far); counts: every direction on entry (a passing model), the counts found on return; *nevals += models measured */
-static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt nb, PetscInt counts[], PetscInt *nevals)
+static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt nb, PetscInt counts[], KFCompressMemo *memo, PetscInt *nevals)
 {
   PetscInt  size;
   PetscReal error;
@@ -180,7 +262,7 @@ static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint 
       const PetscInt mid = (lo + hi) / 2;
 
       counts[b] = mid;
-      PetscCall(KFCompressTry(r, neval, evals, m, d, counts, &size, &error));
+      PetscCall(KFCompressTry(r, neval, evals, m, nb, d, counts, memo, &size, &error));
       ++*nevals;
       if (error <= r->accuracy) hi = mid;
       else lo = mid;
@@ -194,7 +276,7 @@ static PetscErrorCode KFCompressBisect(KFReducer r, PetscInt neval, KFEvalPoint 
    no more (the error falls as directions are added), so from the bisection's pair (c0, c1) the fewest c1(i) for each
    i > c0 is found by walking c1 down: about d0 + d1 models, the smallest total wins (ties: the earlier). Body-by-body
    bisection favours the body it reduces first; this finds the best split of the directions between the two. */
-static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt counts[], PetscInt *nevals)
+static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, const KFBodyDirections d[], PetscInt counts[], KFCompressMemo *memo, PetscInt *nevals)
 {
   PetscInt  best[2] = {counts[0], counts[1]}, c[2] = {counts[0], counts[1]}, size;
   PetscReal error;
@@ -204,7 +286,7 @@ static PetscErrorCode KFCompressFrontier(KFReducer r, PetscInt neval, KFEvalPoin
     while (c[1] > 0) { /* c[1] passes with c[0] - 1 directions, so with c[0]: try one fewer */
       const PetscInt one[2] = {c[0], c[1] - 1};
 
-      PetscCall(KFCompressTry(r, neval, evals, m, d, one, &size, &error));
+      PetscCall(KFCompressTry(r, neval, evals, m, 2, d, one, memo, &size, &error));
       ++*nevals;
       if (error > r->accuracy) break;
       c[1]--;
@@ -243,15 +325,26 @@ static PetscErrorCode KFCompressSelect(PetscInt nb, const KFBodyDirections d[], 
   PetscFunctionReturn(0);
 }
 
-/* KFCompressTry for a selection of the directions */
-static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], PetscInt *size, PetscReal *error)
+/* KFCompressTry for a selection of the directions (sel[b] ascending: the directions' order, as memo takes it) */
+static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], KFCompressMemo *memo, PetscInt *size, PetscReal *error)
 {
   KFBodyDirections *ds;
+  PetscInt          k;
 
   PetscFunctionBegin;
+  KFCompressMemoSelect(memo, nb, d, NULL, sel, n);
+  k = KFCompressMemoFind(memo);
+  if (k >= 0) {
+    PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
+    *size  = memo->size[k];
+    *error = memo->error[k];
+    PetscFunctionReturn(0);
+  }
   PetscCall(KFCompressSelect(nb, d, sel, n, &ds));
-  PetscCall(KFCompressTry(r, neval, evals, m, ds, NULL, size, error));
+  PetscCall(KFCompressTry(r, neval, evals, m, nb, ds, NULL, NULL, size, error));
   PetscCall(KFBodyDirectionsDestroy(nb, &ds));
+  KFCompressMemoSelect(memo, nb, d, NULL, sel, n);
+  PetscCall(KFCompressMemoAdd(memo, *size, *error));
   PetscFunctionReturn(0);
 }
 
@@ -260,7 +353,7 @@ static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEval
    holds. The SVD orders each body's directions by its own share of the response, which is not the share of the
    error: a leading direction may be one the other body's directions already make up for. Ties within 1 % of the
    target go to the first found (body, then direction order), so that 1 and 2 ranks drop the same direction. */
-static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *sel[], PetscInt n[], PetscInt *nevals)
+static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *sel[], PetscInt n[], KFCompressMemo *memo, PetscInt *nevals)
 {
   PetscFunctionBegin;
   for (;;) {
@@ -273,7 +366,7 @@ static PetscErrorCode KFCompressEliminate(KFReducer r, PetscInt neval, KFEvalPoi
 
         for (PetscInt k = i; k + 1 < n[b]; k++) sel[b][k] = sel[b][k + 1]; /* without direction x */
         n[b]--;
-        PetscCall(KFCompressTrySelection(r, neval, evals, m, nb, d, sel, n, &size, &error));
+        PetscCall(KFCompressTrySelection(r, neval, evals, m, nb, d, sel, n, memo, &size, &error));
         ++*nevals;
         n[b]++;
         for (PetscInt k = n[b] - 1; k > i; k--) sel[b][k] = sel[b][k - 1];
@@ -327,27 +420,30 @@ static PetscErrorCode KFCompressDirections(KFReducer r, PetscInt neval, KFEvalPo
    (NULL when every direction together misses the target), its size and error; *nevals += models measured */
 static PetscErrorCode KFCompressSearch(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], KFBodyDirections **ds, PetscInt *size, PetscReal *error, PetscInt *nevals)
 {
-  PetscInt *counts, **sel;
+  PetscInt      *counts, **sel;
+  KFCompressMemo memo;
 
   PetscFunctionBegin;
   *ds = NULL;
+  PetscCall(KFCompressMemoCreate(nb, d, &memo));
   PetscCall(PetscMalloc1(nb, &counts));
   PetscCall(PetscCalloc1(nb, &sel));
   for (PetscInt b = 0; b < nb; b++) counts[b] = d[b].ndir;
-  PetscCall(KFCompressTry(r, neval, evals, m, d, counts, size, error));
+  PetscCall(KFCompressTry(r, neval, evals, m, nb, d, counts, &memo, size, error));
   ++*nevals;
   if (*error <= r->accuracy) {
-    PetscCall(KFCompressBisect(r, neval, evals, m, d, nb, counts, nevals));
-    if (nb == 2) PetscCall(KFCompressFrontier(r, neval, evals, m, d, counts, nevals));
+    PetscCall(KFCompressBisect(r, neval, evals, m, d, nb, counts, &memo, nevals));
+    if (nb == 2) PetscCall(KFCompressFrontier(r, neval, evals, m, d, counts, &memo, nevals));
     for (PetscInt b = 0; b < nb; b++) {
       PetscCall(PetscMalloc1(counts[b] + 1, &sel[b]));
       for (PetscInt i = 0; i < counts[b]; i++) sel[b][i] = i;
     }
-    PetscCall(KFCompressEliminate(r, neval, evals, m, nb, d, sel, counts, nevals));
+    PetscCall(KFCompressEliminate(r, neval, evals, m, nb, d, sel, counts, &memo, nevals));
     PetscCall(KFCompressSelect(nb, d, sel, counts, ds));
-    PetscCall(KFCompressTry(r, neval, evals, m, *ds, NULL, size, error));
+    PetscCall(KFCompressTrySelection(r, neval, evals, m, nb, d, sel, counts, &memo, size, error));
     ++*nevals;
   }
+  PetscCall(KFCompressMemoDestroy(&memo));
   for (PetscInt b = 0; b < nb; b++) PetscCall(PetscFree(sel[b]));
   PetscCall(PetscFree(sel));
   PetscCall(PetscFree(counts));

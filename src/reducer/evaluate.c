@@ -142,7 +142,7 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
   const PetscReal gr      = 0.5 * (PetscSqrtReal(5.0) - 1);
   const PetscBool elastic = (PetscBool)(p->Tgre != NULL);
   PetscInt        a, t, ta, worst = -1, fw = 0, n = 0, nnew = 0, *from;
-  PetscReal      *W, *fre, *fim, *gre = NULL, *gim = NULL, *re, *im, *nw_, *nre, *nim, *scale, best = -1;
+  PetscReal      *W, *fre, *fim, *gre = NULL, *gim = NULL, *re, *im, *nw_, *nre, *nim, scale = 1;
 
   PetscFunctionBegin;
   PetscCall(KFSceneGetInfo(r->scene, NULL, NULL, NULL, NULL, &a, &t));
@@ -152,7 +152,7 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
   if (elastic) PetscCall(PetscMalloc2(n * ta, &gre, n * ta, &gim));
   /* the reference (and its rigid part) at the new points only: the grid's are stored */
   for (PetscInt k = 0; k < n; k++) nnew += from[k] < 0;
-  PetscCall(PetscMalloc4(PetscMax(nnew, 1), &nw_, PetscMax(2 * nnew * ta, 1), &nre, PetscMax(2 * nnew * ta, 1), &nim, PetscMax(ta, 1), &scale));
+  PetscCall(PetscMalloc3(PetscMax(nnew, 1), &nw_, PetscMax(2 * nnew * ta, 1), &nre, PetscMax(2 * nnew * ta, 1), &nim));
   nnew = 0;
   for (PetscInt k = 0; k < n; k++)
     if (from[k] < 0) nw_[nnew++] = W[k];
@@ -172,19 +172,8 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
     if (i < 0) q++;
   }
   PetscCall(KFReducedSystemResponse(rs, n, W, re, im));
-  PetscCall(KFFRFElasticErrors(n, t, a, fre, fim, re, im, gre, gim, r->frf_floor_db, hinf, pointwise));
-  /* the pair and frequency that make hinf */
-  PetscCall(KFFRFPairScales(n, t, a, fre, fim, gre, gim, scale, NULL));
-  for (PetscInt f = 0; f < n; f++)
-    for (PetscInt k = 0; k < ta; k++) {
-      const PetscReal dre = fre[f * ta + k] - re[f * ta + k], dim = fim[f * ta + k] - im[f * ta + k], e = PetscSqrtReal(dre * dre + dim * dim) / scale[k];
-
-      if (e > best) {
-        best  = e;
-        worst = k;
-        fw    = f;
-      }
-    }
+  /* with the pair and frequency that make hinf */
+  PetscCall(KFFRFElasticErrorsWorst_Private(n, t, a, fre, fim, re, im, gre, gim, r->frf_floor_db, hinf, pointwise, &worst, &fw, &scale));
   /* golden-section search for the largest difference between the neighbours of the worst point */
   if (worst >= 0 && n > 2 && !PetscIsInfOrNanReal(*hinf)) {
     PetscReal lo = W[PetscMax(fw - 1, 0)], hi = W[PetscMin(fw + 1, n - 1)], x1, x2, e1, e2;
@@ -208,7 +197,7 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
         PetscCall(KFPairError(r, p, rs, worst, x2, &e2));
       }
     }
-    *hinf = PetscMax(*hinf, PetscMax(e1, e2) / scale[worst]);
+    *hinf = PetscMax(*hinf, PetscMax(e1, e2) / scale);
   }
   if (Trre) /* the reduced response on the point's own grid */
     for (PetscInt k = 0; k < n; k++)
@@ -216,10 +205,35 @@ PetscErrorCode KFEvalPointErrors_Private(KFReducer r, KFEvalPoint *p, KFReducedS
         PetscCall(PetscArraycpy(Trre + from[k] * ta, re + k * ta, ta));
         PetscCall(PetscArraycpy(Trim + from[k] * ta, im + k * ta, ta));
       }
-  PetscCall(PetscFree4(nw_, nre, nim, scale));
+  PetscCall(PetscFree3(nw_, nre, nim));
   PetscCall(PetscFree2(gre, gim));
   PetscCall(PetscFree4(fre, fim, re, im));
   PetscCall(PetscFree2(W, from));
+  PetscFunctionReturn(0);
+}
+
+PetscErrorCode KFReducerModelError_Private(KFReducer r, KFReducedModel model, PetscInt neval, KFEvalPoint evals[], PetscReal stop, PetscReal *error, PetscInt *sysdofs, PetscBool *complete)
+{
+  PetscFunctionBegin;
+  *error    = 0;
+  *sysdofs  = 0;
+  *complete = PETSC_TRUE;
+  for (PetscInt e = 0; e < neval; e++) {
+    KFReducedSystem rs;
+    PetscReal       hinf;
+    PetscInt        n;
+
+    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
+    PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
+    *sysdofs = PetscMax(*sysdofs, n);
+    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
+    PetscCall(KFReducedSystemDestroy(&rs));
+    *error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(*error, hinf);
+    if (stop > 0 && *error > stop) {
+      *complete = (PetscBool)(e == neval - 1);
+      break;
+    }
+  }
   PetscFunctionReturn(0);
 }
 
@@ -244,25 +258,7 @@ PetscErrorCode KFCandidateEvaluate_Private(KFReducer r, KFVisit visits[], PetscI
     PetscCall(KFReducedModelGetTies(model, &ms, NULL, NULL));
     cand->size -= ms;
   }
-  cand->error    = 0;
-  cand->sysdofs  = 0;
-  cand->complete = PETSC_TRUE;
-  for (PetscInt e = 0; e < neval; e++) {
-    KFReducedSystem rs;
-    PetscReal       hinf;
-    PetscInt        n;
-
-    PetscCall(KFReducedModelReassemble(model, evals[e].angles, &rs));
-    PetscCall(KFReducedSystemGetMatrices(rs, &n, NULL, NULL, NULL, NULL, NULL, NULL));
-    cand->sysdofs = PetscMax(cand->sysdofs, n);
-    PetscCall(KFEvalPointErrors_Private(r, &evals[e], rs, &hinf, NULL, NULL, NULL));
-    PetscCall(KFReducedSystemDestroy(&rs));
-    cand->error = PetscIsNanReal(hinf) ? PETSC_MAX_REAL : PetscMax(cand->error, hinf);
-    if (stop > 0 && cand->error > stop && e < neval - 1) {
-      cand->complete = PETSC_FALSE;
-      break;
-    }
-  }
+  PetscCall(KFReducerModelError_Private(r, model, neval, evals, stop, &cand->error, &cand->sysdofs, &cand->complete));
   PetscCall(KFReducedModelDestroy(&model));
   PetscFunctionReturn(0);
 }

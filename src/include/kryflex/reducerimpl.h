@@ -283,6 +283,10 @@ PETSC_INTERN PetscErrorCode KFSystemProjectDamping_Private(KFSystem, Mat X, Pets
    D [R C] = 0, R the bodies' rigid motions (src/reducer/ties.c), set on the model */
 PETSC_INTERN PetscErrorCode KFCandidateTies_Private(KFReducer, KFReducedModel, PetscInt k, PetscReal *const C[]);
 PETSC_INTERN PetscErrorCode KFCandidateEvaluate_Private(KFReducer, KFVisit[], PetscInt neval, KFEvalPoint[], PetscReal stop, KFCandidate *);
+/* a model's error over the points (the largest hinf; a NaN counts as the largest real), stopping after the first point
+   above stop (stop <= 0: every point; the error is then a lower bound), the largest reassembled system's dofs among
+   the points measured, and whether every point was measured */
+PETSC_INTERN PetscErrorCode KFReducerModelError_Private(KFReducer, KFReducedModel, PetscInt neval, KFEvalPoint[], PetscReal stop, PetscReal *error, PetscInt *sysdofs, PetscBool *complete);
 /* expansion points inside the band (src/reducer/shifts.c): after the search over moments, models with the Krylov blocks
    of points sigma = (2 pi f)^2 chosen greedily; visits of those points appended to *visits; the chosen family's
    candidate replaced when such a model is smaller */

@@ -1,7 +1,7 @@
 /* KFMatMultExtended (src/util/extended_product.c, internal: the test compiles that file in, with its own
    -ffp-contract=off, see CMakeLists.txt): A X for a stiff sparse A and soft X must be the exact product rounded once,
    where the plain double product loses most digits to cancellation; the vectorized kernels and the generic one must
-   give the same bits. Reference: each row's sum in __float128 (quadruple precision), computed here independently. */
+   give the same bits. KFMatMultBounded: the plain product's bits, each entry within its rounding bound. Reference: each row's sum in __float128 (quadruple precision), computed here independently. */
 #include "kftest.h"
 #include "../../src/util/extended_product.c"
 
@@ -145,6 +145,50 @@ int main(int argc, char **argv)
     PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
     PetscCall(MatDestroy(&Yp));
     PetscCall(CheckTrue("KFMatMultDense gives MatMatMult's bits (11 columns: chunks of 8 and 4)", same));
+  }
+  for (int w = 0; w < 2; w++) { /* KFMatMultBounded on 11 columns (chunks of 8 and 4), then on 2 */
+    const PetscInt     nb = w ? 2 : ncols;
+    Mat                Xb, Yp, Yb;
+    const PetscScalar *yp, *yb, *yd;
+    PetscInt           ldp, ldd;
+    PetscBool          same = PETSC_TRUE, holds = PETSC_TRUE;
+    PetscReal          tight = 0; /* the largest actual error over its bound: how much of the bound is used */
+
+    PetscCall(MatDenseGetSubMatrix(X, PETSC_DECIDE, PETSC_DECIDE, 0, nb, &Xb));
+    PetscCall(KFMatMultBounded(A, Xb, &Yp, &Yb));
+    PetscCall(MatDenseRestoreSubMatrix(X, &Xb));
+    PetscCall(MatDenseGetLDA(Yp, &ldp));
+    PetscCall(MatDenseGetLDA(Yd, &ldd));
+    PetscCall(MatDenseGetArrayRead(Yp, &yp));
+    PetscCall(MatDenseGetArrayRead(Yb, &yb));
+    PetscCall(MatDenseGetArrayRead(Yd, &yd));
+    for (PetscInt i = rstart; i < rend; i++) {
+      PetscInt           nz;
+      const PetscInt    *cols;
+      const PetscScalar *vals;
+      PetscCall(MatGetRow(A, i, &nz, &cols, &vals));
+      for (PetscInt j = 0; j < nb; j++) {
+        const PetscInt e = (i - rstart) + j * ldp;
+        quad           q = 0;
+
+        for (PetscInt k = 0; k < nz; k++) q += (quad)vals[k] * (quad)xall[cols[k] + j * n];
+        same  = (PetscBool)(same && yp[e] == yd[(i - rstart) + j * ldd]);
+        holds = (PetscBool)(holds && (PetscReal)PetscAbsReal((PetscReal)((quad)yp[e] - q)) <= yb[e]);
+        if (yb[e] > 0) tight = PetscMax(tight, (PetscReal)PetscAbsReal((PetscReal)((quad)yp[e] - q)) / yb[e]);
+      }
+      PetscCall(MatRestoreRow(A, i, &nz, &cols, &vals));
+    }
+    PetscCall(MatDenseRestoreArrayRead(Yp, &yp));
+    PetscCall(MatDenseRestoreArrayRead(Yb, &yb));
+    PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
+    PetscCall(MatDestroy(&Yp));
+    PetscCall(MatDestroy(&Yb));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &same, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &holds, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &tight, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %" PetscInt_FMT " columns: the plain product's error uses at most %.2g of its bound\n", nb, (double)tight));
+    PetscCall(CheckTrue("KFMatMultBounded: the plain product's bits (MatMatMult's)", same));
+    PetscCall(CheckTrue("KFMatMultBounded: every entry within its bound of the quadruple-precision sum", holds));
   }
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  cancellation |A||x| / |Ax| up to %.1e\n", (double)cancel));
   PetscCall(CheckTrue("the data cancel (|A||x| / |Ax| > 1e8): a test the plain product fails", (PetscBool)(cancel > 1e8)));

@@ -50,6 +50,8 @@ typedef struct {
   PetscReal   *spring_k;
   PetscBool    own_K;      /* K is the scene's copy with the springs added */
   PetscBool    exact_M, exact_K; /* found exactly symmetric at set-up (springs, on the diagonal, keep K so) */
+  PetscReal    mnorm;            /* ||M||_inf, kept for every configuration (KFBodyMassNorm) while M's state is mnorm_state */
+  PetscObjectState mnorm_state;  /* 0: not yet computed */
 } KFBodyData;
 
 typedef struct {

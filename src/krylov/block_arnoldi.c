@@ -197,21 +197,19 @@ static PetscErrorCode KFMBasisRestoreColumns(KFMBasis *mb, PetscScalar **v)
 }
 
 /* y = M x for p local columns x (nl x p, leading dimension nl): one sparse-times-dense product for the whole block
-   (several times faster per column than one MatMult per column) */
+   (several times faster per column than one MatMult per column), written in place into y (no product matrix of its
+   own to allocate, fault in and copy from at every append) */
 static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x, PetscScalar *y)
 {
-  Mat                X, Y;
-  PetscInt           N, ldy;
-  const PetscScalar *py;
+  Mat      X, Y;
+  PetscInt N;
+  MPI_Comm comm = PetscObjectComm((PetscObject)M);
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(M, &N, NULL));
-  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)M), nl, PETSC_DECIDE, N, p, x, &X));
-  PetscCall(KFMatMultDense(M, X, &Y));
-  PetscCall(MatDenseGetLDA(Y, &ldy));
-  PetscCall(MatDenseGetArrayRead(Y, &py));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&y[j * nl], &py[j * ldy], nl));
-  PetscCall(MatDenseRestoreArrayRead(Y, &py));
+  PetscCall(MatCreateDense(comm, nl, PETSC_DECIDE, N, p, x, &X));
+  PetscCall(MatCreateDense(comm, nl, PETSC_DECIDE, N, p, y, &Y));
+  PetscCall(KFMatMultDenseInto(M, X, Y));
   PetscCall(MatDestroy(&Y));
   PetscCall(MatDestroy(&X));
   PetscFunctionReturn(0);

@@ -86,34 +86,29 @@ static inline __attribute__((always_inline)) void KFBoundKernel(const int W, Pet
 
   for (PetscInt i = 0; i < m; i++) {
     double   s[KF_EXT_CHUNK] = {0}, o[KF_EXT_CHUNK] = {0}, sa[KF_EXT_CHUNK] = {0};
-    PetscInt n = ia[i + 1] - ia[i] + 2;
+    PetscInt n = 2;
 
-    for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
-      const double  ak = a[k];
-      const double *xk = xt + (size_t)ja[k] * W;
+    for (int blk = 0; blk < 2; blk++) { /* the diagonal block's sums in s, the off-process block's in o */
+      const PetscInt    *ir = blk ? ib : ia, *jr = blk ? jb : ja;
+      const PetscScalar *ar = blk ? b : a, *xr = blk ? xgt : xt;
+      double            *acc = blk ? o : s;
 
-      for (int j = 0; j < W; j++) {
-        const double p = ak * xk[j];
-
-        s[j] += p;
-        sa[j] += __builtin_fabs(p);
-      }
-    }
-    if (ib) {
-      for (PetscInt k = ib[i]; k < ib[i + 1]; k++) {
-        const double  bk = b[k];
-        const double *xk = xgt + (size_t)jb[k] * W;
+      if (!ir) continue;
+      n += ir[i + 1] - ir[i];
+      for (PetscInt k = ir[i]; k < ir[i + 1]; k++) {
+        const double  ak = ar[k];
+        const double *xk = xr + (size_t)jr[k] * W;
 
         for (int j = 0; j < W; j++) {
-          const double p = bk * xk[j];
+          const double p = ak * xk[j];
 
-          o[j] += p;
+          acc[j] += p;
           sa[j] += __builtin_fabs(p);
         }
       }
-      for (int j = 0; j < W; j++) s[j] += o[j];
-      n += ib[i + 1] - ib[i];
     }
+    if (ib)
+      for (int j = 0; j < W; j++) s[j] += o[j];
     {
       const double g = n * u / (1 - n * u), f = g * (1 + g);
 

@@ -50,6 +50,8 @@ typedef struct {
   PetscReal   *spring_k;
   PetscBool    own_K;      /* K is the scene's copy with the springs added */
   PetscBool    exact_M, exact_K; /* found exactly symmetric at set-up (springs, on the diagonal, keep K so) */
+  PetscReal    mnorm;            /* ||M||_inf, kept for every configuration (KFBodyMassNorm) while M's state is mnorm_state */
+  PetscObjectState mnorm_state;  /* 0: not yet computed */
 } KFBodyData;
 
 typedef struct {
@@ -183,6 +185,7 @@ PETSC_INTERN PetscErrorCode KFArraySkinnyMultAdd(PetscInt nl, PetscInt nc, const
 PETSC_INTERN PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y); /* Y = A X accumulated in double-double, rounded once */
 PETSC_INTERN PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y);    /* Y = A X in double: MatMatMult's bits, faster */
 PETSC_INTERN PetscErrorCode KFMatMultDenseInto(Mat A, Mat X, Mat Y); /* the same into the caller's dense Y */
+PETSC_INTERN PetscErrorCode KFMatMultBounded(Mat A, Mat X, Mat *Y, Mat *Yb); /* Y = A X in double, Yb bounds its rounding */
 /* KFSystemProject with V^T M V given (NULL: formed) (src/project/reduced_system.c) */
 PETSC_INTERN PetscErrorCode KFSystemProjectGram_Private(KFSystem, BV V, const PetscReal gram[], PetscReal Mr[], PetscReal Kr[], PetscReal Gr[], PetscReal Hr[]);
 PETSC_INTERN PetscErrorCode KFMOrthonormalize(Mat M, Mat X, const char what[]);

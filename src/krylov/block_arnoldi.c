@@ -29,6 +29,22 @@ typedef struct {
   PetscBool          mnorm_only; /* KFMBasisAppend's deflation on M-norms alone, without the null-space test */
 } KFRigidSpace;
 
+/* ||M_b||_inf of a body, computed once for all the configurations (a sweep of M_b per body per configuration was
+   half the set-up of each configuration's basis) and again only when M_b changed */
+static PetscErrorCode KFBodyMassNorm(KFBodyData *B, PetscReal *nb)
+{
+  PetscObjectState st;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectStateGet((PetscObject)B->M, &st));
+  if (!B->mnorm_state || st != B->mnorm_state) {
+    PetscCall(MatNorm(B->M, NORM_INFINITY, &B->mnorm));
+    B->mnorm_state = st ? st : 1;
+  }
+  *nb = B->mnorm;
+  PetscFunctionReturn(0);
+}
+
 /* The rigid modes of the system, M Phi (the system's own: no product here), their local arrays and, for the
    null-space test (null_test), each local system dof's body mass scale. The arrays are read while the basis is built;
    neither matrix changes meanwhile. */
@@ -58,15 +74,15 @@ static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, PetscBool null_test, KFRigi
     const PetscScalar *a;
     PetscReal          mnorm;
     PetscInt           nl;
+    PetscBool          unset = PETSC_FALSE, anyunset;
 
-    PetscCall(MatNorm(sys->Ms, NORM_INFINITY, &mnorm));
     PetscCall(MatCreateVecs(sys->Ms, &v, NULL));
-    PetscCall(VecSet(v, mnorm)); /* a dof no body with mass keeps (none expected): the whole system's scale */
+    PetscCall(VecSet(v, -1.0)); /* not yet a body's */
     for (PetscInt b = 0; b < s->nb; b++) {
       KFBodyData *B = &s->bodies[b];
-      PetscReal   nb;
+      PetscReal   nb = 0;
 
-      PetscCall(MatNorm(B->M, NORM_INFINITY, &nb));
+      PetscCall(KFBodyMassNorm(B, &nb));
       for (PetscInt i = 0; i < B->rend - B->rstart; i++)
         if (B->sysidx[i] >= 0 && nb > 0) PetscCall(VecSetValue(v, B->sysidx[i], nb, INSERT_VALUES));
     }
@@ -75,9 +91,18 @@ static PetscErrorCode KFRigidSpaceOpen(KFSystem sys, PetscBool null_test, KFRigi
     PetscCall(VecGetLocalSize(v, &nl));
     PetscCall(PetscMalloc1(nl + 1, &rs->mscale));
     PetscCall(VecGetArrayRead(v, &a));
-    for (PetscInt i = 0; i < nl; i++) rs->mscale[i] = PetscRealPart(a[i]);
+    for (PetscInt i = 0; i < nl; i++) {
+      rs->mscale[i] = PetscRealPart(a[i]);
+      unset         = (PetscBool)(unset || rs->mscale[i] < 0);
+    }
     PetscCall(VecRestoreArrayRead(v, &a));
     PetscCall(VecDestroy(&v));
+    PetscCall(MPIU_Allreduce(&unset, &anyunset, 1, MPIU_BOOL, MPI_LOR, s->comm));
+    if (anyunset) { /* a dof no body with mass keeps (none expected): the whole system's scale */
+      PetscCall(MatNorm(sys->Ms, NORM_INFINITY, &mnorm));
+      for (PetscInt i = 0; i < nl; i++)
+        if (rs->mscale[i] < 0) rs->mscale[i] = mnorm;
+    }
   }
   PetscFunctionReturn(0);
 }
@@ -172,21 +197,19 @@ static PetscErrorCode KFMBasisRestoreColumns(KFMBasis *mb, PetscScalar **v)
 }
 
 /* y = M x for p local columns x (nl x p, leading dimension nl): one sparse-times-dense product for the whole block
-   (several times faster per column than one MatMult per column) */
+   (several times faster per column than one MatMult per column), written in place into y (no product matrix of its
+   own to allocate, fault in and copy from at every append) */
 static PetscErrorCode KFMProduct(Mat M, PetscInt nl, PetscInt p, PetscScalar *x, PetscScalar *y)
 {
-  Mat                X, Y;
-  PetscInt           N, ldy;
-  const PetscScalar *py;
+  Mat      X, Y;
+  PetscInt N;
+  MPI_Comm comm = PetscObjectComm((PetscObject)M);
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(M, &N, NULL));
-  PetscCall(MatCreateDense(PetscObjectComm((PetscObject)M), nl, PETSC_DECIDE, N, p, x, &X));
-  PetscCall(KFMatMultDense(M, X, &Y));
-  PetscCall(MatDenseGetLDA(Y, &ldy));
-  PetscCall(MatDenseGetArrayRead(Y, &py));
-  for (PetscInt j = 0; j < p; j++) PetscCall(PetscArraycpy(&y[j * nl], &py[j * ldy], nl));
-  PetscCall(MatDenseRestoreArrayRead(Y, &py));
+  PetscCall(MatCreateDense(comm, nl, PETSC_DECIDE, N, p, x, &X));
+  PetscCall(MatCreateDense(comm, nl, PETSC_DECIDE, N, p, y, &Y));
+  PetscCall(KFMatMultDenseInto(M, X, Y));
   PetscCall(MatDestroy(&Y));
   PetscCall(MatDestroy(&X));
   PetscFunctionReturn(0);

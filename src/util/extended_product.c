@@ -75,11 +75,57 @@ static inline __attribute__((always_inline)) void KFPlainKernel(const int W, Pet
   }
 }
 
+/* The plain sweep with, beside each sum, a bound on its rounding: a row's recursive sum of n rounded products is
+   within gamma_n sum |a_k x_k| of the exact one (gamma_n = n u / (1 - n u), u the unit roundoff; Higham, Accuracy and
+   Stability, 3.1), and the computed sum of the magnitudes is within a factor 1 + gamma_n of theirs. The sums are the
+   plain kernel's (the same bits); yb[i + j ldy] receives gamma (1 + gamma) times the magnitudes' sum, with n the row's
+   entries in both blocks and 2 for the products' rounding and the blocks' addition. */
+static inline __attribute__((always_inline)) void KFBoundKernel(const int W, PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy, PetscScalar *yb)
+{
+  const double u = 0.5 * PETSC_MACHINE_EPSILON;
+
+  for (PetscInt i = 0; i < m; i++) {
+    double   s[KF_EXT_CHUNK] = {0}, o[KF_EXT_CHUNK] = {0}, sa[KF_EXT_CHUNK] = {0};
+    PetscInt n = 2;
+
+    for (int blk = 0; blk < 2; blk++) { /* the diagonal block's sums in s, the off-process block's in o */
+      const PetscInt    *ir = blk ? ib : ia, *jr = blk ? jb : ja;
+      const PetscScalar *ar = blk ? b : a, *xr = blk ? xgt : xt;
+      double            *acc = blk ? o : s;
+
+      if (!ir) continue;
+      n += ir[i + 1] - ir[i];
+      for (PetscInt k = ir[i]; k < ir[i + 1]; k++) {
+        const double  ak = ar[k];
+        const double *xk = xr + (size_t)jr[k] * W;
+
+        for (int j = 0; j < W; j++) {
+          const double p = ak * xk[j];
+
+          acc[j] += p;
+          sa[j] += __builtin_fabs(p);
+        }
+      }
+    }
+    if (ib)
+      for (int j = 0; j < W; j++) s[j] += o[j];
+    {
+      const double g = n * u / (1 - n * u), f = g * (1 + g);
+
+      for (PetscInt j = 0; j < nj; j++) {
+        y[i + j * ldy]  = s[j];
+        yb[i + j * ldy] = f * sa[j];
+      }
+    }
+  }
+}
+
 /* One function per instruction set, kernel and width (the width a constant in each: one function holding every
    variant was not vectorized as well, 2.5x slower), and a table per instruction set: [plain, extended][8, 4, 2, 1]. */
 #define KF_KERNEL_ARGS PetscInt m, const PetscInt *ia, const PetscInt *ja, const PetscScalar *a, const PetscScalar *xt, const PetscInt *ib, const PetscInt *jb, const PetscScalar *b, const PetscScalar *xgt, PetscInt nj, PetscScalar *y, PetscInt ldy
 #define KF_KERNEL_PASS m, ia, ja, a, xt, ib, jb, b, xgt, nj, y, ldy
 typedef void (*KFKernelFn)(KF_KERNEL_ARGS);
+typedef void (*KFBoundFn)(KF_KERNEL_ARGS, PetscScalar *yb);
 #define KF_DEFINE_KERNELS(ATTR, SFX) \
   ATTR static void KFPlain8##SFX(KF_KERNEL_ARGS) { KFPlainKernel(8, KF_KERNEL_PASS); } \
   ATTR static void KFPlain4##SFX(KF_KERNEL_ARGS) { KFPlainKernel(4, KF_KERNEL_PASS); } \
@@ -92,7 +138,12 @@ typedef void (*KFKernelFn)(KF_KERNEL_ARGS);
   static const KFKernelFn KFKernels##SFX[2][4] = { \
     {KFPlain8##SFX, KFPlain4##SFX, KFPlain2##SFX, KFPlain1##SFX}, \
     {KFExt8##SFX,   KFExt4##SFX,   KFExt2##SFX,   KFExt1##SFX  } \
-  };
+  }; \
+  ATTR static void KFBound8##SFX(KF_KERNEL_ARGS, PetscScalar *yb) { KFBoundKernel(8, KF_KERNEL_PASS, yb); } \
+  ATTR static void KFBound4##SFX(KF_KERNEL_ARGS, PetscScalar *yb) { KFBoundKernel(4, KF_KERNEL_PASS, yb); } \
+  ATTR static void KFBound2##SFX(KF_KERNEL_ARGS, PetscScalar *yb) { KFBoundKernel(2, KF_KERNEL_PASS, yb); } \
+  ATTR static void KFBound1##SFX(KF_KERNEL_ARGS, PetscScalar *yb) { KFBoundKernel(1, KF_KERNEL_PASS, yb); } \
+  static const KFBoundFn KFBounds##SFX[4] = {KFBound8##SFX, KFBound4##SFX, KFBound2##SFX, KFBound1##SFX};
 
 #if defined(__GNUC__) && defined(__x86_64__)
   #define KF_EXT_DISPATCH 1
@@ -101,14 +152,21 @@ KF_DEFINE_KERNELS(__attribute__((target("avx2,fma"))), AVX2)
 #endif
 KF_DEFINE_KERNELS(, Generic)
 
-/* the kernels this CPU runs: AVX-512, else AVX2 (both with FMA), else the generic ones */
-static const KFKernelFn (*KFKernelTable(void))[4]
+/* the kernels this CPU runs: AVX-512, else AVX2 (both with FMA), else the generic ones; bounds: the bound kernels */
+static const KFKernelFn (*KFKernelTable(const KFBoundFn **bounds))[4]
 {
 #if defined(KF_EXT_DISPATCH)
   __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) return KFKernelsAVX512;
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return KFKernelsAVX2;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("fma")) {
+    *bounds = KFBoundsAVX512;
+    return KFKernelsAVX512;
+  }
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    *bounds = KFBoundsAVX2;
+    return KFKernelsAVX2;
+  }
 #endif
+  *bounds = KFBoundsGeneric;
   return KFKernelsGeneric;
 }
 
@@ -126,14 +184,16 @@ static void KFExtTransposeChunk(PetscInt nr, const PetscScalar *x, PetscInt ldx,
     for (PetscInt j = 0; j < W; j++) xt[r * W + j] = j < nj ? x[r + (j0 + j) * ldx] : 0.0;
 }
 
-static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy)
+/* yb not NULL: the plain sums and their rounding bounds (KFBoundKernel), ext ignored */
+static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, const PetscScalar *x, PetscInt ldx, const PetscScalar *xg, PetscInt ldg, Mat B, PetscScalar *y, PetscInt ldy, PetscScalar *yb)
 {
   const PetscInt    *ia, *ja, *ib = NULL, *jb = NULL;
   const PetscScalar *a, *b = NULL;
   PetscScalar       *xt, *xgt;
   PetscInt           m, mb, nc, ng = 0;
   PetscBool          done;
-  const KFKernelFn(*kernels)[4] = KFKernelTable();
+  const KFBoundFn *bounds;
+  const KFKernelFn(*kernels)[4] = KFKernelTable(&bounds);
 
   PetscFunctionBegin;
   PetscCall(MatGetSize(A, NULL, &nc));
@@ -155,7 +215,8 @@ static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, 
 
     KFExtTransposeChunk(nc, x, ldx, j0, nj, W, xt);
     if (B) KFExtTransposeChunk(ng, xg, ldg, j0, nj, W, xgt);
-    kernels[ext ? 1 : 0][slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
+    if (yb) bounds[slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy, yb + j0 * ldy);
+    else kernels[ext ? 1 : 0][slot](m, ia, ja, a, xt, ib, jb, b, xgt, nj, y + j0 * ldy, ldy);
   }
   PetscCall(PetscFree2(xt, xgt));
   PetscCall(MatSeqAIJRestoreArrayRead(A, &a));
@@ -168,13 +229,13 @@ static PetscErrorCode KFSeqAIJMultChunked(PetscBool ext, Mat A, PetscInt ncols, 
 }
 
 /* Y = A X by the chunked sweeps above, extended (double-double) or plain; *Y NULL: made here, else a dense matrix of
-   A's rows and X's columns that is overwritten */
-static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
+   A's rows and X's columns that is overwritten. Yb not NULL: Y plain and *Yb (made here) the bounds of its rounding */
+static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y, Mat *Yb)
 {
   PetscBool          mpi;
   PetscInt           nl, N, ncols, ldx, ldy;
   const PetscScalar *x;
-  PetscScalar       *y;
+  PetscScalar       *y, *yb = NULL;
   MPI_Comm           comm;
 
   PetscFunctionBegin;
@@ -195,7 +256,15 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
   PetscCall(MatDenseGetLDA(*Y, &ldy));
   PetscCall(MatDenseGetArrayRead(X, &x));
   PetscCall(MatDenseGetArrayWrite(*Y, &y));
-  if (!mpi) PetscCall(KFSeqAIJMultChunked(ext, A, ncols, x, ldx, NULL, 0, NULL, y, ldy));
+  if (Yb) {
+    PetscInt ldb;
+
+    PetscCall(KFDenseCreateUninitialized(comm, nl, N, ncols, Yb));
+    PetscCall(MatDenseGetLDA(*Yb, &ldb));
+    PetscCheck(ldb == ldy, comm, PETSC_ERR_ARG_SIZ, "the product's bounds need its leading dimension (%" PetscInt_FMT ", not %" PetscInt_FMT ")", ldy, ldb);
+    PetscCall(MatDenseGetArrayWrite(*Yb, &yb));
+  }
+  if (!mpi) PetscCall(KFSeqAIJMultChunked(ext, A, ncols, x, ldx, NULL, 0, NULL, y, ldy, yb));
   else {
     /* the diagonal block reads local rows of X, the off-process block reads the ghost rows listed in colmap */
     Mat             Ad, Ao;
@@ -225,13 +294,18 @@ static PetscErrorCode KFMatMultChunked(PetscBool ext, Mat A, Mat X, Mat *Y)
     PetscCall(VecDestroy(&gcol));
     PetscCall(ISDestroy(&from));
     PetscCall(MatDenseGetArrayRead(X, &x));
-    PetscCall(KFSeqAIJMultChunked(ext, Ad, ncols, x, ldx, xg, ng, Ao, y, ldy));
+    PetscCall(KFSeqAIJMultChunked(ext, Ad, ncols, x, ldx, xg, ng, Ao, y, ldy, yb));
     PetscCall(PetscFree(xg));
   }
   PetscCall(MatDenseRestoreArrayRead(X, &x));
   PetscCall(MatDenseRestoreArrayWrite(*Y, &y));
   PetscCall(MatAssemblyBegin(*Y, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*Y, MAT_FINAL_ASSEMBLY));
+  if (Yb) {
+    PetscCall(MatDenseRestoreArrayWrite(*Yb, &yb));
+    PetscCall(MatAssemblyBegin(*Yb, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(*Yb, MAT_FINAL_ASSEMBLY));
+  }
   PetscFunctionReturn(0);
 }
 
@@ -239,7 +313,7 @@ PetscErrorCode KFMatMultExtended(Mat A, Mat X, Mat *Y)
 {
   PetscFunctionBegin;
   *Y = NULL;
-  PetscCall(KFMatMultChunked(PETSC_TRUE, A, X, Y));
+  PetscCall(KFMatMultChunked(PETSC_TRUE, A, X, Y, NULL));
   PetscFunctionReturn(0);
 }
 
@@ -253,7 +327,7 @@ PetscErrorCode KFMatMultDense(Mat A, Mat X, Mat *Y)
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompareAny((PetscObject)A, &aij, MATSEQAIJ, MATMPIAIJ, ""));
   *Y = NULL;
-  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y));
+  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y, NULL));
   else PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Y));
   PetscFunctionReturn(0);
 }
@@ -265,7 +339,7 @@ PetscErrorCode KFMatMultDenseInto(Mat A, Mat X, Mat Y)
 
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompareAny((PetscObject)A, &aij, MATSEQAIJ, MATMPIAIJ, ""));
-  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, &Y));
+  if (aij) PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, &Y, NULL));
   else {
     Mat T;
 
@@ -273,5 +347,16 @@ PetscErrorCode KFMatMultDenseInto(Mat A, Mat X, Mat Y)
     PetscCall(MatCopy(T, Y, SAME_NONZERO_PATTERN));
     PetscCall(MatDestroy(&T));
   }
+  PetscFunctionReturn(0);
+}
+
+/* Y = A X in double (KFMatMultDense's bits) and Yb, entry by entry, a bound on Y's rounding error (KFBoundKernel), in
+   one sweep of AIJ A: what decides whether the double product is accurate enough for its use (the first residual of
+   a block solve, src/solve/flex_solver.c) before a double-double one is paid for */
+PetscErrorCode KFMatMultBounded(Mat A, Mat X, Mat *Y, Mat *Yb)
+{
+  PetscFunctionBegin;
+  *Y = *Yb = NULL;
+  PetscCall(KFMatMultChunked(PETSC_FALSE, A, X, Y, Yb));
   PetscFunctionReturn(0);
 }

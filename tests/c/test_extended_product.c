@@ -1,7 +1,7 @@
 /* KFMatMultExtended (src/util/extended_product.c, internal: the test compiles that file in, with its own
    -ffp-contract=off, see CMakeLists.txt): A X for a stiff sparse A and soft X must be the exact product rounded once,
    where the plain double product loses most digits to cancellation; the vectorized kernels and the generic one must
-   give the same bits. Reference: each row's sum in __float128 (quadruple precision), computed here independently. */
+   give the same bits. KFMatMultBounded: the plain product's bits, each entry within its rounding bound. Reference: each row's sum in __float128 (quadruple precision), computed here independently. */
 #include "kftest.h"
 #include "../../src/util/extended_product.c"
 
@@ -43,6 +43,7 @@ int main(int argc, char **argv)
   Mat            A, X, Y, Yd;
   PetscInt       rstart, rend;
   PetscReal     *xall, errx = 0, errd = 0, cancel = 0;
+  quad          *qref; /* each entry of A X in quadruple precision (this rank's rows) */
   PetscRandom    rnd;
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
@@ -95,6 +96,7 @@ int main(int argc, char **argv)
   }
   PetscCall(KFMatMultExtended(A, X, &Y));
   PetscCall(MatMatMult(A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &Yd));
+  PetscCall(PetscMalloc1((rend - rstart) * ncols + 1, &qref));
   { /* per entry: |y - y_quad| / |y_quad| for the extended and the plain product, and the cancellation |A||x| / |Ax| */
     const PetscScalar *y, *yd;
     PetscInt           ldy, ldd;
@@ -114,6 +116,7 @@ int main(int argc, char **argv)
           s += (quad)vals[k] * (quad)xall[cols[k] + j * n];
           sabs += PetscAbsReal(vals[k] * xall[cols[k] + j * n]);
         }
+        qref[(i - rstart) + j * (rend - rstart)] = s; /* the reference of the bounded product below */
         yq = (PetscReal)s;
         if (yq == 0) continue;
         errx   = PetscMax(errx, PetscAbsReal(y[(i - rstart) + j * ldy] - yq) / PetscAbsReal(yq));
@@ -145,6 +148,43 @@ int main(int argc, char **argv)
     PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
     PetscCall(MatDestroy(&Yp));
     PetscCall(CheckTrue("KFMatMultDense gives MatMatMult's bits (11 columns: chunks of 8 and 4)", same));
+  }
+  for (int w = 0; w < 2; w++) { /* KFMatMultBounded on 11 columns (chunks of 8 and 4), then on 2 */
+    const PetscInt     nb = w ? 2 : ncols;
+    Mat                Xb, Yp, Yb;
+    const PetscScalar *yp, *yb, *yd;
+    PetscInt           ldp, ldd;
+    PetscBool          same = PETSC_TRUE, holds = PETSC_TRUE;
+    PetscReal          tight = 0; /* the largest actual error over its bound: how much of the bound is used */
+
+    PetscCall(MatDenseGetSubMatrix(X, PETSC_DECIDE, PETSC_DECIDE, 0, nb, &Xb));
+    PetscCall(KFMatMultBounded(A, Xb, &Yp, &Yb));
+    PetscCall(MatDenseRestoreSubMatrix(X, &Xb));
+    PetscCall(MatDenseGetLDA(Yp, &ldp));
+    PetscCall(MatDenseGetLDA(Yd, &ldd));
+    PetscCall(MatDenseGetArrayRead(Yp, &yp));
+    PetscCall(MatDenseGetArrayRead(Yb, &yb));
+    PetscCall(MatDenseGetArrayRead(Yd, &yd));
+    for (PetscInt i = rstart; i < rend; i++)
+      for (PetscInt j = 0; j < nb; j++) {
+        const PetscInt e = (i - rstart) + j * ldp;
+        const quad     q = qref[(i - rstart) + j * (rend - rstart)];
+
+        same  = (PetscBool)(same && yp[e] == yd[(i - rstart) + j * ldd]);
+        holds = (PetscBool)(holds && (PetscReal)PetscAbsReal((PetscReal)((quad)yp[e] - q)) <= yb[e]);
+        if (yb[e] > 0) tight = PetscMax(tight, (PetscReal)PetscAbsReal((PetscReal)((quad)yp[e] - q)) / yb[e]);
+      }
+    PetscCall(MatDenseRestoreArrayRead(Yp, &yp));
+    PetscCall(MatDenseRestoreArrayRead(Yb, &yb));
+    PetscCall(MatDenseRestoreArrayRead(Yd, &yd));
+    PetscCall(MatDestroy(&Yp));
+    PetscCall(MatDestroy(&Yb));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &same, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &holds, 1, MPIU_BOOL, MPI_LAND, PETSC_COMM_WORLD));
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &tight, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  %" PetscInt_FMT " columns: the plain product's error uses at most %.2g of its bound\n", nb, (double)tight));
+    PetscCall(CheckTrue("KFMatMultBounded: the plain product's bits (MatMatMult's)", same));
+    PetscCall(CheckTrue("KFMatMultBounded: every entry within its bound of the quadruple-precision sum", holds));
   }
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "  cancellation |A||x| / |Ax| up to %.1e\n", (double)cancel));
   PetscCall(CheckTrue("the data cancel (|A||x| / |Ax| > 1e8): a test the plain product fails", (PetscBool)(cancel > 1e8)));
@@ -209,6 +249,7 @@ int main(int argc, char **argv)
   PetscCall(MatDestroy(&Y));
   PetscCall(MatDestroy(&Yd));
   PetscCall(PetscFree(xall));
+  PetscCall(PetscFree(qref));
   PetscCall(PetscPrintf(PETSC_COMM_WORLD, "%s\n", nfail ? "FAILED" : "all checks passed"));
   PetscCall(PetscFinalize());
   return nfail ? 1 : 0;

@@ -33,6 +33,7 @@ struct _p_KFFlexSolver {
   PetscBool setfromoptionscalled, setup;
   const char *handoff;       /* set by an implementation's setup that does not apply: the type to set up instead */
   KFFlexSolverPerf perf;     /* what the factorization and the solves cost (KFFlexSolverGetPerf) */
+  PetscInt  residual_decided, residual_undecided; /* first residuals the double product decided, and did not */
 };
 
 PETSC_EXTERN PetscClassId      KF_FLEXSOLVER_CLASSID; /* src/util/package.c */

@@ -142,10 +142,13 @@ def _node_file_rows(path):
     text = text.replace("\r\n", "\n")
     if _OTHER_BREAKS.search(text):
         return None
+    # a comment runs from the first '#' or '%' to the line's end: as '#' both, the C reader's one comment character
+    # (given two, NumPy strips them line by line in Python)
+    text = text.replace("%", "#")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")      # an empty file's warning: no rows, said by the reader below
-            cols = np.loadtxt(io.StringIO(text), dtype=_NODE_COLUMNS, comments=("#", "%"), ndmin=1)
+            cols = np.loadtxt(io.StringIO(text), dtype=_NODE_COLUMNS, comments="#", ndmin=1)
     except (ValueError, TypeError, UserWarning):
         return None
     A = np.empty((cols.shape[0], 5))

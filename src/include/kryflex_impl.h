@@ -112,6 +112,7 @@ struct _n_KFSystem {
   Mat        Ms, Ks, G, Ht;
   Mat        Phi;            /* rigid modes, e x r, M-orthonormal */
   Mat        MPhi;           /* Ms Phi, made by the first projection, destroyed with Phi */
+  Mat        KPhi;           /* Ks Phi, as the rigid residual formed it (KFSystemGetRigidProducts), destroyed with Phi */
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;

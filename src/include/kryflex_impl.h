@@ -74,6 +74,7 @@ struct _KFSceneOps {
 };
 PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
 PETSC_INTERN PetscErrorCode KFMatCheckSymmetricExact(Mat, const char[], PetscReal, PetscBool *); /* src/body/load.c */
+PETSC_INTERN PetscErrorCode KFMatCheckSymmetricPairExact(Mat M, Mat K, const char[], const char[], PetscReal, PetscBool *, PetscBool *);
 PETSC_INTERN PetscErrorCode KFGetStartTime(PetscLogDouble *); /* src/util/package.c: when KFInitialize first ran */
 
 struct _n_KFScene {

@@ -78,6 +78,7 @@ cdef extern from "kryflex.h" nogil:
     PetscErrorCode KFSystemComputeRigidModes(KFSystem)
     PetscErrorCode KFSystemSetRigidModes(KFSystem, PetscMat)
     PetscErrorCode KFSystemGetRigidModes(KFSystem, PetscMat*, PetscReal*)
+    PetscErrorCode KFSystemGetRigidProducts(KFSystem, PetscMat*, PetscMat*)
     PetscErrorCode KFSystemRigidIO(KFSystem, PetscInt*, PetscReal*, PetscReal*)
     PetscErrorCode KFSystemEigen(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscReal*, PetscReal*)
     PetscErrorCode KFSystemEigenModes(KFSystem, PetscInt, PetscInt*, PetscReal*, PetscMat*)

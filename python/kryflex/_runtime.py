@@ -114,6 +114,28 @@ def _keep_python_signals():
 
 
 @contextlib.contextmanager
+def collector_paused():
+    """Python's cyclic collector held off for the duration of the block (as it was after it): for blocks that only
+    build new containers, which cannot be garbage yet. Each full collection walks every container alive; one fell
+    inside the 57k-dof summary's FRF blocks (44,000 new lists), 0.025 s of CPU."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def start_up_objects_kept():
+    """The objects made so far (the modules, classes and functions a command imported, which live to its end) taken
+    out of the cyclic collector's passes (gc.freeze): every later collection, the one at exit among them, then walks
+    only what the command itself makes. Called by the kryflex command after its start-up, before any PETSc or kryflex
+    object of the run exists (a frozen cycle is never collected)."""
+    gc.freeze()
+
+
+@contextlib.contextmanager
 def quiet_progress(quiet):
     """-kf_quiet set for the duration of the block when quiet is true (the C progress lines read it at each line)."""
     from petsc4py import PETSc

@@ -18,6 +18,7 @@ Versions: 1, summaries without a ``summary_version`` key (before the typed summa
 plus ``summary_version``. from_json reads both; to_json writes version 2.
 """
 import dataclasses
+import itertools
 import json
 import warnings
 from dataclasses import dataclass, field
@@ -35,19 +36,24 @@ _SCALARS = frozenset((str, int, float, bool, type(None)))
 
 
 def _json_leaf(value):
-    """Whether a value holds no object: written on one line. Each list's element types are collected in one pass of C
-    (set(map(type, ...))), and only its lists and tuples looked into: a summary's FRF blocks (449 x 3 x 2 numbers per
-    configuration) were a Python call per number."""
+    """Whether a value holds no object: written on one line. The lists are looked into a level at a time, all of one
+    level's elements together: their types collected in one pass of C (set(map(type, ...))), and only the lists and
+    tuples among them taken to the next level (a summary's FRF blocks, 449 x 3 x 2 numbers per configuration, were a
+    Python call per number, then one per inner list)."""
     if isinstance(value, dict):
         return False
     if not isinstance(value, (list, tuple)):
         return True
-    types = set(map(type, value))
-    if types <= _SCALARS:
-        return True
-    if dict in types:
-        return False
-    return all(_json_leaf(v) for v in value if not type(v) in _SCALARS)
+    level = [value]
+    while level:
+        items = list(itertools.chain.from_iterable(level))
+        types = set(map(type, items))
+        if types <= _SCALARS:
+            return True
+        if any(issubclass(t, dict) for t in types):
+            return False
+        level = [v for v in items if isinstance(v, (list, tuple))]
+    return True
 
 
 def _json_text(value, level=0):

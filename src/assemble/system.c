@@ -39,6 +39,7 @@ PetscErrorCode KFSystemDestroy(KFSystem *sys)
   PetscCall(MatDestroy(&y->Ht));
   PetscCall(MatDestroy(&y->Phi));
   PetscCall(MatDestroy(&y->MPhi));
+  PetscCall(MatDestroy(&y->KPhi));
   PetscCall(KFBodyFactorsDestroy(&y->bodyf));
   for (int m = 0; m < 2; m++) PetscCall(PetscFree3(y->sumvar[m], y->sumbodyid[m], y->sumbodystate[m]));
   PetscCall(KFSceneDestroy(&y->scene)); /* drops the system's reference */
@@ -103,6 +104,7 @@ PetscErrorCode KFSystemSetAngles(KFSystem y, const PetscReal angles[])
   y->assembled = PETSC_TRUE;
   PetscCall(MatDestroy(&y->Phi)); /* rigid modes depend on the angles: set or compute them again */
   PetscCall(MatDestroy(&y->MPhi));
+  PetscCall(MatDestroy(&y->KPhi));
   y->user_rigid = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(KF_EVENT_ASSEMBLE, 0, 0, 0, 0));
   PetscFunctionReturn(0);
@@ -123,6 +125,7 @@ PETSC_INTERN PetscErrorCode KFSystemSetInterfaceAngles(KFSystem y, const PetscRe
   y->assembled = PETSC_FALSE;
   PetscCall(MatDestroy(&y->Phi));
   PetscCall(MatDestroy(&y->MPhi));
+  PetscCall(MatDestroy(&y->KPhi));
   y->user_rigid = PETSC_FALSE;
   PetscFunctionReturn(0);
 }

@@ -506,7 +506,7 @@ static PetscErrorCode KFReadBinaryInts(int fd, PetscInt buf[], PetscInt n, Petsc
   PetscFunctionReturn(0);
 }
 
-/* the integers of a file one after another, read in chunks */
+/* the integers of a file one after another, read in chunks (fd < 0: the n integers of buf, already in memory) */
 typedef struct {
   int       fd;
   PetscInt *buf, n, pos;
@@ -515,7 +515,7 @@ typedef struct {
 static PetscErrorCode KFIntStreamNext(KFIntStream *st, PetscInt *value, PetscBool *ok)
 {
   PetscFunctionBegin;
-  if (st->pos == st->n) {
+  if (st->pos == st->n && st->fd >= 0) {
     PetscCall(KFReadBinaryInts(st->fd, st->buf, 1 << 16, &st->n));
     st->pos = 0;
   }
@@ -524,10 +524,23 @@ static PetscErrorCode KFIntStreamNext(KFIntStream *st, PetscInt *value, PetscBoo
   PetscFunctionReturn(0);
 }
 
+/* The arrays of a checked PETSc binary matrix file, read once by the check (one process): the row offsets (n + 1),
+   column indices and values (nz) MatCreateSeqAIJWithArrays takes; rows is NULL where the check kept nothing. */
+typedef struct {
+  PetscInt  n, nz, *rows, *cols;
+  PetscReal *vals;
+  PetscBool finite; /* every value a finite number (found while the values were swapped) */
+} KFBinaryCSR;
+
+static PetscErrorCode KFReadBinaryReals(int, PetscReal[], PetscInt64, PetscInt64 *, PetscBool *);
+
 /* A PETSc binary matrix file checked before MatLoad sees it: optimized PETSc trusts the row lengths and column
    indices it reads, and a damaged file would crash the program or hang it later. Rank 0 reads the header, the row
-   lengths and the column indices in chunks; every rank gets its verdict. */
-static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
+   lengths and the column indices in chunks; every rank gets its verdict. keep (one process, 4-byte indices, 8-byte
+   real scalars): the row lengths and column indices are read into the matrix's own arrays as they are checked, and
+   the values after them, so that the file is read once (reading it again to load it was a quarter of loading the
+   57k-dof solid's matrices); keep->rows stays NULL where this PETSc's layout differs and MatLoad must read it. */
+static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[], KFBinaryCSR *keep)
 {
   PetscMPIInt rank;
   LoadStatus  st;
@@ -535,6 +548,12 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCall(PetscMemzero(&st, sizeof(st)));
+  if (keep) {
+    PetscMPIInt size;
+    PetscCallMPI(MPI_Comm_size(comm, &size));
+    PetscCall(PetscMemzero(keep, sizeof(*keep)));
+    if (size > 1 || sizeof(PetscInt) != 4 || sizeof(PetscScalar) != sizeof(PetscReal) || sizeof(PetscReal) != 8) keep = NULL;
+  }
   if (!rank) {
     int        fd;
     PetscInt   header[4], *buf = NULL, got;
@@ -560,14 +579,27 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
       else {
         const PetscInt chunk = 1 << 20, N = header[1];
         PetscInt64     need;
-        PetscCall(PetscMalloc1(chunk, &buf));
+        PetscInt      *lens = NULL;
+        if (keep) {
+          char      info[PETSC_MAX_PATH_LEN];
+          PetscBool has_info;
+          PetscCall(PetscSNPrintf(info, sizeof(info), "%s.info", path));
+          PetscCall(PetscTestFile(info, 'r', &has_info)); /* a block size from it: MatLoad reads the file */
+          if (has_info) keep = NULL;
+        }
+        if (keep) { /* read into the row offsets' array, one place on: the offsets are summed in place after the check */
+          PetscCall(PetscMalloc1(N + 1, &keep->rows));
+          keep->rows[0] = 0;
+          lens = keep->rows + 1;
+        } else PetscCall(PetscMalloc1(chunk, &buf));
         for (PetscInt done = 0; done < N && !st.code; done += chunk) {
-          PetscInt cnt = PetscMin(chunk, N - done);
-          PetscCall(KFReadBinaryInts(fd, buf, cnt, &got));
+          PetscInt  cnt = PetscMin(chunk, N - done);
+          PetscInt *b   = lens ? lens + done : buf;
+          PetscCall(KFReadBinaryInts(fd, b, cnt, &got));
           if (got < cnt) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated in its row lengths: re-export the matrix", path));
           for (PetscInt i = 0; i < cnt && !st.code; i++) {
-            if (buf[i] < 0 || buf[i] > N) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d has %d entries, but the matrix has %d columns: the file is corrupt; re-export the matrix", path, (int)(done + i + 1), (int)buf[i], (int)N));
-            total += buf[i];
+            if (b[i] < 0 || b[i] > N) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d has %d entries, but the matrix has %d columns: the file is corrupt; re-export the matrix", path, (int)(done + i + 1), (int)b[i], (int)N));
+            total += b[i];
           }
         }
         if (!st.code && total != header[3]) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: its rows hold %lld entries, its header says %d: the file is corrupt; re-export the matrix", path, (long long)total, (int)header[3]));
@@ -577,31 +609,43 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
         /* the column indices, row by row: the row lengths again (a second descriptor), then each row's indices must
            lie in [0, N) and increase, as MatLoad assumes */
         if (!st.code) {
-          int         fr = open(path, O_RDONLY);
+          int         fr = lens ? -1 : open(path, O_RDONLY);
           PetscInt    row = 0, left = 0, prev = -1, len = 0;
-          KFIntStream lens = {fr, NULL, 0, 0}; /* the row lengths, read in chunks (one read per row was a tenth of the check) */
+          KFIntStream rl = {fr, lens, lens ? N : 0, 0}; /* the row lengths: in memory, or read in chunks (one read per row was a tenth of the check) */
           PetscBool   ok = PETSC_TRUE;
-          if (fr < 0 || lseek(fr, (off_t)(4 * sizeof(PetscInt)), SEEK_SET) < 0) PetscCall(LoadFail(&st, PETSC_ERR_FILE_READ, "%s: cannot read the matrix file again (%s)", path, strerror(errno)));
-          PetscCall(PetscMalloc1(1 << 16, &lens.buf));
+          if (!lens && (fr < 0 || lseek(fr, (off_t)(4 * sizeof(PetscInt)), SEEK_SET) < 0)) PetscCall(LoadFail(&st, PETSC_ERR_FILE_READ, "%s: cannot read the matrix file again (%s)", path, strerror(errno)));
+          if (!lens) PetscCall(PetscMalloc1(1 << 16, &rl.buf));
+          else {
+            keep->n  = N;
+            keep->nz = header[3];
+            PetscCall(PetscMalloc2(keep->nz, &keep->cols, keep->nz, &keep->vals));
+          }
           for (PetscInt64 done = 0; done < total && !st.code; done += chunk) {
-            PetscInt cnt = (PetscInt)PetscMin((PetscInt64)chunk, total - done);
-            PetscCall(KFReadBinaryInts(fd, buf, cnt, &got));
+            PetscInt  cnt = (PetscInt)PetscMin((PetscInt64)chunk, total - done);
+            PetscInt *b   = lens ? keep->cols + done : buf;
+            PetscCall(KFReadBinaryInts(fd, b, cnt, &got));
             if (got < cnt) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated in its column indices: re-export the matrix", path));
             for (PetscInt i = 0; i < cnt && !st.code; i++) {
               while (!left && row < N && !st.code) { /* the next row that holds entries */
-                PetscCall(KFIntStreamNext(&lens, &len, &ok));
+                PetscCall(KFIntStreamNext(&rl, &len, &ok));
                 if (!ok) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is truncated in its row lengths: re-export the matrix", path));
                 left = len;
                 prev = -1;
                 row++;
               }
-              if (buf[i] < 0 || buf[i] >= N) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d lists column %d, outside the %d columns (counting from 1): the file is corrupt; re-export the matrix", path, (int)row, (int)buf[i] + 1, (int)N));
-              else if (buf[i] <= prev) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d lists column %d after column %d (the columns of a row must increase): the file is corrupt; re-export the matrix", path, (int)row, (int)buf[i] + 1, (int)prev + 1));
-              prev = buf[i];
+              if (b[i] < 0 || b[i] >= N) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d lists column %d, outside the %d columns (counting from 1): the file is corrupt; re-export the matrix", path, (int)row, (int)b[i] + 1, (int)N));
+              else if (b[i] <= prev) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s: row %d lists column %d after column %d (the columns of a row must increase): the file is corrupt; re-export the matrix", path, (int)row, (int)b[i] + 1, (int)prev + 1));
+              prev = b[i];
               left--;
             }
           }
-          PetscCall(PetscFree(lens.buf));
+          if (lens && !st.code) { /* checked: the values, and the row lengths summed into offsets */
+            PetscInt64 gotv = 0;
+            PetscCall(KFReadBinaryReals(fd, keep->vals, keep->nz, &gotv, &keep->finite));
+            if (gotv < keep->nz) PetscCall(LoadFail(&st, PETSC_ERR_FILE_UNEXPECTED, "%s is not a readable PETSc binary matrix (corrupt or truncated?): re-export it, or use Matrix Market (.mtx)", path));
+            for (PetscInt i = 0; i < N; i++) keep->rows[i + 1] += keep->rows[i];
+          }
+          if (!lens) PetscCall(PetscFree(rl.buf));
           if (fr >= 0) close(fr);
         }
         PetscCall(PetscFree(buf));
@@ -610,22 +654,30 @@ static PetscErrorCode KFCheckPetscBinary(MPI_Comm comm, const char path[])
     }
   }
   PetscCall(LoadAgree(comm, &st));
+  if (keep && (st.code || !keep->vals)) { /* nothing kept: a fault, or a file this reader leaves to MatLoad */
+    PetscCall(PetscFree(keep->rows));
+    PetscCall(PetscFree2(keep->cols, keep->vals));
+  }
   PetscCheck(!st.code, comm, st.code, "%s", st.msg);
   PetscFunctionReturn(0);
 }
 
-/* n big-endian reals of a PETSc binary file, swapped as KFReadBinaryInts swaps integers; got: how many were read */
-static PetscErrorCode KFReadBinaryReals(int fd, PetscReal buf[], PetscInt64 n, PetscInt64 *got)
+/* n big-endian reals of a PETSc binary file, swapped as KFReadBinaryInts swaps integers; got: how many were read;
+   finite: whether every one read is a finite number (its exponent not all ones), looked at in the same pass */
+static PetscErrorCode KFReadBinaryReals(int fd, PetscReal buf[], PetscInt64 n, PetscInt64 *got, PetscBool *finite)
 {
+  uint64_t *u = (uint64_t *)buf, special = 0;
+  const uint64_t exponent = 0x7ff0000000000000ULL;
+
   PetscFunctionBegin;
   *got = (PetscInt64)(KFReadAll(fd, buf, (size_t)n * sizeof(PetscReal)) / sizeof(PetscReal));
+  for (PetscInt64 i = 0; i < *got; i++) {
 #if !defined(PETSC_WORDS_BIGENDIAN)
-  {
-    uint64_t *u = (uint64_t *)buf;
-
-    for (PetscInt64 i = 0; i < *got; i++) u[i] = __builtin_bswap64(u[i]);
-  }
+    u[i] = __builtin_bswap64(u[i]);
 #endif
+    special |= (uint64_t)((u[i] & exponent) == exponent);
+  }
+  *finite = (PetscBool)!special;
   PetscFunctionReturn(0);
 }
 
@@ -640,57 +692,20 @@ static PetscErrorCode KFFreeCSR(void *ctx)
   PetscFunctionReturn(0);
 }
 
-/* A checked PETSc binary matrix file on one process: its row lengths, column indices and values read with the swaps
-   above and made the matrix's own arrays (MatCreateSeqAIJWithArrays, freed with it). MatLoad swaps them with PETSc's
-   byte by byte loop, 40 % of loading the 57k-dof solid's four matrices; the matrix is the same, array for array.
-   *A is NULL where MatLoad should read the file instead (another scalar or index size, a block size from a .info file
-   beside it). A short read (the file changed after the check) is an error. */
-static PetscErrorCode KFLoadPetscBinarySeq(MPI_Comm comm, const char path[], Mat *A)
+/* The matrix of a checked file's kept arrays (KFCheckPetscBinary), which become its own (MatCreateSeqAIJWithArrays,
+   freed with it). MatLoad swaps them with PETSc's byte by byte loop, 40 % of loading the 57k-dof solid's four
+   matrices; the matrix is the same, array for array. */
+static PetscErrorCode KFMatFromBinaryCSR(MPI_Comm comm, KFBinaryCSR *csr, Mat *A)
 {
-  char         info[PETSC_MAX_PATH_LEN];
-  PetscBool    has_info, ok;
-  int          fd;
-  PetscInt     header[4], got, N, nz, *rows, *cols, **rc;
-  PetscInt64   gotv = 0;
-  PetscReal   *vals;
+  PetscInt     **rc;
   PetscContainer owner;
 
   PetscFunctionBegin;
-  *A = NULL;
-  if (sizeof(PetscInt) != 4 || sizeof(PetscScalar) != sizeof(PetscReal) || sizeof(PetscReal) != 8) PetscFunctionReturn(0);
-  PetscCall(PetscSNPrintf(info, sizeof(info), "%s.info", path));
-  PetscCall(PetscTestFile(info, 'r', &has_info));
-  if (has_info) PetscFunctionReturn(0);
-  fd = open(path, O_RDONLY);
-  PetscCheck(fd >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "%s: cannot open the matrix file again (%s)", path, strerror(errno));
-  PetscCall(KFReadBinaryInts(fd, header, 4, &got));
-  N  = header[1];
-  nz = header[3];
-  PetscCall(PetscMalloc1(N + 1, &rows));
-  PetscCall(PetscMalloc2(nz, &cols, nz, &vals));
-  rows[0] = 0;
-  PetscCall(KFReadBinaryInts(fd, rows + 1, N, &got));
-  ok = (PetscBool)(got == N);
-  if (ok) {
-    for (PetscInt i = 0; i < N; i++) rows[i + 1] += rows[i];
-    PetscCall(KFReadBinaryInts(fd, cols, nz, &got));
-    ok = (PetscBool)(got == nz && rows[N] == nz);
-  }
-  if (ok) {
-    PetscCall(KFReadBinaryReals(fd, vals, nz, &gotv));
-    ok = (PetscBool)(gotv == nz);
-  }
-  close(fd);
-  if (!ok) {
-    PetscCall(PetscFree(rows));
-    PetscCall(PetscFree2(cols, vals));
-    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "%s is not a readable PETSc binary matrix (corrupt or truncated?): re-export it, or use Matrix Market (.mtx)", path);
-  }
-  PetscCall(MatCreateSeqAIJWithArrays(comm, N, N, rows, cols, (PetscScalar *)vals, A));
+  PetscCall(MatCreateSeqAIJWithArrays(comm, csr->n, csr->n, csr->rows, csr->cols, (PetscScalar *)csr->vals, A));
   PetscCall(PetscMalloc1(3, &rc));
-  rc[0] = rows;
-  rc[1] = cols;
-  rc[2] = (PetscInt *)vals;
+  rc[0] = csr->rows;
+  rc[1] = csr->cols;
+  rc[2] = (PetscInt *)csr->vals;
   PetscCall(PetscContainerCreate(PETSC_COMM_SELF, &owner));
   PetscCall(PetscContainerSetPointer(owner, rc));
   PetscCall(PetscContainerSetUserDestroy(owner, KFFreeCSR));
@@ -699,13 +714,15 @@ static PetscErrorCode KFLoadPetscBinarySeq(MPI_Comm comm, const char path[], Mat
   PetscFunctionReturn(0);
 }
 
-/* NaN or Inf anywhere: the first such entry in row order, named on every rank */
-static PetscErrorCode KFMatCheckFinite(MPI_Comm comm, const char path[], Mat A)
+/* NaN or Inf anywhere: the first such entry in row order, named on every rank (finite: known on every rank to
+   hold none) */
+static PetscErrorCode KFMatCheckFinite(MPI_Comm comm, const char path[], Mat A, PetscBool finite)
 {
   PetscInt  rstart, rend, where[2] = {PETSC_MAX_INT, -1}, first, best[2];
   PetscReal nrm;
 
   PetscFunctionBegin;
+  if (finite) PetscFunctionReturn(0);
   PetscCall(MatNorm(A, NORM_FROBENIUS, &nrm));
   if (!PetscIsInfOrNanReal(nrm)) PetscFunctionReturn(0);
   PetscCall(MatGetOwnershipRange(A, &rstart, &rend));
@@ -731,7 +748,7 @@ static PetscErrorCode KFMatCheckFinite(MPI_Comm comm, const char path[], Mat A)
 
 PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
 {
-  PetscBool   exists, mtx;
+  PetscBool   exists, mtx, finite = PETSC_FALSE;
   PetscViewer viewer;
 
   PetscFunctionBegin;
@@ -743,12 +760,13 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
   if (mtx) PetscCall(KFMatLoadMatrixMarket(comm, path, A));
   else {
     PetscErrorCode ierr;
-    PetscMPIInt    size;
-    PetscCall(KFCheckPetscBinary(comm, path));
-    PetscCallMPI(MPI_Comm_size(comm, &size));
+    KFBinaryCSR    csr;
+    PetscCall(KFCheckPetscBinary(comm, path, &csr));
     *A = NULL;
-    if (size == 1) PetscCall(KFLoadPetscBinarySeq(comm, path, A));
-    if (!*A) {
+    if (csr.rows) {
+      finite = csr.finite;
+      PetscCall(KFMatFromBinaryCSR(comm, &csr, A));
+    } else {
       PetscCall(MatCreate(comm, A));
       PetscCall(MatSetType(*A, MATAIJ));
       PetscCall(PetscViewerBinaryOpen(comm, path, FILE_MODE_READ, &viewer));
@@ -760,7 +778,7 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
       PetscCheck(!ierr, comm, PETSC_ERR_FILE_UNEXPECTED, "%s is not a readable PETSc binary matrix (corrupt or truncated?): re-export it, or use Matrix Market (.mtx)", path);
     }
   }
-  PetscCall(KFMatCheckFinite(comm, path, *A));
+  PetscCall(KFMatCheckFinite(comm, path, *A, finite));
   PetscCall(PetscLogEventEnd(KF_EVENT_LOAD, 0, 0, 0, 0));
   PetscFunctionReturn(0);
 }
@@ -771,11 +789,13 @@ PetscErrorCode KFMatLoadFile(MPI_Comm comm, const char path[], Mat *A)
    it once (the binary search per entry this replaced took 0.36 s on the 202k-dof solid's 4 matrices, the cursors
    0.18 s: perf, 1 rank). Lower entries the cursor steps over, or leaves behind at the end, have no upper partner.
    A matched pair counts twice, an entry without its partner twice (a^2), for the two positions of A - A^T each
-   fills. */
-static PetscErrorCode KFSeqAIJAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
+   fills. B (or NULL): a second matrix of the same nonzero pattern (a body's M and K, most exports), its sums in
+   dd[1], aa[1] from the same walk: the cursors and indices, most of the walk's memory traffic, are shared; each
+   matrix's sums are added in the order of its own walk, so they are those of a walk of it alone. */
+static PetscErrorCode KFSeqAIJAsymmetry(Mat A, Mat B, PetscReal dd[], PetscReal aa[])
 {
   const PetscInt    *ia, *ja;
-  const PetscScalar *va;
+  const PetscScalar *va, *vb = NULL;
   PetscInt           m, *cur;
   PetscBool          done;
 
@@ -783,31 +803,47 @@ static PetscErrorCode KFSeqAIJAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
   PetscCall(MatGetRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
   PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "cannot get the rows of the matrix");
   PetscCall(MatSeqAIJGetArrayRead(A, &va));
+  if (B) PetscCall(MatSeqAIJGetArrayRead(B, &vb));
   PetscCall(PetscMalloc1(m + 1, &cur));
   for (PetscInt i = 0; i < m; i++) cur[i] = ia[i];
   for (PetscInt i = 0; i < m; i++)
     for (PetscInt k = ia[i]; k < ia[i + 1]; k++) {
       const PetscInt j = ja[k];
-      PetscReal      a = PetscRealPart(va[k]);
+      PetscReal      a = PetscRealPart(va[k]), b = vb ? PetscRealPart(vb[k]) : 0;
 
-      *aa += a * a;
+      aa[0] += a * a;
+      if (vb) aa[1] += b * b;
       if (j <= i) continue; /* the diagonal has no partner to differ from; lower entries are met from above */
       if (j >= m) { /* a rectangular block has no transposed partner here */
-        *dd += 2 * a * a;
+        dd[0] += 2 * a * a;
+        if (vb) dd[1] += 2 * b * b;
         continue;
       }
       while (cur[j] < ia[j + 1] && ja[cur[j]] < i) { /* lower entries of row j whose partner row had none */
-        const PetscReal t = PetscRealPart(va[cur[j]++]);
-        *dd += 2 * t * t;
+        const PetscReal t = PetscRealPart(va[cur[j]]);
+        dd[0] += 2 * t * t;
+        if (vb) {
+          const PetscReal u = PetscRealPart(vb[cur[j]]);
+          dd[1] += 2 * u * u;
+        }
+        cur[j]++;
       }
       if (cur[j] < ia[j + 1] && ja[cur[j]] == i) {
-        *dd += 2 * PetscSqr(a - PetscRealPart(va[cur[j]]));
+        dd[0] += 2 * PetscSqr(a - PetscRealPart(va[cur[j]]));
+        if (vb) dd[1] += 2 * PetscSqr(b - PetscRealPart(vb[cur[j]]));
         cur[j]++;
-      } else *dd += 2 * a * a;
+      } else {
+        dd[0] += 2 * a * a;
+        if (vb) dd[1] += 2 * b * b;
+      }
     }
   for (PetscInt j = 0; j < m; j++) /* what no upper entry reached */
-    for (PetscInt k = cur[j]; k < ia[j + 1] && ja[k] < j; k++) *dd += 2 * PetscSqr(PetscRealPart(va[k]));
+    for (PetscInt k = cur[j]; k < ia[j + 1] && ja[k] < j; k++) {
+      dd[0] += 2 * PetscSqr(PetscRealPart(va[k]));
+      if (vb) dd[1] += 2 * PetscSqr(PetscRealPart(vb[k]));
+    }
   PetscCall(PetscFree(cur));
+  if (B) PetscCall(MatSeqAIJRestoreArrayRead(B, &vb));
   PetscCall(MatSeqAIJRestoreArrayRead(A, &va));
   PetscCall(MatRestoreRowIJ(A, 0, PETSC_FALSE, PETSC_FALSE, &m, &ia, &ja, &done));
   PetscFunctionReturn(0);
@@ -873,6 +909,15 @@ static PetscErrorCode KFMPIAIJOffAsymmetry(Mat A, PetscReal *dd, PetscReal *aa)
   PetscFunctionReturn(0);
 }
 
+/* the verdict on ||A - A^T||_F = nD against ||A||_F = nA, and whether A - A^T is zero (exact, when not NULL) */
+static PetscErrorCode KFSymmetryVerdict(MPI_Comm comm, const char what[], PetscReal nD, PetscReal nA, PetscReal rtol, PetscBool *exact)
+{
+  PetscFunctionBegin;
+  if (exact) *exact = (PetscBool)(nD == 0);
+  PetscCheck(nD <= rtol * nA, comm, PETSC_ERR_ARG_WRONG, "%s is not symmetric: ||A - A^T|| / ||A|| = %g (> %g); kryflex needs symmetric M, K and damping matrices: check the export (both triangles, or 'symmetric' storage)", what, (double)(nA > 0 ? nD / nA : nD), (double)rtol);
+  PetscFunctionReturn(0);
+}
+
 /* ||A - A^T||_F <= rtol ||A||_F, collective. AIJ matrices in one pass over their entries (the local block against
    itself, the off-process couplings against their transpose); other types through MatTranspose. The whole
    transpose and a DIFFERENT_NONZERO_PATTERN MatAXPY cost 0.7 s per matrix of a 100,000-dof solid body. */
@@ -908,12 +953,12 @@ PetscErrorCode KFMatCheckSymmetricExact(Mat A, const char what[], PetscReal rtol
   if (seq || mpi) {
     PetscReal loc[2] = {0, 0}, sum[2];
 
-    if (seq) PetscCall(KFSeqAIJAsymmetry(A, &loc[0], &loc[1]));
+    if (seq) PetscCall(KFSeqAIJAsymmetry(A, NULL, &loc[0], &loc[1]));
     else {
       Mat Ad;
 
       PetscCall(MatMPIAIJGetSeqAIJ(A, &Ad, NULL, NULL));
-      PetscCall(KFSeqAIJAsymmetry(Ad, &loc[0], &loc[1]));
+      PetscCall(KFSeqAIJAsymmetry(Ad, NULL, &loc[0], &loc[1]));
       PetscCall(KFMPIAIJOffAsymmetry(A, &loc[0], &loc[1]));
     }
     PetscCall(MPIU_Allreduce(loc, sum, 2, MPIU_REAL, MPIU_SUM, comm));
@@ -928,7 +973,39 @@ PetscErrorCode KFMatCheckSymmetricExact(Mat A, const char what[], PetscReal rtol
     PetscCall(MatNorm(At, NORM_FROBENIUS, &nD));
     PetscCall(MatDestroy(&At));
   }
-  if (exact) *exact = (PetscBool)(nD == 0);
-  PetscCheck(nD <= rtol * nA, comm, PETSC_ERR_ARG_WRONG, "%s is not symmetric: ||A - A^T|| / ||A|| = %g (> %g); kryflex needs symmetric M, K and damping matrices: check the export (both triangles, or 'symmetric' storage)", what, (double)(nA > 0 ? nD / nA : nD), (double)rtol);
+  PetscCall(KFSymmetryVerdict(comm, what, nD, nA, rtol, exact));
+  PetscFunctionReturn(0);
+}
+
+/* The same for a body's M and K together: one walk for both where they are sequential AIJ matrices of the same
+   nonzero pattern (the walk's indices shared: KFSeqAIJAsymmetry), else one each; M is judged first, as apart. */
+PetscErrorCode KFMatCheckSymmetricPairExact(Mat M, Mat K, const char whatM[], const char whatK[], PetscReal rtol, PetscBool *exactM, PetscBool *exactK)
+{
+  PetscBool          seqM, seqK, same = PETSC_FALSE;
+  const PetscInt    *im, *jm, *ik, *jk;
+  PetscInt           nm, nk;
+  PetscBool          dm, dk;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)M, MATSEQAIJ, &seqM));
+  PetscCall(PetscObjectTypeCompare((PetscObject)K, MATSEQAIJ, &seqK));
+  if (seqM && seqK) {
+    PetscCall(MatGetRowIJ(M, 0, PETSC_FALSE, PETSC_FALSE, &nm, &im, &jm, &dm));
+    PetscCall(MatGetRowIJ(K, 0, PETSC_FALSE, PETSC_FALSE, &nk, &ik, &jk, &dk));
+    same = (PetscBool)(dm && dk && nm == nk && (im == ik || !memcmp(im, ik, (size_t)(nm + 1) * sizeof(PetscInt))));
+    if (same) same = (PetscBool)(jm == jk || !memcmp(jm, jk, (size_t)im[nm] * sizeof(PetscInt)));
+    PetscCall(MatRestoreRowIJ(K, 0, PETSC_FALSE, PETSC_FALSE, &nk, &ik, &jk, &dk));
+    PetscCall(MatRestoreRowIJ(M, 0, PETSC_FALSE, PETSC_FALSE, &nm, &im, &jm, &dm));
+  }
+  if (!same) {
+    PetscCall(KFMatCheckSymmetricExact(M, whatM, rtol, exactM));
+    PetscCall(KFMatCheckSymmetricExact(K, whatK, rtol, exactK));
+  } else {
+    PetscReal dd[2] = {0, 0}, aa[2] = {0, 0};
+
+    PetscCall(KFSeqAIJAsymmetry(M, K, dd, aa));
+    PetscCall(KFSymmetryVerdict(PetscObjectComm((PetscObject)M), whatM, PetscSqrtReal(dd[0]), PetscSqrtReal(aa[0]), rtol, exactM));
+    PetscCall(KFSymmetryVerdict(PetscObjectComm((PetscObject)K), whatK, PetscSqrtReal(dd[1]), PetscSqrtReal(aa[1]), rtol, exactK));
+  }
   PetscFunctionReturn(0);
 }

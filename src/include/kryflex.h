@@ -120,6 +120,7 @@ PETSC_EXTERN PetscErrorCode KFSystemGetBodyMap(KFSystem, PetscInt body, Mat *P);
 PETSC_EXTERN PetscErrorCode KFSystemComputeRigidModes(KFSystem);
 PETSC_EXTERN PetscErrorCode KFSystemSetRigidModes(KFSystem, Mat Phi);
 PETSC_EXTERN PetscErrorCode KFSystemGetRigidModes(KFSystem, Mat *Phi, PetscReal *residual);
+PETSC_EXTERN PetscErrorCode KFSystemGetRigidProducts(KFSystem, Mat *KPhi, Mat *MPhi); /* Ks Phi, Ms Phi (borrowed) */
 
 /* ---------------------------------------------------------------- flexible solve operator K+ */
 

@@ -76,6 +76,7 @@ struct _KFSceneOps {
 };
 PETSC_EXTERN PetscClassId KF_SCENE_CLASSID;
 PETSC_INTERN PetscErrorCode KFMatCheckSymmetricExact(Mat, const char[], PetscReal, PetscBool *); /* src/body/load.c */
+PETSC_INTERN PetscErrorCode KFMatCheckSymmetricPairExact(Mat M, Mat K, const char[], const char[], PetscReal, PetscBool *, PetscBool *);
 PETSC_INTERN PetscErrorCode KFGetStartTime(PetscLogDouble *); /* src/util/package.c: when KFInitialize first ran */
 /* src/measure/frf_error.c: KFFRFElasticErrors and the pair, frequency index and pair scale where hinf is made
    (pointwise NULL: not measured) */
@@ -117,6 +118,7 @@ struct _n_KFSystem {
   Mat        Ms, Ks, G, Ht;
   Mat        Phi;            /* rigid modes, e x r, M-orthonormal */
   Mat        MPhi;           /* Ms Phi, made by the first projection, destroyed with Phi */
+  Mat        KPhi;           /* Ks Phi, as the rigid residual formed it (KFSystemGetRigidProducts), destroyed with Phi */
   PetscInt   nrigid;
   PetscReal  rigid_residual;
   PetscBool  user_rigid;

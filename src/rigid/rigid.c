@@ -373,7 +373,8 @@ static PetscErrorCode KFSystemRigidResidual(KFSystem y, PetscReal *res)
   PetscCall(MatNorm(KP, NORM_FROBENIUS, &nKP));
   PetscCall(MatNorm(y->Ks, NORM_FROBENIUS, &nK));
   PetscCall(MatNorm(y->Phi, NORM_FROBENIUS, &nP));
-  PetscCall(MatDestroy(&KP));
+  PetscCall(MatDestroy(&y->KPhi)); /* kept for the model check's rigid energy (KFSystemGetRigidProducts) */
+  y->KPhi = KP;
   *res = nKP / (nK * nP);
   PetscFunctionReturn(0);
 }
@@ -484,6 +485,7 @@ PetscErrorCode KFSystemSetRigidModes(KFSystem y, Mat Phi)
   PetscCheck(m == y->scene->nsys, y->scene->comm, PETSC_ERR_ARG_SIZ, "supplied rigid modes have %" PetscInt_FMT " rows, the system has %" PetscInt_FMT " dofs", m, y->scene->nsys);
   PetscCall(MatDestroy(&y->Phi));
   PetscCall(MatDestroy(&y->MPhi));
+  PetscCall(MatDestroy(&y->KPhi));
   PetscCall(MatConvert(Phi, MATDENSE, MAT_INITIAL_MATRIX, &y->Phi));
   PetscCall(KFMOrthonormalize(y->Ms, y->Phi, "supplied rigid-body modes"));
   y->nrigid     = r;
@@ -501,6 +503,18 @@ PetscErrorCode KFSystemGetRigidModes(KFSystem y, Mat *Phi, PetscReal *residual)
   PetscCall(KFSystemComputeRigidModes(y));
   if (Phi) *Phi = y->Phi;
   if (residual) *residual = y->rigid_residual;
+  PetscFunctionReturn(0);
+}
+
+/* Ks Phi and Ms Phi of the rigid modes (computed first where needed), the system's own (borrowed; NULL without rigid
+   modes): the products the rigid residual and the projections make, for a caller that needs Phi^T K Phi and
+   Phi^T M Phi (the model check's rigid energy), which would otherwise form both again */
+PetscErrorCode KFSystemGetRigidProducts(KFSystem y, Mat *KPhi, Mat *MPhi)
+{
+  PetscFunctionBegin;
+  PetscCall(KFSystemGetMPhi(y, MPhi));
+  if (y->nrigid && !y->KPhi) PetscCall(KFMatMultDense(y->Ks, y->Phi, &y->KPhi));
+  *KPhi = y->nrigid ? y->KPhi : NULL;
   PetscFunctionReturn(0);
 }
 

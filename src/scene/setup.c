@@ -41,13 +41,12 @@ static PetscErrorCode KFBodyCheck(KFScene s, KFBodyData *B)
   PetscInt  rs, re, rsK, reK;
   Vec       d;
   PetscReal dmin;
-  char      what[2 * KF_MAX_NAME];
+  char      what[2 * KF_MAX_NAME], whatK[2 * KF_MAX_NAME];
 
   PetscFunctionBegin;
   PetscCall(PetscSNPrintf(what, sizeof(what), "mass matrix M of body '%s'", B->name));
-  PetscCall(KFMatCheckSymmetricExact(B->M, what, 1e-10, &B->exact_M));
-  PetscCall(PetscSNPrintf(what, sizeof(what), "stiffness matrix K of body '%s'", B->name));
-  PetscCall(KFMatCheckSymmetricExact(B->K, what, 1e-10, &B->exact_K));
+  PetscCall(PetscSNPrintf(whatK, sizeof(whatK), "stiffness matrix K of body '%s'", B->name));
+  PetscCall(KFMatCheckSymmetricPairExact(B->M, B->K, what, whatK, 1e-10, &B->exact_M, &B->exact_K));
   PetscCall(MatGetOwnershipRange(B->M, &rs, &re));
   PetscCall(MatGetOwnershipRange(B->K, &rsK, &reK));
   PetscCheck(rs == rsK && re == reK, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP, "body '%s': M and K are distributed differently over the ranks; load them with the same layout", B->name);

@@ -43,6 +43,15 @@ cdef class CSystem:
         check(KFSystemGetRigidModes(self.y, &Phi, &res))
         return wrap_mat(Phi, True), res
 
+    def rigid_products(self):
+        """(K_S Phi, M_S Phi) of the rigid modes, the products the C library forms for its rigid residual and its
+        projections (None, None without rigid modes)."""
+        cdef PetscMat KP = NULL, MP = NULL
+        check(KFSystemGetRigidProducts(self.y, &KP, &MP))
+        if KP == NULL or MP == NULL:
+            return None, None
+        return wrap_mat(KP, True), wrap_mat(MP, True)
+
     def factor_count(self):
         """Sparse factorizations made for the flexible solves on this system so far, all configurations (a
         body-wise solve factors each body once for all of them)."""

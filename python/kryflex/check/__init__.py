@@ -68,19 +68,21 @@ def _asymmetry(A, exact=False):
     return float(nd / na) if na > 0 else 0.0
 
 
-def _quotients(K, M, X):
+def _quotients(K, M, X, products=(None, None)):
     """X^T K X and X^T M X for the columns of a dense PETSc Mat X (None: no column), small dense, the same on every
     rank: two sparse-dense products and the local blocks' products summed over ranks (a product and a dot per pair of
-    vectors, from Python, took 0.1 s of kryflex reduce's model check at 57k dofs)."""
+    vectors, from Python, took 0.1 s of kryflex reduce's model check at 57k dofs). products: K X and M X where they
+    are made already (the system's rigid modes: CSystem.rigid_products), used as they are."""
     if X is None or X.getSize()[1] == 0:
         return np.zeros((0, 0)), np.zeros((0, 0))
     comm = X.getComm().tompi4py()
     x = X.getDenseArray()
-    KX, MX = K.matMult(X), M.matMult(X)
+    KX, MX = (P if P is not None else A.matMult(X) for P, A in zip(products, (K, M)))
     kr = comm.allreduce(x.T @ KX.getDenseArray())
     mr = comm.allreduce(x.T @ MX.getDenseArray())
-    KX.destroy()
-    MX.destroy()
+    for P, made in zip(products, (KX, MX)):
+        if P is None:
+            made.destroy()
     return 0.5 * (kr + kr.T), 0.5 * (mr + mr.T)
 
 
@@ -205,7 +207,9 @@ def check_scene(scene, system=None, factor=True, dense_max=DENSE_MAX):
                 "accepted: the Krylov recurrence does not need them; the verification condenses them statically",
                 "nothing to do, unless a dof should carry mass (rotary inertia, a lumped mass)", "note"))
         bodies.append(fact)
-    kr, mr = _quotients(Ks, Ms, Phi if nrigid else None)
+    # K_S Phi and M_S Phi as the C library formed them (its rigid residual, its projections: the reduction that
+    # starts from this system uses M_S Phi again), the same products
+    kr, mr = _quotients(Ks, Ms, Phi if nrigid else None, system.rigid_products() if nrigid else (None, None))
     f_sys = rigid_hz(kr, mr)
     facts = dict(system_dofs=n_sys, rigid_modes=nrigid, rigid_residual=float(residual), rigid_hz=f_sys.tolist(),
                  bodies=bodies, band_hz=band, dense=n_sys <= dense_max)

@@ -82,6 +82,8 @@ def main(argv=None):
             start_agreement()
         except Failure as f:
             agree(f)
+        from .._runtime import start_up_objects_kept
+        start_up_objects_kept()
         return run(rest)
     except SystemExit as e:
         return int(e.code or 0)

@@ -7,7 +7,10 @@ heavy work: the YAML (io/yaml_load.py: size, nesting, aliases, duplicate keys), 
 (io/scene_schema.py), the files the scene names (present, readable; nodes and vectors read and checked), and only
 then the body matrices. Errors are SceneError, naming the entry, the value and the fix.
 """
+import io
 import os
+import re
+import warnings
 
 import numpy as np
 from petsc4py import PETSc
@@ -119,9 +122,48 @@ def _text_lines(where, key, path, name):
             yield lineno, line
 
 
+# a nodes file's columns as NumPy's C reader takes them: integer id and ndof, three reals
+_NODE_COLUMNS = np.dtype([("id", np.int64), ("x", np.float64), ("y", np.float64), ("z", np.float64),
+                          ("ndof", np.int64)])
+# line breaks str.splitlines() takes beside \n (and \r\n), which NumPy's reader does not
+_OTHER_BREAKS = re.compile("[\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+
+
+def _node_file_rows(path):
+    """The rows of a nodes file as an (n, 5) float64 array, read by NumPy's C reader (a 57k-dof solid's two files in
+    a third of the time of the line-by-line reader below), or None wherever that reader might take the file otherwise
+    than _read_nodes' lines do: text that is not UTF-8, other line breaks, a value that is not a plain integer id or
+    ndof (c345, s: other layouts) or a number; the line-by-line reader then reads it and names any bad line."""
+    try:
+        with open(path, "rb") as f:
+            text = f.read().decode("utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    text = text.replace("\r\n", "\n")
+    if _OTHER_BREAKS.search(text):
+        return None
+    # a comment runs from the first '#' or '%' to the line's end: as '#' both, the C reader's one comment character
+    # (given two, NumPy strips them line by line in Python)
+    text = text.replace("%", "#")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")      # an empty file's warning: no rows, said by the reader below
+            cols = np.loadtxt(io.StringIO(text), dtype=_NODE_COLUMNS, comments="#", ndmin=1)
+    except (ValueError, TypeError, UserWarning):
+        return None
+    A = np.empty((cols.shape[0], 5))
+    for i, name in enumerate(_NODE_COLUMNS.names):
+        A[:, i] = cols[name]
+    return A
+
+
 def _read_nodes(where, key, name, base):
     """A nodes file: 'id x y z ndof' per line, '#' comments; checked by the same rules as inline nodes."""
     path = _file(where, key, name, base, "nodes file")
+    rows = _node_file_rows(path)
+    table = schema.node_array_table(rows) if rows is not None else None
+    if table is not None:
+        return table
     rows, labels = [], []
     for lineno, line in _text_lines(where, key, path, name):
         parts = line.split()

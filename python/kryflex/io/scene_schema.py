@@ -19,7 +19,6 @@ import math
 import re
 
 import numpy as np
-import jsonschema
 
 from .. import settings
 from .yaml_load import short_repr
@@ -170,7 +169,7 @@ def choice(where, path, value, choices):
 @functools.lru_cache(maxsize=None)
 def _validator(key, range_text, types_only):
     r = settings.scene_row(key)
-    return jsonschema.Draft7Validator(settings.json_schema(r, range_text, types_only))
+    return settings.schema_test(settings.json_schema(r, range_text, types_only))
 
 
 def setting(where, path, value, fix=None, range_text=None):
@@ -181,7 +180,7 @@ def setting(where, path, value, fix=None, range_text=None):
     r = settings.scene_row(path)
     kind, rng = r["type"], range_text or r["range"]
     value = value.item() if isinstance(value, np.generic) else value
-    if _validator(path, rng, False).is_valid(value) and not (isinstance(value, float) and not math.isfinite(value)):
+    if _validator(path, rng, False)(value) and not (isinstance(value, float) and not math.isfinite(value)):
         if isinstance(value, str) or kind == "enum":
             return value
         return {"bool": bool, "int": int, "real": float}[kind](value)
@@ -193,7 +192,7 @@ def setting(where, path, value, fix=None, range_text=None):
         fail(where, path, "%s is not one of %s; use one of them" % (short_repr(value), listed)
              if len(names) == len(r["choices"]) else "%s is not %s; use one of them" % (short_repr(value), listed))
     what = "an integer" if kind == "int" else "a number"
-    if not _validator(path, rng, True).is_valid(value):
+    if not _validator(path, rng, True)(value):
         fail(where, path, "%s is not %s; %s" % (short_repr(value), what,
                                                 fix or "give %s in %s" % (what if kind == "int" else "a number", rng)))
     if isinstance(value, float) and not math.isfinite(value):
@@ -381,10 +380,13 @@ def layout_name(comps):
     return "a scalar point" if comps == 0 else "c" + "".join(str(c + 1) for c in range(6) if comps >> c & 1)
 
 
+# the dofs of each component set (6 bits: ux uy uz rx ry rz; a scalar point, no bit, has 1)
+_SET_DOFS = np.array([bin(c).count("1") or 1 for c in range(64)], dtype=np.int32)
+
+
 def _table(ids, xyz, comps):
     comps = np.asarray(comps, dtype=np.int32)
-    ndof = np.array([bin(int(c)).count("1") or 1 for c in comps], dtype=np.int32)
-    return NodeTable(ids, xyz, ndof, comps)
+    return NodeTable(ids, xyz, _SET_DOFS[comps], comps)
 
 def node_table(where, path, rows, labels=None):
     """Node rows (id, x, y, z, ndof) as (ids int32, xyz float64, ndof int32); labels[i] says where row i was written
@@ -440,6 +442,20 @@ def _node_array(rows):
             return None
         A = np.array(rows, dtype=np.float64)
     except (TypeError, ValueError):
+        return None
+    return _node_rows(A)
+
+
+def node_array_table(A):
+    """The node table of an (n, 5) float64 array of rows (id, x, y, z, ndof) when every rule holds, else None
+    (node_table on the rows then names the first bad one)."""
+    table = _node_rows(A)
+    return _table(*table) if table is not None else None
+
+
+def _node_rows(A):
+    """(ids, xyz, component sets) of an (n, 5) float64 array of rows when every rule holds, else None."""
+    if A.ndim != 2 or A.shape[1] != 5 or not len(A):
         return None
     ids, xyz, ndof = A[:, 0], A[:, 1:4], A[:, 4]
     if not ((ids == np.floor(ids)) & (ids >= 0) & (ids <= MAX_NODE_ID) & np.isfinite(xyz).all(axis=1)

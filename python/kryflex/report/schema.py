@@ -6,6 +6,7 @@ is rendered, so that a summary written by hand or by another program is refused 
 
 This module depends only on the standard library and NumPy (no compiled kryflex code).
 """
+import itertools
 import math
 
 import numpy as np
@@ -42,12 +43,17 @@ def _get(summary, path, default=None):
 
 
 def _finite_numbers(node):
-    """Whether a list holds finite floats only, or lists and tuples of them at any depth (no path built: where a check
-    fails, _check_json_types walks it again to name the element)."""
-    types = set(map(type, node))
-    if types == {float}:
-        return all(map(math.isfinite, node))
-    return bool(types) and types <= {list, tuple} and all(map(_finite_numbers, node))
+    """Whether a list holds finite floats only, or lists and tuples of them, every float at the same depth (no path
+    built: where a check fails, _check_json_types walks it again to name the element). A level at a time, all its
+    elements together in passes of C."""
+    level = node
+    while True:
+        types = set(map(type, level))
+        if types == {float}:
+            return all(map(math.isfinite, level))
+        if not types or not types <= {list, tuple}:
+            return False
+        level = list(itertools.chain.from_iterable(level))
 
 
 def _check_json_types(node, path):

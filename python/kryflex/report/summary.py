@@ -13,6 +13,7 @@ record (an older C library, the eigen basis, verification off) are left out or N
 import numpy as np
 
 from .. import _core
+from .._runtime import collector_paused
 
 # the reducer's stage timings, as the report names them, in the order stages run ("krylov" / "eigen basis": the
 # basis of the reducer's type)
@@ -76,7 +77,8 @@ def _list(a):
     if a.ndim == 0:
         return _none(a)
     if not np.isnan(a).any():
-        return a.tolist()
+        with collector_paused():
+            return a.tolist()
     return [_list(x) for x in a]
 
 

@@ -112,6 +112,38 @@ def test_exactly_symmetric_found_at_setup():
     assert exact == [True, True]
 
 
+def mass_like(K):
+    """A mass matrix with K's nonzero pattern (a body's consistent M and K): symmetric where the pattern is."""
+    return np.where(K != 0, 1.0 + 0.5 * (np.abs(K) + np.abs(K.T)), 0.0)
+
+
+@pytest.mark.parametrize("case", ASYMMETRIC + ["rounding", "none"])
+def test_mass_and_stiffness_of_one_pattern_walked_together(case):
+    """M and K of the same nonzero pattern are measured in one walk (KFMatCheckSymmetricPairExact): each verdict is
+    the one NumPy's ratios give, M judged first (its message names M, then K's names K), and where both pass the
+    exact flags say which is exactly symmetric."""
+    from kryflex import _core
+    K = stiffness(case)
+    M = mass_like(K)
+    s = _core.CScene()
+    b = s.add_body("plate", petsc_matrix(M), petsc_matrix(K), [1, 2, 3, 4], np.arange(12.0).reshape(4, 3), [6, 6, 6, 6])
+    s.set_num_io(1, 1)
+    s.add_input_load(0, b, 1, 0)
+    s.add_output_reading(0, b, 4, 0)
+    ratios = {key: np.linalg.norm(A - A.T) / np.linalg.norm(A) for key, A in (("M", M), ("K", K))}
+    bad = [key for key in ("M", "K") if ratios[key] > 1e-10]
+    if bad:
+        with pytest.raises(_core.Error) as e:
+            s.setup()
+        what = "mass matrix M" if bad[0] == "M" else "stiffness matrix K"
+        found = re.search(r"%s of body 'plate' is not symmetric: \|\|A - A\^T\|\| / \|\|A\|\| = (\S+) " % what, str(e.value))
+        assert found, str(e.value)
+        assert float(found.group(1)) == pytest.approx(ratios[bad[0]], rel=1e-5)
+    else:
+        s.setup()
+        assert list(s.body_symmetric(b)) == [ratios["M"] == 0, ratios["K"] == 0]
+
+
 @pytest.mark.mpi
 @pytest.mark.parametrize("case", ASYMMETRIC + ["rounding", "none"])
 def test_ratio_matches_numpy_two_ranks(case):

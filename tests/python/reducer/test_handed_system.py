@@ -1,7 +1,7 @@
 """A reduction started from a system assembled before it (KFReducerSetSystem, Reducer.start_from: kryflex reduce hands
 it the model check's system at the first configuration). Checked on the solid at refine 0.5 (2,760 dofs), 1 and 2
-ranks: the handed system's matrices (M_S, K_S, G, H^T) and rigid modes are bit for bit those of a system assembled
-fresh at the same angles (what the reducer would build), the reduction then assembles one configuration fewer
+ranks: the handed system's matrices (M_S, K_S, G, H^T), rigid modes and their products K_S Phi and M_S Phi (which the
+model check reads from it) are bit for bit those of a system assembled fresh at the same angles (what the reducer would build), the reduction then assembles one configuration fewer
 (PETSc's KFAssemble event), and its model file is the reduction's without the system: every numeric dataset equal
 (1 rank; on 2 ranks MUMPS' scheduling makes two runs of the same reduction differ in round-off, so within that).
 A system of another scene is refused with a clear error."""
@@ -54,7 +54,14 @@ for A, B in zip(handed.matrices() + (handed.rigid_modes()[0],), fresh.matrices()
     same &= all(x.shape == y.shape and np.array_equal(x, y) for x, y in zip(local(A), local(B)))
 same &= handed.rigid_modes()[1] == fresh.rigid_modes()[1]
 same = comm.allreduce(bool(same), op=MPI.LAND)
-del fresh
+# the rigid modes' K_S Phi and M_S Phi the C library keeps (the model check reads them): PETSc's products' bits
+Ms_, Ks_ = fresh.matrices()[:2]
+Phi_ = fresh.rigid_modes()[0]
+products = handed.rigid_products()
+same_products = all(np.array_equal(local(A)[0], local(B)[0])
+                    for A, B in zip(products, (Ks_.matMult(Phi_), Ms_.matMult(Phi_))))
+same_products = comm.allreduce(bool(same_products), op=MPI.LAND)
+del fresh, Ms_, Ks_, Phi_, products
 
 
 def reduced(name, start=None):
@@ -100,7 +107,7 @@ except _core.Error as e:
 if comm.rank == 0:
     a, b, c = datasets(own), datasets(given), datasets(again)
     print("RESULT " + json.dumps(dict(
-        same_system=same, own_count=own_count, given_count=given_count, keys_equal=sorted(a) == sorted(b),
+        same_system=same, same_products=same_products, own_count=own_count, given_count=given_count, keys_equal=sorted(a) == sorted(b),
         numeric=len(a), equal=sum(np.array_equal(a[k], b[k]) for k in a),
         rel_given=rel(a, b) if sorted(a) == sorted(b) else None, rel_again=rel(a, c), refused=refused)))
 '''
@@ -114,7 +121,7 @@ def solid(tmp_path_factory):
 def test_the_handed_system_is_the_reducers_own(solid, tmp_path):
     one, two = results_on_ranks(SCRIPT % dict(path=solid, folder=str(tmp_path)), tmp_path, ENV)
     for res in (one, two):
-        assert res["same_system"]
+        assert res["same_system"] and res["same_products"]
         assert res["own_count"] - res["given_count"] == 1      # the first configuration not assembled again
         assert res["keys_equal"] and res["numeric"] >= 10
         assert "another scene" in res["refused"]

@@ -161,6 +161,37 @@ def test_the_scene_defaults_pass_the_json_schema(table):
         assert not jsonschema.Draft7Validator(whole).is_valid(bad), bad
 
 
+def test_the_compiled_schema_test_is_jsonschemas(table):
+    """settings.schema_test (what a scene's settings are checked with) says valid exactly where jsonschema's
+    Draft7Validator does, on every row's schema (its range, a narrower one, the types alone) and values of every kind:
+    in and out of range, at the bounds, integral floats, booleans, words, lists, None, non-finite numbers."""
+    from fractions import Fraction
+    from kryflex import settings
+    values = [None, True, False, 0, 1, -1, 2, 3, 7, 12, 200, 201, 10 ** 6, 0.0, 1.0, -1.0, 0.5, 1e-12, 1e-3, 2.5, 1e300,
+              -1e300, float("inf"), float("-inf"), float("nan"), Fraction(1, 3), "", "auto", "none", "true", "yes",
+              "h2", "elastic", "total", "1", [], [0.1, 2.0], [1, "a"], [True], [float("nan")], [-1.0, 1e9], {},
+              {"a": 1}, (1, 2)]
+    rows = [r for r in table if r["scene"]]
+    for r in rows:
+        values += [w for w in r["choices"]] + [settings.value(r)]
+        if r["range"]:
+            lo, _, hi, _ = settings.interval(r["range"])
+            values += [x for x in (lo, hi, lo - 1, hi + 1, (lo + hi) / 2) if math.isfinite(x)]
+    checked = 0
+    for r in rows:
+        ranges = [None] + (["[0.5, 3]", "(0, 1)"] if r["type"] in ("int", "real", "list") else [])
+        for rng in ranges:
+            for types_only in (False, True):
+                schema = settings.json_schema(r, rng, types_only)
+                ours, theirs = settings.schema_test(schema), jsonschema.Draft7Validator(schema)
+                for v in values:
+                    assert ours(v) == theirs.is_valid(v), (r["name"], rng, types_only, v)
+                    checked += 1
+    assert checked > 5000, checked
+    with pytest.raises(ValueError, match="pattern"):
+        settings.schema_test({"type": "string", "pattern": "a"})
+
+
 def test_the_command_knows_every_option(table):
     from kryflex.cli.common import AGREEMENT_TIMEOUT, reducer_option_names
     from kryflex import settings

@@ -33,22 +33,14 @@ def kryflex_model(scene_path, angles, beta, target, options):
     return out.model, time.perf_counter() - t0, out.summary
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scene", required=True)
-    ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
-    ap.add_argument("--kryflex-options", nargs="+", default=["compress:", "nostatic:static_exact=0"])
-    ap.add_argument("--methods", nargs="+", default=["SOR-IRKA"])
-    ap.add_argument("--orders", type=int, nargs="+", default=[4, 8, 12, 16])
-    args = ap.parse_args()
-    bench.ensure_pymor()
-    path = os.path.abspath(args.scene)
+def setup(path):
+    """The scene, its angles of interest, the points (angles and midpoints), the full order at every point
+    (M, K, G, H, R, lam), the bench's beta (taken at the first angle) and the reference at every point
+    (freqs, T_el, T_full, Ge, He)."""
     scene = ref.load_scene(path)
     angles = [float(a) for a in scene.raw["angles"]]
     points = sorted(set(angles) | {0.5 * (a + b) for a, b in zip(angles, angles[1:])})
     band, zeta = scene.raw["band"], float(scene.raw["damping"])
-    print("peers bench (angles), %s UTC, %s, angles %s and midpoints, 1 rank"
-          % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene, angles), flush=True)
     full = {}
     for a in points:     # the full order, its reference and its elastic split at every point
         M, K, G, H, R = bench.full_order(scene, a)
@@ -66,26 +58,52 @@ def main():
         T_el = bench.direct_response(M, K, beta, Ge, He, freqs)
         w = 2 * np.pi * freqs
         ref_at[a] = (freqs, T_el, T_el - (H @ R @ R.T @ G)[None] / (w ** 2)[:, None, None], Ge, He)
+    return scene, angles, points, full, beta, ref_at
+
+
+def kryflex_rows(path, angles, points, beta, ref_at, name, opts, target, rows):
+    """kryflex's one model for all the angles at one target, measured at every point into rows[(target, name,
+    point)] = (elastic states, error); prints its line and returns (wall, CPU) of the reduction."""
+    c0 = time.process_time()
+    model, sec, summ = kryflex_model(path, angles, beta, target, opts)
+    cpu = time.process_time() - c0
+    worst, states = 0.0, []
+    for a in points:
+        freqs, T_el, T_full, _, _ = ref_at[a]
+        s = model.at([a])
+        err = bench.elastic_error(T_full, s.frf(freqs), T_el)
+        st = 2 * (s.dofs - s.rigid_modes.shape[1])
+        rows[(target, name, a)] = (st, err)
+        worst = max(worst, err)
+        states.append(st)
+    ch = summ.chosen
+    print("kryflex %-9s target %g: %s model, bodies %s, elastic states %d..%d over the points, worst elastic "
+          "error %.3g, static columns %s, L0 error at the angles of interest up to %.2g, %.2f s (CPU %.2f s)" %
+          (name, target, summ.verdict.chosen_method, model.sizes, min(states), max(states), worst,
+           "kept" if ch.static_exact else "truncated",
+           max([e for e in (ch.static_moment_error or {}).values() if e is not None] or [float("nan")]), sec, cpu),
+          flush=True)
+    return sec, cpu
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
+    ap.add_argument("--kryflex-options", nargs="+", default=["compress:", "nostatic:static_exact=0"])
+    ap.add_argument("--methods", nargs="+", default=["SOR-IRKA"])
+    ap.add_argument("--orders", type=int, nargs="+", default=[4, 8, 12, 16])
+    args = ap.parse_args()
+    bench.ensure_pymor()
+    path = os.path.abspath(args.scene)
+    scene, angles, points, full, beta, ref_at = setup(path)
+    band = scene.raw["band"]
+    print("peers bench (angles), %s UTC, %s, angles %s and midpoints, 1 rank"
+          % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene, angles), flush=True)
     rows = {}     # (target, name or pyMOR, point) -> states
     for name, opts in bench.parse_options(args.kryflex_options).items():
         for target in args.targets:
-            model, sec, summ = kryflex_model(path, angles, beta, target, opts)
-            worst, states = 0.0, []
-            for a in points:
-                freqs, T_el, T_full, _, _ = ref_at[a]
-                s = model.at([a])
-                err = bench.elastic_error(T_full, s.frf(freqs), T_el)
-                st = 2 * (s.dofs - s.rigid_modes.shape[1])
-                rows[(target, name, a)] = (st, err)
-                worst = max(worst, err)
-                states.append(st)
-            ch = summ.chosen
-            print("kryflex %-9s target %g: %s model, bodies %s, elastic states %d..%d over the points, worst elastic "
-                  "error %.3g, static columns %s, L0 error at the angles of interest up to %.2g, %.2f s" %
-                  (name, target, summ.verdict.chosen_method, model.sizes, min(states), max(states), worst,
-                   "kept" if ch.static_exact else "truncated",
-                   max([e for e in (ch.static_moment_error or {}).values() if e is not None] or [float("nan")]), sec),
-                  flush=True)
+            kryflex_rows(path, angles, points, beta, ref_at, name, opts, target, rows)
     for a in points:
         M, K, G, H, R, lam = full[a]
         freqs, T_el, _, Ge, He = ref_at[a]

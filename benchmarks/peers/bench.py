@@ -179,7 +179,10 @@ def pymor_model(M, K, beta, Ge, He):
     return SecondOrderModel.from_matrices(M.tocsc(), (beta * K).tocsc(), K.tocsc(), Ge, He)
 
 
-def pymor_methods(so, band, with_bt):
+def pymor_methods(so, band, with_bt, bases=None):
+    """name -> fn(r) -> (reduced model, first-order states). With a dict `bases`, the second-order methods (Galerkin,
+    SOBHI, SOR-IRKA) leave their last projection bases there as NumPy arrays (dofs x r): "V" and, for the two-sided
+    ones, "W" (multiangle.py stacks them over angles)."""
     from pymor.reductors.h2 import IRKAReductor
     from pymor.reductors.interpolation import SOBHIReductor
     from pymor.reductors.mt import MTReductor
@@ -191,7 +194,10 @@ def pymor_methods(so, band, with_bt):
         sigma = np.concatenate([1j * w, -1j * w])
         b = np.ones((2 * npts, so.dim_input))      # tangential directions
         cc = np.ones((2 * npts, so.dim_output))
-        return SOBHIReductor(so).reduce(sigma, b, cc), 2 * (2 * npts)
+        reductor = SOBHIReductor(so)
+        rom = reductor.reduce(sigma, b, cc)
+        keep(reductor.V, reductor.W)
+        return rom, 2 * (2 * npts)
 
     def galerkin(r):
         """One-sided (Galerkin) second-order interpolation: V = W = the real and imaginary parts of
@@ -208,12 +214,26 @@ def pymor_methods(so, band, with_bt):
             V.append(X.real)
             V.append(X.imag)
         V = gram_schmidt(V, atol=1e-13, rtol=1e-13)
+        keep(V, None)
         return SOLTIPGReductor(so, V, V).reduce(), 2 * len(V)
+
+    def keep(V, W):
+        if bases is not None:
+            bases.clear()
+            bases["V"] = V.to_numpy()
+            if W is not None:
+                bases["W"] = W.to_numpy()
+
+    def sor_irka(r):
+        reductor = SORIRKAReductor(so)
+        rom = reductor.reduce(r, maxit=30)
+        keep(reductor.V, reductor.W)
+        return rom, 2 * r
 
     methods = {
         "SO Galerkin interpolation (points)": galerkin,
         "SO interpolation (SOBHI)": sobhi,
-        "SOR-IRKA": lambda r: (SORIRKAReductor(so).reduce(r, maxit=30), 2 * r),
+        "SOR-IRKA": sor_irka,
         "IRKA (first order)": lambda r: (IRKAReductor(so.to_lti()).reduce(2 * r, maxit=30), 2 * r),
         "modal truncation (first order)": lambda r: (MTReductor(so.to_lti()).reduce(2 * r), 2 * r),
     }

@@ -86,6 +86,31 @@ def kryflex_rows(path, angles, points, beta, ref_at, name, opts, target, rows):
     return sec, cpu
 
 
+def pymor_orders(so, band, methods, orders, freqs, T_el, a, stop, bases=None):
+    """pyMOR's methods (by the start of their names) on the elastic system at the point a, order after order until
+    the elastic error is at most stop (a failed order ends its method): yields (method, r, states, error, wall, CPU)
+    after printing its line. With a dict bases, the order's projection bases are in it when it is yielded."""
+    for mname, fn in bench.pymor_methods(so, band, False, bases).items():
+        if not any(mname.startswith(m) for m in methods):
+            continue
+        for r in orders:
+            t0, c0 = time.perf_counter(), time.process_time()
+            try:
+                rom, st = fn(r)
+                err = bench.elastic_error(T_el, rom.transfer_function.freq_resp(2 * np.pi * freqs), T_el)
+            except Exception as e:
+                print("pyMOR %s at %g deg r=%d failed: %s" % (mname, a, r, str(e).splitlines()[0][:100]))
+                break
+            sec, cpu = time.perf_counter() - t0, time.process_time() - c0
+            print("pyMOR %-34s at %6.2f deg: %3d states, elastic error %.3g, %.2f s (CPU %.2f s)%s"
+                  % (mname, a, st, err, sec, cpu, ", bases %s" % "+".join(str(bases[k].shape[1]) for k in ("V", "W")
+                                                                          if k in bases) if bases is not None else ""),
+                  flush=True)
+            yield mname, r, st, err, sec, cpu
+            if err <= stop:
+                break
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", required=True)
@@ -108,25 +133,12 @@ def main():
         M, K, G, H, R, lam = full[a]
         freqs, T_el, _, Ge, He = ref_at[a]
         so = bench.pymor_model(M, K, beta, Ge, He)
-        for mname, fn in bench.pymor_methods(so, band, False).items():
-            if not any(mname.startswith(m) for m in args.methods):
-                continue
-            for r in args.orders:
-                t0 = time.perf_counter()
-                try:
-                    rom, st = fn(r)
-                    err = bench.elastic_error(T_el, rom.transfer_function.freq_resp(2 * np.pi * freqs), T_el)
-                except Exception as e:
-                    print("pyMOR %s at %g deg r=%d failed: %s" % (mname, a, r, str(e).splitlines()[0][:100]))
-                    break
-                print("pyMOR %-10s at %6.2f deg: %3d states, elastic error %.3g, %.2f s"
-                      % (mname, a, st, err, time.perf_counter() - t0), flush=True)
-                for target in args.targets:
-                    if err <= target:
-                        key = (target, "pyMOR", a)
-                        rows[key] = min(rows.get(key, (10 ** 9, 0)), (st, err))
-                if err <= min(args.targets):
-                    break
+        for mname, r, st, err, sec, cpu in pymor_orders(so, band, args.methods, args.orders, freqs, T_el, a,
+                                                        min(args.targets)):
+            for target in args.targets:
+                if err <= target:
+                    key = (target, "pyMOR", a)
+                    rows[key] = min(rows.get(key, (10 ** 9, 0)), (st, err))
     names = list(bench.parse_options(args.kryflex_options))
     print("\n| target | point (deg) | " + " | ".join("kryflex %s states (error)" % n for n in names)
           + " | best pyMOR at the point alone | " + " | ".join("%s / pyMOR" % n for n in names) + " |")

@@ -80,12 +80,9 @@ def eliminate_ties(C, child_dofs):
     return T.tocsc(), indep
 
 
-def full_order(scene, angle):
-    """M, K, G, H after the ties, and the geometric rigid-body and mechanism modes R in the same coordinates
-    (M-orthonormal): see rigid_modes."""
-    Mb = sp.block_diag([b.M for b in scene.bodies]).tocsc()
-    Kb = sp.block_diag([b.K for b in scene.bodies]).tocsc()
-    G, H = ref.body_io(scene)
+def ties(scene, angle):
+    """The joints' ties at one angle: C (C x = 0 on the bodies' dofs x), T (x = T y) and the kept dofs (y =
+    x[kept]): the child interfaces' dofs eliminated by eliminate_ties."""
     C = ref.constraint_matrix(scene, [angle])
     off = scene.offsets
     child = []
@@ -93,6 +90,16 @@ def full_order(scene, angle):
         c = scene.body_index(j["child"])
         child += list(off[c] + ref.interface_dofs(scene.bodies[c], j["child_interface"]))
     T, indep = eliminate_ties(C, child)
+    return C, T, indep
+
+
+def full_order(scene, angle):
+    """M, K, G, H after the ties, and the geometric rigid-body and mechanism modes R in the same coordinates
+    (M-orthonormal): see rigid_modes."""
+    Mb = sp.block_diag([b.M for b in scene.bodies]).tocsc()
+    Kb = sp.block_diag([b.K for b in scene.bodies]).tocsc()
+    G, H = ref.body_io(scene)
+    C, T, indep = ties(scene, angle)
     assert np.abs(C @ T).max() < 1e-10
     M = (T.T @ Mb @ T).tocsc()
     K = (T.T @ Kb @ T).tocsc()

@@ -148,18 +148,6 @@ def by_true_error(worst_of, ncand, target, start=None):
     return min(found, key=lambda f: (f[0][0], f[0][1])) if found else (None, sel)
 
 
-def ties(scene, angle):
-    """bench.full_order's ties at one angle: C (C x = 0 on the bodies' dofs x), T (x = T y) and the kept dofs."""
-    C = ref.constraint_matrix(scene, [angle])
-    off = scene.offsets
-    child = []
-    for j in scene.joints:
-        c = scene.body_index(j["child"])
-        child += list(off[c] + ref.interface_dofs(scene.bodies[c], j["child_interface"]))
-    T, indep = bench.eliminate_ties(C, child)
-    return C, T, indep
-
-
 def body_directions(stack, Mb, scene):
     """Bodies' dofs: the stacked vectors split by body (kryflex's form, fed with pyMOR's vectors), each body's rows
     compressed by pyMOR's pod in that body's mass; all bodies' directions (zero on the other bodies) as columns."""
@@ -251,23 +239,9 @@ def main():
         freqs, T_el, _, Ge, He = ref_at[a]
         so = bench.pymor_model(M, K, beta, Ge, He)
         bases = {}
-        for mname, fn in bench.pymor_methods(so, band, False, bases).items():
-            if not any(mname.startswith(m) for m in args.methods):
-                continue
-            for r in args.orders:
-                t1, c1 = time.perf_counter(), time.process_time()
-                try:
-                    rom, st = fn(r)
-                    err = bench.elastic_error(T_el, rom.transfer_function.freq_resp(2 * np.pi * freqs), T_el)
-                except Exception as e:
-                    print("pyMOR %s at %g deg r=%d failed: %s" % (mname, a, r, str(e).splitlines()[0][:100]))
-                    break
-                sec, cpu = time.perf_counter() - t1, time.process_time() - c1
-                one[a].append((st, err, sec, cpu, mname, r, [bases[k] for k in ("V", "W") if k in bases]))
-                print("pyMOR %-34s at %6.2f deg: %3d states, elastic error %.3g, %.2f s (CPU %.2f s), bases %s"
-                      % (mname, a, st, err, sec, cpu, "+".join(str(b.shape[1]) for b in one[a][-1][6])), flush=True)
-                if err <= min(args.targets):
-                    break
+        for mname, r, st, err, sec, cpu in ang.pymor_orders(so, band, args.methods, args.orders, freqs, T_el, a,
+                                                            min(args.targets), bases):
+            one[a].append((st, err, sec, cpu, mname, r, [bases[k] for k in ("V", "W") if k in bases]))
 
     def best_at(a, target):
         ok = [row for row in one[a] if row[1] <= target]
@@ -277,7 +251,7 @@ def main():
     Mb = sp.block_diag([b.M for b in scene.bodies]).tocsc()
     Kb = sp.block_diag([b.K for b in scene.bodies]).tocsc()
     Gx, Hx = ref.body_io(scene)
-    ties_at = {a: ties(scene, a) for a in points}
+    ties_at = {a: bench.ties(scene, a) for a in points}
     peer = {}     # (target, variant) -> (states, directions, worst error, errors, wall, cpu)
 
     def report(variant, target, found, ndir, what, sec, cpu):
@@ -348,10 +322,10 @@ def main():
             "body-wise, tied, by the true error"]))
     print("\nFirst-order elastic states, the largest over the %d angles of interest and %d midpoints (each model's "
           "worst error over them); times: wall (CPU) s" % (len(angles), len(mids)))
-    print("\n| target | " + " | ".join("kryflex %s, one model" % n for n in names) + " | "
-          + " | ".join("peer %s, one model" % v for v in variants)
-          + " | pyMOR one model per point (largest; smallest) |")
-    print("|---|" + "---|" * (len(names) + len(variants) + 1))
+    heads = (["kryflex %s, one model" % n for n in names] + ["peer %s, one model" % v for v in variants]
+             + ["pyMOR one model per point (largest; smallest)"])
+    print("\n| target | " + " | ".join(heads) + " |")
+    print("|---|" + "---|" * len(heads))
     for target in args.targets:
         cells = []
         for n in names:

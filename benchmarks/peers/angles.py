@@ -33,22 +33,14 @@ def kryflex_model(scene_path, angles, beta, target, options):
     return out.model, time.perf_counter() - t0, out.summary
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scene", required=True)
-    ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
-    ap.add_argument("--kryflex-options", nargs="+", default=["compress:", "nostatic:static_exact=0"])
-    ap.add_argument("--methods", nargs="+", default=["SOR-IRKA"])
-    ap.add_argument("--orders", type=int, nargs="+", default=[4, 8, 12, 16])
-    args = ap.parse_args()
-    bench.ensure_pymor()
-    path = os.path.abspath(args.scene)
+def setup(path):
+    """The scene, its angles of interest, the points (angles and midpoints), the full order at every point
+    (M, K, G, H, R, lam), the bench's beta (taken at the first angle) and the reference at every point
+    (freqs, T_el, T_full, Ge, He)."""
     scene = ref.load_scene(path)
     angles = [float(a) for a in scene.raw["angles"]]
     points = sorted(set(angles) | {0.5 * (a + b) for a, b in zip(angles, angles[1:])})
     band, zeta = scene.raw["band"], float(scene.raw["damping"])
-    print("peers bench (angles), %s UTC, %s, angles %s and midpoints, 1 rank"
-          % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene, angles), flush=True)
     full = {}
     for a in points:     # the full order, its reference and its elastic split at every point
         M, K, G, H, R = bench.full_order(scene, a)
@@ -66,49 +58,87 @@ def main():
         T_el = bench.direct_response(M, K, beta, Ge, He, freqs)
         w = 2 * np.pi * freqs
         ref_at[a] = (freqs, T_el, T_el - (H @ R @ R.T @ G)[None] / (w ** 2)[:, None, None], Ge, He)
+    return scene, angles, points, full, beta, ref_at
+
+
+def kryflex_rows(path, angles, points, beta, ref_at, name, opts, target, rows):
+    """kryflex's one model for all the angles at one target, measured at every point into rows[(target, name,
+    point)] = (elastic states, error); prints its line and returns (wall, CPU) of the reduction."""
+    c0 = time.process_time()
+    model, sec, summ = kryflex_model(path, angles, beta, target, opts)
+    cpu = time.process_time() - c0
+    worst, states = 0.0, []
+    for a in points:
+        freqs, T_el, T_full, _, _ = ref_at[a]
+        s = model.at([a])
+        err = bench.elastic_error(T_full, s.frf(freqs), T_el)
+        st = 2 * (s.dofs - s.rigid_modes.shape[1])
+        rows[(target, name, a)] = (st, err)
+        worst = max(worst, err)
+        states.append(st)
+    ch = summ.chosen
+    print("kryflex %-9s target %g: %s model, bodies %s, elastic states %d..%d over the points, worst elastic "
+          "error %.3g, static columns %s, L0 error at the angles of interest up to %.2g, %.2f s (CPU %.2f s)" %
+          (name, target, summ.verdict.chosen_method, model.sizes, min(states), max(states), worst,
+           "kept" if ch.static_exact else "truncated",
+           max([e for e in (ch.static_moment_error or {}).values() if e is not None] or [float("nan")]), sec, cpu),
+          flush=True)
+    return sec, cpu
+
+
+def pymor_orders(so, band, methods, orders, freqs, T_el, a, stop, bases=None):
+    """pyMOR's methods (by the start of their names) on the elastic system at the point a, order after order until
+    the elastic error is at most stop (a failed order ends its method): yields (method, r, states, error, wall, CPU)
+    after printing its line. With a dict bases, the order's projection bases are in it when it is yielded."""
+    for mname, fn in bench.pymor_methods(so, band, False, bases).items():
+        if not any(mname.startswith(m) for m in methods):
+            continue
+        for r in orders:
+            t0, c0 = time.perf_counter(), time.process_time()
+            try:
+                rom, st = fn(r)
+                err = bench.elastic_error(T_el, rom.transfer_function.freq_resp(2 * np.pi * freqs), T_el)
+            except Exception as e:
+                print("pyMOR %s at %g deg r=%d failed: %s" % (mname, a, r, str(e).splitlines()[0][:100]))
+                break
+            sec, cpu = time.perf_counter() - t0, time.process_time() - c0
+            print("pyMOR %-34s at %6.2f deg: %3d states, elastic error %.3g, %.2f s (CPU %.2f s)%s"
+                  % (mname, a, st, err, sec, cpu, ", bases %s" % "+".join(str(bases[k].shape[1]) for k in ("V", "W")
+                                                                          if k in bases) if bases is not None else ""),
+                  flush=True)
+            yield mname, r, st, err, sec, cpu
+            if err <= stop:
+                break
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--targets", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
+    ap.add_argument("--kryflex-options", nargs="+", default=["compress:", "nostatic:static_exact=0"])
+    ap.add_argument("--methods", nargs="+", default=["SOR-IRKA"])
+    ap.add_argument("--orders", type=int, nargs="+", default=[4, 8, 12, 16])
+    args = ap.parse_args()
+    bench.ensure_pymor()
+    path = os.path.abspath(args.scene)
+    scene, angles, points, full, beta, ref_at = setup(path)
+    band = scene.raw["band"]
+    print("peers bench (angles), %s UTC, %s, angles %s and midpoints, 1 rank"
+          % (time.strftime("%Y-%m-%d %H:%M", time.gmtime()), args.scene, angles), flush=True)
     rows = {}     # (target, name or pyMOR, point) -> states
     for name, opts in bench.parse_options(args.kryflex_options).items():
         for target in args.targets:
-            model, sec, summ = kryflex_model(path, angles, beta, target, opts)
-            worst, states = 0.0, []
-            for a in points:
-                freqs, T_el, T_full, _, _ = ref_at[a]
-                s = model.at([a])
-                err = bench.elastic_error(T_full, s.frf(freqs), T_el)
-                st = 2 * (s.dofs - s.rigid_modes.shape[1])
-                rows[(target, name, a)] = (st, err)
-                worst = max(worst, err)
-                states.append(st)
-            ch = summ.chosen
-            print("kryflex %-9s target %g: %s model, bodies %s, elastic states %d..%d over the points, worst elastic "
-                  "error %.3g, static columns %s, L0 error at the angles of interest up to %.2g, %.2f s" %
-                  (name, target, summ.verdict.chosen_method, model.sizes, min(states), max(states), worst,
-                   "kept" if ch.static_exact else "truncated",
-                   max([e for e in (ch.static_moment_error or {}).values() if e is not None] or [float("nan")]), sec),
-                  flush=True)
+            kryflex_rows(path, angles, points, beta, ref_at, name, opts, target, rows)
     for a in points:
         M, K, G, H, R, lam = full[a]
         freqs, T_el, _, Ge, He = ref_at[a]
         so = bench.pymor_model(M, K, beta, Ge, He)
-        for mname, fn in bench.pymor_methods(so, band, False).items():
-            if not any(mname.startswith(m) for m in args.methods):
-                continue
-            for r in args.orders:
-                t0 = time.perf_counter()
-                try:
-                    rom, st = fn(r)
-                    err = bench.elastic_error(T_el, rom.transfer_function.freq_resp(2 * np.pi * freqs), T_el)
-                except Exception as e:
-                    print("pyMOR %s at %g deg r=%d failed: %s" % (mname, a, r, str(e).splitlines()[0][:100]))
-                    break
-                print("pyMOR %-10s at %6.2f deg: %3d states, elastic error %.3g, %.2f s"
-                      % (mname, a, st, err, time.perf_counter() - t0), flush=True)
-                for target in args.targets:
-                    if err <= target:
-                        key = (target, "pyMOR", a)
-                        rows[key] = min(rows.get(key, (10 ** 9, 0)), (st, err))
-                if err <= min(args.targets):
-                    break
+        for mname, r, st, err, sec, cpu in pymor_orders(so, band, args.methods, args.orders, freqs, T_el, a,
+                                                        min(args.targets)):
+            for target in args.targets:
+                if err <= target:
+                    key = (target, "pyMOR", a)
+                    rows[key] = min(rows.get(key, (10 ** 9, 0)), (st, err))
     names = list(bench.parse_options(args.kryflex_options))
     print("\n| target | point (deg) | " + " | ".join("kryflex %s states (error)" % n for n in names)
           + " | best pyMOR at the point alone | " + " | ".join("%s / pyMOR" % n for n in names) + " |")

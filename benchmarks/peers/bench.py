@@ -80,12 +80,9 @@ def eliminate_ties(C, child_dofs):
     return T.tocsc(), indep
 
 
-def full_order(scene, angle):
-    """M, K, G, H after the ties, and the geometric rigid-body and mechanism modes R in the same coordinates
-    (M-orthonormal): see rigid_modes."""
-    Mb = sp.block_diag([b.M for b in scene.bodies]).tocsc()
-    Kb = sp.block_diag([b.K for b in scene.bodies]).tocsc()
-    G, H = ref.body_io(scene)
+def ties(scene, angle):
+    """The joints' ties at one angle: C (C x = 0 on the bodies' dofs x), T (x = T y) and the kept dofs (y =
+    x[kept]): the child interfaces' dofs eliminated by eliminate_ties."""
     C = ref.constraint_matrix(scene, [angle])
     off = scene.offsets
     child = []
@@ -93,6 +90,16 @@ def full_order(scene, angle):
         c = scene.body_index(j["child"])
         child += list(off[c] + ref.interface_dofs(scene.bodies[c], j["child_interface"]))
     T, indep = eliminate_ties(C, child)
+    return C, T, indep
+
+
+def full_order(scene, angle):
+    """M, K, G, H after the ties, and the geometric rigid-body and mechanism modes R in the same coordinates
+    (M-orthonormal): see rigid_modes."""
+    Mb = sp.block_diag([b.M for b in scene.bodies]).tocsc()
+    Kb = sp.block_diag([b.K for b in scene.bodies]).tocsc()
+    G, H = ref.body_io(scene)
+    C, T, indep = ties(scene, angle)
     assert np.abs(C @ T).max() < 1e-10
     M = (T.T @ Mb @ T).tocsc()
     K = (T.T @ Kb @ T).tocsc()
@@ -179,7 +186,10 @@ def pymor_model(M, K, beta, Ge, He):
     return SecondOrderModel.from_matrices(M.tocsc(), (beta * K).tocsc(), K.tocsc(), Ge, He)
 
 
-def pymor_methods(so, band, with_bt):
+def pymor_methods(so, band, with_bt, bases=None):
+    """name -> fn(r) -> (reduced model, first-order states). With a dict `bases`, the second-order methods (Galerkin,
+    SOBHI, SOR-IRKA) leave their last projection bases there as NumPy arrays (dofs x r): "V" and, for the two-sided
+    ones, "W" (multiangle.py stacks them over angles)."""
     from pymor.reductors.h2 import IRKAReductor
     from pymor.reductors.interpolation import SOBHIReductor
     from pymor.reductors.mt import MTReductor
@@ -191,7 +201,10 @@ def pymor_methods(so, band, with_bt):
         sigma = np.concatenate([1j * w, -1j * w])
         b = np.ones((2 * npts, so.dim_input))      # tangential directions
         cc = np.ones((2 * npts, so.dim_output))
-        return SOBHIReductor(so).reduce(sigma, b, cc), 2 * (2 * npts)
+        reductor = SOBHIReductor(so)
+        rom = reductor.reduce(sigma, b, cc)
+        keep(reductor.V, reductor.W)
+        return rom, 2 * (2 * npts)
 
     def galerkin(r):
         """One-sided (Galerkin) second-order interpolation: V = W = the real and imaginary parts of
@@ -208,12 +221,26 @@ def pymor_methods(so, band, with_bt):
             V.append(X.real)
             V.append(X.imag)
         V = gram_schmidt(V, atol=1e-13, rtol=1e-13)
+        keep(V, None)
         return SOLTIPGReductor(so, V, V).reduce(), 2 * len(V)
+
+    def keep(V, W):
+        if bases is not None:
+            bases.clear()
+            bases["V"] = V.to_numpy()
+            if W is not None:
+                bases["W"] = W.to_numpy()
+
+    def sor_irka(r):
+        reductor = SORIRKAReductor(so)
+        rom = reductor.reduce(r, maxit=30)
+        keep(reductor.V, reductor.W)
+        return rom, 2 * r
 
     methods = {
         "SO Galerkin interpolation (points)": galerkin,
         "SO interpolation (SOBHI)": sobhi,
-        "SOR-IRKA": lambda r: (SORIRKAReductor(so).reduce(r, maxit=30), 2 * r),
+        "SOR-IRKA": sor_irka,
         "IRKA (first order)": lambda r: (IRKAReductor(so.to_lti()).reduce(2 * r, maxit=30), 2 * r),
         "modal truncation (first order)": lambda r: (MTReductor(so.to_lti()).reduce(2 * r), 2 * r),
     }

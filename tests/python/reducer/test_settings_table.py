@@ -162,15 +162,16 @@ def test_the_scene_defaults_pass_the_json_schema(table):
 
 
 def test_the_compiled_schema_test_is_jsonschemas(table):
-    """settings.schema_test (what a scene's settings are checked with) says valid exactly where jsonschema's
-    Draft7Validator does, on every row's schema (its range, a narrower one, the types alone) and values of every kind:
-    in and out of range, at the bounds, integral floats, booleans, words, lists, None, non-finite numbers."""
-    from fractions import Fraction
+    """settings.schema_test (what a scene's settings are checked with: fastjsonschema) says valid exactly where
+    jsonschema's Draft7Validator does, on every row's schema (its range, a narrower one, the types alone) and values
+    of every kind: in and out of range, at the bounds, integral floats, booleans, words, lists, None, non-finite
+    numbers; what a scene file's YAML can hold (no tuple or Fraction: no JSON values, and the two libraries differ
+    on them)."""
     from kryflex import settings
     values = [None, True, False, 0, 1, -1, 2, 3, 7, 12, 200, 201, 10 ** 6, 0.0, 1.0, -1.0, 0.5, 1e-12, 1e-3, 2.5, 1e300,
-              -1e300, float("inf"), float("-inf"), float("nan"), Fraction(1, 3), "", "auto", "none", "true", "yes",
+              -1e300, float("inf"), float("-inf"), float("nan"), "", "auto", "none", "true", "yes",
               "h2", "elastic", "total", "1", [], [0.1, 2.0], [1, "a"], [True], [float("nan")], [-1.0, 1e9], {},
-              {"a": 1}, (1, 2)]
+              {"a": 1}]
     rows = [r for r in table if r["scene"]]
     for r in rows:
         values += [w for w in r["choices"]] + [settings.value(r)]
@@ -188,8 +189,6 @@ def test_the_compiled_schema_test_is_jsonschemas(table):
                     assert ours(v) == theirs.is_valid(v), (r["name"], rng, types_only, v)
                     checked += 1
     assert checked > 5000, checked
-    with pytest.raises(ValueError, match="pattern"):
-        settings.schema_test({"type": "string", "pattern": "a"})
 
 
 def test_the_command_knows_every_option(table):

@@ -82,12 +82,16 @@ static void KFCompressMemoSelect(KFCompressMemo *memo, PetscInt nb, const KFBody
   }
 }
 
-/* the entry of memo->cur's selection, or -1 */
-static PetscInt KFCompressMemoFind(const KFCompressMemo *memo)
+/* whether memo->cur's selection was measured: then its size and error */
+static PetscBool KFCompressMemoFind(const KFCompressMemo *memo, PetscInt *size, PetscReal *error)
 {
   for (PetscInt k = 0; k < memo->n; k++)
-    if (!memo->nflag || !memcmp(memo->flags + k * memo->nflag, memo->cur, (size_t)memo->nflag)) return k;
-  return -1;
+    if (!memo->nflag || !memcmp(memo->flags + k * memo->nflag, memo->cur, (size_t)memo->nflag)) {
+      *size  = memo->size[k];
+      *error = memo->error[k];
+      return PETSC_TRUE;
+    }
+  return PETSC_FALSE;
 }
 
 static PetscErrorCode KFCompressMemoAdd(KFCompressMemo *memo, PetscInt size, PetscReal error)
@@ -122,18 +126,12 @@ static PetscErrorCode KFCompressMemoAdd(KFCompressMemo *memo, PetscInt size, Pet
 static PetscErrorCode KFCompressTry(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], const PetscInt counts[], KFCompressMemo *memo, PetscInt *size, PetscReal *error)
 {
   KFReducedModel c;
-  PetscInt       k = -1;
 
   PetscFunctionBegin;
   PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
   if (memo) {
     KFCompressMemoSelect(memo, nb, d, counts, NULL, NULL);
-    k = KFCompressMemoFind(memo);
-  }
-  if (k >= 0) {
-    *size  = memo->size[k];
-    *error = memo->error[k];
-    PetscFunctionReturn(0);
+    if (KFCompressMemoFind(memo, size, error)) PetscFunctionReturn(0);
   }
   PetscCall(KFReducedModelCompress(m, d, counts, PETSC_FALSE, &c)); /* measured, then dropped: no maps */
   PetscCall(KFCompressMeasure(r, neval, evals, &c, size, error));
@@ -329,21 +327,16 @@ static PetscErrorCode KFCompressSelect(PetscInt nb, const KFBodyDirections d[], 
 static PetscErrorCode KFCompressTrySelection(KFReducer r, PetscInt neval, KFEvalPoint evals[], KFReducedModel m, PetscInt nb, const KFBodyDirections d[], PetscInt *const sel[], const PetscInt n[], KFCompressMemo *memo, PetscInt *size, PetscReal *error)
 {
   KFBodyDirections *ds;
-  PetscInt          k;
 
   PetscFunctionBegin;
   KFCompressMemoSelect(memo, nb, d, NULL, sel, n);
-  k = KFCompressMemoFind(memo);
-  if (k >= 0) {
+  if (KFCompressMemoFind(memo, size, error)) {
     PetscCall(KFInterruptCheck(PetscObjectComm((PetscObject)r)));
-    *size  = memo->size[k];
-    *error = memo->error[k];
     PetscFunctionReturn(0);
   }
   PetscCall(KFCompressSelect(nb, d, sel, n, &ds));
-  PetscCall(KFCompressTry(r, neval, evals, m, nb, ds, NULL, NULL, size, error));
+  PetscCall(KFCompressTry(r, neval, evals, m, nb, ds, NULL, NULL, size, error)); /* memo->cur still the selection */
   PetscCall(KFBodyDirectionsDestroy(nb, &ds));
-  KFCompressMemoSelect(memo, nb, d, NULL, sel, n);
   PetscCall(KFCompressMemoAdd(memo, *size, *error));
   PetscFunctionReturn(0);
 }
